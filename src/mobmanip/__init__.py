@@ -1,0 +1,22 @@
+"""mobmanip: what a wheeled mobile manipulator can do at the end effector.
+
+Unified kinematic and dynamic task-space ellipsoids for mobile manipulators whose platform is
+subject to nonholonomic constraints, built on Pinocchio.
+"""
+
+from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
+from .errors import MobmanipError
+from .model import Robot, load_robot
+from .spec import RobotSpec, load_spec
+
+__all__ = [
+    "MobmanipError",
+    "ReducedDynamics",
+    "Robot",
+    "RobotSpec",
+    "load_robot",
+    "load_spec",
+    "reduced_dynamics",
+    "unified_jacobian",
+]
+__version__ = "0.1.0"

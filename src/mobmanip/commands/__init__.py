@@ -1,0 +1,5 @@
+"""Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
+
+from . import analyze
+
+COMMANDS = (analyze,)

@@ -1,0 +1,93 @@
+"""Exceptions raised by mobmanip.
+
+Every error the toolkit raises on bad input derives from :class:`MobmanipError`, so callers
+(and the command line) can catch one type. Subclasses carry the offending value in attributes
+and, where it helps, the list of valid alternatives.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class MobmanipError(Exception):
+    """Root of every error mobmanip raises on bad input or impossible requests."""
+
+
+def _closest_first(name: str, candidates: Iterable[str], limit: int = 8) -> list[str]:
+    """Return candidates ordered by similarity to ``name`` (closest first), at most ``limit``."""
+    candidates = list(candidates)
+    ranked = difflib.get_close_matches(name, candidates, n=limit, cutoff=0.0)
+    return ranked[:limit]
+
+
+class UnknownRobotError(MobmanipError):
+    """A robot name is neither a built-in robot nor an existing spec file."""
+
+    def __init__(self, name: str, builtins: Iterable[str]):
+        self.name = name
+        self.builtins = sorted(builtins)
+        super().__init__(
+            f"unknown robot {name!r}: not a built-in robot ({', '.join(self.builtins)}) and no spec file at that path"
+        )
+
+
+class SpecError(MobmanipError):
+    """A robot spec (TOML) is unreadable, malformed or inconsistent with its URDF."""
+
+
+class UrdfError(MobmanipError):
+    """A URDF file is missing, unreadable, malformed or uses a construct mobmanip cannot model."""
+
+    def __init__(self, path: str, reason: str):
+        self.path = path
+        self.reason = reason
+        super().__init__(f"URDF {path}: {reason}")
+
+
+class NameNotFoundError(MobmanipError):
+    """A joint or frame name does not exist; lists the names that do (closest first)."""
+
+    kind = "name"
+
+    def __init__(self, name: str, available: Iterable[str], where: str = ""):
+        self.name = name
+        self.available = _closest_first(name, available)
+        suffix = f" in {where}" if where else ""
+        hint = f"; closest: {', '.join(self.available)}" if self.available else ""
+        super().__init__(f"unknown {self.kind} {name!r}{suffix}{hint}")
+
+
+class JointNotFoundError(NameNotFoundError):
+    """A joint name does not exist in the model or URDF."""
+
+    kind = "joint"
+
+
+class FrameNotFoundError(NameNotFoundError):
+    """A frame (link) name does not exist in the model or URDF."""
+
+    kind = "frame"
+
+
+class WheelError(MobmanipError):
+    """The drive wheels are missing, ambiguous or geometrically unusable."""
+
+
+class LimitError(MobmanipError):
+    """A velocity or effort limit is missing, non-positive or not finite."""
+
+    def __init__(self, name: str, kind: str, value: object):
+        self.name = name
+        self.kind = kind
+        self.value = value
+        super().__init__(f"{kind} limit of {name!r} must be a positive finite number, got {value!r}")
+
+
+class ConfigurationError(MobmanipError):
+    """A configuration (or velocity) is malformed: wrong shape, unknown joint, NaN or infinite."""
+
+
+class TaskError(MobmanipError):
+    """An unknown task space or an inconsistent task/object request."""

@@ -1,0 +1,78 @@
+"""Reading configuration files and writing results without losing data."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ConfigurationError, MobmanipError
+from .model import Robot
+
+
+def configuration_from_dict(robot: Robot, data: object, where: str = "configuration") -> np.ndarray:
+    """q from ``{"platform": [x, y, yaw], "joints": {NAME: value}}`` (both keys optional).
+
+    Raises:
+        ConfigurationError: malformed document or NaN value; JointNotFoundError: unknown joint.
+    """
+    if not isinstance(data, dict):
+        raise ConfigurationError(f"{where}: expected an object with 'platform' and 'joints', got {type(data).__name__}")
+    unknown = sorted(set(data) - {"platform", "joints"})
+    if unknown:
+        raise ConfigurationError(f"{where}: unknown keys {unknown}; expected 'platform' and 'joints'")
+    platform = data.get("platform", [0.0, 0.0, 0.0])
+    joints = data.get("joints", {})
+    if not isinstance(platform, list) or len(platform) != 3:
+        raise ConfigurationError(f"{where}: 'platform' must be [x, y, yaw], got {platform!r}")
+    for value in platform:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ConfigurationError(f"{where}: platform pose entries must be finite numbers, got {value!r}")
+    if not isinstance(joints, dict):
+        raise ConfigurationError(f"{where}: 'joints' must map joint names to values, got {joints!r}")
+    return robot.configuration(tuple(platform), joints)
+
+
+def _reject_constant(token: str):
+    raise ConfigurationError(f"non-finite number {token} in JSON")
+
+
+def read_configuration(robot: Robot, path: str | Path) -> np.ndarray:
+    """Read a Q.json file (see :func:`configuration_from_dict`)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigurationError(f"cannot read configuration {path}: {exc.strerror or exc}") from exc
+    try:
+        data = json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as exc:
+        raise ConfigurationError(f"configuration {path} is not valid JSON: {exc}") from exc
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"configuration {path}: {exc}") from None
+    return configuration_from_dict(robot, data, where=str(path))
+
+
+class OutputError(MobmanipError):
+    """An output file cannot be written."""
+
+
+def write_json(path: str | Path, document: object) -> None:
+    """Write JSON atomically: a partial file never replaces an existing one.
+
+    Raises:
+        OutputError: the directory does not exist or is not writable.
+    """
+    path = Path(path)
+    text = json.dumps(document, indent=2, allow_nan=False)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(fd, "w") as handle:
+            handle.write(text + "\n")
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from exc
