@@ -1,4 +1,4 @@
-"""Analyse one configuration: reduced dynamics, unified Jacobian and (later) ellipsoids.
+"""Analyse one configuration: reduced dynamics, unified Jacobian, grasp and both ellipsoids.
 
 :func:`analyze` is the single entry point behind ``mobmanip analyze`` and the Python API;
 :meth:`Analysis.to_dict` gives the JSON document the command writes.
@@ -11,49 +11,66 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import decouple, end_effector_positions, reduced_dynamics, unified_jacobian
+from .ellipsoids import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
+from .errors import TaskError
+from .grasp import HeldObject
 from .model import Robot
 from .tasks import get_task
 
 
 @dataclass(frozen=True)
 class Analysis:
-    """Everything computed at one configuration.
+    """Everything computed at one configuration (robot and object at rest).
 
     Attributes:
         robot: the robot analysed (with its platform and limits).
         q: configuration, (nq,).
         task: task-space name.
+        decoupled: whether the dynamic ellipsoid used the decoupled P.
         unified_jacobian: J_u, (m * n_arms, nx).
         reduced_inertia: P (coupled), (nx, nx).
         reduced_inertia_decoupled: P with platform-arm blocks zeroed, (nx, nx).
         input_matrix: Q, (nx, nx).
         bias: xi at rest (= -S^T g), (nx,).
         end_effector_positions: world positions of the end effectors, (n_arms, 3).
+        held_object: the object (its centre is the task point), or the end effector itself.
+        grasp_matrix: W, (m, m * n_arms).
+        kinematic: the unified kinematic ellipsoid (m/s, rad/s).
+        dynamic: the unified dynamic ellipsoid (m/s^2, rad/s^2).
     """
 
     robot: Robot
     q: np.ndarray
     task: str
+    decoupled: bool
     unified_jacobian: np.ndarray
     reduced_inertia: np.ndarray
     reduced_inertia_decoupled: np.ndarray
     input_matrix: np.ndarray
     bias: np.ndarray
     end_effector_positions: np.ndarray
+    held_object: HeldObject
+    grasp_matrix: np.ndarray
+    kinematic: Ellipsoid
+    dynamic: Ellipsoid
 
     def to_dict(self) -> dict:
         """A JSON-ready dictionary (matrices as lists of rows)."""
         robot = self.robot
+        obj = self.held_object
         return {
             "robot": robot.name,
             "platform": robot.platform.kind,
             "task": self.task,
+            "task_axes": list(get_task(self.task).labels),
+            "decoupled": self.decoupled,
             "q": robot.configuration_dict(self.q),
             "reduced_velocity_names": list(robot.reduced_velocity_names),
             "arms": [
                 {"name": arm.name, "end_effector": arm.end_effector, "position": pos.tolist()}
                 for arm, pos in zip(robot.arms, self.end_effector_positions)
             ],
+            "object": {"center": obj.center.tolist(), "mass": obj.mass, "grasp_offsets": obj.offsets.tolist()},
             "unified_jacobian": self.unified_jacobian.tolist(),
             "reduced_inertia": self.reduced_inertia.tolist(),
             "reduced_inertia_decoupled": self.reduced_inertia_decoupled.tolist(),
@@ -61,29 +78,78 @@ class Analysis:
             "bias": self.bias.tolist(),
             "velocity_limits": robot.velocity_limits.tolist(),
             "effort_limits": robot.effort_limits.tolist(),
+            "grasp_matrix": self.grasp_matrix.tolist(),
+            "kinematic_ellipsoid": self.kinematic.to_dict(),
+            "dynamic_ellipsoid": self.dynamic.to_dict(),
         }
 
 
-def analyze(robot: Robot, q: np.ndarray, task: str | None = None) -> Analysis:
+def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> HeldObject:
+    """The object held by all end effectors, centred at their centroid.
+
+    With one arm the end effector itself is the task point (W = I).
+    """
+    mass = robot.spec.object_mass if mass is None else mass
+    if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
+        raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
+    return HeldObject.between(end_effector_positions(robot, q), float(mass))
+
+
+def analyze(
+    robot: Robot,
+    q: np.ndarray,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    held_object: HeldObject | None = None,
+    decoupled: bool = False,
+) -> Analysis:
     """Analyse the robot at configuration q (robot and object at rest).
 
     Args:
-        robot: the loaded robot (use ``robot.with_platform("fixed")`` for locked wheels).
+        robot: the loaded robot (``robot.with_platform("fixed")`` locks the platform;
+            ``robot.with_wheel_limits(...)`` changes the wheel limits).
         q: configuration, (nq,); see :meth:`Robot.configuration`.
         task: task space name; defaults to the spec's ``default_task``.
+        object_mass: mass of the default object (kg); defaults to the spec's.
+        held_object: an explicit object (overrides ``object_mass``); its offsets must have one
+            row per arm.
+        decoupled: use the decoupled P (no platform-arm interaction) for the dynamic ellipsoid.
     """
     q = robot.check_configuration(q)
     task = get_task(task or robot.spec.default_task)
     dyn = reduced_dynamics(robot, q)
     J_u = unified_jacobian(robot, q, task)
+    positions = end_effector_positions(robot, q)
+    obj = held_object if held_object is not None else default_object(robot, q, object_mass)
+    if obj.offsets.shape != (len(robot.arms), 3):
+        raise TaskError(f"the object needs one grasp offset per arm ({len(robot.arms)}), got {obj.offsets.shape}")
+    W = obj.grasp_matrix(task)
+    P_decoupled = decouple(robot, dyn.P)
+    kin = kinematic_ellipsoid(J_u, W, robot.velocity_limits)
+    dynamic = dynamic_ellipsoid(
+        J_u,
+        W,
+        P_decoupled if decoupled else dyn.P,
+        dyn.Q,
+        dyn.xi,
+        obj.inertia_matrix(task),
+        obj.gravity_vector(task),
+        robot.effort_limits,
+    )
     return Analysis(
         robot=robot,
         q=q,
         task=task.name,
+        decoupled=decoupled,
         unified_jacobian=J_u,
         reduced_inertia=dyn.P,
-        reduced_inertia_decoupled=decouple(robot, dyn.P),
+        reduced_inertia_decoupled=P_decoupled,
         input_matrix=dyn.Q,
         bias=dyn.xi,
-        end_effector_positions=end_effector_positions(robot, q),
+        end_effector_positions=positions,
+        held_object=obj,
+        grasp_matrix=W,
+        kinematic=kin,
+        dynamic=dynamic,
     )

@@ -91,3 +91,25 @@ class ConfigurationError(MobmanipError):
 
 class TaskError(MobmanipError):
     """An unknown task space or an inconsistent task/object request."""
+
+
+class ModelError(MobmanipError):
+    """The loaded model cannot support the requested analysis (e.g. massless moving links)."""
+
+
+class MissingLimitError(LimitError):
+    """A velocity or effort limit is given neither by the URDF nor by the spec."""
+
+    def __init__(self, name: str, kind: str, source: str, unit: str = ""):
+        self.name = name
+        self.kind = kind
+        self.value = None
+        self.source = source
+        unit = f" ({unit})" if unit else ""
+        MobmanipError.__init__(
+            self, f"no {kind} limit for {name!r}: {source}; set it in [limits.{kind}] of the spec{unit}"
+        )
+
+
+class UsageError(MobmanipError):
+    """Command-line arguments that contradict each other or miss a required choice."""

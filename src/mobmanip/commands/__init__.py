@@ -1,5 +1,5 @@
 """Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
 
-from . import analyze
+from . import analyze, paper
 
-COMMANDS = (analyze,)
+COMMANDS = (analyze, paper)

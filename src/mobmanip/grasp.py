@@ -1,0 +1,102 @@
+"""Grasp matrix and object dynamics (paper Eq. 17-22) for rigid grasps.
+
+An object is held at grasp points p_i (one per end effector). With r_i = p_i - c the offset from
+the object centre c, each end effector moves as v_i = W_i^T v_o and the object feels
+h_o = sum_i W_i h_i. Rows of W_i: force, then moment = r_i x f_i + n_i, restricted to the task.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import TaskError
+from .tasks import TaskSpace, get_task
+
+GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame (z up), as Pinocchio's default
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+def grasp_block(task: str | TaskSpace, offset: np.ndarray) -> np.ndarray:
+    """W_i for one rigid grasp at ``offset`` r_i (m) from the object centre, (m, m).
+
+    The full spatial block is [[I, 0], [skew(r_i), I]] (force rows, then moment rows); a task
+    keeps the rows and columns of its own coordinates. For ``planar`` and ``translational`` (no
+    rotation in the task) this is the identity.
+    """
+    task = get_task(task)
+    full = np.eye(6)
+    full[3:, :3] = _skew(np.asarray(offset, dtype=float))
+    rows = list(task.rows)
+    return full[np.ix_(rows, rows)]
+
+
+def grasp_matrix(task: str | TaskSpace, offsets: np.ndarray) -> np.ndarray:
+    """W = [W_1 W_2 ...] for grasps at ``offsets`` (k, 3) from the object centre, (m, m k)."""
+    offsets = np.atleast_2d(np.asarray(offsets, dtype=float))
+    return np.hstack([grasp_block(task, r) for r in offsets])
+
+
+@dataclass(frozen=True)
+class HeldObject:
+    """A rigid object held by the end effectors.
+
+    Attributes:
+        mass: object mass (kg).
+        inertia: rotational inertia about its centre, world axes (kg m^2), (3, 3).
+        center: position of its centre in the world (m), (3,).
+        offsets: grasp points relative to the centre, one row per end effector (m), (k, 3).
+    """
+
+    mass: float
+    inertia: np.ndarray
+    center: np.ndarray
+    offsets: np.ndarray
+
+    def __post_init__(self):
+        if not np.isfinite(self.mass) or self.mass < 0.0:
+            raise TaskError(f"object mass must be a finite non-negative number, got {self.mass!r}")
+
+    @classmethod
+    def between(cls, grasp_points: np.ndarray, mass: float, inertia: np.ndarray | None = None) -> HeldObject:
+        """An object centred at the centroid of the grasp points.
+
+        Without an explicit inertia, the object is taken as a uniform solid sphere whose
+        radius reaches the farthest grasp point (I = 2/5 m R^2), a neutral default for a box held
+        between the hands. Coincident grasp points give a point mass.
+        """
+        points = np.atleast_2d(np.asarray(grasp_points, dtype=float))
+        center = points.mean(axis=0)
+        offsets = points - center
+        if inertia is None:
+            radius = float(np.max(np.linalg.norm(offsets, axis=1))) if len(points) > 1 else 0.0
+            inertia = 0.4 * mass * radius**2 * np.eye(3)
+        return cls(float(mass), np.asarray(inertia, dtype=float), center, offsets)
+
+    def inertia_matrix(self, task: str | TaskSpace) -> np.ndarray:
+        """M_o in the task space: mass on linear rows, rotational inertia on angular rows, (m, m)."""
+        task = get_task(task)
+        full = np.zeros((6, 6))
+        full[:3, :3] = self.mass * np.eye(3)
+        full[3:, 3:] = self.inertia
+        rows = list(task.rows)
+        return full[np.ix_(rows, rows)]
+
+    def gravity_vector(self, task: str | TaskSpace, gravity: np.ndarray = GRAVITY) -> np.ndarray:
+        """g_o in Eq. 22: the wrench the grasps must supply to hold the object still, (m,).
+
+        At rest M_o a_o + g_o = h_o, so g_o = -m g on the linear rows; the centre of mass is the
+        object centre, so gravity adds no moment.
+        """
+        task = get_task(task)
+        full = np.zeros(6)
+        full[:3] = -self.mass * np.asarray(gravity, dtype=float)
+        return full[list(task.rows)]
+
+    def grasp_matrix(self, task: str | TaskSpace) -> np.ndarray:
+        """W for this object's grasp points, (m, m k)."""
+        return grasp_matrix(task, self.offsets)

@@ -1,0 +1,1 @@
+"""Pictures of the analysis: matplotlib figures (:mod:`.figures`) and the meshcat scene."""
