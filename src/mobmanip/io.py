@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -30,11 +31,19 @@ def configuration_from_dict(robot: Robot, data: object, where: str = "configurat
     if not isinstance(platform, list) or len(platform) != 3:
         raise ConfigurationError(f"{where}: 'platform' must be [x, y, yaw], got {platform!r}")
     for value in platform:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not _finite(value):
             raise ConfigurationError(f"{where}: platform pose entries must be finite numbers, got {value!r}")
     if not isinstance(joints, dict):
         raise ConfigurationError(f"{where}: 'joints' must map joint names to values, got {joints!r}")
     return robot.configuration(tuple(platform), joints)
+
+
+def _finite(value: float) -> bool:
+    """math.isfinite that treats an integer too large for a float as infinite."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def _reject_constant(token: str):
@@ -48,8 +57,11 @@ def read_configuration(robot: Robot, path: str | Path) -> np.ndarray:
         text = path.read_text()
     except OSError as exc:
         raise ConfigurationError(f"cannot read configuration {path}: {exc.strerror or exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigurationError(f"configuration {path} is not UTF-8 text: {exc.reason} at byte {exc.start}") from None
     try:
-        data = json.loads(text, parse_constant=_reject_constant)
+        # Integers are read as floats: a huge integer becomes inf and is rejected as non-finite.
+        data = json.loads(text, parse_constant=_reject_constant, parse_int=float)
     except json.JSONDecodeError as exc:
         raise ConfigurationError(f"configuration {path} is not valid JSON: {exc}") from exc
     except ConfigurationError as exc:
@@ -69,10 +81,21 @@ def write_json(path: str | Path, document: object) -> None:
     """
     path = Path(path)
     text = json.dumps(document, indent=2, allow_nan=False)
+    tmp = None
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
         with os.fdopen(fd, "w") as handle:
             handle.write(text + "\n")
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the file the usual permissions
         os.replace(tmp, path)
     except OSError as exc:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)  # never leave the temporary file behind
         raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
