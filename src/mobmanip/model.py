@@ -1,15 +1,18 @@
 """Loading a robot: URDF + spec -> Pinocchio model with a planar root joint, and a Robot.
 
-The :class:`Robot` holds the Pinocchio model and data, the platform constraint layer, the arms
-with their index maps, and the velocity and effort limits of every reduced velocity. Its
-reduced velocity ``x`` is ordered [platform (e.g. eta_r, eta_l), arm 1 joints, arm 2 joints, ...]
-and ``S`` (nv x nx) maps it to Pinocchio's tangent space: ``v = S x``.
+The :class:`Robot` holds the Pinocchio model and data, the platform constraint layer, the torso
+(actuated joints shared by all arms, if any), the arms with their index maps, and the velocity
+and effort limits of every reduced velocity. Its reduced velocity ``x`` is ordered
+[platform (e.g. eta_r, eta_l), torso joints, arm 1 joints, arm 2 joints, ...] and ``S``
+(nv x nx) maps it to Pinocchio's tangent space: ``v = S x``. Every joint that is not a wheel
+(of a differential drive), a torso joint or an arm joint is locked at the spec's reference.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,14 +25,30 @@ from .errors import (
     FrameNotFoundError,
     JointNotFoundError,
     LimitError,
+    MissingLimitError,
     SpecError,
     UrdfError,
     WheelError,
     _closest_first,
 )
 from .platforms import DifferentialDrive, LockedPlatform, Omnidirectional, Platform
-from .spec import RobotSpec, find_spec
-from .urdf import MOVING_JOINT_TYPES, joint_limits, mimic_joints, read_urdf, wheel_radius
+from .spec import OMNI_COORDINATES, RobotSpec, find_spec
+from .urdf import (
+    MOVING_JOINT_TYPES,
+    check_supported,
+    joint_limits,
+    link_has_inertia,
+    mimic_joints,
+    read_urdf,
+    subtree_links,
+    wheel_radius,
+)
+
+#: Units of the omnidirectional base's reduced velocities and efforts, for messages.
+_OMNI_UNITS = {
+    "velocity": {"base_x": "m/s", "base_y": "m/s", "base_yaw": "rad/s"},
+    "effort": {"base_x": "N", "base_y": "N", "base_yaw": "N m"},
+}
 
 
 @dataclass(frozen=True)
@@ -67,6 +86,8 @@ class Robot:
             or ``None`` for a fixed-base robot.
         joint_velocity_limits: per-joint velocity limits by name (all active joints).
         joint_effort_limits: per-joint effort limits by name.
+        torso_joint_names: actuated joints shared by all arms, base to tip (may be empty).
+        torso_v_indices: their tangent indices in the Pinocchio model.
     """
 
     spec: RobotSpec
@@ -77,8 +98,11 @@ class Robot:
     joint_velocity_limits: Mapping[str, float]
     joint_effort_limits: Mapping[str, float]
     wheel_platform: Platform | None = None
+    torso_joint_names: tuple[str, ...] = ()
+    torso_v_indices: tuple[int, ...] = ()
     S: np.ndarray = field(init=False, repr=False)
     B: np.ndarray = field(init=False, repr=False)
+    Q: np.ndarray = field(init=False, repr=False)
     velocity_limits: np.ndarray = field(init=False, repr=False)
     effort_limits: np.ndarray = field(init=False, repr=False)
 
@@ -92,13 +116,15 @@ class Robot:
             S[np.ix_(rows, range(n_eta))] = block
             rows_b, block_b = self.platform.actuation_block()
             B[np.ix_(rows_b, range(n_eta))] = block_b
-        for k, v in enumerate(self.arm_v_indices):
+        for k, v in enumerate(self.torso_v_indices + self.arm_v_indices):
             S[v, n_eta + k] = 1.0
             B[v, n_eta + k] = 1.0
-        S.setflags(write=False)
-        B.setflags(write=False)
+        Q = S.T @ B
+        for matrix in (S, B, Q):
+            matrix.setflags(write=False)
         object.__setattr__(self, "S", S)
         object.__setattr__(self, "B", B)
+        object.__setattr__(self, "Q", Q)
         names = self.reduced_velocity_names
         for attr, table, kind in (
             ("velocity_limits", self.joint_velocity_limits, "velocity"),
@@ -126,18 +152,25 @@ class Robot:
 
     @property
     def nx(self) -> int:
-        """Number of reduced velocities (platform + arm joints)."""
-        return self.platform.n_reduced + len(self.arm_v_indices)
+        """Number of reduced velocities (platform + torso joints + arm joints)."""
+        return self.platform.n_reduced + len(self.torso_v_indices) + len(self.arm_v_indices)
 
     @property
     def reduced_velocity_names(self) -> tuple[str, ...]:
-        """Names of the reduced velocities: platform first, then each arm's joints."""
-        return self.platform.reduced_names + tuple(j for arm in self.arms for j in arm.joint_names)
+        """Names of the reduced velocities: platform first, then the torso, then each arm's joints."""
+        arms = tuple(j for arm in self.arms for j in arm.joint_names)
+        return self.platform.reduced_names + self.torso_joint_names + arms
+
+    @property
+    def torso_slice(self) -> slice:
+        """Where the torso joints sit in the reduced velocity vector (empty without a torso)."""
+        start = self.platform.n_reduced
+        return slice(start, start + len(self.torso_v_indices))
 
     @property
     def arm_slices(self) -> tuple[slice, ...]:
-        """Where each arm's joints sit in the reduced velocity vector."""
-        out, start = [], self.platform.n_reduced
+        """Where each arm's own joints sit in the reduced velocity vector (after the torso)."""
+        out, start = [], self.torso_slice.stop
         for arm in self.arms:
             out.append(slice(start, start + len(arm.v_indices)))
             start += len(arm.v_indices)
@@ -197,37 +230,47 @@ class Robot:
     # ----- configurations -----
 
     def neutral(self) -> np.ndarray:
-        """The neutral configuration (platform at the origin, every joint at zero)."""
-        return pin.neutral(self.model)
+        """The home configuration: platform at the origin, joints at zero or at their ``[reference]``.
+
+        A spec may give a moving joint a home position in ``[reference]`` (e.g. when zero lies
+        outside the joint's range, or a torso's mid-height); every other joint is at zero.
+        """
+        q = pin.neutral(self.model)
+        for name, value in self.spec.reference.items():
+            if self.model.existJointName(name):
+                joint = self.model.joints[self.model.getJointId(name)]
+                if joint.nq == 2:
+                    q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
+                else:
+                    q[joint.idx_q] = value
+        return q
 
     def configuration(
         self, platform: tuple[float, float, float] = (0.0, 0.0, 0.0), joints: Mapping[str, float] | None = None
     ) -> np.ndarray:
         """Build q from the platform pose (x m, y m, yaw rad) and joint values by name.
 
-        Joints not named stay at zero.
+        Joints not named stay at their home position (see :meth:`neutral`; zero unless the
+        spec's ``[reference]`` says otherwise).
 
         Raises:
             ConfigurationError: a NaN/infinite value or a malformed platform pose.
             JointNotFoundError: a joint name not in the model.
         """
         try:
-            pose = [float(v) for v in platform]
-        except (TypeError, ValueError):
+            entries = list(platform)
+        except TypeError:
             raise ConfigurationError(f"platform pose must be [x, y, yaw], got {platform!r}") from None
-        if len(pose) != 3:
-            raise ConfigurationError(f"platform pose must be [x, y, yaw], got {list(platform)!r}")
-        for label, value in zip(("x", "y", "yaw"), pose):
-            if not math.isfinite(value):
-                raise ConfigurationError(f"platform {label} must be finite, got {value!r}")
+        if len(entries) != 3:
+            raise ConfigurationError(f"platform pose must be [x, y, yaw], got {entries!r}")
+        pose = [_finite_number(v, f"platform {label}") for label, v in zip(("x", "y", "yaw"), entries)]
         q = self.neutral()
         x, y, yaw = pose
         q[:4] = (x, y, math.cos(yaw), math.sin(yaw))
         for name, value in (joints or {}).items():
             if not self.model.existJointName(name) or self.model.getJointId(name) == 1:
                 raise JointNotFoundError(name, self.joint_names, where=f"robot {self.name}")
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ConfigurationError(f"joint {name!r} must be a finite number, got {value!r}")
+            value = _finite_number(value, f"joint {name!r}")
             joint = self.model.joints[self.model.getJointId(name)]
             if joint.nq == 2:  # continuous joint: (cos, sin)
                 q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
@@ -279,6 +322,19 @@ class Robot:
         return self.model.getFrameId(name)
 
 
+def _finite_number(value, what: str) -> float:
+    """``value`` as a finite float (any real number type), else a ConfigurationError naming it."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ConfigurationError(f"{what} must be a finite number, got {value!r}")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise ConfigurationError(f"{what} must be a finite number, got {value!r}")
+    return number
+
+
 def _positive_limit(name: str, kind: str, value) -> float:
     if value is None or isinstance(value, bool):
         raise LimitError(name, kind, value)
@@ -292,11 +348,11 @@ def _positive_limit(name: str, kind: str, value) -> float:
 
 
 def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
-    """Every joint and frame the spec names must exist in the URDF, with a usable type."""
+    """The URDF must be a supported tree, and every joint and frame the spec names must exist
+    in it with a usable type."""
+    check_supported(urdf, spec.urdf)
     joints, links = urdf.joint_map, urdf.link_map
-    named_joints = list(spec.arm_joint_names)
-    if spec.wheels is not None:
-        named_joints += [spec.wheels.right, spec.wheels.left]
+    named_joints = list(spec.active_joint_names)
     missing_joints = [j for j in named_joints if j not in joints]
     missing_frames = [a.end_effector for a in spec.arms if a.end_effector not in links and a.end_effector not in joints]
     if missing_joints or missing_frames:
@@ -308,7 +364,7 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
         raise SpecError(f"spec {spec.name!r} names what URDF {spec.urdf.name} lacks: {'; '.join(parts)}")
     for name in named_joints:
         if joints[name].type not in MOVING_JOINT_TYPES:
-            raise SpecError(f"joint {name!r} is {joints[name].type!r}; wheels and arm joints must move")
+            raise SpecError(f"joint {name!r} is {joints[name].type!r}; wheels, torso and arm joints must move")
     if spec.wheels is not None:
         for name in (spec.wheels.right, spec.wheels.left):
             if joints[name].type == "prismatic":
@@ -322,8 +378,9 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
     active = set(named_joints)
     for table, kind in ((spec.velocity_limits, "velocity"), (spec.effort_limits, "effort")):
         for name in table:
-            if name not in active and not (spec.platform == "omnidirectional" and name.startswith("base_")):
-                raise JointNotFoundError(name, sorted(active), where=f"[limits.{kind}] of {spec.name}")
+            if name not in active and not (spec.platform == "omnidirectional" and name in OMNI_COORDINATES):
+                valid = sorted(active) + (list(OMNI_COORDINATES) if spec.platform == "omnidirectional" else [])
+                raise JointNotFoundError(name, valid, where=f"[limits.{kind}] of {spec.name}")
 
 
 def _build_model(spec: RobotSpec) -> pin.Model:
@@ -331,9 +388,7 @@ def _build_model(spec: RobotSpec) -> pin.Model:
         model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
     except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
         raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {exc}") from exc
-    active = set(spec.arm_joint_names)
-    if spec.wheels is not None:
-        active |= {spec.wheels.right, spec.wheels.left}
+    active = set(spec.active_joint_names)
     q_ref = pin.neutral(model)
     locked = []
     for j in range(2, model.njoints):
@@ -352,10 +407,6 @@ def _build_model(spec: RobotSpec) -> pin.Model:
     if locked:
         model = pin.buildReducedModel(model, locked, q_ref)
     return model
-
-
-def _subtree_mass(model: pin.Model, joint_id: int) -> float:
-    return sum(model.inertias[j].mass for j in model.subtrees[joint_id])
 
 
 def _differential_drive(spec: RobotSpec, urdf, model: pin.Model) -> DifferentialDrive:
@@ -417,21 +468,19 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
     _check_spec_against_urdf(spec, urdf)
     model = _build_model(spec)
 
+    def v_index(name: str, role: str) -> int:
+        joint = model.joints[model.getJointId(name)]
+        if joint.nv != 1:
+            raise SpecError(f"{role} joint {name!r} has {joint.nv} degrees of freedom; expected 1")
+        return joint.idx_v
+
+    torso_v = tuple(v_index(name, "torso") for name in spec.torso)
     arms = []
     for arm in spec.arms:
-        v_indices = []
-        for name in arm.joints:
-            joint = model.joints[model.getJointId(name)]
-            if joint.nv != 1:
-                raise SpecError(f"arm joint {name!r} has {joint.nv} degrees of freedom; expected 1")
-            if _subtree_mass(model, model.getJointId(name)) <= 0.0:
-                raise UrdfError(str(spec.urdf), f"joint {name!r} moves links with no mass or inertia")
-            v_indices.append(joint.idx_v)
+        v_indices = tuple(v_index(name, "arm") for name in arm.joints)
         if not model.existFrame(arm.end_effector):
             raise FrameNotFoundError(arm.end_effector, [f.name for f in model.frames], where=spec.name)
-        arms.append(
-            Arm(arm.name, tuple(arm.joints), tuple(v_indices), arm.end_effector, model.getFrameId(arm.end_effector))
-        )
+        arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, model.getFrameId(arm.end_effector)))
 
     if spec.platform == "differential_drive":
         platform = _differential_drive(spec, urdf, model)
@@ -441,17 +490,19 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         platform = LockedPlatform()
 
     velocity, effort = {}, {}
-    for name in platform.reduced_names + spec.arm_joint_names:
-        if spec.platform == "omnidirectional" and name in platform.reduced_names:
-            vel, eff = None, None
-        else:
-            vel, eff = joint_limits(urdf, name)
-        vel = spec.velocity_limits.get(name, vel)
-        eff = spec.effort_limits.get(name, eff)
-        velocity[name] = _positive_limit(name, "velocity", vel)
-        effort[name] = _positive_limit(name, "effort", eff)
+    for name in platform.reduced_names + spec.torso + spec.arm_joint_names:
+        omni = spec.platform == "omnidirectional" and name in platform.reduced_names
+        vel, eff = (None, None) if omni else joint_limits(urdf, name)
+        for table, kind, value in ((velocity, "velocity", vel), (effort, "effort", eff)):
+            value = (spec.velocity_limits if kind == "velocity" else spec.effort_limits).get(name, value)
+            if value is None:
+                if omni:
+                    source = "an omnidirectional base takes its limits from the spec only"
+                    raise MissingLimitError(name, kind, source, _OMNI_UNITS[kind][name])
+                raise MissingLimitError(name, kind, f"the URDF joint has no <limit {kind}=...>")
+            table[name] = _positive_limit(name, kind, value)
 
-    return Robot(
+    robot = Robot(
         spec=spec,
         model=model,
         data=model.createData(),
@@ -460,4 +511,40 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         joint_velocity_limits=velocity,
         joint_effort_limits=effort,
         wheel_platform=None if isinstance(platform, LockedPlatform) else platform,
+        torso_joint_names=spec.torso,
+        torso_v_indices=torso_v,
+    )
+    _check_inertia(robot, urdf)
+    return robot
+
+
+def _check_inertia(robot: Robot, urdf) -> None:
+    """Every torso and arm joint must move some inertia, or P = S^T M S is singular.
+
+    The test is the joint's diagonal entry of M at the home configuration: the mass (prismatic)
+    or the moment of inertia about the axis (revolute) of everything the joint carries.
+
+    Raises:
+        UrdfError: naming the joint and the links it moves that have no mass or inertia.
+    """
+    M = pin.crba(robot.model, robot.data, robot.neutral())
+    for name, v in zip(robot.torso_joint_names, robot.torso_v_indices):
+        _require_inertia(robot, urdf, name, M[v, v])
+    for arm in robot.arms:
+        for name, v in zip(arm.joint_names, arm.v_indices):
+            _require_inertia(robot, urdf, name, M[v, v])
+
+
+def _require_inertia(robot: Robot, urdf, joint: str, diagonal: float) -> None:
+    # Below ~1e-12 (kg or kg m^2) the reduced inertia is numerically singular in double precision
+    # next to real links of 1e-3 .. 1e2; real robots' smallest links are far above it.
+    if diagonal > 1e-12:
+        return
+    links = subtree_links(urdf, joint)
+    empty = [link for link in links if not link_has_inertia(urdf, link)]
+    what = f"links with no mass or inertia: {', '.join(empty)}" if empty else "its links' mass lies on the joint axis"
+    raise UrdfError(
+        str(robot.spec.urdf),
+        f"joint {joint!r} moves link {links[0]!r} and what it carries, which have no mass or inertia "
+        f"about the joint axis ({what}); give link {links[0]!r} an <inertial> with mass",
     )

@@ -7,6 +7,8 @@ A spec is a small TOML file next to its URDF::
     platform = "differential_drive"        # or "fixed", "omnidirectional"
     default_task = "planar"
 
+    torso = ["torso_lift_joint"]            # optional: actuated joints shared by all arms
+
     [wheels]                                # differential drive only
     right = "wheel_right_joint"
     left = "wheel_left_joint"
@@ -23,8 +25,10 @@ A spec is a small TOML file next to its URDF::
 
     [limits.velocity]                       # optional overrides by joint name
     [limits.effort]
-    [reference]                             # positions of joints locked out of the model
-    torso_lift_joint = 0.15
+    [reference]                             # positions of joints locked out of the model,
+    torso_lift_joint = 0.15                 # and home positions of the moving ones
+
+The reduced velocity is ordered [platform, torso joints, arm 1 joints, arm 2 joints, ...].
 
 :class:`RobotSpec` is checked on construction for its own consistency; the cross-check
 against the URDF happens when the robot is loaded (:func:`mobmanip.model.load_robot`).
@@ -108,14 +112,17 @@ class RobotSpec:
         urdf: path of the URDF file.
         platform: ``"differential_drive"``, ``"fixed"`` or ``"omnidirectional"``.
         arms: the arms, in order (arm 1 first).
-        wheels: the drive wheels (differential drive only).
+        wheels: the drive wheels (differential drive only; other platforms take none).
         default_task: task space used when none is asked for.
         velocity_limits: per-joint velocity limit overrides (rad/s or m/s); for an
             omnidirectional base also ``base_x``, ``base_y`` (m/s) and ``base_yaw`` (rad/s).
         effort_limits: per-joint effort limit overrides (N m or N), same keys.
-        object_mass: mass of the default held object (kg).
-        reference: positions of joints that are not wheels or arm joints; they are locked at
-            these values (default 0) when the model is reduced.
+        object_mass: mass of the default held object (kg); 0 means the task point carries no load.
+        reference: positions of joints that are not wheels, torso or arm joints; they are
+            locked at these values (default 0) when the model is reduced. For a moving joint
+            the value is its home position (see :meth:`mobmanip.model.Robot.neutral`).
+        torso: actuated joints shared by all arms (e.g. a lift), base to tip; in the reduced
+            velocity they follow the platform and precede the arms.
         package_dirs: directories where ``package://`` mesh URIs are resolved.
         source: the spec file this came from, if any.
     """
@@ -128,8 +135,9 @@ class RobotSpec:
     default_task: str = "planar"
     velocity_limits: Mapping[str, float] = field(default_factory=dict)
     effort_limits: Mapping[str, float] = field(default_factory=dict)
-    object_mass: float = 1.0
+    object_mass: float = 0.0
     reference: Mapping[str, float] = field(default_factory=dict)
+    torso: tuple[str, ...] = ()
     package_dirs: tuple[Path, ...] = ()
     source: Path | None = None
 
@@ -138,6 +146,11 @@ class RobotSpec:
             raise SpecError(f"unknown platform {self.platform!r}; expected one of {', '.join(PLATFORM_KINDS)}")
         if self.platform == "differential_drive" and self.wheels is None:
             raise SpecError(f"robot {self.name!r}: a differential-drive platform needs [wheels]")
+        if self.platform != "differential_drive" and self.wheels is not None:
+            raise SpecError(
+                f"robot {self.name!r}: [wheels] is only for a differential_drive platform, not {self.platform!r} "
+                "(other platforms lock any wheels of the URDF); remove it"
+            )
         if not self.arms:
             raise SpecError(f"robot {self.name!r} has no arms")
         if self.default_task not in TASKS:
@@ -145,19 +158,30 @@ class RobotSpec:
         names = [a.name for a in self.arms]
         if len(set(names)) != len(names):
             raise SpecError(f"robot {self.name!r}: arm names repeat: {names}")
-        seen: dict[str, str] = {}
+        torso = tuple(self.torso)
+        if not all(isinstance(j, str) for j in torso):
+            raise SpecError(f"robot {self.name!r}: torso joints must be strings, got {list(torso)!r}")
+        if len(set(torso)) != len(torso):
+            raise SpecError(f"robot {self.name!r}: the torso lists a joint twice: {list(torso)}")
+        object.__setattr__(self, "torso", torso)
+        seen: dict[str, str] = dict.fromkeys(torso, "torso")
         for arm in self.arms:
             for joint in arm.joints:
                 if joint in seen:
-                    raise SpecError(f"joint {joint!r} belongs to arms {seen[joint]!r} and {arm.name!r}")
+                    owner = "the torso" if seen[joint] == "torso" else f"arm {seen[joint]!r}"
+                    raise SpecError(f"joint {joint!r} belongs to {owner} and to arm {arm.name!r}")
                 seen[joint] = arm.name
         if self.wheels is not None:
             for joint in (self.wheels.right, self.wheels.left):
                 if joint in seen:
-                    raise SpecError(f"joint {joint!r} is both a wheel and in arm {seen[joint]!r}")
+                    owner = "the torso" if seen[joint] == "torso" else f"arm {seen[joint]!r}"
+                    raise SpecError(f"joint {joint!r} is both a wheel and in {owner}")
         object.__setattr__(self, "velocity_limits", _frozen_limits(self.velocity_limits, "velocity"))
         object.__setattr__(self, "effort_limits", _frozen_limits(self.effort_limits, "effort"))
-        _positive("object", "mass", self.object_mass)
+        if isinstance(self.object_mass, bool) or not isinstance(self.object_mass, (int, float)):
+            raise SpecError(f"object mass must be a number, got {self.object_mass!r}")
+        if not math.isfinite(self.object_mass) or self.object_mass < 0.0:
+            raise SpecError(f"object mass must be finite and non-negative, got {self.object_mass!r}")
         reference = {}
         for joint, value in dict(self.reference).items():
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
@@ -172,6 +196,12 @@ class RobotSpec:
         """All arm joints, arm by arm in spec order."""
         return tuple(j for arm in self.arms for j in arm.joints)
 
+    @property
+    def active_joint_names(self) -> tuple[str, ...]:
+        """Every joint that stays free in the model: wheels (right, left), torso, then arms."""
+        wheels = (self.wheels.right, self.wheels.left) if self.wheels is not None else ()
+        return wheels + self.torso + self.arm_joint_names
+
 
 def _require(table: Mapping, key: str, kind: type, where: str):
     if key not in table:
@@ -182,16 +212,25 @@ def _require(table: Mapping, key: str, kind: type, where: str):
     return value
 
 
+def _optional(table: Mapping, key: str, kind: type, where: str, default):
+    if key not in table:
+        return default
+    value = table[key]
+    if not isinstance(value, kind):
+        raise SpecError(f"{where}: {key!r} must be a {kind.__name__}, got {value!r}")
+    return value
+
+
 def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) -> RobotSpec:
     """Build a :class:`RobotSpec` from parsed TOML; ``base_dir`` anchors a relative URDF path."""
     where = str(source) if source else "spec"
-    known = {"name", "urdf", "platform", "default_task", "wheels", "arms", "object", "limits", "reference"}
+    known = {"name", "urdf", "platform", "default_task", "wheels", "torso", "arms", "object", "limits", "reference"}
     unknown = sorted(set(data) - known)
     if unknown:
         raise SpecError(f"{where}: unknown keys {unknown}; expected some of {sorted(known)}")
     urdf, package_dirs = resolve_urdf_reference(_require(data, "urdf", str, where), base_dir)
-    name = data.get("name", urdf.stem)
-    platform = data.get("platform", "differential_drive")
+    name = _optional(data, "name", str, where, urdf.stem)
+    platform = _optional(data, "platform", str, where, "differential_drive")
     wheels = None
     if "wheels" in data:
         table = _require(data, "wheels", dict, where)
@@ -209,29 +248,42 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
         arm_where = f"{where} [[arms]] #{k + 1}"
         if not isinstance(table, dict):
             raise SpecError(f"{arm_where}: expected a table, got {table!r}")
+        extra = sorted(set(table) - {"name", "joints", "end_effector"})
+        if extra:
+            raise SpecError(f"{arm_where}: unknown keys {extra}; expected 'name', 'joints' and 'end_effector'")
         joints = _require(table, "joints", list, arm_where)
         if not all(isinstance(j, str) for j in joints):
             raise SpecError(f"{arm_where}: joints must be strings, got {joints!r}")
         arms.append(
             ArmSpec(
-                name=table.get("name", f"arm{k + 1}"),
+                name=_optional(table, "name", str, arm_where, f"arm{k + 1}"),
                 joints=tuple(joints),
                 end_effector=_require(table, "end_effector", str, arm_where),
             )
         )
-    limits = data.get("limits", {})
-    obj = data.get("object", {})
+    torso = data.get("torso", [])
+    if not isinstance(torso, list) or not all(isinstance(j, str) for j in torso):
+        raise SpecError(f"{where}: 'torso' must be a list of joint names, got {torso!r}")
+    limits = _optional(data, "limits", dict, where, {})
+    obj = _optional(data, "object", dict, where, {})
+    extra = sorted(set(limits) - {"velocity", "effort"})
+    if extra:
+        raise SpecError(f"{where}: unknown keys in [limits]: {extra}; expected 'velocity' and 'effort'")
+    extra = sorted(set(obj) - {"mass"})
+    if extra:
+        raise SpecError(f"{where}: unknown keys in [object]: {extra}; expected 'mass'")
     return RobotSpec(
         name=name,
         urdf=urdf,
         platform=platform,
         arms=tuple(arms),
         wheels=wheels,
-        default_task=data.get("default_task", "planar"),
-        velocity_limits=limits.get("velocity", {}),
-        effort_limits=limits.get("effort", {}),
-        object_mass=obj.get("mass", 1.0),
-        reference=data.get("reference", {}),
+        default_task=_optional(data, "default_task", str, where, "planar"),
+        velocity_limits=_optional(limits, "velocity", dict, f"{where} [limits]", {}),
+        effort_limits=_optional(limits, "effort", dict, f"{where} [limits]", {}),
+        object_mass=obj.get("mass", 0.0),
+        reference=_optional(data, "reference", dict, where, {}),
+        torso=tuple(torso),
         package_dirs=package_dirs,
         source=source,
     )
@@ -245,9 +297,11 @@ def load_spec(path: str | Path) -> RobotSpec:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise SpecError(f"cannot read spec {path}: {exc.strerror or exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise SpecError(f"spec {path} is not UTF-8 text (byte {exc.start})") from exc
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -1,5 +1,5 @@
 """Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
 
-from . import analyze, paper
+from . import analyze, init_spec, paper
 
-COMMANDS = (analyze, paper)
+COMMANDS = (analyze, paper, init_spec)

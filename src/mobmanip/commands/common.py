@@ -9,21 +9,74 @@ import numpy as np
 from ..tasks import TASKS
 
 
+def add_urdf_options(parser: argparse.ArgumentParser, ee_required: bool = False) -> None:
+    """--ee FRAME (repeatable) and --wheels RIGHT,LEFT, for a robot inferred from a URDF."""
+    parser.add_argument(
+        "--ee",
+        action="append",
+        metavar="FRAME",
+        required=ee_required,
+        help="end-effector frame of an arm (repeat for each arm, arm 1 first)",
+    )
+    parser.add_argument(
+        "--wheels", metavar="RIGHT,LEFT", help="the drive-wheel joints, right then left (default: detected)"
+    )
+
+
 def add_robot_options(parser: argparse.ArgumentParser) -> None:
-    """ROBOT, --q and --task."""
-    parser.add_argument("robot", help="built-in robot name (e.g. planar_dual_arm) or path of a robot spec (.toml)")
+    """ROBOT or --urdf PATH --ee FRAME [--ee FRAME ...] [--wheels RIGHT,LEFT], then --q and --task."""
+    parser.add_argument(
+        "robot",
+        nargs="?",
+        help="built-in robot name (e.g. planar_dual_arm) or path of a robot spec (.toml); or use --urdf",
+    )
+    parser.add_argument("--urdf", metavar="PATH", help="a URDF to analyse without a spec (needs --ee)")
+    add_urdf_options(parser)
     parser.add_argument(
         "--q", metavar="Q.json", help='configuration {"platform": [x, y, yaw], "joints": {NAME: value}}'
     )
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
 
 
+def robot_spec_from_args(args):
+    """The spec named on the command line: ROBOT, or one inferred from --urdf and --ee.
+
+    Raises:
+        UsageError: neither or both of ROBOT and --urdf, --urdf without --ee, or --ee/--wheels
+            without --urdf.
+    """
+    from ..detect import parse_wheel_pair, spec_from_urdf
+    from ..errors import UsageError
+    from ..spec import find_spec
+
+    urdf, ee, wheels = getattr(args, "urdf", None), getattr(args, "ee", None), getattr(args, "wheels", None)
+    if args.robot is not None and urdf is not None:
+        raise UsageError(f"give either ROBOT ({args.robot}) or --urdf ({urdf}), not both")
+    if args.robot is None and urdf is None:
+        raise UsageError("give a ROBOT (built-in name or spec .toml) or --urdf PATH --ee FRAME")
+    if urdf is None:
+        if ee or wheels:
+            raise UsageError("--ee and --wheels go with --urdf; a ROBOT spec names its own end effectors and wheels")
+        return find_spec(args.robot)
+    if not ee:
+        raise UsageError(f"--urdf {urdf} needs at least one --ee FRAME (the end effector of each arm)")
+    return spec_from_urdf(urdf, ee, wheels=None if wheels is None else parse_wheel_pair(wheels))
+
+
 def load_robot_and_configuration(args):
-    """The robot named on the command line and its configuration (neutral without --q)."""
+    """The robot named on the command line and its configuration (home pose without --q)."""
+    from ..errors import MissingLimitError
     from ..io import read_configuration
     from ..model import load_robot
 
-    robot = load_robot(args.robot)
+    spec = robot_spec_from_args(args)
+    try:
+        robot = load_robot(spec)
+    except MissingLimitError as exc:
+        if getattr(args, "urdf", None) is None:
+            raise
+        hint = f"{exc.source} (with --urdf there is no spec yet: `mobmanip init-spec {args.urdf} --ee ...` writes one)"
+        raise MissingLimitError(exc.name, exc.kind, hint) from None
     q = read_configuration(robot, args.q) if args.q else robot.neutral()
     return robot, q
 
