@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dynamics import decouple, end_effector_positions, reduced_dynamics, unified_jacobian
+from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
 from .errors import TaskError
 from .grasp import HeldObject
@@ -90,9 +90,20 @@ def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> He
     With one arm the end effector itself is the task point (W = I).
     """
     mass = robot.spec.object_mass if mass is None else mass
+    _check_mass(mass)
+    return HeldObject.between(_end_effectors(robot, q), float(mass))
+
+
+def _check_mass(mass) -> None:
     if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
         raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
-    return HeldObject.between(end_effector_positions(robot, q), float(mass))
+
+
+def _end_effectors(robot: Robot, q: np.ndarray) -> np.ndarray:
+    import pinocchio as pin
+
+    pin.framesForwardKinematics(robot.model, robot.data, robot.check_configuration(q))
+    return placed_end_effectors(robot)
 
 
 def analyze(
@@ -118,10 +129,15 @@ def analyze(
     """
     q = robot.check_configuration(q)
     task = get_task(task or robot.spec.default_task)
-    dyn = reduced_dynamics(robot, q)
-    J_u = unified_jacobian(robot, q, task)
-    positions = end_effector_positions(robot, q)
-    obj = held_object if held_object is not None else default_object(robot, q, object_mass)
+    dyn = _reduced_dynamics(robot, q, None, False)
+    J_u = frame_jacobians(robot, q, task) @ robot.S
+    positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
+    if held_object is not None:
+        obj = held_object
+    else:
+        mass = robot.spec.object_mass if object_mass is None else object_mass
+        _check_mass(mass)
+        obj = HeldObject.between(positions, float(mass))
     if obj.offsets.shape != (len(robot.arms), 3):
         raise TaskError(f"the object needs one grasp offset per arm ({len(robot.arms)}), got {obj.offsets.shape}")
     W = obj.grasp_matrix(task)

@@ -12,6 +12,7 @@ terms R. In Pinocchio's tangent coordinates S is constant (Sdot = 0) for every p
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,9 +39,19 @@ class ReducedDynamics:
     M: np.ndarray
 
 
+@functools.cache
+def _crba_fills_lower_triangle() -> bool:
+    """Whether this Pinocchio's ``crba`` returns the full matrix (older releases fill only the upper part)."""
+    model = pin.buildSampleModelManipulator()
+    M = pin.crba(model, model.createData(), pin.neutral(model))
+    return bool(np.allclose(M, M.T) and np.any(np.tril(M, -1) != 0.0))
+
+
 def mass_matrix(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """The whole robot's joint-space mass matrix M(q), (nv, nv), from CRBA (symmetrized)."""
+    """The whole robot's joint-space mass matrix M(q), (nv, nv), from CRBA (full, symmetric)."""
     M = pin.crba(robot.model, robot.data, q)
+    if _crba_fills_lower_triangle():
+        return M.copy()
     return np.triu(M) + np.triu(M, 1).T
 
 
@@ -67,7 +78,10 @@ def reduced_dynamics(
         x: reduced velocity, (nx,); ``None`` means at rest (then xi = -S^T g).
         decoupled: zero the platform-arm blocks of P (see :func:`decouple`).
     """
-    q = robot.check_configuration(q)
+    return _reduced_dynamics(robot, robot.check_configuration(q), x, decoupled)
+
+
+def _reduced_dynamics(robot: Robot, q: np.ndarray, x: np.ndarray | None, decoupled: bool) -> ReducedDynamics:
     S = robot.S
     M = mass_matrix(robot, q)
     if x is None:
@@ -81,7 +95,7 @@ def reduced_dynamics(
     P = 0.5 * (P + P.T)
     if decoupled:
         P = decouple(robot, P)
-    return ReducedDynamics(P=P, Q=S.T @ robot.B, xi=-S.T @ (h + M @ sdot_x), M=M)
+    return ReducedDynamics(P=P, Q=robot.Q, xi=-S.T @ (h + M @ sdot_x), M=M)
 
 
 def frame_jacobians(robot: Robot, q: np.ndarray, task: str | TaskSpace) -> np.ndarray:
@@ -102,12 +116,15 @@ def frame_jacobians(robot: Robot, q: np.ndarray, task: str | TaskSpace) -> np.nd
 
 def unified_jacobian(robot: Robot, q: np.ndarray, task: str | TaskSpace) -> np.ndarray:
     """J_u = J S: end-effector task velocities from reduced velocities, (m * n_arms, nx)."""
-    q = robot.check_configuration(q)
-    return frame_jacobians(robot, q, task) @ robot.S
+    return frame_jacobians(robot, robot.check_configuration(q), task) @ robot.S
 
 
 def end_effector_positions(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """World positions of the end effectors, (n_arms, 3) (after a Jacobian or FK call)."""
-    q = robot.check_configuration(q)
-    pin.framesForwardKinematics(robot.model, robot.data, q)
+    """World positions of the end effectors, (n_arms, 3)."""
+    pin.framesForwardKinematics(robot.model, robot.data, robot.check_configuration(q))
+    return placed_end_effectors(robot)
+
+
+def placed_end_effectors(robot: Robot) -> np.ndarray:
+    """End-effector positions from ``robot.data`` as last updated (FK or Jacobians), (n_arms, 3)."""
     return np.array([robot.data.oMf[arm.frame_id].translation for arm in robot.arms])

@@ -27,6 +27,10 @@ import numpy as np
 from .errors import ModelError
 
 _RANK_RTOL = 1e-10
+# Fast paths work with Gram matrices (squared condition numbers); they are used only while the
+# smallest eigenvalue exceeds this fraction of the largest (condition number below 1e4), which
+# keeps their results within ~1e-12 of the SVD path. Otherwise the SVD path runs.
+_FAST_RTOL = 1e-8
 
 
 def _null_space(A: np.ndarray, n: int) -> np.ndarray:
@@ -196,8 +200,16 @@ def kinematic_ellipsoid(J_u: np.ndarray, W: np.ndarray, velocity_limits: np.ndar
     """
     J_hat = J_u * np.asarray(velocity_limits, dtype=float)  # J Y^-1
     m = W.shape[0]
+    # Well-conditioned case (J_hat of full row rank): the set is v_o^T W (J_hat J_hat^T)^-1 W^T v_o <= 1.
+    w, U = np.linalg.eigh(J_hat @ J_hat.T)
+    if w[0] > _FAST_RTOL * w[-1]:
+        B = W @ U
+        A = (B / w) @ B.T
+        lam, V = np.linalg.eigh(0.5 * (A + A.T))
+        if lam[0] > 0.0:
+            return Ellipsoid(np.zeros(m), 1.0 / np.sqrt(lam), V.T.copy(), A, False, False)
+    # General case: image of the unit ball of the joint motions a rigid object can follow.
     Wt_pinv = np.linalg.pinv(W.T)  # left inverse of W^T: v_o = (W^T)^+ v
-    # Joint motions whose end-effector velocities a rigid object can follow.
     inconsistent = J_hat - W.T @ (Wt_pinv @ J_hat)
     N = _null_space(inconsistent, J_hat.shape[1])
     return Ellipsoid.from_generator(np.zeros(m), Wt_pinv @ J_hat @ N)
@@ -231,18 +243,63 @@ def dynamic_ellipsoid(
         cannot accelerate in (W^T a_o outside the range of J).
     """
     m = W.shape[0]
+    Z = 1.0 / np.asarray(effort_limits, dtype=float)
+    if _is_identity(Q):
+        Q = None  # skip the solves with Q (the usual case: wheel and joint torques)
+    w, U = np.linalg.eigh(J_u @ J_u.T)
+    if w[0] > _FAST_RTOL * w[-1]:
+        # Well-conditioned case: J of full row rank, every W^T a_o is reachable.
+        J_pinv = J_u.T @ ((U / w) @ U.T)
+        W_pinv = np.linalg.solve(W @ W.T, W).T
+        fast = _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, None)
+        if fast is not None:
+            return fast
     J_pinv = np.linalg.pinv(J_u, rcond=_RANK_RTOL)
     W_pinv = np.linalg.pinv(W)
-    Q_inv = np.linalg.inv(Q)
-    Lam = Q_inv @ (P @ J_pinv @ W.T + J_u.T @ W_pinv @ M_o)
-    mu = Q_inv @ (-xi + J_u.T @ (W_pinv @ g_o))
-    Z = 1.0 / np.asarray(effort_limits, dtype=float)
     # Object accelerations the end effectors can follow at rest: W^T a_o in range(J).
     N = _null_space(W.T - J_u @ (J_pinv @ W.T), m)
-    L = Z[:, None] * (Lam @ N)
-    mu_bar = Z * mu
     if N.shape[1] == 0:
+        mu_bar = Z * _torque_offset(J_u, W_pinv, Q, xi, g_o)
         return Ellipsoid.from_generator(np.zeros(m), np.zeros((m, 1)), empty=bool(np.linalg.norm(mu_bar) >= 1.0))
+    return _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N)
+
+
+def _torque_offset(J_u, W_pinv, Q, xi, g_o) -> np.ndarray:
+    """mu_o = Q^-1 (-xi + J^T W^+ g_o): torques that hold robot and object still (Q None: identity)."""
+    mu = -xi + J_u.T @ (W_pinv @ g_o)
+    return mu if Q is None else np.linalg.solve(Q, mu)
+
+
+def _is_identity(Q: np.ndarray) -> bool:
+    return Q.shape[0] == Q.shape[1] and bool(np.all(Q == np.eye(Q.shape[0])))
+
+
+def _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N) -> Ellipsoid | None:
+    """The dynamic ellipsoid restricted to object accelerations a_o = N b (N orthonormal, m x d).
+
+    With L = Z Lambda_o N and mu_bar = Z mu_o, ||L b + mu_bar||^2 <= 1 is an ellipsoid around
+    b_c = -L^+ mu_bar of "radius" rho^2 = 1 - |mu_bar outside range(L)|^2. The fast path (N None,
+    i.e. the identity) works from the Gram matrix L^T L and returns None when it is too
+    ill-conditioned for that. Q None stands for the identity.
+    """
+    m = W.shape[0]
+    Lam = P @ (J_pinv @ W.T) + J_u.T @ (W_pinv @ M_o)
+    if Q is not None:
+        Lam = np.linalg.solve(Q, Lam)
+    L = Z[:, None] * (Lam if N is None else Lam @ N)
+    mu_bar = Z * _torque_offset(J_u, W_pinv, Q, xi, g_o)
+    if N is None:
+        gram = L.T @ L
+        s2, V = np.linalg.eigh(0.5 * (gram + gram.T))
+        if s2[0] <= _FAST_RTOL * s2[-1]:
+            return None
+        t = V.T @ (L.T @ mu_bar)
+        along2 = float(np.sum(t * t / s2))
+        center = -(V @ (t / s2))
+        rho2 = 1.0 - max(float(mu_bar @ mu_bar) - along2, 0.0)
+        if rho2 <= 0.0:
+            return Ellipsoid.from_generator(center, np.zeros((m, 1)), empty=True)
+        return Ellipsoid(center, np.sqrt(rho2 / s2), V.T.copy(), gram / rho2, False, False)
     U, s, Vt = np.linalg.svd(L, full_matrices=False)
     if s[-1] <= _RANK_RTOL * max(s[0], 1e-300):
         raise ModelError(

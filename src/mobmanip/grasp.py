@@ -37,7 +37,10 @@ def grasp_block(task: str | TaskSpace, offset: np.ndarray) -> np.ndarray:
 
 def grasp_matrix(task: str | TaskSpace, offsets: np.ndarray) -> np.ndarray:
     """W = [W_1 W_2 ...] for grasps at ``offsets`` (k, 3) from the object centre, (m, m k)."""
+    task = get_task(task)
     offsets = np.atleast_2d(np.asarray(offsets, dtype=float))
+    if not task.angular_rows:  # no rotation in the task: every W_i is the identity
+        return np.tile(np.eye(task.dim), (1, len(offsets)))
     return np.hstack([grasp_block(task, r) for r in offsets])
 
 
@@ -73,13 +76,15 @@ class HeldObject:
         center = points.mean(axis=0)
         offsets = points - center
         if inertia is None:
-            radius = float(np.max(np.linalg.norm(offsets, axis=1))) if len(points) > 1 else 0.0
-            inertia = 0.4 * mass * radius**2 * np.eye(3)
+            radius2 = float(np.max(np.einsum("ij,ij->i", offsets, offsets)))
+            inertia = 0.4 * mass * radius2 * np.eye(3)
         return cls(float(mass), np.asarray(inertia, dtype=float), center, offsets)
 
     def inertia_matrix(self, task: str | TaskSpace) -> np.ndarray:
         """M_o in the task space: mass on linear rows, rotational inertia on angular rows, (m, m)."""
         task = get_task(task)
+        if not task.angular_rows:
+            return self.mass * np.eye(task.dim)
         full = np.zeros((6, 6))
         full[:3, :3] = self.mass * np.eye(3)
         full[3:, 3:] = self.inertia
@@ -95,7 +100,7 @@ class HeldObject:
         task = get_task(task)
         full = np.zeros(6)
         full[:3] = -self.mass * np.asarray(gravity, dtype=float)
-        return full[list(task.rows)]
+        return full[task.index]
 
     def grasp_matrix(self, task: str | TaskSpace) -> np.ndarray:
         """W for this object's grasp points, (m, m k)."""

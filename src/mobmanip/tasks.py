@@ -30,6 +30,11 @@ class TaskSpace:
         return len(self.rows)
 
     @property
+    def index(self) -> np.ndarray:
+        """``rows`` as an integer array, for fancy indexing."""
+        return np.array(self.rows)
+
+    @property
     def angular(self) -> np.ndarray:
         return np.array([r >= 3 for r in self.rows])
 
