@@ -27,9 +27,9 @@ import numpy as np
 from .errors import ModelError
 
 _RANK_RTOL = 1e-10
-# Fast paths work with Gram matrices (squared condition numbers); they are used only while the
-# smallest eigenvalue exceeds this fraction of the largest (condition number below 1e4), which
-# keeps their results within ~1e-12 of the SVD path. Otherwise the SVD path runs.
+# Fast paths assume full rank (J of full row rank, every W^T a_o reachable) and skip the null-space
+# projections; they run while the smallest singular value exceeds this fraction of the largest.
+# Otherwise the general path handles the (near-)singular case exactly.
 _FAST_RTOL = 1e-8
 
 
@@ -200,12 +200,12 @@ def kinematic_ellipsoid(J_u: np.ndarray, W: np.ndarray, velocity_limits: np.ndar
     """
     J_hat = J_u * np.asarray(velocity_limits, dtype=float)  # J Y^-1
     m = W.shape[0]
-    # Well-conditioned case (J_hat of full row rank): the set is v_o^T W (J_hat J_hat^T)^-1 W^T v_o <= 1.
-    w, U = np.linalg.eigh(J_hat @ J_hat.T)
-    if w[0] > _FAST_RTOL * w[-1]:
-        B = W @ U
-        A = (B / w) @ B.T
-        lam, V = np.linalg.eigh(0.5 * (A + A.T))
+    # Full row rank J_hat = U diag(s) V^T: the set is v_o^T W U diag(s^-2) U^T W^T v_o <= 1.
+    U, s, _ = np.linalg.svd(J_hat, full_matrices=False)
+    if s.shape[0] == J_hat.shape[0] and s[-1] > _FAST_RTOL * s[0]:
+        B = (W @ U) / s
+        A = B @ B.T
+        lam, V = np.linalg.eigh(A)
         if lam[0] > 0.0:
             return Ellipsoid(np.zeros(m), 1.0 / np.sqrt(lam), V.T.copy(), A, False, False)
     # General case: image of the unit ball of the joint motions a rigid object can follow.
@@ -246,10 +246,10 @@ def dynamic_ellipsoid(
     Z = 1.0 / np.asarray(effort_limits, dtype=float)
     if _is_identity(Q):
         Q = None  # skip the solves with Q (the usual case: wheel and joint torques)
-    w, U = np.linalg.eigh(J_u @ J_u.T)
-    if w[0] > _FAST_RTOL * w[-1]:
-        # Well-conditioned case: J of full row rank, every W^T a_o is reachable.
-        J_pinv = J_u.T @ ((U / w) @ U.T)
+    U, s, Vt = np.linalg.svd(J_u, full_matrices=False)
+    if s.shape[0] == J_u.shape[0] and s[-1] > _FAST_RTOL * s[0]:
+        # J of full row rank: every W^T a_o is reachable.
+        J_pinv = (Vt.T / s) @ U.T
         W_pinv = np.linalg.solve(W @ W.T, W).T
         fast = _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, None)
         if fast is not None:
@@ -278,9 +278,9 @@ def _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N) -> Ellipsoid
     """The dynamic ellipsoid restricted to object accelerations a_o = N b (N orthonormal, m x d).
 
     With L = Z Lambda_o N and mu_bar = Z mu_o, ||L b + mu_bar||^2 <= 1 is an ellipsoid around
-    b_c = -L^+ mu_bar of "radius" rho^2 = 1 - |mu_bar outside range(L)|^2. The fast path (N None,
-    i.e. the identity) works from the Gram matrix L^T L and returns None when it is too
-    ill-conditioned for that. Q None stands for the identity.
+    b_c = -L^+ mu_bar of "radius" rho^2 = 1 - |mu_bar outside range(L)|^2. N None stands for the
+    identity (the fast path), which returns None when L is too ill-conditioned for it; Q None
+    stands for the identity.
     """
     m = W.shape[0]
     Lam = P @ (J_pinv @ W.T) + J_u.T @ (W_pinv @ M_o)
@@ -288,19 +288,18 @@ def _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N) -> Ellipsoid
         Lam = np.linalg.solve(Q, Lam)
     L = Z[:, None] * (Lam if N is None else Lam @ N)
     mu_bar = Z * _torque_offset(J_u, W_pinv, Q, xi, g_o)
+    U, s, Vt = np.linalg.svd(L, full_matrices=False)
     if N is None:
-        gram = L.T @ L
-        s2, V = np.linalg.eigh(0.5 * (gram + gram.T))
-        if s2[0] <= _FAST_RTOL * s2[-1]:
+        if s[-1] <= _FAST_RTOL * s[0]:
             return None
-        t = V.T @ (L.T @ mu_bar)
-        along2 = float(np.sum(t * t / s2))
-        center = -(V @ (t / s2))
-        rho2 = 1.0 - max(float(mu_bar @ mu_bar) - along2, 0.0)
+        along = U.T @ mu_bar
+        center = -(Vt.T @ (along / s))
+        rho2 = 1.0 - max(float(mu_bar @ mu_bar - along @ along), 0.0)
         if rho2 <= 0.0:
             return Ellipsoid.from_generator(center, np.zeros((m, 1)), empty=True)
-        return Ellipsoid(center, np.sqrt(rho2 / s2), V.T.copy(), gram / rho2, False, False)
-    U, s, Vt = np.linalg.svd(L, full_matrices=False)
+        # s is descending, so the semi-axes rho / s come out ascending: reverse them.
+        matrix = (Vt.T * (s * s / rho2)) @ Vt
+        return Ellipsoid(center, (math.sqrt(rho2) / s)[::-1], Vt[::-1].copy(), matrix, False, False)
     if s[-1] <= _RANK_RTOL * max(s[0], 1e-300):
         raise ModelError(
             "an object acceleration needs no joint torque: the model has moving links without mass or inertia"
