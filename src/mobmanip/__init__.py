@@ -4,16 +4,21 @@ Unified kinematic and dynamic task-space ellipsoids for mobile manipulators whos
 subject to nonholonomic constraints, built on Pinocchio.
 """
 
+from .analysis import Analysis, analyze
 from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
+from .ellipsoids import Ellipsoid
 from .errors import MobmanipError
 from .model import Robot, load_robot
 from .spec import RobotSpec, load_spec
 
 __all__ = [
+    "Analysis",
+    "Ellipsoid",
     "MobmanipError",
     "ReducedDynamics",
     "Robot",
     "RobotSpec",
+    "analyze",
     "load_robot",
     "load_spec",
     "reduced_dynamics",
