@@ -254,10 +254,14 @@ def dynamic_ellipsoid(
         fast = _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, None)
         if fast is not None:
             return fast
-    J_pinv = np.linalg.pinv(J_u, rcond=_RANK_RTOL)
+    # Range of J and J^+ from one SVD with one rank decision, so that they agree near a
+    # singularity (a residual W^T - J J^+ W^T would carry round-off of order cond(J) eps).
+    rank = int(np.sum(s > _RANK_RTOL * max(s[0], 1e-300)))
+    U_r, s_r, Vt_r = U[:, :rank], s[:rank], Vt[:rank]
+    J_pinv = (Vt_r.T / s_r) @ U_r.T
     W_pinv = np.linalg.pinv(W)
     # Object accelerations the end effectors can follow at rest: W^T a_o in range(J).
-    N = _null_space(W.T - J_u @ (J_pinv @ W.T), m)
+    N = _null_space(W.T - U_r @ (U_r.T @ W.T), m)
     if N.shape[1] == 0:
         mu_bar = Z * _torque_offset(J_u, W_pinv, Q, xi, g_o)
         return Ellipsoid.from_generator(np.zeros(m), np.zeros((m, 1)), empty=bool(np.linalg.norm(mu_bar) >= 1.0))
