@@ -383,24 +383,37 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
                 raise JointNotFoundError(name, valid, where=f"[limits.{kind}] of {spec.name}")
 
 
+def locked_joints(model: pin.Model, reference: Mapping[str, float], keep: set[str]) -> tuple[list[int], np.ndarray]:
+    """Joints of a full URDF model (planar root) to lock, and the configuration to lock them at.
+
+    Args:
+        model: the model built from the URDF with a planar root joint.
+        reference: positions by joint name (rad or m); joints not named sit at zero.
+        keep: names of the joints that stay in the model.
+
+    Returns:
+        The ids of the joints to lock and the reference configuration for ``pin.buildReducedModel``.
+    """
+    q_ref = pin.neutral(model)
+    locked = []
+    for j in range(2, model.njoints):
+        name, joint = model.names[j], model.joints[j]
+        value = reference.get(name, 0.0)
+        if joint.nq == 2:  # continuous joint: (cos, sin)
+            q_ref[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
+        else:
+            q_ref[joint.idx_q] = value
+        if name not in keep:
+            locked.append(j)
+    return locked, q_ref
+
+
 def _build_model(spec: RobotSpec) -> pin.Model:
     try:
         model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
     except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
         raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {exc}") from exc
-    active = set(spec.active_joint_names)
-    q_ref = pin.neutral(model)
-    locked = []
-    for j in range(2, model.njoints):
-        name = model.names[j]
-        joint = model.joints[j]
-        value = spec.reference.get(name, 0.0)
-        if joint.nq == 2:
-            q_ref[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
-        else:
-            q_ref[joint.idx_q] = value
-        if name not in active:
-            locked.append(j)
+    locked, q_ref = locked_joints(model, spec.reference, keep=set(spec.active_joint_names))
     unknown_ref = sorted(set(spec.reference) - {model.names[j] for j in range(2, model.njoints)})
     if unknown_ref:
         raise JointNotFoundError(unknown_ref[0], list(model.names[2:]), where=f"[reference] of {spec.name}")

@@ -1,5 +1,5 @@
 """Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
 
-from . import analyze, init_spec, paper
+from . import analyze, init_spec, paper, view
 
-COMMANDS = (analyze, paper, init_spec)
+COMMANDS = (analyze, paper, init_spec, view)

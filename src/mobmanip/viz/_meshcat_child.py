@@ -1,0 +1,90 @@
+"""The child process of :class:`mobmanip.viz.server.MeshcatServer`: meshcat's bridge on 127.0.0.1.
+
+Run by file path (no ``mobmanip`` import, so it starts fast). Prints ``zmq_url=...`` and
+``web_url=...`` on standard output, then serves until terminated or until ``--parent-pid`` has gone.
+Exit code 3: the ``--port`` asked for is in use.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+# Run by path, this file's folder heads sys.path; keep its sibling modules from shadowing others.
+if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(__file__)):
+    del sys.path[0]
+
+LOOPBACK = "127.0.0.1"
+PORT_BUSY_EXIT = 3
+
+
+def _bridge_class():
+    import tornado.web
+    from meshcat.servers import zmqserver
+
+    class LoopbackApplication(tornado.web.Application):
+        def listen(self, port, address=LOOPBACK, **kwargs):
+            return super().listen(port, address=address, **kwargs)
+
+    class LoopbackBridge(zmqserver.ZMQWebSocketBridge):
+        """meshcat's bridge with its web server bound to 127.0.0.1."""
+
+        def make_app(self):
+            return LoopbackApplication(
+                [
+                    (
+                        r"/static/(.*)",
+                        zmqserver.StaticFileHandlerNoCache,
+                        {"path": zmqserver.VIEWER_ROOT, "default_filename": zmqserver.VIEWER_HTML},
+                    ),
+                    (r"/", zmqserver.WebSocketHandler, {"bridge": self}),
+                ]
+            )
+
+    return LoopbackBridge
+
+
+def _watch_parent(bridge, parent_pid: int) -> None:
+    import tornado.ioloop
+
+    def check():
+        try:
+            os.kill(parent_pid, 0)
+        except ProcessLookupError:
+            bridge.ioloop.stop()
+            return
+        except PermissionError:  # pid reused by another user's process: the parent is gone
+            bridge.ioloop.stop()
+            return
+
+    tornado.ioloop.PeriodicCallback(check, 1000).start()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="meshcat server on 127.0.0.1 (started by mobmanip)")
+    parser.add_argument("--port", type=int, default=None, help="HTTP port (default: first free from 7000)")
+    parser.add_argument("--parent-pid", type=int, default=None, help="stop when this process has gone")
+    args = parser.parse_args(argv)
+    bridge_class = _bridge_class()
+    try:
+        bridge = bridge_class(host=LOOPBACK, port=args.port)
+    except OSError as exc:  # only with an explicit --port: without it meshcat scans on
+        print(f"port {args.port} is in use: {exc}", file=sys.stderr)
+        return PORT_BUSY_EXIT
+    print(f"zmq_url={bridge.zmq_url}")
+    print(f"web_url={bridge.web_url}")
+    sys.stdout.flush()
+    # Nobody reads our stdout after the two lines: send later output to the log.
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+    if args.parent_pid is not None:
+        _watch_parent(bridge, args.parent_pid)
+    try:
+        bridge.run()
+    except KeyboardInterrupt:
+        pass
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
