@@ -5,6 +5,7 @@ subject to nonholonomic constraints, built on Pinocchio.
 """
 
 from .analysis import Analysis, analyze
+from .batch import BatchAnalysis, analyze_batch
 from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
 from .ellipsoids import Ellipsoid
 from .errors import MobmanipError
@@ -13,12 +14,14 @@ from .spec import RobotSpec, load_spec
 
 __all__ = [
     "Analysis",
+    "BatchAnalysis",
     "Ellipsoid",
     "MobmanipError",
     "ReducedDynamics",
     "Robot",
     "RobotSpec",
     "analyze",
+    "analyze_batch",
     "load_robot",
     "load_spec",
     "reduced_dynamics",

@@ -204,10 +204,11 @@ def kinematic_ellipsoid(J_u: np.ndarray, W: np.ndarray, velocity_limits: np.ndar
     U, s, _ = np.linalg.svd(J_hat, full_matrices=False)
     if s.shape[0] == J_hat.shape[0] and s[-1] > _FAST_RTOL * s[0]:
         B = (W @ U) / s
-        A = B @ B.T
-        lam, V = np.linalg.eigh(A)
-        if lam[0] > 0.0:
-            return Ellipsoid(np.zeros(m), 1.0 / np.sqrt(lam), V.T.copy(), A, False, False)
+        # A = B B^T; semi-axes and axes from the SVD of B (eigh(A) would square its conditioning
+        # and lose the large semi-axes' accuracy).
+        Ub, sb, _ = np.linalg.svd(B, full_matrices=False)
+        if sb[-1] > 0.0:
+            return Ellipsoid(np.zeros(m), 1.0 / sb[::-1], Ub[:, ::-1].T.copy(), B @ B.T, False, False)
     # General case: image of the unit ball of the joint motions a rigid object can follow.
     Wt_pinv = np.linalg.pinv(W.T)  # left inverse of W^T: v_o = (W^T)^+ v
     inconsistent = J_hat - W.T @ (Wt_pinv @ J_hat)

@@ -1,0 +1,153 @@
+"""``mobmanip sweep ROBOT``: ellipsoid indices over a grid of object placements, headings and limits."""
+
+from __future__ import annotations
+
+import argparse
+
+GRID_HELP = """\
+grid syntax (each axis): START:STOP:COUNT gives COUNT evenly spaced values from START to STOP,
+both included (0:360:37 is every 10 deg); V1,V2,... lists values; V is a single value.
+
+The object sits at --angle (deg from the platform heading; 0 in front, 90 to the left) and
+horizontal --distance (m) from the arms' common first joint (P_o for planar_dual_arm); both
+arms hold it in the mirrored posture that maximises each arm's own manipulability at that reach
+(arm 1 bends right); this needs two 3-joint planar arms with vertical axes sharing their first
+joint, like planar_dual_arm. --heading turns the platform in the world (deg). The wheel scales multiply
+both wheels' velocity / effort limits (after --wheel-velocity-limit / --wheel-effort-limit).
+
+indices per ellipsoid (kinematic: m/s, rad/s; dynamic: m/s^2, rad/s^2): volume, isotropy
+(min/max semi-axis), semi_axis_K (K = 1 is the largest) and capacity: max d . p over the
+ellipsoid for the unit --direction d (radial: from the base towards the object; tangential: 90
+deg to its left; or task coordinates in the world, e.g. 1,0).
+
+outputs: OUT.npz (grid axes, index arrays of shape angle x distance x heading x velocity scale x
+effort scale [x task axis], settings) and OUT.csv (one row per grid point); --plot writes OUT.png
+with --index over the two varying grid axes (polar when they are angle and distance; one panel
+per value of a third varying axis, up to 6; further axes at their first value).
+
+From Python, mobmanip.sweep.run_sweep(spec, grid, executor=client.get_executor()) runs the
+same sweep on a dask.distributed cluster (workers load the robot from its name or spec path).
+
+example:
+  mobmanip sweep planar_dual_arm --angle 0:360:37 --distance 0.6:1.4:9 \\
+      --wheel-velocity-scale 0.1:1:5 --plot --index kinematic.volume --output fig/sweep
+"""
+
+
+def register(sub) -> None:
+    parser = sub.add_parser(
+        "sweep",
+        help="indices over object direction, distance, heading and limit scales (parallel)",
+        description="Sweep the unified ellipsoids' indices over a grid, on local cores.",
+        epilog=GRID_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("robot", help="built-in robot name (e.g. planar_dual_arm) or path of a robot spec (.toml)")
+    grid = parser.add_argument_group("grid")
+    grid.add_argument(
+        "--angle", default="0:360:37", metavar="GRID", help="object direction, deg (default: %(default)s)"
+    )
+    grid.add_argument(
+        "--distance", default="0.6:1.4:9", metavar="GRID", help="object distance, m (default: %(default)s)"
+    )
+    grid.add_argument("--heading", default="0", metavar="GRID", help="platform heading, deg (default: %(default)s)")
+    grid.add_argument("--wheel-velocity-scale", default="1", metavar="GRID", help="factor on the wheels' qdot_max")
+    grid.add_argument("--wheel-effort-scale", default="1", metavar="GRID", help="factor on the wheels' tau_max")
+    analysis = parser.add_argument_group("analysis")
+    analysis.add_argument("--task", help="task space (default: the spec's default_task)")
+    analysis.add_argument(
+        "--wheel-velocity-limit", type=float, metavar="RAD_S", help="both wheels' qdot_max before scaling"
+    )
+    analysis.add_argument("--wheel-effort-limit", type=float, metavar="NM", help="both wheels' tau_max before scaling")
+    analysis.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
+    analysis.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
+    analysis.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    analysis.add_argument(
+        "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
+    )
+    run = parser.add_argument_group("execution and output")
+    run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
+    run.add_argument("--chunk-size", type=int, default=4096, metavar="N", help="configurations per task")
+    run.add_argument("--output", "-o", default="sweep", metavar="OUT", help="output prefix (default: %(default)s)")
+    run.add_argument("--no-csv", action="store_true", help="write only OUT.npz")
+    run.add_argument("--plot", action="store_true", help="also write OUT.png")
+    run.add_argument("--index", default="kinematic.volume", help="index to plot (default: %(default)s)")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run_command)
+
+
+def _direction(text: str):
+    from ..errors import UsageError
+
+    if text in ("radial", "tangential"):
+        return text
+    try:
+        return tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise UsageError(f"--direction must be radial, tangential or numbers like 1,0; got {text!r}") from None
+
+
+def run_command(args) -> int:
+    from pathlib import Path
+
+    from ..errors import UsageError
+    from ..io import OutputError
+    from ..spec import find_spec
+    from ..sweep import SweepGrid, SweepSpec, check_index_name, plot_sweep, run_sweep
+    from ..tasks import TASKS
+
+    grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
+    if args.task is not None and args.task not in TASKS:
+        raise UsageError(f"unknown task {args.task!r}; expected one of {', '.join(TASKS)}")
+    if args.plot:  # check the index name before the sweep runs
+        check_index_name(args.index, len(TASKS[args.task or find_spec(args.robot).default_task].rows))
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be at least 1, got {args.workers}")
+    if args.chunk_size < 1:
+        raise UsageError(f"--chunk-size must be at least 1, got {args.chunk_size}")
+    spec = SweepSpec(
+        robot=args.robot,
+        task=args.task,
+        platform=args.platform,
+        object_mass=args.object_mass,
+        decoupled=args.decoupled,
+        wheel_velocity_limit=args.wheel_velocity_limit,
+        wheel_effort_limit=args.wheel_effort_limit,
+        direction=_direction(args.direction),
+    )
+    out = Path(args.output)
+    if out.parent and not out.parent.exists():
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"cannot create output directory {out.parent}: {exc.strerror or exc}") from exc
+    a, d, h, v, e = grid.shape
+    print(
+        f"sweep {args.robot}: {a} angles x {d} distances x {h} headings = {grid.n_configurations} configurations, "
+        f"x {v} velocity x {e} effort scales"
+    )
+    result = run_sweep(spec, grid, workers=args.workers, chunk_size=args.chunk_size, progress=not args.no_progress)
+    unreachable = int((~result.reachable).sum())
+    if unreachable:
+        print(f"{unreachable} of {result.reachable.size} configurations are out of the arms' reach (NaN indices)")
+    for kind in ("kinematic", "dynamic"):
+        values = result.index(f"{kind}.volume")
+        if result.reachable.any():
+            print(f"{kind} volume: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
+    written = [result.save_npz(out.with_name(out.name + ".npz"))]
+    if not args.no_csv:
+        written.append(result.save_csv(out.with_name(out.name + ".csv")))
+    if args.plot:
+        written.append(plot_sweep(result, args.index, out.with_name(out.name + ".png")))
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _nanfmt(values, how: str) -> str:
+    import numpy as np
+
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return "n/a"
+    return f"{(finite.min() if how == 'min' else finite.max()):.4g}"

@@ -1,0 +1,925 @@
+"""Sweeps: the ellipsoids' indices over object direction, distance, platform heading and limits.
+
+A sweep places the object at direction ``angle`` (deg, from the platform heading, 0 in front,
+90 to the left) and horizontal ``distance`` (m) from the arms' common first joint (P_o for the
+paper's robot), turns the platform to ``heading`` (deg), and scales the wheels' velocity and
+effort limits; at every grid point it records, for the kinematic and the dynamic ellipsoid, the
+volume, the isotropy, the semi-axes and the directional capacity (how far the ellipsoid reaches
+along a direction: ``max d . p`` over it, for a unit d).
+
+Arm postures (robots with two 3-joint planar arms with vertical axes, like ``planar_dual_arm``):
+at a given reach, each arm's posture family is one-dimensional (q3 free, q2 from the reach,
+two elbow branches); the sweep takes the posture that maximises the arm's own manipulability
+sqrt(det(J J^T)) of its 2 x 3 horizontal Jacobian along that family (dense sampling of q3 with
+zooming refinement, see :func:`posture_at_reach`). At the reach of the globally optimal posture
+this is the paper's posture (:func:`mobmanip.casestudy.optimal_posture`). Arm 1 (right) bends
+to the right and arm 2 takes the mirror image about the line from the base to the object; q1 of
+each arm points its end effector at the object. Both end effectors hold the object at its centre.
+Distances beyond the reach of the arms are marked unreachable (indices NaN).
+
+Execution: the grid's configurations are cut into chunks that run through any
+:class:`concurrent.futures.Executor` (a local process pool by default; a ``dask.distributed``
+client's ``get_executor()`` runs the same sweep across machines). Each worker loads the robot
+itself from the spec name or path; only small arrays travel. Results do not depend on the
+executor or the number of workers: chunk boundaries are fixed by ``chunk_size``.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import math
+import multiprocessing
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .batch import BatchSetup, EllipsoidBatch, check_configurations, ellipsoids_from_terms, iter_terms
+from .errors import MobmanipError, SpecError, UsageError
+from .model import Robot, load_robot
+from .tasks import get_task
+
+#: Grid axes in order: the result arrays have this shape (one entry per value).
+AXES = ("angle_deg", "distance", "heading_deg", "wheel_velocity_scale", "wheel_effort_scale")
+#: Per-ellipsoid scalar indices recorded by a sweep.
+SCALAR_INDICES = ("volume", "isotropy", "capacity")
+
+
+class GridError(UsageError):
+    """A grid specification that cannot be parsed or makes no sense."""
+
+
+def parse_grid(text: str, name: str = "grid", positive: bool = False) -> np.ndarray:
+    """Values of one grid axis from ``START:STOP:COUNT``, ``V1,V2,...`` or a single value.
+
+    ``START:STOP:COUNT`` gives COUNT evenly spaced values from START to STOP, both included
+    (``0:360:37`` is every 10 degrees). Values must be finite; with ``positive``, above zero.
+
+    Raises:
+        GridError: the text does not parse, COUNT is not a positive integer, or a value is bad.
+    """
+    text = str(text).strip()
+    hint = "use START:STOP:COUNT, V1,V2,... or V"
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise GridError(f"{name}: expected START:STOP:COUNT, got {text!r}")
+        count_text = parts[2].strip()
+        if not count_text.isdigit() or int(count_text) < 1:
+            raise GridError(f"{name}: COUNT must be a positive integer, got {parts[2]!r} in {text!r}")
+        try:
+            start, stop = float(parts[0]), float(parts[1])
+        except ValueError:
+            raise GridError(f"{name}: not a number in {text!r} ({hint})") from None
+        count = int(count_text)
+        if count == 1 and start != stop:
+            raise GridError(f"{name}: one value from {start:g} to {stop:g}? use COUNT >= 2 or a single value")
+        values = np.linspace(start, stop, count)
+    else:
+        try:
+            values = np.array([float(v) for v in text.split(",")])
+        except ValueError:
+            raise GridError(f"{name}: not a number in {text!r} ({hint})") from None
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        raise GridError(f"{name}: values must be finite numbers, got {text!r}")
+    if positive and np.any(values <= 0.0):
+        raise GridError(f"{name}: values must be positive, got {text!r}")
+    return values
+
+
+@dataclass(frozen=True)
+class SweepGrid:
+    """The grid of a sweep; every axis is a 1-D array of values.
+
+    Attributes:
+        angle_deg: object directions from the platform heading (deg).
+        distance: horizontal distances of the object from the arms' first joint (m).
+        heading_deg: platform headings in the world (deg).
+        wheel_velocity_scale: factors on both wheels' velocity limit.
+        wheel_effort_scale: factors on both wheels' effort limit.
+    """
+
+    angle_deg: np.ndarray
+    distance: np.ndarray
+    heading_deg: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    wheel_velocity_scale: np.ndarray = field(default_factory=lambda: np.ones(1))
+    wheel_effort_scale: np.ndarray = field(default_factory=lambda: np.ones(1))
+
+    def __post_init__(self):
+        for name in AXES:
+            values = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+            if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values)):
+                raise GridError(f"{name}: a non-empty list of finite numbers is needed")
+            if name in ("distance", "wheel_velocity_scale", "wheel_effort_scale") and np.any(values <= 0.0):
+                raise GridError(f"{name}: values must be positive")
+            object.__setattr__(self, name, values)
+
+    @classmethod
+    def parse(
+        cls,
+        angle: str,
+        distance: str,
+        heading: str = "0",
+        wheel_velocity_scale: str = "1",
+        wheel_effort_scale: str = "1",
+    ) -> SweepGrid:
+        """Build a grid from the command line's texts (see :func:`parse_grid`)."""
+        return cls(
+            parse_grid(angle, "--angle"),
+            parse_grid(distance, "--distance", positive=True),
+            parse_grid(heading, "--heading"),
+            parse_grid(wheel_velocity_scale, "--wheel-velocity-scale", positive=True),
+            parse_grid(wheel_effort_scale, "--wheel-effort-scale", positive=True),
+        )
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(getattr(self, name)) for name in AXES)
+
+    @property
+    def n_configurations(self) -> int:
+        """Distinct configurations: angle x distance x heading (limits do not change q)."""
+        a, d, h, _, _ = self.shape
+        return a * d * h
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.shape))
+
+
+# ----------------------------------------------------------------------------------------------
+# arm postures at a given reach
+
+
+@dataclass(frozen=True)
+class PlanarArm:
+    """A 3-joint arm whose joint axes are vertical: its geometry in the horizontal plane.
+
+    Attributes:
+        base: (x, y) of the first joint in the platform frame (m).
+        links: link vectors a_1, a_2, a_3 (first joint to second, second to third, third to the
+            end effector) at zero joint angles, (3, 2) (m).
+        signs: +1 where a joint turns about +z, -1 about -z.
+    """
+
+    base: np.ndarray
+    links: np.ndarray
+    signs: np.ndarray
+
+    def tip(self, theta: np.ndarray) -> np.ndarray:
+        """End effector relative to the base for rotation angles theta = signs * q, (..., 2)."""
+        theta = np.asarray(theta, dtype=float)
+        phi1 = theta[..., 0]
+        phi2 = phi1 + theta[..., 1]
+        phi3 = phi2 + theta[..., 2]
+        out = np.zeros(theta.shape[:-1] + (2,))
+        for phi, a in zip((phi1, phi2, phi3), self.links):
+            c, s = np.cos(phi), np.sin(phi)
+            out[..., 0] += c * a[0] - s * a[1]
+            out[..., 1] += s * a[0] + c * a[1]
+        return out
+
+    @property
+    def max_reach(self) -> float:
+        return float(np.sum(np.linalg.norm(self.links, axis=1)))
+
+
+def planar_arm(robot: Robot, arm_index: int) -> PlanarArm:
+    """The horizontal geometry of a 3-joint arm with vertical axes, read from the model.
+
+    Raises:
+        SpecError: the arm does not have 3 joints with vertical axes, or its motion is not the
+            planar chain this reads (checked against Pinocchio at random angles).
+    """
+    arm = robot.arms[arm_index]
+    if len(arm.joint_names) != 3:
+        raise SpecError(f"sweep postures need 3-joint planar arms; arm {arm.name!r} has {len(arm.joint_names)}")
+    model, data = robot.model, robot.data
+    q0 = robot.configuration(joints=dict.fromkeys(arm.joint_names, 0.0))
+    pin.computeJointJacobians(model, data, q0)
+    pin.updateFramePlacements(model, data)
+    points, signs = [], []
+    for name in arm.joint_names:
+        jid = model.getJointId(name)
+        axis = pin.getJointJacobian(model, data, jid, pin.WORLD)[3:, model.joints[jid].idx_v]
+        if abs(abs(axis[2]) - 1.0) > 1e-9:
+            raise SpecError(
+                f"sweep postures need vertical arm joints; {name!r} turns about {np.round(axis, 3).tolist()}"
+            )
+        signs.append(1.0 if axis[2] > 0 else -1.0)
+        points.append(data.oMi[jid].translation[:2].copy())
+    points.append(data.oMf[arm.frame_id].translation[:2].copy())
+    points = np.array(points)
+    result = PlanarArm(points[0].copy(), np.diff(points, axis=0), np.array(signs))
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        q = rng.uniform(-math.pi, math.pi, 3)
+        qa = robot.configuration(joints=dict(zip(arm.joint_names, q)))
+        pin.framesForwardKinematics(model, data, qa)
+        actual = data.oMf[arm.frame_id].translation[:2] - result.base
+        if np.max(np.abs(actual - result.tip(result.signs * q))) > 1e-9:
+            raise SpecError(f"arm {arm.name!r} of {robot.name!r} is not a planar chain with vertical axes")
+    return result
+
+
+def _manipulability(arm: PlanarArm, theta2: np.ndarray, theta3: np.ndarray) -> np.ndarray:
+    """sqrt(det(J J^T)) of the 2 x 3 horizontal Jacobian at q1 = 0 (it does not depend on q1).
+
+    Column i of J is +-e_z x (tip - p_i); by Cauchy-Binet det(J J^T) is the sum of the squared
+    2 x 2 minors, i.e. of the squared cross products of the vectors tip - p_i.
+    """
+    zeros = np.zeros_like(theta2)
+    tip = arm.tip(np.stack([zeros, theta2, theta3], axis=-1))
+    phi = theta2 + theta3
+    a3 = arm.links[2]
+    last = np.stack([np.cos(phi) * a3[0] - np.sin(phi) * a3[1], np.sin(phi) * a3[0] + np.cos(phi) * a3[1]], axis=-1)
+    cols = (tip, tip - arm.links[0], last)  # tip - p_1, tip - p_2, tip - p_3
+    det = np.zeros_like(theta2)
+    for i in range(3):
+        for j in range(i + 1, 3):
+            det += (cols[i][..., 0] * cols[j][..., 1] - cols[i][..., 1] * cols[j][..., 0]) ** 2
+    return np.sqrt(det)
+
+
+def _theta2_for(arm: PlanarArm, theta3: np.ndarray, reach, branch: int) -> np.ndarray:
+    """theta2 putting the end effector at ``reach`` from the base (NaN where impossible);
+    ``theta3`` and ``reach`` broadcast."""
+    a1 = arm.links[0]
+    c3, s3 = np.cos(theta3), np.sin(theta3)
+    bx = arm.links[1][0] + c3 * arm.links[2][0] - s3 * arm.links[2][1]
+    by = arm.links[1][1] + s3 * arm.links[2][0] + c3 * arm.links[2][1]
+    nb = np.hypot(bx, by)
+    na = float(np.linalg.norm(a1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos_ = (np.asarray(reach) ** 2 - na**2 - nb**2) / (2.0 * na * nb)
+        cos_ = np.where(np.abs(cos_) <= 1.0 + 1e-12, np.clip(cos_, -1.0, 1.0), np.nan)  # rounding at full reach
+        angle = np.arccos(cos_)
+    return math.atan2(a1[1], a1[0]) - np.arctan2(by, bx) + branch * angle
+
+
+@dataclass(frozen=True)
+class ReachPosture:
+    """The most manipulable posture of one arm at a given reach.
+
+    Attributes:
+        q: joint angles (q1, q2, q3) with q1 = 0 (rad).
+        manipulability: sqrt(det(J J^T)) of the arm's horizontal Jacobian (m^2).
+        bearing: direction of the end effector from the first joint at q1 = 0 (rad).
+    """
+
+    q: tuple[float, float, float]
+    manipulability: float
+    bearing: float
+
+
+def postures_at_reaches(
+    arm: PlanarArm, reaches: Sequence[float], bend: int = 1, samples: int = 721, refinements: int = 8
+) -> np.ndarray:
+    """Maximise an arm's own manipulability over its postures at each reach (vectorised).
+
+    The family at a reach is parametrised by theta3 in [-pi, pi] and the elbow branch; theta2
+    follows from the reach. The search samples theta3 on ``samples`` points on both branches,
+    then zooms ``refinements`` times around the best sample (41 samples over +-2 previous steps
+    each time), to about (4 pi / samples) / 10^refinements rad in theta3 -- below the flatness
+    of the maximum in double precision (about 1e-8 rad).
+
+    Args:
+        arm: the arm's planar geometry.
+        reaches: distances from the first joint to the end effector (m), (D,).
+        bend: +1 for the posture with positive bearing (the end effector counterclockwise from
+            the first link at q1 = 0: the elbow to the right of the line from base to end
+            effector, as :func:`mobmanip.casestudy.optimal_posture`), -1 for its mirror image
+            (-q2, -q3) (exact when the links are collinear at zero angles, as in the paper's arm).
+
+    Returns:
+        (D, 4): q2, q3 (rad), manipulability (m^2), bearing (rad); NaN rows where no posture
+        reaches that far (or that close).
+    """
+    reaches = np.asarray(reaches, dtype=float).reshape(-1)
+    D = reaches.size
+    theta3 = np.linspace(-math.pi, math.pi, samples)
+    step = theta3[1] - theta3[0]
+    offsets = np.linspace(-1.0, 1.0, 41)
+    best = np.full((D, 3), np.nan)  # value, theta2, theta3
+    rho = reaches[:, None]
+    for branch in (1, -1):
+        w = _manipulability(arm, _theta2_for(arm, theta3[None, :], rho, branch), np.broadcast_to(theta3, (D, samples)))
+        found = ~np.all(np.isnan(w), axis=1)
+        i = np.argmax(np.where(np.isnan(w), -np.inf, w), axis=1)
+        center, width = theta3[i], np.full(D, 2.0 * step)
+        for _ in range(refinements):
+            t3 = center[:, None] + width[:, None] * offsets[None, :]
+            w = _manipulability(arm, _theta2_for(arm, t3, rho, branch), t3)
+            ok = ~np.all(np.isnan(w), axis=1)
+            j = np.argmax(np.where(np.isnan(w), -np.inf, w), axis=1)
+            center = np.where(ok, t3[np.arange(D), j], center)
+            width = width / 20.0
+        t2 = _theta2_for(arm, center, reaches, branch)
+        value = _manipulability(arm, t2, center)
+        better = found & np.isfinite(value) & ~(value <= best[:, 0] + 1e-15)
+        best[better] = np.stack([value, t2, center], axis=1)[better]
+    value, t2, t3 = best.T
+    tip = arm.tip(np.stack([np.zeros(D), t2, t3], axis=1))
+    bearing = np.arctan2(tip[:, 1], tip[:, 0])
+    mirror = bend * bearing < 0
+    t2, t3 = np.where(mirror, -t2, t2), np.where(mirror, -t3, t3)
+    tip = arm.tip(np.stack([np.zeros(D), t2, t3], axis=1))
+    bearing = np.arctan2(tip[:, 1], tip[:, 0])
+    out = np.stack([t2 * arm.signs[1], t3 * arm.signs[2], value, bearing], axis=1)
+    out[~(reaches > 0.0)] = np.nan
+    return out
+
+
+def posture_at_reach(arm: PlanarArm, reach: float, bend: int = 1, **search) -> ReachPosture | None:
+    """The most manipulable posture at one reach (see :func:`postures_at_reaches`), or ``None``."""
+    q2, q3, value, bearing = postures_at_reaches(arm, [reach], bend, **search)[0]
+    if math.isnan(value):
+        return None
+    return ReachPosture((0.0, float(q2), float(q3)), float(value), float(bearing))
+
+
+@dataclass(frozen=True)
+class PostureTable:
+    """The two arms' postures at every distance of a grid.
+
+    Attributes:
+        reachable: whether both arms reach each distance, (D,).
+        right: (q2, q3, bearing) of arm 1 per distance, (D, 3) (NaN where unreachable).
+        left: the same for arm 2, (D, 3).
+        signs: axis signs of each arm's first joint, (2,).
+    """
+
+    reachable: np.ndarray
+    right: np.ndarray
+    left: np.ndarray
+    signs: np.ndarray
+
+
+def posture_table(robot: Robot, distances: Sequence[float]) -> PostureTable:
+    """Postures of both arms (arm 1 bending right, arm 2 its mirror image) at each distance.
+
+    Raises:
+        SpecError: not a differential drive with two planar 3-joint arms sharing their first
+            joint's position.
+    """
+    if len(robot.arms) != 2:
+        raise SpecError(
+            f"sweeps need a robot with two arms (like planar_dual_arm); {robot.name!r} has {len(robot.arms)}"
+        )
+    arms = [planar_arm(robot, 0), planar_arm(robot, 1)]
+    if np.max(np.abs(arms[0].base - arms[1].base)) > 1e-9:
+        raise SpecError(f"sweeps need both arms of {robot.name!r} to share their first joint's (x, y) position")
+    mirror = np.allclose(arms[0].links, arms[1].links, atol=1e-12) and np.array_equal(arms[0].signs, arms[1].signs)
+    right_all = postures_at_reaches(arms[0], distances, bend=1)
+    if mirror:
+        left_all = right_all * np.array([-1.0, -1.0, 1.0, -1.0])
+    else:
+        left_all = postures_at_reaches(arms[1], distances, bend=-1)
+    reachable = np.isfinite(right_all[:, 2]) & np.isfinite(left_all[:, 2])
+    right = np.where(reachable[:, None], right_all[:, [0, 1, 3]], np.nan)
+    left = np.where(reachable[:, None], left_all[:, [0, 1, 3]], np.nan)
+    return PostureTable(reachable, right, left, np.array([arms[0].signs[0], arms[1].signs[0]]))
+
+
+def sweep_configurations(
+    robot: Robot, grid: SweepGrid, table: PostureTable, flat: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Configurations at flat indices into (angle, distance, heading), and which are reachable.
+
+    Unreachable rows get the home posture (finite, but not meaningful).
+    """
+    ia, idist, ih = np.unravel_index(flat, grid.shape[:3])
+    n = len(flat)
+    qs = np.repeat(robot.neutral()[None, :], n, axis=0)
+    heading = np.radians(grid.heading_deg[ih])
+    qs[:, 0:2] = 0.0
+    qs[:, 2], qs[:, 3] = np.cos(heading), np.sin(heading)
+    alpha = np.radians(grid.angle_deg[ia])
+    reachable = table.reachable[idist]
+    model = robot.model
+    for arm, values, sign in zip(robot.arms, (table.right, table.left), table.signs):
+        q2, q3, bearing = (np.where(reachable, values[idist, c], 0.0) for c in range(3))
+        q1 = np.where(reachable, sign * (alpha - bearing), 0.0)
+        for name, value in zip(arm.joint_names, (q1, q2, q3)):
+            joint = model.joints[model.getJointId(name)]
+            if joint.nq == 2:
+                qs[:, joint.idx_q], qs[:, joint.idx_q + 1] = np.cos(value), np.sin(value)
+            else:
+                qs[:, joint.idx_q] = value
+    return qs, reachable
+
+
+# ----------------------------------------------------------------------------------------------
+# the job and its chunks
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """What to sweep, in a form any worker process or machine can rebuild the robot from.
+
+    Attributes:
+        robot: built-in robot name or spec path (workers load it themselves; for a cluster,
+            the path must exist on every worker).
+        task: task space; defaults to the spec's ``default_task``.
+        platform: ``"own"`` or ``"fixed"`` (locked platform).
+        object_mass: object mass (kg); defaults to the spec's.
+        decoupled: decoupled dynamics (the paper's Sec. 4.3).
+        wheel_velocity_limit: both wheels' qdot_max before scaling (rad/s); default: the spec's.
+        wheel_effort_limit: both wheels' tau_max before scaling (N m); default: the spec's.
+        direction: the capacity direction: ``"radial"`` (from the base towards the object,
+            in the horizontal plane), ``"tangential"`` (90 deg to the left of it) or task
+            coordinates, e.g. ``(1, 0)`` (world frame; normalised).
+    """
+
+    robot: str
+    task: str | None = None
+    platform: str = "own"
+    object_mass: float | None = None
+    decoupled: bool = False
+    wheel_velocity_limit: float | None = None
+    wheel_effort_limit: float | None = None
+    direction: str | tuple[float, ...] = "radial"
+
+    def load(self) -> Robot:
+        """The robot with the platform and base wheel limits applied."""
+        robot = load_robot(self.robot)
+        if self.wheel_velocity_limit is not None or self.wheel_effort_limit is not None:
+            robot = robot.with_wheel_limits(velocity=self.wheel_velocity_limit, effort=self.wheel_effort_limit)
+        if self.platform in ("fixed", "locked"):
+            robot = robot.with_platform("fixed")
+        elif self.platform != "own":
+            raise UsageError(f"platform must be 'own' or 'fixed', got {self.platform!r}")
+        return robot
+
+
+@dataclass(frozen=True)
+class _Job:
+    spec: SweepSpec
+    grid: SweepGrid
+    table: PostureTable
+    start: int
+    stop: int
+    chunk_size: int
+
+
+_WORKER_CACHE: dict = {}
+
+
+def _worker_setup(spec: SweepSpec):
+    """The robot and batch setup for a spec, loaded once per process."""
+    key = spec
+    if key not in _WORKER_CACHE:
+        robot = spec.load()
+        _WORKER_CACHE.clear()
+        _WORKER_CACHE[key] = (robot, BatchSetup(robot, spec.task, spec.object_mass))
+    return _WORKER_CACHE[key]
+
+
+def _wheel_limits(robot: Robot, base: np.ndarray, scales: np.ndarray) -> list[np.ndarray]:
+    """Limit vectors with both drive wheels' entries scaled (unchanged with a locked platform)."""
+    n_eta = robot.platform.n_reduced if robot.platform.kind == "differential_drive" else 0
+    out = []
+    for s in scales:
+        limits = np.array(base, dtype=float)
+        limits[:n_eta] *= s
+        out.append(limits)
+    return out
+
+
+def _directions(spec: SweepSpec, m: int, alpha_world: np.ndarray) -> np.ndarray:
+    """Unit capacity directions per configuration, (n, m)."""
+    d = np.zeros((len(alpha_world), m))
+    if isinstance(spec.direction, str):
+        phi = alpha_world + (math.pi / 2 if spec.direction == "tangential" else 0.0)
+        d[:, 0], d[:, 1] = np.cos(phi), np.sin(phi)
+    else:
+        d[:] = np.asarray(spec.direction, dtype=float) / np.linalg.norm(spec.direction)
+    return d
+
+
+def _record(e: EllipsoidBatch, directions: np.ndarray, rows: np.ndarray, out: dict, prefix: str, col: int):
+    out[f"{prefix}_volume"][rows, col] = e.volume
+    out[f"{prefix}_isotropy"][rows, col] = e.isotropy
+    capacity = e.support(directions)
+    out[f"{prefix}_capacity"][rows, col] = np.where(e.empty, np.nan, capacity)
+    out[f"{prefix}_semi_axes"][rows, col] = e.semi_axes
+    out[f"{prefix}_degenerate"][rows, col] = e.degenerate
+    out[f"{prefix}_empty"][rows, col] = e.empty
+
+
+def _empty_chunk(n: int, nv: int, ne: int, m: int) -> dict:
+    out = {"reachable": np.zeros(n, dtype=bool)}
+    for prefix, count in (("kinematic", nv), ("dynamic", ne)):
+        for name in SCALAR_INDICES:
+            out[f"{prefix}_{name}"] = np.full((n, count), np.nan)
+        out[f"{prefix}_semi_axes"] = np.full((n, count, m), np.nan)
+        out[f"{prefix}_degenerate"] = np.zeros((n, count), dtype=bool)
+        out[f"{prefix}_empty"] = np.zeros((n, count), dtype=bool)
+    return out
+
+
+def _run_job(job: _Job) -> tuple[int, dict]:
+    """One chunk of a sweep: its configurations' indices at every limit scale (a worker task)."""
+    robot, setup = _worker_setup(job.spec)
+    grid = job.grid
+    flat = np.arange(job.start, job.stop)
+    qs, reachable = sweep_configurations(robot, grid, job.table, flat)
+    nv, ne, m = len(grid.wheel_velocity_scale), len(grid.wheel_effort_scale), setup.m
+    out = _empty_chunk(len(flat), nv, ne, m)
+    out["reachable"][:] = reachable
+    rows = np.flatnonzero(reachable)
+    if rows.size == 0:
+        return job.start, out
+    qs = check_configurations(robot, qs[rows])
+    ia, _, ih = np.unravel_index(flat[rows], grid.shape[:3])
+    alpha_world = np.radians(grid.angle_deg[ia] + grid.heading_deg[ih])
+    directions = _directions(job.spec, m, alpha_world)
+    vlims = _wheel_limits(robot, robot.velocity_limits, grid.wheel_velocity_scale)
+    elims = _wheel_limits(robot, robot.effort_limits, grid.wheel_effort_scale)
+    for start, t in iter_terms(setup, qs, job.chunk_size):
+        n = t.J_u.shape[0]
+        sub = rows[start : start + n]
+        dirs = directions[start : start + n]
+        for col, vlim in enumerate(vlims):
+            kin = EllipsoidBatch.allocate(n, m)
+            ellipsoids_from_terms(setup, t, velocity_limits=vlim, kinematic=kin)
+            _record(kin, dirs, sub, out, "kinematic", col)
+        for col, elim in enumerate(elims):
+            dyn = EllipsoidBatch.allocate(n, m)
+            ellipsoids_from_terms(setup, t, effort_limits=elim, decoupled=job.spec.decoupled, dynamic=dyn)
+            _record(dyn, dirs, sub, out, "dynamic", col)
+    return job.start, out
+
+
+# ----------------------------------------------------------------------------------------------
+# results
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Indices over a sweep grid.
+
+    ``indices[name]`` has the grid's shape (angle, distance, heading, wheel velocity scale,
+    wheel effort scale), with a trailing task axis for ``*_semi_axes``. Names:
+    ``{kinematic,dynamic}_{volume,isotropy,capacity,semi_axes,degenerate,empty}``. Kinematic
+    indices do not depend on the effort scale, nor dynamic ones on the velocity scale; both are
+    repeated along that axis. Unreachable grid points hold NaN (and False flags).
+
+    Attributes:
+        spec: what was swept.
+        grid: the grid.
+        task: task-space name.
+        task_axes: labels of the task coordinates.
+        reachable: whether the arms reach each (angle, distance, heading), (A, D, H).
+        indices: the arrays described above.
+        postures: the arms' postures per distance.
+    """
+
+    spec: SweepSpec
+    grid: SweepGrid
+    task: str
+    task_axes: tuple[str, ...]
+    reachable: np.ndarray
+    indices: dict
+    postures: PostureTable
+
+    def index(self, name: str) -> np.ndarray:
+        """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
+
+        Raises:
+            UsageError: an unknown name (the message lists the valid ones).
+        """
+        kind, what, k = check_index_name(name, len(self.task_axes))
+        if k is None:
+            return self.indices[f"{kind}_{what}"]
+        return self.indices[f"{kind}_semi_axes"][..., k - 1]
+
+    def save_npz(self, path: str | Path) -> Path:
+        """Write the grid axes, the indices and the settings to a NumPy ``.npz`` file."""
+        path = Path(path)
+        arrays = {name: getattr(self.grid, name) for name in AXES}
+        arrays.update(self.indices)
+        arrays["reachable"] = self.reachable
+        arrays["posture_right"] = self.postures.right
+        arrays["posture_left"] = self.postures.left
+        meta = {
+            "robot": str(self.spec.robot),
+            "task": self.task,
+            "task_axes": ",".join(self.task_axes),
+            "platform": self.spec.platform,
+            "decoupled": str(self.spec.decoupled),
+            "object_mass": str(self.spec.object_mass),
+            "direction": str(self.spec.direction),
+            "axes": ",".join(AXES),
+        }
+        arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
+        with open(path, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        return path
+
+    def save_csv(self, path: str | Path) -> Path:
+        """Write one row per grid point: the axis values, reachability and every index."""
+        path = Path(path)
+        m = len(self.task_axes)
+        grids = np.meshgrid(*(getattr(self.grid, name) for name in AXES), indexing="ij")
+        reach = np.broadcast_to(self.reachable[..., None, None], self.grid.shape)
+        columns, header = [g.ravel() for g in grids], list(AXES)
+        columns.append(reach.ravel().astype(int))
+        header.append("reachable")
+        for kind in ("kinematic", "dynamic"):
+            for name in SCALAR_INDICES:
+                columns.append(self.indices[f"{kind}_{name}"].ravel())
+                header.append(f"{kind}_{name}")
+            for k in range(m):
+                columns.append(self.indices[f"{kind}_semi_axes"][..., k].ravel())
+                header.append(f"{kind}_semi_axis_{k + 1}")
+            for flag in ("degenerate", "empty"):
+                columns.append(self.indices[f"{kind}_{flag}"].ravel().astype(int))
+                header.append(f"{kind}_{flag}")
+        with open(path, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(header)
+            table = np.column_stack(columns)
+            step = 65536
+            for start in range(0, table.shape[0], step):
+                writer.writerows([f"{v:.12g}" for v in row] for row in table[start : start + step])
+        return path
+
+
+def check_index_name(name: str, m: int) -> tuple[str, str, int | None]:
+    """Split an index name into (kind, index, semi-axis number or None).
+
+    Raises:
+        UsageError: an unknown name (the message lists the valid ones for an m-dimensional task).
+    """
+    kind, _, what = str(name).replace("-", "_").partition(".")
+    if kind in ("kinematic", "dynamic"):
+        if what in SCALAR_INDICES:
+            return kind, what, None
+        if what.startswith("semi_axis_") and what[10:].isdigit() and 1 <= int(what[10:]) <= m:
+            return kind, "semi_axes", int(what[10:])
+    raise UsageError(f"unknown index {name!r}; expected one of {', '.join(index_names(m))}")
+
+
+def index_names(m: int) -> list[str]:
+    """Names accepted by :meth:`SweepResult.index` for an m-dimensional task."""
+    out = []
+    for kind in ("kinematic", "dynamic"):
+        out += [f"{kind}.{name}" for name in SCALAR_INDICES]
+        out += [f"{kind}.semi_axis_{k}" for k in range(1, m + 1)]
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# running
+
+
+def default_workers() -> int:
+    """Worker processes by default: the cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _local_pool(workers: int, mp_context: str | None) -> cf.ProcessPoolExecutor:
+    """A process pool. By default "fork" where the platform has it (no ``__main__`` guard needed
+    in user scripts; the workers still load the robot themselves: the parent never fills their
+    cache), else "spawn"."""
+    if mp_context is None:
+        mp_context = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(mp_context))
+
+
+def run_sweep(
+    spec: SweepSpec,
+    grid: SweepGrid,
+    *,
+    executor: cf.Executor | None = None,
+    workers: int | None = None,
+    chunk_size: int = 4096,
+    progress: bool = False,
+    mp_context: str | None = None,
+) -> SweepResult:
+    """Run a sweep, serially, on local processes, or on any ``concurrent.futures.Executor``.
+
+    Args:
+        spec: what to sweep (robot by name or spec path, task, platform, limits...).
+        grid: the grid.
+        executor: run the chunks here, e.g. ``dask.distributed.Client(...).get_executor()``;
+            the caller owns it. Without one: a local process pool of ``workers`` processes, or
+            in this process when ``workers == 1``.
+        workers: local worker processes (default: the usable cores).
+        chunk_size: configurations per task; memory per task is proportional to it, and the
+            results do not depend on it only up to rounding (keep it fixed to compare runs).
+        progress: show a tqdm progress bar on standard error.
+        mp_context: start method of the local pool ("fork", "spawn", "forkserver"); default
+            "fork" where available. With "spawn"/"forkserver", scripts need the usual
+            ``if __name__ == "__main__":`` guard.
+
+    Raises:
+        SpecError: the robot's arms are not planar 3-joint arms sharing their base (postures).
+        GridError, UsageError: bad grid or settings.
+    """
+    if not isinstance(chunk_size, int) or chunk_size < 1:
+        raise UsageError(f"chunk size must be a positive integer, got {chunk_size!r}")
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise UsageError(f"workers must be a positive integer, got {workers!r}")
+    robot = spec.load()
+    task = get_task(spec.task or robot.spec.default_task)
+    spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim))
+    table = posture_table(robot, grid.distance)
+    _check_postures(robot, grid, table)
+    BatchSetup(robot, task.name, spec.object_mass)  # validate the object mass here, once
+    n = grid.n_configurations
+    jobs = [_Job(spec, grid, table, s, min(s + chunk_size, n), chunk_size) for s in range(0, n, chunk_size)]
+    nv, ne, m = len(grid.wheel_velocity_scale), len(grid.wheel_effort_scale), task.dim
+    merged = _empty_chunk(n, nv, ne, m)
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=n, unit="cfg", disable=not progress, desc=f"sweep {robot.name}", leave=False)
+
+    def store(start: int, out: dict) -> None:
+        stop = start + len(out["reachable"])
+        for key, value in out.items():
+            merged[key][start:stop] = value
+        bar.update(stop - start)
+
+    try:
+        if executor is None and (workers or default_workers()) == 1:
+            for job in jobs:
+                store(*_run_job(job))
+        elif executor is None:
+            with _local_pool(workers or default_workers(), mp_context) as pool:
+                _drain(pool, jobs, store, window=4 * (workers or default_workers()))
+        else:
+            _drain(executor, jobs, store, window=64)
+    finally:
+        bar.close()
+    return _assemble(spec, grid, task, merged, table)
+
+
+def _drain(executor: cf.Executor, jobs: list, store, window: int) -> None:
+    """Submit jobs with at most ``window`` in flight (bounded memory), store results as they come."""
+    pending = set()
+    queue = iter(jobs)
+    for job in queue:
+        pending.add(executor.submit(_run_job, job))
+        if len(pending) >= window:
+            done, pending = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for future in done:
+                store(*future.result())
+    for future in cf.as_completed(pending):
+        store(*future.result())
+
+
+def _check_direction(direction, m: int):
+    if isinstance(direction, str):
+        if direction not in ("radial", "tangential"):
+            raise UsageError(f"direction must be 'radial', 'tangential' or {m} numbers, got {direction!r}")
+        return direction
+    try:
+        values = tuple(float(v) for v in direction)
+    except (TypeError, ValueError):
+        raise UsageError(f"direction must be 'radial', 'tangential' or {m} numbers, got {direction!r}") from None
+    if len(values) != m or not all(math.isfinite(v) for v in values) or not any(values):
+        raise UsageError(f"direction must have {m} finite numbers, not all zero, got {list(values)}")
+    return values
+
+
+def _check_postures(robot: Robot, grid: SweepGrid, table: PostureTable) -> None:
+    """Both end effectors at the object for one configuration per reachable distance (FK check)."""
+    model, data = robot.model, robot.data
+    for i in np.flatnonzero(table.reachable):
+        flat = np.ravel_multi_index((0, i, 0), grid.shape[:3])
+        q = sweep_configurations(robot, grid, table, np.array([flat]))[0][0]
+        pin.framesForwardKinematics(model, data, q)
+        heading = math.radians(grid.angle_deg[0] + grid.heading_deg[0])
+        target = grid.distance[i] * np.array([math.cos(heading), math.sin(heading)])
+        for arm in robot.arms:
+            base = data.oMi[model.getJointId(arm.joint_names[0])].translation[:2]
+            tip = data.oMf[arm.frame_id].translation[:2]
+            if np.max(np.abs(tip - base - target)) > 1e-9 * max(1.0, grid.distance[i]):
+                raise MobmanipError(
+                    f"posture check failed: {arm.end_effector} misses the object at distance {grid.distance[i]:g} m"
+                )
+
+
+def _assemble(spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable) -> SweepResult:
+    a, d, h, nv, ne = grid.shape
+    m = task.dim
+    indices = {}
+    for key, value in merged.items():
+        if key == "reachable":
+            continue
+        kind = key.split("_", 1)[0]
+        count = nv if kind == "kinematic" else ne
+        tail = value.shape[2:]
+        arr = value.reshape((a, d, h, count) + tail)
+        if kind == "kinematic":
+            arr = np.broadcast_to(arr[:, :, :, :, None], (a, d, h, nv, ne) + tail)
+        else:
+            arr = np.broadcast_to(arr[:, :, :, None, :], (a, d, h, nv, ne) + tail)
+        indices[key] = np.ascontiguousarray(arr)
+    del m
+    return SweepResult(
+        spec=spec,
+        grid=grid,
+        task=task.name,
+        task_axes=task.labels,
+        reachable=merged["reachable"].reshape(a, d, h),
+        indices=indices,
+        postures=table,
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# plot
+
+_AXIS_LABELS = {
+    "angle_deg": "object direction (deg)",
+    "distance": "object distance (m)",
+    "heading_deg": "platform heading (deg)",
+    "wheel_velocity_scale": "wheel velocity scale",
+    "wheel_effort_scale": "wheel effort scale",
+}
+
+
+def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: int = 6) -> Path:
+    """Plot one index over the sweep's varying grid axes and save it (PNG, matplotlib Agg).
+
+    Two varying axes: a heat map, polar when they are angle and distance (0 deg up, 90 deg to
+    the left, like the robot seen from above facing up). A third varying axis gives one panel per
+    value (up to ``max_panels``, evenly picked); further axes are taken at their first value.
+    One varying axis: a line plot.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    values = result.index(index)
+    grid = result.grid
+    varying = [i for i, n in enumerate(grid.shape) if n > 1]
+    if 0 in varying and 1 in varying:
+        pair = [0, 1]
+    else:
+        pair = varying[:2]
+    rest = [i for i in varying if i not in pair]
+    panel_axis = rest[0] if rest and len(pair) == 2 else None
+    n_panel = 1 if panel_axis is None else grid.shape[panel_axis]
+    picks = np.unique(np.linspace(0, n_panel - 1, min(n_panel, max_panels)).round().astype(int))
+    polar = pair == [0, 1]
+    cols = min(len(picks), 3)
+    rows = math.ceil(len(picks) / cols)
+    fig = Figure(figsize=(4.2 * cols + 0.8, 4.0 * rows), layout="constrained")
+    FigureCanvasAgg(fig)
+    finite = values[np.isfinite(values)]
+    vmin, vmax = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    mesh = None
+    for p, pick in enumerate(picks):
+        ax = fig.add_subplot(rows, cols, p + 1, projection="polar" if polar else None)
+        index_tuple = [0] * 5
+        if panel_axis is not None:
+            index_tuple[panel_axis] = pick
+        sl = tuple(slice(None) if i in pair else index_tuple[i] for i in range(5))
+        data = values[sl]
+        if len(pair) == 2:
+            x = getattr(grid, AXES[pair[0]])
+            y = getattr(grid, AXES[pair[1]])
+            if polar:
+                ax.set_theta_zero_location("N")
+                mesh = ax.pcolormesh(np.radians(x), y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
+                ax.set_rlim(0.0, float(y.max()) * 1.05)
+            else:
+                mesh = ax.pcolormesh(x, y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
+                ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])
+                ax.set_ylabel(_AXIS_LABELS[AXES[pair[1]]])
+        elif len(pair) == 1:
+            x = getattr(grid, AXES[pair[0]])
+            ax.plot(x, data, marker=".")
+            ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])
+            ax.set_ylabel(index)
+        else:
+            ax.bar([index], [float(data)])
+        if panel_axis is not None:
+            ax.set_title(f"{_AXIS_LABELS[AXES[panel_axis]]} = {getattr(grid, AXES[panel_axis])[pick]:g}", fontsize=9)
+    if mesh is not None:
+        fig.colorbar(mesh, ax=fig.axes, label=index, shrink=0.8)
+    fixed = [
+        f"{_AXIS_LABELS[AXES[i]]} {getattr(grid, AXES[i])[0]:g}"
+        for i in range(5)
+        if i not in pair and i != panel_axis and grid.shape[i] > 1
+    ]
+    title = f"{result.spec.robot}: {index} ({result.task} task)"
+    if polar:
+        title += "; radius: object distance (m), angle: object direction"
+    if fixed:
+        title += "\nat " + ", ".join(fixed)
+    fig.suptitle(title, fontsize=10)
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path

@@ -1,0 +1,195 @@
+"""analyze_batch: the stacked analysis equals the single-configuration analyze, row by row."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mobmanip
+from conftest import random_configurations
+from mobmanip.analysis import analyze
+from mobmanip.batch import EllipsoidBatch, analyze_batch
+from mobmanip.errors import ConfigurationError, TaskError
+
+TOL = 1e-10  # relative to the ellipsoid's size: max(largest semi-axis, |centre|)
+
+
+@pytest.fixture(scope="module")
+def tiago():
+    return mobmanip.load_robot("tiago_dual")
+
+
+def assert_same_ellipsoid(batch_e, single_e, label=""):
+    """Equal to TOL of the ellipsoid's size: semi-axes, centre, G G^T, axes up to sign, flags."""
+    assert batch_e.degenerate == single_e.degenerate, label
+    assert batch_e.empty == single_e.empty, label
+    scale = max(float(single_e.semi_axes[0]), float(np.linalg.norm(single_e.center)), 1e-300)
+    np.testing.assert_allclose(batch_e.semi_axes, single_e.semi_axes, rtol=0, atol=TOL * scale, err_msg=label)
+    np.testing.assert_allclose(batch_e.center, single_e.center, rtol=0, atol=TOL * scale, err_msg=label)
+    Gb, Gs = batch_e.generator, single_e.generator
+    np.testing.assert_allclose(Gb @ Gb.T, Gs @ Gs.T, rtol=0, atol=TOL * scale**2, err_msg=label)
+    # axes up to sign, where the semi-axis is positive and clearly apart from its neighbours
+    s = single_e.semi_axes
+    for k in range(len(s)):
+        gaps = [abs(s[k] - s[j]) for j in range(len(s)) if j != k]
+        if s[k] > 1e-6 * scale and min(gaps, default=np.inf) > 1e-3 * scale:
+            dot = abs(float(batch_e.axes[k] @ single_e.axes[k]))
+            assert dot == pytest.approx(1.0, abs=1e-8), (label, k)
+    assert batch_e.volume == pytest.approx(single_e.volume, rel=0, abs=TOL * max(single_e.volume, scale**batch_e.dim))
+    assert batch_e.isotropy == pytest.approx(single_e.isotropy, abs=1e-8)
+
+
+def assert_batch_equals_single(robot, qs, task, decoupled=False, object_mass=None, method="auto"):
+    batch = analyze_batch(robot, qs, task, decoupled=decoupled, object_mass=object_mass, method=method)
+    assert len(batch) == len(qs)
+    for i, q in enumerate(qs):
+        single = analyze(robot, q, task, decoupled=decoupled, object_mass=object_mass)
+        assert_same_ellipsoid(batch.kinematic[i], single.kinematic, f"kinematic row {i}")
+        assert_same_ellipsoid(batch.dynamic[i], single.dynamic, f"dynamic row {i}")
+    return batch
+
+
+@pytest.mark.parametrize("task", ["planar", "planar_rigid", "translational", "spatial"])
+@pytest.mark.parametrize("platform", ["own", "fixed"])
+def test_paper_robot_random_configurations(robot, rng, task, platform):
+    r = robot if platform == "own" else robot.with_platform("fixed")
+    qs = np.array(random_configurations(r, rng, 40))
+    for decoupled in (False, True):
+        batch = assert_batch_equals_single(r, qs, task, decoupled=decoupled)
+    if task in ("translational", "spatial"):
+        # the planar robot cannot move its object out of the plane: degenerate everywhere
+        assert batch.kinematic.degenerate.all() and batch.dynamic.degenerate.all()
+        assert batch.svd_path.all()
+
+
+@pytest.mark.parametrize("task", ["spatial", "translational", "planar_rigid"])
+@pytest.mark.parametrize("platform", ["own", "fixed"])
+def test_tiago_random_configurations(tiago, rng, task, platform):
+    r = tiago if platform == "own" else tiago.with_platform("fixed")
+    qs = np.array(random_configurations(r, rng, 30))
+    assert_batch_equals_single(r, qs, task, decoupled=False)
+    assert_batch_equals_single(r, qs, task, decoupled=True)
+
+
+def test_svd_path_equals_single(robot, tiago, rng):
+    """The stacked mirror of mobmanip.ellipsoids, forced on every row."""
+    for r, task in (
+        (robot, "planar"),
+        (robot, "planar_rigid"),
+        (tiago, "spatial"),
+        (tiago.with_platform("fixed"), "spatial"),
+    ):
+        qs = np.array(random_configurations(r, rng, 15))
+        batch = assert_batch_equals_single(r, qs, task, method="svd")
+        assert batch.svd_path.all()
+
+
+def stretched(robot, angle=0.3, heading=0.2):
+    """Both arms of the paper's robot straight out towards the object (each arm singular)."""
+    joints = {}
+    for arm in robot.arms:
+        joints.update(zip(arm.joint_names, (angle, 0.0, 0.0)))
+    return robot.configuration((0.4, -0.1, heading), joints)
+
+
+def test_stretched_arms_degenerate(robot):
+    """Arms stretched: the fixed dual-arm system cannot move the object along the arms."""
+    fixed = robot.with_platform("fixed")
+    q = stretched(fixed)
+    nearly = stretched(fixed)
+    for arm, bend in zip(fixed.arms, (1e-5, -1e-5)):  # ill-conditioned, not singular
+        nearly[fixed.model.joints[fixed.model.getJointId(arm.joint_names[1])].idx_q] = bend
+    qs = np.array([q, nearly, q])
+    batch = assert_batch_equals_single(fixed, qs, "planar")
+    assert batch.kinematic.degenerate[0] and batch.kinematic.degenerate[2]
+    assert batch.kinematic.semi_axes[0, -1] == 0.0
+    assert not batch.kinematic.degenerate[1]
+    assert 0.0 < batch.kinematic.semi_axes[1, -1] < 1e-3 * batch.kinematic.semi_axes[1, 0]
+    assert batch.svd_path[0] and batch.svd_path[2]  # a singular row is never certified for the fast path
+    # with the platform moving, the wheels restore the lost direction
+    moving = assert_batch_equals_single(robot, qs, "planar")
+    assert not moving.kinematic.degenerate[0]
+
+
+def test_gravity_and_empty(tiago, rng):
+    """TIAGo++ holding an object in the spatial task: gravity shifts the dynamic ellipsoid, and a
+    heavy object makes it empty (the torques cannot hold it), as in the single path."""
+    qs = np.array(random_configurations(tiago, rng, 25))
+    light = assert_batch_equals_single(tiago, qs, "spatial", object_mass=1.0)
+    assert np.all(np.linalg.norm(light.dynamic.center, axis=1) > 0.0)
+    heavy = assert_batch_equals_single(tiago, qs, "spatial", object_mass=60.0)
+    assert heavy.dynamic.empty.any()
+    assert np.all(heavy.dynamic.semi_axes[heavy.dynamic.empty] == 0.0)
+    assert not heavy.kinematic.empty.any()
+
+
+def test_results_do_not_depend_on_chunking(tiago, rng):
+    qs = np.array(random_configurations(tiago, rng, 23))
+    a = analyze_batch(tiago, qs, chunk_size=2048)
+    b = analyze_batch(tiago, qs, chunk_size=5)
+    for name in ("semi_axes", "center", "matrix"):
+        np.testing.assert_allclose(getattr(a.kinematic, name), getattr(b.kinematic, name), rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(getattr(a.dynamic, name), getattr(b.dynamic, name), rtol=1e-13, atol=1e-13)
+
+
+def test_positions_and_object_centres(tiago, robot, rng):
+    qs = np.array(random_configurations(tiago, rng, 4))
+    batch = analyze_batch(tiago, qs)
+    for i, q in enumerate(qs):
+        single = analyze(tiago, q)
+        np.testing.assert_allclose(batch.end_effector_positions[i], single.end_effector_positions, atol=1e-14)
+        np.testing.assert_allclose(batch.object_centers[i], single.held_object.center, atol=1e-14)
+    planar = analyze_batch(robot, np.array(random_configurations(robot, rng, 3)))
+    assert planar.end_effector_positions is None  # not needed by the planar grasp
+    assert analyze_batch(robot, planar.qs, positions=True).end_effector_positions.shape == (3, 2, 3)
+
+
+def test_ellipsoid_batch_indices_match_single(tiago, rng):
+    qs = np.array(random_configurations(tiago, rng, 6))
+    batch = analyze_batch(tiago, qs)
+    d = rng.normal(size=6)
+    for i, q in enumerate(qs):
+        single = analyze(tiago, q).dynamic
+        row = batch.dynamic[i]
+        scale = single.semi_axes[0]
+        assert batch.dynamic.radius_along(d)[i] == pytest.approx(single.radius_along(d), abs=TOL * scale)
+        assert batch.dynamic.support(d)[i] == pytest.approx(single.support(d), abs=TOL * scale * np.linalg.norm(d))
+        assert batch.dynamic.volume[i] == pytest.approx(row.volume, rel=1e-14)
+        assert batch.dynamic.isotropy[i] == pytest.approx(row.isotropy, rel=1e-14)
+        assert batch.dynamic.manipulability[i] == pytest.approx(row.manipulability, rel=1e-14)
+    # the matrix is the inverse of the generator Gram on the ellipsoid's span
+    G = batch.kinematic.generator
+    product = batch.kinematic.matrix @ G @ np.swapaxes(G, 1, 2)
+    np.testing.assert_allclose(product, np.broadcast_to(np.eye(6), product.shape), atol=1e-8)
+
+
+def test_empty_and_single_row_batches(robot):
+    q = robot.neutral()
+    one = analyze_batch(robot, q[None, :])
+    assert len(one) == 1 and one.kinematic.semi_axes.shape == (1, 2)
+    none = analyze_batch(robot, np.zeros((0, robot.model.nq)))
+    assert len(none) == 0 and none.dynamic.semi_axes.shape == (0, 2)
+    assert isinstance(none.kinematic, EllipsoidBatch)
+
+
+def test_bad_configurations_name_row_and_joint(robot):
+    qs = np.tile(robot.neutral(), (5, 1))
+    name = robot.arms[1].joint_names[2]
+    index = robot.model.joints[robot.model.getJointId(name)].idx_q
+    qs[3, index] = math.nan
+    with pytest.raises(ConfigurationError, match=rf"row 3, entry {index} \(joint '{name}'\) is nan"):
+        analyze_batch(robot, qs)
+    with pytest.raises(ConfigurationError, match=r"shape \(N, 14\)"):
+        analyze_batch(robot, robot.neutral())
+    with pytest.raises(ConfigurationError, match=r"shape \(N, 14\)"):
+        analyze_batch(robot, np.zeros((3, 13)))
+    with pytest.raises(TaskError, match="object mass"):
+        analyze_batch(robot, qs[:1], object_mass=-1.0)
+    with pytest.raises(TaskError, match="unknown task"):
+        analyze_batch(robot, qs[:1], task="sideways")
+
+
+def test_exported_from_package():
+    assert mobmanip.analyze_batch is analyze_batch
