@@ -624,3 +624,12 @@ def test_server_stops_when_its_parent_is_killed(tmp_path):
             parent.kill()
             parent.wait()
         parent.stdout.close()
+
+
+def test_object_angle_sweep_of_the_paper_robot_refuses_a_configuration(tmp_path, capsys):
+    """The sweep aims the paper robot's arms itself; a --q would be silently ignored otherwise."""
+    q_file = tmp_path / "q.json"
+    q_file.write_text('{"joints": {"arm_right_2_joint": 0.5}}')
+    assert run_cli(["view", "planar_dual_arm", "--sweep", "object-angle", "--q", str(q_file)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and "leave out --q" in captured.err

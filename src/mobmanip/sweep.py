@@ -916,7 +916,7 @@ def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: in
     ]
     title = f"{result.spec.robot}: {index} ({result.task} task)"
     if polar:
-        title += "; radius: object distance (m), angle: object direction"
+        title += "\nradius: object distance (m), angle: object direction (deg)"
     if fixed:
         title += "\nat " + ", ".join(fixed)
     fig.suptitle(title, fontsize=10)

@@ -74,6 +74,10 @@ def object_angle_frames(
         **options: passed to :func:`mobmanip.analysis.analyze` (``object_mass``, ``decoupled``).
     """
     paper, posture = _paper_like(robot)
+    if posture is not None and q is not None:
+        raise UsageError(
+            f"the object-angle sweep places {robot.name!r} itself (arms aimed at the object); leave out --q"
+        )
     frames = []
     for angle in angles_deg:
         if posture is not None:
