@@ -289,3 +289,14 @@ def test_dask_cluster_equals_serial():
             workers = client.run(lambda: __import__("mobmanip.sweep").sweep._WORKER_CACHE.__len__())
     assert_same_result(serial, result)
     assert len(workers) == 2
+
+
+def test_saving_to_a_missing_directory_is_an_output_error(tmp_path):
+    """From Python as from the CLI: one MobmanipError naming the path, no partial file."""
+    from mobmanip.io import OutputError
+
+    result = run_sweep(SweepSpec("planar_dual_arm"), SweepGrid(angle_deg=[0.0], distance=[1.0]), workers=1)
+    for save, name in ((result.save_npz, "x.npz"), (result.save_csv, "x.csv")):
+        with pytest.raises(OutputError, match=name):
+            save(tmp_path / "missing" / name)
+    assert not (tmp_path / "missing").exists()

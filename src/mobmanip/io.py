@@ -7,7 +7,9 @@ import json
 import math
 import os
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 
@@ -73,26 +75,59 @@ class OutputError(MobmanipError):
     """An output file cannot be written."""
 
 
+@contextlib.contextmanager
+def atomic_output(path: str | Path, mode: str = "w", **open_options) -> Iterator[IO]:
+    """Open a temporary file beside ``path`` that replaces it only once written completely.
+
+    Every file mobmanip writes goes through here, so an error or an interruption midway never
+    leaves a truncated file in place of a good one, nor a temporary file behind.
+
+    Args:
+        path: the file to write.
+        mode: ``"w"`` (text) or ``"wb"`` (binary).
+        **open_options: passed to :func:`open` (e.g. ``newline=""`` for CSV).
+
+    Raises:
+        OutputError: the directory does not exist or is not writable.
+    """
+    path = Path(path)
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(fd, mode, **open_options) as handle:
+            yield handle
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the file the usual permissions
+        os.replace(tmp, path)
+        tmp = None
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from exc
+    finally:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def write_text(path: str | Path, text: str) -> None:
+    """Write a text file atomically (see :func:`atomic_output`)."""
+    with atomic_output(path, "w", encoding="utf-8") as handle:
+        handle.write(text)
+
+
 def write_json(path: str | Path, document: object) -> None:
     """Write JSON atomically: a partial file never replaces an existing one.
 
     Raises:
         OutputError: the directory does not exist or is not writable.
     """
+    write_text(path, json.dumps(document, indent=2, allow_nan=False) + "\n")
+
+
+def save_figure(figure, path: str | Path, **options) -> Path:
+    """Save a matplotlib figure atomically, in the format named by the file's suffix (PNG by default)."""
     path = Path(path)
-    text = json.dumps(document, indent=2, allow_nan=False)
-    tmp = None
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text + "\n")
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the file the usual permissions
-        os.replace(tmp, path)
-    except OSError as exc:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)  # never leave the temporary file behind
-        raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from exc
+    with atomic_output(path, "wb") as handle:
+        figure.savefig(handle, format=path.suffix.lstrip(".").lower() or "png", **options)
+    return path
 
 
 def _umask() -> int:

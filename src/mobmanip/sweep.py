@@ -40,6 +40,7 @@ import pinocchio as pin
 
 from .batch import BatchSetup, EllipsoidBatch, check_configurations, ellipsoids_from_terms, iter_terms
 from .errors import MobmanipError, SpecError, UsageError
+from .io import atomic_output, save_figure
 from .model import Robot, load_robot
 from .tasks import get_task
 
@@ -617,7 +618,7 @@ class SweepResult:
             "axes": ",".join(AXES),
         }
         arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
-        with open(path, "wb") as f:
+        with atomic_output(path, "wb") as f:
             np.savez_compressed(f, **arrays)
         return path
 
@@ -640,7 +641,7 @@ class SweepResult:
             for flag in ("degenerate", "empty"):
                 columns.append(self.indices[f"{kind}_{flag}"].ravel().astype(int))
                 header.append(f"{kind}_{flag}")
-        with open(path, "w", newline="") as f:
+        with atomic_output(path, "w", newline="") as f:
             writer = csv.writer(f)
             writer.writerow(header)
             table = np.column_stack(columns)
@@ -920,6 +921,4 @@ def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: in
     if fixed:
         title += "\nat " + ", ".join(fixed)
     fig.suptitle(title, fontsize=10)
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save_figure(fig, path, dpi=110)

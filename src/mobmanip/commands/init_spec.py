@@ -31,7 +31,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..detect import detect_spec, parse_wheel_pair, spec_to_toml
-    from ..io import OutputError
+    from ..io import write_text
 
     wheels = None if args.wheels is None else parse_wheel_pair(args.wheels)
     found = detect_spec(args.urdf, args.ee, wheels, args.platform, torso=args.torso, name=args.name)
@@ -46,10 +46,7 @@ def run(args) -> int:
     if not args.out:
         print(text, end="")
         return 0
-    try:
-        Path(args.out).write_text(text)
-    except OSError as exc:
-        raise OutputError(f"cannot write {args.out}: {exc.strerror or exc}") from exc
+    write_text(args.out, text)
     spec = found.spec
     print(f"wrote {args.out}: {spec.platform}, {len(spec.arms)} arm(s), {len(spec.active_joint_names)} active joints")
     return 0

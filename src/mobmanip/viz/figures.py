@@ -18,6 +18,7 @@ import pinocchio as pin  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from ..ellipsoids import Ellipsoid  # noqa: E402
+from ..io import save_figure  # noqa: E402
 from ..model import Robot  # noqa: E402
 from ..platforms import DifferentialDrive  # noqa: E402
 
@@ -106,6 +107,8 @@ def sweep_figure(
         ax.legend(loc="lower right", fontsize=8)
     fig.suptitle(f"{title}  (ellipse scale: 1 {unit} = {scale:.3g} m)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
     return scale

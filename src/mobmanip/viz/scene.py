@@ -68,6 +68,7 @@ import pinocchio as pin
 from ..analysis import Analysis, analyze
 from ..ellipsoids import Ellipsoid
 from ..errors import ModelError
+from ..io import write_text
 from ..model import Robot, locked_joints
 from ..tasks import get_task
 from .server import MeshcatServer, ViewerError
@@ -623,11 +624,7 @@ class EllipsoidViewer:
     def export_html(self, path: str | Path) -> Path:
         """Write the scene (with its animation, if any) as a self-contained HTML page."""
         path = Path(path)
-        html = self.static_html()
-        try:
-            path.write_text(html, encoding="utf-8")
-        except OSError as exc:
-            raise ViewerError(f"cannot write {path}: {exc.strerror or exc}") from None
+        write_text(path, self.static_html())
         return path
 
     def close(self) -> None:
