@@ -83,10 +83,10 @@ def test_cli_bad_grid_is_one_line_exit_2(args, tmp_path, capsys):
     assert err.startswith("mobmanip: error: ") and err.count("\n") == 1, err
 
 
-def test_cli_robot_without_planar_arms(tmp_path, capsys):
-    code = main(
-        ["sweep", "tiago_dual", "--angle", "0", "--distance", "0.5", "--no-progress", "-o", str(tmp_path / "t")]
-    )
+def test_cli_planar_postures_need_planar_arms(tmp_path, capsys):
+    """The closed form on request only; other robots get inverse kinematics (test_sweep_general.py)."""
+    args = ["sweep", "tiago_dual", "--postures", "planar", "--angle", "0", "--distance", "0.5"]
+    code = main([*args, "--no-progress", "-o", str(tmp_path / "t")])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "planar" in err
 

@@ -1,21 +1,36 @@
 """Sweeps: the ellipsoids' indices over object direction, distance, platform heading and limits.
 
 A sweep places the object at direction ``angle`` (deg, from the platform heading, 0 in front,
-90 to the left) and horizontal ``distance`` (m) from the arms' common first joint (P_o for the
-paper's robot), turns the platform to ``heading`` (deg), and scales the wheels' velocity and
-effort limits; at every grid point it records, for the kinematic and the dynamic ellipsoid, the
-volume, the isotropy, the semi-axes and the directional capacity (how far the ellipsoid reaches
-along a direction: ``max d . p`` over it, for a unit d).
+90 to the left) and horizontal ``distance`` (m) from the arms' reference point, turns the
+platform to ``heading`` (deg), and scales the wheels' velocity and effort limits; at every grid
+point it records, for the kinematic and the dynamic ellipsoid, the volume, the isotropy, the
+semi-axes and the directional capacity (how far the ellipsoid reaches along a direction:
+``max d . p`` over it, for a unit d).
 
-Arm postures (robots with two 3-joint planar arms with vertical axes, like ``planar_dual_arm``):
-at a given reach, each arm's posture family is one-dimensional (q3 free, q2 from the reach,
-two elbow branches); the sweep takes the posture that maximises the arm's own manipulability
-sqrt(det(J J^T)) of its 2 x 3 horizontal Jacobian along that family (dense sampling of q3 with
-zooming refinement, see :func:`posture_at_reach`). At the reach of the globally optimal posture
-this is the paper's posture (:func:`mobmanip.casestudy.optimal_posture`). Arm 1 (right) bends
-to the right and arm 2 takes the mirror image about the line from the base to the object; q1 of
-each arm points its end effector at the object. Both end effectors hold the object at its centre.
-Distances beyond the reach of the arms are marked unreachable (indices NaN).
+The arms' postures depend on (angle, distance) only; they are found once, in the calling
+process, before the grid's configurations are analysed. Two providers (``SweepSpec.postures``):
+
+``planar`` -- the paper's closed form, for robots with two 3-joint planar arms with vertical
+axes sharing their first joint (like ``planar_dual_arm``; the reference point is that joint,
+P_o): at a given reach, each arm's posture family is one-dimensional (q3 free, q2 from the
+reach, two elbow branches); the sweep takes the posture that maximises the arm's own
+manipulability sqrt(det(J J^T)) of its 2 x 3 horizontal Jacobian along that family (dense
+sampling of q3 with zooming refinement, see :func:`posture_at_reach`). At the reach of the
+globally optimal posture this is the paper's posture (:func:`mobmanip.casestudy.optimal_posture`).
+Arm 1 (right) bends to the right and arm 2 takes the mirror image about the line from the base
+to the object; q1 of each arm points its end effector at the object. Both end effectors hold
+the object at its centre. Distances beyond the reach of the arms are unreachable.
+
+``ik`` -- any robot: inverse kinematics holds the object as a reference posture (by default
+the spec's home configuration) does, turned towards the object's direction, with the object
+centre at the given distance from the horizontal centroid of the arms' first joints and at the
+reference posture's height; :mod:`mobmanip.posture` defines this precisely. Grid points where
+some end effector cannot be brought within :data:`mobmanip.posture.POSITION_TOLERANCE` of its
+target are unreachable.
+
+``auto`` (the default) takes ``planar`` where it applies and no reference posture is given,
+else ``ik``. Unreachable grid points hold NaN indices; a grid with no reachable point at all is
+an error (:class:`UnreachableGridError`).
 
 Execution: the grid's configurations are cut into chunks that run through any
 :class:`concurrent.futures.Executor` (a local process pool by default; a ``dask.distributed``
@@ -31,7 +46,7 @@ import csv
 import math
 import multiprocessing
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -42,16 +57,23 @@ from .batch import BatchSetup, EllipsoidBatch, check_configurations, ellipsoids_
 from .errors import MobmanipError, SpecError, UsageError
 from .io import atomic_output, save_figure
 from .model import Robot, load_robot
+from .posture import POSITION_TOLERANCE, IKPostureTable, reference_configuration, solve_postures
 from .tasks import get_task
 
 #: Grid axes in order: the result arrays have this shape (one entry per value).
 AXES = ("angle_deg", "distance", "heading_deg", "wheel_velocity_scale", "wheel_effort_scale")
 #: Per-ellipsoid scalar indices recorded by a sweep.
 SCALAR_INDICES = ("volume", "isotropy", "capacity")
+#: Where the arms' postures come from (see the module's docstring).
+POSTURE_METHODS = ("auto", "planar", "ik")
 
 
 class GridError(UsageError):
     """A grid specification that cannot be parsed or makes no sense."""
+
+
+class UnreachableGridError(GridError):
+    """No grid point is within the arms' reach: the message names the grid's distances and angles."""
 
 
 def parse_grid(text: str, name: str = "grid", positive: bool = False) -> np.ndarray:
@@ -98,7 +120,9 @@ class SweepGrid:
 
     Attributes:
         angle_deg: object directions from the platform heading (deg).
-        distance: horizontal distances of the object from the arms' first joint (m).
+        distance: horizontal distances of the object from the arms' reference point (m): their
+            common first joint for the planar postures, the horizontal centroid of their first
+            joints for the inverse-kinematics ones.
         heading_deg: platform headings in the world (deg).
         wheel_velocity_scale: factors on both wheels' velocity limit.
         wheel_effort_scale: factors on both wheels' effort limit.
@@ -345,27 +369,44 @@ def posture_at_reach(arm: PlanarArm, reach: float, bend: int = 1, **search) -> R
 
 @dataclass(frozen=True)
 class PostureTable:
-    """The two arms' postures at every distance of a grid.
+    """The two arms' postures at every distance of a grid (the planar closed form).
 
     Attributes:
         reachable: whether both arms reach each distance, (D,).
         right: (q2, q3, bearing) of arm 1 per distance, (D, 3) (NaN where unreachable).
         left: the same for arm 2, (D, 3).
         signs: axis signs of each arm's first joint, (2,).
+        joint_names: the arm joints, arm 1's three then arm 2's.
     """
 
     reachable: np.ndarray
     right: np.ndarray
     left: np.ndarray
     signs: np.ndarray
+    joint_names: tuple[str, ...] = ()
+
+    method = "planar"
+
+    def joint_values(self, alpha: np.ndarray, idist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Arm joint positions for object directions ``alpha`` (rad) at distance indices ``idist``.
+
+        Returns:
+            (N, 6) joint positions (zero where unreachable) and whether each row is reachable.
+        """
+        reachable = self.reachable[idist]
+        columns = []
+        for values, sign in zip((self.right, self.left), self.signs):
+            q2, q3, bearing = (np.where(reachable, values[idist, c], 0.0) for c in range(3))
+            q1 = np.where(reachable, sign * (alpha - bearing), 0.0)
+            columns += [q1, q2, q3]
+        return np.stack(columns, axis=1), reachable
 
 
 def posture_table(robot: Robot, distances: Sequence[float]) -> PostureTable:
     """Postures of both arms (arm 1 bending right, arm 2 its mirror image) at each distance.
 
     Raises:
-        SpecError: not a differential drive with two planar 3-joint arms sharing their first
-            joint's position.
+        SpecError: not a robot with two planar 3-joint arms sharing their first joint's position.
     """
     if len(robot.arms) != 2:
         raise SpecError(
@@ -383,11 +424,66 @@ def posture_table(robot: Robot, distances: Sequence[float]) -> PostureTable:
     reachable = np.isfinite(right_all[:, 2]) & np.isfinite(left_all[:, 2])
     right = np.where(reachable[:, None], right_all[:, [0, 1, 3]], np.nan)
     left = np.where(reachable[:, None], left_all[:, [0, 1, 3]], np.nan)
-    return PostureTable(reachable, right, left, np.array([arms[0].signs[0], arms[1].signs[0]]))
+    names = tuple(name for arm in robot.arms for name in arm.joint_names)
+    return PostureTable(reachable, right, left, np.array([arms[0].signs[0], arms[1].signs[0]]), names)
+
+
+@dataclass(frozen=True)
+class _PostureRows:
+    """Inverse-kinematics postures of consecutive (angle, distance) pairs, for one chunk.
+
+    Attributes:
+        first: flat index (angle * D + distance) of the first row.
+        joints: arm joint positions, (rows, n); NaN where unreachable.
+        reachable: (rows,).
+        joint_names: the arm joints.
+    """
+
+    first: int
+    joints: np.ndarray
+    reachable: np.ndarray
+    joint_names: tuple[str, ...]
+
+
+def _posture_rows(table: IKPostureTable, first: int = 0, stop: int | None = None) -> _PostureRows:
+    n = table.joints.shape[-1]
+    joints = table.joints.reshape(-1, n)[first:stop]
+    return _PostureRows(first, joints, table.reachable.reshape(-1)[first:stop], table.joint_names)
+
+
+def sweep_postures(
+    robot: Robot, grid: SweepGrid, method: str = "auto", reference=None
+) -> PostureTable | IKPostureTable:
+    """The arms' postures for a grid (see the module's docstring for the methods).
+
+    Args:
+        robot: the robot.
+        grid: the grid (only its angles and distances matter).
+        method: ``"auto"``, ``"planar"`` or ``"ik"``.
+        reference: joint positions by name for the inverse kinematics' reference posture
+            (joints not named stay at home); ``None``: the home configuration.
+
+    Raises:
+        SpecError: ``"planar"`` on a robot without two planar 3-joint arms sharing their base.
+        UsageError: an unknown method, or a reference posture with ``"planar"``.
+        JointNotFoundError, ConfigurationError: a bad reference posture.
+    """
+    if method not in POSTURE_METHODS:
+        raise UsageError(f"postures must be one of {', '.join(POSTURE_METHODS)}, got {method!r}")
+    if method == "planar" and reference is not None:
+        raise UsageError("the planar postures follow the paper's closed form; a reference posture needs postures 'ik'")
+    if method != "ik" and reference is None:
+        try:
+            return posture_table(robot, grid.distance)
+        except SpecError:
+            if method == "planar":
+                raise
+    q_ref = reference_configuration(robot, reference)
+    return solve_postures(robot, grid.angle_deg, grid.distance, q_ref)
 
 
 def sweep_configurations(
-    robot: Robot, grid: SweepGrid, table: PostureTable, flat: np.ndarray
+    robot: Robot, grid: SweepGrid, table: PostureTable | IKPostureTable | _PostureRows, flat: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Configurations at flat indices into (angle, distance, heading), and which are reachable.
 
@@ -399,18 +495,23 @@ def sweep_configurations(
     heading = np.radians(grid.heading_deg[ih])
     qs[:, 0:2] = 0.0
     qs[:, 2], qs[:, 3] = np.cos(heading), np.sin(heading)
-    alpha = np.radians(grid.angle_deg[ia])
-    reachable = table.reachable[idist]
+    if isinstance(table, PostureTable):
+        values, reachable = table.joint_values(np.radians(grid.angle_deg[ia]), idist)
+        names = tuple(name for arm in robot.arms for name in arm.joint_names)
+        rows = np.arange(n)
+    else:
+        chunk = _posture_rows(table) if isinstance(table, IKPostureTable) else table
+        pair = ia * grid.shape[1] + idist - chunk.first
+        reachable = chunk.reachable[pair]
+        rows = np.flatnonzero(reachable)
+        values, names = chunk.joints[pair[rows]], chunk.joint_names
     model = robot.model
-    for arm, values, sign in zip(robot.arms, (table.right, table.left), table.signs):
-        q2, q3, bearing = (np.where(reachable, values[idist, c], 0.0) for c in range(3))
-        q1 = np.where(reachable, sign * (alpha - bearing), 0.0)
-        for name, value in zip(arm.joint_names, (q1, q2, q3)):
-            joint = model.joints[model.getJointId(name)]
-            if joint.nq == 2:
-                qs[:, joint.idx_q], qs[:, joint.idx_q + 1] = np.cos(value), np.sin(value)
-            else:
-                qs[:, joint.idx_q] = value
+    for name, value in zip(names, values.T):
+        joint = model.joints[model.getJointId(name)]
+        if joint.nq == 2:
+            qs[rows, joint.idx_q], qs[rows, joint.idx_q + 1] = np.cos(value), np.sin(value)
+        else:
+            qs[rows, joint.idx_q] = value
     return qs, reachable
 
 
@@ -431,9 +532,13 @@ class SweepSpec:
         decoupled: decoupled dynamics (the paper's Sec. 4.3).
         wheel_velocity_limit: both wheels' qdot_max before scaling (rad/s); default: the spec's.
         wheel_effort_limit: both wheels' tau_max before scaling (N m); default: the spec's.
-        direction: the capacity direction: ``"radial"`` (from the base towards the object,
+        direction: the capacity direction: ``"radial"`` (from the reference point towards the object,
             in the horizontal plane), ``"tangential"`` (90 deg to the left of it) or task
             coordinates, e.g. ``(1, 0)`` (world frame; normalised).
+        postures: ``"auto"``, ``"planar"`` or ``"ik"`` (see the module's docstring).
+        reference: the inverse kinematics' reference posture, joint positions by name (a
+            mapping or (name, value) pairs; joints not named stay at home); ``None``: the home
+            configuration. Stored as a tuple of pairs.
     """
 
     robot: str
@@ -444,6 +549,17 @@ class SweepSpec:
     wheel_velocity_limit: float | None = None
     wheel_effort_limit: float | None = None
     direction: str | tuple[float, ...] = "radial"
+    postures: str = "auto"
+    reference: tuple[tuple[str, float], ...] | None = None
+
+    def __post_init__(self):
+        if self.reference is not None:
+            pairs = self.reference.items() if isinstance(self.reference, Mapping) else self.reference
+            try:
+                pairs = tuple((str(name), value) for name, value in pairs)
+            except (TypeError, ValueError):
+                raise UsageError(f"reference must map joint names to positions, got {self.reference!r}") from None
+            object.__setattr__(self, "reference", pairs)
 
     def load(self) -> Robot:
         """The robot with the platform and base wheel limits applied."""
@@ -461,7 +577,7 @@ class SweepSpec:
 class _Job:
     spec: SweepSpec
     grid: SweepGrid
-    table: PostureTable
+    table: PostureTable | _PostureRows  # the planar table, or the chunk's own rows of an IK table
     start: int
     stop: int
     chunk_size: int
@@ -542,7 +658,7 @@ def _run_job(job: _Job) -> tuple[int, dict]:
     vlims = _wheel_limits(robot, robot.velocity_limits, grid.wheel_velocity_scale)
     elims = _wheel_limits(robot, robot.effort_limits, grid.wheel_effort_scale)
     for start, t in iter_terms(setup, qs, job.chunk_size):
-        n = t.J_u.shape[0]
+        n = min(job.chunk_size, len(rows) - start)  # iter_terms' chunks
         sub = rows[start : start + n]
         dirs = directions[start : start + n]
         for col, vlim in enumerate(vlims):
@@ -577,7 +693,9 @@ class SweepResult:
         task_axes: labels of the task coordinates.
         reachable: whether the arms reach each (angle, distance, heading), (A, D, H).
         indices: the arrays described above.
-        postures: the arms' postures per distance.
+        postures: the arms' postures: a :class:`PostureTable` per distance (planar closed form)
+            or a :class:`mobmanip.posture.IKPostureTable` per (angle, distance); see
+            :meth:`joint_positions` for both as one array.
     """
 
     spec: SweepSpec
@@ -586,7 +704,19 @@ class SweepResult:
     task_axes: tuple[str, ...]
     reachable: np.ndarray
     indices: dict
-    postures: PostureTable
+    postures: PostureTable | IKPostureTable
+
+    def joint_positions(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """The arm joints' names and positions (rad or m) at every (angle, distance), (A, D, n);
+        NaN where unreachable. The platform heading turns the whole robot and does not change them."""
+        table = self.postures
+        if isinstance(table, IKPostureTable):
+            return table.joint_names, table.joints
+        a, d = self.grid.shape[:2]
+        ia, idist = (i.ravel() for i in np.meshgrid(np.arange(a), np.arange(d), indexing="ij"))
+        values, reachable = table.joint_values(np.radians(self.grid.angle_deg[ia]), idist)
+        values[~reachable] = np.nan
+        return table.joint_names, values.reshape(a, d, -1)
 
     def index(self, name: str) -> np.ndarray:
         """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
@@ -600,13 +730,35 @@ class SweepResult:
         return self.indices[f"{kind}_semi_axes"][..., k - 1]
 
     def save_npz(self, path: str | Path) -> Path:
-        """Write the grid axes, the indices and the settings to a NumPy ``.npz`` file."""
+        """Write the grid axes, the indices, the postures and the settings to a NumPy ``.npz`` file.
+
+        Keys: the grid axes (:data:`AXES`), every index array, ``reachable`` (A, D, H),
+        ``posture_joint_names`` and ``posture_joints`` (A, D, n) (:meth:`joint_positions`), and
+        ``meta_*`` texts (``meta_postures`` is ``planar`` or ``ik``). Planar postures add
+        ``posture_right`` / ``posture_left`` ((q2, q3, bearing) per distance); inverse-kinematics
+        ones add ``posture_position_error`` and ``posture_rotation_error`` (A, D),
+        ``posture_reference`` (the reference configuration) and the hold: ``hold_origin``,
+        ``hold_height``, ``hold_offsets``, ``hold_rotations`` (see :class:`mobmanip.posture.Hold`).
+        """
         path = Path(path)
         arrays = {name: getattr(self.grid, name) for name in AXES}
         arrays.update(self.indices)
         arrays["reachable"] = self.reachable
-        arrays["posture_right"] = self.postures.right
-        arrays["posture_left"] = self.postures.left
+        table = self.postures
+        names, joints = self.joint_positions()
+        arrays["posture_joint_names"] = np.array(names, dtype=str)
+        arrays["posture_joints"] = joints
+        if isinstance(table, PostureTable):
+            arrays["posture_right"] = table.right
+            arrays["posture_left"] = table.left
+        else:
+            arrays["posture_position_error"] = table.position_error
+            arrays["posture_rotation_error"] = table.rotation_error
+            arrays["posture_reference"] = table.reference
+            arrays["hold_origin"] = table.hold.origin
+            arrays["hold_height"] = np.array(table.hold.height)
+            arrays["hold_offsets"] = table.hold.offsets
+            arrays["hold_rotations"] = table.hold.rotations
         meta = {
             "robot": str(self.spec.robot),
             "task": self.task,
@@ -616,6 +768,7 @@ class SweepResult:
             "object_mass": str(self.spec.object_mass),
             "direction": str(self.spec.direction),
             "axes": ",".join(AXES),
+            "postures": table.method,
         }
         arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
         with atomic_output(path, "wb") as f:
@@ -723,7 +876,8 @@ def run_sweep(
             ``if __name__ == "__main__":`` guard.
 
     Raises:
-        SpecError: the robot's arms are not planar 3-joint arms sharing their base (postures).
+        SpecError: ``postures="planar"`` on a robot without planar 3-joint arms sharing their base.
+        UnreachableGridError: the arms reach no grid point.
         GridError, UsageError: bad grid or settings.
     """
     if not isinstance(chunk_size, int) or chunk_size < 1:
@@ -733,11 +887,17 @@ def run_sweep(
     robot = spec.load()
     task = get_task(spec.task or robot.spec.default_task)
     spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim))
-    table = posture_table(robot, grid.distance)
-    _check_postures(robot, grid, table)
     BatchSetup(robot, task.name, spec.object_mass)  # validate the object mass here, once
+    table = sweep_postures(robot, grid, spec.postures, None if spec.reference is None else dict(spec.reference))
+    if not np.any(table.reachable):
+        raise UnreachableGridError(_unreachable_message(robot, grid, table))
+    if isinstance(table, PostureTable):
+        _check_postures(robot, grid, table)
+    else:
+        _check_ik_postures(robot, grid, table)
     n = grid.n_configurations
-    jobs = [_Job(spec, grid, table, s, min(s + chunk_size, n), chunk_size) for s in range(0, n, chunk_size)]
+    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
+    jobs = [_Job(spec, grid, _chunk_table(grid, table, s, e), s, e, chunk_size) for s, e in bounds]
     nv, ne, m = len(grid.wheel_velocity_scale), len(grid.wheel_effort_scale), task.dim
     merged = _empty_chunk(n, nv, ne, m)
 
@@ -809,6 +969,60 @@ def _check_postures(robot: Robot, grid: SweepGrid, table: PostureTable) -> None:
                 raise MobmanipError(
                     f"posture check failed: {arm.end_effector} misses the object at distance {grid.distance[i]:g} m"
                 )
+
+
+def _chunk_table(grid: SweepGrid, table, start: int, stop: int):
+    """What a chunk of flat configuration indices [start, stop) needs of the posture table."""
+    if isinstance(table, PostureTable):
+        return table
+    h = grid.shape[2]
+    return _posture_rows(table, start // h, (stop - 1) // h + 1)
+
+
+def _check_ik_postures(robot: Robot, grid: SweepGrid, table: IKPostureTable) -> None:
+    """Every end effector at its target, at the first heading, for every reachable (angle, distance)."""
+    model, data = robot.model, robot.data
+    d, h = grid.shape[1:3]
+    pairs = np.flatnonzero(table.reachable.reshape(-1))
+    qs, _ = sweep_configurations(robot, grid, table, pairs * h)
+    alpha = np.radians(grid.angle_deg[pairs // d])
+    targets, _ = table.hold.targets(alpha, grid.distance[pairs % d], alpha)
+    yaw = math.radians(grid.heading_deg[0])
+    turn = np.array([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+    for q, target in zip(qs, targets @ turn.T):
+        pin.framesForwardKinematics(model, data, q)
+        for arm, point in zip(robot.arms, target):
+            miss = float(np.linalg.norm(data.oMf[arm.frame_id].translation - point))
+            if miss > POSITION_TOLERANCE + 1e-12:
+                raise MobmanipError(f"posture check failed: {arm.end_effector} misses its target by {miss:.3g} m")
+
+
+def _span(values: np.ndarray, unit: str) -> str:
+    values = np.unique(values)
+    if len(values) <= 4:
+        return ", ".join(f"{v:g}" for v in values) + f" {unit}"
+    return f"{values[0]:g} .. {values[-1]:g} {unit} ({len(values)} values)"
+
+
+def _unreachable_message(robot: Robot, grid: SweepGrid, table) -> str:
+    if isinstance(table, PostureTable):
+        reach = min(planar_arm(robot, i).max_reach for i in range(len(robot.arms)))
+        return (
+            f"{robot.name}: no grid distance is within the arms' reach: distance {_span(grid.distance, 'm')} "
+            f"from their first joint, and they reach {reach:g} m at most"
+        )
+    hold = table.hold
+    held = ""
+    if len(robot.arms) > 1:
+        width = float(np.max(np.linalg.norm(hold.offsets[:, None] - hold.offsets[None], axis=2)))
+        held = f", hands {width:.3g} m apart"
+    return (
+        f"{robot.name}: the arms reach none of the grid's points: distance {_span(grid.distance, 'm')}, "
+        f"angle {_span(grid.angle_deg, 'deg')}, from the reference point ({hold.origin[0]:.3g}, "
+        f"{hold.origin[1]:.3g}) m, holding the object as the reference posture does (at height "
+        f"{hold.height:.3g} m{held}); the inverse kinematics came within {np.min(table.position_error):.3g} m "
+        "at best; try other distances or another reference posture"
+    )
 
 
 def _assemble(spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable) -> SweepResult:

@@ -9,28 +9,41 @@ grid syntax (each axis): START:STOP:COUNT gives COUNT evenly spaced values from 
 both included (0:360:37 is every 10 deg); V1,V2,... lists values; V is a single value.
 
 The object sits at --angle (deg from the platform heading; 0 in front, 90 to the left) and
-horizontal --distance (m) from the arms' common first joint (P_o for planar_dual_arm); both
-arms hold it in the mirrored posture that maximises each arm's own manipulability at that reach
-(arm 1 bends right); this needs two 3-joint planar arms with vertical axes sharing their first
-joint, like planar_dual_arm. --heading turns the platform in the world (deg). The wheel scales multiply
-both wheels' velocity / effort limits (after --wheel-velocity-limit / --wheel-effort-limit).
+horizontal --distance (m) from the arms' reference point. --postures says how the arms hold it:
+  planar  two 3-joint planar arms with vertical axes sharing their first joint (planar_dual_arm):
+          the reference point is that joint (P_o), both arms take the mirrored posture that
+          maximises each arm's own manipulability at that reach (arm 1 bends right), as in the paper.
+  ik      any robot: the reference point is the horizontal centroid of the arms' first joints;
+          the end effectors hold the object as in the reference posture (--reference, default the
+          spec's home configuration): same height, same grasp offsets between the hands, turned
+          with the object's direction; inverse kinematics moves only the arm joints, within their
+          limits, and keeps the hands' orientation where it can. A point where an end effector
+          misses its target by more than 1e-9 m is out of reach. One arm: its end effector is
+          the object.
+  auto    planar where it applies (and no --reference is given), else ik (the default).
+Out-of-reach points get NaN indices; a grid with none in reach is an error. --heading turns the
+platform in the world (deg). The wheel scales multiply both wheels' velocity / effort limits
+(after --wheel-velocity-limit / --wheel-effort-limit).
 
 indices per ellipsoid (kinematic: m/s, rad/s; dynamic: m/s^2, rad/s^2): volume, isotropy
 (min/max semi-axis), semi_axis_K (K = 1 is the largest) and capacity: max d . p over the
-ellipsoid for the unit --direction d (radial: from the base towards the object; tangential: 90
-deg to its left; or task coordinates in the world, e.g. 1,0).
+ellipsoid for the unit --direction d (radial: from the reference point towards the object;
+tangential: 90 deg to its left; or task coordinates in the world, e.g. 1,0).
 
 outputs: OUT.npz (grid axes, index arrays of shape angle x distance x heading x velocity scale x
-effort scale [x task axis], settings) and OUT.csv (one row per grid point); --plot writes OUT.png
-with --index over the two varying grid axes (polar when they are angle and distance; one panel
-per value of a third varying axis, up to 6; further axes at their first value).
+effort scale [x task axis], the arm joints' positions per angle x distance, settings) and OUT.csv
+(one row per grid point); --plot writes OUT.png with --index over the two varying grid axes
+(polar when they are angle and distance; one panel per value of a third varying axis, up to 6;
+further axes at their first value).
 
 From Python, mobmanip.sweep.run_sweep(spec, grid, executor=client.get_executor()) runs the
 same sweep on a dask.distributed cluster (workers load the robot from its name or spec path).
 
-example:
+examples:
   mobmanip sweep planar_dual_arm --angle 0:360:37 --distance 0.6:1.4:9 \\
       --wheel-velocity-scale 0.1:1:5 --plot --index kinematic.volume --output fig/sweep
+  mobmanip sweep panda --angle=-90:90:19 --distance 0.2:0.8:7 --plot -o panda   # "=" before a minus
+  mobmanip sweep tiago_dual --reference hold.json --angle=-40:40:9 --distance 0.3:0.8:6 -o tiago
 """
 
 
@@ -64,6 +77,15 @@ def register(sub) -> None:
     analysis.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
     analysis.add_argument(
         "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
+    )
+    postures = parser.add_argument_group("arm postures")
+    postures.add_argument(
+        "--postures", choices=["auto", "planar", "ik"], default="auto", help="how the arms hold the object (see below)"
+    )
+    postures.add_argument(
+        "--reference",
+        metavar="Q.json",
+        help='reference posture for ik, {"joints": {NAME: value}} (platform ignored; default: home)',
     )
     run = parser.add_argument_group("execution and output")
     run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
@@ -105,6 +127,13 @@ def run_command(args) -> int:
         raise UsageError(f"--workers must be at least 1, got {args.workers}")
     if args.chunk_size < 1:
         raise UsageError(f"--chunk-size must be at least 1, got {args.chunk_size}")
+    reference = None
+    if args.reference is not None:
+        from ..io import read_configuration
+        from ..model import load_robot
+
+        robot = load_robot(args.robot)
+        reference = robot.configuration_dict(read_configuration(robot, args.reference))["joints"]
     spec = SweepSpec(
         robot=args.robot,
         task=args.task,
@@ -114,6 +143,8 @@ def run_command(args) -> int:
         wheel_velocity_limit=args.wheel_velocity_limit,
         wheel_effort_limit=args.wheel_effort_limit,
         direction=_direction(args.direction),
+        postures=args.postures,
+        reference=reference,
     )
     out = Path(args.output)
     if out.parent and not out.parent.exists():
@@ -127,6 +158,14 @@ def run_command(args) -> int:
         f"x {v} velocity x {e} effort scales"
     )
     result = run_sweep(spec, grid, workers=args.workers, chunk_size=args.chunk_size, progress=not args.no_progress)
+    table = result.postures
+    if table.method == "ik":
+        hold = table.hold
+        print(
+            f"postures by inverse kinematics in {table.seconds:.2f} s: object at height {hold.height:.3f} m, "
+            f"distances from ({hold.origin[0]:.3f}, {hold.origin[1]:.3f}) m; "
+            f"{int(table.reachable.sum())} of {table.reachable.size} (angle, distance) points in reach"
+        )
     unreachable = int((~result.reachable).sum())
     if unreachable:
         print(f"{unreachable} of {result.reachable.size} configurations are out of the arms' reach (NaN indices)")
