@@ -5,8 +5,9 @@ Measures in one run, as medians over interleaved rounds (the machine may be shar
 (a) the floor: Pinocchio's own calls per configuration -- forward kinematics, the end
     effectors' frame Jacobians, CRBA and the nonlinear effects -- for the paper's robot
     (planar_dual_arm, task planar) and TIAGo++ (tiago_dual, task spatial);
-(b) ``mobmanip.analyze`` per configuration;
-(c) ``mobmanip.analyze_batch`` per configuration at N = 10,000;
+(b) ``mobmanip.analyze`` per configuration (and, for reference, its exact SVD path);
+(c) ``mobmanip.analyze_batch`` per configuration at N = 10,000 (and its NumPy fast path, the
+    stacked alternative to the compiled kernel);
 (d) pycapacity's ``velocity_ellipsoid`` plus ``acceleration_ellipsoid`` per configuration on
     the same unified Jacobian and reduced inertia, precomputed (not timed);
 (e) a sweep of the paper's robot on 2 worker processes against 1 (in-process);
@@ -51,6 +52,14 @@ TARGETS = {  # (b)/(a), (c)/(a) upper bounds per robot
     "planar_dual_arm": (20.0, 3.0),
     "tiago_dual": (10.0, 2.0),
 }
+
+
+def _numba_version() -> str:
+    try:
+        import numba
+    except ImportError:
+        return "missing (NumPy paths)"
+    return numba.__version__
 
 
 def random_configurations(robot, rng, count):
@@ -112,8 +121,16 @@ class Case:
         for q in self.qs_single:
             mobmanip.analyze(robot, q, task)
 
+    def single_exact(self):
+        robot, task = self.robot, self.task
+        for q in self.qs_single:
+            mobmanip.analyze(robot, q, task, method="exact")
+
     def batch(self):
         mobmanip.analyze_batch(self.robot, self.qs_batch, self.task)
+
+    def batch_numpy(self):
+        mobmanip.analyze_batch(self.robot, self.qs_batch, self.task, method="numpy")
 
     def pycapacity(self):
         vlim, elim = self.robot.velocity_limits, self.robot.effort_limits
@@ -127,7 +144,9 @@ class Case:
             ("floor", self.floor, n1),
             ("pass", self.batch_pass, n1),
             ("single", self.single, n1),
+            ("single_exact", self.single_exact, n1),
             ("batch", self.batch, nb),
+            ("batch_numpy", self.batch_numpy, nb),
             ("pycapacity", self.pycapacity, n1),
         ):
             self.times.setdefault(key, []).append(per_config(fn, count))
@@ -186,7 +205,10 @@ def main(argv=None) -> int:
     memory_n = 40_000 if quick else 1_000_000
 
     rng = np.random.default_rng(20240607)
-    versions = f"mobmanip {mobmanip.__version__}, pinocchio {pin.__version__}, numpy {np.__version__}"
+    versions = (
+        f"mobmanip {mobmanip.__version__}, pinocchio {pin.__version__}, numpy {np.__version__}, "
+        f"numba {_numba_version()}"
+    )
     print(f"{versions}, {os.cpu_count()} cores")
     cases = [Case(name, task, n_single, n_batch, rng) for name, task in ROBOTS]
     for case in cases:  # warm-up round, not counted
@@ -206,7 +228,9 @@ def main(argv=None) -> int:
         ("(a) floor: Pinocchio FK + frame Jacobians + CRBA + NLE", "floor"),
         ("    batch's Pinocchio pass (its calls + copies into stacks)", "pass"),
         ("(b) analyze, one configuration", "single"),
+        ("    analyze(method='exact'): SVD path only", "single_exact"),
         (f"(c) analyze_batch, N = {n_batch}", "batch"),
+        ("    analyze_batch(method='numpy'): stacked NumPy fast path", "batch_numpy"),
         ("(d) pycapacity velocity + acceleration ellipsoid, J and M given", "pycapacity"),
     )
     for label, key in rows:

@@ -6,16 +6,18 @@
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
+from .batch import BatchSetup, EllipsoidBatch, _kernel_fast, _pinocchio_pass, _Terms, _Workspace, kernel_available
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
 from .errors import TaskError
 from .grasp import HeldObject
 from .model import Robot
-from .tasks import get_task
+from .tasks import TaskSpace, get_task
 
 
 @dataclass(frozen=True)
@@ -114,6 +116,7 @@ def analyze(
     object_mass: float | None = None,
     held_object: HeldObject | None = None,
     decoupled: bool = False,
+    method: str = "auto",
 ) -> Analysis:
     """Analyse the robot at configuration q (robot and object at rest).
 
@@ -126,46 +129,107 @@ def analyze(
         held_object: an explicit object (overrides ``object_mass``); its offsets must have one
             row per arm.
         decoupled: use the decoupled P (no platform-arm interaction) for the dynamic ellipsoid.
+        method: ``"auto"``: the compiled kernel of :mod:`mobmanip.batch` (closed forms with an
+            a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
+            at a singularity, is computed by the exact path); ``"exact"``: always the SVD-based
+            :mod:`mobmanip.ellipsoids` (the reference; about 4x slower). Without Numba,
+            ``"auto"`` is ``"exact"``.
     """
+    if method not in ("auto", "exact"):
+        raise ValueError(f"method must be 'auto' or 'exact', got {method!r}")
     q = robot.check_configuration(q)
     task = get_task(task or robot.spec.default_task)
+    if held_object is None:
+        mass = robot.spec.object_mass if object_mass is None else object_mass
+        _check_mass(mass)
+    else:
+        mass = held_object.mass
+        if held_object.offsets.shape != (len(robot.arms), 3):
+            raise TaskError(
+                f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
+            )
+    if method == "auto" and kernel_available():
+        return _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
+    return _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
+
+
+def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
+    """The reference path: :mod:`mobmanip.dynamics` and the SVD-based :mod:`mobmanip.ellipsoids`."""
     dyn = _reduced_dynamics(robot, q, None, False)
     J_u = frame_jacobians(robot, q, task) @ robot.S
     positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
+    obj = held_object if held_object is not None else HeldObject.between(positions, mass)
+    return _assemble(robot, q, task, decoupled, J_u, dyn.P, dyn.xi, positions, obj, obj.grasp_matrix(task))
+
+
+def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
+    """The compiled kernel of :mod:`mobmanip.batch` on one configuration; an ellipsoid its
+    certificate does not accept is computed by the reference path instead."""
+    setup, ws = _single_setup(robot, task, mass)
+    _pinocchio_pass(setup, q[None, :], ws, 1)
+    t = _Terms(1, ws.Jw, ws.M, ws.g, ws.pos)
+    m = setup.m
+    kin_b, dyn_b = EllipsoidBatch.allocate(1, m), EllipsoidBatch.allocate(1, m)
+    offsets = Mo = None
     if held_object is not None:
-        obj = held_object
-    else:
-        mass = robot.spec.object_mass if object_mass is None else object_mass
-        _check_mass(mass)
-        obj = HeldObject.between(positions, float(mass))
-    if obj.offsets.shape != (len(robot.arms), 3):
-        raise TaskError(f"the object needs one grasp offset per arm ({len(robot.arms)}), got {obj.offsets.shape}")
-    W = obj.grasp_matrix(task)
-    P_decoupled = decouple(robot, dyn.P)
-    kin = kinematic_ellipsoid(J_u, W, robot.velocity_limits)
-    dynamic = dynamic_ellipsoid(
-        J_u,
-        W,
-        P_decoupled if decoupled else dyn.P,
-        dyn.Q,
-        dyn.xi,
-        obj.inertia_matrix(task),
-        obj.gravity_vector(task),
-        robot.effort_limits,
+        offsets = np.ascontiguousarray(held_object.offsets, dtype=float)
+        Mo = np.ascontiguousarray(held_object.inertia_matrix(task), dtype=float)
+    vlim, elim = robot.velocity_limits, robot.effort_limits
+    bad_kin, bad_dyn, W, _ = _kernel_fast(
+        setup, t, vlim, elim, decoupled, kin_b, dyn_b, slice(0, 1), offsets=offsets, Mo=Mo, grasp=True
     )
+    positions = ws.pos[0].copy()
+    obj = held_object if held_object is not None else HeldObject.between(positions, mass)
+    kin = None if bad_kin[0] else kin_b[0]
+    dynamic = None if bad_dyn[0] else dyn_b[0]
+    return _assemble(robot, q, task, decoupled, t.J_u[0], t.P[0], t.xi[0], positions, obj, W[0], kin, dynamic)
+
+
+def _assemble(robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None) -> Analysis:
+    """The Analysis from the terms; an ellipsoid not given is computed by the exact path."""
+    P_decoupled = decouple(robot, P)
+    if kin is None:
+        kin = kinematic_ellipsoid(J_u, W, robot.velocity_limits)
+    if dynamic is None:
+        dynamic = dynamic_ellipsoid(
+            J_u,
+            W,
+            P_decoupled if decoupled else P,
+            robot.Q,
+            xi,
+            obj.inertia_matrix(task),
+            obj.gravity_vector(task),
+            robot.effort_limits,
+        )
     return Analysis(
         robot=robot,
         q=q,
         task=task.name,
         decoupled=decoupled,
         unified_jacobian=J_u,
-        reduced_inertia=dyn.P,
+        reduced_inertia=P,
         reduced_inertia_decoupled=P_decoupled,
-        input_matrix=dyn.Q,
-        bias=dyn.xi,
+        input_matrix=robot.Q,
+        bias=xi,
         end_effector_positions=positions,
         held_object=obj,
         grasp_matrix=W,
         kinematic=kin,
         dynamic=dynamic,
     )
+
+
+_SETUPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _single_setup(robot: Robot, task: TaskSpace, mass: float):
+    """The batch setup and a one-row workspace for (robot, task, mass), built once and kept as
+    long as the robot lives."""
+    per_robot = _SETUPS.setdefault(robot, {})
+    key = (task.name, tuple(task.rows), mass)
+    if key not in per_robot:
+        if len(per_robot) > 64:  # e.g. a sweep over masses: do not grow without bound
+            per_robot.clear()
+        setup = BatchSetup(robot, task, mass)
+        per_robot[key] = (setup, _Workspace(setup, 1))
+    return per_robot[key]

@@ -30,6 +30,7 @@ The split shows in the results only through :attr:`BatchAnalysis.svd_path`.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -53,6 +54,9 @@ _EPS = np.finfo(float).eps
 #: the rows accepted at this setting differed from the SVD path by at most 1e-11 of the
 #: ellipsoid's size, with identical flags; the tests check 1e-10 against the single path.
 FAST_PATH_TOLERANCE = 1e-9
+
+#: Ways to compute the ellipsoids (see :func:`analyze_batch`).
+METHODS = ("auto", "numpy", "svd")
 
 #: Configurations per internal chunk: large enough to amortise NumPy's per-call overhead,
 #: small enough for the workspaces to stay in cache.
@@ -311,6 +315,32 @@ class BatchSetup:
                     joint = model.joints[j]
                     support[joint.idx_v : joint.idx_v + joint.nv] = 1.0
             self.frame_supports.append(support)
+        # for the compiled kernel: supports (k, nv), S column-compressed, task rows (linear first)
+        self.supports = np.array(self.frame_supports, dtype=float).reshape(self.k, self.nv)
+        ptr, idx = [0], []
+        for j in range(self.nx):
+            idx.extend(np.flatnonzero(self.S[:, j]).tolist())
+            ptr.append(len(idx))
+        idx = np.array(idx, dtype=np.int64)
+        # Index arrays are unsigned: Numba then skips the negative-index wraparound check on
+        # every indirect access (it halves the cost of these gathers).
+        self.S_csc = (
+            np.array(ptr, dtype=np.uint64),
+            idx.astype(np.uint64),
+            self.S[idx, np.repeat(np.arange(self.nx), np.diff(ptr))],
+        )
+        # reduced coordinates that can move each end effector (J_u is zero elsewhere in its rows)
+        moves = (self.supports @ (self.S != 0.0)) > 0.0  # (k, nx)
+        self.arm_cols = np.zeros((self.k, self.nx), dtype=np.uint64)
+        self.n_arm_cols = moves.sum(axis=1).astype(np.uint64)
+        for a in range(self.k):
+            self.arm_cols[a, : self.n_arm_cols[a]] = np.flatnonzero(moves[a])
+        self.P_plan = _congruence_plan(self.S)
+        self.task_rows = np.array(task.rows, dtype=np.int64)
+        self.n_linear = int(np.sum(self.task_rows < 3))
+        if np.any(self.task_rows[: self.n_linear] >= 3):
+            raise TaskError(f"task {task.name!r} must list its linear rows before its angular rows")
+        self.Q_inv_kernel = np.zeros((0, 0)) if self.Q_inv is None else np.ascontiguousarray(self.Q_inv)
         angular = task.angular
         self.angular = angular
         self.n_angular = int(angular.sum())
@@ -336,6 +366,26 @@ class BatchSetup:
             self.Mo = np.where(angular, 0.0, self.mass)
 
 
+def _congruence_plan(S: np.ndarray):
+    """S^T M S as a list of terms over M's upper triangle, for the kernel: entry e of P (row
+    ``rows[e]`` <= column ``cols[e]``) is sum over t in ptr[e] .. ptr[e+1] of coef[t] M[u[t], w[t]]."""
+    nx = S.shape[1]
+    nz = [np.flatnonzero(S[:, j]) for j in range(nx)]
+    ptr, rows, cols, us, ws, coefs = [0], [], [], [], [], []
+    for a in range(nx):
+        for b in range(a, nx):
+            for u in nz[a]:
+                for w in nz[b]:
+                    us.append(min(u, w))
+                    ws.append(max(u, w))
+                    coefs.append(S[u, a] * S[w, b])
+            rows.append(a)
+            cols.append(b)
+            ptr.append(len(us))
+    ints = (np.array(x, dtype=np.uint64) for x in (ptr, rows, cols, us, ws))
+    return (*ints, np.array(coefs, dtype=float))
+
+
 def _null_basis(W: np.ndarray) -> np.ndarray:
     """Orthonormal basis of null(W), (cols, cols - rank)."""
     _, s, vt = np.linalg.svd(W)
@@ -348,13 +398,28 @@ def _null_basis(W: np.ndarray) -> np.ndarray:
 
 
 class _Terms:
-    """Per-configuration quantities for one chunk, as stacked arrays."""
+    """One chunk's per-configuration quantities.
 
-    __slots__ = ("J_u", "P", "xi", "positions", "W", "T", "C", "Mo", "_gram")
+    Pinocchio's outputs (views into the chunk's workspace, valid until the next chunk): world
+    joint Jacobians ``Jw`` (n, 6, nv), mass matrices ``M``, generalized gravity ``g`` and
+    end-effector positions ``positions`` (n, k, 3). The derived terms -- J_u, P, xi and the
+    grasp (W, T, C, M_o diagonal; ``None`` for a grasp that does not move) -- come either from
+    the compiled kernel (rows it could not certify are all that is needed after it) or from
+    stacked NumPy (:func:`_numpy_terms`), whichever ran first.
+    """
+
+    __slots__ = ("n", "Jw", "M", "g", "positions", "J_u", "P", "xi", "W", "T", "C", "Mo", "_gram")
+
+    def __init__(self, n, Jw, M, g, positions):
+        self.n, self.Jw, self.M, self.g, self.positions = n, Jw, M, g, positions
+        self.J_u = self.P = self.xi = self.W = self.T = self.C = self.Mo = self._gram = None
+
+    def __len__(self) -> int:
+        return self.n
 
     def gram(self):
         """(J^T contiguous, solver B -> (J J^T)^-1 B, an upper bound on kappa_2(J J^T)), cached."""
-        if getattr(self, "_gram", None) is None:
+        if self._gram is None:
             Jt = np.ascontiguousarray(np.swapaxes(self.J_u, 1, 2))
             Gu = self.J_u @ Jt
             solve, inv_norm = _spd_solver(Gu)
@@ -363,43 +428,39 @@ class _Terms:
 
 
 def _pinocchio_pass(setup: BatchSetup, qs: np.ndarray, ws: _Workspace, n: int) -> None:
-    """Fill the workspace's first n rows from Pinocchio (one call of each kind per configuration).
-
-    Without positions: frame Jacobians from ``getFrameJacobian``. With positions: the world
-    joint Jacobian and the frame placements, the frame Jacobians then follow in NumPy
-    (:func:`_frame_jacobians`), which saves a call and a copy per arm.
-    """
+    """Fill the workspace's first n rows from Pinocchio, once per configuration: CRBA in the
+    world convention (which also leaves the world joint Jacobians in ``data.J``), the
+    end-effector placements and the generalized gravity. The frame Jacobians follow from the
+    joint Jacobians and the placements without further calls."""
     model, data = setup.robot.model, setup.robot.data
-    compute_jacobians = pin.computeJointJacobians
     crba = pin.crba
     gravity = pin.computeGeneralizedGravity
-    M, g = ws.M, ws.g
-    if ws.pos is None:
-        frame_jacobian = pin.getFrameJacobian
-        lwa = pin.LOCAL_WORLD_ALIGNED
-        frames = tuple(enumerate(setup.frame_ids))
-        J6 = ws.J6
+    placement = pin.updateFramePlacement
+    frames = tuple(enumerate(setup.frame_ids))
+    Jw, pos, M, g = ws.Jw, ws.pos, ws.M, ws.g
+    if _WORLD is None:  # a Pinocchio without conventions: one more call for the Jacobians
         for i in range(n):
             q = qs[i]
-            compute_jacobians(model, data, q)
-            Ji = J6[i]
-            for a, f in frames:
-                Ji[a] = frame_jacobian(model, data, f, lwa)
+            Jw[i] = pin.computeJointJacobians(model, data, q)
             M[i] = crba(model, data, q)
-            g[i] = gravity(model, data, q)
-    else:
-        placement = pin.updateFramePlacement
-        frames = tuple(enumerate(setup.frame_ids))
-        Jw, pos = ws.Jw, ws.pos
-        for i in range(n):
-            q = qs[i]
-            Jw[i] = compute_jacobians(model, data, q)
             pi = pos[i]
             for a, f in frames:
                 pi[a] = placement(model, data, f).translation
-            M[i] = crba(model, data, q)
             g[i] = gravity(model, data, q)
-        _frame_jacobians(setup, Jw[:n], pos[:n], ws.J6[:n])
+        return
+    J = data.J  # a view of Pinocchio's buffer, refreshed by every crba call below
+    world = _WORLD
+    for i in range(n):
+        q = qs[i]
+        M[i] = crba(model, data, q, world)
+        Jw[i] = J
+        pi = pos[i]
+        for a, f in frames:
+            pi[a] = placement(model, data, f).translation
+        g[i] = gravity(model, data, q)
+
+
+_WORLD = getattr(getattr(pin, "Convention", None), "WORLD", None)
 
 
 def _frame_jacobians(setup: BatchSetup, Jw: np.ndarray, pos: np.ndarray, out: np.ndarray) -> None:
@@ -421,34 +482,35 @@ class _Workspace:
 
     def __init__(self, setup: BatchSetup, n: int):
         self.n = n
-        self.J6 = np.zeros((n, setup.k, 6, setup.nv))
         self.M = np.zeros((n, setup.nv, setup.nv))
         self.g = np.zeros((n, setup.nv))
-        self.pos = np.zeros((n, setup.k, 3)) if setup.need_positions else None
-        self.Jw = np.zeros((n, 6, setup.nv)) if setup.need_positions else None
+        self.pos = np.zeros((n, setup.k, 3))
+        self.Jw = np.zeros((n, 6, setup.nv))
 
 
 def _terms(setup: BatchSetup, qs: np.ndarray, ws: _Workspace) -> _Terms:
     n = qs.shape[0]
     _pinocchio_pass(setup, qs, ws, n)
-    J6, M, g = ws.J6[:n], ws.M[:n], ws.g[:n]
-    pos = None if ws.pos is None else ws.pos[:n]
-    proj, nv, m, k = setup.projection, setup.nv, setup.m, setup.k
-    t = _Terms()
-    t._gram = None
+    return _Terms(n, ws.Jw[:n], ws.M[:n], ws.g[:n], ws.pos[:n])
+
+
+def _numpy_terms(setup: BatchSetup, t: _Terms) -> None:
+    """J_u, P, xi and the grasp of a chunk, stacked in NumPy (when the kernel has not run)."""
+    if t.J_u is not None:
+        return
+    n, proj, nv, m, k = t.n, setup.projection, setup.nv, setup.m, setup.k
+    J6 = np.empty((n, k, 6, nv))
+    _frame_jacobians(setup, t.Jw, t.positions, J6)
+    M = t.M
     J = J6[:, :, setup.row_slice, :] if setup.row_slice is not None else J6[:, :, setup.rows, :]
     t.J_u = proj.right(J.reshape(n, k * m, nv))
     if not setup.crba_symmetric:  # M from the upper triangle, as mobmanip.dynamics.mass_matrix
         M = np.triu(M) + np.swapaxes(np.triu(M, 1), 1, 2)
     P = proj.left_transpose(proj.right(M))
     t.P = 0.5 * (P + np.swapaxes(P, 1, 2))
-    t.xi = -proj.right(g)
-    t.positions = None if pos is None else pos.copy()
+    t.xi = -proj.right(t.g)
     if setup.moving_grasp:
-        t.W, t.T, t.C, t.Mo = _moving_grasp(setup, pos)
-    else:
-        t.W = t.T = t.C = t.Mo = None
-    return t
+        t.W, t.T, t.C, t.Mo = _moving_grasp(setup, t.positions)
 
 
 def _moving_grasp(setup: BatchSetup, pos: np.ndarray):
@@ -957,31 +1019,140 @@ def ellipsoids_from_terms(
 ) -> np.ndarray:
     """Fill ``kinematic``/``dynamic`` rows ``offset .. offset + n`` from one chunk's terms.
 
-    Either output may be ``None`` to skip that ellipsoid. Returns the chunk's SVD-path mask (n,).
+    Either output may be ``None`` to skip that ellipsoid. ``method``: ``"auto"`` (the compiled
+    kernel when Numba is available, else the stacked NumPy fast path; rows neither certifies go
+    to the SVD path), ``"numpy"`` (stacked NumPy fast path, then SVD path) or ``"svd"``.
+    Returns the chunk's SVD-path mask (n,).
     """
-    n = t.J_u.shape[0]
+    n = t.n
     rows = np.arange(offset, offset + n)
     block = slice(offset, offset + n)
     vlim = _limits(velocity_limits, setup.robot.velocity_limits, "velocity")
     elim = _limits(effort_limits, setup.robot.effort_limits, "effort")
+    bad_kin = bad_dyn = None
+    if method == "auto" and kernel_available():
+        bad_kin, bad_dyn = _kernel_fast(setup, t, vlim, elim, decoupled, kinematic, dynamic, block)
+    else:
+        _numpy_terms(setup, t)
     svd_rows = np.zeros(n, dtype=bool)
-    W_rows = setup.W if t.W is None else t.W
     if kinematic is not None:
-        bad = np.ones(n, dtype=bool) if method == "svd" else _kinematic_fast(setup, t, vlim, kinematic, block)
-        if bad.any():
-            W = W_rows if t.W is None else W_rows[bad]
-            kinematic._put(rows[bad], _kinematic_svd(t.J_u[bad], W, vlim))
-        svd_rows |= bad
+        if bad_kin is None:
+            bad_kin = np.ones(n, dtype=bool) if method == "svd" else _kinematic_fast(setup, t, vlim, kinematic, block)
+        if bad_kin.any():
+            W = setup.W if t.W is None else t.W[bad_kin]
+            kinematic._put(rows[bad_kin], _kinematic_svd(t.J_u[bad_kin], W, vlim))
+        svd_rows |= bad_kin
     if dynamic is not None:
         P = _decouple(setup, t.P) if decoupled else t.P
-        bad = np.ones(n, dtype=bool) if method == "svd" else _dynamic_fast(setup, t, P, elim, dynamic, block)
-        if bad.any():
-            W = W_rows if t.W is None else W_rows[bad]
-            Mo = setup.Mo if t.Mo is None else t.Mo[bad]
-            result = _dynamic_svd(t.J_u[bad], W, P[bad], setup.Q_inv, t.xi[bad], Mo, setup.g_o, elim, rows[bad])
-            dynamic._put(rows[bad], result)
-        svd_rows |= bad
+        if bad_dyn is None:
+            bad_dyn = np.ones(n, dtype=bool) if method == "svd" else _dynamic_fast(setup, t, P, elim, dynamic, block)
+        if bad_dyn.any():
+            W = setup.W if t.W is None else t.W[bad_dyn]
+            Mo = setup.Mo if t.Mo is None else t.Mo[bad_dyn]
+            result = _dynamic_svd(
+                t.J_u[bad_dyn], W, P[bad_dyn], setup.Q_inv, t.xi[bad_dyn], Mo, setup.g_o, elim, rows[bad_dyn]
+            )
+            dynamic._put(rows[bad_dyn], result)
+        svd_rows |= bad_dyn
     return svd_rows
+
+
+def kernel_available() -> bool:
+    """Whether the compiled kernel (:mod:`mobmanip._kernel`, needs Numba) can run here."""
+    return _kernel_module() is not None
+
+
+@functools.cache
+def _kernel_module():
+    try:
+        from . import _kernel
+    except ImportError:  # Numba missing or unusable on this platform: the NumPy paths remain
+        return None
+    return _kernel
+
+
+def _kernel_fast(setup, t, vlim, elim, decoupled, kinematic, dynamic, block, offsets=None, Mo=None, grasp=False):
+    """Run the compiled kernel on a chunk: fills the accepted rows of the outputs and t's terms
+    (J_u, P, xi and, for a moving grasp, W and M_o's diagonal) for the rows left to the SVD
+    path. Returns the kinematic and dynamic masks of those rows (``None`` where not asked),
+    then, with ``grasp``, W and M_o of every row.
+
+    ``offsets`` (k, 3) and ``Mo`` (m, m) describe an explicit object instead of the default one
+    (a sphere centred between the end effectors); its mass is ``setup.mass``."""
+    n, m, k, nx = t.n, setup.m, setup.k, setup.nx
+    J_u = np.empty((n, k * m, nx))
+    P = np.empty((n, nx, nx))
+    xi = np.empty((n, nx))
+    W = np.empty((n, m, k * m))
+    Mo_rows = np.empty((n, m, m))
+    kin = kinematic if kinematic is not None else EllipsoidBatch.allocate(0, m)
+    dyn = dynamic if dynamic is not None else EllipsoidBatch.allocate(0, m)
+    kin_b = block if kinematic is not None else slice(0, 0)
+    dyn_b = block if dynamic is not None else slice(0, 0)
+    kin_ok = np.zeros(n, dtype=bool)
+    dyn_ok = np.zeros(n, dtype=bool)
+    dyn_empty = np.zeros(n if dynamic is not None else 0, dtype=bool)
+    ptr, idx, val = setup.S_csc
+    _kernel_module().run_chunk(
+        t.Jw,
+        t.M,
+        t.g,
+        t.positions,
+        setup.supports,
+        setup.arm_cols,
+        setup.n_arm_cols,
+        setup.task_rows,
+        setup.n_linear,
+        ptr,
+        idx,
+        val,
+        *setup.P_plan,
+        setup.Q_inv_kernel,
+        np.ascontiguousarray(vlim, dtype=float),
+        np.ascontiguousarray(elim, dtype=float),
+        _NO_OFFSETS if offsets is None else offsets,
+        _NO_MO if Mo is None else Mo,
+        setup.mass,
+        np.ascontiguousarray(setup.g_o, dtype=float),
+        setup.n_eta if decoupled else 0,
+        kinematic is not None,
+        dynamic is not None,
+        J_u,
+        P,
+        xi,
+        W,
+        Mo_rows,
+        kin.center[kin_b],
+        kin.semi_axes[kin_b],
+        kin.axes[kin_b],
+        kin.matrix[kin_b],
+        kin_ok,
+        dyn.center[dyn_b],
+        dyn.semi_axes[dyn_b],
+        dyn.axes[dyn_b],
+        dyn.matrix[dyn_b],
+        dyn_ok,
+        dyn_empty,
+    )
+    t.J_u, t.P, t.xi = J_u, P, xi
+    if setup.moving_grasp:
+        t.W, t.Mo = W, np.diagonal(Mo_rows, axis1=1, axis2=2)
+    bad_kin = bad_dyn = None
+    if kinematic is not None:
+        kinematic.degenerate[block][kin_ok] = False
+        kinematic.empty[block][kin_ok] = False
+        bad_kin = ~kin_ok
+    if dynamic is not None:
+        dynamic.empty[block][dyn_ok] = dyn_empty[dyn_ok]
+        dynamic.degenerate[block][dyn_ok] = dyn_empty[dyn_ok]
+        bad_dyn = ~dyn_ok
+    if grasp:
+        return bad_kin, bad_dyn, W, Mo_rows
+    return bad_kin, bad_dyn
+
+
+_NO_OFFSETS = np.zeros((0, 3))
+_NO_MO = np.zeros((0, 0))
 
 
 def iter_terms(setup: BatchSetup, qs: np.ndarray, chunk_size: int = DEFAULT_CHUNK):
@@ -1018,7 +1189,9 @@ def analyze_batch(
         positions: also return the end-effector positions (always returned when the grasp needs
             them: several arms and a task with rotation).
         chunk_size: configurations per internal chunk (memory use is proportional to it).
-        method: ``"auto"`` (fast path, SVD path for rows it cannot certify) or ``"svd"``
+        method: ``"auto"`` (the fast path compiled per configuration, see :mod:`mobmanip._kernel`,
+            falling back to ``"numpy"`` without Numba; SVD path for the rows it cannot certify),
+            ``"numpy"`` (the same fast path stacked in NumPy, then the SVD path) or ``"svd"``
             (SVD path for every row, the stacked mirror of :mod:`mobmanip.ellipsoids`).
 
     Raises:
@@ -1027,8 +1200,8 @@ def analyze_batch(
         TaskError: unknown task or bad object mass.
         ModelError: a configuration where an object acceleration needs no torque (massless links).
     """
-    if method not in ("auto", "svd"):
-        raise ValueError(f"method must be 'auto' or 'svd', got {method!r}")
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if not isinstance(chunk_size, int) or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     qs = check_configurations(robot, qs)
@@ -1038,7 +1211,7 @@ def analyze_batch(
     svd_rows = np.zeros(n, dtype=bool)
     pos = np.zeros((n, setup.k, 3)) if setup.need_positions else None
     for start, t in iter_terms(setup, qs, chunk_size):
-        stop = start + t.J_u.shape[0]
+        stop = start + t.n
         svd_rows[start:stop] = ellipsoids_from_terms(
             setup, t, decoupled=decoupled, kinematic=kin, dynamic=dyn, offset=start, method=method
         )

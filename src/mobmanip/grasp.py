@@ -72,12 +72,12 @@ class HeldObject:
         radius reaches the farthest grasp point (I = 2/5 m R^2), a neutral default for a box held
         between the hands. Coincident grasp points give a point mass.
         """
-        points = np.atleast_2d(np.asarray(grasp_points, dtype=float))
-        center = points.mean(axis=0)
+        points = np.asarray(grasp_points, dtype=float).reshape(-1, 3)
+        center = points.sum(axis=0) / points.shape[0]
         offsets = points - center
         if inertia is None:
-            radius2 = float(np.max(np.einsum("ij,ij->i", offsets, offsets)))
-            inertia = 0.4 * mass * radius2 * np.eye(3)
+            radius2 = float((offsets * offsets).sum(axis=1).max())
+            inertia = (0.4 * mass * radius2) * np.eye(3)
         return cls(float(mass), np.asarray(inertia, dtype=float), center, offsets)
 
     def inertia_matrix(self, task: str | TaskSpace) -> np.ndarray:

@@ -1,0 +1,854 @@
+"""Compiled per-configuration kernel: everything after Pinocchio, one configuration at a time.
+
+The stacked NumPy fast path of :mod:`mobmanip.batch` computes the same quantities, but every
+stacked operation on tiny matrices (6 x 6, 12 x 16) pays NumPy's per-call overhead, which after
+Pinocchio dominates the cost. This module runs the same algorithm, with the same a-priori error
+certificates, as loops compiled by Numba, row by row over a chunk:
+
+1. terms: LOCAL_WORLD_ALIGNED frame Jacobians from the world joint Jacobian and the frame
+   positions, J_u = J S, P = S^T M S (upper triangle of M, as :func:`mobmanip.dynamics.mass_matrix`),
+   xi = -S^T g, through S stored column-compressed;
+2. grasp: the object at the centroid of the end effectors (or at explicit offsets), W, its
+   pseudo-inverse T = (W W^T)^-1 W, a basis C of null(W) in closed form, and M_o;
+3. the kinematic and dynamic fast paths of :mod:`mobmanip.batch` (see its docstring for the
+   algebra), with the symmetric eigenproblems solved by Householder tridiagonalisation and
+   implicit QL (backward stable, as the LAPACK routines NumPy calls).
+
+A row the certificates do not accept is flagged and left to the exact SVD paths; the kernel
+never guesses. Compilation is cached on disk (first use in a fresh environment takes seconds).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_EPS = float(np.finfo(float).eps)
+_TOL = 1e-9  # mobmanip.batch.FAST_PATH_TOLERANCE
+_FAST_LIMIT = 1e6  # 1e-2 / mobmanip.batch._FAST_RTOL
+
+_jit = njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "nsz"})
+
+
+@_jit
+def _cholesky(A, L, n):
+    """Lower Cholesky factor of the leading n x n block of A into L; False if not positive definite."""
+    for j in range(n):
+        s = A[j, j]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        if not s > 0.0:  # also catches NaN
+            return False
+        d = np.sqrt(s)
+        L[j, j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / d
+        for i in range(j):
+            L[i, j] = 0.0
+    return True
+
+
+@_jit
+def _lower_inverse(L, X, n):
+    """X = L^-1 for lower-triangular L (leading n x n blocks); returns ||X||_F^2."""
+    total = 0.0
+    for i in range(n):
+        d = 1.0 / L[i, i]
+        X[i, i] = d
+        total += d * d
+        for j in range(i):
+            s = 0.0
+            for p in range(j, i):
+                s += L[i, p] * X[p, j]
+            X[i, j] = -s * d
+            total += X[i, j] * X[i, j]
+        for j in range(i + 1, n):
+            X[i, j] = 0.0
+    return total
+
+
+@_jit
+def _spd_inverse(A, L, X, out, n):
+    """out = A^-1 for symmetric positive definite A by Cholesky; False if it fails."""
+    if not _cholesky(A, L, n):
+        return False
+    _lower_inverse(L, X, n)
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for p in range(j, n):
+                s += X[p, i] * X[p, j]
+            out[i, j] = s
+            out[j, i] = s
+    return True
+
+
+@_jit
+def _fro2(A, rows, cols):
+    s = 0.0
+    for i in range(rows):
+        for j in range(cols):
+            s += A[i, j] * A[i, j]
+    return s
+
+
+@_jit
+def _eigh(V, d, e, n):
+    """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
+    as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
+    tridiagonal form, then the implicit QL iteration with Wilkinson-type shifts (the classical
+    EISPACK tred2/tql2 pair): backward stable, like LAPACK's symmetric solvers. Returns False
+    if an eigenvalue needs more than 60 iterations (the row then takes the SVD path).
+    The QL rotations use sqrt(a^2 + b^2) rather than hypot: entries are pre-scaled to at most 1.
+    """
+    big = 0.0
+    finite = True
+    for i in range(n):
+        for j in range(n):
+            x = abs(V[i, j])
+            finite = finite and x < np.inf  # False for inf and NaN
+            big = max(big, x)
+    if not finite or big == 0.0:  # identity eigenvectors; zero eigenvalues, or NaN and False
+        for i in range(n):
+            d[i] = 0.0 if finite else np.nan
+            for j in range(n):
+                V[i, j] = 1.0 if i == j else 0.0
+        return finite
+    inv_big = 1.0 / big
+    for i in range(n):
+        for j in range(n):
+            V[i, j] *= inv_big
+    for j in range(n):
+        d[j] = V[n - 1, j]
+    for i in range(n - 1, 0, -1):
+        scale = 0.0
+        h = 0.0
+        for k in range(i):
+            scale += abs(d[k])
+        if scale == 0.0:
+            e[i] = d[i - 1]
+            for j in range(i):
+                d[j] = V[i - 1, j]
+                V[i, j] = 0.0
+                V[j, i] = 0.0
+        else:
+            for k in range(i):
+                d[k] /= scale
+                h += d[k] * d[k]
+            f = d[i - 1]
+            g = math.sqrt(h)
+            if f > 0.0:
+                g = -g
+            e[i] = scale * g
+            h -= f * g
+            d[i - 1] = f - g
+            for j in range(i):
+                e[j] = 0.0
+            for j in range(i):
+                f = d[j]
+                V[j, i] = f
+                g = e[j] + V[j, j] * f
+                for k in range(j + 1, i):
+                    g += V[k, j] * d[k]
+                    e[k] += V[k, j] * f
+                e[j] = g
+            f = 0.0
+            for j in range(i):
+                e[j] /= h
+                f += e[j] * d[j]
+            hh = f / (h + h)
+            for j in range(i):
+                e[j] -= hh * d[j]
+            for j in range(i):
+                f = d[j]
+                g = e[j]
+                for k in range(j, i):
+                    V[k, j] -= f * e[k] + g * d[k]
+                d[j] = V[i - 1, j]
+                V[i, j] = 0.0
+        d[i] = h
+    for i in range(n - 1):
+        V[n - 1, i] = V[i, i]
+        V[i, i] = 1.0
+        h = d[i + 1]
+        if h != 0.0:
+            for k in range(i + 1):
+                d[k] = V[k, i + 1] / h
+            for j in range(i + 1):
+                g = 0.0
+                for k in range(i + 1):
+                    g += V[k, i + 1] * V[k, j]
+                for k in range(i + 1):
+                    V[k, j] -= g * d[k]
+        for k in range(i + 1):
+            V[k, i + 1] = 0.0
+    for j in range(n):
+        d[j] = V[n - 1, j]
+        V[n - 1, j] = 0.0
+    V[n - 1, n - 1] = 1.0
+    e[0] = 0.0
+    # implicit QL on the tridiagonal (d, e)
+    for i in range(1, n):
+        e[i - 1] = e[i]
+    e[n - 1] = 0.0
+    f = 0.0
+    tst1 = 0.0
+    for l in range(n):
+        tst1 = max(tst1, abs(d[l]) + abs(e[l]))
+        m = l
+        while m < n - 1:
+            if abs(e[m]) <= _EPS * tst1:
+                break
+            m += 1
+        if m > l:
+            it = 0
+            while True:
+                it += 1
+                if it > 60:
+                    return False
+                g = d[l]
+                p = (d[l + 1] - g) / (2.0 * e[l])
+                r = math.sqrt(p * p + 1.0)
+                if p < 0.0:
+                    r = -r
+                d[l] = e[l] / (p + r)
+                d[l + 1] = e[l] * (p + r)
+                dl1 = d[l + 1]
+                h = g - d[l]
+                for i in range(l + 2, n):
+                    d[i] -= h
+                f += h
+                p = d[m]
+                c = 1.0
+                c2 = c
+                c3 = c
+                el1 = e[l + 1]
+                s = 0.0
+                s2 = 0.0
+                for i in range(m - 1, l - 1, -1):
+                    c3 = c2
+                    c2 = c
+                    s2 = s
+                    g = c * e[i]
+                    h = c * p
+                    r = math.sqrt(p * p + e[i] * e[i])
+                    e[i + 1] = s * r
+                    s = e[i] / r
+                    c = p / r
+                    p = c * d[i] - s * g
+                    d[i + 1] = h + s * (c * g + s * d[i])
+                    for k in range(n):
+                        h = V[k, i + 1]
+                        V[k, i + 1] = s * V[k, i] + c * h
+                        V[k, i] = c * V[k, i] - s * h
+                p = -s * s2 * c3 * el1 * e[l] / dl1
+                e[l] = s * p
+                d[l] = c * p
+                if not abs(e[l]) > _EPS * tst1:
+                    break
+        d[l] = d[l] + f
+        e[l] = 0.0
+    for i in range(n):
+        d[i] *= big
+    for i in range(1, n):
+        j = i
+        while j > 0 and d[j - 1] > d[j]:
+            d[j - 1], d[j] = d[j], d[j - 1]
+            for r in range(n):
+                V[r, j - 1], V[r, j] = V[r, j], V[r, j - 1]
+            j -= 1
+    return True
+
+
+@_jit
+def run_chunk(
+    Jw,
+    M,
+    g,
+    pos,
+    supports,
+    arm_cols,
+    n_arm_cols,
+    task_rows,
+    n_linear,
+    S_ptr,
+    S_idx,
+    S_val,
+    P_ptr,
+    P_row,
+    P_col,
+    P_u,
+    P_w,
+    P_c,
+    Q_inv,
+    vlim,
+    elim,
+    offsets_in,
+    Mo_in,
+    mass,
+    g_o,
+    decouple_eta,
+    want_kin,
+    want_dyn,
+    J_u,
+    P,
+    xi,
+    W,
+    Mo,
+    kin_center,
+    kin_semi,
+    kin_axes,
+    kin_matrix,
+    kin_ok,
+    dyn_center,
+    dyn_semi,
+    dyn_axes,
+    dyn_matrix,
+    dyn_ok,
+    dyn_empty,
+):
+    """Terms and both fast-path ellipsoids for every row of a chunk (see the module docstring).
+
+    Inputs per row i: Jw[i] (6, nv) world joint Jacobian, M[i] (nv, nv) (upper triangle read),
+    g[i] (nv,) generalized gravity, pos[i] (k, 3) end-effector positions. Constants: supports
+    (k, nv), 1 where a joint moves arm a's end effector; arm_cols[a, :n_arm_cols[a]] the
+    reduced coordinates that can move it (J_u's other entries in arm a's rows are zero); task
+    rows (m,), linear ones first; S column-compressed; P = S^T M S as a list of terms
+    P[P_row[t], P_col[t]] = sum P_c M[P_u, P_w] (upper triangle, P_ptr delimiting each entry);
+    Q_inv (nx, nx) or (0, 0) for Q = I; limits; offsets_in (k, 3) or (0, 3) for the centroid;
+    Mo_in (m, m) or (0, 0) for a uniform sphere of ``mass`` reaching the farthest grasp; g_o
+    (m,); decouple_eta > 0 zeroes P's platform-arm blocks in the dynamic ellipsoid. Outputs:
+    J_u, P (coupled), xi, W, Mo per row, the ellipsoids of accepted rows and the acceptance
+    flags kin_ok / dyn_ok (rows with False are left untouched).
+    """
+    n = Jw.shape[0]
+    nv = Jw.shape[2]
+    k = pos.shape[1]
+    m = task_rows.shape[0]
+    nx = S_ptr.shape[0] - 1
+    km = k * m
+    c = km - m
+    c1 = max(c, 1)
+    has_q = Q_inv.shape[0] > 0
+    has_offsets = offsets_in.shape[0] > 0
+    has_mo = Mo_in.shape[0] > 0
+    vmax = vlim.max()
+    vmin = vlim.min()
+    n_pairs = P_ptr.shape[0] - 1
+
+    Jf = np.zeros((6, nv))
+    r_off = np.zeros((k, 3))
+    Kb = np.zeros((k, m, m))
+    WWt = np.zeros((m, m))
+    WWi = np.zeros((m, m))
+    Lm = np.zeros((m, m))
+    Xm = np.zeros((m, m))
+    T = np.zeros((m, km))
+    Cb = np.zeros((m, c1))  # bottom block of C (C's top block is the identity)
+    Gu = np.zeros((km, km))
+    Lg = np.zeros((km, km))
+    Li = np.zeros((km, km))
+    Jh = np.zeros((km, nx))
+    Gk = np.zeros((km, km))
+    GC = np.zeros((km, c1))
+    KK = np.zeros((c1, c1))
+    KKi = np.zeros((c1, c1))
+    Lc = np.zeros((c1, c1))
+    Xc = np.zeros((c1, c1))
+    X = np.zeros((c1, m))
+    Y = np.zeros((c1, m))
+    Z = np.zeros((m, km))
+    G = np.zeros((m, nx))
+    B = np.zeros((m, m))
+    V = np.zeros((m, m))
+    lam = np.zeros(m)
+    ework = np.zeros(m)
+    sol = np.zeros((km, m))
+    tmp = np.zeros((km, m))
+    JpWt = np.zeros((nx, m))
+    TMo = np.zeros((km, m))
+    Lam = np.zeros((nx, m))
+    Lam2 = np.zeros((nx, m))
+    mu = np.zeros(nx)
+    mu2v = np.zeros(nx)
+    Wpg = np.zeros(km)
+    L = np.zeros((nx, m))
+    mub = np.zeros(nx)
+    H = np.zeros((m, m))
+    LV = np.zeros((nx, m))
+    lam_rq = np.zeros(m)
+    order = np.zeros(m, np.int64)
+    Hinv = np.zeros((m, m))
+    yv = np.zeros(m)
+    cv = np.zeros(m)
+    row_arm = np.zeros(km, np.uint64)
+    for p in range(km):
+        row_arm[p] = p // m
+
+    for i in range(n):
+        Ju = J_u[i]
+        Pi = P[i]
+        Mi = M[i]
+        Jwi = Jw[i]
+        Wi = W[i]
+        Moi = Mo[i]
+        # ---------------- terms: J_u, P, xi ----------------
+        for a in range(k):
+            p0 = pos[i, a, 0]
+            p1 = pos[i, a, 1]
+            p2 = pos[i, a, 2]
+            for v in range(nv):
+                if supports[a, v] == 0.0:
+                    for r in range(6):
+                        Jf[r, v] = 0.0
+                    continue
+                wx = Jwi[3, v]
+                wy = Jwi[4, v]
+                wz = Jwi[5, v]
+                Jf[0, v] = Jwi[0, v] + wy * p2 - wz * p1
+                Jf[1, v] = Jwi[1, v] + wz * p0 - wx * p2
+                Jf[2, v] = Jwi[2, v] + wx * p1 - wy * p0
+                Jf[3, v] = wx
+                Jf[4, v] = wy
+                Jf[5, v] = wz
+            for r in range(m):
+                tr = task_rows[r]
+                Jr = Ju[a * m + r]
+                for j in range(nx):
+                    s = 0.0
+                    for t in range(S_ptr[j], S_ptr[j + 1]):
+                        s += Jf[tr, S_idx[t]] * S_val[t]
+                    Jr[j] = s
+        for e_ in range(n_pairs):
+            s = 0.0
+            for t in range(P_ptr[e_], P_ptr[e_ + 1]):
+                s += P_c[t] * Mi[P_u[t], P_w[t]]
+            Pi[P_row[e_], P_col[e_]] = s
+            Pi[P_col[e_], P_row[e_]] = s
+        for j in range(nx):
+            s = 0.0
+            for t in range(S_ptr[j], S_ptr[j + 1]):
+                s += g[i, S_idx[t]] * S_val[t]
+            xi[i, j] = -s
+
+        # ---------------- grasp: W, T, C, M_o ----------------
+        if has_offsets:
+            for a in range(k):
+                for d in range(3):
+                    r_off[a, d] = offsets_in[a, d]
+        else:
+            for d in range(3):
+                cen = 0.0
+                for a in range(k):
+                    cen += pos[i, a, d]
+                cen /= k
+                for a in range(k):
+                    r_off[a, d] = pos[i, a, d] - cen
+        radius2 = 0.0
+        for a in range(k):
+            rr = r_off[a, 0] ** 2 + r_off[a, 1] ** 2 + r_off[a, 2] ** 2
+            if rr > radius2:
+                radius2 = rr
+        for p in range(m):
+            for q in range(m):
+                if has_mo:
+                    Moi[p, q] = Mo_in[p, q]
+                elif p != q:
+                    Moi[p, q] = 0.0
+                elif p < n_linear:
+                    Moi[p, q] = mass
+                else:
+                    Moi[p, q] = 0.4 * mass * radius2
+        # W_a = I + K_a, K_a the angular-by-linear block of skew(r_a) on the task's rows
+        for a in range(k):
+            rx = r_off[a, 0]
+            ry = r_off[a, 1]
+            rz = r_off[a, 2]
+            for p in range(n_linear, m):
+                ra = task_rows[p] - 3
+                for q in range(n_linear):
+                    cl = task_rows[q]
+                    if ra == 0:
+                        val = -rz if cl == 1 else (ry if cl == 2 else 0.0)
+                    elif ra == 1:
+                        val = rz if cl == 0 else (-rx if cl == 2 else 0.0)
+                    else:
+                        val = -ry if cl == 0 else (rx if cl == 1 else 0.0)
+                    Kb[a, p, q] = val
+            for p in range(m):
+                for q in range(m):
+                    Wi[p, a * m + q] = Kb[a, p, q] + (1.0 if p == q else 0.0)
+        for p in range(m):
+            for q in range(p, m):
+                s = 0.0
+                for r in range(km):
+                    s += Wi[p, r] * Wi[q, r]
+                WWt[p, q] = s
+                WWt[q, p] = s
+        grasp_ok = _spd_inverse(WWt, Lm, Xm, WWi, m)
+        for p in range(m):
+            for r in range(km):
+                s = 0.0
+                for q in range(m):
+                    s += WWi[p, q] * Wi[q, r]
+                T[p, r] = s
+        # null(W): h_k = -W_k^-1 (W_1 h_1 + ... + W_{k-1} h_{k-1}), W_k^-1 W_a = I + K_a - K_k;
+        # C = [I; Cb] with Cb = -[W_k^-1 W_1 ... W_k^-1 W_{k-1}]
+        for a in range(k - 1):
+            for p in range(m):
+                for q in range(m):
+                    Cb[p, a * m + q] = -(Kb[a, p, q] - Kb[k - 1, p, q] + (1.0 if p == q else 0.0))
+
+        # ---------------- Gram of J_u: Cholesky, kappa ----------------
+        for p in range(km):
+            cols = arm_cols[row_arm[p]]
+            ncol = n_arm_cols[row_arm[p]]
+            Jp = Ju[p]
+            for q in range(p, km):
+                Jq = Ju[q]
+                s = 0.0
+                for t in range(ncol):
+                    j = cols[t]
+                    s += Jp[j] * Jq[j]
+                Gu[p, q] = s
+                Gu[q, p] = s
+        gram_ok = _cholesky(Gu, Lg, km)
+        if gram_ok:
+            inv_norm = _lower_inverse(Lg, Li, km)
+            kappa = np.sqrt(_fro2(Gu, km, km)) * inv_norm
+        else:
+            kappa = np.inf
+
+        # ---------------- kinematic ellipsoid ----------------
+        kin_ok[i] = False
+        if want_kin and grasp_ok:
+            branch = np.sqrt(kappa) * (vmax / vmin) < _FAST_LIMIT
+            for p in range(km):
+                cols = arm_cols[row_arm[p]]
+                for t in range(n_arm_cols[row_arm[p]]):
+                    j = cols[t]
+                    Jh[p, j] = Ju[p, j] * vlim[j]
+            hard = not branch
+            second = 0.0
+            if k == 1:
+                for p in range(m):
+                    for j in range(nx):
+                        G[p, j] = Jh[p, j]
+                z_norm = 1.0
+            else:
+                for p in range(km):
+                    cols = arm_cols[row_arm[p]]
+                    ncol = n_arm_cols[row_arm[p]]
+                    for q in range(p, km):
+                        s = 0.0
+                        for t in range(ncol):
+                            j = cols[t]
+                            s += Jh[p, j] * Jh[q, j]
+                        Gk[p, q] = s
+                        Gk[q, p] = s
+                # GC = G_k C, KK = C^T G_k C, X = (G_k C)^T T^T
+                for p in range(km):
+                    for q in range(c):
+                        s = Gk[p, q]
+                        for r in range(m):
+                            s += Gk[p, c + r] * Cb[r, q]
+                        GC[p, q] = s
+                for p in range(c):
+                    for q in range(p, c):
+                        s = GC[p, q]
+                        for r in range(m):
+                            s += Cb[r, p] * GC[c + r, q]
+                        KK[p, q] = s
+                        KK[q, p] = s
+                for p in range(c):
+                    for q in range(m):
+                        s = 0.0
+                        for r in range(km):
+                            s += GC[r, p] * T[q, r]
+                        X[p, q] = s
+                if _spd_inverse(KK, Lc, Xc, KKi, c):
+                    kk_norm = np.sqrt(_fro2(KK, c, c))
+                    kappa_kk = kk_norm * np.sqrt(_fro2(KKi, c, c))
+                else:
+                    kk_norm = np.inf
+                    kappa_kk = np.inf
+                for p in range(c):
+                    for q in range(m):
+                        s = 0.0
+                        for r in range(c):
+                            s += KKi[p, r] * X[r, q]
+                        Y[p, q] = s
+                # Z = T - Y^T C^T
+                for q in range(m):
+                    for r in range(c):
+                        Z[q, r] = T[q, r] - Y[r, q]
+                    for r in range(m):
+                        s = T[q, c + r]
+                        for p in range(c):
+                            s -= Y[p, q] * Cb[r, p]
+                        Z[q, c + r] = s
+                # G = Z J_hat, row by row of J_hat over its nonzero columns
+                for q in range(m):
+                    for j in range(nx):
+                        G[q, j] = 0.0
+                for r in range(km):
+                    cols = arm_cols[row_arm[r]]
+                    ncol = n_arm_cols[row_arm[r]]
+                    for q in range(m):
+                        z = Z[q, r]
+                        for t in range(ncol):
+                            j = cols[t]
+                            G[q, j] += z * Jh[r, j]
+                second = kk_norm * (_EPS * kappa_kk * np.sqrt(_fro2(Y, c, m))) ** 2
+                hard = hard or not (kappa_kk <= 1e12)
+                z_norm = np.sqrt(_fro2(Z, m, km))
+            for p in range(m):
+                for q in range(p, m):
+                    s = 0.0
+                    for j in range(nx):
+                        s += G[p, j] * G[q, j]
+                    B[p, q] = s
+                    B[q, p] = s
+                    V[p, q] = s
+                    V[q, p] = s
+            eig_ok = _eigh(V, lam, ework, m)
+            lmin = lam[0]
+            lmax = lam[m - 1]
+            err = (
+                8.0 * _EPS * (z_norm * np.sqrt(_fro2(Jh, km, nx)) * np.sqrt(_fro2(G, m, nx)) + np.sqrt(_fro2(B, m, m)))
+            )
+            err += second
+            est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
+            ok = eig_ok and not hard and lmin > 1e-12 * lmax and lmin > 0.0 and np.isfinite(est) and est <= _TOL
+            if ok:
+                kin_ok[i] = True
+                for p in range(m):
+                    kin_center[i, p] = 0.0
+                    src = m - 1 - p
+                    kin_semi[i, p] = np.sqrt(lam[src])
+                    for q in range(m):
+                        kin_axes[i, p, q] = V[q, src]
+                for p in range(m):
+                    for q in range(m):
+                        s = 0.0
+                        for r in range(m):
+                            s += V[p, r] * V[q, r] / lam[r]
+                        kin_matrix[i, p, q] = s
+
+        # ---------------- dynamic ellipsoid ----------------
+        dyn_ok[i] = False
+        if want_dyn and grasp_ok and kappa < 1e12:
+            # J^+ W^T = J^T (J J^T)^-1 W^T, then one refinement step with the residual
+            for p in range(km):
+                for q in range(m):
+                    tmp[p, q] = Wi[q, p]
+            for q in range(nx):
+                for r in range(m):
+                    JpWt[q, r] = 0.0
+            for step in range(2):
+                # sol = Li^T (Li tmp)
+                for p in range(km):
+                    for q in range(m):
+                        sol[p, q] = 0.0
+                    for r in range(p + 1):
+                        lpr = Li[p, r]
+                        for q in range(m):
+                            sol[p, q] += lpr * tmp[r, q]
+                for p in range(km):
+                    for q in range(m):
+                        s = 0.0
+                        for r in range(p, km):
+                            s += Li[r, p] * sol[r, q]
+                        tmp[p, q] = s
+                # JpWt += J_u^T sol
+                for p in range(km):
+                    cols = arm_cols[row_arm[p]]
+                    ncol = n_arm_cols[row_arm[p]]
+                    for t in range(ncol):
+                        j = cols[t]
+                        jpj = Ju[p, j]
+                        for q in range(m):
+                            JpWt[j, q] += jpj * tmp[p, q]
+                if step == 0:
+                    for p in range(km):
+                        cols = arm_cols[row_arm[p]]
+                        ncol = n_arm_cols[row_arm[p]]
+                        for q in range(m):
+                            s = Wi[q, p]
+                            for t in range(ncol):
+                                j = cols[t]
+                                s -= Ju[p, j] * JpWt[j, q]
+                            tmp[p, q] = s
+            # Lambda = P J^+ W^T + J^T (T^T M_o)
+            for p in range(km):
+                for q in range(m):
+                    s = 0.0
+                    for r in range(m):
+                        s += T[r, p] * Moi[r, q]
+                    TMo[p, q] = s
+            for j in range(nx):
+                Pj = Pi[j]
+                for q in range(m):
+                    Lam[j, q] = 0.0
+                for l_ in range(nx):
+                    if decouple_eta > 0 and ((j < decouple_eta) != (l_ < decouple_eta)):
+                        continue
+                    pjl = Pj[l_]
+                    for q in range(m):
+                        Lam[j, q] += pjl * JpWt[l_, q]
+            for p in range(km):
+                cols = arm_cols[row_arm[p]]
+                ncol = n_arm_cols[row_arm[p]]
+                for t in range(ncol):
+                    j = cols[t]
+                    jpj = Ju[p, j]
+                    for q in range(m):
+                        Lam[j, q] += jpj * TMo[p, q]
+            for p in range(km):
+                s = 0.0
+                for q in range(m):
+                    s += T[q, p] * g_o[q]
+                Wpg[p] = s
+            for j in range(nx):
+                mu[j] = -xi[i, j]
+            for p in range(km):
+                cols = arm_cols[row_arm[p]]
+                ncol = n_arm_cols[row_arm[p]]
+                wp = Wpg[p]
+                for t in range(ncol):
+                    j = cols[t]
+                    mu[j] += Ju[p, j] * wp
+            if has_q:
+                for j in range(nx):
+                    for q in range(m):
+                        s = 0.0
+                        for l_ in range(nx):
+                            s += Q_inv[j, l_] * Lam[l_, q]
+                        Lam2[j, q] = s
+                    s = 0.0
+                    for l_ in range(nx):
+                        s += Q_inv[j, l_] * mu[l_]
+                    mu2v[j] = s
+                for j in range(nx):
+                    mu[j] = mu2v[j]
+                    for q in range(m):
+                        Lam[j, q] = Lam2[j, q]
+            for j in range(nx):
+                zj = 1.0 / elim[j]
+                mub[j] = mu[j] * zj
+                for q in range(m):
+                    L[j, q] = Lam[j, q] * zj
+            for p in range(m):
+                for q in range(p, m):
+                    s = 0.0
+                    for j in range(nx):
+                        s += L[j, p] * L[j, q]
+                    H[p, q] = s
+                    H[q, p] = s
+                    V[p, q] = s
+                    V[q, p] = s
+            eig_ok = _eigh(V, lam, ework, m)
+            for j in range(nx):
+                for q in range(m):
+                    s = 0.0
+                    for p in range(m):
+                        s += L[j, p] * V[p, q]
+                    LV[j, q] = s
+            for q in range(m):
+                lam_rq[q] = 0.0
+            for j in range(nx):
+                for q in range(m):
+                    lam_rq[q] += LV[j, q] * LV[j, q]
+            for p in range(m):
+                for q in range(m):
+                    s = 0.0
+                    for r in range(m):
+                        s += V[p, r] * V[q, r] / lam_rq[r]
+                    Hinv[p, q] = s
+            # centre: normal equations, then one refinement step
+            for p in range(m):
+                s = 0.0
+                for j in range(nx):
+                    s += L[j, p] * mub[j]
+                yv[p] = s
+            for p in range(m):
+                s = 0.0
+                for q in range(m):
+                    s += Hinv[p, q] * yv[q]
+                cv[p] = -s
+            for p in range(m):
+                yv[p] = 0.0
+            for j in range(nx):
+                s = mub[j]
+                for p in range(m):
+                    s += L[j, p] * cv[p]
+                for p in range(m):
+                    yv[p] += L[j, p] * s
+            for p in range(m):
+                s = 0.0
+                for q in range(m):
+                    s += Hinv[p, q] * yv[q]
+                cv[p] -= s
+            outside2 = 0.0
+            mub2 = 0.0
+            for j in range(nx):
+                s = mub[j]
+                for p in range(m):
+                    s += L[j, p] * cv[p]
+                outside2 += s * s
+                mub2 += mub[j] * mub[j]
+            rho2 = 1.0 - outside2
+            lmin = lam_rq.min()
+            lmax = lam_rq.max()
+            aniso = np.sqrt(lmax / lmin)
+            err_l = 8.0 * _EPS * (1.0 + np.sqrt(kappa) + _EPS * kappa * kappa) * aniso
+            err_rho2 = 2.0 * np.sqrt(outside2 * mub2) * err_l + 8.0 * _EPS * mub2
+            c_norm = 0.0
+            for p in range(m):
+                c_norm += cv[p] * cv[p]
+            c_norm = np.sqrt(c_norm)
+            scale = max(np.sqrt(abs(rho2) / lmin), c_norm)
+            err_c = err_l * (c_norm + np.sqrt(outside2 / lmin)) / scale
+            ok = (
+                eig_ok
+                and lmin > 0.0
+                and np.isfinite(aniso)
+                and aniso < _FAST_LIMIT
+                and err_l <= _TOL
+                and err_c <= _TOL
+                and err_rho2 <= 2.0 * _TOL * abs(rho2)
+            )
+            if ok:
+                dyn_ok[i] = True
+                for p in range(m):
+                    dyn_center[i, p] = cv[p]
+                if rho2 <= 0.0:
+                    dyn_empty[i] = True
+                    for p in range(m):
+                        dyn_semi[i, p] = 0.0
+                        for q in range(m):
+                            dyn_axes[i, p, q] = 1.0 if p == q else 0.0
+                            dyn_matrix[i, p, q] = 0.0
+                else:
+                    dyn_empty[i] = False
+                    # ascending Rayleigh quotient = descending semi-axis
+                    for p in range(m):
+                        order[p] = p
+                    for p in range(1, m):
+                        j = p
+                        while j > 0 and lam_rq[order[j - 1]] > lam_rq[order[j]]:
+                            order[j - 1], order[j] = order[j], order[j - 1]
+                            j -= 1
+                    for p in range(m):
+                        src = order[p]
+                        dyn_semi[i, p] = np.sqrt(rho2 / lam_rq[src])
+                        for q in range(m):
+                            dyn_axes[i, p, q] = V[q, src]
+                    for p in range(m):
+                        for q in range(m):
+                            dyn_matrix[i, p, q] = H[p, q] / rho2

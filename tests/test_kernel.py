@@ -1,0 +1,202 @@
+"""The compiled kernel (mobmanip._kernel) against the exact SVD paths and against NumPy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from conftest import random_configurations
+from mobmanip import batch as batch_module
+from mobmanip.analysis import analyze
+from mobmanip.batch import BatchSetup, _pinocchio_pass, _Workspace, analyze_batch, kernel_available
+from mobmanip.grasp import HeldObject
+from test_batch import assert_same_ellipsoid
+
+pytestmark = pytest.mark.skipif(not kernel_available(), reason="Numba is not installed")
+
+
+@pytest.fixture(scope="module")
+def tiago():
+    return mobmanip.load_robot("tiago_dual")
+
+
+def assert_same_analysis(fast, exact, label):
+    for name in ("unified_jacobian", "reduced_inertia", "reduced_inertia_decoupled", "bias", "grasp_matrix"):
+        a, b = getattr(fast, name), getattr(exact, name)
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * max(1.0, np.abs(b).max()), err_msg=f"{label} {name}")
+    np.testing.assert_allclose(fast.end_effector_positions, exact.end_effector_positions, atol=1e-14)
+    assert_same_ellipsoid(fast.kinematic, exact.kinematic, f"{label} kinematic")
+    assert_same_ellipsoid(fast.dynamic, exact.dynamic, f"{label} dynamic")
+
+
+@pytest.mark.parametrize(
+    ("name", "task", "platform"),
+    [
+        ("planar_dual_arm", "planar", "own"),
+        ("planar_dual_arm", "planar_rigid", "own"),
+        ("planar_dual_arm_omni", "planar_rigid", "own"),
+        ("tiago_dual", "spatial", "own"),
+        ("tiago_dual", "spatial", "fixed"),
+        ("tiago_dual_torso", "translational", "own"),
+        ("ur5", "spatial", "own"),
+    ],
+)
+def test_single_configuration_equals_exact_path(name, task, platform, rng):
+    """analyze's compiled path equals the SVD-based reference (analyze(method="exact"))."""
+    robot = mobmanip.load_robot(name)
+    robot = robot if platform == "own" else robot.with_platform("fixed")
+    for i, q in enumerate(random_configurations(robot, rng, 12)):
+        for decoupled in (False, True):
+            fast = analyze(robot, q, task, decoupled=decoupled)
+            exact = analyze(robot, q, task, decoupled=decoupled, method="exact")
+            assert_same_analysis(fast, exact, f"{name} {task} row {i} decoupled={decoupled}")
+
+
+def test_explicit_object_with_full_inertia(tiago, rng):
+    """An object given explicitly (offsets not at the centroid, a non-diagonal inertia) goes
+    through the kernel's explicit-object inputs and matches the exact path."""
+    A = rng.standard_normal((3, 3))
+    inertia = 0.05 * (A @ A.T + np.eye(3))
+    for q in random_configurations(tiago, rng, 8):
+        pin.framesForwardKinematics(tiago.model, tiago.data, q)
+        points = np.array([tiago.data.oMf[arm.frame_id].translation for arm in tiago.arms])
+        obj = HeldObject(2.5, inertia, points.mean(axis=0) + [0.02, -0.01, 0.03], points - points.mean(axis=0))
+        fast = analyze(tiago, q, "spatial", held_object=obj)
+        exact = analyze(tiago, q, "spatial", held_object=obj, method="exact")
+        assert fast.held_object is obj
+        assert_same_analysis(fast, exact, "explicit object")
+
+
+def test_input_matrix_not_identity_is_applied(tiago, rng):
+    """Q = S^T B is the identity for every built-in robot; give the setup another invertible Q
+    (as a transmission would) and check the kernel's Q^-1 branch against the NumPy and SVD
+    paths, which apply it independently."""
+    setup = BatchSetup(tiago, "spatial")
+    Q = np.eye(setup.nx) + 0.1 * rng.standard_normal((setup.nx, setup.nx))
+    setup.Q_inv = np.linalg.inv(Q)
+    setup.Q_inv_kernel = np.ascontiguousarray(setup.Q_inv)
+    qs = np.array(random_configurations(tiago, rng, 40))
+    results = {}
+    for method in ("auto", "numpy", "svd"):
+        dyn = batch_module.EllipsoidBatch.allocate(len(qs), setup.m)
+        for start, t in batch_module.iter_terms(setup, qs):
+            batch_module.ellipsoids_from_terms(setup, t, dynamic=dyn, offset=start, method=method)
+        results[method] = dyn
+    plain = analyze_batch(tiago, qs, "spatial")
+    for i in range(len(qs)):
+        assert_same_ellipsoid(results["auto"][i], results["svd"][i], f"auto row {i}")
+        assert_same_ellipsoid(results["numpy"][i], results["svd"][i], f"numpy row {i}")
+        assert not np.allclose(results["auto"].semi_axes[i], plain.dynamic.semi_axes[i])
+
+
+def test_kernel_numpy_and_svd_paths_agree_on_many_rows(tiago):
+    """Three independent implementations over 2,000 random TIAGo++ configurations, with a heavy
+    object so that some dynamic ellipsoids are empty."""
+    rng = np.random.default_rng(11)
+    qs = np.array(random_configurations(tiago, rng, 2000))
+    results = {m: analyze_batch(tiago, qs, "spatial", object_mass=25.0, method=m) for m in ("auto", "numpy", "svd")}
+    reference = results["svd"]
+    assert 0 < reference.dynamic.empty.sum() < len(qs)
+    for method in ("auto", "numpy"):
+        for name in ("kinematic", "dynamic"):
+            got, ref = getattr(results[method], name), getattr(reference, name)
+            np.testing.assert_array_equal(got.empty, ref.empty)
+            np.testing.assert_array_equal(got.degenerate, ref.degenerate)
+            scale = np.maximum(ref.semi_axes[:, 0], np.linalg.norm(ref.center, axis=1))[:, None]
+            assert np.all(np.abs(got.semi_axes - ref.semi_axes) <= 1e-10 * scale), (method, name)
+            assert np.all(np.abs(got.center - ref.center) <= 1e-10 * scale), (method, name)
+    # the kernel certifies nearly every row; the rest went to the SVD path
+    assert results["auto"].svd_path.mean() < 0.01
+
+
+def test_singular_rows_are_not_certified(robot):
+    """Stretched arms on a locked platform: the kinematic ellipsoid is degenerate, which the
+    closed forms cannot represent; the kernel must hand the row to the SVD path."""
+    fixed = robot.with_platform("fixed")
+    joints = {}
+    for arm in fixed.arms:
+        joints.update(zip(arm.joint_names, (0.3, 0.0, 0.0)))
+    q = fixed.configuration((0.4, -0.1, 0.2), joints)
+    batch = analyze_batch(fixed, q[None, :], "planar")
+    assert batch.svd_path[0] and batch.kinematic.degenerate[0]
+    single = analyze(fixed, q, "planar")
+    assert single.kinematic.degenerate and single.kinematic.semi_axes[-1] == 0.0
+
+
+@pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual"])
+def test_pinocchio_pass_gives_joint_jacobians_and_placements(name, rng):
+    """One CRBA call in the world convention leaves the world joint Jacobians in data.J: they
+    equal computeJointJacobians', and the placements and M equal a fresh FK and CRBA."""
+    robot = mobmanip.load_robot(name)
+    setup = BatchSetup(robot)
+    qs = np.array(random_configurations(robot, rng, 5))
+    ws = _Workspace(setup, len(qs))
+    _pinocchio_pass(setup, qs, ws, len(qs))
+    data = robot.model.createData()
+    for i, q in enumerate(qs):
+        np.testing.assert_allclose(ws.Jw[i], pin.computeJointJacobians(robot.model, data, q), atol=1e-13)
+        pin.framesForwardKinematics(robot.model, data, q)
+        for a, arm in enumerate(robot.arms):
+            np.testing.assert_allclose(ws.pos[i, a], data.oMf[arm.frame_id].translation, atol=1e-14)
+        M = pin.crba(robot.model, data, q)
+        np.testing.assert_allclose(np.triu(ws.M[i]), np.triu(M), atol=1e-12 * np.abs(M).max())
+        np.testing.assert_allclose(ws.g[i], pin.computeGeneralizedGravity(robot.model, data, q), atol=1e-12)
+
+
+def test_without_numba_the_numpy_paths_run(robot, rng, monkeypatch):
+    """If the kernel cannot be imported, analyze uses the exact path and analyze_batch NumPy."""
+    qs = np.array(random_configurations(robot, rng, 6))
+    with_kernel = analyze_batch(robot, qs, "planar")
+    monkeypatch.setattr(batch_module, "_kernel_module", lambda: None)
+    assert not kernel_available()
+    without = analyze_batch(robot, qs, "planar")
+    for i, q in enumerate(qs):
+        assert_same_ellipsoid(without.dynamic[i], with_kernel.dynamic[i], f"row {i}")
+        assert_same_ellipsoid(analyze(robot, q, "planar").kinematic, with_kernel.kinematic[i], f"row {i}")
+
+
+# ----------------------------------------------------------------------------------------------
+# the symmetric eigensolver
+
+
+def _eigh(A):
+    from mobmanip._kernel import _eigh as eigh
+
+    n = A.shape[0]
+    V = np.array(A, dtype=float, copy=True)
+    d, e = np.zeros(n), np.zeros(n)
+    converged = eigh(V, d, e, n)
+    return converged, d, V
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 6, 9])
+def test_eigh_matches_lapack_and_is_orthogonal(n):
+    rng = np.random.default_rng(n)
+    cases = []
+    for _ in range(200):
+        A = rng.standard_normal((n, n))
+        cases.append(A + A.T)
+    G = rng.standard_normal((n, max(n - 2, 1)))
+    cases.append(G @ G.T)  # rank-deficient
+    cases.append(np.diag(np.repeat([2.0, 1.0], n)[:n]))  # repeated eigenvalues
+    cases.append(1e-200 * np.eye(n) + 1e-210)  # tiny entries: pre-scaling avoids underflow
+    cases.append(1e200 * (cases[0] / np.abs(cases[0]).max()))  # huge entries: no overflow
+    cases.append(np.zeros((n, n)))
+    for A in cases:
+        converged, d, V = _eigh(A)
+        assert converged
+        ref = np.linalg.eigvalsh(A)
+        size = max(np.abs(ref).max(), np.finfo(float).tiny)
+        assert np.all(np.diff(d) >= 0.0)
+        np.testing.assert_allclose(d, ref, rtol=0, atol=20 * n * np.finfo(float).eps * size)
+        np.testing.assert_allclose(V.T @ V, np.eye(n), atol=20 * n * np.finfo(float).eps)
+        np.testing.assert_allclose((V * d) @ V.T, A, rtol=0, atol=20 * n * np.finfo(float).eps * size)
+
+
+def test_eigh_reports_nan_input():
+    A = np.eye(4)
+    A[1, 2] = A[2, 1] = np.nan
+    converged, _, _ = _eigh(A)
+    assert not converged
