@@ -310,6 +310,31 @@ def test_toml_syntax_error_is_a_spec_error(tmp_path):
     assert str(spec) in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("hold", "message"),
+    [
+        ("wheel_left_joint = 0.5", "'wheel_left_joint', which is not an arm or torso joint"),
+        ("arm_left_2_joint = nan", "hold position of 'arm_left_2_joint' must be a finite number"),
+        ('arm_left_2_joint = "bent"', "hold position of 'arm_left_2_joint' must be a finite number"),
+        ("arm_left_2_joint = 3.5", r"arm_left_2_joint = 3\.5 lies outside its range \[-3\.14159, 3\.14159\]"),
+    ],
+)
+def test_bad_hold_posture_is_a_spec_error_naming_it(tmp_path, hold, message):
+    spec = write_variant(tmp_path, PAPER_URDF.read_text())
+    spec.write_text(spec.read_text() + f"\n[hold]\narm_right_2_joint = 1.0\n{hold}\n")
+    with pytest.raises(SpecError, match=message):
+        mobmanip.load_robot(spec)
+
+
+def test_hold_posture_of_a_spec(tmp_path):
+    spec = write_variant(tmp_path, PAPER_URDF.read_text())
+    spec.write_text(spec.read_text() + "\n[hold]\narm_right_2_joint = 1.0\narm_left_2_joint = -1.0\n")
+    robot = mobmanip.load_robot(spec)
+    expected = robot.configuration(joints={"arm_right_2_joint": 1.0, "arm_left_2_joint": -1.0})
+    np.testing.assert_array_equal(robot.hold_configuration(), expected)
+    np.testing.assert_array_equal(mobmanip.load_robot("planar_dual_arm").hold_configuration(), robot.neutral())
+
+
 def _wheels_without_geometry():
     text = PAPER_URDF.read_text()
     for side in ("right", "left"):

@@ -240,14 +240,51 @@ def test_chunks_and_processes_do_not_change_an_ik_sweep():
 
 
 def test_no_reachable_point_is_one_error_naming_the_grid(tiago, tmp_path, capsys):
-    # TIAGo's home posture holds its hands 1.97 m apart, arms stretched sideways: nothing else fits
+    # As reference, TIAGo's home posture (an empty one) holds its hands 1.97 m apart, arms
+    # stretched sideways: nothing else fits
+    home = SweepSpec("tiago_dual", reference={})
     with pytest.raises(UnreachableGridError, match=r"distance 0\.5 m, angle 0 deg.*1\.97 m apart"):
-        run_sweep(SweepSpec("tiago_dual"), SweepGrid(angle_deg=[0.0], distance=[0.5]), workers=1)
+        run_sweep(home, SweepGrid(angle_deg=[0.0], distance=[0.5]), workers=1)
     with pytest.raises(UnreachableGridError, match=r"distance 2, 3 m .* reach 1\.5 m at most"):
         run_sweep(SweepSpec("planar_dual_arm"), SweepGrid(angle_deg=[0.0], distance=[2.0, 3.0]), workers=1)
     code = main(["sweep", "ur5", "--angle", "0", "--distance", "3", "--no-progress", "-o", str(tmp_path / "u")])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "distance 3 m" in err
+
+
+@pytest.mark.parametrize("name", ["tiago_dual", "tiago_dual_torso"])
+def test_tiago_hold_posture_holds_a_box_between_facing_hands(name):
+    """The spec's [hold]: within the joint ranges, tool frames 0.30 m apart at one height, each
+    approach (x) axis pointing at the other hand, in front of the platform."""
+    robot = mobmanip.load_robot(name)
+    names = list(robot.spec.hold)
+    assert sorted(names) == sorted(n for arm in robot.arms for n in arm.joint_names)
+    values = np.array([robot.spec.hold[n] for n in names])
+    lower, upper = joint_limits(robot, names)
+    assert (lower < values).all() and (values < upper).all()
+    points, rotations, _ = placements(robot, robot.hold_configuration())
+    between = points[1] - points[0]
+    assert np.linalg.norm(between) == pytest.approx(0.30, abs=1e-3)
+    assert abs(between[2]) < 1e-3 and (points[:, 0] > 0.5).all()
+    for a, toward in ((0, between), (1, -between)):
+        assert rotations[a][:, 0] @ toward / np.linalg.norm(toward) > 1.0 - 1e-6
+
+
+def test_sweeps_start_from_the_spec_hold(tiago):
+    """Without a reference posture, a TIAGo++ sweep holds the object as the spec's [hold] does:
+    the same as passing that posture explicitly, and in reach around it."""
+    grid = SweepGrid(angle_deg=[-20.0, 0.0, 20.0], distance=[0.45, 0.6, 1.3])
+    default = run_sweep(SweepSpec("tiago_dual"), grid, workers=1)
+    explicit = run_sweep(SweepSpec("tiago_dual", reference=dict(tiago.spec.hold)), grid, workers=1)
+    np.testing.assert_array_equal(default.postures.reference, tiago.hold_configuration())
+    np.testing.assert_array_equal(default.reachable, explicit.reachable)
+    assert default.reachable[:, :2].all() and not default.reachable[:, 2].any()
+    for key in default.indices:
+        np.testing.assert_array_equal(default.indices[key], explicit.indices[key], err_msg=key)
+    # the hold's own object: 0.55 m ahead of base_footprint, the arms' reference point at x = -0.036 m
+    points, _, firsts = placements(tiago, tiago.hold_configuration())
+    assert default.postures.hold.height == pytest.approx(points[:, 2].mean(), abs=1e-12)
+    assert np.linalg.norm(points.mean(axis=0)[:2] - firsts[:, :2].mean(axis=0)) == pytest.approx(0.586, abs=2e-3)
 
 
 def test_bad_posture_settings():

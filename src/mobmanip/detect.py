@@ -503,4 +503,12 @@ def spec_to_toml(
         "[reference]",
     ]
     out += [f"{_key(joint)} = {_number(value)}" for joint, value in spec.reference.items()]
+    first = spec.arms[0].joints[0]
+    out += [
+        "",
+        "# Optional: arm (and torso) positions of a posture in which the end effectors hold an",
+        "# object together; `mobmanip sweep` starts its inverse kinematics from it (else from home).",
+        "# [hold]",
+        f"# {_key(first)} = 0.0",
+    ]
     return "\n".join(out) + "\n"

@@ -245,6 +245,11 @@ class Robot:
                     q[joint.idx_q] = value
         return q
 
+    def hold_configuration(self) -> np.ndarray:
+        """The spec's hold posture (see :attr:`mobmanip.spec.RobotSpec.hold`), platform at the
+        origin; the home configuration if the spec gives none."""
+        return self.configuration((0.0, 0.0, 0.0), self.spec.hold)
+
     def configuration(
         self, platform: tuple[float, float, float] = (0.0, 0.0, 0.0), joints: Mapping[str, float] | None = None
     ) -> np.ndarray:
@@ -422,6 +427,19 @@ def _build_model(spec: RobotSpec) -> pin.Model:
     return model
 
 
+def _check_hold(spec: RobotSpec, model: pin.Model) -> None:
+    """Every position of the spec's ``[hold]`` lies within its joint's range."""
+    for name, value in spec.hold.items():
+        joint = model.joints[model.getJointId(name)]
+        if joint.nq != 1:  # continuous joint: any angle
+            continue
+        lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+        if not lower <= value <= upper:
+            raise SpecError(
+                f"[hold] of {spec.name}: {name} = {value} lies outside its range [{lower:.6g}, {upper:.6g}]"
+            )
+
+
 def _differential_drive(spec: RobotSpec, urdf, model: pin.Model) -> DifferentialDrive:
     """Wheel radius, half-track, axis signs and axle centre from the URDF geometry."""
     data = model.createData()
@@ -480,6 +498,7 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
     urdf = read_urdf(spec.urdf)
     _check_spec_against_urdf(spec, urdf)
     model = _build_model(spec)
+    _check_hold(spec, model)
 
     def v_index(name: str, role: str) -> int:
         joint = model.joints[model.getJointId(name)]

@@ -28,6 +28,10 @@ A spec is a small TOML file next to its URDF::
     [reference]                             # positions of joints locked out of the model,
     torso_lift_joint = 0.15                 # and home positions of the moving ones
 
+    [hold]                                  # optional: arm/torso positions of a posture in which
+    arm_right_1_joint = 1.08                # the hands hold the default object (sweeps start
+                                            # their inverse kinematics from it)
+
 The reduced velocity is ordered [platform, torso joints, arm 1 joints, arm 2 joints, ...].
 
 :class:`RobotSpec` is checked on construction for its own consistency; the cross-check
@@ -123,6 +127,10 @@ class RobotSpec:
             the value is its home position (see :meth:`mobmanip.model.Robot.neutral`).
         torso: actuated joints shared by all arms (e.g. a lift), base to tip; in the reduced
             velocity they follow the platform and precede the arms.
+        hold: positions of arm and torso joints (joints not named stay at home) of a posture in
+            which the end effectors hold the default object together; sweeps take it as the
+            reference posture of their inverse kinematics (see :mod:`mobmanip.sweep`). Empty:
+            the home configuration is that reference.
         package_dirs: directories where ``package://`` mesh URIs are resolved.
         source: the spec file this came from, if any.
     """
@@ -138,6 +146,7 @@ class RobotSpec:
     object_mass: float = 0.0
     reference: Mapping[str, float] = field(default_factory=dict)
     torso: tuple[str, ...] = ()
+    hold: Mapping[str, float] = field(default_factory=dict)
     package_dirs: tuple[Path, ...] = ()
     source: Path | None = None
 
@@ -188,6 +197,17 @@ class RobotSpec:
                 raise SpecError(f"reference position of {joint!r} must be a finite number, got {value!r}")
             reference[str(joint)] = float(value)
         object.__setattr__(self, "reference", MappingProxyType(reference))
+        hold = {}
+        for joint, value in dict(self.hold).items():
+            if joint not in seen:
+                raise SpecError(
+                    f"robot {self.name!r}: [hold] names {joint!r}, which is not an arm or torso joint; "
+                    f"expected some of {list(seen)}"
+                )
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise SpecError(f"hold position of {joint!r} must be a finite number, got {value!r}")
+            hold[str(joint)] = float(value)
+        object.__setattr__(self, "hold", MappingProxyType(hold))
         object.__setattr__(self, "arms", tuple(self.arms))
         object.__setattr__(self, "package_dirs", tuple(Path(p) for p in self.package_dirs))
 
@@ -224,7 +244,7 @@ def _optional(table: Mapping, key: str, kind: type, where: str, default):
 def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) -> RobotSpec:
     """Build a :class:`RobotSpec` from parsed TOML; ``base_dir`` anchors a relative URDF path."""
     where = str(source) if source else "spec"
-    known = {"name", "urdf", "platform", "default_task", "wheels", "torso", "arms", "object", "limits", "reference"}
+    known = set("name urdf platform default_task wheels torso arms object limits reference hold".split())
     unknown = sorted(set(data) - known)
     if unknown:
         raise SpecError(f"{where}: unknown keys {unknown}; expected some of {sorted(known)}")
@@ -284,6 +304,7 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
         object_mass=obj.get("mass", 0.0),
         reference=_optional(data, "reference", dict, where, {}),
         torso=tuple(torso),
+        hold=_optional(data, "hold", dict, where, {}),
         package_dirs=package_dirs,
         source=source,
     )

@@ -22,7 +22,7 @@ to the object; q1 of each arm points its end effector at the object. Both end ef
 the object at its centre. Distances beyond the reach of the arms are unreachable.
 
 ``ik`` -- any robot: inverse kinematics holds the object as a reference posture (by default
-the spec's home configuration) does, turned towards the object's direction, with the object
+the spec's ``[hold]`` posture, else its home configuration) does, turned towards the object's direction, with the object
 centre at the given distance from the horizontal centroid of the arms' first joints and at the
 reference posture's height; :mod:`mobmanip.posture` defines this precisely. Grid points where
 some end effector cannot be brought within :data:`mobmanip.posture.POSITION_TOLERANCE` of its
@@ -461,7 +461,8 @@ def sweep_postures(
         grid: the grid (only its angles and distances matter).
         method: ``"auto"``, ``"planar"`` or ``"ik"``.
         reference: joint positions by name for the inverse kinematics' reference posture
-            (joints not named stay at home); ``None``: the home configuration.
+            (joints not named stay at home); ``None``: the spec's hold posture
+            (:meth:`mobmanip.model.Robot.hold_configuration`).
 
     Raises:
         SpecError: ``"planar"`` on a robot without two planar 3-joint arms sharing their base.
@@ -478,7 +479,7 @@ def sweep_postures(
         except SpecError:
             if method == "planar":
                 raise
-    q_ref = reference_configuration(robot, reference)
+    q_ref = robot.hold_configuration() if reference is None else reference_configuration(robot, reference)
     return solve_postures(robot, grid.angle_deg, grid.distance, q_ref)
 
 
@@ -537,8 +538,8 @@ class SweepSpec:
             coordinates, e.g. ``(1, 0)`` (world frame; normalised).
         postures: ``"auto"``, ``"planar"`` or ``"ik"`` (see the module's docstring).
         reference: the inverse kinematics' reference posture, joint positions by name (a
-            mapping or (name, value) pairs; joints not named stay at home); ``None``: the home
-            configuration. Stored as a tuple of pairs.
+            mapping or (name, value) pairs; joints not named stay at home); ``None``: the spec's
+            hold posture, else the home configuration. Stored as a tuple of pairs.
     """
 
     robot: str

@@ -15,7 +15,7 @@ horizontal --distance (m) from the arms' reference point. --postures says how th
           maximises each arm's own manipulability at that reach (arm 1 bends right), as in the paper.
   ik      any robot: the reference point is the horizontal centroid of the arms' first joints;
           the end effectors hold the object as in the reference posture (--reference, default the
-          spec's home configuration): same height, same grasp offsets between the hands, turned
+          spec's [hold] posture, else its home configuration): same height, same grasp offsets between the hands, turned
           with the object's direction; inverse kinematics moves only the arm joints, within their
           limits, and keeps the hands' orientation where it can. A point where an end effector
           misses its target by more than 1e-9 m is out of reach. One arm: its end effector is
@@ -43,7 +43,7 @@ examples:
   mobmanip sweep planar_dual_arm --angle 0:360:37 --distance 0.6:1.4:9 \\
       --wheel-velocity-scale 0.1:1:5 --plot --index kinematic.volume --output fig/sweep
   mobmanip sweep panda --angle=-90:90:19 --distance 0.2:0.8:7 --plot -o panda   # "=" before a minus
-  mobmanip sweep tiago_dual --reference hold.json --angle=-40:40:9 --distance 0.3:0.8:6 -o tiago
+  mobmanip sweep tiago_dual --angle=-40:40:9 --distance 0.3:0.8:6 -o tiago
 """
 
 
@@ -85,7 +85,7 @@ def register(sub) -> None:
     postures.add_argument(
         "--reference",
         metavar="Q.json",
-        help='reference posture for ik, {"joints": {NAME: value}} (platform ignored; default: home)',
+        help='reference posture for ik, {"joints": {NAME: value}} (platform ignored; default: [hold] of the spec)',
     )
     run = parser.add_argument_group("execution and output")
     run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
