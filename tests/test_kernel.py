@@ -126,11 +126,19 @@ def test_singular_rows_are_not_certified(robot):
 
 
 @pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual"])
-def test_pinocchio_pass_gives_joint_jacobians_and_placements(name, rng):
+@pytest.mark.parametrize("bindings", ["views", "copies", "no conventions"])
+def test_pinocchio_pass_gives_joint_jacobians_and_placements(name, bindings, rng, monkeypatch):
     """One CRBA call in the world convention leaves the world joint Jacobians in data.J: they
-    equal computeJointJacobians', and the placements and M equal a fresh FK and CRBA."""
+    equal computeJointJacobians', and the placements and M equal a fresh FK and CRBA. The same
+    where the bindings hand out copies of the frame translations or know no conventions."""
+    if bindings != "views":
+        monkeypatch.setattr(batch_module, "_translation_views", lambda data, frame_ids: None)
+    if bindings == "no conventions":
+        monkeypatch.setattr(batch_module, "_WORLD", None)
     robot = mobmanip.load_robot(name)
     setup = BatchSetup(robot)
+    if bindings == "views":  # this Pinocchio hands out live views: the fast branch is the one tested
+        assert batch_module._translation_views(robot.data, setup.frame_ids) is not None
     qs = np.array(random_configurations(robot, rng, 5))
     ws = _Workspace(setup, len(qs))
     _pinocchio_pass(setup, qs, ws, len(qs))

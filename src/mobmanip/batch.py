@@ -436,13 +436,15 @@ def _pinocchio_pass(setup: BatchSetup, qs: np.ndarray, ws: _Workspace, n: int) -
     crba = pin.crba
     gravity = pin.computeGeneralizedGravity
     placement = pin.updateFramePlacement
-    frames = tuple(enumerate(setup.frame_ids))
     Jw, pos, M, g = ws.Jw, ws.pos, ws.M, ws.g
-    if _WORLD is None:  # a Pinocchio without conventions: one more call for the Jacobians
+    views = _translation_views(data, setup.frame_ids)
+    if _WORLD is None or views is None:  # an older Pinocchio: one more call, copied translations
+        world = () if _WORLD is None else (_WORLD,)
+        frames = tuple(enumerate(setup.frame_ids))
         for i in range(n):
             q = qs[i]
-            Jw[i] = pin.computeJointJacobians(model, data, q)
-            M[i] = crba(model, data, q)
+            M[i] = crba(model, data, q, *world)
+            Jw[i] = data.J if world else pin.computeJointJacobians(model, data, q)
             pi = pos[i]
             for a, f in frames:
                 pi[a] = placement(model, data, f).translation
@@ -450,14 +452,26 @@ def _pinocchio_pass(setup: BatchSetup, qs: np.ndarray, ws: _Workspace, n: int) -
         return
     J = data.J  # a view of Pinocchio's buffer, refreshed by every crba call below
     world = _WORLD
+    frames = tuple(zip(range(len(views)), setup.frame_ids, views))
     for i in range(n):
         q = qs[i]
         M[i] = crba(model, data, q, world)
         Jw[i] = J
         pi = pos[i]
-        for a, f in frames:
-            pi[a] = placement(model, data, f).translation
+        for a, f, view in frames:
+            placement(model, data, f)
+            pi[a] = view
         g[i] = gravity(model, data, q)
+
+
+def _translation_views(data: pin.Data, frame_ids) -> list[np.ndarray] | None:
+    """Views of the frames' translations inside ``data.oMf``, which every
+    ``updateFramePlacement`` call refreshes (copying them saves building an SE3's array per
+    call); ``None`` where this Pinocchio's bindings hand out copies instead."""
+    views = [data.oMf[f].translation for f in frame_ids]
+    if all(np.shares_memory(v, data.oMf[f].translation) for v, f in zip(views, frame_ids)):
+        return views
+    return None
 
 
 _WORLD = getattr(getattr(pin, "Convention", None), "WORLD", None)
