@@ -153,6 +153,39 @@ def test_pinocchio_pass_gives_joint_jacobians_and_placements(name, bindings, rng
         np.testing.assert_allclose(ws.g[i], pin.computeGeneralizedGravity(robot.model, data, q), atol=1e-12)
 
 
+@pytest.mark.parametrize("name", ["tiago_dual_torso", "planar_dual_arm_omni"])
+def test_sparsity_the_kernel_skips_is_structural(name, rng):
+    """M is zero outside the ancestor pattern at random configurations (CRBA, both triangles),
+    so P = S^T M S is zero outside the plan's entries; and J_u is zero outside each arm's
+    columns, so two arms' rows meet only on the columns both can use."""
+    robot = mobmanip.load_robot(name)
+    setup = BatchSetup(robot)
+    pattern = batch_module._mass_matrix_pattern(robot.model)
+    assert not pattern.all()  # the arms are separate branches: their coupling is skipped
+    ptr, rows, cols = setup.P_plan[:3]
+    listed = np.zeros((setup.nx, setup.nx), dtype=bool)
+    listed[rows.astype(int), cols.astype(int)] = listed[cols.astype(int), rows.astype(int)] = True
+    zptr, zidx = setup.P_plan[-2:]
+    for j in range(setup.nx):
+        np.testing.assert_array_equal(np.sort(zidx[zptr[j] : zptr[j + 1]]), np.flatnonzero(listed[j]))
+    for q in random_configurations(robot, rng, 5):
+        M = pin.crba(robot.model, robot.data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        assert np.all(M[~pattern] == 0.0)
+        P = robot.S.T @ M @ robot.S
+        assert np.all(P[~listed] == 0.0)
+        J_u = analyze(robot, q, method="exact").unified_jacobian
+        m = J_u.shape[0] // setup.k
+        for a in range(setup.k):
+            outside = np.ones(setup.nx, dtype=bool)
+            outside[setup.arm_cols[a, : setup.n_arm_cols[a]].astype(int)] = False
+            assert np.all(J_u[a * m : (a + 1) * m, outside] == 0.0)
+            for b in range(setup.k):
+                both = setup.pair_cols[a, b, : setup.n_pair_cols[a, b]].astype(int)
+                expected = np.flatnonzero(~outside & np.any(J_u[b * m : (b + 1) * m] != 0.0, axis=0))
+                assert set(expected) <= set(both)
+
+
 def test_without_numba_the_numpy_paths_run(robot, rng, monkeypatch):
     """If the kernel cannot be imported, analyze uses the exact path and analyze_batch NumPy."""
     qs = np.array(random_configurations(robot, rng, 6))

@@ -274,6 +274,8 @@ def run_chunk(
     supports,
     arm_cols,
     n_arm_cols,
+    pair_cols,
+    n_pair_cols,
     task_rows,
     n_linear,
     S_ptr,
@@ -285,6 +287,8 @@ def run_chunk(
     P_u,
     P_w,
     P_c,
+    Pz_ptr,
+    Pz_idx,
     Q_inv,
     vlim,
     elim,
@@ -295,6 +299,7 @@ def run_chunk(
     decouple_eta,
     want_kin,
     want_dyn,
+    all_terms,
     J_u,
     P,
     xi,
@@ -317,14 +322,17 @@ def run_chunk(
     Inputs per row i: Jw[i] (6, nv) world joint Jacobian, M[i] (nv, nv) (upper triangle read),
     g[i] (nv,) generalized gravity, pos[i] (k, 3) end-effector positions. Constants: supports
     (k, nv), 1 where a joint moves arm a's end effector; arm_cols[a, :n_arm_cols[a]] the
-    reduced coordinates that can move it (J_u's other entries in arm a's rows are zero); task
-    rows (m,), linear ones first; S column-compressed; P = S^T M S as a list of terms
-    P[P_row[t], P_col[t]] = sum P_c M[P_u, P_w] (upper triangle, P_ptr delimiting each entry);
-    Q_inv (nx, nx) or (0, 0) for Q = I; limits; offsets_in (k, 3) or (0, 3) for the centroid;
-    Mo_in (m, m) or (0, 0) for a uniform sphere of ``mass`` reaching the farthest grasp; g_o
-    (m,); decouple_eta > 0 zeroes P's platform-arm blocks in the dynamic ellipsoid. Outputs:
-    J_u, P (coupled), xi, W, Mo per row, the ellipsoids of accepted rows and the acceptance
-    flags kin_ok / dyn_ok (rows with False are left untouched).
+    reduced coordinates that can move it (J_u's other entries in arm a's rows are zero) and
+    pair_cols[a, b, :n_pair_cols[a, b]] those that move both a's and b's; task rows (m,),
+    linear ones first; S column-compressed; P = S^T M S as a list of terms
+    P[P_row[t], P_col[t]] = sum P_c M[P_u, P_w] over M's structural nonzeros (upper triangle,
+    P_ptr delimiting each listed entry; P is zero elsewhere) and P's nonzero columns per row,
+    Pz_idx[Pz_ptr[j]:Pz_ptr[j + 1]]; Q_inv (nx, nx) or (0, 0) for Q = I; limits; offsets_in
+    (k, 3) or (0, 3) for the centroid; Mo_in (m, m) or (0, 0) for a uniform sphere of ``mass``
+    reaching the farthest grasp; g_o (m,); decouple_eta > 0 zeroes P's platform-arm blocks in
+    the dynamic ellipsoid. Outputs: the ellipsoids of accepted rows and the acceptance flags
+    kin_ok / dyn_ok (rows with False are left untouched), and J_u, P (coupled), xi, W, Mo of
+    the rows some asked ellipsoid was not accepted for (of every row with ``all_terms``).
     """
     n = Jw.shape[0]
     nv = Jw.shape[2]
@@ -342,6 +350,11 @@ def run_chunk(
     n_pairs = P_ptr.shape[0] - 1
 
     Jf = np.zeros((6, nv))
+    Ju = np.zeros((km, nx))
+    Pi = np.zeros((nx, nx))  # entries P_plan does not list stay zero
+    xi_i = np.zeros(nx)
+    Wi = np.zeros((m, km))
+    Moi = np.zeros((m, m))
     r_off = np.zeros((k, 3))
     Kb = np.zeros((k, m, m))
     WWt = np.zeros((m, m))
@@ -391,12 +404,8 @@ def run_chunk(
         row_arm[p] = p // m
 
     for i in range(n):
-        Ju = J_u[i]
-        Pi = P[i]
         Mi = M[i]
         Jwi = Jw[i]
-        Wi = W[i]
-        Moi = Mo[i]
         # ---------------- terms: J_u, P, xi ----------------
         for a in range(k):
             p0 = pos[i, a, 0]
@@ -434,7 +443,7 @@ def run_chunk(
             s = 0.0
             for t in range(S_ptr[j], S_ptr[j + 1]):
                 s += g[i, S_idx[t]] * S_val[t]
-            xi[i, j] = -s
+            xi_i[j] = -s
 
         # ---------------- grasp: W, T, C, M_o ----------------
         if has_offsets:
@@ -506,15 +515,13 @@ def run_chunk(
 
         # ---------------- Gram of J_u: Cholesky, kappa ----------------
         for p in range(km):
-            cols = arm_cols[row_arm[p]]
-            ncol = n_arm_cols[row_arm[p]]
-            Jp = Ju[p]
+            ap = row_arm[p]
             for q in range(p, km):
-                Jq = Ju[q]
+                cols = pair_cols[ap, row_arm[q]]
                 s = 0.0
-                for t in range(ncol):
+                for t in range(n_pair_cols[ap, row_arm[q]]):
                     j = cols[t]
-                    s += Jp[j] * Jq[j]
+                    s += Ju[p, j] * Ju[q, j]
                 Gu[p, q] = s
                 Gu[q, p] = s
         gram_ok = _cholesky(Gu, Lg, km)
@@ -542,11 +549,11 @@ def run_chunk(
                 z_norm = 1.0
             else:
                 for p in range(km):
-                    cols = arm_cols[row_arm[p]]
-                    ncol = n_arm_cols[row_arm[p]]
+                    ap = row_arm[p]
                     for q in range(p, km):
+                        cols = pair_cols[ap, row_arm[q]]
                         s = 0.0
-                        for t in range(ncol):
+                        for t in range(n_pair_cols[ap, row_arm[q]]):
                             j = cols[t]
                             s += Jh[p, j] * Jh[q, j]
                         Gk[p, q] = s
@@ -692,13 +699,13 @@ def run_chunk(
                         s += T[r, p] * Moi[r, q]
                     TMo[p, q] = s
             for j in range(nx):
-                Pj = Pi[j]
                 for q in range(m):
                     Lam[j, q] = 0.0
-                for l_ in range(nx):
+                for t in range(Pz_ptr[j], Pz_ptr[j + 1]):
+                    l_ = Pz_idx[t]
                     if decouple_eta > 0 and ((j < decouple_eta) != (l_ < decouple_eta)):
                         continue
-                    pjl = Pj[l_]
+                    pjl = Pi[j, l_]
                     for q in range(m):
                         Lam[j, q] += pjl * JpWt[l_, q]
             for p in range(km):
@@ -715,7 +722,7 @@ def run_chunk(
                     s += T[q, p] * g_o[q]
                 Wpg[p] = s
             for j in range(nx):
-                mu[j] = -xi[i, j]
+                mu[j] = -xi_i[j]
             for p in range(km):
                 cols = arm_cols[row_arm[p]]
                 ncol = n_arm_cols[row_arm[p]]
@@ -852,3 +859,18 @@ def run_chunk(
                     for p in range(m):
                         for q in range(m):
                             dyn_matrix[i, p, q] = H[p, q] / rho2
+
+        # ---------------- terms, where the caller needs them ----------------
+        if all_terms or (want_kin and not kin_ok[i]) or (want_dyn and not dyn_ok[i]):
+            for p in range(km):
+                for j in range(nx):
+                    J_u[i, p, j] = Ju[p, j]
+            for j in range(nx):
+                xi[i, j] = xi_i[j]
+                for l_ in range(nx):
+                    P[i, j, l_] = Pi[j, l_]
+            for p in range(m):
+                for q in range(km):
+                    W[i, p, q] = Wi[p, q]
+                for q in range(m):
+                    Mo[i, p, q] = Moi[p, q]

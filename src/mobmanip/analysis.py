@@ -176,7 +176,7 @@ def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
         Mo = np.ascontiguousarray(held_object.inertia_matrix(task), dtype=float)
     vlim, elim = robot.velocity_limits, robot.effort_limits
     bad_kin, bad_dyn, W, _ = _kernel_fast(
-        setup, t, vlim, elim, decoupled, kin_b, dyn_b, slice(0, 1), offsets=offsets, Mo=Mo, grasp=True
+        setup, t, vlim, elim, decoupled, kin_b, dyn_b, slice(0, 1), offsets=offsets, Mo=Mo, grasp=True, all_terms=True
     )
     positions = ws.pos[0].copy()
     obj = held_object if held_object is not None else HeldObject.between(positions, mass)

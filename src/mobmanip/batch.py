@@ -58,9 +58,19 @@ FAST_PATH_TOLERANCE = 1e-9
 #: Ways to compute the ellipsoids (see :func:`analyze_batch`).
 METHODS = ("auto", "numpy", "svd")
 
-#: Configurations per internal chunk: large enough to amortise NumPy's per-call overhead,
-#: small enough for the workspaces to stay in cache.
+#: Configurations per internal chunk for the stacked NumPy paths: large enough to amortise
+#: NumPy's per-call overhead, small enough for the workspaces to stay in cache.
 DEFAULT_CHUNK = 2048
+
+#: ... and for the compiled kernel, which runs right after Pinocchio on each chunk: small
+#: enough for Pinocchio's outputs (M alone is 2.9 kB per TIAGo++ configuration) to stay in the
+#: core's cache until the kernel reads them (about 1 us per configuration faster than 2048).
+KERNEL_CHUNK = 256
+
+
+def default_chunk(method: str = "auto") -> int:
+    """Configurations per internal chunk for ``method`` (see :func:`analyze_batch`)."""
+    return KERNEL_CHUNK if method == "auto" and kernel_available() else DEFAULT_CHUNK
 
 
 # ----------------------------------------------------------------------------------------------
@@ -335,7 +345,15 @@ class BatchSetup:
         self.n_arm_cols = moves.sum(axis=1).astype(np.uint64)
         for a in range(self.k):
             self.arm_cols[a, : self.n_arm_cols[a]] = np.flatnonzero(moves[a])
-        self.P_plan = _congruence_plan(self.S)
+        # ... and those that move two end effectors (the Gram's off-diagonal blocks)
+        self.pair_cols = np.zeros((self.k, self.k, self.nx), dtype=np.uint64)
+        self.n_pair_cols = np.zeros((self.k, self.k), dtype=np.uint64)
+        for a in range(self.k):
+            for b in range(self.k):
+                both = np.flatnonzero(moves[a] & moves[b])
+                self.pair_cols[a, b, : len(both)] = both
+                self.n_pair_cols[a, b] = len(both)
+        self.P_plan = _congruence_plan(self.S, _mass_matrix_pattern(model))
         self.task_rows = np.array(task.rows, dtype=np.int64)
         self.n_linear = int(np.sum(self.task_rows < 3))
         if np.any(self.task_rows[: self.n_linear] >= 3):
@@ -366,24 +384,45 @@ class BatchSetup:
             self.Mo = np.where(angular, 0.0, self.mass)
 
 
-def _congruence_plan(S: np.ndarray):
-    """S^T M S as a list of terms over M's upper triangle, for the kernel: entry e of P (row
-    ``rows[e]`` <= column ``cols[e]``) is sum over t in ptr[e] .. ptr[e+1] of coef[t] M[u[t], w[t]]."""
+def _mass_matrix_pattern(model: pin.Model) -> np.ndarray:
+    """Where M(q) may be nonzero, (nv, nv) bool: between degrees of freedom of joints one of
+    which supports the other (M couples no two branches of the kinematic tree)."""
+    pattern = np.zeros((model.nv, model.nv), dtype=bool)
+    for j in range(1, model.njoints):
+        dofs = slice(model.joints[j].idx_v, model.joints[j].idx_v + model.joints[j].nv)
+        for i in model.supports[j]:
+            if i > 0:
+                ancestor = slice(model.joints[i].idx_v, model.joints[i].idx_v + model.joints[i].nv)
+                pattern[dofs, ancestor] = pattern[ancestor, dofs] = True
+    return pattern
+
+
+def _congruence_plan(S: np.ndarray, pattern: np.ndarray):
+    """S^T M S as a list of terms over M's upper triangle where ``pattern`` (M's structural
+    nonzeros) allows, for the kernel: listed entry e of P (row ``rows[e]`` <= column ``cols[e]``)
+    is the sum over t in ptr[e] .. ptr[e+1] of coef[t] M[u[t], w[t]]; entries not listed are
+    zero. Then P's nonzero columns per row, ``zidx[zptr[j]:zptr[j + 1]]``."""
     nx = S.shape[1]
     nz = [np.flatnonzero(S[:, j]) for j in range(nx)]
     ptr, rows, cols, us, ws, coefs = [0], [], [], [], [], []
+    nonzero = np.zeros((nx, nx), dtype=bool)
     for a in range(nx):
         for b in range(a, nx):
-            for u in nz[a]:
-                for w in nz[b]:
-                    us.append(min(u, w))
-                    ws.append(max(u, w))
-                    coefs.append(S[u, a] * S[w, b])
+            terms = [(u, w) for u in nz[a] for w in nz[b] if pattern[u, w]]
+            if not terms:
+                continue
+            for u, w in terms:
+                us.append(min(u, w))
+                ws.append(max(u, w))
+                coefs.append(S[u, a] * S[w, b])
             rows.append(a)
             cols.append(b)
             ptr.append(len(us))
+            nonzero[a, b] = nonzero[b, a] = True
+    zptr = np.concatenate([[0], np.cumsum(nonzero.sum(axis=1))])
+    zidx = np.flatnonzero(nonzero.ravel()) % nx
     ints = (np.array(x, dtype=np.uint64) for x in (ptr, rows, cols, us, ws))
-    return (*ints, np.array(coefs, dtype=float))
+    return (*ints, np.array(coefs, dtype=float), zptr.astype(np.uint64), zidx.astype(np.uint64))
 
 
 def _null_basis(W: np.ndarray) -> np.ndarray:
@@ -1057,15 +1096,17 @@ def ellipsoids_from_terms(
             kinematic._put(rows[bad_kin], _kinematic_svd(t.J_u[bad_kin], W, vlim))
         svd_rows |= bad_kin
     if dynamic is not None:
-        P = _decouple(setup, t.P) if decoupled else t.P
         if bad_dyn is None:
-            bad_dyn = np.ones(n, dtype=bool) if method == "svd" else _dynamic_fast(setup, t, P, elim, dynamic, block)
+            if method == "svd":
+                bad_dyn = np.ones(n, dtype=bool)
+            else:
+                P = _decouple(setup, t.P) if decoupled else t.P
+                bad_dyn = _dynamic_fast(setup, t, P, elim, dynamic, block)
         if bad_dyn.any():
             W = setup.W if t.W is None else t.W[bad_dyn]
             Mo = setup.Mo if t.Mo is None else t.Mo[bad_dyn]
-            result = _dynamic_svd(
-                t.J_u[bad_dyn], W, P[bad_dyn], setup.Q_inv, t.xi[bad_dyn], Mo, setup.g_o, elim, rows[bad_dyn]
-            )
+            P = _decouple(setup, t.P[bad_dyn]) if decoupled else t.P[bad_dyn]
+            result = _dynamic_svd(t.J_u[bad_dyn], W, P, setup.Q_inv, t.xi[bad_dyn], Mo, setup.g_o, elim, rows[bad_dyn])
             dynamic._put(rows[bad_dyn], result)
         svd_rows |= bad_dyn
     return svd_rows
@@ -1085,11 +1126,14 @@ def _kernel_module():
     return _kernel
 
 
-def _kernel_fast(setup, t, vlim, elim, decoupled, kinematic, dynamic, block, offsets=None, Mo=None, grasp=False):
+def _kernel_fast(
+    setup, t, vlim, elim, decoupled, kinematic, dynamic, block, offsets=None, Mo=None, grasp=False, all_terms=False
+):
     """Run the compiled kernel on a chunk: fills the accepted rows of the outputs and t's terms
     (J_u, P, xi and, for a moving grasp, W and M_o's diagonal) for the rows left to the SVD
-    path. Returns the kinematic and dynamic masks of those rows (``None`` where not asked),
-    then, with ``grasp``, W and M_o of every row.
+    path (the other rows' terms are left undefined unless ``all_terms``). Returns the
+    kinematic and dynamic masks of those rows (``None`` where not asked), then, with
+    ``grasp``, W and M_o (of every row only with ``all_terms``).
 
     ``offsets`` (k, 3) and ``Mo`` (m, m) describe an explicit object instead of the default one
     (a sphere centred between the end effectors); its mass is ``setup.mass``."""
@@ -1115,6 +1159,8 @@ def _kernel_fast(setup, t, vlim, elim, decoupled, kinematic, dynamic, block, off
         setup.supports,
         setup.arm_cols,
         setup.n_arm_cols,
+        setup.pair_cols,
+        setup.n_pair_cols,
         setup.task_rows,
         setup.n_linear,
         ptr,
@@ -1131,6 +1177,7 @@ def _kernel_fast(setup, t, vlim, elim, decoupled, kinematic, dynamic, block, off
         setup.n_eta if decoupled else 0,
         kinematic is not None,
         dynamic is not None,
+        all_terms,
         J_u,
         P,
         xi,
@@ -1184,7 +1231,7 @@ def analyze_batch(
     object_mass: float | None = None,
     decoupled: bool = False,
     positions: bool = False,
-    chunk_size: int = DEFAULT_CHUNK,
+    chunk_size: int | None = None,
     method: str = "auto",
 ) -> BatchAnalysis:
     """Analyse the robot at every row of ``qs`` (robot and object at rest).
@@ -1202,7 +1249,8 @@ def analyze_batch(
         decoupled: use the decoupled P (no platform-arm interaction) for the dynamic ellipsoids.
         positions: also return the end-effector positions (always returned when the grasp needs
             them: several arms and a task with rotation).
-        chunk_size: configurations per internal chunk (memory use is proportional to it).
+        chunk_size: configurations per internal chunk (memory use is proportional to it);
+            default: :func:`default_chunk` of the method.
         method: ``"auto"`` (the fast path compiled per configuration, see :mod:`mobmanip._kernel`,
             falling back to ``"numpy"`` without Numba; SVD path for the rows it cannot certify),
             ``"numpy"`` (the same fast path stacked in NumPy, then the SVD path) or ``"svd"``
@@ -1216,6 +1264,8 @@ def analyze_batch(
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if chunk_size is None:
+        chunk_size = default_chunk(method)
     if not isinstance(chunk_size, int) or chunk_size < 1:
         raise ValueError(f"chunk_size must be a positive integer, got {chunk_size!r}")
     qs = check_configurations(robot, qs)

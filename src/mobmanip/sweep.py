@@ -53,7 +53,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .batch import BatchSetup, EllipsoidBatch, check_configurations, ellipsoids_from_terms, iter_terms
+from .batch import BatchSetup, EllipsoidBatch, check_configurations, default_chunk, ellipsoids_from_terms, iter_terms
 from .errors import MobmanipError, SpecError, UsageError
 from .io import atomic_output, save_figure
 from .model import Robot, load_robot
@@ -658,18 +658,27 @@ def _run_job(job: _Job) -> tuple[int, dict]:
     directions = _directions(job.spec, m, alpha_world)
     vlims = _wheel_limits(robot, robot.velocity_limits, grid.wheel_velocity_scale)
     elims = _wheel_limits(robot, robot.effort_limits, grid.wheel_effort_scale)
-    for start, t in iter_terms(setup, qs, job.chunk_size):
-        n = min(job.chunk_size, len(rows) - start)  # iter_terms' chunks
+    for start, t in iter_terms(setup, qs, min(job.chunk_size, default_chunk())):
+        n = t.n
         sub = rows[start : start + n]
         dirs = directions[start : start + n]
-        for col, vlim in enumerate(vlims):
-            kin = EllipsoidBatch.allocate(n, m)
-            ellipsoids_from_terms(setup, t, velocity_limits=vlim, kinematic=kin)
-            _record(kin, dirs, sub, out, "kinematic", col)
-        for col, elim in enumerate(elims):
-            dyn = EllipsoidBatch.allocate(n, m)
-            ellipsoids_from_terms(setup, t, effort_limits=elim, decoupled=job.spec.decoupled, dynamic=dyn)
-            _record(dyn, dirs, sub, out, "dynamic", col)
+        # one pass per scale, both ellipsoids together while both have scales left
+        for col in range(max(len(vlims), len(elims))):
+            kin = EllipsoidBatch.allocate(n, m) if col < len(vlims) else None
+            dyn = EllipsoidBatch.allocate(n, m) if col < len(elims) else None
+            ellipsoids_from_terms(
+                setup,
+                t,
+                velocity_limits=vlims[col] if kin is not None else None,
+                effort_limits=elims[col] if dyn is not None else None,
+                decoupled=job.spec.decoupled,
+                kinematic=kin,
+                dynamic=dyn,
+            )
+            if kin is not None:
+                _record(kin, dirs, sub, out, "kinematic", col)
+            if dyn is not None:
+                _record(dyn, dirs, sub, out, "dynamic", col)
     return job.start, out
 
 
