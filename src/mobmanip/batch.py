@@ -476,7 +476,7 @@ def _pinocchio_pass(setup: BatchSetup, qs: np.ndarray, ws: _Workspace, n: int) -
     gravity = pin.computeGeneralizedGravity
     placement = pin.updateFramePlacement
     Jw, pos, M, g = ws.Jw, ws.pos, ws.M, ws.g
-    views = _translation_views(data, setup.frame_ids)
+    views = ws.translations
     if _WORLD is None or views is None:  # an older Pinocchio: one more call, copied translations
         world = () if _WORLD is None else (_WORLD,)
         frames = tuple(enumerate(setup.frame_ids))
@@ -539,6 +539,7 @@ class _Workspace:
         self.g = np.zeros((n, setup.nv))
         self.pos = np.zeros((n, setup.k, 3))
         self.Jw = np.zeros((n, 6, setup.nv))
+        self.translations = _translation_views(setup.robot.data, setup.frame_ids)
 
 
 def _terms(setup: BatchSetup, qs: np.ndarray, ws: _Workspace) -> _Terms:
