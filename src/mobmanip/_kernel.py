@@ -98,6 +98,23 @@ def _fro2(A, rows, cols):
 
 
 @_jit
+def _stacked_gram(J, G, rows, row_arm, pair_cols, n_pair_cols):
+    """G = J J^T for the first ``rows`` rows of a stacked Jacobian (row p belongs to arm
+    row_arm[p]), summing only over the columns both rows' arms can move."""
+    for p in range(rows):
+        ap = row_arm[p]
+        for q in range(p, rows):
+            aq = row_arm[q]
+            cols = pair_cols[ap, aq]
+            s = 0.0
+            for t in range(n_pair_cols[ap, aq]):
+                j = cols[t]
+                s += J[p, j] * J[q, j]
+            G[p, q] = s
+            G[q, p] = s
+
+
+@_jit
 def _eigh(V, d, e, n):
     """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
     as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
@@ -514,16 +531,7 @@ def run_chunk(
                     Cb[p, a * m + q] = -(Kb[a, p, q] - Kb[k - 1, p, q] + (1.0 if p == q else 0.0))
 
         # ---------------- Gram of J_u: Cholesky, kappa ----------------
-        for p in range(km):
-            ap = row_arm[p]
-            for q in range(p, km):
-                cols = pair_cols[ap, row_arm[q]]
-                s = 0.0
-                for t in range(n_pair_cols[ap, row_arm[q]]):
-                    j = cols[t]
-                    s += Ju[p, j] * Ju[q, j]
-                Gu[p, q] = s
-                Gu[q, p] = s
+        _stacked_gram(Ju, Gu, km, row_arm, pair_cols, n_pair_cols)
         gram_ok = _cholesky(Gu, Lg, km)
         if gram_ok:
             inv_norm = _lower_inverse(Lg, Li, km)
@@ -548,16 +556,7 @@ def run_chunk(
                         G[p, j] = Jh[p, j]
                 z_norm = 1.0
             else:
-                for p in range(km):
-                    ap = row_arm[p]
-                    for q in range(p, km):
-                        cols = pair_cols[ap, row_arm[q]]
-                        s = 0.0
-                        for t in range(n_pair_cols[ap, row_arm[q]]):
-                            j = cols[t]
-                            s += Jh[p, j] * Jh[q, j]
-                        Gk[p, q] = s
-                        Gk[q, p] = s
+                _stacked_gram(Jh, Gk, km, row_arm, pair_cols, n_pair_cols)
                 # GC = G_k C, KK = C^T G_k C, X = (G_k C)^T T^T
                 for p in range(km):
                     for q in range(c):
