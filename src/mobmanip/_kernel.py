@@ -115,6 +115,21 @@ def _stacked_gram(J, G, rows, row_arm, pair_cols, n_pair_cols):
 
 
 @_jit
+def _gram_twice(A, out, copy, rows, cols):
+    """out = copy = A A^T over the leading rows x cols block of A (copy is the eigensolver's
+    input, which it overwrites)."""
+    for p in range(rows):
+        for q in range(p, rows):
+            s = 0.0
+            for j in range(cols):
+                s += A[p, j] * A[q, j]
+            out[p, q] = s
+            out[q, p] = s
+            copy[p, q] = s
+            copy[q, p] = s
+
+
+@_jit
 def _eigh(V, d, e, n):
     """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
     as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
@@ -613,15 +628,7 @@ def run_chunk(
                 second = kk_norm * (_EPS * kappa_kk * np.sqrt(_fro2(Y, c, m))) ** 2
                 hard = hard or not (kappa_kk <= 1e12)
                 z_norm = np.sqrt(_fro2(Z, m, km))
-            for p in range(m):
-                for q in range(p, m):
-                    s = 0.0
-                    for j in range(nx):
-                        s += G[p, j] * G[q, j]
-                    B[p, q] = s
-                    B[q, p] = s
-                    V[p, q] = s
-                    V[q, p] = s
+            _gram_twice(G, B, V, m, nx)
             eig_ok = _eigh(V, lam, ework, m)
             lmin = lam[0]
             lmax = lam[m - 1]
@@ -749,15 +756,7 @@ def run_chunk(
                 mub[j] = mu[j] * zj
                 for q in range(m):
                     L[j, q] = Lam[j, q] * zj
-            for p in range(m):
-                for q in range(p, m):
-                    s = 0.0
-                    for j in range(nx):
-                        s += L[j, p] * L[j, q]
-                    H[p, q] = s
-                    H[q, p] = s
-                    V[p, q] = s
-                    V[q, p] = s
+            _gram_twice(L.T, H, V, m, nx)
             eig_ok = _eigh(V, lam, ework, m)
             for j in range(nx):
                 for q in range(m):
