@@ -230,7 +230,9 @@ def test_analysis_uses_the_end_effector_centroid_and_its_offsets(rng):
         a = analyze(robot, q, task)
         np.testing.assert_allclose(a.held_object.center, centre, rtol=0, atol=1e-12)
         np.testing.assert_allclose(a.held_object.offsets, tips - centre, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(a.grasp_matrix, grasp_matrix(task, tips - centre), rtol=0, atol=0)
+        # W is the one of the object's offsets, which are the FK tips' up to rounding
+        np.testing.assert_allclose(a.grasp_matrix, grasp_matrix(task, a.held_object.offsets), rtol=0, atol=0)
+        np.testing.assert_allclose(a.grasp_matrix, grasp_matrix(task, tips - centre), rtol=0, atol=1e-12)
         assert a.held_object.mass == 2.0  # the spec's object mass (Table 2)
         np.testing.assert_array_equal(a.held_object.inertia_matrix(task)[:2, :2], 2.0 * np.eye(2))
     # planar: W = [I I] whatever the offsets (rotation is not in the task).

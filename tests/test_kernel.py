@@ -125,32 +125,54 @@ def test_singular_rows_are_not_certified(robot):
     assert single.kinematic.degenerate and single.kinematic.semi_axes[-1] == 0.0
 
 
-@pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual"])
-@pytest.mark.parametrize("bindings", ["views", "copies", "no conventions"])
-def test_pinocchio_pass_gives_joint_jacobians_and_placements(name, bindings, rng, monkeypatch):
-    """One CRBA call in the world convention leaves the world joint Jacobians in data.J: they
-    equal computeJointJacobians', and the placements and M equal a fresh FK and CRBA. The same
-    where the bindings hand out copies of the frame translations or know no conventions."""
-    if bindings != "views":
-        monkeypatch.setattr(batch_module, "_translation_views", lambda data, frame_ids: None)
+@pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual_torso", "ur5"])
+@pytest.mark.parametrize("bindings", ["conventions", "no conventions"])
+def test_probed_pass_gives_what_separate_pinocchio_calls_give(name, bindings, rng, monkeypatch):
+    """One CRBA call per configuration on the probed model: its world joint Jacobians, M, the
+    gravity probe's row and the frame probes' columns equal computeJointJacobians, crba,
+    computeGeneralizedGravity and the frame placements of the robot's own model. The same
+    where the bindings know no conventions (Jacobians then come from their own call)."""
     if bindings == "no conventions":
         monkeypatch.setattr(batch_module, "_WORLD", None)
     robot = mobmanip.load_robot(name)
     setup = BatchSetup(robot)
-    if bindings == "views":  # this Pinocchio hands out live views: the fast branch is the one tested
-        assert batch_module._translation_views(robot.data, setup.frame_ids) is not None
+    probed = setup.probed
+    assert probed.model.nv == robot.model.nv + 1 + 2 * len(robot.arms)
     qs = np.array(random_configurations(robot, rng, 5))
     ws = _Workspace(setup, len(qs))
     _pinocchio_pass(setup, qs, ws, len(qs))
+    Jw, M, g = probed.robot_jacobians(ws.Ja), probed.robot_mass_matrices(ws.Ma), probed.gravity_torques(ws.Ma)
+    positions = probed.frame_positions(ws.Ja)
+    weight = np.linalg.norm(robot.model.gravity.linear) * sum(inertia.mass for inertia in robot.model.inertias)
     data = robot.model.createData()
     for i, q in enumerate(qs):
-        np.testing.assert_allclose(ws.Jw[i], pin.computeJointJacobians(robot.model, data, q), atol=1e-13)
+        np.testing.assert_allclose(Jw[i], pin.computeJointJacobians(robot.model, data, q), rtol=0, atol=1e-13)
         pin.framesForwardKinematics(robot.model, data, q)
         for a, arm in enumerate(robot.arms):
-            np.testing.assert_allclose(ws.pos[i, a], data.oMf[arm.frame_id].translation, atol=1e-14)
-        M = pin.crba(robot.model, data, q)
-        np.testing.assert_allclose(np.triu(ws.M[i]), np.triu(M), atol=1e-12 * np.abs(M).max())
-        np.testing.assert_allclose(ws.g[i], pin.computeGeneralizedGravity(robot.model, data, q), atol=1e-12)
+            np.testing.assert_allclose(positions[i, a], data.oMf[arm.frame_id].translation, rtol=0, atol=1e-14)
+        Mq = pin.crba(robot.model, data, q)
+        np.testing.assert_allclose(np.triu(M[i]), np.triu(Mq), rtol=0, atol=1e-12 * np.abs(Mq).max())
+        gq = pin.computeGeneralizedGravity(robot.model, data, q)  # ~0 for a planar robot: scale by weight x 1 m
+        np.testing.assert_allclose(g[i], gq, rtol=0, atol=1e-13 * weight)
+    # the probes are massless: they add nothing to the robot's M
+    probes = np.setdiff1d(np.arange(probed.model.nv), probed.vmap.astype(int))
+    assert len(probes) == 1 + 2 * len(robot.arms)
+    assert np.all(np.triu(ws.Ma)[:, probes[1:], :] == 0.0)
+
+
+def test_probes_follow_any_gravity(rng):
+    """The gravity probe points against the model's gravity, whatever its direction and size."""
+    robot = mobmanip.load_robot("tiago_dual")
+    robot.model.gravity.linear = np.array([1.5, -2.0, -4.0])
+    setup = BatchSetup(robot)
+    qs = np.array(random_configurations(robot, rng, 3))
+    ws = _Workspace(setup, len(qs))
+    _pinocchio_pass(setup, qs, ws, len(qs))
+    g = setup.probed.gravity_torques(ws.Ma)
+    data = robot.model.createData()
+    for i, q in enumerate(qs):
+        gq = pin.computeGeneralizedGravity(robot.model, data, q)
+        np.testing.assert_allclose(g[i], gq, rtol=0, atol=1e-12 * np.abs(gq).max())
 
 
 @pytest.mark.parametrize("name", ["tiago_dual_torso", "planar_dual_arm_omni"])
@@ -241,3 +263,35 @@ def test_eigh_reports_nan_input():
     A[1, 2] = A[2, 1] = np.nan
     converged, _, _ = _eigh(A)
     assert not converged
+
+
+def test_eigh_pair_is_two_independent_solves():
+    """Solved in lockstep, each problem gets exactly what it gets alone, whatever the other does:
+    a different size of spectrum, zero, NaN, or not wanted."""
+    from mobmanip._kernel import _eigh_pair
+
+    rng = np.random.default_rng(7)
+    n = 6
+    G = rng.standard_normal((n, 3))
+    others = [rng.standard_normal((n, n)) for _ in range(3)] + [G @ G.T, np.zeros((n, n)), np.full((n, n), np.nan)]
+    for _ in range(30):
+        A = rng.standard_normal((n, n))
+        A = A + A.T
+        alone_ok, d_alone, V_alone = _eigh(A)
+        for other in others:
+            B = other + other.T
+            V1, V2 = A.copy(), B.copy()
+            d1, e1, d2, e2 = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+            ok1, ok2 = _eigh_pair(V1, d1, e1, V2, d2, e2, n, True, True)
+            assert ok1 == alone_ok
+            np.testing.assert_array_equal(d1, d_alone)
+            np.testing.assert_array_equal(V1, V_alone)
+            other_ok, d_other, V_other = _eigh(B)
+            assert ok2 == other_ok
+            np.testing.assert_array_equal(d2, d_other)
+            if other_ok:
+                np.testing.assert_array_equal(V2, V_other)
+        # the second problem not wanted: left untouched, reported converged
+        V2 = np.full((n, n), 3.0)
+        ok1, ok2 = _eigh_pair(A.copy(), np.zeros(n), np.zeros(n), V2, np.zeros(n), np.zeros(n), n, True, False)
+        assert ok1 == alone_ok and ok2 and np.all(V2 == 3.0)

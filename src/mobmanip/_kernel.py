@@ -5,9 +5,11 @@ stacked operation on tiny matrices (6 x 6, 12 x 16) pays NumPy's per-call overhe
 Pinocchio dominates the cost. This module runs the same algorithm, with the same a-priori error
 certificates, as loops compiled by Numba, row by row over a chunk:
 
-1. terms: LOCAL_WORLD_ALIGNED frame Jacobians from the world joint Jacobian and the frame
-   positions, J_u = J S, P = S^T M S (upper triangle of M, as :func:`mobmanip.dynamics.mass_matrix`),
-   xi = -S^T g, through S stored column-compressed;
+1. terms, from one CRBA of the probed model (:class:`mobmanip.batch.ProbedModel`): the
+   end-effector positions from the probe columns of the world joint Jacobian,
+   LOCAL_WORLD_ALIGNED frame Jacobians, J_u = J S, P = S^T M S (upper triangle of M, as
+   :func:`mobmanip.dynamics.mass_matrix`), xi = -S^T g with g from the gravity probe's row of
+   M, through S stored column-compressed;
 2. grasp: the object at the centroid of the end effectors (or at explicit offsets), W, its
    pseudo-inverse T = (W W^T)^-1 W, a basis C of null(W) in closed form, and M_o;
 3. the kinematic and dynamic fast paths of :mod:`mobmanip.batch` (see its docstring for the
@@ -130,14 +132,11 @@ def _gram_twice(A, out, copy, rows, cols):
 
 
 @_jit
-def _eigh(V, d, e, n):
-    """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
-    as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
-    tridiagonal form, then the implicit QL iteration with Wilkinson-type shifts (the classical
-    EISPACK tred2/tql2 pair): backward stable, like LAPACK's symmetric solvers. Returns False
-    if an eigenvalue needs more than 60 iterations (the row then takes the SVD path).
-    The QL rotations use sqrt(a^2 + b^2) rather than hypot: entries are pre-scaled to at most 1.
-    """
+def _tridiagonalize(V, d, e, n):
+    """First half of :func:`_eigh`: scale the symmetric n x n block of V to entries at most 1,
+    reduce it to tridiagonal form (d diagonal, e[i] the entry between i and i + 1, e[n - 1] = 0)
+    and leave the accumulated Householder transforms in V. Returns the scale, or 0.0 where
+    nothing is left to do: a zero matrix (V = I, d = 0) or a non-finite one (V = I, d = NaN)."""
     big = 0.0
     finite = True
     for i in range(n):
@@ -145,12 +144,12 @@ def _eigh(V, d, e, n):
             x = abs(V[i, j])
             finite = finite and x < np.inf  # False for inf and NaN
             big = max(big, x)
-    if not finite or big == 0.0:  # identity eigenvectors; zero eigenvalues, or NaN and False
+    if not finite or big == 0.0:
         for i in range(n):
             d[i] = 0.0 if finite else np.nan
             for j in range(n):
                 V[i, j] = 1.0 if i == j else 0.0
-        return finite
+        return 0.0
     inv_big = 1.0 / big
     for i in range(n):
         for j in range(n):
@@ -223,14 +222,17 @@ def _eigh(V, d, e, n):
         d[j] = V[n - 1, j]
         V[n - 1, j] = 0.0
     V[n - 1, n - 1] = 1.0
-    e[0] = 0.0
-    # implicit QL on the tridiagonal (d, e)
     for i in range(1, n):
         e[i - 1] = e[i]
     e[n - 1] = 0.0
-    f = 0.0
-    tst1 = 0.0
-    for l in range(n):
+    return big
+
+
+@_jit
+def _ql_next(d, e, n, l, f, tst1):
+    """Deflate converged eigenvalues from index l on; returns the next (l, m, tst1) that needs a
+    QL iteration on the block l..m (l == n when all have converged)."""
+    while l < n:
         tst1 = max(tst1, abs(d[l]) + abs(e[l]))
         m = l
         while m < n - 1:
@@ -238,53 +240,67 @@ def _eigh(V, d, e, n):
                 break
             m += 1
         if m > l:
-            it = 0
-            while True:
-                it += 1
-                if it > 60:
-                    return False
-                g = d[l]
-                p = (d[l + 1] - g) / (2.0 * e[l])
-                r = math.sqrt(p * p + 1.0)
-                if p < 0.0:
-                    r = -r
-                d[l] = e[l] / (p + r)
-                d[l + 1] = e[l] * (p + r)
-                dl1 = d[l + 1]
-                h = g - d[l]
-                for i in range(l + 2, n):
-                    d[i] -= h
-                f += h
-                p = d[m]
-                c = 1.0
-                c2 = c
-                c3 = c
-                el1 = e[l + 1]
-                s = 0.0
-                s2 = 0.0
-                for i in range(m - 1, l - 1, -1):
-                    c3 = c2
-                    c2 = c
-                    s2 = s
-                    g = c * e[i]
-                    h = c * p
-                    r = math.sqrt(p * p + e[i] * e[i])
-                    e[i + 1] = s * r
-                    s = e[i] / r
-                    c = p / r
-                    p = c * d[i] - s * g
-                    d[i + 1] = h + s * (c * g + s * d[i])
-                    for k in range(n):
-                        h = V[k, i + 1]
-                        V[k, i + 1] = s * V[k, i] + c * h
-                        V[k, i] = c * V[k, i] - s * h
-                p = -s * s2 * c3 * el1 * e[l] / dl1
-                e[l] = s * p
-                d[l] = c * p
-                if not abs(e[l]) > _EPS * tst1:
-                    break
+            return l, m, tst1
         d[l] = d[l] + f
         e[l] = 0.0
+        l += 1
+    return l, l, tst1
+
+
+@_jit
+def _ql_shift(d, e, n, l, m):
+    """Start one QL iteration on the block l..m: the Wilkinson-type shift. Returns the amount h
+    subtracted from the diagonal, d[l + 1] and e[l + 1] after it, and d[m] (the sweep's p)."""
+    g = d[l]
+    p = (d[l + 1] - g) / (2.0 * e[l])
+    r = math.sqrt(p * p + 1.0)
+    if p < 0.0:
+        r = -r
+    d[l] = e[l] / (p + r)
+    d[l + 1] = e[l] * (p + r)
+    h = g - d[l]
+    for i in range(l + 2, n):
+        d[i] -= h
+    return h, d[l + 1], e[l + 1], d[m]
+
+
+@_jit
+def _ql_close(d, e, n, l, f, tst1, c, s, s_b, c_c, el, dl):
+    """End one QL iteration on the block starting at l (c, s the sweep's last rotation, s_b and
+    c_c the ones before); if e[l] has converged, deflate and find the next block. Returns the
+    new (l, m, tst1) and whether l moved on."""
+    p = -s * s_b * c_c * el * e[l] / dl
+    e[l] = s * p
+    d[l] = c * p
+    if abs(e[l]) > _EPS * tst1:
+        return l, 0, tst1, False
+    d[l] = d[l] + f
+    e[l] = 0.0
+    l, m, tst1 = _ql_next(d, e, n, l + 1, f, tst1)
+    return l, m, tst1, True
+
+
+@_jit
+def _ql_rotation(d, e, V, n, i, p, c, s):
+    """One plane rotation of a QL sweep, at rows i, i + 1; returns the new (p, c, s)."""
+    g = c * e[i]
+    h = c * p
+    r = math.sqrt(p * p + e[i] * e[i])
+    e[i + 1] = s * r
+    s = e[i] / r
+    c = p / r
+    p = c * d[i] - s * g
+    d[i + 1] = h + s * (c * g + s * d[i])
+    for k in range(n):
+        h = V[k, i + 1]
+        V[k, i + 1] = s * V[k, i] + c * h
+        V[k, i] = c * V[k, i] - s * h
+    return p, c, s
+
+
+@_jit
+def _sort_eigen(V, d, n, big):
+    """Undo the scaling and sort the eigenvalues ascending, with their vectors."""
     for i in range(n):
         d[i] *= big
     for i in range(1, n):
@@ -294,14 +310,110 @@ def _eigh(V, d, e, n):
             for r in range(n):
                 V[r, j - 1], V[r, j] = V[r, j], V[r, j - 1]
             j -= 1
-    return True
+
+
+@_jit
+def _eigh_pair(V1, d1, e1, V2, d2, e2, n, want1, want2):
+    """Two independent symmetric eigenproblems (see :func:`_eigh`) solved in lockstep: the QL
+    sweeps of both run in one loop, so that the processor overlaps their chains of square roots
+    and divisions, each of which waits on the last. Each problem does exactly the arithmetic
+    :func:`_eigh` does alone. Returns whether each converged (True for a problem not wanted)."""
+    ok1 = ok2 = True
+    big1 = _tridiagonalize(V1, d1, e1, n) if want1 else 0.0
+    big2 = _tridiagonalize(V2, d2, e2, n) if want2 else 0.0
+    if want1 and big1 == 0.0:
+        ok1 = not np.isnan(d1[0])
+    if want2 and big2 == 0.0:
+        ok2 = not np.isnan(d2[0])
+    f1 = f2 = t1 = t2 = 0.0
+    l1 = l2 = m1 = m2 = n
+    if big1 > 0.0:
+        l1, m1, t1 = _ql_next(d1, e1, n, 0, f1, t1)
+    if big2 > 0.0:
+        l2, m2, t2 = _ql_next(d2, e2, n, 0, f2, t2)
+    it1 = it2 = 0
+    p1 = c1 = s1 = s1b = c1b = c1c = el1 = dl1 = 0.0
+    p2 = c2 = s2 = s2b = c2b = c2c = el2 = dl2 = 0.0
+    while l1 < n or l2 < n:
+        run1 = l1 < n
+        run2 = l2 < n
+        if run1:
+            it1 += 1
+            if it1 > 60:
+                ok1 = False
+                run1 = False
+                l1 = n
+        if run2:
+            it2 += 1
+            if it2 > 60:
+                ok2 = False
+                run2 = False
+                l2 = n
+        i1 = l1 - 1
+        i2 = l2 - 1
+        if run1:
+            h, dl1, el1, p1 = _ql_shift(d1, e1, n, l1, m1)
+            f1 += h
+            c1 = c1b = c1c = 1.0
+            s1 = s1b = 0.0
+            i1 = m1 - 1
+        if run2:
+            h, dl2, el2, p2 = _ql_shift(d2, e2, n, l2, m2)
+            f2 += h
+            c2 = c2b = c2c = 1.0
+            s2 = s2b = 0.0
+            i2 = m2 - 1
+        # the sweeps, from m - 1 down to l, interleaved
+        while i1 >= l1 or i2 >= l2:
+            if i1 >= l1:
+                c1c = c1b
+                c1b = c1
+                s1b = s1
+                p1, c1, s1 = _ql_rotation(d1, e1, V1, n, i1, p1, c1, s1)
+                i1 -= 1
+            if i2 >= l2:
+                c2c = c2b
+                c2b = c2
+                s2b = s2
+                p2, c2, s2 = _ql_rotation(d2, e2, V2, n, i2, p2, c2, s2)
+                i2 -= 1
+        if run1:
+            l1, new_m, t1, moved = _ql_close(d1, e1, n, l1, f1, t1, c1, s1, s1b, c1c, el1, dl1)
+            if moved:
+                m1 = new_m
+                it1 = 0
+        if run2:
+            l2, new_m, t2, moved = _ql_close(d2, e2, n, l2, f2, t2, c2, s2, s2b, c2c, el2, dl2)
+            if moved:
+                m2 = new_m
+                it2 = 0
+    if big1 > 0.0 and ok1:
+        _sort_eigen(V1, d1, n, big1)
+    if big2 > 0.0 and ok2:
+        _sort_eigen(V2, d2, n, big2)
+    return ok1, ok2
+
+
+@_jit
+def _eigh(V, d, e, n):
+    """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
+    as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
+    tridiagonal form, then the implicit QL iteration with Wilkinson-type shifts (the classical
+    EISPACK tred2/tql2 pair): backward stable, like LAPACK's symmetric solvers. Returns False
+    if an eigenvalue needs more than 60 iterations (the row then takes the SVD path) or the
+    matrix is not finite. The QL rotations use sqrt(a^2 + b^2) rather than hypot: entries are
+    pre-scaled to at most 1.
+    """
+    return _eigh_pair(V, d, e, V, d, e, n, True, False)[0]
 
 
 @_jit
 def run_chunk(
     Jw,
     M,
-    g,
+    vmap,
+    gravity,
+    probe_cols,
     pos,
     supports,
     arm_cols,
@@ -351,23 +463,27 @@ def run_chunk(
 ):
     """Terms and both fast-path ellipsoids for every row of a chunk (see the module docstring).
 
-    Inputs per row i: Jw[i] (6, nv) world joint Jacobian, M[i] (nv, nv) (upper triangle read),
-    g[i] (nv,) generalized gravity, pos[i] (k, 3) end-effector positions. Constants: supports
+    Inputs per row i, from the probed model of :class:`mobmanip.batch.ProbedModel`: Jw[i]
+    (6, nv_p) world joint Jacobian and M[i] (nv_p, nv_p) (upper triangle read), where the
+    robot's degrees of freedom are columns vmap (nv,), generalized gravity is ``gravity`` times
+    row 0 of M, and columns probe_cols[a] are the x and y probes at end effector a, whose
+    positions go to pos[i] (k, 3) (an output). Constants: supports
     (k, nv), 1 where a joint moves arm a's end effector; arm_cols[a, :n_arm_cols[a]] the
     reduced coordinates that can move it (J_u's other entries in arm a's rows are zero) and
     pair_cols[a, b, :n_pair_cols[a, b]] those that move both a's and b's; task rows (m,),
     linear ones first; S column-compressed; P = S^T M S as a list of terms
     P[P_row[t], P_col[t]] = sum P_c M[P_u, P_w] over M's structural nonzeros (upper triangle,
-    P_ptr delimiting each listed entry; P is zero elsewhere) and P's nonzero columns per row,
-    Pz_idx[Pz_ptr[j]:Pz_ptr[j + 1]]; Q_inv (nx, nx) or (0, 0) for Q = I; limits; offsets_in
-    (k, 3) or (0, 3) for the centroid; Mo_in (m, m) or (0, 0) for a uniform sphere of ``mass``
-    reaching the farthest grasp; g_o (m,); decouple_eta > 0 zeroes P's platform-arm blocks in
-    the dynamic ellipsoid. Outputs: the ellipsoids of accepted rows and the acceptance flags
-    kin_ok / dyn_ok (rows with False are left untouched), and J_u, P (coupled), xi, W, Mo of
-    the rows some asked ellipsoid was not accepted for (of every row with ``all_terms``).
+    indexed as the probed model's, P_ptr delimiting each listed entry; P is zero elsewhere) and
+    P's nonzero columns per row, Pz_idx[Pz_ptr[j]:Pz_ptr[j + 1]]; Q_inv (nx, nx) or (0, 0)
+    for Q = I; limits; offsets_in (k, 3) or (0, 3) for the centroid; Mo_in (m, m) or (0, 0)
+    for a uniform sphere of ``mass`` reaching the farthest grasp; g_o (m,); decouple_eta > 0
+    zeroes P's platform-arm blocks in the dynamic ellipsoid. Outputs: the ellipsoids of
+    accepted rows and the acceptance flags kin_ok / dyn_ok (rows with False are left
+    untouched), and J_u, P (coupled), xi, W, Mo of the rows some asked ellipsoid was not
+    accepted for (of every row with ``all_terms``).
     """
     n = Jw.shape[0]
-    nv = Jw.shape[2]
+    nv = vmap.shape[0]
     k = pos.shape[1]
     m = task_rows.shape[0]
     nx = S_ptr.shape[0] - 1
@@ -410,9 +526,12 @@ def run_chunk(
     Z = np.zeros((m, km))
     G = np.zeros((m, nx))
     B = np.zeros((m, m))
-    V = np.zeros((m, m))
-    lam = np.zeros(m)
-    ework = np.zeros(m)
+    Vk = np.zeros((m, m))  # the kinematic and the dynamic eigenproblem
+    lamk = np.zeros(m)
+    ek = np.zeros(m)
+    Vd = np.zeros((m, m))
+    lamd = np.zeros(m)
+    ed = np.zeros(m)
     sol = np.zeros((km, m))
     tmp = np.zeros((km, m))
     JpWt = np.zeros((nx, m))
@@ -438,22 +557,34 @@ def run_chunk(
     for i in range(n):
         Mi = M[i]
         Jwi = Jw[i]
-        # ---------------- terms: J_u, P, xi ----------------
+        # ---------------- terms: positions, J_u, P, xi ----------------
         for a in range(k):
-            p0 = pos[i, a, 0]
-            p1 = pos[i, a, 1]
-            p2 = pos[i, a, 2]
+            # p = a + w_x (w_x . b), a = w_x x v_x and b = w_y x v_y from the probe columns
+            cx = probe_cols[a, 0]
+            cy = probe_cols[a, 1]
+            vx0, vx1, vx2 = Jwi[0, cx], Jwi[1, cx], Jwi[2, cx]
+            wx0, wx1, wx2 = Jwi[3, cx], Jwi[4, cx], Jwi[5, cx]
+            vy0, vy1, vy2 = Jwi[0, cy], Jwi[1, cy], Jwi[2, cy]
+            wy0, wy1, wy2 = Jwi[3, cy], Jwi[4, cy], Jwi[5, cy]
+            s = wx0 * (wy1 * vy2 - wy2 * vy1) + wx1 * (wy2 * vy0 - wy0 * vy2) + wx2 * (wy0 * vy1 - wy1 * vy0)
+            p0 = wx1 * vx2 - wx2 * vx1 + wx0 * s
+            p1 = wx2 * vx0 - wx0 * vx2 + wx1 * s
+            p2 = wx0 * vx1 - wx1 * vx0 + wx2 * s
+            pos[i, a, 0] = p0
+            pos[i, a, 1] = p1
+            pos[i, a, 2] = p2
             for v in range(nv):
                 if supports[a, v] == 0.0:
                     for r in range(6):
                         Jf[r, v] = 0.0
                     continue
-                wx = Jwi[3, v]
-                wy = Jwi[4, v]
-                wz = Jwi[5, v]
-                Jf[0, v] = Jwi[0, v] + wy * p2 - wz * p1
-                Jf[1, v] = Jwi[1, v] + wz * p0 - wx * p2
-                Jf[2, v] = Jwi[2, v] + wx * p1 - wy * p0
+                col = vmap[v]
+                wx = Jwi[3, col]
+                wy = Jwi[4, col]
+                wz = Jwi[5, col]
+                Jf[0, v] = Jwi[0, col] + wy * p2 - wz * p1
+                Jf[1, v] = Jwi[1, col] + wz * p0 - wx * p2
+                Jf[2, v] = Jwi[2, col] + wx * p1 - wy * p0
                 Jf[3, v] = wx
                 Jf[4, v] = wy
                 Jf[5, v] = wz
@@ -474,8 +605,8 @@ def run_chunk(
         for j in range(nx):
             s = 0.0
             for t in range(S_ptr[j], S_ptr[j + 1]):
-                s += g[i, S_idx[t]] * S_val[t]
-            xi_i[j] = -s
+                s += Mi[0, vmap[S_idx[t]]] * S_val[t]
+            xi_i[j] = -gravity * s
 
         # ---------------- grasp: W, T, C, M_o ----------------
         if has_offsets:
@@ -554,9 +685,13 @@ def run_chunk(
         else:
             kappa = np.inf
 
-        # ---------------- kinematic ellipsoid ----------------
+        # ---------------- kinematic ellipsoid: its generator G, B = G G^T ----------------
         kin_ok[i] = False
-        if want_kin and grasp_ok:
+        kin_go = want_kin and grasp_ok
+        hard = True
+        second = 0.0
+        z_norm = 1.0
+        if kin_go:
             branch = np.sqrt(kappa) * (vmax / vmin) < _FAST_LIMIT
             for p in range(km):
                 cols = arm_cols[row_arm[p]]
@@ -628,34 +763,12 @@ def run_chunk(
                 second = kk_norm * (_EPS * kappa_kk * np.sqrt(_fro2(Y, c, m))) ** 2
                 hard = hard or not (kappa_kk <= 1e12)
                 z_norm = np.sqrt(_fro2(Z, m, km))
-            _gram_twice(G, B, V, m, nx)
-            eig_ok = _eigh(V, lam, ework, m)
-            lmin = lam[0]
-            lmax = lam[m - 1]
-            err = (
-                8.0 * _EPS * (z_norm * np.sqrt(_fro2(Jh, km, nx)) * np.sqrt(_fro2(G, m, nx)) + np.sqrt(_fro2(B, m, m)))
-            )
-            err += second
-            est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
-            ok = eig_ok and not hard and lmin > 1e-12 * lmax and lmin > 0.0 and np.isfinite(est) and est <= _TOL
-            if ok:
-                kin_ok[i] = True
-                for p in range(m):
-                    kin_center[i, p] = 0.0
-                    src = m - 1 - p
-                    kin_semi[i, p] = np.sqrt(lam[src])
-                    for q in range(m):
-                        kin_axes[i, p, q] = V[q, src]
-                for p in range(m):
-                    for q in range(m):
-                        s = 0.0
-                        for r in range(m):
-                            s += V[p, r] * V[q, r] / lam[r]
-                        kin_matrix[i, p, q] = s
+            _gram_twice(G, B, Vk, m, nx)
 
-        # ---------------- dynamic ellipsoid ----------------
+        # ---------------- dynamic ellipsoid: L, H = L^T L ----------------
         dyn_ok[i] = False
-        if want_dyn and grasp_ok and kappa < 1e12:
+        dyn_go = want_dyn and grasp_ok and kappa < 1e12
+        if dyn_go:
             # J^+ W^T = J^T (J J^T)^-1 W^T, then one refinement step with the residual
             for p in range(km):
                 for q in range(m):
@@ -756,13 +869,45 @@ def run_chunk(
                 mub[j] = mu[j] * zj
                 for q in range(m):
                     L[j, q] = Lam[j, q] * zj
-            _gram_twice(L.T, H, V, m, nx)
-            eig_ok = _eigh(V, lam, ework, m)
+            _gram_twice(L.T, H, Vd, m, nx)
+
+        # ---------------- both eigenproblems, in lockstep ----------------
+        kin_eig, dyn_eig = _eigh_pair(Vk, lamk, ek, Vd, lamd, ed, m, kin_go, dyn_go)
+
+        # ---------------- kinematic ellipsoid: certificate, semi-axes ----------------
+        if kin_go:
+            eig_ok = kin_eig
+            lmin = lamk[0]
+            lmax = lamk[m - 1]
+            err = (
+                8.0 * _EPS * (z_norm * np.sqrt(_fro2(Jh, km, nx)) * np.sqrt(_fro2(G, m, nx)) + np.sqrt(_fro2(B, m, m)))
+            )
+            err += second
+            est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
+            ok = eig_ok and not hard and lmin > 1e-12 * lmax and lmin > 0.0 and np.isfinite(est) and est <= _TOL
+            if ok:
+                kin_ok[i] = True
+                for p in range(m):
+                    kin_center[i, p] = 0.0
+                    src = m - 1 - p
+                    kin_semi[i, p] = np.sqrt(lamk[src])
+                    for q in range(m):
+                        kin_axes[i, p, q] = Vk[q, src]
+                for p in range(m):
+                    for q in range(m):
+                        s = 0.0
+                        for r in range(m):
+                            s += Vk[p, r] * Vk[q, r] / lamk[r]
+                        kin_matrix[i, p, q] = s
+
+        # ---------------- dynamic ellipsoid: certificate, semi-axes, centre ----------------
+        if dyn_go:
+            eig_ok = dyn_eig
             for j in range(nx):
                 for q in range(m):
                     s = 0.0
                     for p in range(m):
-                        s += L[j, p] * V[p, q]
+                        s += L[j, p] * Vd[p, q]
                     LV[j, q] = s
             for q in range(m):
                 lam_rq[q] = 0.0
@@ -773,7 +918,7 @@ def run_chunk(
                 for q in range(m):
                     s = 0.0
                     for r in range(m):
-                        s += V[p, r] * V[q, r] / lam_rq[r]
+                        s += Vd[p, r] * Vd[q, r] / lam_rq[r]
                     Hinv[p, q] = s
             # centre: normal equations, then one refinement step
             for p in range(m):
@@ -853,7 +998,7 @@ def run_chunk(
                         src = order[p]
                         dyn_semi[i, p] = np.sqrt(rho2 / lam_rq[src])
                         for q in range(m):
-                            dyn_axes[i, p, q] = V[q, src]
+                            dyn_axes[i, p, q] = Vd[q, src]
                     for p in range(m):
                         for q in range(m):
                             dyn_matrix[i, p, q] = H[p, q] / rho2

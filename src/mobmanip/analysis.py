@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .batch import BatchSetup, EllipsoidBatch, _kernel_fast, _pinocchio_pass, _Terms, _Workspace, kernel_available
+from .batch import BatchSetup, EllipsoidBatch, _kernel_fast, _terms, _Workspace, kernel_available
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
 from .errors import TaskError
@@ -166,8 +166,7 @@ def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
     """The compiled kernel of :mod:`mobmanip.batch` on one configuration; an ellipsoid its
     certificate does not accept is computed by the reference path instead."""
     setup, ws = _single_setup(robot, task, mass)
-    _pinocchio_pass(setup, q[None, :], ws, 1)
-    t = _Terms(1, ws.Jw, ws.M, ws.g, ws.pos)
+    t = _terms(setup, q[None, :], ws)
     m = setup.m
     kin_b, dyn_b = EllipsoidBatch.allocate(1, m), EllipsoidBatch.allocate(1, m)
     offsets = Mo = None
@@ -178,7 +177,7 @@ def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
     bad_kin, bad_dyn, W, _ = _kernel_fast(
         setup, t, vlim, elim, decoupled, kin_b, dyn_b, slice(0, 1), offsets=offsets, Mo=Mo, grasp=True, all_terms=True
     )
-    positions = ws.pos[0].copy()
+    positions = t.positions[0].copy()
     obj = held_object if held_object is not None else HeldObject.between(positions, mass)
     kin = None if bad_kin[0] else kin_b[0]
     dynamic = None if bad_dyn[0] else dyn_b[0]

@@ -2,9 +2,10 @@
 
 :func:`analyze_batch` gives the same ellipsoids as :func:`mobmanip.analysis.analyze` (to 1e-10
 of each ellipsoid's size) for every row of a configuration array, several times faster per
-configuration than the single path. Pinocchio is called once per configuration only for what
-only it computes (joint and frame Jacobians, CRBA, generalized gravity, frame placements when
-the grasp needs them); everything else runs stacked over the batch in NumPy, with constant
+configuration than the single path. Pinocchio is called once per configuration, for one CRBA
+of the robot's model with massless probe joints added (:class:`ProbedModel`), which gives the
+joint Jacobians, M, generalized gravity and the end-effector positions at once; everything else
+runs stacked over the batch (in a compiled kernel or in NumPy), with constant
 things (S, Q, W and its pseudo-inverses for grasps that do not move, the object's inertia and
 gravity, the limits) computed once per batch in :class:`BatchSetup`.
 
@@ -309,13 +310,14 @@ class BatchSetup:
         rows = task.rows
         contiguous = tuple(rows) == tuple(range(rows[0], rows[0] + len(rows)))
         self.row_slice = slice(rows[0], rows[0] + len(rows)) if contiguous else None
+        self.frame_ids = tuple(arm.frame_id for arm in robot.arms)
+        self.probed = ProbedModel(robot.model, self.frame_ids)
         # Pinocchio 3 fills both triangles of M (the lower copied from the upper); older
         # versions fill only the upper one, which mass_matrix() reads.
         M0 = pin.crba(robot.model, robot.data, robot.neutral())
         self.crba_symmetric = bool(np.array_equal(M0, M0.T))
         Q = robot.S.T @ robot.B
         self.Q_inv = None if np.array_equal(Q, np.eye(self.nx)) else np.linalg.inv(Q)
-        self.frame_ids = tuple(arm.frame_id for arm in robot.arms)
         model = robot.model
         self.frame_supports = []
         for f in self.frame_ids:
@@ -353,7 +355,10 @@ class BatchSetup:
                 both = np.flatnonzero(moves[a] & moves[b])
                 self.pair_cols[a, b, : len(both)] = both
                 self.n_pair_cols[a, b] = len(both)
-        self.P_plan = _congruence_plan(self.S, _mass_matrix_pattern(model))
+        # P's terms index M over the robot's degrees of freedom; the kernel reads the probed M
+        ptr, p_rows, p_cols, p_u, p_w, *rest = _congruence_plan(self.S, _mass_matrix_pattern(model))
+        vmap = self.probed.vmap
+        self.P_plan = (ptr, p_rows, p_cols, vmap[p_u.astype(int)], vmap[p_w.astype(int)], *rest)
         self.task_rows = np.array(task.rows, dtype=np.int64)
         self.n_linear = int(np.sum(self.task_rows < 3))
         if np.any(self.task_rows[: self.n_linear] >= 3):
@@ -436,21 +441,114 @@ def _null_basis(W: np.ndarray) -> np.ndarray:
 # Pinocchio: once per configuration
 
 
+class ProbedModel:
+    """The robot's model with massless *probe* joints, so that one CRBA call per configuration
+    gives everything the batch needs from Pinocchio.
+
+    CRBA in the world convention leaves the world joint Jacobians in ``data.J`` beside M. Two
+    kinds of probes, which carry no mass and sit at q = 0, make the other per-configuration
+    calls unnecessary:
+
+    * a prismatic joint along -g at the root, carrying the whole robot: its row of M is
+      sum_b m_b dc_b/dq (the robot's momentum along it), so generalized gravity is
+      ``g = |g| M[0, v]``;
+    * two revolute joints at each end-effector frame, about its x and y axes: a revolute
+      joint's world Jacobian column is (p x w, w) for its position p and unit axis w, and
+      w x (p x w) = p - w (w . p), so the two columns give the frame's position (see
+      :func:`_frame_positions`).
+
+    Probes change neither the robot's Jacobians nor its M: its degrees of freedom are columns
+    ``vmap`` of the probed model's (the probes go right after their parent's subtree, keeping
+    every subtree contiguous as CRBA requires), its configuration entries ``qmap``.
+    """
+
+    def __init__(self, model: pin.Model, frame_ids):
+        gravity = np.asarray(model.gravity.linear, dtype=float)
+        self.gravity = float(np.linalg.norm(gravity))
+        axis = -gravity / self.gravity if self.gravity > 0.0 else np.array([0.0, 0.0, 1.0])
+        probed = pin.Model()
+        probed.name = model.name
+        root = probed.addJoint(0, pin.JointModelPrismaticUnaligned(axis), pin.SE3.Identity(), "mobmanip_gravity_probe")
+        # each frame's probes follow the last joint of its parent joint's subtree
+        after: dict[int, list[int]] = {}
+        for a, f in enumerate(frame_ids):
+            parent = model.frames[f].parentJoint
+            after.setdefault(max(model.subtrees[parent]) if parent > 0 else model.njoints - 1, []).append(a)
+        new_id = {0: root}
+        probe_ids = [None] * len(frame_ids)
+
+        def add_probes(last: int) -> None:
+            for a in after.get(last, ()):
+                frame = model.frames[frame_ids[a]]
+                probe_ids[a] = [
+                    probed.addJoint(new_id[frame.parentJoint], joint, frame.placement, f"mobmanip_probe_{a}_{axis}")
+                    for axis, joint in (("x", pin.JointModelRX()), ("y", pin.JointModelRY()))
+                ]
+
+        add_probes(0)
+        for j in range(1, model.njoints):
+            parent = new_id[model.parents[j]]
+            new_id[j] = probed.addJoint(parent, model.joints[j], model.jointPlacements[j], model.names[j])
+            probed.appendBodyToJoint(new_id[j], model.inertias[j], pin.SE3.Identity())
+            add_probes(j)
+        self.vmap = np.zeros(model.nv, dtype=np.uint64)
+        self.qmap = np.zeros(model.nq, dtype=np.int64)
+        for j in range(1, model.njoints):
+            old, new = model.joints[j], probed.joints[new_id[j]]
+            self.vmap[old.idx_v : old.idx_v + old.nv] = np.arange(new.idx_v, new.idx_v + new.nv)
+            self.qmap[old.idx_q : old.idx_q + old.nq] = np.arange(new.idx_q, new.idx_q + new.nq)
+        armature = np.zeros(probed.nv)
+        armature[self.vmap.astype(int)] = model.armature
+        probed.armature = armature
+        self.probe_cols = np.array([[probed.joints[j].idx_v for j in ids] for ids in probe_ids], dtype=np.uint64)
+        self.model = probed
+        self.data = probed.createData()
+        self.nv = model.nv
+
+    def robot_jacobians(self, Jw: np.ndarray) -> np.ndarray:
+        """The robot's world joint Jacobians (n, 6, nv) from the probed model's."""
+        return Jw[..., self.vmap.astype(int)]
+
+    def robot_mass_matrices(self, M: np.ndarray) -> np.ndarray:
+        """The robot's M (n, nv, nv) from the probed model's."""
+        v = self.vmap.astype(int)
+        return M[:, v[:, None], v]
+
+    def gravity_torques(self, M: np.ndarray) -> np.ndarray:
+        """Generalized gravity (n, nv) from the probed model's M."""
+        return self.gravity * M[:, 0, self.vmap.astype(int)]
+
+    def frame_positions(self, Jw: np.ndarray) -> np.ndarray:
+        """End-effector positions (n, k, 3) from the probe columns of the world Jacobians."""
+        return _frame_positions(Jw[..., self.probe_cols[:, 0].astype(int)], Jw[..., self.probe_cols[:, 1].astype(int)])
+
+
+def _frame_positions(x_cols: np.ndarray, y_cols: np.ndarray) -> np.ndarray:
+    """Positions p (n, k, 3) from the world Jacobian columns (n, 6, k) of revolute joints at p
+    about two orthogonal unit axes w_x, w_y: a = w_x x v_x = p - w_x (w_x . p) lacks only p's
+    component along w_x, which b = w_y x v_y keeps: p = a + w_x (w_x . b)."""
+    vx, wx = np.swapaxes(x_cols[:, :3], 1, 2), np.swapaxes(x_cols[:, 3:], 1, 2)
+    vy, wy = np.swapaxes(y_cols[:, :3], 1, 2), np.swapaxes(y_cols[:, 3:], 1, 2)
+    a = np.cross(wx, vx)
+    b = np.cross(wy, vy)
+    return a + wx * np.sum(wx * b, axis=-1, keepdims=True)
+
+
 class _Terms:
     """One chunk's per-configuration quantities.
 
-    Pinocchio's outputs (views into the chunk's workspace, valid until the next chunk): world
-    joint Jacobians ``Jw`` (n, 6, nv), mass matrices ``M``, generalized gravity ``g`` and
-    end-effector positions ``positions`` (n, k, 3). The derived terms -- J_u, P, xi and the
+    Pinocchio's outputs for the probed model (views into the chunk's workspace, valid until the
+    next chunk): world joint Jacobians ``Ja`` (n, 6, nv_p) and mass matrices ``Ma``. The
+    end-effector positions ``positions`` (n, k, 3) and the derived terms -- J_u, P, xi and the
     grasp (W, T, C, M_o diagonal; ``None`` for a grasp that does not move) -- come either from
     the compiled kernel (rows it could not certify are all that is needed after it) or from
     stacked NumPy (:func:`_numpy_terms`), whichever ran first.
     """
 
-    __slots__ = ("n", "Jw", "M", "g", "positions", "J_u", "P", "xi", "W", "T", "C", "Mo", "_gram")
+    __slots__ = ("n", "Ja", "Ma", "positions", "J_u", "P", "xi", "W", "T", "C", "Mo", "_gram")
 
-    def __init__(self, n, Jw, M, g, positions):
-        self.n, self.Jw, self.M, self.g, self.positions = n, Jw, M, g, positions
+    def __init__(self, n, Ja, Ma, positions):
+        self.n, self.Ja, self.Ma, self.positions = n, Ja, Ma, positions
         self.J_u = self.P = self.xi = self.W = self.T = self.C = self.Mo = self._gram = None
 
     def __len__(self) -> int:
@@ -467,50 +565,26 @@ class _Terms:
 
 
 def _pinocchio_pass(setup: BatchSetup, qs: np.ndarray, ws: _Workspace, n: int) -> None:
-    """Fill the workspace's first n rows from Pinocchio, once per configuration: CRBA in the
-    world convention (which also leaves the world joint Jacobians in ``data.J``), the
-    end-effector placements and the generalized gravity. The frame Jacobians follow from the
-    joint Jacobians and the placements without further calls."""
-    model, data = setup.robot.model, setup.robot.data
+    """Fill the workspace's first n rows from Pinocchio: one CRBA call per configuration of the
+    probed model (:class:`ProbedModel`), in the world convention, which also leaves the world
+    joint Jacobians in ``data.J``."""
+    probed = setup.probed
+    model, data = probed.model, probed.data
+    qa, Ja, Ma = ws.q, ws.Ja, ws.Ma
+    qa[:n, probed.qmap] = qs[:n]
     crba = pin.crba
-    gravity = pin.computeGeneralizedGravity
-    placement = pin.updateFramePlacement
-    Jw, pos, M, g = ws.Jw, ws.pos, ws.M, ws.g
-    views = ws.translations
-    if _WORLD is None or views is None:  # an older Pinocchio: one more call, copied translations
-        world = () if _WORLD is None else (_WORLD,)
-        frames = tuple(enumerate(setup.frame_ids))
+    if _WORLD is None:  # an older Pinocchio: one more call
+        jacobians = pin.computeJointJacobians
         for i in range(n):
-            q = qs[i]
-            M[i] = crba(model, data, q, *world)
-            Jw[i] = data.J if world else pin.computeJointJacobians(model, data, q)
-            pi = pos[i]
-            for a, f in frames:
-                pi[a] = placement(model, data, f).translation
-            g[i] = gravity(model, data, q)
+            q = qa[i]
+            Ma[i] = crba(model, data, q)
+            Ja[i] = jacobians(model, data, q)
         return
     J = data.J  # a view of Pinocchio's buffer, refreshed by every crba call below
     world = _WORLD
-    frames = tuple(zip(range(len(views)), setup.frame_ids, views))
     for i in range(n):
-        q = qs[i]
-        M[i] = crba(model, data, q, world)
-        Jw[i] = J
-        pi = pos[i]
-        for a, f, view in frames:
-            placement(model, data, f)
-            pi[a] = view
-        g[i] = gravity(model, data, q)
-
-
-def _translation_views(data: pin.Data, frame_ids) -> list[np.ndarray] | None:
-    """Views of the frames' translations inside ``data.oMf``, which every
-    ``updateFramePlacement`` call refreshes (copying them saves building an SE3's array per
-    call); ``None`` where this Pinocchio's bindings hand out copies instead."""
-    views = [data.oMf[f].translation for f in frame_ids]
-    if all(np.shares_memory(v, data.oMf[f].translation) for v, f in zip(views, frame_ids)):
-        return views
-    return None
+        Ma[i] = crba(model, data, qa[i], world)
+        Ja[i] = J
 
 
 _WORLD = getattr(getattr(pin, "Convention", None), "WORLD", None)
@@ -534,35 +608,36 @@ class _Workspace:
     """Reusable buffers for the Pinocchio pass of one chunk size."""
 
     def __init__(self, setup: BatchSetup, n: int):
+        probed = setup.probed.model
         self.n = n
-        self.M = np.zeros((n, setup.nv, setup.nv))
-        self.g = np.zeros((n, setup.nv))
+        self.q = np.zeros((n, probed.nq))  # the probes' entries stay 0
+        self.Ma = np.zeros((n, probed.nv, probed.nv))
+        self.Ja = np.zeros((n, 6, probed.nv))
         self.pos = np.zeros((n, setup.k, 3))
-        self.Jw = np.zeros((n, 6, setup.nv))
-        self.translations = _translation_views(setup.robot.data, setup.frame_ids)
 
 
 def _terms(setup: BatchSetup, qs: np.ndarray, ws: _Workspace) -> _Terms:
     n = qs.shape[0]
     _pinocchio_pass(setup, qs, ws, n)
-    return _Terms(n, ws.Jw[:n], ws.M[:n], ws.g[:n], ws.pos[:n])
+    return _Terms(n, ws.Ja[:n], ws.Ma[:n], ws.pos[:n])
 
 
 def _numpy_terms(setup: BatchSetup, t: _Terms) -> None:
     """J_u, P, xi and the grasp of a chunk, stacked in NumPy (when the kernel has not run)."""
     if t.J_u is not None:
         return
-    n, proj, nv, m, k = t.n, setup.projection, setup.nv, setup.m, setup.k
+    n, proj, nv, m, k, probed = t.n, setup.projection, setup.nv, setup.m, setup.k, setup.probed
+    t.positions[...] = probed.frame_positions(t.Ja)
     J6 = np.empty((n, k, 6, nv))
-    _frame_jacobians(setup, t.Jw, t.positions, J6)
-    M = t.M
+    _frame_jacobians(setup, probed.robot_jacobians(t.Ja), t.positions, J6)
+    M = probed.robot_mass_matrices(t.Ma)
     J = J6[:, :, setup.row_slice, :] if setup.row_slice is not None else J6[:, :, setup.rows, :]
     t.J_u = proj.right(J.reshape(n, k * m, nv))
     if not setup.crba_symmetric:  # M from the upper triangle, as mobmanip.dynamics.mass_matrix
         M = np.triu(M) + np.swapaxes(np.triu(M, 1), 1, 2)
     P = proj.left_transpose(proj.right(M))
     t.P = 0.5 * (P + np.swapaxes(P, 1, 2))
-    t.xi = -proj.right(t.g)
+    t.xi = -proj.right(probed.gravity_torques(t.Ma))
     if setup.moving_grasp:
         t.W, t.T, t.C, t.Mo = _moving_grasp(setup, t.positions)
 
@@ -1152,10 +1227,13 @@ def _kernel_fast(
     dyn_ok = np.zeros(n, dtype=bool)
     dyn_empty = np.zeros(n if dynamic is not None else 0, dtype=bool)
     ptr, idx, val = setup.S_csc
+    probed = setup.probed
     _kernel_module().run_chunk(
-        t.Jw,
-        t.M,
-        t.g,
+        t.Ja,
+        t.Ma,
+        probed.vmap,
+        probed.gravity,
+        probed.probe_cols,
         t.positions,
         setup.supports,
         setup.arm_cols,
