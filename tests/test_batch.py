@@ -225,3 +225,39 @@ def test_bad_configurations_name_row_and_joint(robot):
 
 def test_exported_from_package():
     assert mobmanip.analyze_batch is analyze_batch
+
+
+def test_svd_rows_queued_over_chunks_equal_rows_computed_per_chunk(tiago, rng):
+    """analyze_batch queues the SVD path's rows of all chunks and computes them at once: the
+    same ellipsoids as computing them chunk by chunk, also where chunks use different limits
+    (queued items are grouped by their limits)."""
+    from mobmanip.batch import BatchSetup, _SvdBacklog, ellipsoids_from_terms, iter_terms
+
+    qs = np.array(random_configurations(tiago, rng, 12))
+    setup = BatchSetup(tiago, "spatial")
+    scales = (1.0, 1.0, 0.5)  # chunks of 4: the first two share their limits
+    results = {}
+    for queued in (False, True):
+        kin, dyn = EllipsoidBatch.allocate(len(qs), setup.m), EllipsoidBatch.allocate(len(qs), setup.m)
+        backlog = _SvdBacklog(setup) if queued else None
+        for (start, t), scale in zip(iter_terms(setup, qs, 4), scales):
+            svd_rows = ellipsoids_from_terms(
+                setup,
+                t,
+                velocity_limits=scale * tiago.velocity_limits,
+                effort_limits=scale * tiago.effort_limits,
+                kinematic=kin,
+                dynamic=dyn,
+                offset=start,
+                method="svd",
+                backlog=backlog,
+            )
+            assert svd_rows.all()
+        if queued:
+            assert len(backlog.dynamic) == 3 and not np.any(dyn.semi_axes)  # nothing computed yet
+            backlog.flush(kin, dyn)
+            assert not backlog.dynamic and not backlog.kinematic
+        results[queued] = (kin, dyn)
+    for per_chunk, queued in zip(results[False], results[True]):
+        for name in ("center", "semi_axes", "axes", "matrix", "degenerate", "empty"):
+            np.testing.assert_array_equal(getattr(queued, name), getattr(per_chunk, name))

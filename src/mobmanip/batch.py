@@ -1145,13 +1145,16 @@ def ellipsoids_from_terms(
     dynamic: EllipsoidBatch | None = None,
     offset: int = 0,
     method: str = "auto",
+    backlog: _SvdBacklog | None = None,
 ) -> np.ndarray:
     """Fill ``kinematic``/``dynamic`` rows ``offset .. offset + n`` from one chunk's terms.
 
     Either output may be ``None`` to skip that ellipsoid. ``method``: ``"auto"`` (the compiled
     kernel when Numba is available, else the stacked NumPy fast path; rows neither certifies go
     to the SVD path), ``"numpy"`` (stacked NumPy fast path, then SVD path) or ``"svd"``.
-    Returns the chunk's SVD-path mask (n,).
+    With a ``backlog``, the SVD path's rows are queued there instead of computed now (its
+    :meth:`_SvdBacklog.flush` computes them, for every chunk at once). Returns the chunk's
+    SVD-path mask (n,).
     """
     n = t.n
     rows = np.arange(offset, offset + n)
@@ -1169,7 +1172,10 @@ def ellipsoids_from_terms(
             bad_kin = np.ones(n, dtype=bool) if method == "svd" else _kinematic_fast(setup, t, vlim, kinematic, block)
         if bad_kin.any():
             W = setup.W if t.W is None else t.W[bad_kin]
-            kinematic._put(rows[bad_kin], _kinematic_svd(t.J_u[bad_kin], W, vlim))
+            if backlog is not None:
+                backlog.kinematic.append((rows[bad_kin], t.J_u[bad_kin], _per_row(W, int(bad_kin.sum()), 3), vlim))
+            else:
+                kinematic._put(rows[bad_kin], _kinematic_svd(t.J_u[bad_kin], W, vlim))
         svd_rows |= bad_kin
     if dynamic is not None:
         if bad_dyn is None:
@@ -1182,10 +1188,54 @@ def ellipsoids_from_terms(
             W = setup.W if t.W is None else t.W[bad_dyn]
             Mo = setup.Mo if t.Mo is None else t.Mo[bad_dyn]
             P = _decouple(setup, t.P[bad_dyn]) if decoupled else t.P[bad_dyn]
-            result = _dynamic_svd(t.J_u[bad_dyn], W, P, setup.Q_inv, t.xi[bad_dyn], Mo, setup.g_o, elim, rows[bad_dyn])
-            dynamic._put(rows[bad_dyn], result)
+            J_u, xi, count = t.J_u[bad_dyn], t.xi[bad_dyn], int(bad_dyn.sum())
+            if backlog is not None:
+                W, Mo = _per_row(W, count, 3), _per_row(Mo, count, 2)
+                backlog.dynamic.append((rows[bad_dyn], J_u, W, P, xi, Mo, elim))
+            else:
+                result = _dynamic_svd(J_u, W, P, setup.Q_inv, xi, Mo, setup.g_o, elim, rows[bad_dyn])
+                dynamic._put(rows[bad_dyn], result)
         svd_rows |= bad_dyn
     return svd_rows
+
+
+def _per_row(A: np.ndarray, count: int, ndim: int) -> np.ndarray:
+    """``count`` rows of A: a per-row array (``ndim`` dimensions) as it is, a constant repeated."""
+    return A if A.ndim == ndim else np.broadcast_to(A, (count, *A.shape))
+
+
+def _same_limits(items: list[tuple]):
+    """Concatenate consecutive queued items (tuples of per-row arrays, then their limits) that
+    share limits; yields (per-row arrays..., limits)."""
+    start = 0
+    for end in range(1, len(items) + 1):
+        if end == len(items) or not np.array_equal(items[end][-1], items[start][-1]):
+            group = items[start:end]
+            fields = zip(*(item[:-1] for item in group))
+            yield (*(np.concatenate(f) for f in fields), group[0][-1])
+            start = end
+
+
+class _SvdBacklog:
+    """Rows of several chunks left to the SVD path, computed together by :meth:`flush`: the
+    stacked SVD path costs about as much for one row as for fifty (NumPy's per-call overhead),
+    and only a few rows per thousand need it."""
+
+    def __init__(self, setup: BatchSetup):
+        self.setup = setup
+        self.kinematic: list[tuple] = []
+        self.dynamic: list[tuple] = []
+
+    def flush(self, kinematic: EllipsoidBatch | None, dynamic: EllipsoidBatch | None) -> None:
+        """Compute the queued rows into ``kinematic`` / ``dynamic`` (one stacked call per run of
+        items with the same limits) and empty the queue."""
+        setup = self.setup
+        for rows, J_u, W, vlim in _same_limits(self.kinematic):
+            kinematic._put(rows, _kinematic_svd(J_u, W, vlim))
+        for rows, J_u, W, P, xi, Mo, elim in _same_limits(self.dynamic):
+            dynamic._put(rows, _dynamic_svd(J_u, W, P, setup.Q_inv, xi, Mo, setup.g_o, elim, rows))
+        self.kinematic.clear()
+        self.dynamic.clear()
 
 
 def kernel_available() -> bool:
@@ -1353,13 +1403,15 @@ def analyze_batch(
     kin, dyn = EllipsoidBatch.allocate(n, m), EllipsoidBatch.allocate(n, m)
     svd_rows = np.zeros(n, dtype=bool)
     pos = np.zeros((n, setup.k, 3)) if setup.need_positions else None
+    backlog = _SvdBacklog(setup)
     for start, t in iter_terms(setup, qs, chunk_size):
         stop = start + t.n
         svd_rows[start:stop] = ellipsoids_from_terms(
-            setup, t, decoupled=decoupled, kinematic=kin, dynamic=dyn, offset=start, method=method
+            setup, t, decoupled=decoupled, kinematic=kin, dynamic=dyn, offset=start, method=method, backlog=backlog
         )
         if pos is not None:
             pos[start:stop] = t.positions
+    backlog.flush(kin, dyn)
     return BatchAnalysis(
         robot=robot,
         qs=qs,
