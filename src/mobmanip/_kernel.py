@@ -45,11 +45,12 @@ def _cholesky(A, L, n):
             return False
         d = np.sqrt(s)
         L[j, j] = d
+        inv_d = 1.0 / d  # one division per column, as LAPACK's dpotf2
         for i in range(j + 1, n):
             s = A[i, j]
             for p in range(j):
                 s -= L[i, p] * L[j, p]
-            L[i, j] = s / d
+            L[i, j] = s * inv_d
         for i in range(j):
             L[i, j] = 0.0
     return True
@@ -395,6 +396,20 @@ def _eigh_pair(V1, d1, e1, V2, d2, e2, n, want1, want2):
 
 
 @_jit
+def _eigen_inverse(V, lam, out, work, n):
+    """out = V diag(lam)^-1 V^T (V's columns the eigenvectors of lam); work is (n,)."""
+    for r in range(n):
+        work[r] = 1.0 / lam[r]
+    for p in range(n):
+        for q in range(p, n):
+            s = 0.0
+            for r in range(n):
+                s += V[p, r] * V[q, r] * work[r]
+            out[p, q] = s
+            out[q, p] = s
+
+
+@_jit
 def _eigh(V, d, e, n):
     """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
     as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
@@ -532,6 +547,7 @@ def run_chunk(
     Vd = np.zeros((m, m))
     lamd = np.zeros(m)
     ed = np.zeros(m)
+    ework = np.zeros(m)
     sol = np.zeros((km, m))
     tmp = np.zeros((km, m))
     JpWt = np.zeros((nx, m))
@@ -893,12 +909,7 @@ def run_chunk(
                     kin_semi[i, p] = np.sqrt(lamk[src])
                     for q in range(m):
                         kin_axes[i, p, q] = Vk[q, src]
-                for p in range(m):
-                    for q in range(m):
-                        s = 0.0
-                        for r in range(m):
-                            s += Vk[p, r] * Vk[q, r] / lamk[r]
-                        kin_matrix[i, p, q] = s
+                _eigen_inverse(Vk, lamk, kin_matrix[i], ework, m)
 
         # ---------------- dynamic ellipsoid: certificate, semi-axes, centre ----------------
         if dyn_go:
@@ -914,12 +925,7 @@ def run_chunk(
             for j in range(nx):
                 for q in range(m):
                     lam_rq[q] += LV[j, q] * LV[j, q]
-            for p in range(m):
-                for q in range(m):
-                    s = 0.0
-                    for r in range(m):
-                        s += Vd[p, r] * Vd[q, r] / lam_rq[r]
-                    Hinv[p, q] = s
+            _eigen_inverse(Vd, lam_rq, Hinv, ework, m)
             # centre: normal equations, then one refinement step
             for p in range(m):
                 s = 0.0
@@ -999,9 +1005,10 @@ def run_chunk(
                         dyn_semi[i, p] = np.sqrt(rho2 / lam_rq[src])
                         for q in range(m):
                             dyn_axes[i, p, q] = Vd[q, src]
+                    inv_rho2 = 1.0 / rho2
                     for p in range(m):
                         for q in range(m):
-                            dyn_matrix[i, p, q] = H[p, q] / rho2
+                            dyn_matrix[i, p, q] = H[p, q] * inv_rho2
 
         # ---------------- terms, where the caller needs them ----------------
         if all_terms or (want_kin and not kin_ok[i]) or (want_dyn and not dyn_ok[i]):
