@@ -30,6 +30,9 @@ from numba import njit
 _EPS = float(np.finfo(float).eps)
 _TOL = 1e-9  # mobmanip.batch.FAST_PATH_TOLERANCE
 _FAST_LIMIT = 1e6  # 1e-2 / mobmanip.batch._FAST_RTOL
+# kappa(J J^T) up to which the dynamic path first tries J^+ W^T without refinement: its error
+# bound 8 eps kappa aniso then passes _TOL for ellipsoids up to aniso = 100 (most of them)
+_KAPPA_PLAIN = _TOL / (8.0 * _EPS * 100.0)
 
 _jit = njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "nsz"})
 
@@ -115,6 +118,20 @@ def _stacked_gram(J, G, rows, row_arm, pair_cols, n_pair_cols):
                 s += J[p, j] * J[q, j]
             G[p, q] = s
             G[q, p] = s
+
+
+@_jit
+def _add_jt_product(J, Y, out, rows, cols, row_arm, arm_cols, n_arm_cols):
+    """out += J^T Y for the first ``rows`` rows of a stacked Jacobian J (row p belongs to arm
+    row_arm[p] and is zero outside arm_cols[row_arm[p]]) and Y (rows, cols)."""
+    for p in range(rows):
+        arm = row_arm[p]
+        arm_c = arm_cols[arm]
+        for t in range(n_arm_cols[arm]):
+            j = arm_c[t]
+            jpj = J[p, j]
+            for q in range(cols):
+                out[j, q] += jpj * Y[p, q]
 
 
 @_jit
@@ -781,234 +798,229 @@ def run_chunk(
                 z_norm = np.sqrt(_fro2(Z, m, km))
             _gram_twice(G, B, Vk, m, nx)
 
-        # ---------------- dynamic ellipsoid: L, H = L^T L ----------------
+        # The refinement of J^+ W^T is skipped where J J^T is so well conditioned that the
+        # certificate will most likely accept the plain solution; a row it then rejects is
+        # computed again, refined.
         dyn_ok[i] = False
         dyn_go = want_dyn and grasp_ok and kappa < 1e12
-        if dyn_go:
-            # J^+ W^T = J^T (J J^T)^-1 W^T, then one refinement step with the residual
-            for p in range(km):
-                for q in range(m):
-                    tmp[p, q] = Wi[q, p]
-            for q in range(nx):
-                for r in range(m):
-                    JpWt[q, r] = 0.0
-            for step in range(2):
-                # sol = Li^T (Li tmp)
+        refine = not (kappa <= _KAPPA_PLAIN)
+        for attempt in range(2):
+            # ---------------- dynamic ellipsoid: L, H = L^T L ----------------
+            if dyn_go:
+                # J^+ W^T = J^T (J J^T)^-1 W^T, with one refinement step by the residual if asked
                 for p in range(km):
                     for q in range(m):
-                        sol[p, q] = 0.0
-                    for r in range(p + 1):
-                        lpr = Li[p, r]
+                        tmp[p, q] = Wi[q, p]
+                for q in range(nx):
+                    for r in range(m):
+                        JpWt[q, r] = 0.0
+                for step in range(2 if refine else 1):
+                    # sol = Li^T (Li tmp)
+                    for p in range(km):
                         for q in range(m):
-                            sol[p, q] += lpr * tmp[r, q]
+                            sol[p, q] = 0.0
+                        for r in range(p + 1):
+                            lpr = Li[p, r]
+                            for q in range(m):
+                                sol[p, q] += lpr * tmp[r, q]
+                    for p in range(km):
+                        for q in range(m):
+                            s = 0.0
+                            for r in range(p, km):
+                                s += Li[r, p] * sol[r, q]
+                            tmp[p, q] = s
+                    _add_jt_product(Ju, tmp, JpWt, km, m, row_arm, arm_cols, n_arm_cols)  # JpWt += J_u^T sol
+                    if refine and step == 0:
+                        for p in range(km):
+                            cols = arm_cols[row_arm[p]]
+                            ncol = n_arm_cols[row_arm[p]]
+                            for q in range(m):
+                                s = Wi[q, p]
+                                for t in range(ncol):
+                                    j = cols[t]
+                                    s -= Ju[p, j] * JpWt[j, q]
+                                tmp[p, q] = s
+                # Lambda = P J^+ W^T + J^T (T^T M_o)
                 for p in range(km):
                     for q in range(m):
                         s = 0.0
-                        for r in range(p, km):
-                            s += Li[r, p] * sol[r, q]
-                        tmp[p, q] = s
-                # JpWt += J_u^T sol
+                        for r in range(m):
+                            s += T[r, p] * Moi[r, q]
+                        TMo[p, q] = s
+                for j in range(nx):
+                    for q in range(m):
+                        Lam[j, q] = 0.0
+                    for t in range(Pz_ptr[j], Pz_ptr[j + 1]):
+                        l_ = Pz_idx[t]
+                        if decouple_eta > 0 and ((j < decouple_eta) != (l_ < decouple_eta)):
+                            continue
+                        pjl = Pi[j, l_]
+                        for q in range(m):
+                            Lam[j, q] += pjl * JpWt[l_, q]
+                _add_jt_product(Ju, TMo, Lam, km, m, row_arm, arm_cols, n_arm_cols)
+                for p in range(km):
+                    s = 0.0
+                    for q in range(m):
+                        s += T[q, p] * g_o[q]
+                    Wpg[p] = s
+                for j in range(nx):
+                    mu[j] = -xi_i[j]
                 for p in range(km):
                     cols = arm_cols[row_arm[p]]
                     ncol = n_arm_cols[row_arm[p]]
+                    wp = Wpg[p]
                     for t in range(ncol):
                         j = cols[t]
-                        jpj = Ju[p, j]
+                        mu[j] += Ju[p, j] * wp
+                if has_q:
+                    for j in range(nx):
                         for q in range(m):
-                            JpWt[j, q] += jpj * tmp[p, q]
-                if step == 0:
-                    for p in range(km):
-                        cols = arm_cols[row_arm[p]]
-                        ncol = n_arm_cols[row_arm[p]]
+                            s = 0.0
+                            for l_ in range(nx):
+                                s += Q_inv[j, l_] * Lam[l_, q]
+                            Lam2[j, q] = s
+                        s = 0.0
+                        for l_ in range(nx):
+                            s += Q_inv[j, l_] * mu[l_]
+                        mu2v[j] = s
+                    for j in range(nx):
+                        mu[j] = mu2v[j]
                         for q in range(m):
-                            s = Wi[q, p]
-                            for t in range(ncol):
-                                j = cols[t]
-                                s -= Ju[p, j] * JpWt[j, q]
-                            tmp[p, q] = s
-            # Lambda = P J^+ W^T + J^T (T^T M_o)
-            for p in range(km):
-                for q in range(m):
-                    s = 0.0
-                    for r in range(m):
-                        s += T[r, p] * Moi[r, q]
-                    TMo[p, q] = s
-            for j in range(nx):
-                for q in range(m):
-                    Lam[j, q] = 0.0
-                for t in range(Pz_ptr[j], Pz_ptr[j + 1]):
-                    l_ = Pz_idx[t]
-                    if decouple_eta > 0 and ((j < decouple_eta) != (l_ < decouple_eta)):
-                        continue
-                    pjl = Pi[j, l_]
+                            Lam[j, q] = Lam2[j, q]
+                for j in range(nx):
+                    zj = 1.0 / elim[j]
+                    mub[j] = mu[j] * zj
                     for q in range(m):
-                        Lam[j, q] += pjl * JpWt[l_, q]
-            for p in range(km):
-                cols = arm_cols[row_arm[p]]
-                ncol = n_arm_cols[row_arm[p]]
-                for t in range(ncol):
-                    j = cols[t]
-                    jpj = Ju[p, j]
-                    for q in range(m):
-                        Lam[j, q] += jpj * TMo[p, q]
-            for p in range(km):
-                s = 0.0
-                for q in range(m):
-                    s += T[q, p] * g_o[q]
-                Wpg[p] = s
-            for j in range(nx):
-                mu[j] = -xi_i[j]
-            for p in range(km):
-                cols = arm_cols[row_arm[p]]
-                ncol = n_arm_cols[row_arm[p]]
-                wp = Wpg[p]
-                for t in range(ncol):
-                    j = cols[t]
-                    mu[j] += Ju[p, j] * wp
-            if has_q:
+                        L[j, q] = Lam[j, q] * zj
+                _gram_twice(L.T, H, Vd, m, nx)
+
+            # ---------------- both eigenproblems, in lockstep ----------------
+            kin_eig, dyn_eig = _eigh_pair(Vk, lamk, ek, Vd, lamd, ed, m, kin_go and attempt == 0, dyn_go)
+
+            # ---------------- kinematic ellipsoid: certificate, semi-axes ----------------
+            if kin_go and attempt == 0:
+                eig_ok = kin_eig
+                lmin = lamk[0]
+                lmax = lamk[m - 1]
+                gen_norm = z_norm * np.sqrt(_fro2(Jh, km, nx)) * np.sqrt(_fro2(G, m, nx))
+                err = 8.0 * _EPS * (gen_norm + np.sqrt(_fro2(B, m, m)))
+                err += second
+                est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
+                ok = eig_ok and not hard and lmin > 1e-12 * lmax and lmin > 0.0 and np.isfinite(est) and est <= _TOL
+                if ok:
+                    kin_ok[i] = True
+                    for p in range(m):
+                        kin_center[i, p] = 0.0
+                        src = m - 1 - p
+                        kin_semi[i, p] = np.sqrt(lamk[src])
+                        for q in range(m):
+                            kin_axes[i, p, q] = Vk[q, src]
+                    _eigen_inverse(Vk, lamk, kin_matrix[i], ework, m)
+
+            # ---------------- dynamic ellipsoid: certificate, semi-axes, centre ----------------
+            if dyn_go:
+                eig_ok = dyn_eig
                 for j in range(nx):
                     for q in range(m):
                         s = 0.0
-                        for l_ in range(nx):
-                            s += Q_inv[j, l_] * Lam[l_, q]
-                        Lam2[j, q] = s
-                    s = 0.0
-                    for l_ in range(nx):
-                        s += Q_inv[j, l_] * mu[l_]
-                    mu2v[j] = s
+                        for p in range(m):
+                            s += L[j, p] * Vd[p, q]
+                        LV[j, q] = s
+                for q in range(m):
+                    lam_rq[q] = 0.0
                 for j in range(nx):
-                    mu[j] = mu2v[j]
                     for q in range(m):
-                        Lam[j, q] = Lam2[j, q]
-            for j in range(nx):
-                zj = 1.0 / elim[j]
-                mub[j] = mu[j] * zj
-                for q in range(m):
-                    L[j, q] = Lam[j, q] * zj
-            _gram_twice(L.T, H, Vd, m, nx)
-
-        # ---------------- both eigenproblems, in lockstep ----------------
-        kin_eig, dyn_eig = _eigh_pair(Vk, lamk, ek, Vd, lamd, ed, m, kin_go, dyn_go)
-
-        # ---------------- kinematic ellipsoid: certificate, semi-axes ----------------
-        if kin_go:
-            eig_ok = kin_eig
-            lmin = lamk[0]
-            lmax = lamk[m - 1]
-            err = (
-                8.0 * _EPS * (z_norm * np.sqrt(_fro2(Jh, km, nx)) * np.sqrt(_fro2(G, m, nx)) + np.sqrt(_fro2(B, m, m)))
-            )
-            err += second
-            est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
-            ok = eig_ok and not hard and lmin > 1e-12 * lmax and lmin > 0.0 and np.isfinite(est) and est <= _TOL
-            if ok:
-                kin_ok[i] = True
+                        lam_rq[q] += LV[j, q] * LV[j, q]
+                _eigen_inverse(Vd, lam_rq, Hinv, ework, m)
+                # centre: normal equations, then one refinement step
                 for p in range(m):
-                    kin_center[i, p] = 0.0
-                    src = m - 1 - p
-                    kin_semi[i, p] = np.sqrt(lamk[src])
-                    for q in range(m):
-                        kin_axes[i, p, q] = Vk[q, src]
-                _eigen_inverse(Vk, lamk, kin_matrix[i], ework, m)
-
-        # ---------------- dynamic ellipsoid: certificate, semi-axes, centre ----------------
-        if dyn_go:
-            eig_ok = dyn_eig
-            for j in range(nx):
-                for q in range(m):
                     s = 0.0
-                    for p in range(m):
-                        s += L[j, p] * Vd[p, q]
-                    LV[j, q] = s
-            for q in range(m):
-                lam_rq[q] = 0.0
-            for j in range(nx):
-                for q in range(m):
-                    lam_rq[q] += LV[j, q] * LV[j, q]
-            _eigen_inverse(Vd, lam_rq, Hinv, ework, m)
-            # centre: normal equations, then one refinement step
-            for p in range(m):
-                s = 0.0
+                    for j in range(nx):
+                        s += L[j, p] * mub[j]
+                    yv[p] = s
+                for p in range(m):
+                    s = 0.0
+                    for q in range(m):
+                        s += Hinv[p, q] * yv[q]
+                    cv[p] = -s
+                for p in range(m):
+                    yv[p] = 0.0
                 for j in range(nx):
-                    s += L[j, p] * mub[j]
-                yv[p] = s
-            for p in range(m):
-                s = 0.0
-                for q in range(m):
-                    s += Hinv[p, q] * yv[q]
-                cv[p] = -s
-            for p in range(m):
-                yv[p] = 0.0
-            for j in range(nx):
-                s = mub[j]
-                for p in range(m):
-                    s += L[j, p] * cv[p]
-                for p in range(m):
-                    yv[p] += L[j, p] * s
-            for p in range(m):
-                s = 0.0
-                for q in range(m):
-                    s += Hinv[p, q] * yv[q]
-                cv[p] -= s
-            outside2 = 0.0
-            mub2 = 0.0
-            for j in range(nx):
-                s = mub[j]
-                for p in range(m):
-                    s += L[j, p] * cv[p]
-                outside2 += s * s
-                mub2 += mub[j] * mub[j]
-            rho2 = 1.0 - outside2
-            lmin = lam_rq.min()
-            lmax = lam_rq.max()
-            aniso = np.sqrt(lmax / lmin)
-            err_l = 8.0 * _EPS * (1.0 + np.sqrt(kappa) + _EPS * kappa * kappa) * aniso
-            err_rho2 = 2.0 * np.sqrt(outside2 * mub2) * err_l + 8.0 * _EPS * mub2
-            c_norm = 0.0
-            for p in range(m):
-                c_norm += cv[p] * cv[p]
-            c_norm = np.sqrt(c_norm)
-            scale = max(np.sqrt(abs(rho2) / lmin), c_norm)
-            err_c = err_l * (c_norm + np.sqrt(outside2 / lmin)) / scale
-            ok = (
-                eig_ok
-                and lmin > 0.0
-                and np.isfinite(aniso)
-                and aniso < _FAST_LIMIT
-                and err_l <= _TOL
-                and err_c <= _TOL
-                and err_rho2 <= 2.0 * _TOL * abs(rho2)
-            )
-            if ok:
-                dyn_ok[i] = True
-                for p in range(m):
-                    dyn_center[i, p] = cv[p]
-                if rho2 <= 0.0:
-                    dyn_empty[i] = True
+                    s = mub[j]
                     for p in range(m):
-                        dyn_semi[i, p] = 0.0
-                        for q in range(m):
-                            dyn_axes[i, p, q] = 1.0 if p == q else 0.0
-                            dyn_matrix[i, p, q] = 0.0
-                else:
-                    dyn_empty[i] = False
-                    # ascending Rayleigh quotient = descending semi-axis
+                        s += L[j, p] * cv[p]
                     for p in range(m):
-                        order[p] = p
-                    for p in range(1, m):
-                        j = p
-                        while j > 0 and lam_rq[order[j - 1]] > lam_rq[order[j]]:
-                            order[j - 1], order[j] = order[j], order[j - 1]
-                            j -= 1
+                        yv[p] += L[j, p] * s
+                for p in range(m):
+                    s = 0.0
+                    for q in range(m):
+                        s += Hinv[p, q] * yv[q]
+                    cv[p] -= s
+                outside2 = 0.0
+                mub2 = 0.0
+                for j in range(nx):
+                    s = mub[j]
                     for p in range(m):
-                        src = order[p]
-                        dyn_semi[i, p] = np.sqrt(rho2 / lam_rq[src])
-                        for q in range(m):
-                            dyn_axes[i, p, q] = Vd[q, src]
-                    inv_rho2 = 1.0 / rho2
+                        s += L[j, p] * cv[p]
+                    outside2 += s * s
+                    mub2 += mub[j] * mub[j]
+                rho2 = 1.0 - outside2
+                lmin = lam_rq.min()
+                lmax = lam_rq.max()
+                aniso = np.sqrt(lmax / lmin)
+                # J^+ W^T's relative error: eps kappa(J)^2 as solved, eps (kappa(J) + eps kappa(J)^4) refined
+                j_err = np.sqrt(kappa) + _EPS * kappa * kappa if refine else kappa
+                err_l = 8.0 * _EPS * (1.0 + j_err) * aniso
+                err_rho2 = 2.0 * np.sqrt(outside2 * mub2) * err_l + 8.0 * _EPS * mub2
+                c_norm = 0.0
+                for p in range(m):
+                    c_norm += cv[p] * cv[p]
+                c_norm = np.sqrt(c_norm)
+                scale = max(np.sqrt(abs(rho2) / lmin), c_norm)
+                err_c = err_l * (c_norm + np.sqrt(outside2 / lmin)) / scale
+                ok = (
+                    eig_ok
+                    and lmin > 0.0
+                    and np.isfinite(aniso)
+                    and aniso < _FAST_LIMIT
+                    and err_l <= _TOL
+                    and err_c <= _TOL
+                    and err_rho2 <= 2.0 * _TOL * abs(rho2)
+                )
+                if ok:
+                    dyn_ok[i] = True
                     for p in range(m):
-                        for q in range(m):
-                            dyn_matrix[i, p, q] = H[p, q] * inv_rho2
+                        dyn_center[i, p] = cv[p]
+                    if rho2 <= 0.0:
+                        dyn_empty[i] = True
+                        for p in range(m):
+                            dyn_semi[i, p] = 0.0
+                            for q in range(m):
+                                dyn_axes[i, p, q] = 1.0 if p == q else 0.0
+                                dyn_matrix[i, p, q] = 0.0
+                    else:
+                        dyn_empty[i] = False
+                        # ascending Rayleigh quotient = descending semi-axis
+                        for p in range(m):
+                            order[p] = p
+                        for p in range(1, m):
+                            j = p
+                            while j > 0 and lam_rq[order[j - 1]] > lam_rq[order[j]]:
+                                order[j - 1], order[j] = order[j], order[j - 1]
+                                j -= 1
+                        for p in range(m):
+                            src = order[p]
+                            dyn_semi[i, p] = np.sqrt(rho2 / lam_rq[src])
+                            for q in range(m):
+                                dyn_axes[i, p, q] = Vd[q, src]
+                        inv_rho2 = 1.0 / rho2
+                        for p in range(m):
+                            for q in range(m):
+                                dyn_matrix[i, p, q] = H[p, q] * inv_rho2
+
+            if not dyn_go or dyn_ok[i] or refine:
+                break
+            refine = True
 
         # ---------------- terms, where the caller needs them ----------------
         if all_terms or (want_kin and not kin_ok[i]) or (want_dyn and not dyn_ok[i]):
