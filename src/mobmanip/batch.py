@@ -570,21 +570,20 @@ def _pinocchio_pass(setup: BatchSetup, qs: np.ndarray, ws: _Workspace, n: int) -
     joint Jacobians in ``data.J``."""
     probed = setup.probed
     model, data = probed.model, probed.data
-    qa, Ja, Ma = ws.q, ws.Ja, ws.Ma
-    qa[:n, probed.qmap] = qs[:n]
+    ws.q[:n, probed.qmap] = qs[:n]
+    rows = zip(ws.q_rows[:n], ws.M_rows[:n], ws.J_rows[:n])  # views made once: cheaper than indexing
     crba = pin.crba
     if _WORLD is None:  # an older Pinocchio: one more call
         jacobians = pin.computeJointJacobians
-        for i in range(n):
-            q = qa[i]
-            Ma[i] = crba(model, data, q)
-            Ja[i] = jacobians(model, data, q)
+        for q, M, Jw in rows:
+            M[...] = crba(model, data, q)
+            Jw[...] = jacobians(model, data, q)
         return
     J = data.J  # a view of Pinocchio's buffer, refreshed by every crba call below
     world = _WORLD
-    for i in range(n):
-        Ma[i] = crba(model, data, qa[i], world)
-        Ja[i] = J
+    for q, M, Jw in rows:
+        M[...] = crba(model, data, q, world)
+        Jw[...] = J
 
 
 _WORLD = getattr(getattr(pin, "Convention", None), "WORLD", None)
@@ -614,6 +613,7 @@ class _Workspace:
         self.Ma = np.zeros((n, probed.nv, probed.nv))
         self.Ja = np.zeros((n, 6, probed.nv))
         self.pos = np.zeros((n, setup.k, 3))
+        self.q_rows, self.M_rows, self.J_rows = list(self.q), list(self.Ma), list(self.Ja)
 
 
 def _terms(setup: BatchSetup, qs: np.ndarray, ws: _Workspace) -> _Terms:
