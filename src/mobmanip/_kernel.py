@@ -104,20 +104,25 @@ def _fro2(A, rows, cols):
 
 
 @_jit
-def _stacked_gram(J, G, rows, row_arm, pair_cols, n_pair_cols):
-    """G = J J^T for the first ``rows`` rows of a stacked Jacobian (row p belongs to arm
-    row_arm[p]), summing only over the columns both rows' arms can move."""
+def _stacked_grams(J, w, G, Gw, rows, row_arm, pair_cols, n_pair_cols):
+    """G = J J^T and Gw = J diag(w) J^T for the first ``rows`` rows of a stacked Jacobian (row p
+    belongs to arm row_arm[p]), summing only over the columns both rows' arms can move."""
     for p in range(rows):
         ap = row_arm[p]
         for q in range(p, rows):
             aq = row_arm[q]
             cols = pair_cols[ap, aq]
             s = 0.0
+            sw = 0.0
             for t in range(n_pair_cols[ap, aq]):
                 j = cols[t]
-                s += J[p, j] * J[q, j]
+                x = J[p, j] * J[q, j]
+                s += x
+                sw += x * w[j]
             G[p, q] = s
             G[q, p] = s
+            Gw[p, q] = sw
+            Gw[q, p] = sw
 
 
 @_jit
@@ -186,8 +191,9 @@ def _tridiagonalize(V, d, e, n):
                 V[i, j] = 0.0
                 V[j, i] = 0.0
         else:
+            inv_scale = 1.0 / scale
             for k in range(i):
-                d[k] /= scale
+                d[k] *= inv_scale
                 h += d[k] * d[k]
             f = d[i - 1]
             g = math.sqrt(h)
@@ -207,8 +213,9 @@ def _tridiagonalize(V, d, e, n):
                     e[k] += V[k, j] * f
                 e[j] = g
             f = 0.0
+            inv_h = 1.0 / h
             for j in range(i):
-                e[j] /= h
+                e[j] *= inv_h
                 f += e[j] * d[j]
             hh = f / (h + h)
             for j in range(i):
@@ -226,8 +233,9 @@ def _tridiagonalize(V, d, e, n):
         V[i, i] = 1.0
         h = d[i + 1]
         if h != 0.0:
+            inv_h = 1.0 / h
             for k in range(i + 1):
-                d[k] = V[k, i + 1] / h
+                d[k] = V[k, i + 1] * inv_h
             for j in range(i + 1):
                 g = 0.0
                 for k in range(i + 1):
@@ -441,6 +449,8 @@ def _eigh(V, d, e, n):
 
 @_jit
 def run_chunk(
+    k_tuple,
+    m_tuple,
     Jw,
     M,
     vmap,
@@ -495,6 +505,9 @@ def run_chunk(
 ):
     """Terms and both fast-path ellipsoids for every row of a chunk (see the module docstring).
 
+    k_tuple and m_tuple are tuples (of zeros, say) as long as the number of end effectors
+    (``pos.shape[1]``) and the task dimension (``task_rows.shape[0]``).
+
     Inputs per row i, from the probed model of :class:`mobmanip.batch.ProbedModel`: Jw[i]
     (6, nv_p) world joint Jacobian and M[i] (nv_p, nv_p) (upper triangle read), where the
     robot's degrees of freedom are columns vmap (nv,), generalized gravity is ``gravity`` times
@@ -516,8 +529,11 @@ def run_chunk(
     """
     n = Jw.shape[0]
     nv = vmap.shape[0]
-    k = pos.shape[1]
-    m = task_rows.shape[0]
+    # The arm count and task dimension come as the lengths of tuples, which Numba compiles in
+    # as constants (one specialisation per pair): the many short loops over them then unroll,
+    # about 1.5 us per TIAGo++ configuration.
+    k = len(k_tuple)
+    m = len(m_tuple)
     nx = S_ptr.shape[0] - 1
     km = k * m
     c = km - m
@@ -583,6 +599,7 @@ def run_chunk(
     Hinv = np.zeros((m, m))
     yv = np.zeros(m)
     cv = np.zeros(m)
+    vlim2 = vlim * vlim
     row_arm = np.zeros(km, np.uint64)
     for p in range(km):
         row_arm[p] = p // m
@@ -710,7 +727,7 @@ def run_chunk(
                     Cb[p, a * m + q] = -(Kb[a, p, q] - Kb[k - 1, p, q] + (1.0 if p == q else 0.0))
 
         # ---------------- Gram of J_u: Cholesky, kappa ----------------
-        _stacked_gram(Ju, Gu, km, row_arm, pair_cols, n_pair_cols)
+        _stacked_grams(Ju, vlim2, Gu, Gk, km, row_arm, pair_cols, n_pair_cols)  # Gk = J_hat J_hat^T
         gram_ok = _cholesky(Gu, Lg, km)
         if gram_ok:
             inv_norm = _lower_inverse(Lg, Li, km)
@@ -739,7 +756,6 @@ def run_chunk(
                         G[p, j] = Jh[p, j]
                 z_norm = 1.0
             else:
-                _stacked_gram(Jh, Gk, km, row_arm, pair_cols, n_pair_cols)
                 # GC = G_k C, KK = C^T G_k C, X = (G_k C)^T T^T
                 for p in range(km):
                     for q in range(c):

@@ -1279,6 +1279,8 @@ def _kernel_fast(
     ptr, idx, val = setup.S_csc
     probed = setup.probed
     _kernel_module().run_chunk(
+        (0,) * k,  # sizes as tuple lengths: compile-time constants for the kernel
+        (0,) * m,
         t.Ja,
         t.Ma,
         probed.vmap,
