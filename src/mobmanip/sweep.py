@@ -257,12 +257,13 @@ def _manipulability(arm: PlanarArm, theta2: np.ndarray, theta3: np.ndarray) -> n
     Column i of J is +-e_z x (tip - p_i); by Cauchy-Binet det(J J^T) is the sum of the squared
     2 x 2 minors, i.e. of the squared cross products of the vectors tip - p_i.
     """
-    zeros = np.zeros_like(theta2)
-    tip = arm.tip(np.stack([zeros, theta2, theta3], axis=-1))
+    a1, a2, a3 = arm.links
+    c2, s2 = np.cos(theta2), np.sin(theta2)
     phi = theta2 + theta3
-    a3 = arm.links[2]
-    last = np.stack([np.cos(phi) * a3[0] - np.sin(phi) * a3[1], np.sin(phi) * a3[0] + np.cos(phi) * a3[1]], axis=-1)
-    cols = (tip, tip - arm.links[0], last)  # tip - p_1, tip - p_2, tip - p_3
+    c3, s3 = np.cos(phi), np.sin(phi)
+    last = np.stack([c3 * a3[0] - s3 * a3[1], s3 * a3[0] + c3 * a3[1]], axis=-1)  # tip - p_3
+    middle = np.stack([c2 * a2[0] - s2 * a2[1], s2 * a2[0] + c2 * a2[1]], axis=-1) + last  # tip - p_2
+    cols = (a1 + middle, middle, last)  # tip - p_1 (arm.tip at q1 = 0), tip - p_2, tip - p_3
     det = np.zeros_like(theta2)
     for i in range(3):
         for j in range(i + 1, 3):
