@@ -300,3 +300,21 @@ def test_saving_to_a_missing_directory_is_an_output_error(tmp_path):
         with pytest.raises(OutputError, match=name):
             save(tmp_path / "missing" / name)
     assert not (tmp_path / "missing").exists()
+
+
+def test_posture_table_is_the_same_spread_over_workers():
+    """run_sweep spreads the posture search over its executor in slices of distances: every
+    distance's posture is searched on its own, so the table is identical."""
+    import concurrent.futures as cf
+
+    from mobmanip.sweep import posture_table
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    distances = np.linspace(0.2, 1.6, 37)  # some out of reach
+    alone = posture_table(robot, distances)
+    with cf.ProcessPoolExecutor(max_workers=2) as pool:
+        spread = posture_table(robot, distances, pool.map)
+    np.testing.assert_array_equal(spread.reachable, alone.reachable)
+    np.testing.assert_array_equal(spread.right, alone.right)
+    np.testing.assert_array_equal(spread.left, alone.left)
+    assert 0 < alone.reachable.sum() < len(distances)

@@ -42,7 +42,9 @@ executor or the number of workers: chunk boundaries are fixed by ``chunk_size``.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import csv
+import functools
 import math
 import multiprocessing
 import os
@@ -403,8 +405,11 @@ class PostureTable:
         return np.stack(columns, axis=1), reachable
 
 
-def posture_table(robot: Robot, distances: Sequence[float]) -> PostureTable:
+def posture_table(robot: Robot, distances: Sequence[float], map_fn=map) -> PostureTable:
     """Postures of both arms (arm 1 bending right, arm 2 its mirror image) at each distance.
+
+    ``map_fn`` (e.g. an executor's ``map``) runs the search on slices of the distances; each
+    distance's posture is found independently, so the result does not depend on it.
 
     Raises:
         SpecError: not a robot with two planar 3-joint arms sharing their first joint's position.
@@ -417,16 +422,23 @@ def posture_table(robot: Robot, distances: Sequence[float]) -> PostureTable:
     if np.max(np.abs(arms[0].base - arms[1].base)) > 1e-9:
         raise SpecError(f"sweeps need both arms of {robot.name!r} to share their first joint's (x, y) position")
     mirror = np.allclose(arms[0].links, arms[1].links, atol=1e-12) and np.array_equal(arms[0].signs, arms[1].signs)
-    right_all = postures_at_reaches(arms[0], distances, bend=1)
+    right_all = _postures_mapped(map_fn, arms[0], distances, 1)
     if mirror:
         left_all = right_all * np.array([-1.0, -1.0, 1.0, -1.0])
     else:
-        left_all = postures_at_reaches(arms[1], distances, bend=-1)
+        left_all = _postures_mapped(map_fn, arms[1], distances, -1)
     reachable = np.isfinite(right_all[:, 2]) & np.isfinite(left_all[:, 2])
     right = np.where(reachable[:, None], right_all[:, [0, 1, 3]], np.nan)
     left = np.where(reachable[:, None], left_all[:, [0, 1, 3]], np.nan)
     names = tuple(name for arm in robot.arms for name in arm.joint_names)
     return PostureTable(reachable, right, left, np.array([arms[0].signs[0], arms[1].signs[0]]), names)
+
+
+def _postures_mapped(map_fn, arm: PlanarArm, distances, bend: int, pieces: int = 8) -> np.ndarray:
+    """:func:`postures_at_reaches` over ``pieces`` slices of the distances, through ``map_fn``."""
+    parts = np.array_split(np.asarray(distances, dtype=float).reshape(-1), pieces)
+    results = list(map_fn(functools.partial(postures_at_reaches, arm, bend=bend), parts))
+    return np.concatenate(results, axis=0)
 
 
 @dataclass(frozen=True)
@@ -453,7 +465,7 @@ def _posture_rows(table: IKPostureTable, first: int = 0, stop: int | None = None
 
 
 def sweep_postures(
-    robot: Robot, grid: SweepGrid, method: str = "auto", reference=None
+    robot: Robot, grid: SweepGrid, method: str = "auto", reference=None, map_fn=map
 ) -> PostureTable | IKPostureTable:
     """The arms' postures for a grid (see the module's docstring for the methods).
 
@@ -464,6 +476,8 @@ def sweep_postures(
         reference: joint positions by name for the inverse kinematics' reference posture
             (joints not named stay at home); ``None``: the spec's hold posture
             (:meth:`mobmanip.model.Robot.hold_configuration`).
+        map_fn: runs the planar posture search on slices of the distances (an executor's
+            ``map`` spreads it over workers); the result does not depend on it.
 
     Raises:
         SpecError: ``"planar"`` on a robot without two planar 3-joint arms sharing their base.
@@ -476,7 +490,7 @@ def sweep_postures(
         raise UsageError("the planar postures follow the paper's closed form; a reference posture needs postures 'ik'")
     if method != "ik" and reference is None:
         try:
-            return posture_table(robot, grid.distance)
+            return posture_table(robot, grid.distance, map_fn)
         except SpecError:
             if method == "planar":
                 raise
@@ -899,7 +913,20 @@ def run_sweep(
     task = get_task(spec.task or robot.spec.default_task)
     spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim))
     BatchSetup(robot, task.name, spec.object_mass)  # validate the object mass here, once
-    table = sweep_postures(robot, grid, spec.postures, None if spec.reference is None else dict(spec.reference))
+    n_workers = workers or default_workers()
+    with contextlib.ExitStack() as stack:
+        if executor is None and n_workers > 1:
+            executor = stack.enter_context(_local_pool(n_workers, mp_context))
+            window = 4 * n_workers
+        else:
+            window = 64
+        return _run_sweep(spec, grid, robot, task, executor, window, chunk_size, progress)
+
+
+def _run_sweep(spec, grid, robot, task, executor, window, chunk_size, progress) -> SweepResult:
+    """run_sweep with its arguments checked: in this process (``executor`` None) or on one."""
+    reference = None if spec.reference is None else dict(spec.reference)
+    table = sweep_postures(robot, grid, spec.postures, reference, map if executor is None else executor.map)
     if not np.any(table.reachable):
         raise UnreachableGridError(_unreachable_message(robot, grid, table))
     if isinstance(table, PostureTable):
@@ -923,14 +950,11 @@ def run_sweep(
         bar.update(stop - start)
 
     try:
-        if executor is None and (workers or default_workers()) == 1:
+        if executor is None:
             for job in jobs:
                 store(*_run_job(job))
-        elif executor is None:
-            with _local_pool(workers or default_workers(), mp_context) as pool:
-                _drain(pool, jobs, store, window=4 * (workers or default_workers()))
         else:
-            _drain(executor, jobs, store, window=64)
+            _drain(executor, jobs, store, window=window)
     finally:
         bar.close()
     return _assemble(spec, grid, task, merged, table)
