@@ -488,7 +488,11 @@ class ProbedModel:
         add_probes(0)
         for j in range(1, model.njoints):
             parent = new_id[model.parents[j]]
-            new_id[j] = probed.addJoint(parent, model.joints[j], model.jointPlacements[j], model.names[j])
+            try:
+                new_id[j] = probed.addJoint(parent, model.joints[j], model.jointPlacements[j], model.names[j])
+            except Exception as error:  # a joint type Pinocchio's bindings cannot copy
+                name, kind = model.names[j], model.joints[j].shortname()
+                raise ModelError(f"joint {name!r} ({kind}) cannot be copied for the batch pass: {error}") from None
             probed.appendBodyToJoint(new_id[j], model.inertias[j], pin.SE3.Identity())
             add_probes(j)
         self.vmap = np.zeros(model.nv, dtype=np.uint64)
