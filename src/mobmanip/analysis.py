@@ -156,7 +156,7 @@ def analyze(
 def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
     """The reference path: :mod:`mobmanip.dynamics` and the SVD-based :mod:`mobmanip.ellipsoids`."""
     dyn = _reduced_dynamics(robot, q, None, False)
-    J_u = frame_jacobians(robot, q, task) @ robot.S
+    J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
     positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
     obj = held_object if held_object is not None else HeldObject.between(positions, mass)
     return _assemble(robot, q, task, decoupled, J_u, dyn.P, dyn.xi, positions, obj, obj.grasp_matrix(task))

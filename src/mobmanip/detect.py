@@ -6,13 +6,14 @@ returns a :class:`~mobmanip.spec.RobotSpec` ready for :func:`mobmanip.model.load
 
 The rules:
 
-- A *drive wheel* is a continuous joint whose child link carries a cylinder about the joint
-  axis or a sphere (:func:`mobmanip.urdf.wheel_radius`), whose axis is the platform's lateral
-  (y) axis, and that no other rotating joint carries (so caster wheels, which hang on a swivel,
-  and wheels on an arm are not drive wheels). With more than two such joints, those with an
-  effort limit (driven) are preferred; if that still leaves more than two the choice is
-  ambiguous and :class:`~mobmanip.errors.WheelError` lists the candidates. The right wheel is the
-  one with the smaller lateral (y) position in the root link's frame (forward = +x).
+- A *wheel candidate* is a continuous joint whose child link carries a cylinder about the joint
+  axis or a sphere (:func:`mobmanip.urdf.wheel_radius`) and that lies on no arm's path
+  (:func:`mobmanip.platforms.wheels.wheel_candidates`). Each wheeled platform kind of
+  :data:`mobmanip.platforms.KINDS` says whether the candidates fit it (its ``detect``): e.g. a
+  differential drive is two lateral wheels on no swivel, the right one with the smaller lateral
+  (y) position in the root link's frame (forward = +x). Without an explicit platform the kind
+  that fits is taken; none fitting means a fixed platform, and a kind that fits ambiguously
+  raises :class:`~mobmanip.errors.WheelError` listing the candidates and what to add.
 - An *arm* is the actuated (revolute, continuous, prismatic) joints on the path from the root
   link to the end-effector frame, drive wheels excluded (and no joint on such a path is taken
   for a drive wheel). Joints on the path of more than one arm (a
@@ -32,11 +33,11 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from .errors import FrameNotFoundError, JointNotFoundError, SpecError, UrdfError, WheelError
+from .platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
+from .platforms.wheels import WheelCandidate, wheel_candidates
 from .resources import EXAMPLE_ROBOT_DATA_PREFIX, example_robot_data_share
-from .spec import OMNI_COORDINATES, PLATFORM_KINDS, ArmSpec, RobotSpec, WheelSpec
+from .spec import ArmSpec, RobotSpec
 from .urdf import (
     MOVING_JOINT_TYPES,
     check_supported,
@@ -46,43 +47,20 @@ from .urdf import (
     mimic_joints,
     read_urdf,
     root_link,
-    wheel_radius,
     zero_configuration_placements,
 )
 
-#: |cos| between a wheel axis and the platform's lateral axis above which the wheel counts as
-#: lateral; the same threshold the model uses when it reads the wheel axis signs.
-_LATERAL = 0.99
-
-
-@dataclass(frozen=True)
-class WheelCandidate:
-    """A continuous joint whose child link is wheel-shaped.
-
-    Attributes:
-        name: joint name.
-        radius: wheel radius from the geometry (m).
-        position: joint origin in the root link's frame at the zero configuration (m), (3,).
-        axis: joint axis in the root link's frame, (3,).
-        carried_by_rotating_joint: whether a revolute/continuous joint lies between it and the root.
-        driven: whether the URDF gives it a positive effort limit.
-    """
-
-    name: str
-    radius: float
-    position: np.ndarray
-    axis: np.ndarray
-    carried_by_rotating_joint: bool
-    driven: bool
-
-    @property
-    def lateral(self) -> bool:
-        """Whether it turns about the platform's lateral (y) axis."""
-        return abs(float(self.axis[1])) >= _LATERAL
-
-    def describe(self) -> str:
-        x, y, z = self.position
-        return f"{self.name} (r = {self.radius:g} m at x = {x:.3f}, y = {y:.3f} m)"
+__all__ = [
+    "Detection",
+    "WheelCandidate",
+    "arm_joints",
+    "detect_platform",
+    "detect_spec",
+    "parse_wheel_list",
+    "spec_from_urdf",
+    "spec_to_toml",
+    "wheel_candidates",
+]
 
 
 @dataclass(frozen=True)
@@ -102,66 +80,36 @@ class Detection:
     urdf_limits: Mapping[str, tuple[float | None, float | None]]
 
 
-def wheel_candidates(urdf) -> list[WheelCandidate]:
-    """Every continuous joint with a wheel-shaped child link, in URDF order."""
-    placements = zero_configuration_placements(urdf)
-    out = []
-    for joint in urdf.robot.joints:
-        if joint.type != "continuous":
-            continue
-        radius = wheel_radius(urdf, joint.name)
-        if radius is None:
-            continue
-        pose = placements[joint.name]
-        ancestors = joint_path(urdf, joint.parent)
-        _, effort = joint_limits(urdf, joint.name)
-        out.append(
-            WheelCandidate(
-                name=joint.name,
-                radius=radius,
-                position=pose[:3, 3].copy(),
-                axis=pose[:3, :3] @ joint_axis(joint),
-                carried_by_rotating_joint=any(j.type in ("revolute", "continuous") for j in ancestors),
-                driven=effort is not None and effort > 0.0,
-            )
-        )
-    return out
+def detect_platform(urdf, candidates, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
+    """The platform kind the wheel candidates fit, and what it found (``None``: fixed).
 
-
-def detect_wheels(urdf, path: str | Path = "URDF", exclude: Iterable[str] = ()) -> WheelSpec | None:
-    """The drive wheels of a differential drive, or ``None`` if the URDF has none.
-
-    Args:
-        urdf: the parsed URDF.
-        path: the URDF's path, for messages.
-        exclude: joints that cannot be wheels (those on the way to an end effector).
+    Every wheeled kind of :data:`mobmanip.platforms.KINDS` is asked; exactly one must fit.
 
     Raises:
-        WheelError: only one drive wheel, more than two (ambiguous; the message lists them),
-            or two at the same lateral position.
+        WheelError: no kind fits but one fits ambiguously (its message says what to add), or
+            several kinds fit (the message lists them; choose with ``--platform``).
     """
-    exclude = set(exclude)
-    candidates = [c for c in wheel_candidates(urdf) if c.name not in exclude]
-    drive = [c for c in candidates if c.lateral and not c.carried_by_rotating_joint]
-    if len(drive) > 2 and sum(c.driven for c in drive) >= 2:
-        drive = [c for c in drive if c.driven]
-    if not drive:
-        return None
-    if len(drive) != 2:
-        what = "only one drive wheel" if len(drive) == 1 else f"{len(drive)} possible drive wheels"
-        others = [c for c in candidates if c not in drive]
-        also = f"; not drive wheels: {', '.join(c.name for c in others)}" if others else ""
+    found, errors = [], []
+    for kind in KINDS.values():
+        if not kind.takes_wheels:
+            continue
+        try:
+            detected = kind.detect(urdf, candidates, str(path))
+        except WheelError as exc:
+            errors.append(exc)
+            continue
+        if detected is not None:
+            found.append((kind, detected))
+    if len(found) == 1:
+        return found[0]
+    if len(found) > 1:
         raise WheelError(
-            f"{path}: {what}: {', '.join(c.describe() for c in drive)}{also}; "
-            "name the pair explicitly (--wheels RIGHT,LEFT) or choose another platform"
+            f"{path}: the wheels fit several platform kinds ({', '.join(k.name for k, _ in found)}); "
+            "choose one with --platform"
         )
-    right, left = sorted(drive, key=lambda c: float(c.position[1]))
-    if float(left.position[1] - right.position[1]) < 1e-6:
-        raise WheelError(
-            f"{path}: wheels {right.name!r} and {left.name!r} sit at the same lateral position; "
-            "name the pair explicitly (--wheels RIGHT,LEFT)"
-        )
-    return WheelSpec(right=right.name, left=left.name)
+    if errors:
+        raise errors[0]
+    return KINDS["fixed"], None
 
 
 def _frame_link(urdf, frame: str, path: str | Path) -> str:
@@ -246,9 +194,10 @@ def detect_spec(
     Args:
         path: the URDF file.
         end_effectors: one end-effector frame per arm, arm 1 first (link or joint names).
-        wheels: ``(right, left)`` drive-wheel joints, to skip wheel detection.
-        platform: ``"differential_drive"``, ``"fixed"`` or ``"omnidirectional"``; ``None``
-            means differential drive if two drive wheels are found (or given), else fixed.
+        wheels: the platform's wheel joints (for a differential drive ``(right, left)``), to
+            skip wheel detection.
+        platform: a kind of :data:`mobmanip.platforms.KINDS`; ``None`` means the wheeled kind
+            the URDF's wheels fit (a differential drive when wheels are given), else fixed.
         torso: make the joints shared by several arms the spec's torso (else lock them).
         name: robot name (default: the URDF's robot name).
         default_task: task space (default: ``"planar"`` if every arm joint moves in the
@@ -264,42 +213,46 @@ def detect_spec(
     path = Path(path)
     urdf = read_urdf(path)
     check_supported(urdf, path)
-    if platform is not None and platform not in PLATFORM_KINDS:
-        raise SpecError(f"unknown platform {platform!r}; expected one of {', '.join(PLATFORM_KINDS)}")
+    if platform is not None:
+        get_kind(platform)  # an unknown kind is a SpecError listing the known ones
     end_effectors = list(end_effectors)
     if not end_effectors:
         raise SpecError(f"{path}: name at least one end-effector frame")
     notes: list[str] = [f"platform frame: root link {root_link(urdf, path)!r} (forward = +x, left = +y)"]
 
     on_arm_paths = {j for ee in end_effectors for j in arm_joints(urdf, ee, (), path)}
-    candidates = {c.name: c for c in wheel_candidates(urdf) if c.name not in on_arm_paths}
+    candidates = wheel_candidates(urdf, exclude=on_arm_paths)
+    wheel_spec: WheelsSpec | None = None
     if wheels is not None:
         for joint in wheels:
             if joint not in urdf.joint_map:
                 raise JointNotFoundError(joint, urdf.joint_map, where=str(path))
-        wheel_spec = WheelSpec(right=wheels[0], left=wheels[1])
-    elif platform in (None, "differential_drive"):
-        wheel_spec = detect_wheels(urdf, path, exclude=on_arm_paths)
+        kind = get_kind(platform or "differential_drive")
+        given = (kind if kind.takes_wheels else KINDS["differential_drive"]).wheels_from_joints(tuple(wheels))
+        if kind.takes_wheels:
+            wheel_spec = given
+            notes.append(f"{kind.name} wheels: {', '.join(given.joint_names)}")
+        else:
+            notes.append(f"platform {kind.name!r}: wheels {', '.join(given.joint_names)} are locked")
+    elif platform is None:
+        kind, detected = detect_platform(urdf, candidates, path)
+        if detected is not None:
+            wheel_spec = detected.wheels
+            notes.extend(detected.notes)
     else:
-        wheel_spec = None
-    if platform is None:
-        platform = "differential_drive" if wheel_spec is not None else "fixed"
-    if platform == "differential_drive":
-        if wheel_spec is None:
-            listed = ", ".join(c.describe() for c in candidates.values()) or "none"
-            raise WheelError(
-                f"{path}: no drive wheels found (wheel-shaped continuous joints: {listed}); "
-                "name them with --wheels RIGHT,LEFT or choose another platform"
-            )
-        radius = wheel_radius(urdf, wheel_spec.right)
-        notes.append(
-            f"drive wheels: right {wheel_spec.right!r}, left {wheel_spec.left!r}"
-            + (f" (radius {radius:g} m from the URDF geometry)" if radius is not None else "")
-        )
-    elif wheel_spec is not None:
-        notes.append(f"platform {platform!r}: wheels {wheel_spec.right!r} and {wheel_spec.left!r} are locked")
-        wheel_spec = None
-    drive = set(wheels or ()) | ({wheel_spec.right, wheel_spec.left} if wheel_spec is not None else set())
+        kind = get_kind(platform)
+        if kind.takes_wheels:
+            detected = kind.detect(urdf, candidates, str(path))
+            if detected is None:
+                listed = ", ".join(c.describe() for c in candidates) or "none"
+                raise WheelError(
+                    f"{path}: no wheels of a {kind.name} platform found (wheel-shaped continuous joints: {listed}); "
+                    "name them with --wheels or choose another platform"
+                )
+            wheel_spec = detected.wheels
+            notes.extend(detected.notes)
+    platform = kind.name
+    drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
     paths = [arm_joints(urdf, ee, drive, path) for ee in end_effectors]
     counts: dict[str, int] = {}
     for joints in paths:
@@ -330,7 +283,7 @@ def detect_spec(
     reference: dict[str, float] = {}
     active = set(torso_joints) | {j for arm in arms for j in arm.joints}
     if wheel_spec is not None:
-        active |= {wheel_spec.right, wheel_spec.left}
+        active |= set(wheel_spec.joint_names)
     for joint in urdf.robot.joints:
         if joint.type not in MOVING_JOINT_TYPES:
             continue
@@ -359,11 +312,10 @@ def detect_spec(
         torso=torso_joints,
         package_dirs=(path.resolve().parent,),
     )
-    if platform == "omnidirectional":
-        notes.append(
-            "an omnidirectional base needs limits for base_x, base_y (m/s, N) and base_yaw (rad/s, N m) "
-            "in [limits.velocity] and [limits.effort]"
-        )
+    own_limits = kind.toml_limit_hints(wheel_spec)
+    if own_limits:
+        names = ", ".join(name for name, _ in own_limits)
+        notes.append(f"a {kind.name} platform needs limits for {names} in [limits.velocity] and [limits.effort]")
     return Detection(spec=spec, shared_joints=shared, notes=tuple(notes), urdf_limits=urdf_limits)
 
 
@@ -378,16 +330,18 @@ def spec_from_urdf(
     return detect_spec(path, end_effectors, wheels, platform, **options).spec
 
 
-def parse_wheel_pair(text: str) -> tuple[str, str]:
-    """``"RIGHT,LEFT"`` -> ``("RIGHT", "LEFT")``.
+def parse_wheel_list(text: str) -> tuple[str, ...]:
+    """``"RIGHT,LEFT"`` -> ``("RIGHT", "LEFT")``: comma-separated wheel joint names.
+
+    How many a platform takes, and in which order, is the platform kind's to say.
 
     Raises:
-        WheelError: not exactly two non-empty names.
+        WheelError: an empty name.
     """
-    parts = [p.strip() for p in str(text).split(",")]
-    if len(parts) != 2 or not all(parts):
-        raise WheelError(f"wheels must be given as RIGHT,LEFT (two joint names), got {text!r}")
-    return parts[0], parts[1]
+    parts = tuple(p.strip() for p in str(text).split(","))
+    if not all(parts):
+        raise WheelError(f"wheels must be given as comma-separated joint names (e.g. RIGHT,LEFT), got {text!r}")
+    return parts
 
 
 # ----- writing a spec as TOML -----
@@ -448,7 +402,7 @@ def spec_to_toml(
     out += [
         f"name = {_string(spec.name)}",
         f"urdf = {_string(_urdf_reference(spec.urdf, None if base_dir is None else Path(base_dir)))}",
-        f'platform = {_string(spec.platform)}  # "differential_drive", "fixed" or "omnidirectional"',
+        f"platform = {_string(spec.platform)}  # {', '.join(json.dumps(k) for k in KINDS)}",
         f"default_task = {_string(spec.default_task)}  # planar, planar_rigid, translational or spatial",
     ]
     if spec.torso:
@@ -457,16 +411,9 @@ def spec_to_toml(
     elif shared_joints:
         out += ["", "# Joints shared by the arms are locked (see [reference]); to actuate them:",
                 f"# torso = {json.dumps(list(shared_joints))}"]  # fmt: skip
+    kind = get_kind(spec.platform)
     if spec.wheels is not None:
-        w = spec.wheels
-        out += [
-            "",
-            "# Right and left drive wheel; radius and half-track are read from the URDF unless set.",
-            "[wheels]",
-        ]
-        out += [f"right = {_string(w.right)}", f"left = {_string(w.left)}"]
-        for key, value in (("radius", w.radius), ("half_track", w.half_track)):
-            out.append(f"{key} = {_number(value)}" if value is not None else f"# {key} = ...  # m, overrides the URDF")
+        out += ["", *kind.toml_lines(spec.wheels)]
     out += ["", "# Arms in order (arm 1 first): actuated joints base to tip, then the end-effector frame."]
     for arm in spec.arms:
         out += [
@@ -477,9 +424,8 @@ def spec_to_toml(
             "",
         ]
     out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg", ""]
-    active = list(spec.active_joint_names)
-    if spec.platform == "omnidirectional":
-        active = list(OMNI_COORDINATES) + active
+    hints = dict(kind.toml_limit_hints(spec.wheels))
+    active = list(hints) + list(spec.active_joint_names)
     for kind, table, unit in (
         ("velocity", spec.velocity_limits, "rad/s or m/s"),
         ("effort", spec.effort_limits, "N m or N"),
@@ -488,8 +434,8 @@ def spec_to_toml(
         for joint in active:
             if joint in table:
                 out.append(f"{_key(joint)} = {_number(table[joint])}")
-            elif joint in OMNI_COORDINATES:
-                out.append(f"# {_key(joint)} = ...  # REQUIRED for an omnidirectional base")
+            elif joint in hints:
+                out.append(f"# {_key(joint)} = ...  # {hints[joint]}")
             elif urdf_limits is not None and joint in urdf_limits:
                 value = urdf_limits[joint][0 if kind == "velocity" else 1]
                 if value is None:

@@ -7,7 +7,9 @@ M vdot + h = B tau + A^T lambda project through S^T to
 
 M is the mass matrix of the whole robot (platform, wheels and arms in one tree), so P's platform
 block includes the arms carried as load and its platform-arm blocks are the paper's interaction
-terms R. In Pinocchio's tangent coordinates S is constant (Sdot = 0) for every platform here.
+terms R. In Pinocchio's tangent coordinates S is constant (Sdot = 0) for most platforms; a
+platform whose S depends on q (a steered wheel) gives Sdot x through
+:meth:`mobmanip.model.Robot.null_space_rate`.
 """
 
 from __future__ import annotations
@@ -82,7 +84,7 @@ def reduced_dynamics(
 
 
 def _reduced_dynamics(robot: Robot, q: np.ndarray, x: np.ndarray | None, decoupled: bool) -> ReducedDynamics:
-    S = robot.S
+    S = robot.null_space(q)
     M = mass_matrix(robot, q)
     if x is None:
         h = pin.computeGeneralizedGravity(robot.model, robot.data, q)
@@ -90,7 +92,7 @@ def _reduced_dynamics(robot: Robot, q: np.ndarray, x: np.ndarray | None, decoupl
     else:
         x = np.asarray(x, dtype=float)
         h = pin.nonLinearEffects(robot.model, robot.data, q, S @ x)
-        sdot_x = np.zeros(robot.model.nv)  # S is constant in Pinocchio's tangent coordinates
+        sdot_x = robot.null_space_rate(q, x) @ x
     P = S.T @ M @ S
     P = 0.5 * (P + P.T)
     if decoupled:
@@ -116,7 +118,8 @@ def frame_jacobians(robot: Robot, q: np.ndarray, task: str | TaskSpace) -> np.nd
 
 def unified_jacobian(robot: Robot, q: np.ndarray, task: str | TaskSpace) -> np.ndarray:
     """J_u = J S: end-effector task velocities from reduced velocities, (m * n_arms, nx)."""
-    return frame_jacobians(robot, robot.check_configuration(q), task) @ robot.S
+    q = robot.check_configuration(q)
+    return frame_jacobians(robot, q, task) @ robot.null_space(q)
 
 
 def end_effector_positions(robot: Robot, q: np.ndarray) -> np.ndarray:

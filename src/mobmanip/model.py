@@ -31,8 +31,8 @@ from .errors import (
     WheelError,
     _closest_first,
 )
-from .platforms import DifferentialDrive, LockedPlatform, Omnidirectional, Platform
-from .spec import OMNI_COORDINATES, RobotSpec, find_spec
+from .platforms import LockedPlatform, Platform, get_kind
+from .spec import RobotSpec, find_spec
 from .urdf import (
     MOVING_JOINT_TYPES,
     check_supported,
@@ -41,14 +41,7 @@ from .urdf import (
     mimic_joints,
     read_urdf,
     subtree_links,
-    wheel_radius,
 )
-
-#: Units of the omnidirectional base's reduced velocities and efforts, for messages.
-_OMNI_UNITS = {
-    "velocity": {"base_x": "m/s", "base_y": "m/s", "base_yaw": "rad/s"},
-    "effort": {"base_x": "N", "base_y": "N", "base_yaw": "N m"},
-}
 
 
 @dataclass(frozen=True)
@@ -108,17 +101,15 @@ class Robot:
 
     def __post_init__(self):
         nv, nx = self.model.nv, self.nx
-        S = np.zeros((nv, nx))
         B = np.zeros((nv, nx))
         n_eta = self.platform.n_reduced
-        rows, block = self.platform.tangent_block()
         if n_eta:
-            S[np.ix_(rows, range(n_eta))] = block
             rows_b, block_b = self.platform.actuation_block()
             B[np.ix_(rows_b, range(n_eta))] = block_b
         for k, v in enumerate(self.torso_v_indices + self.arm_v_indices):
-            S[v, n_eta + k] = 1.0
             B[v, n_eta + k] = 1.0
+        S = self._assemble_null_space(self.platform.tangent_block(self.neutral()))
+        # B acts on wheel and joint coordinates only, where S does not depend on q: Q is constant.
         Q = S.T @ B
         for matrix in (S, B, Q):
             matrix.setflags(write=False)
@@ -138,6 +129,46 @@ class Robot:
             array = np.array(values, dtype=float)
             array.setflags(write=False)
             object.__setattr__(self, attr, array)
+
+    # ----- the constraint layer -----
+
+    def _assemble_null_space(self, platform_rows: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        """S (nv, nx) from the platform's rows; torso and arm columns are unit columns."""
+        S = np.zeros((self.model.nv, self.nx))
+        n_eta = self.platform.n_reduced
+        rows, block = platform_rows
+        if n_eta:
+            S[np.ix_(rows, range(n_eta))] = block
+        for k, v in enumerate(self.torso_v_indices + self.arm_v_indices):
+            S[v, n_eta + k] = 1.0
+        return S
+
+    @property
+    def constant_null_space(self) -> bool:
+        """Whether S is the same at every configuration (then :attr:`S` is S(q) for all q)."""
+        return not self.platform.varies_with_q
+
+    def null_space(self, q: np.ndarray) -> np.ndarray:
+        """S(q), (nv, nx): the joint rates v = S(q) x of the reduced velocities x.
+
+        Equal to :attr:`S` (its value at the home configuration) when
+        :attr:`constant_null_space`.
+        """
+        if self.constant_null_space:
+            return self.S
+        return self._assemble_null_space(self.platform.tangent_block(np.asarray(q, dtype=float)))
+
+    def null_space_rate(self, q: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """dS/dt, (nv, nx), along the motion with reduced velocity x at configuration q.
+
+        Zero when :attr:`constant_null_space`. Only platform rows can depend on q.
+        """
+        out = np.zeros((self.model.nv, self.nx))
+        if self.constant_null_space or not self.platform.n_reduced:
+            return out
+        rows, block = self.platform.tangent_block_rate(np.asarray(q, dtype=float), np.asarray(x, dtype=float))
+        out[np.ix_(rows, range(self.platform.n_reduced))] = block
+        return out
 
     # ----- sizes and names -----
 
@@ -219,7 +250,7 @@ class Robot:
 
     def with_wheel_limits(self, velocity: float | None = None, effort: float | None = None) -> Robot:
         """The same robot with both drive wheels' velocity (rad/s) or effort (N m) limit set."""
-        wheels = self.wheel_platform.reduced_names if isinstance(self.wheel_platform, DifferentialDrive) else ()
+        wheels = self.wheel_platform.drive_names if self.wheel_platform is not None else ()
         if not wheels:
             raise WheelError(f"robot {self.name!r} has no drive wheels to set a wheel limit on")
         return self.with_limits(
@@ -371,7 +402,7 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
         if joints[name].type not in MOVING_JOINT_TYPES:
             raise SpecError(f"joint {name!r} is {joints[name].type!r}; wheels, torso and arm joints must move")
     if spec.wheels is not None:
-        for name in (spec.wheels.right, spec.wheels.left):
+        for name in spec.wheels.joint_names:
             if joints[name].type == "prismatic":
                 raise WheelError(f"wheel joint {name!r} is prismatic; a wheel must be revolute or continuous")
     mimics = mimic_joints(urdf)
@@ -381,10 +412,11 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
                 str(spec.urdf), f"joint {name!r} mimics {mimics[name]!r}; mimic joints cannot be actuated here"
             )
     active = set(named_joints)
+    own = spec.platform_limit_names
     for table, kind in ((spec.velocity_limits, "velocity"), (spec.effort_limits, "effort")):
         for name in table:
-            if name not in active and not (spec.platform == "omnidirectional" and name in OMNI_COORDINATES):
-                valid = sorted(active) + (list(OMNI_COORDINATES) if spec.platform == "omnidirectional" else [])
+            if name not in active and name not in own:
+                valid = sorted(active) + list(own)
                 raise JointNotFoundError(name, valid, where=f"[limits.{kind}] of {spec.name}")
 
 
@@ -440,54 +472,6 @@ def _check_hold(spec: RobotSpec, model: pin.Model) -> None:
             )
 
 
-def _differential_drive(spec: RobotSpec, urdf, model: pin.Model) -> DifferentialDrive:
-    """Wheel radius, half-track, axis signs and axle centre from the URDF geometry."""
-    data = model.createData()
-    q0 = pin.neutral(model)
-    pin.computeJointJacobians(model, data, q0)
-    centres, signs, v_indices, radii = [], [], [], []
-    for side, name in (("right", spec.wheels.right), ("left", spec.wheels.left)):
-        joint_id = model.getJointId(name)
-        v = model.joints[joint_id].idx_v
-        J = pin.getJointJacobian(model, data, joint_id, pin.LOCAL_WORLD_ALIGNED)
-        axis = J[3:, v]
-        if abs(axis[1]) < 0.99:
-            raise WheelError(
-                f"{side} wheel {name!r} turns about {np.round(axis, 3).tolist()} in the platform frame; "
-                "a drive wheel must turn about the platform's lateral (y) axis"
-            )
-        signs.append(1.0 if axis[1] > 0 else -1.0)  # rolling forward = positive rotation about +y
-        centres.append(data.oMi[joint_id].translation.copy())
-        v_indices.append(v)
-        radii.append(spec.wheels.radius if spec.wheels.radius is not None else wheel_radius(urdf, name))
-    if radii[0] is None or radii[1] is None:
-        missing = spec.wheels.right if radii[0] is None else spec.wheels.left
-        raise WheelError(
-            f"wheel {missing!r} has no cylinder about its axis or sphere to read a radius from; "
-            "set [wheels] radius in the spec"
-        )
-    if spec.wheels.radius is None and abs(radii[0] - radii[1]) > 1e-9:
-        raise WheelError(f"wheel radii differ ({radii[0]} and {radii[1]} m); set [wheels] radius in the spec")
-    right, left = centres
-    if not right[1] < left[1]:
-        raise WheelError(
-            f"right wheel {spec.wheels.right!r} (y = {right[1]:.3f} m) is not to the right of "
-            f"left wheel {spec.wheels.left!r} (y = {left[1]:.3f} m); swap them in the spec"
-        )
-    half_track = spec.wheels.half_track if spec.wheels.half_track is not None else (left[1] - right[1]) / 2
-    if abs(right[0] - left[0]) > 1e-6:
-        raise WheelError(f"wheels {spec.wheels.right!r} and {spec.wheels.left!r} are not on one axle (x differs)")
-    center = (right + left) / 2
-    return DifferentialDrive(
-        radius=float(radii[0]),
-        half_track=float(half_track),
-        wheel_v=(v_indices[0], v_indices[1]),
-        signs=(signs[0], signs[1]),
-        axle_center=(float(center[0]), float(center[1])),
-        wheel_names=(spec.wheels.right, spec.wheels.left),
-    )
-
-
 def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
     """Load a robot from a spec, a built-in name (``"planar_dual_arm"``) or a spec path.
 
@@ -514,23 +498,17 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
             raise FrameNotFoundError(arm.end_effector, [f.name for f in model.frames], where=spec.name)
         arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, model.getFrameId(arm.end_effector)))
 
-    if spec.platform == "differential_drive":
-        platform = _differential_drive(spec, urdf, model)
-    elif spec.platform == "omnidirectional":
-        platform = Omnidirectional()
-    else:
-        platform = LockedPlatform()
-
+    platform = get_kind(spec.platform).build(spec.wheels, urdf, model)
+    from_urdf = dict(platform.urdf_limits(urdf))
     velocity, effort = {}, {}
     for name in platform.reduced_names + spec.torso + spec.arm_joint_names:
-        omni = spec.platform == "omnidirectional" and name in platform.reduced_names
-        vel, eff = (None, None) if omni else joint_limits(urdf, name)
+        vel, eff = from_urdf[name] if name in from_urdf else joint_limits(urdf, name)
         for table, kind, value in ((velocity, "velocity", vel), (effort, "effort", eff)):
             value = (spec.velocity_limits if kind == "velocity" else spec.effort_limits).get(name, value)
             if value is None:
-                if omni:
-                    source = "an omnidirectional base takes its limits from the spec only"
-                    raise MissingLimitError(name, kind, source, _OMNI_UNITS[kind][name])
+                if name in from_urdf:
+                    source, unit = platform.missing_limit_source(name, kind)
+                    raise MissingLimitError(name, kind, source, unit)
                 raise MissingLimitError(name, kind, f"the URDF joint has no <limit {kind}=...>")
             table[name] = _positive_limit(name, kind, value)
 

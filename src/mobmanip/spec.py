@@ -4,12 +4,12 @@ A spec is a small TOML file next to its URDF::
 
     name = "planar_dual_arm"
     urdf = "planar_dual_arm.urdf"          # relative to this file, or "example-robot-data:..."
-    platform = "differential_drive"        # or "fixed", "omnidirectional"
+    platform = "differential_drive"        # a kind of mobmanip.platforms.KINDS, e.g. "fixed"
     default_task = "planar"
 
     torso = ["torso_lift_joint"]            # optional: actuated joints shared by all arms
 
-    [wheels]                                # differential drive only
+    [wheels]                                # the platform kind's own table (see its module)
     right = "wheel_right_joint"
     left = "wheel_left_joint"
     # radius = 0.075                       # optional overrides of the URDF geometry (m)
@@ -48,11 +48,11 @@ from pathlib import Path
 from types import MappingProxyType
 
 from .errors import LimitError, SpecError, UnknownRobotError
+from .platforms import KINDS, WheelSpec, WheelsSpec, get_kind
 from .resources import builtin_robot_names, builtin_robots_dir, resolve_urdf_reference
 from .tasks import TASKS
 
-PLATFORM_KINDS = ("differential_drive", "fixed", "omnidirectional")
-OMNI_COORDINATES = ("base_x", "base_y", "base_yaw")
+__all__ = ["ArmSpec", "RobotSpec", "WheelSpec", "find_spec", "load_spec", "spec_from_dict"]
 
 
 def _positive(name: str, kind: str, value: object) -> float:
@@ -66,30 +66,6 @@ def _positive(name: str, kind: str, value: object) -> float:
 
 def _frozen_limits(limits: Mapping[str, object], kind: str) -> Mapping[str, float]:
     return MappingProxyType({str(k): _positive(str(k), kind, v) for k, v in limits.items()})
-
-
-@dataclass(frozen=True)
-class WheelSpec:
-    """The two drive wheels of a differential-drive platform.
-
-    Attributes:
-        right: name of the right wheel's joint.
-        left: name of the left wheel's joint.
-        radius: wheel radius override (m); ``None`` reads it from the URDF geometry.
-        half_track: half the distance between the wheels (m); ``None`` reads the URDF.
-    """
-
-    right: str
-    left: str
-    radius: float | None = None
-    half_track: float | None = None
-
-    def __post_init__(self):
-        if self.right == self.left:
-            raise SpecError(f"right and left wheel are the same joint {self.right!r}")
-        for label, value in (("wheel radius", self.radius), ("half_track", self.half_track)):
-            if value is not None:
-                _positive(label, "geometry", value)
 
 
 @dataclass(frozen=True)
@@ -114,12 +90,15 @@ class RobotSpec:
     Attributes:
         name: robot name.
         urdf: path of the URDF file.
-        platform: ``"differential_drive"``, ``"fixed"`` or ``"omnidirectional"``.
+        platform: a platform kind of :data:`mobmanip.platforms.KINDS`, e.g.
+            ``"differential_drive"``, ``"fixed"`` or ``"omnidirectional"``.
         arms: the arms, in order (arm 1 first).
-        wheels: the drive wheels (differential drive only; other platforms take none).
+        wheels: the platform kind's ``[wheels]`` (e.g. :class:`WheelSpec` for a differential
+            drive); ``None`` for kinds that take none.
         default_task: task space used when none is asked for.
-        velocity_limits: per-joint velocity limit overrides (rad/s or m/s); for an
-            omnidirectional base also ``base_x``, ``base_y`` (m/s) and ``base_yaw`` (rad/s).
+        velocity_limits: per-joint velocity limit overrides (rad/s or m/s), and of the
+            platform's own reduced velocities that are not joints (e.g. an omnidirectional
+            base's ``base_x``, ``base_y`` in m/s and ``base_yaw`` in rad/s).
         effort_limits: per-joint effort limit overrides (N m or N), same keys.
         object_mass: mass of the default held object (kg); 0 means the task point carries no load.
         reference: positions of joints that are not wheels, torso or arm joints; they are
@@ -139,7 +118,7 @@ class RobotSpec:
     urdf: Path
     platform: str
     arms: tuple[ArmSpec, ...]
-    wheels: WheelSpec | None = None
+    wheels: WheelsSpec | None = None
     default_task: str = "planar"
     velocity_limits: Mapping[str, float] = field(default_factory=dict)
     effort_limits: Mapping[str, float] = field(default_factory=dict)
@@ -151,15 +130,11 @@ class RobotSpec:
     source: Path | None = None
 
     def __post_init__(self):
-        if self.platform not in PLATFORM_KINDS:
-            raise SpecError(f"unknown platform {self.platform!r}; expected one of {', '.join(PLATFORM_KINDS)}")
-        if self.platform == "differential_drive" and self.wheels is None:
-            raise SpecError(f"robot {self.name!r}: a differential-drive platform needs [wheels]")
-        if self.platform != "differential_drive" and self.wheels is not None:
-            raise SpecError(
-                f"robot {self.name!r}: [wheels] is only for a differential_drive platform, not {self.platform!r} "
-                "(other platforms lock any wheels of the URDF); remove it"
-            )
+        kind = get_kind(self.platform)
+        if kind.takes_wheels and self.wheels is None:
+            raise SpecError(f"robot {self.name!r}: a {self.platform} platform needs [wheels]")
+        if not kind.takes_wheels and self.wheels is not None:
+            raise _wheels_not_taken(self.name, self.platform)
         if not self.arms:
             raise SpecError(f"robot {self.name!r} has no arms")
         if self.default_task not in TASKS:
@@ -181,7 +156,7 @@ class RobotSpec:
                     raise SpecError(f"joint {joint!r} belongs to {owner} and to arm {arm.name!r}")
                 seen[joint] = arm.name
         if self.wheels is not None:
-            for joint in (self.wheels.right, self.wheels.left):
+            for joint in self.wheels.joint_names:
                 if joint in seen:
                     owner = "the torso" if seen[joint] == "torso" else f"arm {seen[joint]!r}"
                     raise SpecError(f"joint {joint!r} is both a wheel and in {owner}")
@@ -217,10 +192,28 @@ class RobotSpec:
         return tuple(j for arm in self.arms for j in arm.joints)
 
     @property
+    def wheel_joint_names(self) -> tuple[str, ...]:
+        """The URDF joints the platform keeps moving (e.g. the drive wheels, right then left)."""
+        return self.wheels.joint_names if self.wheels is not None else ()
+
+    @property
     def active_joint_names(self) -> tuple[str, ...]:
-        """Every joint that stays free in the model: wheels (right, left), torso, then arms."""
-        wheels = (self.wheels.right, self.wheels.left) if self.wheels is not None else ()
-        return wheels + self.torso + self.arm_joint_names
+        """Every joint that stays free in the model: the platform's wheels, torso, then arms."""
+        return self.wheel_joint_names + self.torso + self.arm_joint_names
+
+    @property
+    def platform_limit_names(self) -> tuple[str, ...]:
+        """Names other than joints that ``[limits.*]`` may set (the platform kind's own)."""
+        return get_kind(self.platform).limit_names(self.wheels)
+
+
+def _wheels_not_taken(robot: str, platform: str) -> SpecError:
+    wheeled = [k.name for k in KINDS.values() if k.takes_wheels]
+    listed = wheeled[0] if len(wheeled) == 1 else f"{', '.join(wheeled[:-1])} or {wheeled[-1]}"
+    return SpecError(
+        f"robot {robot!r}: [wheels] is only for a {listed} platform, not {platform!r} "
+        "(other platforms lock any wheels of the URDF); remove it"
+    )
 
 
 def _require(table: Mapping, key: str, kind: type, where: str):
@@ -254,15 +247,10 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
     wheels = None
     if "wheels" in data:
         table = _require(data, "wheels", dict, where)
-        extra = sorted(set(table) - {"right", "left", "radius", "half_track"})
-        if extra:
-            raise SpecError(f"{where}: unknown keys in [wheels]: {extra}")
-        wheels = WheelSpec(
-            right=_require(table, "right", str, f"{where} [wheels]"),
-            left=_require(table, "left", str, f"{where} [wheels]"),
-            radius=table.get("radius"),
-            half_track=table.get("half_track"),
-        )
+        kind = get_kind(platform)
+        if not kind.takes_wheels:
+            raise _wheels_not_taken(name, platform)
+        wheels = kind.parse_wheels(table, where)
     arms = []
     for k, table in enumerate(_require(data, "arms", list, where)):
         arm_where = f"{where} [[arms]] #{k + 1}"

@@ -613,12 +613,12 @@ def _worker_setup(spec: SweepSpec):
 
 
 def _wheel_limits(robot: Robot, base: np.ndarray, scales: np.ndarray) -> list[np.ndarray]:
-    """Limit vectors with both drive wheels' entries scaled (unchanged with a locked platform)."""
-    n_eta = robot.platform.n_reduced if robot.platform.kind == "differential_drive" else 0
+    """Limit vectors with the drive wheels' entries scaled (unchanged with a locked platform)."""
+    drives = [k for k, name in enumerate(robot.platform.reduced_names) if name in robot.platform.drive_names]
     out = []
     for s in scales:
         limits = np.array(base, dtype=float)
-        limits[:n_eta] *= s
+        limits[drives] *= s
         out.append(limits)
     return out
 

@@ -45,7 +45,7 @@ def robot_spec_from_args(args):
         UsageError: neither or both of ROBOT and --urdf, --urdf without --ee, or --ee/--wheels
             without --urdf.
     """
-    from ..detect import parse_wheel_pair, spec_from_urdf
+    from ..detect import parse_wheel_list, spec_from_urdf
     from ..errors import UsageError
     from ..spec import find_spec
 
@@ -60,7 +60,7 @@ def robot_spec_from_args(args):
         return find_spec(args.robot)
     if not ee:
         raise UsageError(f"--urdf {urdf} needs at least one --ee FRAME (the end effector of each arm)")
-    return spec_from_urdf(urdf, ee, wheels=None if wheels is None else parse_wheel_pair(wheels))
+    return spec_from_urdf(urdf, ee, wheels=None if wheels is None else parse_wheel_list(wheels))
 
 
 def load_robot_and_configuration(args):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..spec import PLATFORM_KINDS
+from ..platforms import KINDS
 from .common import add_urdf_options
 
 
@@ -18,8 +18,8 @@ def register(sub) -> None:
     add_urdf_options(parser, ee_required=True)
     parser.add_argument(
         "--platform",
-        choices=list(PLATFORM_KINDS),
-        help="platform kind (default: differential_drive if two drive wheels are found, else fixed)",
+        choices=list(KINDS),
+        help="platform kind (default: the wheeled kind the URDF's wheels fit, else fixed)",
     )
     parser.add_argument(
         "--torso", action="store_true", help="actuate the joints shared by all arms (default: lock them)"
@@ -30,10 +30,10 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..detect import detect_spec, parse_wheel_pair, spec_to_toml
+    from ..detect import detect_spec, parse_wheel_list, spec_to_toml
     from ..io import write_text
 
-    wheels = None if args.wheels is None else parse_wheel_pair(args.wheels)
+    wheels = None if args.wheels is None else parse_wheel_list(args.wheels)
     found = detect_spec(args.urdf, args.ee, wheels, args.platform, torso=args.torso, name=args.name)
     base_dir = Path(args.out).resolve().parent if args.out else None
     text = spec_to_toml(

@@ -20,20 +20,14 @@ from matplotlib.patches import Polygon  # noqa: E402
 from ..ellipsoids import Ellipsoid  # noqa: E402
 from ..io import save_figure  # noqa: E402
 from ..model import Robot  # noqa: E402
-from ..platforms import DifferentialDrive  # noqa: E402
 
 COLORS = ("#1b9e77", "#d95f02", "#7570b3", "#444444", "#e7298a", "#66a61e")
 
 
 def _platform_outline(robot: Robot) -> np.ndarray:
-    """Corners (4, 2) of the platform body in its own frame, from the wheel geometry."""
-    platform = robot.wheel_platform
-    if isinstance(platform, DifferentialDrive):
-        half_width = platform.half_track - 0.02
-        px, py = platform.axle_center
-        return np.array([[px - 0.25, py - half_width], [px + 0.25, py - half_width],
-                         [px + 0.25, py + half_width], [px - 0.25, py + half_width]])  # fmt: skip
-    return np.array([[-0.25, -0.2], [0.25, -0.2], [0.25, 0.2], [-0.25, 0.2]])
+    """Corners (k, 2) of the platform body in its own frame (the platform kind draws it)."""
+    platform = robot.wheel_platform if robot.wheel_platform is not None else robot.platform
+    return platform.outline()
 
 
 def draw_robot(ax, robot: Robot, q: np.ndarray) -> None:
@@ -46,11 +40,16 @@ def draw_robot(ax, robot: Robot, q: np.ndarray) -> None:
     body = _platform_outline(robot) @ R.T + origin
     ax.add_patch(Polygon(body, closed=True, facecolor="#d9d9d9", edgecolor="#555555", lw=1.0, zorder=1))
     platform = robot.wheel_platform
-    if isinstance(platform, DifferentialDrive):
-        for name in platform.wheel_names:
-            centre = data.oMi[model.getJointId(name)].translation[:2]
-            tip = R @ np.array([platform.radius, 0.0])
-            ax.plot(*np.array([centre - tip, centre + tip]).T, color="black", lw=5, solid_capstyle="butt", zorder=2)
+    wheels = platform.wheels() if platform is not None else ()
+    if wheels:
+        pin.computeJointJacobians(model, data, q)
+    for name, radius in wheels:  # a segment along the wheel's rolling direction, as long as its diameter
+        joint_id = model.getJointId(name)
+        axle = pin.getJointJacobian(model, data, joint_id, pin.LOCAL_WORLD_ALIGNED)[3:, model.joints[joint_id].idx_v]
+        rolling = np.cross(axle, (0.0, 0.0, 1.0))[:2]
+        tip = radius * rolling / max(float(np.linalg.norm(rolling)), 1e-12)
+        centre = data.oMi[joint_id].translation[:2]
+        ax.plot(*np.array([centre - tip, centre + tip]).T, color="black", lw=5, solid_capstyle="butt", zorder=2)
     for k, arm in enumerate(robot.arms):
         points = [data.oMi[model.getJointId(name)].translation[:2] for name in arm.joint_names]
         points.append(data.oMf[arm.frame_id].translation[:2])

@@ -1,0 +1,187 @@
+"""What every platform kind provides: the protocol of the platform family.
+
+Two objects per kind:
+
+- a :class:`PlatformKind` (one instance per kind, in the registry of :mod:`mobmanip.platforms`)
+  knows the kind's spec: it reads and writes its ``[wheels]`` table, says which URDF joints the
+  platform keeps moving and which limit names it accepts, recognises the kind in a URDF, and
+  builds the platform of a loaded model;
+- a :class:`Platform` (one per loaded robot) is the constraint layer itself: the reduced
+  platform velocities ``eta`` and the rows of S(q) and Sdot(q, x) that map them to Pinocchio's
+  tangent space, the actuation block of Q, the limits of ``eta`` and how figures draw it.
+
+Pinocchio's planar root joint has velocity (v_x, v_y, omega_z) in the platform's own frame
+(tangent indices :data:`BASE_V`); a platform's rows of S cover those and its wheel joints.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+#: Tangent indices of the planar root joint (v_x, v_y, omega_z in the platform frame).
+BASE_V = (0, 1, 2)
+
+#: A default body outline (m, platform frame) for a platform without wheel geometry.
+DEFAULT_OUTLINE = ((-0.25, -0.2), (0.25, -0.2), (0.25, 0.2), (-0.25, 0.2))
+
+
+class Platform(ABC):
+    """The constraint layer of one loaded robot's platform.
+
+    Subclasses are frozen dataclasses; ``kind`` is their registry name.
+    """
+
+    kind: ClassVar[str]
+
+    #: Whether S depends on the configuration (then Sdot is not zero along a motion).
+    varies_with_q: ClassVar[bool] = False
+
+    @property
+    @abstractmethod
+    def reduced_names(self) -> tuple[str, ...]:
+        """Names of the reduced platform velocities eta, in their order in x."""
+
+    @property
+    def n_reduced(self) -> int:
+        return len(self.reduced_names)
+
+    @property
+    def actuated(self) -> tuple[bool, ...]:
+        """Whether each reduced platform velocity is driven by a motor."""
+        return (True,) * self.n_reduced
+
+    @property
+    def drive_names(self) -> tuple[str, ...]:
+        """The reduced velocities that are wheel drives: the ones wheel limits and the sweeps'
+        wheel-limit scales act on (empty when the platform has no drive wheels)."""
+        return ()
+
+    @abstractmethod
+    def tangent_block(self, q: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The platform's rows of S at configuration q.
+
+        Args:
+            q: configuration (nq,); may be ``None`` when ``varies_with_q`` is False.
+
+        Returns:
+            ``(v_indices, block)``: tangent indices (root joint, then wheel joints) and the
+            (len(v_indices), n_reduced) block mapping eta to their rates.
+        """
+
+    def tangent_block_rate(self, q: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The platform's rows of dS/dt along a motion with reduced velocity x (whole x, (nx,)).
+
+        Zero for a platform whose S is constant; same rows as :meth:`tangent_block`.
+        """
+        rows, block = self.tangent_block(q)
+        return rows, np.zeros_like(block)
+
+    @abstractmethod
+    def actuation_block(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where the platform's efforts enter the generalized forces: ``(v_indices, block)`` of B."""
+
+    def urdf_limits(self, urdf) -> Mapping[str, tuple[float | None, float | None]]:
+        """(velocity, effort) of each reduced platform velocity read from the URDF, by name;
+        ``None`` where the URDF gives none. By default each name is a joint of the URDF."""
+        from ..urdf import joint_limits
+
+        return {name: joint_limits(urdf, name) for name in self.reduced_names}
+
+    def missing_limit_source(self, name: str, kind: str) -> tuple[str, str]:
+        """Why the ``kind`` (velocity/effort) limit of ``name`` is missing, and its unit, for
+        the message: ``(reason, unit)``."""
+        return f"the URDF joint has no <limit {kind}=...>", ""
+
+    def outline(self) -> np.ndarray:
+        """Corners (k, 2) of the platform body seen from above, in the platform frame (m)."""
+        return np.array(DEFAULT_OUTLINE)
+
+    def wheels(self) -> tuple[tuple[str, float], ...]:
+        """(joint name, radius in m) of each wheel a figure draws."""
+        return ()
+
+
+@dataclass(frozen=True)
+class WheelsSpec:
+    """Base of each kind's ``[wheels]`` table, as read from a spec."""
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """URDF joints the platform keeps moving (they stay in the Pinocchio model)."""
+        return ()
+
+
+@dataclass(frozen=True)
+class Detected:
+    """A platform recognised in a URDF: its ``[wheels]`` spec and notes for the user."""
+
+    wheels: WheelsSpec | None
+    notes: tuple[str, ...] = ()
+
+
+class PlatformKind(ABC):
+    """One kind of platform: its spec, its detection and how a loaded model builds it."""
+
+    #: Registry name, as written in specs (``platform = "..."``).
+    name: ClassVar[str]
+    #: One line for help texts.
+    summary: ClassVar[str]
+    #: Whether the spec needs a ``[wheels]`` table (True), takes none (False).
+    takes_wheels: ClassVar[bool] = False
+    #: Keys its ``[wheels]`` table accepts.
+    wheel_keys: ClassVar[tuple[str, ...]] = ()
+
+    def parse_wheels(self, table: Mapping, where: str) -> WheelsSpec:
+        """The kind's ``[wheels]`` spec from a parsed TOML table.
+
+        Raises:
+            SpecError: unknown keys or wrong types (naming ``where``).
+        """
+        from ..errors import SpecError
+
+        raise SpecError(f"{where}: a {self.name} platform takes no [wheels] table")
+
+    def wheels_from_joints(self, joints: Sequence[str]) -> WheelsSpec:
+        """The ``[wheels]`` spec from joint names given on the command line (``--wheels``)."""
+        from ..errors import WheelError
+
+        raise WheelError(f"a {self.name} platform takes no wheel joints")
+
+    def limit_names(self, wheels: WheelsSpec | None) -> tuple[str, ...]:
+        """Names, other than URDF joints, that ``[limits.*]`` may set (e.g. ``base_x``)."""
+        return ()
+
+    @abstractmethod
+    def build(self, wheels: WheelsSpec | None, urdf, model) -> Platform:
+        """The platform of a loaded model (geometry from the URDF and the Pinocchio model).
+
+        Args:
+            wheels: the spec's ``[wheels]`` (``None`` when the kind takes none).
+            urdf: the parsed URDF (yourdfpy).
+            model: the Pinocchio model with its planar root joint (locked joints removed).
+
+        Raises:
+            WheelError: geometry that does not fit the kind (naming the joint and value).
+        """
+
+    def detect(self, urdf, candidates: Sequence, path: str) -> Detected | None:
+        """Recognise this kind among a URDF's wheel candidates (see
+        :func:`mobmanip.platforms.wheels.wheel_candidates`); ``None`` if it does not fit.
+
+        Raises:
+            WheelError: the kind fits but is ambiguous (the message says what to add).
+        """
+        return None
+
+    def toml_lines(self, wheels: WheelsSpec | None) -> list[str]:
+        """The spec's ``[wheels]`` section (with comments) for ``init-spec``; empty if none."""
+        return []
+
+    def toml_limit_hints(self, wheels: WheelsSpec | None) -> list[tuple[str, str]]:
+        """(name, comment) of limit names that are not URDF joints, for ``init-spec``."""
+        return []

@@ -1,0 +1,172 @@
+"""Wheels as the platform kinds see them: candidates in a URDF, geometry in a loaded model.
+
+Shared by the wheeled kinds for detection (:func:`wheel_candidates`) and for reading their
+geometry once the Pinocchio model exists (:func:`wheel_geometry`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import WheelError
+from ..urdf import joint_axis, joint_limits, joint_path, wheel_radius, zero_configuration_placements
+
+#: |cos| between a wheel axis and the platform's lateral axis above which the wheel counts as
+#: lateral (rolling along the platform's x axis).
+LATERAL = 0.99
+
+
+@dataclass(frozen=True)
+class WheelCandidate:
+    """A continuous joint whose child link is wheel-shaped.
+
+    Attributes:
+        name: joint name.
+        radius: wheel radius from the geometry (m).
+        position: joint origin in the root link's frame at the zero configuration (m), (3,).
+        axis: joint axis in the root link's frame, (3,).
+        carried_by_rotating_joint: whether a revolute/continuous joint lies between it and the root.
+        driven: whether the URDF gives it a positive effort limit.
+        steering_joint: the nearest revolute/continuous joint above it with a vertical axis
+            (a steering or caster swivel), or ``None``.
+    """
+
+    name: str
+    radius: float
+    position: np.ndarray
+    axis: np.ndarray
+    carried_by_rotating_joint: bool
+    driven: bool
+    steering_joint: str | None = None
+
+    @property
+    def lateral(self) -> bool:
+        """Whether it turns about the platform's lateral (y) axis."""
+        return abs(float(self.axis[1])) >= LATERAL
+
+    def describe(self) -> str:
+        x, y, _ = self.position
+        return f"{self.name} (r = {self.radius:g} m at x = {x:.3f}, y = {y:.3f} m)"
+
+
+def wheel_candidates(urdf, exclude=()) -> list[WheelCandidate]:
+    """Every continuous joint with a wheel-shaped child link, in URDF order (``exclude`` left out)."""
+    placements = zero_configuration_placements(urdf)
+    exclude = set(exclude)
+    out = []
+    for joint in urdf.robot.joints:
+        if joint.type != "continuous" or joint.name in exclude:
+            continue
+        radius = wheel_radius(urdf, joint.name)
+        if radius is None:
+            continue
+        pose = placements[joint.name]
+        ancestors = joint_path(urdf, joint.parent)
+        _, effort = joint_limits(urdf, joint.name)
+        steering = None
+        for above in reversed(ancestors):
+            if above.type in ("revolute", "continuous"):
+                axis = placements[above.name][:3, :3] @ joint_axis(above)
+                if abs(float(axis[2])) >= LATERAL:
+                    steering = above.name
+                break
+        out.append(
+            WheelCandidate(
+                name=joint.name,
+                radius=radius,
+                position=pose[:3, 3].copy(),
+                axis=pose[:3, :3] @ joint_axis(joint),
+                carried_by_rotating_joint=any(j.type in ("revolute", "continuous") for j in ancestors),
+                driven=effort is not None and effort > 0.0,
+                steering_joint=steering,
+            )
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class WheelGeometry:
+    """Where a wheel joint sits in a loaded model, at the home configuration.
+
+    Attributes:
+        name: joint name.
+        v_index: its tangent index.
+        center: joint origin in the platform frame (m), (3,).
+        axis: joint axis in the platform frame (unit), (3,).
+        sign: +1 if a positive joint rate rolls the wheel forward (+x), else -1.
+    """
+
+    name: str
+    v_index: int
+    center: np.ndarray
+    axis: np.ndarray
+    sign: float
+
+
+def wheel_geometry(model: pin.Model, names, role: str = "wheel", q: np.ndarray | None = None) -> list[WheelGeometry]:
+    """Centres, axes and forward signs of wheel joints of a model (platform at the origin).
+
+    Args:
+        model: the Pinocchio model with its planar root joint.
+        names: wheel joint names.
+        role: what the wheels are, for messages (e.g. ``"right wheel"``).
+        q: configuration (default: neutral); steering joints, if any, are where q puts them.
+
+    Raises:
+        WheelError: a wheel that does not turn about the platform's lateral (y) axis.
+    """
+    data = model.createData()
+    q0 = pin.neutral(model) if q is None else q
+    pin.computeJointJacobians(model, data, q0)
+    out = []
+    for name in names:
+        joint_id = model.getJointId(name)
+        joint = model.joints[joint_id]
+        if joint.nv != 1:
+            raise WheelError(f"{role} {name!r} has {joint.nv} degrees of freedom; a wheel has one")
+        v = joint.idx_v
+        axis = pin.getJointJacobian(model, data, joint_id, pin.LOCAL_WORLD_ALIGNED)[3:, v].copy()
+        if float(np.linalg.norm(axis)) < 0.5:
+            raise WheelError(f"{role} {name!r} does not rotate (a prismatic joint?); a wheel must be revolute")
+        if abs(axis[1]) < LATERAL:
+            raise WheelError(
+                f"{role} {name!r} turns about {np.round(axis, 3).tolist()} in the platform frame; "
+                "a drive wheel must turn about the platform's lateral (y) axis"
+            )
+        out.append(
+            WheelGeometry(
+                name=name,
+                v_index=v,
+                center=data.oMi[joint_id].translation.copy(),
+                axis=axis,
+                sign=1.0 if axis[1] > 0 else -1.0,  # rolling forward = positive rotation about +y
+            )
+        )
+    return out
+
+
+def radius_of(urdf, name: str, override: float | None) -> float:
+    """A wheel's radius: the spec's override, else the URDF geometry.
+
+    Raises:
+        WheelError: no override and no cylinder about the axis or sphere in the URDF.
+    """
+    if override is not None:
+        return float(override)
+    radius = wheel_radius(urdf, name)
+    if radius is None:
+        raise WheelError(
+            f"wheel {name!r} has no cylinder about its axis or sphere to read a radius from; "
+            "set [wheels] radius in the spec"
+        )
+    return float(radius)
+
+
+def side_by_side_message(right: str, left: str, y_right: float, y_left: float) -> str:
+    return (
+        f"right wheel {right!r} (y = {y_right:.3f} m) is not to the right of "
+        f"left wheel {left!r} (y = {y_left:.3f} m); swap them in the spec"
+    )
