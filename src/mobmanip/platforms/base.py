@@ -16,6 +16,8 @@ Pinocchio's planar root joint has velocity (v_x, v_y, omega_z) in the platform's
 
 from __future__ import annotations
 
+import json
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -28,6 +30,44 @@ BASE_V = (0, 1, 2)
 
 #: A default body outline (m, platform frame) for a platform without wheel geometry.
 DEFAULT_OUTLINE = ((-0.25, -0.2), (0.25, -0.2), (0.25, 0.2), (-0.25, 0.2))
+
+
+def positive_length(label: str, value: object) -> float:
+    """A positive finite number (m), else a LimitError naming ``label`` and the value."""
+    from ..errors import LimitError
+
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise LimitError(label, "geometry", value)
+    value = float(value)
+    if not math.isfinite(value) or value <= 0.0:
+        raise LimitError(label, "geometry", value)
+    return value
+
+
+def toml_string(value: str) -> str:
+    """A TOML basic string (a JSON string is one)."""
+    return json.dumps(value)
+
+
+def unicycle_rows(radius: float, half_track: float, center) -> np.ndarray:
+    """Root-joint rows of S for two wheel rates (right, left) that drive a point like a unicycle.
+
+    The point P at ``center`` = (p_x, p_y) in the platform frame moves forward at
+    r/2 (eta_r + eta_l) with no lateral velocity, and the platform turns at
+    omega = r / (2 b) (eta_r - eta_l); the platform origin then moves as v_P - omega x p.
+
+    Returns:
+        (3, 2) block: (v_x, v_y, omega_z) of the root joint per unit eta_r and eta_l.
+    """
+    r, c = radius, radius / (2.0 * half_track)
+    px, py = center
+    return np.array(
+        [
+            [r / 2 + py * c, r / 2 - py * c],  # v_x of the platform origin
+            [-px * c, px * c],  # v_y of the platform origin
+            [c, -c],  # omega_z
+        ]
+    )
 
 
 class Platform(ABC):

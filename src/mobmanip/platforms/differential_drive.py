@@ -8,25 +8,23 @@ The paper's world-frame form (Eq. 7-11) is kept alongside for reference and test
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import LimitError, SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec
+from ..errors import SpecError, WheelError
+from .base import (
+    BASE_V,
+    Detected,
+    Platform,
+    PlatformKind,
+    WheelsSpec,
+    positive_length,
+    toml_string,
+    unicycle_rows,
+)
 from .wheels import radius_of, side_by_side_message, wheel_geometry
-
-
-def positive_length(label: str, value: object) -> float:
-    """A positive finite number (m), else a LimitError naming it."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LimitError(label, "geometry", value)
-    value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise LimitError(label, "geometry", value)
-    return value
 
 
 @dataclass(frozen=True)
@@ -103,17 +101,8 @@ class DifferentialDrive(Platform):
             v = r/2 (eta_r + eta_l) forward at P_o, omega = c (eta_r - eta_l), and the platform
             origin moves as v_origin = v_Po - omega x p.
         """
-        r, c = self.radius, self.c
-        px, py = self.axle_center
-        block = np.array(
-            [
-                [r / 2 + py * c, r / 2 - py * c],  # v_x of the platform origin
-                [-px * c, px * c],  # v_y of the platform origin
-                [c, -c],  # omega_z
-                [self.signs[0], 0.0],  # right wheel joint rate
-                [0.0, self.signs[1]],  # left wheel joint rate
-            ]
-        )
+        wheels = np.diag(self.signs)  # joint rate = sign * eta
+        block = np.vstack([unicycle_rows(self.radius, self.half_track, self.axle_center), wheels])
         return np.array(BASE_V + self.wheel_v), block
 
     def actuation_block(self) -> tuple[np.ndarray, np.ndarray]:
@@ -234,18 +223,12 @@ class DifferentialDriveKind(PlatformKind):
         out = [
             "# Right and left drive wheel; radius and half-track are read from the URDF unless set.",
             "[wheels]",
-            f"right = {_string(wheels.right)}",
-            f"left = {_string(wheels.left)}",
+            f"right = {toml_string(wheels.right)}",
+            f"left = {toml_string(wheels.left)}",
         ]
         for key, value in (("radius", wheels.radius), ("half_track", wheels.half_track)):
             out.append(f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF")
         return out
-
-
-def _string(value: str) -> str:
-    import json
-
-    return json.dumps(value)  # a JSON string is a valid TOML basic string
 
 
 KIND = DifferentialDriveKind()
