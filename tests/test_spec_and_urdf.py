@@ -368,3 +368,28 @@ def test_wheel_turning_about_a_vertical_axis_is_a_wheel_error(tmp_path):
     text = replace_joint_block(PAPER_URDF.read_text(), "wheel_left_joint", '<axis xyz="0 1 0"/>', '<axis xyz="0 0 1"/>')
     with pytest.raises(WheelError, match="wheel_left_joint"):
         mobmanip.load_robot(write_variant(tmp_path, text))
+
+
+# ----- xacro substitutions left in a URDF -----
+
+
+def test_optenv_substitution_reads_as_its_default(tmp_path, monkeypatch):
+    """``$(optenv NAME DEFAULT)`` (as in Husky's shipped URDF) is its default, whatever the environment."""
+    monkeypatch.setenv("ARM_XYZ", "9 9 9")
+    text = replace_joint_block(
+        PAPER_URDF.read_text(), "arm_right_2_joint", 'xyz="0.5 0.0 0.0"', 'xyz="$(optenv ARM_XYZ 0.5 0.0 0.0)"'
+    )
+    robot = mobmanip.load_robot(write_variant(tmp_path, text))
+    reference = mobmanip.load_robot("planar_dual_arm")
+    q = reference.configuration((0.3, -0.2, 0.7), {"arm_right_2_joint": 0.4, "arm_left_3_joint": -0.9})
+    np.testing.assert_array_equal(
+        mobmanip.unified_jacobian(robot, q, "planar"), mobmanip.unified_jacobian(reference, q, "planar")
+    )
+
+
+@pytest.mark.parametrize("substitution", ["$(arg arm_roll)", "$(find my_robot)", "$(optenv ONLY_A_NAME)"])
+def test_other_xacro_substitution_is_a_urdf_error_naming_it_and_its_line(tmp_path, substitution):
+    text = replace_joint_block(PAPER_URDF.read_text(), "arm_right_2_joint", 'rpy="0 0 0"', f'rpy="{substitution}"')
+    line = text[: text.index(substitution)].count("\n") + 1
+    with pytest.raises(UrdfError, match=rf"line {line}: unexpanded xacro substitution '{re.escape(substitution)}'"):
+        mobmanip.load_robot(write_variant(tmp_path, text))

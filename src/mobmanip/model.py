@@ -41,6 +41,7 @@ from .urdf import (
     mimic_joints,
     read_urdf,
     subtree_links,
+    urdf_text,
 )
 
 
@@ -447,7 +448,11 @@ def locked_joints(model: pin.Model, reference: Mapping[str, float], keep: set[st
 
 def _build_model(spec: RobotSpec) -> pin.Model:
     try:
-        model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
+        text = urdf_text(spec.urdf)
+        if text is None:
+            model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
+        else:
+            model = pin.buildModelFromXML(text, pin.JointModelPlanar())
     except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
         raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {exc}") from exc
     locked, q_ref = locked_joints(model, spec.reference, keep=set(spec.active_joint_names))
