@@ -301,6 +301,7 @@ def detect_spec(
         default_task = "planar" if _planar(urdf, active - drive) else "spatial"
 
     urdf_limits = {j: joint_limits(urdf, j) for j in sorted(active)}
+    urdf_limits.update(kind.urdf_limits(wheel_spec, urdf))
     spec = RobotSpec(
         name=name or urdf.robot.name or path.stem,
         urdf=path.resolve(),
@@ -312,10 +313,13 @@ def detect_spec(
         torso=torso_joints,
         package_dirs=(path.resolve().parent,),
     )
-    own_limits = kind.toml_limit_hints(wheel_spec)
-    if own_limits:
-        names = ", ".join(name for name, _ in own_limits)
-        notes.append(f"a {kind.name} platform needs limits for {names} in [limits.velocity] and [limits.effort]")
+    needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
+    needed += [name for name, pair in kind.urdf_limits(wheel_spec, urdf).items() if None in pair]
+    if needed:
+        notes.append(
+            f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "
+            "[limits.effort] (the URDF gives none)"
+        )
     return Detection(spec=spec, shared_joints=shared, notes=tuple(notes), urdf_limits=urdf_limits)
 
 
@@ -425,7 +429,8 @@ def spec_to_toml(
         ]
     out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg", ""]
     hints = dict(kind.toml_limit_hints(spec.wheels))
-    active = list(hints) + list(spec.active_joint_names)
+    joints = [j for j in spec.active_joint_names if kind.limits_by_joint or j not in spec.wheel_joint_names]
+    active = list(kind.limit_names(spec.wheels)) + joints
     for kind, table, unit in (
         ("velocity", spec.velocity_limits, "rad/s or m/s"),
         ("effort", spec.effort_limits, "N m or N"),

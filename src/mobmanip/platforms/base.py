@@ -222,6 +222,13 @@ class PlatformKind(ABC):
         """The spec's ``[wheels]`` section (with comments) for ``init-spec``; empty if none."""
         return []
 
+    #: Whether the wheel joints themselves take limits (False: the kind's own names do).
+    limits_by_joint: ClassVar[bool] = True
+
+    def urdf_limits(self, wheels: WheelsSpec | None, urdf) -> Mapping[str, tuple[float | None, float | None]]:
+        """(velocity, effort) that the URDF implies for the kind's own :meth:`limit_names`."""
+        return {}
+
     def toml_limit_hints(self, wheels: WheelsSpec | None) -> list[tuple[str, str]]:
-        """(name, comment) of limit names that are not URDF joints, for ``init-spec``."""
+        """(name, comment) of own limit names the URDF cannot give, for ``init-spec``."""
         return []
