@@ -148,7 +148,7 @@ def analyze(
             raise TaskError(
                 f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
             )
-    if method == "auto" and kernel_available():
+    if method == "auto" and kernel_available() and robot.constant_null_space:  # the kernel freezes S
         return _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
     return _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
 

@@ -10,7 +10,7 @@ compares kind names. Adding a kind is a new module here and one line in :data:`K
 from __future__ import annotations
 
 from ..errors import SpecError
-from . import differential_drive, fixed, omnidirectional, skid_steer
+from . import differential_drive, fixed, omnidirectional, skid_steer, steered
 from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec
 from .differential_drive import DifferentialDrive, WheelSpec
 from .fixed import LockedPlatform
@@ -24,6 +24,7 @@ KINDS: dict[str, PlatformKind] = {
         fixed.KIND,
         omnidirectional.KIND,
         skid_steer.KIND,
+        steered.KIND,
     )
 }
 

@@ -200,8 +200,8 @@ class DifferentialDriveKind(PlatformKind):
         drive = [c for c in candidates if c.lateral and not c.carried_by_rotating_joint]
         if len(drive) > 2 and sum(c.driven for c in drive) >= 2:
             drive = [c for c in drive if c.driven]
-        if not drive:
-            return None
+        if not drive or (not any(c.driven for c in drive) and any(c.driven for c in candidates)):
+            return None  # no wheels on an axle, or idle ones while a wheel elsewhere is driven
         if len(drive) != 2:
             what = "only one drive wheel" if len(drive) == 1 else f"{len(drive)} possible drive wheels"
             others = [c for c in candidates if c not in drive]
