@@ -1,11 +1,13 @@
-"""Sweeps: the ellipsoids' indices over object direction, distance, platform heading and limits.
+"""Sweeps: the measures' indices over object direction, distance, platform heading and limits.
 
 A sweep places the object at direction ``angle`` (deg, from the platform heading, 0 in front,
 90 to the left) and horizontal ``distance`` (m) from the arms' reference point, turns the
 platform to ``heading`` (deg), and scales the wheels' velocity and effort limits; at every grid
-point it records, for the kinematic and the dynamic ellipsoid, the volume, the isotropy, the
-semi-axes and the directional capacity (how far the ellipsoid reaches along a direction:
-``max d . p`` over it, for a unit d).
+point it records, for each measure swept (by default the kinematic and the dynamic ellipsoid;
+any measure of :mod:`mobmanip.measures` with a batch form), the volume, the isotropy, the
+directional capacity (how far the set reaches along a direction: ``max d . p`` over it, for a
+unit d), the empty and degenerate flags and the measure's per-axis arrays (the ellipsoids'
+semi-axes).
 
 The arms' postures depend on (angle, distance) only; they are found once, in the calling
 process, before the grid's configurations are analysed. Two providers (``SweepSpec.postures``):
@@ -55,17 +57,21 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .batch import BatchSetup, EllipsoidBatch, check_configurations, default_chunk, ellipsoids_from_terms, iter_terms
+from .batch import BatchSetup, check_configurations, default_chunk, iter_terms
 from .errors import MobmanipError, SpecError, UsageError
 from .io import atomic_output, save_figure
+from .measure import TaskSetBatch
+from .measures import BatchRequest, Measure, evaluate_batch, resolve_measures
 from .model import Robot, load_robot
 from .posture import POSITION_TOLERANCE, IKPostureTable, reference_configuration, solve_postures
 from .tasks import get_task
 
 #: Grid axes in order: the result arrays have this shape (one entry per value).
 AXES = ("angle_deg", "distance", "heading_deg", "wheel_velocity_scale", "wheel_effort_scale")
-#: Per-ellipsoid scalar indices recorded by a sweep.
+#: Scalar indices recorded by a sweep for every measure.
 SCALAR_INDICES = ("volume", "isotropy", "capacity")
+#: Flags recorded by a sweep for every measure.
+FLAGS = ("degenerate", "empty")
 #: Where the arms' postures come from (see the module's docstring).
 POSTURE_METHODS = ("auto", "planar", "ik")
 
@@ -555,6 +561,9 @@ class SweepSpec:
         reference: the inverse kinematics' reference posture, joint positions by name (a
             mapping or (name, value) pairs; joints not named stay at home); ``None``: the spec's
             hold posture, else the home configuration. Stored as a tuple of pairs.
+        measures: the measures to sweep, by name (each needs a batch form, see
+            :mod:`mobmanip.measures`); ``None``: the default ones (``kinematic``, ``dynamic``).
+            :func:`run_sweep` stores them resolved, in the registry's order.
     """
 
     robot: str
@@ -567,8 +576,15 @@ class SweepSpec:
     direction: str | tuple[float, ...] = "radial"
     postures: str = "auto"
     reference: tuple[tuple[str, float], ...] | None = None
+    measures: tuple[str, ...] | None = None
 
     def __post_init__(self):
+        if self.measures is not None:
+            names = (self.measures,) if isinstance(self.measures, str) else self.measures
+            try:
+                object.__setattr__(self, "measures", tuple(names))
+            except TypeError:
+                raise UsageError(f"measures must be measure names, got {self.measures!r}") from None
         if self.reference is not None:
             pairs = self.reference.items() if isinstance(self.reference, Mapping) else self.reference
             try:
@@ -634,24 +650,31 @@ def _directions(spec: SweepSpec, m: int, alpha_world: np.ndarray) -> np.ndarray:
     return d
 
 
-def _record(e: EllipsoidBatch, directions: np.ndarray, rows: np.ndarray, out: dict, prefix: str, col: int):
+def _record(e: TaskSetBatch, measure: Measure, directions: np.ndarray, rows: np.ndarray, out: dict, col: int):
+    """Store one measure's indices of a chunk's rows at limit column ``col``."""
+    prefix = measure.name
     out[f"{prefix}_volume"][rows, col] = e.volume
     out[f"{prefix}_isotropy"][rows, col] = e.isotropy
     capacity = e.support(directions)
     out[f"{prefix}_capacity"][rows, col] = np.where(e.empty, np.nan, capacity)
-    out[f"{prefix}_semi_axes"][rows, col] = e.semi_axes
+    for attribute, _ in measure.axis_indices:
+        out[f"{prefix}_{attribute}"][rows, col] = getattr(e, attribute)
     out[f"{prefix}_degenerate"][rows, col] = e.degenerate
     out[f"{prefix}_empty"][rows, col] = e.empty
 
 
-def _empty_chunk(n: int, nv: int, ne: int, m: int) -> dict:
+def _empty_chunk(n: int, nv: int, ne: int, m: int, measures: tuple[Measure, ...]) -> dict:
+    """NaN-filled (False for flags) result arrays of a chunk of n configurations: per measure,
+    one column per value of its limit scale (nv velocity, ne effort scales)."""
     out = {"reachable": np.zeros(n, dtype=bool)}
-    for prefix, count in (("kinematic", nv), ("dynamic", ne)):
+    for measure in measures:
+        prefix, count = measure.name, nv if measure.quantity.limits == "velocity" else ne
         for name in SCALAR_INDICES:
             out[f"{prefix}_{name}"] = np.full((n, count), np.nan)
-        out[f"{prefix}_semi_axes"] = np.full((n, count, m), np.nan)
-        out[f"{prefix}_degenerate"] = np.zeros((n, count), dtype=bool)
-        out[f"{prefix}_empty"] = np.zeros((n, count), dtype=bool)
+        for attribute, _ in measure.axis_indices:
+            out[f"{prefix}_{attribute}"] = np.full((n, count, m), np.nan)
+        for flag in FLAGS:
+            out[f"{prefix}_{flag}"] = np.zeros((n, count), dtype=bool)
     return out
 
 
@@ -662,7 +685,8 @@ def _run_job(job: _Job) -> tuple[int, dict]:
     flat = np.arange(job.start, job.stop)
     qs, reachable = sweep_configurations(robot, grid, job.table, flat)
     nv, ne, m = len(grid.wheel_velocity_scale), len(grid.wheel_effort_scale), setup.m
-    out = _empty_chunk(len(flat), nv, ne, m)
+    measures = resolve_measures(job.spec.measures, sweep=True)
+    out = _empty_chunk(len(flat), nv, ne, m, measures)
     out["reachable"][:] = reachable
     rows = np.flatnonzero(reachable)
     if rows.size == 0:
@@ -677,23 +701,18 @@ def _run_job(job: _Job) -> tuple[int, dict]:
         n = t.n
         sub = rows[start : start + n]
         dirs = directions[start : start + n]
-        # one pass per scale, both ellipsoids together while both have scales left
+        # one pass per scale, every measure that still has a scale left at once (measures that
+        # share a batch form, like the two ellipsoids, in one call)
         for col in range(max(len(vlims), len(elims))):
-            kin = EllipsoidBatch.allocate(n, m) if col < len(vlims) else None
-            dyn = EllipsoidBatch.allocate(n, m) if col < len(elims) else None
-            ellipsoids_from_terms(
-                setup,
-                t,
-                velocity_limits=vlims[col] if kin is not None else None,
-                effort_limits=elims[col] if dyn is not None else None,
-                decoupled=job.spec.decoupled,
-                kinematic=kin,
-                dynamic=dyn,
-            )
-            if kin is not None:
-                _record(kin, dirs, sub, out, "kinematic", col)
-            if dyn is not None:
-                _record(dyn, dirs, sub, out, "dynamic", col)
+            limits = {}
+            for measure in measures:
+                by_scale = vlims if measure.quantity.limits == "velocity" else elims
+                if col < len(by_scale):
+                    limits[measure.name] = by_scale[col]
+            results = evaluate_batch(BatchRequest(setup, t, limits, job.spec.decoupled))
+            for measure in measures:
+                if measure.name in limits:
+                    _record(results[measure.name], measure, dirs, sub, out, col)
     return job.start, out
 
 
@@ -706,10 +725,12 @@ class SweepResult:
     """Indices over a sweep grid.
 
     ``indices[name]`` has the grid's shape (angle, distance, heading, wheel velocity scale,
-    wheel effort scale), with a trailing task axis for ``*_semi_axes``. Names:
-    ``{kinematic,dynamic}_{volume,isotropy,capacity,semi_axes,degenerate,empty}``. Kinematic
-    indices do not depend on the effort scale, nor dynamic ones on the velocity scale; both are
-    repeated along that axis. Unreachable grid points hold NaN (and False flags).
+    wheel effort scale), with a trailing task axis for per-axis arrays (``*_semi_axes``). Names:
+    ``<measure>_{volume,isotropy,capacity,degenerate,empty}`` for every measure swept, and its
+    per-axis arrays (``<measure>_semi_axes`` for the ellipsoids), e.g. ``kinematic_volume``.
+    Indices of velocities (kinematic) do not depend on the effort scale, nor those of
+    accelerations (dynamic) on the velocity scale; both are repeated along that axis.
+    Unreachable grid points hold NaN (and False flags).
 
     Attributes:
         spec: what was swept.
@@ -743,16 +764,21 @@ class SweepResult:
         values[~reachable] = np.nan
         return table.joint_names, values.reshape(a, d, -1)
 
+    @property
+    def measures(self) -> tuple[Measure, ...]:
+        """The definitions of the measures swept, in order."""
+        return resolve_measures(self.spec.measures, sweep=True)
+
     def index(self, name: str) -> np.ndarray:
         """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
 
         Raises:
             UsageError: an unknown name (the message lists the valid ones).
         """
-        kind, what, k = check_index_name(name, len(self.task_axes))
+        kind, what, k = check_index_name(name, len(self.task_axes), self.spec.measures)
         if k is None:
             return self.indices[f"{kind}_{what}"]
-        return self.indices[f"{kind}_semi_axes"][..., k - 1]
+        return self.indices[f"{kind}_{what}"][..., k - 1]
 
     def save_npz(self, path: str | Path) -> Path:
         """Write the grid axes, the indices, the postures and the settings to a NumPy ``.npz`` file.
@@ -809,14 +835,16 @@ class SweepResult:
         columns, header = [g.ravel() for g in grids], list(AXES)
         columns.append(reach.ravel().astype(int))
         header.append("reachable")
-        for kind in ("kinematic", "dynamic"):
+        for measure in self.measures:
+            kind = measure.name
             for name in SCALAR_INDICES:
                 columns.append(self.indices[f"{kind}_{name}"].ravel())
                 header.append(f"{kind}_{name}")
-            for k in range(m):
-                columns.append(self.indices[f"{kind}_semi_axes"][..., k].ravel())
-                header.append(f"{kind}_semi_axis_{k + 1}")
-            for flag in ("degenerate", "empty"):
+            for attribute, stem in measure.axis_indices:
+                for k in range(m):
+                    columns.append(self.indices[f"{kind}_{attribute}"][..., k].ravel())
+                    header.append(f"{kind}_{stem}_{k + 1}")
+            for flag in FLAGS:
                 columns.append(self.indices[f"{kind}_{flag}"].ravel().astype(int))
                 header.append(f"{kind}_{flag}")
         with atomic_output(path, "w", newline="") as f:
@@ -829,27 +857,40 @@ class SweepResult:
         return path
 
 
-def check_index_name(name: str, m: int) -> tuple[str, str, int | None]:
-    """Split an index name into (kind, index, semi-axis number or None).
+def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | None]:
+    """Split an index name into (measure, index or per-axis array, axis number or None):
+    ``"kinematic.volume"`` gives ``("kinematic", "volume", None)``, ``"dynamic.semi_axis_2"``
+    gives ``("dynamic", "semi_axes", 2)``.
+
+    Args:
+        name: ``<measure>.<index>``.
+        m: task dimension.
+        measures: the measures swept (names; ``None``: the default ones).
 
     Raises:
         UsageError: an unknown name (the message lists the valid ones for an m-dimensional task).
     """
     kind, _, what = str(name).replace("-", "_").partition(".")
-    if kind in ("kinematic", "dynamic"):
+    for measure in resolve_measures(measures, sweep=True):
+        if kind != measure.name:
+            continue
         if what in SCALAR_INDICES:
             return kind, what, None
-        if what.startswith("semi_axis_") and what[10:].isdigit() and 1 <= int(what[10:]) <= m:
-            return kind, "semi_axes", int(what[10:])
-    raise UsageError(f"unknown index {name!r}; expected one of {', '.join(index_names(m))}")
+        for attribute, stem in measure.axis_indices:
+            number = what[len(stem) + 1 :] if what.startswith(f"{stem}_") else ""
+            if number.isdigit() and 1 <= int(number) <= m:
+                return kind, attribute, int(number)
+    raise UsageError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
 
 
-def index_names(m: int) -> list[str]:
-    """Names accepted by :meth:`SweepResult.index` for an m-dimensional task."""
+def index_names(m: int, measures=None) -> list[str]:
+    """Names accepted by :meth:`SweepResult.index` for an m-dimensional task and the measures
+    swept (names; ``None``: the default ones)."""
     out = []
-    for kind in ("kinematic", "dynamic"):
-        out += [f"{kind}.{name}" for name in SCALAR_INDICES]
-        out += [f"{kind}.semi_axis_{k}" for k in range(1, m + 1)]
+    for measure in resolve_measures(measures, sweep=True):
+        out += [f"{measure.name}.{name}" for name in SCALAR_INDICES]
+        for _, stem in measure.axis_indices:
+            out += [f"{measure.name}.{stem}_{k}" for k in range(1, m + 1)]
     return out
 
 
@@ -902,6 +943,7 @@ def run_sweep(
 
     Raises:
         SpecError: ``postures="planar"`` on a robot without planar 3-joint arms sharing their base.
+        UnknownMeasureError, MeasureError: an unknown measure, or one without a batch form.
         UnreachableGridError: the arms reach no grid point.
         GridError, UsageError: bad grid or settings.
     """
@@ -911,7 +953,8 @@ def run_sweep(
         raise UsageError(f"workers must be a positive integer, got {workers!r}")
     robot = spec.load()
     task = get_task(spec.task or robot.spec.default_task)
-    spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim))
+    measures = tuple(measure.name for measure in resolve_measures(spec.measures, sweep=True))
+    spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim), measures=measures)
     BatchSetup(robot, task.name, spec.object_mass)  # validate the object mass here, once
     n_workers = workers or default_workers()
     with contextlib.ExitStack() as stack:
@@ -937,7 +980,7 @@ def _run_sweep(spec, grid, robot, task, executor, window, chunk_size, progress) 
     bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     jobs = [_Job(spec, grid, _chunk_table(grid, table, s, e), s, e, chunk_size) for s, e in bounds]
     nv, ne, m = len(grid.wheel_velocity_scale), len(grid.wheel_effort_scale), task.dim
-    merged = _empty_chunk(n, nv, ne, m)
+    merged = _empty_chunk(n, nv, ne, m, resolve_measures(spec.measures, sweep=True))
 
     from tqdm import tqdm
 
@@ -1062,21 +1105,22 @@ def _unreachable_message(robot: Robot, grid: SweepGrid, table) -> str:
 
 def _assemble(spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable) -> SweepResult:
     a, d, h, nv, ne = grid.shape
-    m = task.dim
     indices = {}
-    for key, value in merged.items():
-        if key == "reachable":
-            continue
-        kind = key.split("_", 1)[0]
-        count = nv if kind == "kinematic" else ne
-        tail = value.shape[2:]
-        arr = value.reshape((a, d, h, count) + tail)
-        if kind == "kinematic":
-            arr = np.broadcast_to(arr[:, :, :, :, None], (a, d, h, nv, ne) + tail)
-        else:
-            arr = np.broadcast_to(arr[:, :, :, None, :], (a, d, h, nv, ne) + tail)
-        indices[key] = np.ascontiguousarray(arr)
-    del m
+    for measure in resolve_measures(spec.measures, sweep=True):
+        velocity = measure.quantity.limits == "velocity"
+        count = nv if velocity else ne
+        keys = [f"{measure.name}_{name}" for name in SCALAR_INDICES]
+        keys += [f"{measure.name}_{attribute}" for attribute, _ in measure.axis_indices]
+        keys += [f"{measure.name}_{flag}" for flag in FLAGS]
+        for key in keys:
+            value = merged[key]
+            tail = value.shape[2:]
+            arr = value.reshape((a, d, h, count) + tail)
+            if velocity:
+                arr = np.broadcast_to(arr[:, :, :, :, None], (a, d, h, nv, ne) + tail)
+            else:
+                arr = np.broadcast_to(arr[:, :, :, None, :], (a, d, h, nv, ne) + tail)
+            indices[key] = np.ascontiguousarray(arr)
     return SweepResult(
         spec=spec,
         grid=grid,
