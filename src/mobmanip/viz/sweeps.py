@@ -71,7 +71,8 @@ def object_angle_frames(
         task: task space (default the spec's).
         angles_deg: the directions (deg).
         locked: also draw the locked-platform pair.
-        **options: passed to :func:`mobmanip.analysis.analyze` (``object_mass``, ``decoupled``).
+        **options: passed to :func:`mobmanip.analysis.analyze` (``object_mass``, ``decoupled``,
+            ``measures``).
     """
     paper, posture = _paper_like(robot)
     if posture is not None and q is not None:
