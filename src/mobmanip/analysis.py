@@ -192,7 +192,7 @@ def analyze(
         analysis = _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
     else:
         analysis = _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
-    if tuple(analysis.measures) != tuple(m.name for m in wanted):
+    if measures is not None and tuple(analysis.measures) != tuple(m.name for m in wanted):
         analysis = _with_measures(analysis, wanted)
     return analysis
 
@@ -235,7 +235,29 @@ def _assemble(
     ones). The kinematic and dynamic ellipsoids may be given (the compiled path computes them);
     every measure not given is computed from the terms by its definition (the reference path)."""
     P_decoupled = decouple(robot, P)
-    analysis = Analysis(
+    given = {KINEMATIC.name: kin, DYNAMIC.name: dynamic}
+    terms = None
+    sets = {}
+    for measure in resolve_measures(measures):
+        found = given.get(measure.name)
+        if found is None:
+            if terms is None:
+                terms = MeasureTerms(
+                    task=task.name,
+                    J_u=J_u,
+                    W=W,
+                    P=P_decoupled if decoupled else P,
+                    Q=robot.Q,
+                    xi=xi,
+                    M_o=obj.inertia_matrix(task),
+                    g_o=obj.gravity_vector(task),
+                    velocity_limits=robot.velocity_limits,
+                    effort_limits=robot.effort_limits,
+                    decoupled=decoupled,
+                )
+            found = measure.compute(terms)
+        sets[measure.name] = found
+    return Analysis(
         robot=robot,
         q=q,
         task=task.name,
@@ -248,20 +270,17 @@ def _assemble(
         end_effector_positions=positions,
         held_object=obj,
         grasp_matrix=W,
-        measures=types.MappingProxyType({}),
+        measures=types.MappingProxyType(sets),
     )
-    return _with_measures(analysis, resolve_measures(measures), {KINEMATIC.name: kin, DYNAMIC.name: dynamic})
 
 
-def _with_measures(analysis: Analysis, wanted: Iterable[Measure], given: Mapping | None = None) -> Analysis:
-    """The analysis holding exactly the measures ``wanted``: each taken from ``given``, else from
-    the analysis, else computed from its terms."""
+def _with_measures(analysis: Analysis, wanted: Iterable[Measure]) -> Analysis:
+    """The analysis holding exactly the measures ``wanted``: each taken from the analysis, else
+    computed from its terms."""
     terms = None
     out = {}
     for measure in wanted:
-        found = None if given is None else given.get(measure.name)
-        if found is None:
-            found = analysis.measures.get(measure.name)
+        found = analysis.measures.get(measure.name)
         if found is None:
             terms = MeasureTerms.of(analysis) if terms is None else terms
             found = measure.compute(terms)

@@ -219,6 +219,7 @@ class Measure:
 
 
 _REGISTRY: dict[str, Measure] = {}
+_DEFAULTS: list[tuple[Measure, ...]] = []  # the resolved default measures, while the registry is unchanged
 #: The registered measures by name, in registration order (read-only; see :func:`register_measure`).
 MEASURES: Mapping[str, Measure] = types.MappingProxyType(_REGISTRY)
 
@@ -242,6 +243,7 @@ def register_measure(measure: Measure, *, replace: bool = False) -> Measure:
         if other.name != measure.name and other.json_key == measure.json_key:
             raise MeasureError(f"JSON key {measure.json_key!r} of {measure.name!r} is taken by {other.name!r}")
     _REGISTRY[measure.name] = measure
+    _DEFAULTS.clear()
     return measure
 
 
@@ -252,6 +254,7 @@ def unregister_measure(name: str) -> Measure:
         UnknownMeasureError: no measure of that name.
     """
     get_measure(name)
+    _DEFAULTS.clear()
     return _REGISTRY.pop(name)
 
 
@@ -290,13 +293,11 @@ def resolve_measures(names: Iterable[str] | str | None = None, *, sweep: bool = 
         MeasureError: no measure asked for, or (``sweep``) one without a batch form.
     """
     if names is None:
-        names = default_measures()
-    elif isinstance(names, str):
-        names = (names,)
-    wanted = {get_measure(name).name for name in names}
-    if not wanted:
-        raise MeasureError(f"no measure asked for; registered: {', '.join(_REGISTRY)}")
-    out = tuple(m for name, m in _REGISTRY.items() if name in wanted)
+        if not _DEFAULTS:  # analyze asks for these on every call: resolve them once
+            _DEFAULTS.append(_resolve(default_measures()))
+        out = _DEFAULTS[0]
+    else:
+        out = _resolve((names,) if isinstance(names, str) else names)
     if sweep:
         missing = [m.name for m in out if not m.sweepable]
         if missing:
@@ -306,6 +307,13 @@ def resolve_measures(names: Iterable[str] | str | None = None, *, sweep: bool = 
                 f"sweepable: {', '.join(able)}"
             )
     return out
+
+
+def _resolve(names: Iterable[str]) -> tuple[Measure, ...]:
+    wanted = {get_measure(name).name for name in names}
+    if not wanted:
+        raise MeasureError(f"no measure asked for; registered: {', '.join(_REGISTRY)}")
+    return tuple(m for name, m in _REGISTRY.items() if name in wanted)
 
 
 def evaluate_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
