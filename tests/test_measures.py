@@ -355,6 +355,22 @@ def test_command_line_summary_and_json_loop_over_measures(tmp_path, capsys, toys
     assert err.startswith("mobmanip: error: unknown measure 'nope'") and "kinematic_box" in err
 
 
+def test_case_study_json_lists_a_measure_beside_its_figures_ellipsoid(robot, toys):
+    from mobmanip.casestudy import run_case_study
+
+    study = run_case_study(
+        robot, angles_deg=(90.0,), platform_speeds=(1.0,), wheel_torques=(50.0,), measures=["doubled"]
+    )
+    document = json.loads(json.dumps(study.to_dict()))
+    for case, entry in zip(study.kinematic, document["kinematic"]):  # velocity: beside Fig. 3's ellipses
+        assert list(entry)[-1] == "doubled_ellipsoid"
+        np.testing.assert_allclose(entry["doubled_ellipsoid"]["semi_axes"], 2.0 * np.array(entry["semi_axes"]))
+        np.testing.assert_array_equal(entry["semi_axes"], case.analysis.kinematic.semi_axes)
+    assert all("doubled_ellipsoid" not in entry for entry in document["dynamic"])  # not an acceleration set
+    plain = run_case_study(robot, angles_deg=(90.0,), platform_speeds=(1.0,), wheel_torques=(50.0,)).to_dict()
+    assert [list(entry) for entry in plain["kinematic"]] == [list(entry)[:-1] for entry in document["kinematic"]]
+
+
 # --------------------------------------------------------------------------- sweeps
 
 
