@@ -837,7 +837,9 @@ def test_stretched_arms_give_a_flat_ellipsoid(paper, own):
         assert E.degenerate and not E.empty
         assert E.semi_axes[1] == 0.0 and E.semi_axes[0] > 0.0
         assert abs(E.axes[1] @ u) == pytest.approx(1.0, abs=1e-9)
-        for value in E.to_dict().values():
+        document = E.to_dict()
+        assert document.pop("kind") == "ellipsoid"
+        for value in document.values():
             assert np.all(np.isfinite(value))
         assert E.contains(0.9 * E.semi_axes[0] * n)[0]
         assert not E.contains(1e-6 * u)[0] and not E.contains(0.5 * E.semi_axes[0] * n + 1e-6 * u)[0]

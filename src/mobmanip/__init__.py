@@ -2,29 +2,67 @@
 
 Unified kinematic and dynamic task-space ellipsoids for mobile manipulators whose platform is
 subject to nonholonomic constraints, built on Pinocchio.
+
+The public API is what this package exports (below) and the documented modules the README
+names: :mod:`mobmanip.sweep` (grids), :mod:`mobmanip.casestudy` (the paper's Section 4),
+:mod:`mobmanip.measures` (the registry of measures), :mod:`mobmanip.errors` (every exception)
+and :mod:`mobmanip.viz` (the viewer and figures).
 """
 
 from .analysis import Analysis, analyze
-from .batch import BatchAnalysis, analyze_batch
+from .batch import BatchAnalysis, EllipsoidBatch, analyze_batch
 from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
 from .ellipsoids import Ellipsoid
 from .errors import MobmanipError
+from .measure import TaskSet, TaskSetBatch
+from .measures import (
+    ACCELERATION,
+    VELOCITY,
+    BatchRequest,
+    Measure,
+    MeasureTerms,
+    Quantity,
+    default_measures,
+    get_measure,
+    measure_names,
+    register_measure,
+    unregister_measure,
+)
 from .model import Robot, load_robot
 from .spec import RobotSpec, load_spec
+from .sweep import SweepGrid, SweepResult, SweepSpec, run_sweep
 
 __all__ = [
+    "ACCELERATION",
+    "VELOCITY",
     "Analysis",
     "BatchAnalysis",
+    "BatchRequest",
     "Ellipsoid",
+    "EllipsoidBatch",
+    "Measure",
+    "MeasureTerms",
     "MobmanipError",
+    "Quantity",
     "ReducedDynamics",
     "Robot",
     "RobotSpec",
+    "SweepGrid",
+    "SweepResult",
+    "SweepSpec",
+    "TaskSet",
+    "TaskSetBatch",
     "analyze",
     "analyze_batch",
+    "default_measures",
+    "get_measure",
     "load_robot",
     "load_spec",
+    "measure_names",
     "reduced_dynamics",
+    "register_measure",
+    "run_sweep",
     "unified_jacobian",
+    "unregister_measure",
 ]
 __version__ = "0.1.0"

@@ -1,21 +1,27 @@
-"""Analyse one configuration: reduced dynamics, unified Jacobian, grasp and both ellipsoids.
+"""Analyse one configuration: reduced dynamics, unified Jacobian, grasp and the measures.
 
 :func:`analyze` is the single entry point behind ``mobmanip analyze`` and the Python API;
-:meth:`Analysis.to_dict` gives the JSON document the command writes.
+:meth:`Analysis.to_dict` gives the JSON document the command writes. The measures computed
+(by default the paper's kinematic and dynamic ellipsoids) come from :mod:`mobmanip.measures`.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import types
 import weakref
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
 from .batch import BatchSetup, EllipsoidBatch, _kernel_fast, _terms, _Workspace, kernel_available
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
-from .ellipsoids import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
-from .errors import TaskError
+from .ellipsoids import Ellipsoid
+from .errors import MeasureError, TaskError
 from .grasp import HeldObject
+from .measure import TaskSet
+from .measures import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
 from .model import Robot
 from .tasks import TaskSpace, get_task
 
@@ -37,8 +43,8 @@ class Analysis:
         end_effector_positions: world positions of the end effectors, (n_arms, 3).
         held_object: the object (its centre is the task point), or the end effector itself.
         grasp_matrix: W, (m, m * n_arms).
-        kinematic: the unified kinematic ellipsoid (m/s, rad/s).
-        dynamic: the unified dynamic ellipsoid (m/s^2, rad/s^2).
+        measures: the task-space sets computed, by measure name, in the registry's order
+            (read-only); see :mod:`mobmanip.measures`. By default ``kinematic`` and ``dynamic``.
     """
 
     robot: Robot
@@ -53,11 +59,37 @@ class Analysis:
     end_effector_positions: np.ndarray
     held_object: HeldObject
     grasp_matrix: np.ndarray
-    kinematic: Ellipsoid
-    dynamic: Ellipsoid
+    measures: Mapping[str, TaskSet]
+
+    def measure(self, name: str) -> TaskSet:
+        """The set of measure ``name``.
+
+        Raises:
+            UnknownMeasureError: no measure of that name is registered.
+            MeasureError: it is registered but was not computed for this analysis.
+        """
+        get_measure(name)
+        try:
+            return self.measures[name]
+        except KeyError:
+            raise MeasureError(
+                f"measure {name!r} was not computed in this analysis ({', '.join(self.measures)}); "
+                f"ask analyze(..., measures=(..., {name!r}))"
+            ) from None
+
+    @property
+    def kinematic(self) -> Ellipsoid:
+        """The unified kinematic ellipsoid (m/s, rad/s): ``measures["kinematic"]``."""
+        return self.measure(KINEMATIC.name)
+
+    @property
+    def dynamic(self) -> Ellipsoid:
+        """The unified dynamic ellipsoid (m/s^2, rad/s^2): ``measures["dynamic"]``."""
+        return self.measure(DYNAMIC.name)
 
     def to_dict(self) -> dict:
-        """A JSON-ready dictionary (matrices as lists of rows)."""
+        """A JSON-ready dictionary (matrices as lists of rows); each measure under its JSON key
+        (``kinematic_ellipsoid``, ``dynamic_ellipsoid``, ...)."""
         robot = self.robot
         obj = self.held_object
         return {
@@ -81,8 +113,7 @@ class Analysis:
             "velocity_limits": robot.velocity_limits.tolist(),
             "effort_limits": robot.effort_limits.tolist(),
             "grasp_matrix": self.grasp_matrix.tolist(),
-            "kinematic_ellipsoid": self.kinematic.to_dict(),
-            "dynamic_ellipsoid": self.dynamic.to_dict(),
+            **{get_measure(name).json_key: s.to_dict() for name, s in self.measures.items()},
         }
 
 
@@ -117,6 +148,7 @@ def analyze(
     held_object: HeldObject | None = None,
     decoupled: bool = False,
     method: str = "auto",
+    measures: Iterable[str] | None = None,
 ) -> Analysis:
     """Analyse the robot at configuration q (robot and object at rest).
 
@@ -128,13 +160,21 @@ def analyze(
         object_mass: mass of the default object (kg); defaults to the spec's.
         held_object: an explicit object (overrides ``object_mass``); its offsets must have one
             row per arm.
-        decoupled: use the decoupled P (no platform-arm interaction) for the dynamic ellipsoid.
+        decoupled: use the decoupled P (no platform-arm interaction) for the dynamic ellipsoid
+            (and every measure of accelerations).
+        measures: the measures to compute, by name (:func:`mobmanip.measures.measure_names`);
+            default: the default ones, ``("kinematic", "dynamic")``. They come out in the
+            registry's order.
         method: ``"auto"``: the compiled kernel of :mod:`mobmanip.batch` (closed forms with an
             a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
             at a singularity, is computed by the exact path); ``"exact"``: always the SVD-based
             :mod:`mobmanip.ellipsoids` (the reference; about 4x slower). Without Numba,
             ``"auto"`` is ``"exact"``.
+
+    Raises:
+        UnknownMeasureError: a measure name that is not registered (the message lists them).
     """
+    wanted = resolve_measures(measures)
     if method not in ("auto", "exact"):
         raise ValueError(f"method must be 'auto' or 'exact', got {method!r}")
     q = robot.check_configuration(q)
@@ -149,8 +189,12 @@ def analyze(
                 f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
             )
     if method == "auto" and kernel_available() and robot.constant_null_space:  # the kernel freezes S
-        return _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
-    return _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
+        analysis = _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
+    else:
+        analysis = _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
+    if measures is not None and tuple(analysis.measures) != tuple(m.name for m in wanted):
+        analysis = _with_measures(analysis, wanted)
+    return analysis
 
 
 def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
@@ -184,22 +228,35 @@ def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
     return _assemble(robot, q, task, decoupled, t.J_u[0], t.P[0], t.xi[0], positions, obj, W[0], kin, dynamic)
 
 
-def _assemble(robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None) -> Analysis:
-    """The Analysis from the terms; an ellipsoid not given is computed by the exact path."""
+def _assemble(
+    robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None, measures=None
+) -> Analysis:
+    """The Analysis from the terms, with the measures ``measures`` (names; default: the default
+    ones). The kinematic and dynamic ellipsoids may be given (the compiled path computes them);
+    every measure not given is computed from the terms by its definition (the reference path)."""
     P_decoupled = decouple(robot, P)
-    if kin is None:
-        kin = kinematic_ellipsoid(J_u, W, robot.velocity_limits)
-    if dynamic is None:
-        dynamic = dynamic_ellipsoid(
-            J_u,
-            W,
-            P_decoupled if decoupled else P,
-            robot.Q,
-            xi,
-            obj.inertia_matrix(task),
-            obj.gravity_vector(task),
-            robot.effort_limits,
-        )
+    given = {KINEMATIC.name: kin, DYNAMIC.name: dynamic}
+    terms = None
+    sets = {}
+    for measure in resolve_measures(measures):
+        found = given.get(measure.name)
+        if found is None:
+            if terms is None:
+                terms = MeasureTerms(
+                    task=task.name,
+                    J_u=J_u,
+                    W=W,
+                    P=P_decoupled if decoupled else P,
+                    Q=robot.Q,
+                    xi=xi,
+                    M_o=obj.inertia_matrix(task),
+                    g_o=obj.gravity_vector(task),
+                    velocity_limits=robot.velocity_limits,
+                    effort_limits=robot.effort_limits,
+                    decoupled=decoupled,
+                )
+            found = measure.compute(terms)
+        sets[measure.name] = found
     return Analysis(
         robot=robot,
         q=q,
@@ -213,9 +270,22 @@ def _assemble(robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None
         end_effector_positions=positions,
         held_object=obj,
         grasp_matrix=W,
-        kinematic=kin,
-        dynamic=dynamic,
+        measures=types.MappingProxyType(sets),
     )
+
+
+def _with_measures(analysis: Analysis, wanted: Iterable[Measure]) -> Analysis:
+    """The analysis holding exactly the measures ``wanted``: each taken from the analysis, else
+    computed from its terms."""
+    terms = None
+    out = {}
+    for measure in wanted:
+        found = analysis.measures.get(measure.name)
+        if found is None:
+            terms = MeasureTerms.of(analysis) if terms is None else terms
+            found = measure.compute(terms)
+        out[measure.name] = found
+    return dataclasses.replace(analysis, measures=types.MappingProxyType(out))
 
 
 _SETUPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

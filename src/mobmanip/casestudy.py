@@ -22,7 +22,9 @@ import pinocchio as pin
 
 from .analysis import Analysis, analyze
 from .errors import SpecError
+from .measures import DYNAMIC, KINEMATIC, get_measure
 from .model import Arm, Robot
+from .platforms import DifferentialDrive
 
 ANGLES_DEG = (0.0, 45.0, 90.0)
 PLATFORM_SPEEDS = (0.001, 0.5, 1.0)  # m/s, maximum rim speed of the wheels (Fig. 3)
@@ -47,7 +49,7 @@ class ArmPosture:
 
 
 def _check_paper_like(robot: Robot) -> None:
-    if robot.platform.kind != "differential_drive" or len(robot.arms) != 2:
+    if not isinstance(robot.platform, DifferentialDrive) or len(robot.arms) != 2:  # the paper's own platform
         raise SpecError(f"the case study needs a differential drive with two arms; {robot.name!r} does not fit")
     if any(len(arm.joint_names) != 3 for arm in robot.arms):
         raise SpecError(f"the case study needs two 3-joint arms; {robot.name!r} has other arms")
@@ -139,8 +141,20 @@ class CaseStudy:
     dynamic: tuple[DynamicCase, ...]
 
     def to_dict(self) -> dict:
+        """JSON-ready: each case gives its figure's ellipsoid (``semi_axes``, ``axes``) and every
+        other measure of the same quantity it was analysed with, under its JSON key (e.g. a
+        velocity polytope beside Fig. 3's ellipses)."""
+
         def ell(e):
             return {"semi_axes": e.semi_axes.tolist(), "axes": e.axes.tolist()}
+
+        def others(analysis: Analysis, figure: str) -> dict:
+            quantity = get_measure(figure).quantity
+            return {
+                get_measure(name).json_key: s.to_dict()
+                for name, s in analysis.measures.items()
+                if name != figure and get_measure(name).quantity == quantity
+            }
 
         return {
             "robot": self.robot.name,
@@ -154,6 +168,7 @@ class CaseStudy:
                     "object_angle_deg": c.angle_deg,
                     "platform_speed_max": c.platform_speed_max,
                     **ell(c.analysis.kinematic),
+                    **others(c.analysis, KINEMATIC.name),
                 }
                 for c in self.kinematic
             ],
@@ -163,6 +178,7 @@ class CaseStudy:
                     "wheel_torque_max": c.wheel_torque_max,
                     "decoupled": c.decoupled,
                     **ell(c.analysis.dynamic),
+                    **others(c.analysis, DYNAMIC.name),
                 }
                 for c in self.dynamic
             ],
@@ -176,6 +192,7 @@ def run_case_study(
     wheel_torques: Sequence[float] = WHEEL_TORQUES,
     task: str = "planar",
     progress: Callable[[str], None] | None = None,
+    measures: Sequence[str] | None = None,
 ) -> CaseStudy:
     """Run the Fig. 3 and Fig. 4 sweeps on a paper-like robot.
 
@@ -186,8 +203,12 @@ def run_case_study(
         wheel_torques: maximum wheel torques for Fig. 4 (N m).
         task: task space at the object.
         progress: called with a short message after each step.
+        measures: measures to compute besides the kinematic and dynamic ellipsoids (names, see
+            :mod:`mobmanip.measures`); ``None``: the default ones.
     """
     note = progress or (lambda message: None)
+    if measures is not None:
+        measures = (KINEMATIC.name, DYNAMIC.name, *measures)
     posture = optimal_posture(robot)
     note(
         f"optimal arm posture q2 = {posture.q[1]:.4f}, q3 = {posture.q[2]:.4f} rad, "
@@ -199,12 +220,13 @@ def run_case_study(
         q = configuration_at(robot, posture, angle)
         for speed in platform_speeds:
             variant = robot.with_wheel_limits(velocity=speed / radius)
-            kinematic.append(KinematicCase(angle, speed, analyze(variant, q, task)))
-        kinematic.append(KinematicCase(angle, None, analyze(robot.with_platform("fixed"), q, task)))
+            kinematic.append(KinematicCase(angle, speed, analyze(variant, q, task, measures=measures)))
+        kinematic.append(KinematicCase(angle, None, analyze(robot.with_platform("fixed"), q, task, measures=measures)))
         for decoupled in (True, False):
             for torque in wheel_torques:
                 variant = robot.with_wheel_limits(effort=torque)
-                dynamic.append(DynamicCase(angle, torque, decoupled, analyze(variant, q, task, decoupled=decoupled)))
+                case = analyze(variant, q, task, decoupled=decoupled, measures=measures)
+                dynamic.append(DynamicCase(angle, torque, decoupled, case))
         note(
             f"object at {angle:g} deg: {len(platform_speeds) + 1} kinematic and {2 * len(wheel_torques)} dynamic cases"
         )

@@ -20,11 +20,14 @@ when the part of Z mu_o that no acceleration can cancel already has norm >= 1.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from .errors import ModelError
+from .errors import ModelError, SetQueryError
+from .measure import TaskSet, check_dims, check_direction, check_points
 
 _RANK_RTOL = 1e-10
 # Fast paths assume full rank (J of full row rank, every W^T a_o reachable) and skip the null-space
@@ -44,8 +47,11 @@ def _null_space(A: np.ndarray, n: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class Ellipsoid:
+class Ellipsoid(TaskSet):
     """The set {c + sum_k s_k z_k e_k : ||z|| <= 1} in an m-dimensional task space.
+
+    A :class:`mobmanip.measure.TaskSet` of kind ``"ellipsoid"``: its capacities
+    (:meth:`radius_along`) are measured from its centre.
 
     Attributes:
         center: centre c, (m,).
@@ -65,8 +71,11 @@ class Ellipsoid:
     degenerate: bool
     empty: bool
 
+    kind: ClassVar[str] = "ellipsoid"
+
     @property
     def dim(self) -> int:
+        """Task dimension m."""
         return int(self.semi_axes.shape[0])
 
     @property
@@ -92,19 +101,32 @@ class Ellipsoid:
         return self.axes.T * self.semi_axes
 
     def support(self, direction: np.ndarray) -> float:
-        """max over the ellipsoid of d . p for a direction d (not necessarily unit)."""
-        d = np.asarray(direction, dtype=float)
+        """max over the ellipsoid of d . p for a direction d, (m,) (not necessarily unit):
+        d . c + ||G^T d||; 0 when empty.
+
+        Raises:
+            SetQueryError: d has the wrong shape, is zero or not finite.
+        """
+        d = check_direction(direction, self.dim)
+        if self.empty:
+            return 0.0
         return float(d @ self.center + np.linalg.norm(self.generator.T @ d))
 
     def radius_along(self, direction: np.ndarray) -> float:
-        """How far the ellipsoid reaches from its centre along a unit direction (capacity)."""
-        d = np.asarray(direction, dtype=float)
+        """How far the ellipsoid reaches from its centre along the unit direction of d (capacity);
+        0 when empty.
+
+        Raises:
+            SetQueryError: d has the wrong shape, is zero or not finite.
+        """
+        d = check_direction(direction, self.dim)
         d = d / np.linalg.norm(d)
         return float(np.linalg.norm(self.generator.T @ d))
 
     def contains(self, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-        """Whether points (n, m) lie in the ellipsoid (within ``tol`` in the normalised norm)."""
-        p = np.atleast_2d(np.asarray(points, dtype=float)) - self.center
+        """Whether points, (n, m) or (m,), lie in the ellipsoid (within ``tol`` in the normalised
+        norm, and ``tol`` in task units along a zero semi-axis); bool array (n,)."""
+        p = check_points(points, self.dim) - self.center
         if self.empty:
             return np.zeros(len(p), dtype=bool)
         coords = p @ self.axes.T  # components along each axis
@@ -116,25 +138,36 @@ class Ellipsoid:
             inside &= np.all(np.abs(coords[:, ~positive]) <= tol, axis=1)
         return inside
 
-    def project(self, dims: tuple[int, int] = (0, 1)) -> Ellipsoid:
-        """The shadow of the ellipsoid on two task coordinates (a 2-D ellipse)."""
-        return Ellipsoid.from_generator(self.center[list(dims)], self.generator[list(dims)], empty=self.empty)
+    def project(self, dims: Sequence[int] = (0, 1)) -> Ellipsoid:
+        """The shadow of the ellipsoid on the task coordinates ``dims`` (e.g. (0, 1) gives a 2-D
+        ellipse; the other coordinates are free).
 
-    def slice(self, dims: tuple[int, int] = (0, 1)) -> Ellipsoid:
-        """The cut through the centre in the plane of two task coordinates (others at the centre)."""
-        dims = list(dims)
+        Raises:
+            SetQueryError: ``dims`` repeated, empty or out of range.
+        """
+        dims = check_dims(dims, self.dim)
+        return Ellipsoid.from_generator(self.center[dims], self.generator[dims], empty=self.empty)
+
+    def slice(self, dims: Sequence[int] = (0, 1)) -> Ellipsoid:
+        """The cut through the centre in the task coordinates ``dims`` (others at the centre's).
+
+        Raises:
+            SetQueryError: ``dims`` repeated, empty or out of range.
+        """
+        dims = check_dims(dims, self.dim)
+        k = len(dims)
         if self.empty:
-            return Ellipsoid.from_generator(self.center[dims], np.zeros((2, 2)), empty=True)
-        # Points c + B y with B selecting the two coordinates; inside iff ||G^+ B y|| <= 1 and
+            return Ellipsoid.from_generator(self.center[dims], np.zeros((k, k)), empty=True)
+        # Points c + B y with B selecting the coordinates; inside iff ||G^+ B y|| <= 1 and
         # B y in the range of G.
-        B = np.zeros((self.dim, 2))
-        B[dims, [0, 1]] = 1.0
+        B = np.zeros((self.dim, k))
+        B[dims, list(range(k))] = 1.0
         G = self.generator
         G_pinv = np.linalg.pinv(G, rcond=_RANK_RTOL)
         blocked = B - G @ (G_pinv @ B)  # component of B y outside range(G)
-        N = _null_space(blocked, 2)
+        N = _null_space(blocked, k)
         if N.shape[1] == 0:
-            return Ellipsoid.from_generator(self.center[dims], np.zeros((2, 2)))
+            return Ellipsoid.from_generator(self.center[dims], np.zeros((k, k)))
         # within y = N w: ||G^+ B N w|| <= 1  ->  image of the unit ball under (G^+ B N)^+.
         K = G_pinv @ B @ N
         return Ellipsoid.from_generator(self.center[dims], N @ np.linalg.pinv(K, rcond=_RANK_RTOL))
@@ -142,7 +175,7 @@ class Ellipsoid:
     def boundary(self, n: int = 200) -> np.ndarray:
         """Points on a 2-D ellipse's boundary, (n, 2) (use :meth:`project` or :meth:`slice` first)."""
         if self.dim != 2:
-            raise ValueError("boundary() needs a 2-D ellipse; project or slice first")
+            raise SetQueryError(f"boundary() needs a 2-D ellipse, this one is {self.dim}-D; project or slice first")
         t = np.linspace(0.0, 2.0 * np.pi, n)
         return self.center + (self.generator @ np.vstack([np.cos(t), np.sin(t)])).T
 
@@ -174,8 +207,10 @@ class Ellipsoid:
         )
 
     def to_dict(self) -> dict:
-        """JSON-ready dictionary (``axes[k]`` is the unit direction of ``semi_axes[k]``)."""
+        """JSON-ready dictionary (``axes[k]`` is the unit direction of ``semi_axes[k]``); ``"kind"``
+        is ``"ellipsoid"``."""
         return {
+            "kind": self.kind,
             "center": self.center.tolist(),
             "semi_axes": self.semi_axes.tolist(),
             "axes": self.axes.tolist(),

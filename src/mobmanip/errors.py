@@ -113,3 +113,22 @@ class MissingLimitError(LimitError):
 
 class UsageError(MobmanipError):
     """Command-line arguments that contradict each other or miss a required choice."""
+
+
+class MeasureError(MobmanipError):
+    """A measure cannot be registered or computed as asked (e.g. swept without a batch form)."""
+
+
+class UnknownMeasureError(MeasureError):
+    """A measure name that is not registered; lists the names that are."""
+
+    def __init__(self, name: object, available: Iterable[str]):
+        self.name = name
+        self.available = list(available)
+        super().__init__(f"unknown measure {name!r}; expected one of {', '.join(self.available)}")
+
+
+class SetQueryError(MeasureError, ValueError):
+    """A query on a task-space set that makes no sense: a zero or non-finite direction, points
+    or coordinates of the wrong dimension, task coordinates out of range. Also a ``ValueError``,
+    as bad arguments to a function usually are."""

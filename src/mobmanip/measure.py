@@ -18,15 +18,25 @@ ask the same questions of each, through :class:`TaskSet`:
 
 An empty set never yields NaN or infinity from these queries: ``support``, ``radius_along``,
 ``volume`` and ``isotropy`` are 0 and ``contains`` is all False; callers that must tell "no
-capacity" from "empty" look at ``empty``.
+capacity" from "empty" look at ``empty``. Bad arguments (a zero or non-finite direction, points
+of the wrong dimension, coordinates out of range) raise :class:`mobmanip.errors.SetQueryError`;
+:func:`check_direction`, :func:`check_points` and :func:`check_dims` do these checks for every
+subclass.
+
+Many configurations at once (sweeps) give a *batch* of sets of one kind: see
+:class:`TaskSetBatch`. Which measures exist, and how each is computed, is the registry
+:mod:`mobmanip.measures`.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from typing import Protocol, runtime_checkable
 
 import numpy as np
+
+from .errors import SetQueryError
 
 #: Scalar indices every measure gives for sweeps (see :meth:`TaskSet.indices`).
 SCALAR_INDICES = ("volume", "isotropy")
@@ -93,3 +103,84 @@ class TaskSet(ABC):
     def indices(self) -> dict[str, float]:
         """The scalar indices sweeps record, by name (at least :data:`SCALAR_INDICES`)."""
         return {"volume": self.volume, "isotropy": self.isotropy}
+
+
+@runtime_checkable
+class TaskSetBatch(Protocol):
+    """N sets of one kind in an m-dimensional task space, as stacked arrays (a sweep's chunk).
+
+    Row n is the set ``batch[n]`` (a :class:`TaskSet`); the arrays answer for all rows at once.
+    :class:`mobmanip.batch.EllipsoidBatch` is one. A measure's batch form returns these, and a
+    sweep records ``volume``, ``isotropy``, ``support`` along its capacity direction, the
+    ``degenerate`` and ``empty`` flags and the per-axis arrays the measure names
+    (:attr:`mobmanip.measures.Measure.axis_indices`).
+    """
+
+    @property
+    def volume(self) -> np.ndarray:
+        """Volumes, (N,) (0 where empty or degenerate)."""
+
+    @property
+    def isotropy(self) -> np.ndarray:
+        """Isotropies in [0, 1], (N,) (0 where empty or degenerate)."""
+
+    degenerate: np.ndarray
+    empty: np.ndarray
+
+    def support(self, direction: np.ndarray) -> np.ndarray:
+        """max over set n of d . p, (N,), for one direction (m,) or one per row (N, m)."""
+
+    def __len__(self) -> int: ...
+
+    def __getitem__(self, index: int) -> TaskSet: ...
+
+
+def check_direction(direction, m: int, where: str = "direction") -> np.ndarray:
+    """A direction as a float array (m,), checked: finite and not zero.
+
+    Raises:
+        SetQueryError: wrong shape, a NaN or infinite entry, or the zero vector.
+    """
+    try:
+        d = np.asarray(direction, dtype=float)
+    except (TypeError, ValueError):
+        raise SetQueryError(f"{where} must be {m} numbers, got {direction!r}") from None
+    if d.shape != (m,):
+        raise SetQueryError(f"{where} must have shape ({m},) in this {m}-dimensional task space, got {d.shape}")
+    if not np.all(np.isfinite(d)) or not np.any(d):
+        raise SetQueryError(f"{where} must be finite and not zero, got {d.tolist()}")
+    return d
+
+
+def check_points(points, m: int) -> np.ndarray:
+    """Points as a float array (n, m) (one point (m,) becomes (1, m)), checked finite.
+
+    Raises:
+        SetQueryError: wrong shape or a NaN or infinite entry.
+    """
+    try:
+        p = np.atleast_2d(np.asarray(points, dtype=float))
+    except (TypeError, ValueError):
+        raise SetQueryError(f"points must be numbers of shape (n, {m}), got {points!r}") from None
+    if p.ndim != 2 or p.shape[1] != m:
+        raise SetQueryError(f"points must have shape (n, {m}) or ({m},), got {np.shape(points)}")
+    if not np.all(np.isfinite(p)):
+        raise SetQueryError("points must be finite (a NaN or infinite coordinate was given)")
+    return p
+
+
+def check_dims(dims: Sequence[int], m: int) -> list[int]:
+    """Task coordinates for :meth:`TaskSet.project` / :meth:`TaskSet.slice`, checked.
+
+    Raises:
+        SetQueryError: empty, repeated, not integers, or outside 0 .. m - 1.
+    """
+    try:
+        items = list(dims)
+    except TypeError:
+        items = [dims]
+    ok = all(isinstance(i, (int, np.integer)) and not isinstance(i, bool) for i in items)
+    out = [int(i) for i in items] if ok else []
+    if not ok or not out or len(set(out)) != len(out) or min(out) < 0 or max(out) >= m:
+        raise SetQueryError(f"dims must be distinct task coordinates among 0 .. {m - 1}, got {dims!r}")
+    return out

@@ -145,6 +145,11 @@ class Robot:
         return S
 
     @property
+    def platform_locked(self) -> bool:
+        """Whether the platform is held still (a fixed-base robot, or ``with_platform("fixed")``)."""
+        return isinstance(self.platform, LockedPlatform)
+
+    @property
     def constant_null_space(self) -> bool:
         """Whether S is the same at every configuration (then :attr:`S` is S(q) for all q)."""
         return not self.platform.varies_with_q

@@ -93,6 +93,21 @@ def add_analysis_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
     parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    add_measure_option(parser)
+
+
+def add_measure_option(parser: argparse.ArgumentParser) -> None:
+    """--measure NAME (repeatable): the measures to compute instead of the default ones."""
+    from ..measures import default_measures, measure_names
+
+    parser.add_argument(
+        "--measure",
+        action="append",
+        dest="measures",
+        metavar="NAME",
+        help=f"a measure to compute (repeat for several; default: {', '.join(default_measures())}; "
+        f"registered: {', '.join(measure_names())})",
+    )
 
 
 def apply_analysis_options(robot, args):

@@ -25,10 +25,12 @@ Out-of-reach points get NaN indices; a grid with none in reach is an error. --he
 platform in the world (deg). The wheel scales multiply both wheels' velocity / effort limits
 (after --wheel-velocity-limit / --wheel-effort-limit).
 
-indices per ellipsoid (kinematic: m/s, rad/s; dynamic: m/s^2, rad/s^2): volume, isotropy
-(min/max semi-axis), semi_axis_K (K = 1 is the largest) and capacity: max d . p over the
-ellipsoid for the unit --direction d (radial: from the reference point towards the object;
-tangential: 90 deg to its left; or task coordinates in the world, e.g. 1,0).
+indices per measure (--measure; by default the kinematic ellipsoid, m/s and rad/s, and the
+dynamic ellipsoid, m/s^2 and rad/s^2), named MEASURE.INDEX: volume, isotropy (min/max reach
+from the centre; for an ellipsoid min/max semi-axis), capacity: max d . p over the set for the
+unit --direction d (radial: from the reference point towards the object; tangential: 90 deg to
+its left; or task coordinates in the world, e.g. 1,0), and for ellipsoids semi_axis_K (K = 1 is
+the largest), e.g. kinematic.volume, dynamic.semi_axis_1.
 
 outputs: OUT.npz (grid axes, index arrays of shape angle x distance x heading x velocity scale x
 effort scale [x task axis], the arm joints' positions per angle x distance, settings) and OUT.csv
@@ -48,6 +50,8 @@ examples:
 
 
 def register(sub) -> None:
+    from .common import add_measure_option
+
     parser = sub.add_parser(
         "sweep",
         help="indices over object direction, distance, heading and limit scales (parallel)",
@@ -78,6 +82,7 @@ def register(sub) -> None:
     analysis.add_argument(
         "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
     )
+    add_measure_option(analysis)
     postures = parser.add_argument_group("arm postures")
     postures.add_argument(
         "--postures", choices=["auto", "planar", "ik"], default="auto", help="how the arms hold the object (see below)"
@@ -93,7 +98,7 @@ def register(sub) -> None:
     run.add_argument("--output", "-o", default="sweep", metavar="OUT", help="output prefix (default: %(default)s)")
     run.add_argument("--no-csv", action="store_true", help="write only OUT.npz")
     run.add_argument("--plot", action="store_true", help="also write OUT.png")
-    run.add_argument("--index", default="kinematic.volume", help="index to plot (default: %(default)s)")
+    run.add_argument("--index", help="index to plot (default: the first measure's volume, kinematic.volume)")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run_command)
 
@@ -114,6 +119,7 @@ def run_command(args) -> int:
 
     from ..errors import UsageError
     from ..io import OutputError
+    from ..measures import resolve_measures
     from ..spec import find_spec
     from ..sweep import SweepGrid, SweepSpec, check_index_name, plot_sweep, run_sweep
     from ..tasks import TASKS
@@ -121,8 +127,10 @@ def run_command(args) -> int:
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
     if args.task is not None and args.task not in TASKS:
         raise UsageError(f"unknown task {args.task!r}; expected one of {', '.join(TASKS)}")
+    measures = tuple(m.name for m in resolve_measures(args.measures, sweep=True))  # before the sweep runs
+    index = args.index or f"{measures[0]}.volume"
     if args.plot:  # check the index name before the sweep runs
-        check_index_name(args.index, len(TASKS[args.task or find_spec(args.robot).default_task].rows))
+        check_index_name(index, len(TASKS[args.task or find_spec(args.robot).default_task].rows), measures)
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be at least 1, got {args.workers}")
     if args.chunk_size < 1:
@@ -145,6 +153,7 @@ def run_command(args) -> int:
         direction=_direction(args.direction),
         postures=args.postures,
         reference=reference,
+        measures=measures,
     )
     out = Path(args.output)
     if out.parent and not out.parent.exists():
@@ -169,7 +178,8 @@ def run_command(args) -> int:
     unreachable = int((~result.reachable).sum())
     if unreachable:
         print(f"{unreachable} of {result.reachable.size} configurations are out of the arms' reach (NaN indices)")
-    for kind in ("kinematic", "dynamic"):
+    for measure in result.measures:
+        kind = measure.name
         values = result.index(f"{kind}.volume")
         if result.reachable.any():
             print(f"{kind} volume: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
@@ -177,7 +187,7 @@ def run_command(args) -> int:
     if not args.no_csv:
         written.append(result.save_csv(out.with_name(out.name + ".csv")))
     if args.plot:
-        written.append(plot_sweep(result, args.index, out.with_name(out.name + ".png")))
+        written.append(plot_sweep(result, index, out.with_name(out.name + ".png")))
     for path in written:
         print(f"wrote {path}")
     return 0

@@ -74,10 +74,16 @@ def _stop_on_sigterm():
         signal.signal(signal.SIGTERM, previous)
 
 
-def _describe_empty(name: str, analysis) -> str | None:
-    if analysis is not None and analysis.dynamic.empty:
-        return f"{name} dynamic ellipsoid is EMPTY (the torque limits cannot hold the load still): not drawn"
-    return None
+def _describe_empty(name: str, analysis) -> list[str]:
+    from ..measures import get_measure
+
+    if analysis is None:
+        return []
+    return [
+        f"{name} {get_measure(key).label} is EMPTY (the torque limits cannot hold the load still): not drawn"
+        for key, task_set in analysis.measures.items()
+        if task_set.empty
+    ]
 
 
 def run(args) -> int:
@@ -88,7 +94,7 @@ def run(args) -> int:
     _check(args)
     robot, q = load_robot_and_configuration(args)
     robot = apply_analysis_options(robot, args)
-    options = {"object_mass": args.object_mass, "decoupled": args.decoupled}
+    options = {"object_mass": args.object_mass, "decoupled": args.decoupled, "measures": args.measures}
     frames = None
     if args.sweep:
         frames = sweep_frames(args.sweep, robot, q if args.q else None, args.task, locked=not args.no_locked, **options)
@@ -102,17 +108,16 @@ def run(args) -> int:
             print(f"robot {robot.name}, task {first.analysis.task}, sweep {args.sweep}: {len(frames)} frames")
             for start, end, label in schedule:
                 print(f"  {start:5.1f} .. {end:5.1f} s  {label}")
-            notes = [_describe_empty(f"frame {i}", f.analysis) for i, f in enumerate(frames)]
+            notes = [note for i, f in enumerate(frames) for note in _describe_empty(f"frame {i}", f.analysis)]
         else:
             viewer.show(q, analysis, locked)
             print(f"robot {robot.name} ({robot.platform.kind}), task {analysis.task}")
             c = analysis.held_object.center
             print(f"task point (object): ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m")
-            notes = [_describe_empty("the", analysis), _describe_empty("the locked-platform", locked)]
+            notes = _describe_empty("the", analysis) + _describe_empty("the locked-platform", locked)
         print(f"scale: {viewer.scales.describe()}")
         for note in notes:
-            if note:
-                print(note)
+            print(note)
         if args.export:
             path = viewer.export_html(args.export)
             print(f"wrote {path}")

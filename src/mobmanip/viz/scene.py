@@ -1,4 +1,4 @@
-"""The meshcat scene: the robot with its meshes, the held object and the task-space ellipsoids.
+"""The meshcat scene: the robot with its meshes, the held object and the task-space sets.
 
 Scene paths (under meshcat's root ``/meshcat``; the control panel toggles each by path, and
 ``set_property("visible", ...)`` does the same from Python):
@@ -11,15 +11,21 @@ Scene paths (under meshcat's root ``/meshcat``; the control panel toggles each b
                                ellipsoid; it holds ``shape`` (a semi-transparent unit sphere) and
                                ``axes`` (its principal axes: unit line segments along the local x,
                                y and z axes, scaled by the same transform)
-``mobmanip/locked``            the same pair for the locked platform (arms only), ``locked/K``,
+``mobmanip/locked``            the same for the locked platform (arms only), ``locked/K``,
                                whose ``shape`` is three unit circles (the principal sections)
 ============================== =================================================================
 
-Colours: kinematic green ``#1fbf3f``, dynamic magenta ``#d81bd8`` (semi-transparent, opacity 0.5,
-Lambert shading without specular highlights); the locked pair as rings, its three principal
-sections drawn as lines, kinematic yellow ``#f2d21b`` and dynamic red ``#e0301e`` (in the
-paper's case the locked pair lies inside, or nearly on, the robot's own, which a solid would hide).
-Principal axes are drawn in a darker shade of the same colour.
+Every measure of :mod:`mobmanip.measures` an analysis holds is drawn the same way: at its
+:attr:`~mobmanip.measures.Measure.scene_path` (``ellipsoids/<name>`` for an ellipsoid) and
+``locked/<name>``, in its colours, at the scale of its quantity, by the drawing of its set kind
+(:mod:`mobmanip.viz.shapes`; sets of a kind without a drawing, e.g. polytopes for now, are left
+out and listed in :attr:`EllipsoidViewer.undrawn`).
+
+Colours (from the registry): kinematic green ``#1fbf3f``, dynamic magenta ``#d81bd8``
+(semi-transparent, opacity 0.5, Lambert shading without specular highlights); the locked pair as
+rings, its three principal sections drawn as lines, kinematic yellow ``#f2d21b`` and dynamic red
+``#e0301e`` (in the paper's case the locked pair lies inside, or nearly on, the robot's own,
+which a solid would hide). Principal axes are drawn in a darker shade of the same colour.
 
 What is drawn, and how
 - Only the *linear* part of a task space is drawn: ``planar`` and ``planar_rigid`` as the (x, y)
@@ -27,38 +33,39 @@ What is drawn, and how
   i.e. the linear velocities (accelerations) reachable with any accompanying angular motion.
   That is the ellipsoid of the linear rows of the Jacobian, as usually plotted.
 - A 2-D ellipse is drawn as a flat ellipsoid in the horizontal plane through the task point,
-  its third semi-axis a fixed thickness (:data:`PLANAR_THICKNESS`, a few millimetres, slightly
-  different per ellipsoid so the discs do not z-fight).
+  its third semi-axis a fixed thickness (:func:`planar_thickness`, a few millimetres, slightly
+  different per measure so the discs do not z-fight).
 - The group transform is ``[R diag(k s) | p]``: the columns of ``R`` are the world directions of
   the principal axes (descending semi-axes; an axis' sign is free: for a 3-D ellipsoid the last
   column is negated if needed so that ``R`` is a rotation, for a 2-D one the second, so that the
   thin third axis points up), ``s`` the semi-axes, ``k`` the scale factor of the ellipsoid's unit, and
   ``p = task point + k c`` with ``c`` the ellipsoid's centre (zero for velocities; the dynamic
   centre is shifted by gravity). A zero semi-axis (degenerate) is drawn :data:`MIN_SEMI_AXIS`
-  long; an empty dynamic ellipsoid (the torques cannot hold the load) is hidden.
-- Scale factors (:class:`ScaleFactors`): metres of scene per m/s and per m/s^2, chosen so that
-  the largest drawn extent (|centre| + largest semi-axis, over the robot's and the locked
-  ellipsoid) is ``size`` = 0.5 m; fixed at the first :meth:`EllipsoidViewer.show` (or over all
-  frames of an animation) so that later updates stay comparable.
+  long; an empty set (e.g. the torques cannot hold the load) is hidden.
+- Scale factors (:class:`ScaleFactors`): metres of scene per m/s and per m/s^2 (one per
+  quantity, shared by the measures of that quantity), chosen so that the largest drawn extent
+  (|centre| + largest semi-axis for an ellipsoid, over the robot's and the locked sets) is
+  ``size`` = 0.5 m; fixed at the first :meth:`EllipsoidViewer.show` (or over all frames of an
+  animation) so that later updates stay comparable.
 
 Camera: meshcat 0.3.2 always aims its camera at the world origin (see
 :meth:`EllipsoidViewer.set_camera`); the first :meth:`EllipsoidViewer.show` places it far enough
 to see the robot and the ellipsoids from 30 deg above the ground.
 
-The viewer loads every mesh once (``set_object``) when it is created; :meth:`EllipsoidViewer.show`
-and :meth:`EllipsoidViewer.update` send only transforms and visibility, and
-:meth:`EllipsoidViewer.animate` sends one meshcat animation.
+The viewer loads every mesh once (``set_object``): those of the measures it is created for when
+it is created, those of another measure the first time an analysis brings it;
+:meth:`EllipsoidViewer.show` and :meth:`EllipsoidViewer.update` send only transforms and
+visibility, and :meth:`EllipsoidViewer.animate` sends one meshcat animation.
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
-import itertools
 import math
 import warnings
 import webbrowser
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -66,47 +73,74 @@ import numpy as np
 import pinocchio as pin
 
 from ..analysis import Analysis, analyze
-from ..ellipsoids import Ellipsoid
-from ..errors import ModelError
+from ..errors import MobmanipError, ModelError
 from ..io import write_text
+from ..measures import Quantity, default_measures, get_measure, measure_names, resolve_measures
 from ..model import Robot, locked_joints
-from ..tasks import get_task
 from .server import MeshcatServer, ViewerError
+from .shapes import DRAWINGS, MIN_SEMI_AXIS, _translation, drawn_ellipsoid, drawn_extent, ellipsoid_frame
+from .shapes import _aligned as _aligned  # noqa: F401 - re-exported: the animation tests use it
+from .shapes import ellipsoid_matrix as ellipsoid_matrix
 
 ROOT = "mobmanip"
 ROBOT_PATH = f"{ROOT}/robot"
 OBJECT_PATH = f"{ROOT}/object"
 ELLIPSOIDS_PATH = f"{ROOT}/ellipsoids"
 LOCKED_PATH = f"{ROOT}/locked"
-KINDS = ("kinematic", "dynamic")
-
-#: Scene path of each drawn ellipsoid, by (locked, kind).
-ELLIPSOID_PATHS = {
-    (False, "kinematic"): f"{ELLIPSOIDS_PATH}/kinematic",
-    (False, "dynamic"): f"{ELLIPSOIDS_PATH}/dynamic",
-    (True, "kinematic"): f"{LOCKED_PATH}/kinematic",
-    (True, "dynamic"): f"{LOCKED_PATH}/dynamic",
-}
-#: Colour (0xRRGGBB) of each ellipsoid, by (locked, kind).
-COLORS = {
-    (False, "kinematic"): 0x1FBF3F,
-    (False, "dynamic"): 0xD81BD8,
-    (True, "kinematic"): 0xF2D21B,
-    (True, "dynamic"): 0xE0301E,
-}
-OPACITY = 0.5  # of the robot's own pair; the locked pair is drawn as rings
 OBJECT_COLOR = 0xF0F0F0
 OBJECT_RADIUS = 0.035  # m
-#: Third semi-axis (m) of a 2-D ellipse drawn as a flat ellipsoid, by (locked, kind).
-PLANAR_THICKNESS = {
-    (False, "kinematic"): 0.010,
-    (False, "dynamic"): 0.012,
-    (True, "kinematic"): 0.014,
-    (True, "dynamic"): 0.016,
-}
-MIN_SEMI_AXIS = 0.002  # m: how a zero (degenerate) semi-axis is drawn
-DEFAULT_SIZE = 0.5  # m: the largest drawn extent of each kind of ellipsoid
-UNITS = {"kinematic": "m/s", "dynamic": "m/s^2"}
+DEFAULT_SIZE = 0.5  # m: the largest drawn extent of each quantity's sets
+
+__all__ = [
+    "COLORS",
+    "ELLIPSOID_PATHS",
+    "MIN_SEMI_AXIS",
+    "PLANAR_THICKNESS",
+    "EllipsoidViewer",
+    "Frame",
+    "ScaleFactors",
+    "analyze_pair",
+    "drawn_ellipsoid",
+    "drawn_extent",
+    "ellipsoid_frame",
+    "ellipsoid_matrix",
+    "planar_thickness",
+    "scene_color",
+    "scene_path",
+    "visual_model",
+]
+
+
+def scene_path(name: str, locked: bool = False) -> str:
+    """Scene path of measure ``name``'s set (``locked``: its locked-platform counterpart)."""
+    measure = get_measure(name)
+    return f"{ROOT}/{measure.locked_scene_path if locked else measure.scene_path}"
+
+
+def scene_color(name: str, locked: bool = False) -> int:
+    """Colour (0xRRGGBB) of measure ``name``'s set (``locked``: its locked counterpart)."""
+    measure = get_measure(name)
+    return measure.locked_color if locked else measure.color
+
+
+def planar_thickness(name: str, locked: bool = False) -> float:
+    """Third semi-axis (m) of measure ``name``'s planar set drawn in 3-D: 10 mm and up in steps
+    of 2 mm, in blocks of two measures in the registry's order (own pair, then locked pair), so
+    that no two discs z-fight: kinematic 10, dynamic 12, locked kinematic 14, locked dynamic 16."""
+    i = measure_names().index(get_measure(name).name)
+    return 0.010 + 0.002 * (4 * (i // 2) + i % 2 + 2 * bool(locked))
+
+
+def _of_defaults(value) -> dict:
+    return {(locked, name): value(name, locked) for locked in (False, True) for name in default_measures()}
+
+
+#: Scene path of each set of the default measures, by (locked, measure name).
+ELLIPSOID_PATHS = _of_defaults(scene_path)
+#: Colour (0xRRGGBB) of each set of the default measures, by (locked, measure name).
+COLORS = _of_defaults(scene_color)
+#: Third semi-axis (m) of each planar set of the default measures drawn flat, by (locked, name).
+PLANAR_THICKNESS = _of_defaults(planar_thickness)
 
 
 # --------------------------------------------------------------------------- visual model
@@ -141,150 +175,81 @@ def visual_model(robot: Robot) -> tuple[pin.Model, pin.GeometryModel]:
     return model, geometry
 
 
-# --------------------------------------------------------------------------- ellipsoid math
-
-
-def drawn_ellipsoid(ellipsoid: Ellipsoid, task: str) -> tuple[Ellipsoid, np.ndarray]:
-    """The part of a task-space ellipsoid that is drawn, and where its coordinates point.
-
-    Returns:
-        (linear, E): ``linear`` is the ellipsoid itself when the task is all linear
-        (``planar``, ``translational``), else its projection onto the linear coordinates
-        (``planar_rigid`` -> (x, y), ``spatial`` -> (x, y, z)); ``E`` (3, k) maps its k
-        coordinates to world directions.
-    """
-    space = get_task(task)
-    linear = space.linear_rows
-    if not linear:
-        raise ViewerError(f"task {task!r} has no linear rows to draw")
-    E = np.zeros((3, len(linear)))
-    for column, i in enumerate(linear):
-        E[space.rows[i], column] = 1.0
-    if len(linear) == space.dim:
-        return ellipsoid, E
-    return ellipsoid.project(tuple(linear)), E
-
-
-def drawn_extent(ellipsoid: Ellipsoid, task: str) -> float:
-    """|centre| + largest semi-axis of the drawn part (task units; 0 when empty)."""
-    if ellipsoid.empty:
-        return 0.0
-    linear, _ = drawn_ellipsoid(ellipsoid, task)
-    return float(np.linalg.norm(linear.center) + (linear.semi_axes[0] if linear.dim else 0.0))
-
-
-def ellipsoid_frame(
-    ellipsoid: Ellipsoid, task: str, origin: np.ndarray, scale: float, thickness: float = 0.01
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where the drawn ellipsoid sits in the world: centre, rotation and semi-axes (m).
-
-    Args:
-        ellipsoid: the task-space ellipsoid (rows in world axes).
-        task: its task space.
-        origin: world position of the task point (m), (3,).
-        scale: metres of scene per unit of the ellipsoid (m per m/s or per m/s^2).
-        thickness: third semi-axis (m) of a 2-D ellipse.
-
-    Returns:
-        (p, R, r): centre p (3,), rotation R (3, 3) whose columns are the principal directions
-        (descending), semi-axes r (3,) in metres (zero semi-axes raised to MIN_SEMI_AXIS).
-    """
-    linear, E = drawn_ellipsoid(ellipsoid, task)
-    k = linear.dim
-    directions = E @ linear.axes.T  # (3, k): world direction of each principal axis
-    semi = np.maximum(scale * linear.semi_axes, MIN_SEMI_AXIS)
-    if k == 3:
-        R = directions.copy()
-    elif k == 2:
-        normal = np.cross(directions[:, 0], directions[:, 1])
-        if normal @ np.ones(3) < 0:  # keep the thin axis pointing +z (up) for a horizontal ellipse
-            directions[:, 1] *= -1.0
-            normal = -normal
-        R = np.column_stack([directions, normal / np.linalg.norm(normal)])
-        semi = np.append(semi, thickness)
-    else:
-        raise ViewerError(f"cannot draw a {k}-dimensional ellipsoid")
-    if np.linalg.det(R) < 0:
-        R[:, -1] *= -1.0
-    p = np.asarray(origin, dtype=float) + scale * (E @ linear.center)
-    return p, R, semi
-
-
-def ellipsoid_matrix(
-    ellipsoid: Ellipsoid, task: str, origin: np.ndarray, scale: float, thickness: float = 0.01
-) -> np.ndarray:
-    """The 4x4 transform that maps the unit sphere onto the drawn ellipsoid: [R diag(r) | p].
-
-    See :func:`ellipsoid_frame`. For a 3-D ellipsoid with matrix A, every unit vector u maps to a
-    point x with ((x - o) / k - c)^T A ((x - o) / k - c) = 1 (o the task point, k the scale,
-    c the centre); for a 2-D ellipse the same holds for the horizontal unit vectors.
-    """
-    p, R, semi = ellipsoid_frame(ellipsoid, task, origin, scale, thickness)
-    T = np.eye(4)
-    T[:3, :3] = R * semi
-    T[:3, 3] = p
-    return T
-
-
-def _aligned(R: np.ndarray, semi: np.ndarray, previous: np.ndarray | None, planar: bool):
-    """R and semi with their columns permuted and signs flipped to follow ``previous`` (for
-    smooth animations); the ellipsoid drawn is the same."""
-    if previous is None:
-        return R, semi
-    k = 2 if planar else 3
-    best, best_score = (R, semi), -np.inf
-    for perm in itertools.permutations(range(k)):
-        for signs in itertools.product((1.0, -1.0), repeat=k):
-            cols = R[:, list(perm)] * np.array(signs)
-            if planar:
-                normal = np.cross(cols[:, 0], cols[:, 1])
-                candidate = np.column_stack([cols, normal])
-                semis = np.append(semi[list(perm)], semi[2])
-            else:
-                candidate = cols
-                semis = semi[list(perm)]
-            if np.linalg.det(candidate) < 0:
-                continue
-            score = float(np.trace(previous.T @ candidate))
-            if score > best_score:
-                best, best_score = (candidate, semis), score
-    return best
-
-
 # --------------------------------------------------------------------------- scales
 
 
 @dataclass(frozen=True)
 class ScaleFactors:
-    """How long 1 unit of each ellipsoid is drawn.
+    """How long 1 unit of each quantity is drawn (metres of scene per m/s, per m/s^2, ...).
+
+    Index it by a quantity, its name (``"velocity"``), its label (``"kinematic"``) or the name of
+    a measure of it (``scales["kinematic"]``); labels also work as attributes
+    (``scales.kinematic``, ``scales.dynamic``).
 
     Attributes:
-        kinematic: metres of scene per m/s.
-        dynamic: metres of scene per m/s^2.
+        values: metres of scene per unit, by quantity.
     """
 
-    kinematic: float
-    dynamic: float
+    values: Mapping[Quantity, float]
 
-    def __getitem__(self, kind: str) -> float:
-        return {"kinematic": self.kinematic, "dynamic": self.dynamic}[kind]
+    def _quantity(self, key) -> Quantity:
+        if isinstance(key, Quantity):
+            return key
+        for quantity in self.values:
+            if key in (quantity.name, quantity.label):
+                return quantity
+        return get_measure(key).quantity
+
+    def __getitem__(self, key) -> float:
+        quantity = self._quantity(key)
+        try:
+            return self.values[quantity]
+        except KeyError:
+            raise ViewerError(f"no scale for {quantity.name} ({key!r}); scales: {self.describe()}") from None
+
+    def __getattr__(self, name: str) -> float:
+        if name.startswith("_") or name == "values":
+            raise AttributeError(name)
+        try:
+            return self[name]
+        except MobmanipError:
+            raise AttributeError(name) from None
 
     @classmethod
-    def fit(cls, analyses: Sequence[Analysis | None], size: float = DEFAULT_SIZE) -> ScaleFactors:
-        """Scales that draw the largest extent (|centre| + largest semi-axis) of each kind,
-        over all given analyses, ``size`` metres long (1 when everything is zero or empty)."""
-        values = {}
-        for kind in KINDS:
+    def fit(
+        cls, analyses: Sequence[Analysis | None], size: float = DEFAULT_SIZE, measures: Iterable[str] | None = None
+    ) -> ScaleFactors:
+        """Scales that draw the largest extent (|centre| + largest semi-axis for an ellipsoid) of
+        each quantity's drawable sets, over all given analyses, ``size`` metres long (1 when
+        everything is zero or empty). Quantities: those of ``measures`` (default: the default
+        measures) and of every measure the analyses hold, in the registry's order."""
+        present = {name for a in analyses if a is not None for name in a.measures}
+        present.update(m.name for m in resolve_measures(measures))
+        values: dict[Quantity, float] = {}
+        for name in measure_names():
+            quantity = get_measure(name).quantity
+            if name not in present or quantity in values:
+                continue
             extent = max(
-                (drawn_extent(getattr(a, kind), a.task) for a in analyses if a is not None),
+                (
+                    DRAWINGS[s.kind].extent(s, a.task)
+                    for a in analyses
+                    if a is not None
+                    for key, s in a.measures.items()
+                    if get_measure(key).quantity == quantity and s.kind in DRAWINGS
+                ),
                 default=0.0,
             )
-            values[kind] = size / extent if extent > 0.0 else 1.0
-        return cls(**values)
+            values[quantity] = size / extent if extent > 0.0 else 1.0
+        return cls(values)
+
+    def including(self, other: ScaleFactors) -> ScaleFactors:
+        """These scales, and those of ``other`` for the quantities these do not have."""
+        return ScaleFactors({**other.values, **self.values})
 
     def describe(self) -> str:
         """E.g. ``kinematic: 1 m/s = 0.0974 m; dynamic: 1 m/s^2 = 0.0190 m``."""
-        return "; ".join(f"{kind}: 1 {UNITS[kind]} = {self[kind]:.4g} m" for kind in KINDS)
+        return "; ".join(f"{q.label}: 1 {q.unit} = {v:.4g} m" for q, v in self.values.items())
 
 
 # --------------------------------------------------------------------------- frames
@@ -315,7 +280,7 @@ def analyze_pair(
     """``analyze`` the robot and, if it has a moving platform and ``locked``, the same
     configuration with the platform locked (the arms alone)."""
     analysis = analyze(robot, q, task, **options)
-    if not locked or robot.platform.kind == "fixed" or robot.wheel_platform is None:
+    if not locked or robot.platform_locked or robot.wheel_platform is None:
         return analysis, None
     return analysis, analyze(robot.with_platform("fixed"), q, analysis.task, **options)
 
@@ -324,7 +289,8 @@ def analyze_pair(
 
 
 class EllipsoidViewer:
-    """A meshcat viewer of a robot, its held object and its ellipsoids.
+    """A meshcat viewer of a robot, its held object and its task-space sets (every measure an
+    analysis holds, drawn by its set kind; see the module's docstring).
 
     The meshcat server runs in a child process on 127.0.0.1 (see :mod:`mobmanip.viz.server`);
     no browser opens unless ``open_browser``. Use it as a context manager or call :meth:`close`.
@@ -336,6 +302,8 @@ class EllipsoidViewer:
         scales: fixed scale factors; ``None`` fits them at the first :meth:`show` or :meth:`animate`.
         size: the largest drawn extent when scales are fitted (m).
         timeout: seconds to wait for the server to answer a command.
+        measures: the measures whose meshes are loaded now (default: the default ones); another
+            measure's are loaded the first time an analysis brings it.
 
     Raises:
         PortBusyError: ``port`` is in use.
@@ -351,6 +319,7 @@ class EllipsoidViewer:
         scales: ScaleFactors | None = None,
         size: float = DEFAULT_SIZE,
         timeout: float = 60.0,
+        measures: Iterable[str] | None = None,
     ):
         import zmq
 
@@ -363,6 +332,9 @@ class EllipsoidViewer:
         self.scales = scales
         self.size = size
         self._closed = False
+        self._visible: dict[tuple[bool, str], bool | None] = {}  # loaded sets, visibility as last sent
+        #: Measures whose sets were not drawn: no drawing for their set kind yet (by name: kind).
+        self.undrawn: dict[str, str] = {}
         self._server = MeshcatServer(port)
         try:
             with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we print ours
@@ -376,11 +348,10 @@ class EllipsoidViewer:
             with self._commands():
                 self._pin.initViewer(viewer=self._vis)
                 self._pin.loadViewerModel(rootNodeName=ROBOT_PATH)
-                self._load_static()
+                self._load_static(resolve_measures(measures))
         except BaseException:
             self._server.stop()
             raise
-        self._visible: dict[tuple[bool, str], bool | None] = dict.fromkeys(ELLIPSOID_PATHS)  # as last sent
         self._locked_visible: bool | None = None
         self._camera_set = False
         self.last: Frame | None = None
@@ -431,30 +402,37 @@ class EllipsoidViewer:
         """Open the viewer page in the default web browser."""
         webbrowser.open(self.url, new=2)
 
-    def _load_static(self) -> None:
+    def _load_static(self, measures) -> None:
         import meshcat.geometry as mg
 
         self._vis[OBJECT_PATH].set_object(mg.Sphere(OBJECT_RADIUS), mg.MeshPhongMaterial(color=OBJECT_COLOR))
-        for key, path in ELLIPSOID_PATHS.items():
-            locked, kind = key
-            if locked:  # rings only: they never hide the robot's own pair, which usually contains them
-                self._vis[f"{path}/shape"].set_object(
-                    mg.LineSegments(mg.PointsGeometry(_unit_rings()), _line_material(COLORS[key]))
-                )
-                self._vis[f"{path}/shape/<object>"].set_property("renderOrder", 1)
-            else:
-                material = mg.MeshLambertMaterial(
-                    color=COLORS[key], opacity=OPACITY, transparent=True, depthWrite=False
-                )
-                self._vis[f"{path}/shape"].set_object(mg.Sphere(1.0), material)
-            # Principal axes: +-1 along local x, y, z (the group transform scales them).
-            segments = np.array(
-                [[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], dtype=np.float32
-            ).T
-            self._vis[f"{path}/axes"].set_object(
-                mg.LineSegments(mg.PointsGeometry(segments), _line_material(_darker(COLORS[key])))
-            )
-            self._vis[f"{path}/axes/<object>"].set_property("renderOrder", 1)
+        for locked in (False, True):
+            for measure in measures:
+                if measure.set_kind in DRAWINGS:
+                    self._load((locked, measure.name), measure.set_kind)
+
+    def _load(self, key: tuple[bool, str], kind: str) -> None:
+        """Load the meshes of set ``key`` = (locked, measure name), of set kind ``kind``, once."""
+        if key not in self._visible:
+            locked, name = key
+            DRAWINGS[kind].load(self._vis, scene_path(name, locked), scene_color(name, locked), locked)
+            self._visible[key] = None
+
+    def _drawn(self, analysis: Analysis | None, locked: bool) -> dict[tuple[bool, str], object]:
+        """The sets of an analysis the viewer draws, by (locked, measure name); the others are
+        noted in :attr:`undrawn`."""
+        out = {}
+        if analysis is not None:
+            for name, task_set in analysis.measures.items():
+                if task_set.kind in DRAWINGS:
+                    out[locked, name] = task_set
+                else:
+                    self.undrawn[name] = task_set.kind
+        return out
+
+    def scene_paths(self) -> dict[tuple[bool, str], str]:
+        """Scene path of every set loaded so far, by (locked, measure name)."""
+        return {key: scene_path(key[1], key[0]) for key in self._visible}
 
     # ----- camera
 
@@ -490,47 +468,66 @@ class EllipsoidViewer:
 
     def show(self, q: np.ndarray | None, analysis: Analysis, locked: Analysis | None = None) -> None:
         """Draw the robot at ``q`` (default ``analysis.q``) with the analysis' object and
-        ellipsoids, and the locked pair if ``locked`` is given (hidden otherwise).
+        sets, and the locked ones if ``locked`` is given (hidden otherwise).
 
         Only transforms and visibility are sent: the meshes were loaded when the viewer was
-        created. Scales are fitted at the first call when none were given.
+        created (or, for a measure it was not created for, now). Scales are fitted at the first
+        call when none were given (and for a quantity they do not have yet).
         """
         q = self.robot.check_configuration(analysis.q if q is None else q)
         frame = Frame(q, analysis, locked)
-        if self.scales is None:
-            self.scales = ScaleFactors.fit([analysis, locked], self.size)
+        self._fit_scales([analysis, locked])
+        sets = {**self._drawn(analysis, False), **self._drawn(locked, True)}
         with self._commands():
             self._pin.display(q)
             self._vis[OBJECT_PATH].set_transform(_translation(analysis.held_object.center))
-            for key, path in ELLIPSOID_PATHS.items():
-                source = locked if key[0] else analysis
-                if source is None:
-                    continue
-                visible = not getattr(source, key[1]).empty
+            for key, task_set in sets.items():
+                self._load(key, task_set.kind)
+                visible = not task_set.empty
                 if visible:
-                    self._vis[path].set_transform(self.placement(source, key))
-                if self._visible[key] != visible:
-                    self._vis[path].set_property("visible", visible)
-                    self._visible[key] = visible
+                    source = locked if key[0] else analysis
+                    DRAWINGS[task_set.kind].draw(
+                        self._vis,
+                        scene_path(key[1], key[0]),
+                        task_set,
+                        source.task,
+                        source.held_object.center,
+                        self.scales[key[1]],
+                        planar_thickness(key[1], key[0]),
+                    )
+                self._set_visible(key, visible)
+            for key in self._visible:
+                if key not in sets and (not key[0] or locked is not None):  # a measure this analysis lacks
+                    self._set_visible(key, False)
             if self._locked_visible != (locked is not None):
                 self.set_locked_visible(locked is not None)
         if not self._camera_set:
             self._fit_camera(frame)
         self.last = frame
 
+    def _set_visible(self, key: tuple[bool, str], visible: bool) -> None:
+        if self._visible[key] != visible:
+            self._vis[scene_path(key[1], key[0])].set_property("visible", visible)
+            self._visible[key] = visible
+
+    def _fit_scales(self, analyses: Sequence[Analysis | None]) -> None:
+        """Fit the scales (when none are set) or add those of quantities they lack."""
+        fitted = ScaleFactors.fit(analyses, self.size)
+        self.scales = fitted if self.scales is None else self.scales.including(fitted)
+
     def update(self, q: np.ndarray | None, analysis: Analysis, locked: Analysis | None = None) -> None:
         """Same as :meth:`show`: move everything to the new configuration in place."""
         self.show(q, analysis, locked)
 
     def placement(self, analysis: Analysis, key: tuple[bool, str]) -> np.ndarray:
-        """The 4x4 transform of the ellipsoid ``key`` = (locked, kind) for ``analysis``."""
-        locked, kind = key
+        """The 4x4 transform of the ellipsoid ``key`` = (locked, measure name) for ``analysis``."""
+        locked, name = key
         return ellipsoid_matrix(
-            getattr(analysis, kind),
+            analysis.measure(name),
             analysis.task,
             analysis.held_object.center,
-            self.scales[kind],
-            PLANAR_THICKNESS[key],
+            self.scales[name],
+            planar_thickness(name, locked),
         )
 
     def set_locked_visible(self, visible: bool) -> None:
@@ -558,48 +555,52 @@ class EllipsoidViewer:
 
         if not frames:
             raise ViewerError("an animation needs at least one frame")
-        if self.scales is None:
-            self.scales = ScaleFactors.fit([a for f in frames for a in (f.analysis, f.locked)], self.size)
+        self._fit_scales([a for f in frames for a in (f.analysis, f.locked)])
         any_locked = any(f.locked is not None for f in frames)
+        per_frame = [{**self._drawn(f.analysis, False), **self._drawn(f.locked, True)} for f in frames]
+        order = {name: i for i, name in enumerate(measure_names())}
+        keys = sorted({key for sets in per_frame for key in sets}, key=lambda k: (k[0], order[k[1]]))
+        kinds = {key: sets[key].kind for sets in per_frame for key in sets}
         first = frames[0]
         self.show(first.q, first.analysis, first.locked)
         if any_locked and not self._locked_visible:
             self.set_locked_visible(True)
-        with self._commands():  # an ellipsoid empty in the first frame may appear later: scale hides it
-            for key, path in ELLIPSOID_PATHS.items():
-                if self._visible[key] is False:
-                    self._vis[path].set_property("visible", True)
-                    self._visible[key] = True
+        with self._commands():  # a set empty (or absent) in the first frame may appear later: scale hides it
+            for key in keys:
+                self._load(key, kinds[key])
+                self._set_visible(key, True)
         animation = ma.Animation(default_framerate=fps)
         data, geometry_data = self.model.createData(), self.visual_model.createData()
         geometry_paths = [
             self._pin.getViewerNodeName(geom, pin.GeometryType.VISUAL) for geom in self.visual_model.geometryObjects
         ]
-        hidden = np.full(3, 1e-6)  # an empty (or absent) ellipsoid shrinks to nothing
+        hidden = np.full(3, 1e-6)  # an empty (or absent) set shrinks to nothing
         previous: dict = {}  # key -> (pose 4x4 without scale, semi-axes) of the last frame drawn
         schedule, t = [], 0.0
-        for frame in frames:
+        for frame, sets in zip(frames, per_frame):
             pin.forwardKinematics(self.model, data, frame.q)
             pin.updateGeometryPlacements(self.model, data, self.visual_model, geometry_data)
             poses = [(path, geometry_data.oMg[g].homogeneous, None) for g, path in enumerate(geometry_paths)]
             poses.append((OBJECT_PATH, _translation(frame.analysis.held_object.center), None))
-            for key, path in ELLIPSOID_PATHS.items():
-                source = frame.locked if key[0] else frame.analysis
-                ellipsoid = None if source is None else getattr(source, key[1])
-                if ellipsoid is None or ellipsoid.empty:
-                    if source is not None or any_locked:
-                        poses.append((path, previous.get(key, (np.eye(4), None))[0], hidden))
+            for key in keys:
+                path, task_set = scene_path(key[1], key[0]), sets.get(key)
+                if task_set is None or task_set.empty:
+                    poses.append((path, previous.get(key, (np.eye(4), None))[0], hidden))
                     continue
-                p, R, semi = ellipsoid_frame(
-                    ellipsoid, source.task, source.held_object.center, self.scales[key[1]], PLANAR_THICKNESS[key]
-                )
-                planar = drawn_ellipsoid(ellipsoid, source.task)[0].dim == 2
+                source = frame.locked if key[0] else frame.analysis
                 last = previous.get(key)
-                R, semi = _aligned(R, semi, None if last is None else last[0][:3, :3], planar)
-                pose = _translation(p)
-                pose[:3, :3] = R
-                previous[key] = (pose, semi)
-                poses.append((path, pose, semi))
+                placed = DRAWINGS[task_set.kind].keyframe(
+                    task_set,
+                    source.task,
+                    source.held_object.center,
+                    self.scales[key[1]],
+                    planar_thickness(key[1], key[0]),
+                    None if last is None else last[0][:3, :3],
+                )
+                if placed is None:  # a drawing that does not animate: it stays as first shown
+                    continue
+                previous[key] = placed
+                poses.append((path, *placed))
             times = [t] if frame.hold <= 0 else [t, t + frame.hold]
             for time_s in times:
                 with animation.at_frame(self._vis, time_s * fps) as at:
@@ -641,32 +642,3 @@ class EllipsoidViewer:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-def _unit_rings(n: int = 96) -> np.ndarray:
-    """Line segments (3, 6 n) of the unit circles in the xy, yz and zx planes."""
-    t = np.linspace(0.0, 2.0 * np.pi, n + 1)
-    c, s, z = np.cos(t), np.sin(t), np.zeros_like(t)
-    points = []
-    for ring in (np.stack([c, s, z]), np.stack([z, c, s]), np.stack([s, z, c])):
-        points.append(np.repeat(ring, 2, axis=1)[:, 1:-1])  # p0 p1 p1 p2 ... as segment pairs
-    return np.hstack(points).astype(np.float32)
-
-
-def _line_material(color: int):
-    """Lines drawn after the semi-transparent shapes (transparent pass, renderOrder 1), so that
-    rings and axes inside a shape keep their colour instead of being tinted by its surface."""
-    import meshcat.geometry as mg
-
-    return mg.LineBasicMaterial(color=color, transparent=True, opacity=1.0)
-
-
-def _darker(color: int, factor: float = 0.45) -> int:
-    r, g, b = ((color >> shift) & 0xFF for shift in (16, 8, 0))
-    return (int(r * factor) << 16) | (int(g * factor) << 8) | int(b * factor)
-
-
-def _translation(p) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, 3] = np.asarray(p, dtype=float)
-    return T

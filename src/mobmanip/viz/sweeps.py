@@ -38,7 +38,7 @@ _SUBSTEPS = 8  # computed frames between two of the paper's values
 
 
 def _check_moving(robot: Robot, sweep: str) -> None:
-    if robot.wheel_platform is None or robot.platform.kind == "fixed":
+    if robot.wheel_platform is None or robot.platform_locked:
         raise UsageError(f"--sweep {sweep} varies the wheels' limits; it needs the robot's own moving platform")
 
 
@@ -46,7 +46,7 @@ def _paper_like(robot: Robot):
     """(robot on its differential drive, optimal posture), or (None, None) when the robot is
     not like the paper's. A paper-like robot with its platform locked still qualifies."""
     own = robot
-    if robot.platform.kind == "fixed" and robot.wheel_platform is not None:
+    if robot.platform_locked and robot.wheel_platform is not None:
         own = robot.with_platform(robot.wheel_platform.kind)
     try:
         return own, optimal_posture(own)
@@ -71,7 +71,8 @@ def object_angle_frames(
         task: task space (default the spec's).
         angles_deg: the directions (deg).
         locked: also draw the locked-platform pair.
-        **options: passed to :func:`mobmanip.analysis.analyze` (``object_mass``, ``decoupled``).
+        **options: passed to :func:`mobmanip.analysis.analyze` (``object_mass``, ``decoupled``,
+            ``measures``).
     """
     paper, posture = _paper_like(robot)
     if posture is not None and q is not None:

@@ -1,0 +1,292 @@
+"""A sweep's results: the index arrays over the grid, their names, files and plots.
+
+:class:`SweepResult` holds, for every measure swept (:mod:`mobmanip.measures`), its indices over
+the grid of :class:`mobmanip.sweep.SweepGrid`; :func:`check_index_name` and :func:`index_names`
+define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, ...), and
+:func:`plot_sweep` draws one. :mod:`mobmanip.sweep` runs sweeps and re-exports these names.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import UsageError
+from .io import atomic_output, save_figure
+from .measures import Measure, resolve_measures
+from .planar_postures import PostureTable
+from .posture import IKPostureTable
+
+if TYPE_CHECKING:
+    from .sweep import SweepGrid, SweepSpec
+
+#: Grid axes in order: the result arrays have this shape (one entry per value).
+AXES = ("angle_deg", "distance", "heading_deg", "wheel_velocity_scale", "wheel_effort_scale")
+#: Scalar indices recorded by a sweep for every measure.
+SCALAR_INDICES = ("volume", "isotropy", "capacity")
+#: Flags recorded by a sweep for every measure.
+FLAGS = ("degenerate", "empty")
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Indices over a sweep grid.
+
+    ``indices[name]`` has the grid's shape (angle, distance, heading, wheel velocity scale,
+    wheel effort scale), with a trailing task axis for per-axis arrays (``*_semi_axes``). Names:
+    ``<measure>_{volume,isotropy,capacity,degenerate,empty}`` for every measure swept, and its
+    per-axis arrays (``<measure>_semi_axes`` for the ellipsoids), e.g. ``kinematic_volume``.
+    Indices of velocities (kinematic) do not depend on the effort scale, nor those of
+    accelerations (dynamic) on the velocity scale; both are repeated along that axis.
+    Unreachable grid points hold NaN (and False flags).
+
+    Attributes:
+        spec: what was swept.
+        grid: the grid.
+        task: task-space name.
+        task_axes: labels of the task coordinates.
+        reachable: whether the arms reach each (angle, distance, heading), (A, D, H).
+        indices: the arrays described above.
+        postures: the arms' postures: a :class:`PostureTable` per distance (planar closed form)
+            or a :class:`mobmanip.posture.IKPostureTable` per (angle, distance); see
+            :meth:`joint_positions` for both as one array.
+    """
+
+    spec: SweepSpec
+    grid: SweepGrid
+    task: str
+    task_axes: tuple[str, ...]
+    reachable: np.ndarray
+    indices: dict
+    postures: PostureTable | IKPostureTable
+
+    def joint_positions(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """The arm joints' names and positions (rad or m) at every (angle, distance), (A, D, n);
+        NaN where unreachable. The platform heading turns the whole robot and does not change them."""
+        table = self.postures
+        if isinstance(table, IKPostureTable):
+            return table.joint_names, table.joints
+        a, d = self.grid.shape[:2]
+        ia, idist = (i.ravel() for i in np.meshgrid(np.arange(a), np.arange(d), indexing="ij"))
+        values, reachable = table.joint_values(np.radians(self.grid.angle_deg[ia]), idist)
+        values[~reachable] = np.nan
+        return table.joint_names, values.reshape(a, d, -1)
+
+    @property
+    def measures(self) -> tuple[Measure, ...]:
+        """The definitions of the measures swept, in order."""
+        return resolve_measures(self.spec.measures, sweep=True)
+
+    def index(self, name: str) -> np.ndarray:
+        """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
+
+        Raises:
+            UsageError: an unknown name (the message lists the valid ones).
+        """
+        kind, what, k = check_index_name(name, len(self.task_axes), self.spec.measures)
+        if k is None:
+            return self.indices[f"{kind}_{what}"]
+        return self.indices[f"{kind}_{what}"][..., k - 1]
+
+    def save_npz(self, path: str | Path) -> Path:
+        """Write the grid axes, the indices, the postures and the settings to a NumPy ``.npz`` file.
+
+        Keys: the grid axes (:data:`AXES`), every index array, ``reachable`` (A, D, H),
+        ``posture_joint_names`` and ``posture_joints`` (A, D, n) (:meth:`joint_positions`), and
+        ``meta_*`` texts (``meta_postures`` is ``planar`` or ``ik``). Planar postures add
+        ``posture_right`` / ``posture_left`` ((q2, q3, bearing) per distance); inverse-kinematics
+        ones add ``posture_position_error`` and ``posture_rotation_error`` (A, D),
+        ``posture_reference`` (the reference configuration) and the hold: ``hold_origin``,
+        ``hold_height``, ``hold_offsets``, ``hold_rotations`` (see :class:`mobmanip.posture.Hold`).
+        """
+        path = Path(path)
+        arrays = {name: getattr(self.grid, name) for name in AXES}
+        arrays.update(self.indices)
+        arrays["reachable"] = self.reachable
+        table = self.postures
+        names, joints = self.joint_positions()
+        arrays["posture_joint_names"] = np.array(names, dtype=str)
+        arrays["posture_joints"] = joints
+        if isinstance(table, PostureTable):
+            arrays["posture_right"] = table.right
+            arrays["posture_left"] = table.left
+        else:
+            arrays["posture_position_error"] = table.position_error
+            arrays["posture_rotation_error"] = table.rotation_error
+            arrays["posture_reference"] = table.reference
+            arrays["hold_origin"] = table.hold.origin
+            arrays["hold_height"] = np.array(table.hold.height)
+            arrays["hold_offsets"] = table.hold.offsets
+            arrays["hold_rotations"] = table.hold.rotations
+        meta = {
+            "robot": str(self.spec.robot),
+            "task": self.task,
+            "task_axes": ",".join(self.task_axes),
+            "platform": self.spec.platform,
+            "decoupled": str(self.spec.decoupled),
+            "object_mass": str(self.spec.object_mass),
+            "direction": str(self.spec.direction),
+            "axes": ",".join(AXES),
+            "postures": table.method,
+        }
+        arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
+        with atomic_output(path, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        return path
+
+    def save_csv(self, path: str | Path) -> Path:
+        """Write one row per grid point: the axis values, reachability and every index."""
+        path = Path(path)
+        m = len(self.task_axes)
+        grids = np.meshgrid(*(getattr(self.grid, name) for name in AXES), indexing="ij")
+        reach = np.broadcast_to(self.reachable[..., None, None], self.grid.shape)
+        columns, header = [g.ravel() for g in grids], list(AXES)
+        columns.append(reach.ravel().astype(int))
+        header.append("reachable")
+        for measure in self.measures:
+            kind = measure.name
+            for name in SCALAR_INDICES:
+                columns.append(self.indices[f"{kind}_{name}"].ravel())
+                header.append(f"{kind}_{name}")
+            for attribute, stem in measure.axis_indices:
+                for k in range(m):
+                    columns.append(self.indices[f"{kind}_{attribute}"][..., k].ravel())
+                    header.append(f"{kind}_{stem}_{k + 1}")
+            for flag in FLAGS:
+                columns.append(self.indices[f"{kind}_{flag}"].ravel().astype(int))
+                header.append(f"{kind}_{flag}")
+        with atomic_output(path, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(header)
+            table = np.column_stack(columns)
+            step = 65536
+            for start in range(0, table.shape[0], step):
+                writer.writerows([f"{v:.12g}" for v in row] for row in table[start : start + step])
+        return path
+
+
+def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | None]:
+    """Split an index name into (measure, index or per-axis array, axis number or None):
+    ``"kinematic.volume"`` gives ``("kinematic", "volume", None)``, ``"dynamic.semi_axis_2"``
+    gives ``("dynamic", "semi_axes", 2)``.
+
+    Args:
+        name: ``<measure>.<index>``.
+        m: task dimension.
+        measures: the measures swept (names; ``None``: the default ones).
+
+    Raises:
+        UsageError: an unknown name (the message lists the valid ones for an m-dimensional task).
+    """
+    kind, _, what = str(name).replace("-", "_").partition(".")
+    for measure in resolve_measures(measures, sweep=True):
+        if kind != measure.name:
+            continue
+        if what in SCALAR_INDICES:
+            return kind, what, None
+        for attribute, stem in measure.axis_indices:
+            number = what[len(stem) + 1 :] if what.startswith(f"{stem}_") else ""
+            if number.isdigit() and 1 <= int(number) <= m:
+                return kind, attribute, int(number)
+    raise UsageError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
+
+
+def index_names(m: int, measures=None) -> list[str]:
+    """Names accepted by :meth:`SweepResult.index` for an m-dimensional task and the measures
+    swept (names; ``None``: the default ones)."""
+    out = []
+    for measure in resolve_measures(measures, sweep=True):
+        out += [f"{measure.name}.{name}" for name in SCALAR_INDICES]
+        for _, stem in measure.axis_indices:
+            out += [f"{measure.name}.{stem}_{k}" for k in range(1, m + 1)]
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# plot
+
+_AXIS_LABELS = {
+    "angle_deg": "object direction (deg)",
+    "distance": "object distance (m)",
+    "heading_deg": "platform heading (deg)",
+    "wheel_velocity_scale": "wheel velocity scale",
+    "wheel_effort_scale": "wheel effort scale",
+}
+
+
+def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: int = 6) -> Path:
+    """Plot one index over the sweep's varying grid axes and save it (PNG, matplotlib Agg).
+
+    Two varying axes: a heat map, polar when they are angle and distance (0 deg up, 90 deg to
+    the left, like the robot seen from above facing up). A third varying axis gives one panel per
+    value (up to ``max_panels``, evenly picked); further axes are taken at their first value.
+    One varying axis: a line plot.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    values = result.index(index)
+    grid = result.grid
+    varying = [i for i, n in enumerate(grid.shape) if n > 1]
+    if 0 in varying and 1 in varying:
+        pair = [0, 1]
+    else:
+        pair = varying[:2]
+    rest = [i for i in varying if i not in pair]
+    panel_axis = rest[0] if rest and len(pair) == 2 else None
+    n_panel = 1 if panel_axis is None else grid.shape[panel_axis]
+    picks = np.unique(np.linspace(0, n_panel - 1, min(n_panel, max_panels)).round().astype(int))
+    polar = pair == [0, 1]
+    cols = min(len(picks), 3)
+    rows = math.ceil(len(picks) / cols)
+    fig = Figure(figsize=(4.2 * cols + 0.8, 4.0 * rows), layout="constrained")
+    FigureCanvasAgg(fig)
+    finite = values[np.isfinite(values)]
+    vmin, vmax = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    mesh = None
+    for p, pick in enumerate(picks):
+        ax = fig.add_subplot(rows, cols, p + 1, projection="polar" if polar else None)
+        index_tuple = [0] * 5
+        if panel_axis is not None:
+            index_tuple[panel_axis] = pick
+        sl = tuple(slice(None) if i in pair else index_tuple[i] for i in range(5))
+        data = values[sl]
+        if len(pair) == 2:
+            x = getattr(grid, AXES[pair[0]])
+            y = getattr(grid, AXES[pair[1]])
+            if polar:
+                ax.set_theta_zero_location("N")
+                mesh = ax.pcolormesh(np.radians(x), y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
+                ax.set_rlim(0.0, float(y.max()) * 1.05)
+            else:
+                mesh = ax.pcolormesh(x, y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
+                ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])
+                ax.set_ylabel(_AXIS_LABELS[AXES[pair[1]]])
+        elif len(pair) == 1:
+            x = getattr(grid, AXES[pair[0]])
+            ax.plot(x, data, marker=".")
+            ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])
+            ax.set_ylabel(index)
+        else:
+            ax.bar([index], [float(data)])
+        if panel_axis is not None:
+            ax.set_title(f"{_AXIS_LABELS[AXES[panel_axis]]} = {getattr(grid, AXES[panel_axis])[pick]:g}", fontsize=9)
+    if mesh is not None:
+        fig.colorbar(mesh, ax=fig.axes, label=index, shrink=0.8)
+    fixed = [
+        f"{_AXIS_LABELS[AXES[i]]} {getattr(grid, AXES[i])[0]:g}"
+        for i in range(5)
+        if i not in pair and i != panel_axis and grid.shape[i] > 1
+    ]
+    title = f"{result.spec.robot}: {index} ({result.task} task)"
+    if polar:
+        title += "\nradius: object distance (m), angle: object direction (deg)"
+    if fixed:
+        title += "\nat " + ", ".join(fixed)
+    fig.suptitle(title, fontsize=10)
+    return save_figure(fig, path, dpi=110)
