@@ -43,19 +43,17 @@ class KernelOutcome(NamedTuple):
         refused_dynamic: the same for the dynamic ellipsoids.
         W: grasp matrices, (n, m, mk), of the refused rows (of every row with ``all_terms``).
         Mo: object inertias in the task space, (n, m, m), of the same rows.
-        kinematic_bound: the certificate's a-priori error bound of every row's kinematic
-            ellipsoid, relative to its size, (n,); inf where the closed forms do not apply. A
-            row is certified exactly where this is at most
+        bounds: the certificate's a-priori error bounds of every row's kinematic (column 0)
+            and dynamic (column 1) ellipsoid, relative to its size, (n, 2); inf where the
+            closed forms do not apply. A row is certified exactly where its bound is at most
             :data:`mobmanip.tolerances.FAST_PATH_TOLERANCE`.
-        dynamic_bound: the same for the dynamic ellipsoids.
     """
 
     refused_kinematic: np.ndarray | None
     refused_dynamic: np.ndarray | None
     W: np.ndarray
     Mo: np.ndarray
-    kinematic_bound: np.ndarray
-    dynamic_bound: np.ndarray
+    bounds: np.ndarray
 
 
 _NO_OFFSETS = np.zeros((0, 3))
@@ -109,8 +107,7 @@ def run_kernel(
     kin_ok = np.zeros(n, dtype=bool)
     dyn_ok = np.zeros(n, dtype=bool)
     dyn_empty = np.zeros(n if dynamic is not None else 0, dtype=bool)
-    kin_bound = np.empty(n)
-    dyn_bound = np.empty(n)
+    bounds = np.empty((n, 2))
     ptr, idx, val = setup.S_csc
     probed = setup.probed
     kernel_module().run_chunk(
@@ -155,14 +152,13 @@ def run_kernel(
         kin.axes[kin_b],
         kin.matrix[kin_b],
         kin_ok,
-        kin_bound,
         dyn.center[dyn_b],
         dyn.semi_axes[dyn_b],
         dyn.axes[dyn_b],
         dyn.matrix[dyn_b],
         dyn_ok,
-        dyn_bound,
         dyn_empty,
+        bounds,
     )
     t.J_u, t.P, t.xi = J_u, P, xi
     if setup.moving_grasp:
@@ -176,4 +172,4 @@ def run_kernel(
         dynamic.empty[block][dyn_ok] = dyn_empty[dyn_ok]
         dynamic.degenerate[block][dyn_ok] = dyn_empty[dyn_ok]
         bad_dyn = ~dyn_ok
-    return KernelOutcome(bad_kin, bad_dyn, W, Mo_rows, kin_bound, dyn_bound)
+    return KernelOutcome(bad_kin, bad_dyn, W, Mo_rows, bounds)

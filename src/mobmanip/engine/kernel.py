@@ -497,14 +497,13 @@ def run_chunk(
     kin_axes,
     kin_matrix,
     kin_ok,
-    kin_bound,
     dyn_center,
     dyn_semi,
     dyn_axes,
     dyn_matrix,
     dyn_ok,
-    dyn_bound,
     dyn_empty,
+    bounds,
 ):
     """Terms and both fast-path ellipsoids for every row of a chunk (see the module docstring).
 
@@ -528,7 +527,7 @@ def run_chunk(
     zeroes P's platform-arm blocks in the dynamic ellipsoid; ``tolerances`` is
     :func:`mobmanip.tolerances.kernel_tolerances`. Outputs: the ellipsoids of accepted rows and
     the acceptance flags kin_ok / dyn_ok (rows with False are left untouched); the a-priori
-    error bounds kin_bound / dyn_bound of every row, relative to the ellipsoid's size (inf
+    error bounds of every row, bounds (n, 2) (kinematic, dynamic), relative to the ellipsoid's size (inf
     where the closed forms do not apply at all: a row is accepted exactly where its bound is at
     most the certificate threshold); and J_u, P (coupled), xi, W, Mo of the rows some asked
     ellipsoid was not accepted for (of every row with ``all_terms``).
@@ -614,8 +613,8 @@ def run_chunk(
     for i in range(n):
         Mi = M[i]
         Jwi = Jw[i]
-        kin_bound[i] = np.inf
-        dyn_bound[i] = np.inf
+        bounds[i, 0] = np.inf
+        bounds[i, 1] = np.inf
         # ---------------- terms: positions, J_u, P, xi ----------------
         for a in range(k):
             # p = a + w_x (w_x . b), a = w_x x v_x and b = w_y x v_y from the probe columns
@@ -932,8 +931,8 @@ def run_chunk(
                 err += second
                 est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
                 if eig_ok and not hard and lmin * gram_limit > lmax and lmin > 0.0 and np.isfinite(est):
-                    kin_bound[i] = est
-                if kin_bound[i] <= tol:
+                    bounds[i, 0] = est
+                if bounds[i, 0] <= tol:
                     kin_ok[i] = True
                     for p in range(m):
                         kin_center[i, p] = 0.0
@@ -1004,10 +1003,10 @@ def run_chunk(
                 c_norm = np.sqrt(c_norm)
                 scale = max(np.sqrt(abs(rho2) / lmin), c_norm)
                 err_c = err_l * (c_norm + np.sqrt(outside2 / lmin)) / scale
-                dyn_bound[i] = np.inf
+                bounds[i, 1] = np.inf
                 if eig_ok and lmin > 0.0 and np.isfinite(aniso) and aniso < cond_limit:
-                    dyn_bound[i] = max(err_l, err_c, err_rho2 / (2.0 * abs(rho2)))
-                if dyn_bound[i] <= tol:
+                    bounds[i, 1] = max(err_l, err_c, err_rho2 / (2.0 * abs(rho2)))
+                if bounds[i, 1] <= tol:
                     dyn_ok[i] = True
                     for p in range(m):
                         dyn_center[i, p] = cv[p]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,9 +23,10 @@ from .terms import chunk_terms, numpy_terms
 ONE_ROW_METHODS = ("auto", "kernel", "numpy")
 
 
-@dataclass(frozen=True)
-class OneRow:
+class OneRow(NamedTuple):
     """The engine's terms and certified ellipsoids at one configuration (robot and object at rest).
+
+    A named tuple (immutable, and cheap to build on the path every ``analyze`` call takes).
 
     Attributes:
         J_u: unified Jacobian J S, (m k, nx).
@@ -120,7 +121,7 @@ def evaluate_one(
             Mo = np.ascontiguousarray(held_object.inertia_matrix(task), dtype=float)
         out = run_kernel(setup, t, vlim, elim, decoupled, kin_b, dyn_b, slice(0, 1), offsets, Mo, all_terms=True)
         refused_kin, refused_dyn, W = out.refused_kinematic[0], out.refused_dynamic[0], out.W[0]
-        bounds = float(out.kinematic_bound[0]), float(out.dynamic_bound[0])
+        bounds = out.bounds[0].tolist()
     else:
         numpy_terms(setup, t)
         bounds = None, None
@@ -128,19 +129,20 @@ def evaluate_one(
             W = held_object.grasp_matrix(task)
             refused_kin = refused_dyn = True
         else:
-            W = setup.W if t.W is None else t.W[0]
+            W = setup.W.copy() if t.W is None else t.W[0]
             refused_kin = bool(kinematic_fast(setup, t, vlim, kin_b, slice(0, 1))[0])
             P = t.P.copy()
             if decoupled:
                 e = setup.n_eta
                 P[:, :e, e:] = P[:, e:, :e] = 0.0
             refused_dyn = bool(dynamic_fast(setup, t, P, elim, dyn_b, slice(0, 1))[0])
+    # J_u, P, xi and W are new arrays of this call; the positions live in the reused workspace
     return OneRow(
-        J_u=t.J_u[0].copy(),
-        P=t.P[0].copy(),
-        xi=t.xi[0].copy(),
+        J_u=t.J_u[0],
+        P=t.P[0],
+        xi=t.xi[0],
         positions=t.positions[0].copy(),
-        W=np.array(W, dtype=float),
+        W=W,
         kinematic=None if refused_kin else kin_b[0],
         dynamic=None if refused_dyn else dyn_b[0],
         kinematic_bound=bounds[0],
