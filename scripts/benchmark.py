@@ -43,7 +43,7 @@ import pinocchio as pin  # noqa: E402
 from pycapacity.robot import acceleration_ellipsoid, velocity_ellipsoid  # noqa: E402
 
 import mobmanip  # noqa: E402
-from mobmanip.batch import BatchSetup, _pinocchio_pass, _Workspace  # noqa: E402
+from mobmanip.batch import BatchSetup, Workspace, pinocchio_pass  # noqa: E402
 from mobmanip.dynamics import reduced_dynamics, unified_jacobian  # noqa: E402
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep  # noqa: E402
 
@@ -99,7 +99,7 @@ class Case:
         # precomputed for pycapacity (not timed): the unified Jacobian and reduced inertia
         self.precomputed = [(unified_jacobian(robot, q, task), reduced_dynamics(robot, q).P) for q in self.qs_single]
         self.setup = BatchSetup(robot, task)
-        self.workspace = _Workspace(self.setup, n_single)
+        self.workspace = Workspace(self.setup.probed, n_single)
 
     def floor(self):
         model, data = self.robot.model, self.robot.data
@@ -114,7 +114,7 @@ class Case:
             pin.nonLinearEffects(model, data, q, v0)
 
     def batch_pass(self):
-        _pinocchio_pass(self.setup, self.qs_single, self.workspace, len(self.qs_single))
+        pinocchio_pass(self.setup.probed, self.qs_single, self.workspace)
 
     def single(self):
         robot, task = self.robot, self.task

@@ -231,7 +231,7 @@ def test_svd_rows_queued_over_chunks_equal_rows_computed_per_chunk(tiago, rng):
     """analyze_batch queues the SVD path's rows of all chunks and computes them at once: the
     same ellipsoids as computing them chunk by chunk, also where chunks use different limits
     (queued items are grouped by their limits)."""
-    from mobmanip.batch import BatchSetup, _SvdBacklog, ellipsoids_from_terms, iter_terms
+    from mobmanip.batch import BatchSetup, SvdBacklog, ellipsoids_from_terms, iter_terms
 
     qs = np.array(random_configurations(tiago, rng, 12))
     setup = BatchSetup(tiago, "spatial")
@@ -239,7 +239,7 @@ def test_svd_rows_queued_over_chunks_equal_rows_computed_per_chunk(tiago, rng):
     results = {}
     for queued in (False, True):
         kin, dyn = EllipsoidBatch.allocate(len(qs), setup.m), EllipsoidBatch.allocate(len(qs), setup.m)
-        backlog = _SvdBacklog(setup) if queued else None
+        backlog = SvdBacklog(setup) if queued else None
         for (start, t), scale in zip(iter_terms(setup, qs, 4), scales):
             svd_rows = ellipsoids_from_terms(
                 setup,

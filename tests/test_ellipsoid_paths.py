@@ -13,6 +13,7 @@ import pytest
 import mobmanip
 from mobmanip import ellipsoids
 from mobmanip.analysis import analyze
+from mobmanip.ellipsoids import Ellipsoid
 
 
 def _assert_same(fast, exact, rtol=1e-9):
@@ -36,20 +37,45 @@ def _random_q(robot, rng):
     return robot.configuration((rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-np.pi, np.pi)), joints)
 
 
+@pytest.fixture
+def general_branch_calls(monkeypatch):
+    """Count the calls of Ellipsoid.from_generator: for a non-empty ellipsoid only the general
+    (null-space) branches of mobmanip.ellipsoids call it; the full-rank branches build the
+    Ellipsoid directly. So the count tells which branch ran."""
+    calls = []
+    original = Ellipsoid.from_generator.__func__
+
+    def spy(cls, *args, **kwargs):
+        calls.append(args)
+        return original(cls, *args, **kwargs)
+
+    monkeypatch.setattr(Ellipsoid, "from_generator", classmethod(spy))
+    return calls
+
+
 @pytest.mark.parametrize("task", ["planar", "planar_rigid"])
-def test_fast_and_exact_paths_agree_on_random_configurations(robot, task, monkeypatch):
+def test_fast_and_exact_paths_agree_on_random_configurations(robot, task, monkeypatch, general_branch_calls):
+    """The reference path's full-rank branches against its general branches, both reached
+    through analyze(method="exact") (the compiled kernel is never involved)."""
     rng = np.random.default_rng(7)
     configurations = [_random_q(robot, rng) for _ in range(20)]
-    fast = [analyze(robot, q, task, decoupled=bool(k % 2)) for k, q in enumerate(configurations)]
-    monkeypatch.setattr(ellipsoids, "_FAST_RTOL", np.inf)  # every call takes the SVD path
+    fast = []
+    for k, q in enumerate(configurations):
+        general_branch_calls.clear()
+        fast.append(analyze(robot, q, task, decoupled=bool(k % 2), method="exact"))
+        assert not general_branch_calls  # both ellipsoids from the full-rank branches
+    monkeypatch.setattr(ellipsoids, "FAST_RTOL", np.inf)  # every call takes the general branches
     for k, (q, quick) in enumerate(zip(configurations, fast)):
-        exact = analyze(robot, q, task, decoupled=bool(k % 2))
+        general_branch_calls.clear()
+        exact = analyze(robot, q, task, decoupled=bool(k % 2), method="exact")
+        assert len(general_branch_calls) == 2  # kinematic and dynamic
+        assert not quick.dynamic.empty
         _assert_same(quick.kinematic, exact.kinematic)
         _assert_same(quick.dynamic, exact.dynamic)
 
 
 @pytest.mark.parametrize("load", [0.3, 0.9, 1.5])
-def test_shifted_and_empty_dynamic_ellipsoids_agree(robot, load, monkeypatch):
+def test_shifted_and_empty_dynamic_ellipsoids_agree(robot, load, monkeypatch, general_branch_calls):
     """A bias torque of growing size (relative to the limits) shifts, then empties, the set."""
     rng = np.random.default_rng(11)
     q = _random_q(robot, rng)
@@ -60,8 +86,11 @@ def test_shifted_and_empty_dynamic_ellipsoids_agree(robot, load, monkeypatch):
     xi *= load / np.linalg.norm(xi / limits)  # ||Z xi|| = load
     M_o, g_o = 2.0 * np.eye(2), np.zeros(2)
     quick = ellipsoids.dynamic_ellipsoid(J, W, P, Q, xi, M_o, g_o, limits)
-    monkeypatch.setattr(ellipsoids, "_FAST_RTOL", np.inf)
+    assert len(general_branch_calls) == int(quick.empty)  # the full-rank branch builds a non-empty set itself
+    monkeypatch.setattr(ellipsoids, "FAST_RTOL", np.inf)
+    general_branch_calls.clear()
     exact = ellipsoids.dynamic_ellipsoid(J, W, P, Q, xi, M_o, g_o, limits)
+    assert general_branch_calls  # the general branch ran
     _assert_same(quick, exact)
     assert np.linalg.norm(exact.center) > 0
     # Independent check of emptiness: least-squares residual of Z(Lambda a + mu) over all a.

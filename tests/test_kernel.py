@@ -1,4 +1,4 @@
-"""The compiled kernel (mobmanip._kernel) against the exact SVD paths and against NumPy."""
+"""The compiled kernel (mobmanip.engine.kernel) against the exact SVD paths and against NumPy."""
 
 from __future__ import annotations
 
@@ -8,9 +8,18 @@ import pytest
 
 import mobmanip
 from conftest import random_configurations
-from mobmanip import batch as batch_module
 from mobmanip.analysis import analyze
-from mobmanip.batch import BatchSetup, _pinocchio_pass, _Workspace, analyze_batch, kernel_available
+from mobmanip.batch import (
+    BatchSetup,
+    EllipsoidBatch,
+    Workspace,
+    analyze_batch,
+    ellipsoids_from_terms,
+    iter_terms,
+    kernel_available,
+    pinocchio_pass,
+)
+from mobmanip.engine.setup import mass_matrix_pattern
 from mobmanip.grasp import HeldObject
 from test_batch import assert_same_ellipsoid
 
@@ -80,9 +89,9 @@ def test_input_matrix_not_identity_is_applied(tiago, rng):
     qs = np.array(random_configurations(tiago, rng, 40))
     results = {}
     for method in ("auto", "numpy", "svd"):
-        dyn = batch_module.EllipsoidBatch.allocate(len(qs), setup.m)
-        for start, t in batch_module.iter_terms(setup, qs):
-            batch_module.ellipsoids_from_terms(setup, t, dynamic=dyn, offset=start, method=method)
+        dyn = EllipsoidBatch.allocate(len(qs), setup.m)
+        for start, t in iter_terms(setup, qs):
+            ellipsoids_from_terms(setup, t, dynamic=dyn, offset=start, method=method)
         results[method] = dyn
     plain = analyze_batch(tiago, qs, "spatial")
     for i in range(len(qs)):
@@ -127,20 +136,21 @@ def test_singular_rows_are_not_certified(robot):
 
 @pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual_torso", "ur5"])
 @pytest.mark.parametrize("bindings", ["conventions", "no conventions"])
-def test_probed_pass_gives_what_separate_pinocchio_calls_give(name, bindings, rng, monkeypatch):
+def test_probed_pass_gives_what_separate_pinocchio_calls_give(name, bindings, rng):
     """One CRBA call per configuration on the probed model: its world joint Jacobians, M, the
     gravity probe's row and the frame probes' columns equal computeJointJacobians, crba,
     computeGeneralizedGravity and the frame placements of the robot's own model. The same
     where the bindings know no conventions (Jacobians then come from their own call)."""
-    if bindings == "no conventions":
-        monkeypatch.setattr(batch_module, "_WORLD", None)
     robot = mobmanip.load_robot(name)
     setup = BatchSetup(robot)
     probed = setup.probed
     assert probed.model.nv == robot.model.nv + 1 + 2 * len(robot.arms)
     qs = np.array(random_configurations(robot, rng, 5))
-    ws = _Workspace(setup, len(qs))
-    _pinocchio_pass(setup, qs, ws, len(qs))
+    ws = Workspace(probed, len(qs))
+    if bindings == "no conventions":
+        pinocchio_pass(probed, qs, ws, convention=None)
+    else:
+        pinocchio_pass(probed, qs, ws)
     Jw, M, g = probed.robot_jacobians(ws.Ja), probed.robot_mass_matrices(ws.Ma), probed.gravity_torques(ws.Ma)
     positions = probed.frame_positions(ws.Ja)
     weight = np.linalg.norm(robot.model.gravity.linear) * sum(inertia.mass for inertia in robot.model.inertias)
@@ -166,8 +176,8 @@ def test_probes_follow_any_gravity(rng):
     robot.model.gravity.linear = np.array([1.5, -2.0, -4.0])
     setup = BatchSetup(robot)
     qs = np.array(random_configurations(robot, rng, 3))
-    ws = _Workspace(setup, len(qs))
-    _pinocchio_pass(setup, qs, ws, len(qs))
+    ws = Workspace(setup.probed, len(qs))
+    pinocchio_pass(setup.probed, qs, ws)
     g = setup.probed.gravity_torques(ws.Ma)
     data = robot.model.createData()
     for i, q in enumerate(qs):
@@ -182,7 +192,7 @@ def test_sparsity_the_kernel_skips_is_structural(name, rng):
     columns, so two arms' rows meet only on the columns both can use."""
     robot = mobmanip.load_robot(name)
     setup = BatchSetup(robot)
-    pattern = batch_module._mass_matrix_pattern(robot.model)
+    pattern = mass_matrix_pattern(robot.model)
     assert not pattern.all()  # the arms are separate branches: their coupling is skipped
     ptr, rows, cols = setup.P_plan[:3]
     listed = np.zeros((setup.nx, setup.nx), dtype=bool)
@@ -208,24 +218,12 @@ def test_sparsity_the_kernel_skips_is_structural(name, rng):
                 assert set(expected) <= set(both)
 
 
-def test_without_numba_the_numpy_paths_run(robot, rng, monkeypatch):
-    """If the kernel cannot be imported, analyze uses the exact path and analyze_batch NumPy."""
-    qs = np.array(random_configurations(robot, rng, 6))
-    with_kernel = analyze_batch(robot, qs, "planar")
-    monkeypatch.setattr(batch_module, "_kernel_module", lambda: None)
-    assert not kernel_available()
-    without = analyze_batch(robot, qs, "planar")
-    for i, q in enumerate(qs):
-        assert_same_ellipsoid(without.dynamic[i], with_kernel.dynamic[i], f"row {i}")
-        assert_same_ellipsoid(analyze(robot, q, "planar").kinematic, with_kernel.kinematic[i], f"row {i}")
-
-
 # ----------------------------------------------------------------------------------------------
 # the symmetric eigensolver
 
 
 def _eigh(A):
-    from mobmanip._kernel import _eigh as eigh
+    from mobmanip.engine.kernel import eigh
 
     n = A.shape[0]
     V = np.array(A, dtype=float, copy=True)
@@ -268,7 +266,7 @@ def test_eigh_reports_nan_input():
 def test_eigh_pair_is_two_independent_solves():
     """Solved in lockstep, each problem gets exactly what it gets alone, whatever the other does:
     a different size of spectrum, zero, NaN, or not wanted."""
-    from mobmanip._kernel import _eigh_pair
+    from mobmanip.engine.kernel import eigh_pair
 
     rng = np.random.default_rng(7)
     n = 6
@@ -282,7 +280,7 @@ def test_eigh_pair_is_two_independent_solves():
             B = other + other.T
             V1, V2 = A.copy(), B.copy()
             d1, e1, d2, e2 = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
-            ok1, ok2 = _eigh_pair(V1, d1, e1, V2, d2, e2, n, True, True)
+            ok1, ok2 = eigh_pair(V1, d1, e1, V2, d2, e2, n, True, True)
             assert ok1 == alone_ok
             np.testing.assert_array_equal(d1, d_alone)
             np.testing.assert_array_equal(V1, V_alone)
@@ -293,5 +291,5 @@ def test_eigh_pair_is_two_independent_solves():
                 np.testing.assert_array_equal(V2, V_other)
         # the second problem not wanted: left untouched, reported converged
         V2 = np.full((n, n), 3.0)
-        ok1, ok2 = _eigh_pair(A.copy(), np.zeros(n), np.zeros(n), V2, np.zeros(n), np.zeros(n), n, True, False)
+        ok1, ok2 = eigh_pair(A.copy(), np.zeros(n), np.zeros(n), V2, np.zeros(n), np.zeros(n), n, True, False)
         assert ok1 == alone_ok and ok2 and np.all(V2 == 3.0)

@@ -19,6 +19,7 @@ import pytest
 
 import mobmanip
 from mobmanip.detect import detect_spec
+from mobmanip.errors import ModelError
 
 R_DRIVE, R_REAR, WHEELBASE, HALF_TRACK = 0.16, 0.12, 0.9, 0.35
 
@@ -231,6 +232,12 @@ def test_analyze_at_rest_gives_finite_ellipsoids_and_a_moving_platform_helps(tri
     assert result.kinematic.volume > locked.kinematic.volume
     exact = mobmanip.analyze(tricycle, q, task="translational", method="exact")
     np.testing.assert_allclose(result.kinematic.semi_axes, exact.kinematic.semi_axes, rtol=1e-10)
+
+
+def test_batches_refuse_a_configuration_dependent_s_by_name(tricycle, rng):
+    q, _ = random_state(tricycle, rng)
+    with pytest.raises(ModelError, match=r"'tricycle' has a steered platform whose S depends on q"):
+        mobmanip.analyze_batch(tricycle, q[None, :], task="translational")
 
 
 def test_detection_finds_the_tricycle(tmp_path):

@@ -11,7 +11,7 @@ import pytest
 
 import mobmanip
 from mobmanip.analysis import analyze
-from mobmanip.casestudy import ArmPosture, _arm_measure, configuration_at, optimal_posture
+from mobmanip.casestudy import ArmPosture, arm_measure, configuration_at, optimal_posture
 from mobmanip.cli import main
 from mobmanip.errors import SpecError
 from mobmanip.sweep import (
@@ -106,7 +106,7 @@ def test_posture_at_reach_against_pinocchio(robot, reach):
     """Reach and manipulability checked with Pinocchio; no neighbour on the family does better."""
     arm = robot.arms[0]
     found = posture_at_reach(planar_arm(robot, 0), reach)
-    w, tip, base = _arm_measure(robot, arm, found.q[1], found.q[2])
+    w, tip, base = arm_measure(robot, arm, found.q[1], found.q[2])
     assert np.hypot(*(tip - base)[:2]) == pytest.approx(reach, abs=1e-12)
     assert w == pytest.approx(found.manipulability, rel=1e-10)
     assert found.bearing > 0.0  # arm 1 bends to the right
@@ -115,7 +115,7 @@ def test_posture_at_reach_against_pinocchio(robot, reach):
         """q2 keeping the reach, by bisection on Pinocchio's forward kinematics (same elbow)."""
 
         def err(q2):
-            _, t, b = _arm_measure(robot, arm, q2, q3)
+            _, t, b = arm_measure(robot, arm, q2, q3)
             return np.hypot(*(t - b)[:2]) - reach
 
         lo, hi = found.q[1] - 0.2, found.q[1] + 0.2
@@ -123,7 +123,7 @@ def test_posture_at_reach_against_pinocchio(robot, reach):
         for _ in range(100):
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if err(lo) * err(mid) > 0 else (lo, mid)
-        return _arm_measure(robot, arm, 0.5 * (lo + hi), q3)[0]
+        return arm_measure(robot, arm, 0.5 * (lo + hi), q3)[0]
 
     for dq3 in (-1e-3, 1e-3):
         assert family_member(found.q[2] + dq3) <= found.manipulability + 1e-12

@@ -11,7 +11,7 @@ import pytest
 import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.cli import main
-from mobmanip.posture import POSITION_TOLERANCE, _log3, solve_postures
+from mobmanip.posture import POSITION_TOLERANCE, rotation_log, solve_postures
 from mobmanip.sweep import SweepGrid, SweepSpec, UnreachableGridError, run_sweep, sweep_configurations
 
 #: TIAGo++ holding a box of about 0.26 m between its hands, 0.44 m in front of the shoulders at
@@ -69,7 +69,7 @@ def test_log3_matches_pinocchio(rng):
     angles = np.concatenate([rng.uniform(0.0, math.pi, 200), [0.0, 1e-9, math.pi - 1e-3, math.pi - 1e-6, math.pi]])
     axes = rng.normal(size=(len(angles), 3))
     rotations = np.array([pin.exp3(t * a / np.linalg.norm(a)) for t, a in zip(angles, axes)])
-    ours = _log3(rotations)
+    ours = rotation_log(rotations)
     for omega, R in zip(ours, rotations):  # a half turn has two logs; compare through exp
         np.testing.assert_allclose(pin.exp3(omega), R, atol=1e-12)
     reference = np.array([pin.log3(R) for R in rotations[:-1]])

@@ -9,21 +9,20 @@ from __future__ import annotations
 
 import dataclasses
 import types
-import weakref
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from .batch import BatchSetup, EllipsoidBatch, _kernel_fast, _terms, _Workspace, kernel_available
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid
+from .engine import evaluate_one, kernel_available
 from .errors import MeasureError, TaskError
 from .grasp import HeldObject
 from .measure import TaskSet
 from .measures import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
 from .model import Robot
-from .tasks import TaskSpace, get_task
+from .tasks import get_task
 
 
 @dataclass(frozen=True)
@@ -165,7 +164,7 @@ def analyze(
         measures: the measures to compute, by name (:func:`mobmanip.measures.measure_names`);
             default: the default ones, ``("kinematic", "dynamic")``. They come out in the
             registry's order.
-        method: ``"auto"``: the compiled kernel of :mod:`mobmanip.batch` (closed forms with an
+        method: ``"auto"``: the compiled kernel of :mod:`mobmanip.engine` (closed forms with an
             a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
             at a singularity, is computed by the exact path); ``"exact"``: always the SVD-based
             :mod:`mobmanip.ellipsoids` (the reference; about 4x slower). Without Numba,
@@ -207,25 +206,13 @@ def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
 
 
 def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
-    """The compiled kernel of :mod:`mobmanip.batch` on one configuration; an ellipsoid its
-    certificate does not accept is computed by the reference path instead."""
-    setup, ws = _single_setup(robot, task, mass)
-    t = _terms(setup, q[None, :], ws)
-    m = setup.m
-    kin_b, dyn_b = EllipsoidBatch.allocate(1, m), EllipsoidBatch.allocate(1, m)
-    offsets = Mo = None
-    if held_object is not None:
-        offsets = np.ascontiguousarray(held_object.offsets, dtype=float)
-        Mo = np.ascontiguousarray(held_object.inertia_matrix(task), dtype=float)
-    vlim, elim = robot.velocity_limits, robot.effort_limits
-    bad_kin, bad_dyn, W, _ = _kernel_fast(
-        setup, t, vlim, elim, decoupled, kin_b, dyn_b, slice(0, 1), offsets=offsets, Mo=Mo, grasp=True, all_terms=True
+    """The batch engine on one configuration (:func:`mobmanip.engine.evaluate_one`); an
+    ellipsoid its certificate does not accept is computed by the reference path instead."""
+    row = evaluate_one(robot, q, task, mass, held_object, decoupled, method="kernel", validate=False)
+    obj = held_object if held_object is not None else HeldObject.between(row.positions, mass)
+    return _assemble(
+        robot, q, task, decoupled, row.J_u, row.P, row.xi, row.positions, obj, row.W, row.kinematic, row.dynamic
     )
-    positions = t.positions[0].copy()
-    obj = held_object if held_object is not None else HeldObject.between(positions, mass)
-    kin = None if bad_kin[0] else kin_b[0]
-    dynamic = None if bad_dyn[0] else dyn_b[0]
-    return _assemble(robot, q, task, decoupled, t.J_u[0], t.P[0], t.xi[0], positions, obj, W[0], kin, dynamic)
 
 
 def _assemble(
@@ -286,19 +273,3 @@ def _with_measures(analysis: Analysis, wanted: Iterable[Measure]) -> Analysis:
             found = measure.compute(terms)
         out[measure.name] = found
     return dataclasses.replace(analysis, measures=types.MappingProxyType(out))
-
-
-_SETUPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _single_setup(robot: Robot, task: TaskSpace, mass: float):
-    """The batch setup and a one-row workspace for (robot, task, mass), built once and kept as
-    long as the robot lives."""
-    per_robot = _SETUPS.setdefault(robot, {})
-    key = (task.name, tuple(task.rows), mass)
-    if key not in per_robot:
-        if len(per_robot) > 64:  # e.g. a sweep over masses: do not grow without bound
-            per_robot.clear()
-        setup = BatchSetup(robot, task, mass)
-        per_robot[key] = (setup, _Workspace(setup, 1))
-    return per_robot[key]

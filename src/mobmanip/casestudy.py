@@ -55,8 +55,9 @@ def _check_paper_like(robot: Robot) -> None:
         raise SpecError(f"the case study needs two 3-joint arms; {robot.name!r} has other arms")
 
 
-def _arm_measure(robot: Robot, arm: Arm, q2: float, q3: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """Manipulability, end-effector position and first-joint position for (0, q2, q3)."""
+def arm_measure(robot: Robot, arm: Arm, q2: float, q3: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """An arm's own manipulability sqrt(det(J J^T)) of its planar 2 x 3 translational Jacobian,
+    its end-effector position and its first joint's position (m), at joints (0, q2, q3) (rad)."""
     model, data = robot.model, robot.data
     q = robot.configuration(joints=dict(zip(arm.joint_names, (0.0, q2, q3))))
     pin.computeJointJacobians(model, data, q)
@@ -84,17 +85,17 @@ def optimal_posture(robot: Robot, arm_index: int = 0, grid: int = 73, refinement
         for dq2 in values:
             for dq3 in values:
                 q2, q3 = center[0] + dq2, center[1] + dq3
-                w = _arm_measure(robot, arm, q2, q3)[0]
+                w = arm_measure(robot, arm, q2, q3)[0]
                 if w > best[0]:
                     best = (w, q2, q3)
         center = np.array(best[1:])
         half = 2.0 * half / (grid - 1)
     w, q2, q3 = best
-    _, tip, base = _arm_measure(robot, arm, q2, q3)
+    _, tip, base = arm_measure(robot, arm, q2, q3)
     bearing = math.atan2(tip[1] - base[1], tip[0] - base[0])
     if bearing < 0:  # take the mirror image so that the arm's elbow is on its right
         q2, q3 = -q2, -q3
-        _, tip, base = _arm_measure(robot, arm, q2, q3)
+        _, tip, base = arm_measure(robot, arm, q2, q3)
         bearing = math.atan2(tip[1] - base[1], tip[0] - base[0])
     reach = float(np.hypot(*(tip - base)[:2]))
     return ArmPosture((0.0, float(q2), float(q3)), float(w), reach, float(bearing))

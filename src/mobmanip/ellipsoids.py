@@ -28,12 +28,13 @@ import numpy as np
 
 from .errors import ModelError, SetQueryError
 from .measure import TaskSet, check_dims, check_direction, check_points
+from .tolerances import FAST_RTOL
+from .tolerances import RANK_RTOL as _RANK_RTOL
 
-_RANK_RTOL = 1e-10
-# Fast paths assume full rank (J of full row rank, every W^T a_o reachable) and skip the null-space
-# projections; they run while the smallest singular value exceeds this fraction of the largest.
-# Otherwise the general path handles the (near-)singular case exactly.
-_FAST_RTOL = 1e-8
+# The full-rank branches below (J of full row rank, every W^T a_o reachable) skip the null-space
+# projections; they run while the smallest singular value exceeds FAST_RTOL times the largest
+# (read here at call time, so a test can set it to infinity to force the general branches).
+# Otherwise the general branch handles the (near-)singular case exactly.
 
 
 def _null_space(A: np.ndarray, n: int) -> np.ndarray:
@@ -237,7 +238,7 @@ def kinematic_ellipsoid(J_u: np.ndarray, W: np.ndarray, velocity_limits: np.ndar
     m = W.shape[0]
     # Full row rank J_hat = U diag(s) V^T: the set is v_o^T W U diag(s^-2) U^T W^T v_o <= 1.
     U, s, _ = np.linalg.svd(J_hat, full_matrices=False)
-    if s.shape[0] == J_hat.shape[0] and s[-1] > _FAST_RTOL * s[0]:
+    if s.shape[0] == J_hat.shape[0] and s[-1] > FAST_RTOL * s[0]:
         B = (W @ U) / s
         # A = B B^T; semi-axes and axes from the SVD of B (eigh(A) would square its conditioning
         # and lose the large semi-axes' accuracy).
@@ -283,7 +284,7 @@ def dynamic_ellipsoid(
     if _is_identity(Q):
         Q = None  # skip the solves with Q (the usual case: wheel and joint torques)
     U, s, Vt = np.linalg.svd(J_u, full_matrices=False)
-    if s.shape[0] == J_u.shape[0] and s[-1] > _FAST_RTOL * s[0]:
+    if s.shape[0] == J_u.shape[0] and s[-1] > FAST_RTOL * s[0]:
         # J of full row rank: every W^T a_o is reachable.
         J_pinv = (Vt.T / s) @ U.T
         W_pinv = np.linalg.solve(W @ W.T, W).T
@@ -330,7 +331,7 @@ def _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N) -> Ellipsoid
     mu_bar = Z * _torque_offset(J_u, W_pinv, Q, xi, g_o)
     U, s, Vt = np.linalg.svd(L, full_matrices=False)
     if N is None:
-        if s[-1] <= _FAST_RTOL * s[0]:
+        if s[-1] <= FAST_RTOL * s[0]:
             return None
         along = U.T @ mu_bar
         center = -(Vt.T @ (along / s))

@@ -289,7 +289,7 @@ class _Solver:
                     J_p[row, 3 * i : 3 * i + 3, cols] = J[:3, v]
                     J_o[row, 3 * i : 3 * i + 3, cols] = J[3:, v]
         e_p = (targets - positions).reshape(N, 3 * k)
-        e_o = _log3(target_rotations @ np.swapaxes(placed, 2, 3)).reshape(N, 3 * k)
+        e_o = rotation_log(target_rotations @ np.swapaxes(placed, 2, 3)).reshape(N, 3 * k)
         return e_p, e_o, J_p, J_o
 
     def step(self, qs, e_p, e_o, J_p, J_o, lower: bool = True) -> np.ndarray:
@@ -437,7 +437,7 @@ def _lower_step(res_o, e_r, dq1, J_p, J_o, J_r, J_r_full) -> np.ndarray:
     return lower * np.minimum(1.0, _LOWER_STEP / np.maximum(biggest, 1e-300))[:, None]
 
 
-def _log3(R: np.ndarray) -> np.ndarray:
+def rotation_log(R: np.ndarray) -> np.ndarray:
     """The rotation vectors of rotation matrices (..., 3, 3) -> (..., 3) (rad), as ``pin.log3``.
 
     Away from a half turn: theta / (2 sin theta) times the axial vector of R - R^T (theta from

@@ -1,23 +1,28 @@
 """Compiled per-configuration kernel: everything after Pinocchio, one configuration at a time.
 
-The stacked NumPy fast path of :mod:`mobmanip.batch` computes the same quantities, but every
+The stacked NumPy fast path (:mod:`mobmanip.engine.numpy_path`) computes the same quantities, but every
 stacked operation on tiny matrices (6 x 6, 12 x 16) pays NumPy's per-call overhead, which after
 Pinocchio dominates the cost. This module runs the same algorithm, with the same a-priori error
 certificates, as loops compiled by Numba, row by row over a chunk:
 
-1. terms, from one CRBA of the probed model (:class:`mobmanip.batch.ProbedModel`): the
+1. terms, from one CRBA of the probed model (:class:`mobmanip.engine.probed.ProbedModel`): the
    end-effector positions from the probe columns of the world joint Jacobian,
    LOCAL_WORLD_ALIGNED frame Jacobians, J_u = J S, P = S^T M S (upper triangle of M, as
    :func:`mobmanip.dynamics.mass_matrix`), xi = -S^T g with g from the gravity probe's row of
    M, through S stored column-compressed;
 2. grasp: the object at the centroid of the end effectors (or at explicit offsets), W, its
    pseudo-inverse T = (W W^T)^-1 W, a basis C of null(W) in closed form, and M_o;
-3. the kinematic and dynamic fast paths of :mod:`mobmanip.batch` (see its docstring for the
-   algebra), with the symmetric eigenproblems solved by Householder tridiagonalisation and
-   implicit QL (backward stable, as the LAPACK routines NumPy calls).
+3. the kinematic and dynamic fast paths (see :mod:`mobmanip.engine` for the algebra), with
+   the symmetric eigenproblems solved by Householder tridiagonalisation and implicit QL
+   (backward stable, as the LAPACK routines NumPy calls).
 
 A row the certificates do not accept is flagged and left to the exact SVD paths; the kernel
 never guesses. Compilation is cached on disk (first use in a fresh environment takes seconds).
+
+The thresholds of the certificates come from :mod:`mobmanip.tolerances` as an argument of
+:func:`run_chunk` (``tolerances``), not as globals: Numba compiles globals in as constants and
+its disk cache does not notice when another module's values change. Machine epsilon, which
+cannot change, is the one constant read as a global.
 """
 
 from __future__ import annotations
@@ -27,12 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-_EPS = float(np.finfo(float).eps)
-_TOL = 1e-9  # mobmanip.batch.FAST_PATH_TOLERANCE
-_FAST_LIMIT = 1e6  # 1e-2 / mobmanip.batch._FAST_RTOL
-# kappa(J J^T) up to which the dynamic path first tries J^+ W^T without refinement: its error
-# bound 8 eps kappa aniso then passes _TOL for ellipsoids up to aniso = 100 (most of them)
-_KAPPA_PLAIN = _TOL / (8.0 * _EPS * 100.0)
+from ..tolerances import EPS
 
 _jit = njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "nsz"})
 
@@ -156,7 +156,7 @@ def _gram_twice(A, out, copy, rows, cols):
 
 @_jit
 def _tridiagonalize(V, d, e, n):
-    """First half of :func:`_eigh`: scale the symmetric n x n block of V to entries at most 1,
+    """First half of :func:`eigh`: scale the symmetric n x n block of V to entries at most 1,
     reduce it to tridiagonal form (d diagonal, e[i] the entry between i and i + 1, e[n - 1] = 0)
     and leave the accumulated Householder transforms in V. Returns the scale, or 0.0 where
     nothing is left to do: a zero matrix (V = I, d = 0) or a non-finite one (V = I, d = NaN)."""
@@ -262,7 +262,7 @@ def _ql_next(d, e, n, l, f, tst1):
         tst1 = max(tst1, abs(d[l]) + abs(e[l]))
         m = l
         while m < n - 1:
-            if abs(e[m]) <= _EPS * tst1:
+            if abs(e[m]) <= EPS * tst1:
                 break
             m += 1
         if m > l:
@@ -298,7 +298,7 @@ def _ql_close(d, e, n, l, f, tst1, c, s, s_b, c_c, el, dl):
     p = -s * s_b * c_c * el * e[l] / dl
     e[l] = s * p
     d[l] = c * p
-    if abs(e[l]) > _EPS * tst1:
+    if abs(e[l]) > EPS * tst1:
         return l, 0, tst1, False
     d[l] = d[l] + f
     e[l] = 0.0
@@ -339,11 +339,11 @@ def _sort_eigen(V, d, n, big):
 
 
 @_jit
-def _eigh_pair(V1, d1, e1, V2, d2, e2, n, want1, want2):
-    """Two independent symmetric eigenproblems (see :func:`_eigh`) solved in lockstep: the QL
+def eigh_pair(V1, d1, e1, V2, d2, e2, n, want1, want2):
+    """Two independent symmetric eigenproblems (see :func:`eigh`) solved in lockstep: the QL
     sweeps of both run in one loop, so that the processor overlaps their chains of square roots
     and divisions, each of which waits on the last. Each problem does exactly the arithmetic
-    :func:`_eigh` does alone. Returns whether each converged (True for a problem not wanted)."""
+    :func:`eigh` does alone. Returns whether each converged (True for a problem not wanted)."""
     ok1 = ok2 = True
     big1 = _tridiagonalize(V1, d1, e1, n) if want1 else 0.0
     big2 = _tridiagonalize(V2, d2, e2, n) if want2 else 0.0
@@ -435,7 +435,7 @@ def _eigen_inverse(V, lam, out, work, n):
 
 
 @_jit
-def _eigh(V, d, e, n):
+def eigh(V, d, e, n):
     """Eigen-decomposition of the symmetric n x n block of V (overwritten by the eigenvectors,
     as columns); eigenvalues into d, ascending; e is workspace (n,). Householder reduction to
     tridiagonal form, then the implicit QL iteration with Wilkinson-type shifts (the classical
@@ -444,7 +444,7 @@ def _eigh(V, d, e, n):
     matrix is not finite. The QL rotations use sqrt(a^2 + b^2) rather than hypot: entries are
     pre-scaled to at most 1.
     """
-    return _eigh_pair(V, d, e, V, d, e, n, True, False)[0]
+    return eigh_pair(V, d, e, V, d, e, n, True, False)[0]
 
 
 @_jit
@@ -486,6 +486,7 @@ def run_chunk(
     want_kin,
     want_dyn,
     all_terms,
+    tolerances,
     J_u,
     P,
     xi,
@@ -502,6 +503,7 @@ def run_chunk(
     dyn_matrix,
     dyn_ok,
     dyn_empty,
+    bounds,
 ):
     """Terms and both fast-path ellipsoids for every row of a chunk (see the module docstring).
 
@@ -522,10 +524,13 @@ def run_chunk(
     P's nonzero columns per row, Pz_idx[Pz_ptr[j]:Pz_ptr[j + 1]]; Q_inv (nx, nx) or (0, 0)
     for Q = I; limits; offsets_in (k, 3) or (0, 3) for the centroid; Mo_in (m, m) or (0, 0)
     for a uniform sphere of ``mass`` reaching the farthest grasp; g_o (m,); decouple_eta > 0
-    zeroes P's platform-arm blocks in the dynamic ellipsoid. Outputs: the ellipsoids of
-    accepted rows and the acceptance flags kin_ok / dyn_ok (rows with False are left
-    untouched), and J_u, P (coupled), xi, W, Mo of the rows some asked ellipsoid was not
-    accepted for (of every row with ``all_terms``).
+    zeroes P's platform-arm blocks in the dynamic ellipsoid; ``tolerances`` is
+    :func:`mobmanip.tolerances.kernel_tolerances`. Outputs: the ellipsoids of accepted rows and
+    the acceptance flags kin_ok / dyn_ok (rows with False are left untouched); the a-priori
+    error bounds of every row, bounds (n, 2) (kinematic, dynamic), relative to the ellipsoid's size (inf
+    where the closed forms do not apply at all: a row is accepted exactly where its bound is at
+    most the certificate threshold); and J_u, P (coupled), xi, W, Mo of the rows some asked
+    ellipsoid was not accepted for (of every row with ``all_terms``).
     """
     n = Jw.shape[0]
     nv = vmap.shape[0]
@@ -543,6 +548,7 @@ def run_chunk(
     has_mo = Mo_in.shape[0] > 0
     vmax = vlim.max()
     vmin = vlim.min()
+    tol, cond_limit, gram_limit, kappa_plain = tolerances
     n_pairs = P_ptr.shape[0] - 1
 
     Jf = np.zeros((6, nv))
@@ -607,6 +613,8 @@ def run_chunk(
     for i in range(n):
         Mi = M[i]
         Jwi = Jw[i]
+        bounds[i, 0] = np.inf
+        bounds[i, 1] = np.inf
         # ---------------- terms: positions, J_u, P, xi ----------------
         for a in range(k):
             # p = a + w_x (w_x . b), a = w_x x v_x and b = w_y x v_y from the probe columns
@@ -742,7 +750,7 @@ def run_chunk(
         second = 0.0
         z_norm = 1.0
         if kin_go:
-            branch = np.sqrt(kappa) * (vmax / vmin) < _FAST_LIMIT
+            branch = np.sqrt(kappa) * (vmax / vmin) < cond_limit
             for p in range(km):
                 cols = arm_cols[row_arm[p]]
                 for t in range(n_arm_cols[row_arm[p]]):
@@ -809,8 +817,8 @@ def run_chunk(
                         for t in range(ncol):
                             j = cols[t]
                             G[q, j] += z * Jh[r, j]
-                second = kk_norm * (_EPS * kappa_kk * np.sqrt(_fro2(Y, c, m))) ** 2
-                hard = hard or not (kappa_kk <= 1e12)
+                second = kk_norm * (EPS * kappa_kk * np.sqrt(_fro2(Y, c, m))) ** 2
+                hard = hard or not (kappa_kk <= gram_limit)
                 z_norm = np.sqrt(_fro2(Z, m, km))
             _gram_twice(G, B, Vk, m, nx)
 
@@ -818,8 +826,8 @@ def run_chunk(
         # certificate will most likely accept the plain solution; a row it then rejects is
         # computed again, refined.
         dyn_ok[i] = False
-        dyn_go = want_dyn and grasp_ok and kappa < 1e12
-        refine = not (kappa <= _KAPPA_PLAIN)
+        dyn_go = want_dyn and grasp_ok and kappa < gram_limit
+        refine = not (kappa <= kappa_plain)
         for attempt in range(2):
             # ---------------- dynamic ellipsoid: L, H = L^T L ----------------
             if dyn_go:
@@ -911,7 +919,7 @@ def run_chunk(
                 _gram_twice(L.T, H, Vd, m, nx)
 
             # ---------------- both eigenproblems, in lockstep ----------------
-            kin_eig, dyn_eig = _eigh_pair(Vk, lamk, ek, Vd, lamd, ed, m, kin_go and attempt == 0, dyn_go)
+            kin_eig, dyn_eig = eigh_pair(Vk, lamk, ek, Vd, lamd, ed, m, kin_go and attempt == 0, dyn_go)
 
             # ---------------- kinematic ellipsoid: certificate, semi-axes ----------------
             if kin_go and attempt == 0:
@@ -919,11 +927,12 @@ def run_chunk(
                 lmin = lamk[0]
                 lmax = lamk[m - 1]
                 gen_norm = z_norm * np.sqrt(_fro2(Jh, km, nx)) * np.sqrt(_fro2(G, m, nx))
-                err = 8.0 * _EPS * (gen_norm + np.sqrt(_fro2(B, m, m)))
+                err = 8.0 * EPS * (gen_norm + np.sqrt(_fro2(B, m, m)))
                 err += second
                 est = err / (2.0 * np.sqrt(abs(lmin * lmax)))
-                ok = eig_ok and not hard and lmin > 1e-12 * lmax and lmin > 0.0 and np.isfinite(est) and est <= _TOL
-                if ok:
+                if eig_ok and not hard and lmin * gram_limit > lmax and lmin > 0.0 and np.isfinite(est):
+                    bounds[i, 0] = est
+                if bounds[i, 0] <= tol:
                     kin_ok[i] = True
                     for p in range(m):
                         kin_center[i, p] = 0.0
@@ -985,25 +994,19 @@ def run_chunk(
                 lmax = lam_rq.max()
                 aniso = np.sqrt(lmax / lmin)
                 # J^+ W^T's relative error: eps kappa(J)^2 as solved, eps (kappa(J) + eps kappa(J)^4) refined
-                j_err = np.sqrt(kappa) + _EPS * kappa * kappa if refine else kappa
-                err_l = 8.0 * _EPS * (1.0 + j_err) * aniso
-                err_rho2 = 2.0 * np.sqrt(outside2 * mub2) * err_l + 8.0 * _EPS * mub2
+                j_err = np.sqrt(kappa) + EPS * kappa * kappa if refine else kappa
+                err_l = 8.0 * EPS * (1.0 + j_err) * aniso
+                err_rho2 = 2.0 * np.sqrt(outside2 * mub2) * err_l + 8.0 * EPS * mub2
                 c_norm = 0.0
                 for p in range(m):
                     c_norm += cv[p] * cv[p]
                 c_norm = np.sqrt(c_norm)
                 scale = max(np.sqrt(abs(rho2) / lmin), c_norm)
                 err_c = err_l * (c_norm + np.sqrt(outside2 / lmin)) / scale
-                ok = (
-                    eig_ok
-                    and lmin > 0.0
-                    and np.isfinite(aniso)
-                    and aniso < _FAST_LIMIT
-                    and err_l <= _TOL
-                    and err_c <= _TOL
-                    and err_rho2 <= 2.0 * _TOL * abs(rho2)
-                )
-                if ok:
+                bounds[i, 1] = np.inf
+                if eig_ok and lmin > 0.0 and np.isfinite(aniso) and aniso < cond_limit:
+                    bounds[i, 1] = max(err_l, err_c, err_rho2 / (2.0 * abs(rho2)))
+                if bounds[i, 1] <= tol:
                     dyn_ok[i] = True
                     for p in range(m):
                         dyn_center[i, p] = cv[p]

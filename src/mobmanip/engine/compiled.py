@@ -1,0 +1,175 @@
+"""The compiled path: whether the kernel can run here, and running it on a chunk.
+
+:mod:`mobmanip.engine.kernel` needs Numba, an optional dependency (``pip install
+mobmanip[fast]``); it is imported on first use, and :func:`kernel_available` says whether that
+worked. Without it, ``analyze_batch`` takes the stacked NumPy fast path and ``analyze`` the
+reference path.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import tolerances
+from .results import EllipsoidBatch
+from .setup import BatchSetup
+from .terms import ChunkTerms
+
+
+def kernel_available() -> bool:
+    """Whether the compiled kernel (:mod:`mobmanip.engine.kernel`, needs Numba) can run here."""
+    return kernel_module() is not None
+
+
+@functools.cache
+def kernel_module():
+    """The compiled kernel's module, or ``None`` where Numba is missing or unusable."""
+    try:
+        from . import kernel
+    except ImportError:  # Numba missing or unusable on this platform: the NumPy paths remain
+        return None
+    return kernel
+
+
+class KernelOutcome(NamedTuple):
+    """What :func:`run_kernel` returns besides the ellipsoids and terms it fills in.
+
+    Attributes:
+        refused_kinematic: rows whose kinematic ellipsoid was not certified, (n,); ``None``
+            when the kinematic ellipsoids were not asked for.
+        refused_dynamic: the same for the dynamic ellipsoids.
+        W: grasp matrices, (n, m, mk), of the refused rows (of every row with ``all_terms``).
+        Mo: object inertias in the task space, (n, m, m), of the same rows.
+        bounds: the certificate's a-priori error bounds of every row's kinematic (column 0)
+            and dynamic (column 1) ellipsoid, relative to its size, (n, 2); inf where the
+            closed forms do not apply. A row is certified exactly where its bound is at most
+            :data:`mobmanip.tolerances.FAST_PATH_TOLERANCE`.
+    """
+
+    refused_kinematic: np.ndarray | None
+    refused_dynamic: np.ndarray | None
+    W: np.ndarray
+    Mo: np.ndarray
+    bounds: np.ndarray
+
+
+_NO_OFFSETS = np.zeros((0, 3))
+_NO_MO = np.zeros((0, 0))
+
+
+def run_kernel(
+    setup: BatchSetup,
+    t: ChunkTerms,
+    vlim: np.ndarray,
+    elim: np.ndarray,
+    decoupled: bool,
+    kinematic: EllipsoidBatch | None,
+    dynamic: EllipsoidBatch | None,
+    block: slice,
+    offsets: np.ndarray | None = None,
+    Mo: np.ndarray | None = None,
+    all_terms: bool = False,
+) -> KernelOutcome:
+    """Run the compiled kernel on a chunk after its Pinocchio pass.
+
+    Fills rows ``block`` of ``kinematic`` / ``dynamic`` (either may be ``None`` to skip it)
+    where the certificates accept them, and t's terms (J_u, P, xi and, for a moving grasp, W
+    and M_o's diagonal) for the rows left to the SVD path (the other rows' terms are left
+    undefined unless ``all_terms``).
+
+    Args:
+        setup: the batch set-up.
+        t: the chunk's Pinocchio outputs.
+        vlim: velocity limits, (nx,).
+        elim: effort limits, (nx,).
+        decoupled: use the decoupled P for the dynamic ellipsoids.
+        kinematic: output for the kinematic ellipsoids, or ``None``.
+        dynamic: output for the dynamic ellipsoids, or ``None``.
+        block: the rows of the outputs this chunk fills.
+        offsets: grasp offsets (k, 3) of an explicit object instead of the default one (a
+            sphere centred between the end effectors); its mass is ``setup.mass``.
+        Mo: that object's inertia in the task space, (m, m).
+        all_terms: fill the terms of every row, not only of the refused ones.
+    """
+    n, m, k, nx = t.n, setup.m, setup.k, setup.nx
+    J_u = np.empty((n, k * m, nx))
+    P = np.empty((n, nx, nx))
+    xi = np.empty((n, nx))
+    W = np.empty((n, m, k * m))
+    Mo_rows = np.empty((n, m, m))
+    kin = kinematic if kinematic is not None else EllipsoidBatch.allocate(0, m)
+    dyn = dynamic if dynamic is not None else EllipsoidBatch.allocate(0, m)
+    kin_b = block if kinematic is not None else slice(0, 0)
+    dyn_b = block if dynamic is not None else slice(0, 0)
+    kin_ok = np.zeros(n, dtype=bool)
+    dyn_ok = np.zeros(n, dtype=bool)
+    dyn_empty = np.zeros(n if dynamic is not None else 0, dtype=bool)
+    bounds = np.empty((n, 2))
+    ptr, idx, val = setup.S_csc
+    probed = setup.probed
+    kernel_module().run_chunk(
+        (0,) * k,  # sizes as tuple lengths: compile-time constants for the kernel
+        (0,) * m,
+        t.Ja,
+        t.Ma,
+        probed.vmap,
+        probed.gravity,
+        probed.probe_cols,
+        t.positions,
+        setup.supports,
+        setup.arm_cols,
+        setup.n_arm_cols,
+        setup.pair_cols,
+        setup.n_pair_cols,
+        setup.task_rows,
+        setup.n_linear,
+        ptr,
+        idx,
+        val,
+        *setup.P_plan,
+        setup.Q_inv_kernel,
+        np.ascontiguousarray(vlim, dtype=float),
+        np.ascontiguousarray(elim, dtype=float),
+        _NO_OFFSETS if offsets is None else offsets,
+        _NO_MO if Mo is None else Mo,
+        setup.mass,
+        np.ascontiguousarray(setup.g_o, dtype=float),
+        setup.n_eta if decoupled else 0,
+        kinematic is not None,
+        dynamic is not None,
+        all_terms,
+        tolerances.kernel_tolerances(),
+        J_u,
+        P,
+        xi,
+        W,
+        Mo_rows,
+        kin.center[kin_b],
+        kin.semi_axes[kin_b],
+        kin.axes[kin_b],
+        kin.matrix[kin_b],
+        kin_ok,
+        dyn.center[dyn_b],
+        dyn.semi_axes[dyn_b],
+        dyn.axes[dyn_b],
+        dyn.matrix[dyn_b],
+        dyn_ok,
+        dyn_empty,
+        bounds,
+    )
+    t.J_u, t.P, t.xi = J_u, P, xi
+    if setup.moving_grasp:
+        t.W, t.Mo = W, np.diagonal(Mo_rows, axis1=1, axis2=2)
+    bad_kin = bad_dyn = None
+    if kinematic is not None:
+        kinematic.degenerate[block][kin_ok] = False
+        kinematic.empty[block][kin_ok] = False
+        bad_kin = ~kin_ok
+    if dynamic is not None:
+        dynamic.empty[block][dyn_ok] = dyn_empty[dyn_ok]
+        dynamic.degenerate[block][dyn_ok] = dyn_empty[dyn_ok]
+        bad_dyn = ~dyn_ok
+    return KernelOutcome(bad_kin, bad_dyn, W, Mo_rows, bounds)
