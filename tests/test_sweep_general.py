@@ -289,9 +289,9 @@ def test_sweeps_start_from_the_spec_hold(tiago):
 
 def test_bad_posture_settings():
     grid = SweepGrid(angle_deg=[0.0], distance=[0.5])
-    with pytest.raises(mobmanip.errors.UsageError, match="postures must be one of"):
+    with pytest.raises(mobmanip.errors.ArgumentError, match="postures must be one of"):
         run_sweep(SweepSpec("ur5", postures="closed"), grid, workers=1)
-    with pytest.raises(mobmanip.errors.UsageError, match="reference posture needs postures 'ik'"):
+    with pytest.raises(mobmanip.errors.ArgumentError, match="reference posture needs postures 'ik'"):
         run_sweep(SweepSpec("planar_dual_arm", postures="planar", reference={"arm_right_2_joint": 1.0}), grid)
     with pytest.raises(mobmanip.errors.JointNotFoundError, match="elbow"):
         run_sweep(SweepSpec("ur5", reference={"elbow": 1.0}), grid, workers=1)

@@ -17,7 +17,7 @@ import numpy as np
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid
 from .engine import evaluate_one, kernel_available
-from .errors import MeasureError, TaskError
+from .errors import ArgumentError, MeasureError, TaskError
 from .grasp import HeldObject
 from .measure import TaskSet
 from .measures import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
@@ -175,7 +175,7 @@ def analyze(
     """
     wanted = resolve_measures(measures)
     if method not in ("auto", "exact"):
-        raise ValueError(f"method must be 'auto' or 'exact', got {method!r}")
+        raise ArgumentError(f"method must be 'auto' or 'exact', got {method!r}")
     q = robot.check_configuration(q)
     task = get_task(task or robot.spec.default_task)
     if held_object is None:

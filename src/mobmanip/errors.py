@@ -1,7 +1,9 @@
-"""Exceptions raised by mobmanip.
+"""Exceptions raised by mobmanip: every one of them, in this one module.
 
 Every error the toolkit raises on bad input derives from :class:`MobmanipError`, so callers
-(and the command line) can catch one type. Subclasses carry the offending value in attributes
+(and the command line, which prints one ``mobmanip: error: ...`` line for it) can catch one
+type. Library code raises :class:`ArgumentError` for a bad argument value; :class:`UsageError`
+is the command line's own. Subclasses carry the offending value in attributes
 and, where it helps, the list of valid alternatives.
 """
 
@@ -111,8 +113,42 @@ class MissingLimitError(LimitError):
         )
 
 
-class UsageError(MobmanipError):
-    """Command-line arguments that contradict each other or miss a required choice."""
+class ArgumentError(MobmanipError):
+    """An argument of a library call has a value it cannot take (an unknown method, a
+    non-positive count, a malformed direction, ...); the message names it and the value."""
+
+
+class UsageError(ArgumentError):
+    """Command-line arguments that contradict each other or miss a required choice.
+
+    Raised by :mod:`mobmanip.commands` only; library code raises :class:`ArgumentError`.
+    """
+
+
+class GridError(ArgumentError):
+    """A sweep grid that cannot be parsed or makes no sense."""
+
+
+class UnreachableGridError(GridError):
+    """No grid point is within the arms' reach: the message names the grid's distances and angles."""
+
+
+class OutputError(MobmanipError):
+    """An output file cannot be written."""
+
+
+class ViewerError(MobmanipError):
+    """The meshcat viewer cannot start, or its server stopped answering."""
+
+
+class PortBusyError(ViewerError):
+    """The port asked for with ``--port`` is in use."""
+
+    def __init__(self, port: int, scan_start: int = 7000):
+        self.port = port
+        super().__init__(
+            f"port {port} is in use; choose another --port or omit --port to take the first free one from {scan_start}"
+        )
 
 
 class MeasureError(MobmanipError):

@@ -13,7 +13,7 @@ from typing import IO
 
 import numpy as np
 
-from .errors import ConfigurationError, MobmanipError
+from .errors import ConfigurationError, OutputError
 from .model import Robot
 
 
@@ -69,10 +69,6 @@ def read_configuration(robot: Robot, path: str | Path) -> np.ndarray:
     except ConfigurationError as exc:
         raise ConfigurationError(f"configuration {path}: {exc}") from None
     return configuration_from_dict(robot, data, where=str(path))
-
-
-class OutputError(MobmanipError):
-    """An output file cannot be written."""
 
 
 @contextlib.contextmanager

@@ -50,7 +50,7 @@ import numpy as np
 import pinocchio as pin
 
 from .batch import BatchSetup, check_configurations, default_chunk, iter_terms
-from .errors import MobmanipError, SpecError, UsageError
+from .errors import ArgumentError, GridError, MobmanipError, SpecError, UnreachableGridError
 from .measure import TaskSetBatch
 from .measures import BatchRequest, Measure, evaluate_batch, resolve_measures
 from .model import Robot, load_robot
@@ -96,14 +96,6 @@ __all__ = [
 
 #: Where the arms' postures come from (see the module's docstring).
 POSTURE_METHODS = ("auto", "planar", "ik")
-
-
-class GridError(UsageError):
-    """A grid specification that cannot be parsed or makes no sense."""
-
-
-class UnreachableGridError(GridError):
-    """No grid point is within the arms' reach: the message names the grid's distances and angles."""
 
 
 def parse_grid(text: str, name: str = "grid", positive: bool = False) -> np.ndarray:
@@ -246,13 +238,15 @@ def sweep_postures(
 
     Raises:
         SpecError: ``"planar"`` on a robot without two planar 3-joint arms sharing their base.
-        UsageError: an unknown method, or a reference posture with ``"planar"``.
+        ArgumentError: an unknown method, or a reference posture with ``"planar"``.
         JointNotFoundError, ConfigurationError: a bad reference posture.
     """
     if method not in POSTURE_METHODS:
-        raise UsageError(f"postures must be one of {', '.join(POSTURE_METHODS)}, got {method!r}")
+        raise ArgumentError(f"postures must be one of {', '.join(POSTURE_METHODS)}, got {method!r}")
     if method == "planar" and reference is not None:
-        raise UsageError("the planar postures follow the paper's closed form; a reference posture needs postures 'ik'")
+        raise ArgumentError(
+            "the planar postures follow the paper's closed form; a reference posture needs postures 'ik'"
+        )
     if method != "ik" and reference is None:
         try:
             return posture_table(robot, grid.distance, map_fn)
@@ -343,13 +337,13 @@ class SweepSpec:
             try:
                 object.__setattr__(self, "measures", tuple(names))
             except TypeError:
-                raise UsageError(f"measures must be measure names, got {self.measures!r}") from None
+                raise ArgumentError(f"measures must be measure names, got {self.measures!r}") from None
         if self.reference is not None:
             pairs = self.reference.items() if isinstance(self.reference, Mapping) else self.reference
             try:
                 pairs = tuple((str(name), value) for name, value in pairs)
             except (TypeError, ValueError):
-                raise UsageError(f"reference must map joint names to positions, got {self.reference!r}") from None
+                raise ArgumentError(f"reference must map joint names to positions, got {self.reference!r}") from None
             object.__setattr__(self, "reference", pairs)
 
     def load(self) -> Robot:
@@ -360,7 +354,7 @@ class SweepSpec:
         if self.platform in ("fixed", "locked"):
             robot = robot.with_platform("fixed")
         elif self.platform != "own":
-            raise UsageError(f"platform must be 'own' or 'fixed', got {self.platform!r}")
+            raise ArgumentError(f"platform must be 'own' or 'fixed', got {self.platform!r}")
         return robot
 
 
@@ -526,12 +520,12 @@ def run_sweep(
         SpecError: ``postures="planar"`` on a robot without planar 3-joint arms sharing their base.
         UnknownMeasureError, MeasureError: an unknown measure, or one without a batch form.
         UnreachableGridError: the arms reach no grid point.
-        GridError, UsageError: bad grid or settings.
+        GridError, ArgumentError: bad grid or settings.
     """
     if not isinstance(chunk_size, int) or chunk_size < 1:
-        raise UsageError(f"chunk size must be a positive integer, got {chunk_size!r}")
+        raise ArgumentError(f"chunk size must be a positive integer, got {chunk_size!r}")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise UsageError(f"workers must be a positive integer, got {workers!r}")
+        raise ArgumentError(f"workers must be a positive integer, got {workers!r}")
     robot = spec.load()
     task = get_task(spec.task or robot.spec.default_task)
     measures = tuple(measure.name for measure in resolve_measures(spec.measures, sweep=True))
@@ -601,14 +595,14 @@ def _drain(executor: cf.Executor, jobs: list, store, window: int) -> None:
 def _check_direction(direction, m: int):
     if isinstance(direction, str):
         if direction not in ("radial", "tangential"):
-            raise UsageError(f"direction must be 'radial', 'tangential' or {m} numbers, got {direction!r}")
+            raise ArgumentError(f"direction must be 'radial', 'tangential' or {m} numbers, got {direction!r}")
         return direction
     try:
         values = tuple(float(v) for v in direction)
     except (TypeError, ValueError):
-        raise UsageError(f"direction must be 'radial', 'tangential' or {m} numbers, got {direction!r}") from None
+        raise ArgumentError(f"direction must be 'radial', 'tangential' or {m} numbers, got {direction!r}") from None
     if len(values) != m or not all(math.isfinite(v) for v in values) or not any(values):
-        raise UsageError(f"direction must have {m} finite numbers, not all zero, got {list(values)}")
+        raise ArgumentError(f"direction must have {m} finite numbers, not all zero, got {list(values)}")
     return values
 
 

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import UsageError
+from .errors import ArgumentError
 from .io import atomic_output, save_figure
 from .measures import Measure, resolve_measures
 from .planar_postures import PostureTable
@@ -86,7 +86,7 @@ class SweepResult:
         """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
 
         Raises:
-            UsageError: an unknown name (the message lists the valid ones).
+            ArgumentError: an unknown name (the message lists the valid ones).
         """
         kind, what, k = check_index_name(name, len(self.task_axes), self.spec.measures)
         if k is None:
@@ -181,7 +181,7 @@ def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | 
         measures: the measures swept (names; ``None``: the default ones).
 
     Raises:
-        UsageError: an unknown name (the message lists the valid ones for an m-dimensional task).
+        ArgumentError: an unknown name (the message lists the valid ones for an m-dimensional task).
     """
     kind, _, what = str(name).replace("-", "_").partition(".")
     for measure in resolve_measures(measures, sweep=True):
@@ -193,7 +193,7 @@ def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | 
             number = what[len(stem) + 1 :] if what.startswith(f"{stem}_") else ""
             if number.isdigit() and 1 <= int(number) <= m:
                 return kind, attribute, int(number)
-    raise UsageError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
+    raise ArgumentError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
 
 
 def index_names(m: int, measures=None) -> list[str]:

@@ -22,27 +22,12 @@ import tempfile
 import threading
 from pathlib import Path
 
-from ..errors import MobmanipError
+from ..errors import PortBusyError, ViewerError
 
 LOOPBACK = "127.0.0.1"
 DEFAULT_PORT = 7000  # meshcat's DEFAULT_FILESERVER_PORT: the scan starts here
 _PORT_BUSY_EXIT = 3  # the child's exit code when --port is in use
 _CHILD = Path(__file__).with_name("_meshcat_child.py")
-
-
-class ViewerError(MobmanipError):
-    """The meshcat viewer cannot start, or its server stopped answering."""
-
-
-class PortBusyError(ViewerError):
-    """The port asked for with ``--port`` is in use."""
-
-    def __init__(self, port: int):
-        self.port = port
-        super().__init__(
-            f"port {port} is in use; choose another --port or omit --port to take the first free one from "
-            f"{DEFAULT_PORT}"
-        )
 
 
 class MeshcatServer:
@@ -86,7 +71,7 @@ class MeshcatServer:
             log = self._log_tail()
             self.stop()
             if code == _PORT_BUSY_EXIT and port is not None:
-                raise PortBusyError(int(port))
+                raise PortBusyError(int(port), DEFAULT_PORT)
             what = "did not answer in time" if code is None else f"exited with code {code}"
             raise ViewerError(f"the meshcat server did not start ({what}): {log}")
         self.zmq_url = urls["zmq_url"]

@@ -28,7 +28,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..casestudy import ANGLES_DEG, PLATFORM_SPEEDS, WHEEL_TORQUES, configuration_at, optimal_posture
-from ..errors import SpecError, UsageError
+from ..errors import ArgumentError, SpecError
 from ..model import Robot
 from .scene import Frame, analyze_pair
 
@@ -39,7 +39,7 @@ _SUBSTEPS = 8  # computed frames between two of the paper's values
 
 def _check_moving(robot: Robot, sweep: str) -> None:
     if robot.wheel_platform is None or robot.platform_locked:
-        raise UsageError(f"--sweep {sweep} varies the wheels' limits; it needs the robot's own moving platform")
+        raise ArgumentError(f"--sweep {sweep} varies the wheels' limits; it needs the robot's own moving platform")
 
 
 def _paper_like(robot: Robot):
@@ -76,7 +76,7 @@ def object_angle_frames(
     """
     paper, posture = _paper_like(robot)
     if posture is not None and q is not None:
-        raise UsageError(
+        raise ArgumentError(
             f"the object-angle sweep places {robot.name!r} itself (arms aimed at the object); leave out --q"
         )
     frames = []
@@ -191,7 +191,7 @@ def sweep_frames(
     """The frames of the sweep ``name`` (one of :data:`SWEEPS`).
 
     Raises:
-        UsageError: unknown sweep, or fig3/fig4 on a locked platform.
+        ArgumentError: unknown sweep, or fig3/fig4 on a locked platform.
         SpecError: fig3/fig4 on a robot unlike the paper's.
     """
     if name == "object-angle":
@@ -201,4 +201,4 @@ def sweep_frames(
     if name == "fig4":
         options.pop("decoupled", None)  # decoupled, as in the paper
         return fig4_frames(robot, task or "planar", locked=locked, **options)
-    raise UsageError(f"unknown sweep {name!r}; expected one of {', '.join(SWEEPS)}")
+    raise ArgumentError(f"unknown sweep {name!r}; expected one of {', '.join(SWEEPS)}")
