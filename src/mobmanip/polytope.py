@@ -329,10 +329,15 @@ class Polytope(TaskSet):
         if self.empty:
             return np.zeros((0, self._G.shape[1]))
         rep = self._vrep()
-        if rep.get("Y") is None:
-            hull = rep["hull"]
-            rows = [np.zeros(0, dtype=int)] if hull is None else hull.vertex_rows()
-            rep["Y"] = np.array([self._vertex_y(v, r) for v, r in zip(rep["vertices"], rows)])
+        Y = rep.get("Y")
+        if Y is None:
+            Y = np.full((len(rep["vertices"]), self._G.shape[1]), np.nan)
+        missing = np.flatnonzero(np.isnan(Y).any(axis=1))
+        if len(missing):
+            Y = Y.copy()
+            for i in missing:
+                Y[i] = self._vertex_y(rep["vertices"][i])
+            rep["Y"] = Y
         return rep["Y"] * self._limits
 
     def inputs(self, points, tol: float = 1e-9) -> np.ndarray:
@@ -440,7 +445,7 @@ class Polytope(TaskSet):
             length = np.linalg.norm(A, axis=1)
             keep = length > 1e-12 * max(float(length.max(initial=0.0)), 1e-300)
             length = length[keep]
-            self._cache["ineq"] = (A[keep] / length[:, None], -b0[keep] / length, h[keep] / length)
+            self._cache["ineq"] = (A[keep] / length[:, None], b0[keep] / length, h[keep] / length)
             self._cache["z_normals"] = rows[keep]
         return self._cache["ineq"]
 
@@ -464,40 +469,64 @@ class Polytope(TaskSet):
             hull = enumerate_hull(A @ self._N, s)
             V = p0 + hull.vertices @ self._N.T
             rep = {"vertices": V, "faces": hull.faces, "facet_rows": hull.facet_rows, "hull": hull}
-            if self.is_zonotope:
-                self._exact_zonotope_vertices(rep, A, hull)
+            self._exact_vertices(rep, hull)
         rep["vertices"].setflags(write=False)
         self._cache["vrep"] = rep
         return rep
 
-    def _exact_zonotope_vertices(self, rep, A, hull):
-        """Replace Qhull's vertices by c + G sign(G^T d), d inside each vertex's normal cone."""
-        V = rep["vertices"]
-        d = hull.normal_sums(A[hull.facet_rows])  # inside each vertex's normal cone
-        proj = d @ self._G
-        Y = np.where(np.abs(proj) > 1e-12 * np.abs(d).sum(axis=1, keepdims=True) * np.abs(self._G).sum(0), 1.0, 0.0)
-        Y *= np.sign(proj)
-        exact = self._c + Y @ self._G.T
-        if np.max(np.abs(exact - V), initial=0.0) <= 1e-7 * self._size:
-            rep["vertices"], rep["Y"] = exact, Y
+    def _exact_vertices(self, rep, hull):
+        """Recompute each vertex with its joint values from the zonotope face it lies on.
 
-    def _vertex_y(self, v, rows) -> np.ndarray:
-        """Box coordinates reaching vertex v: signs fixed by the zonotope face it lies on, the
-        rest in least squares; a linear program when that leaves the box."""
-        self._inequalities()
-        G = self._G
-        target = self._F @ v - self._c
-        if len(rows):
-            dz = self._cache["z_normals"][rows].sum(axis=0)
-            proj = dz @ G
-            fixed = np.abs(proj) > 1e-9 * np.linalg.norm(dz) * np.linalg.norm(G, axis=0)
-            y = np.where(fixed, np.sign(proj), 0.0)
-            free = ~fixed
-            if free.any():
-                y[free] = np.linalg.lstsq(G[:, free], target - G[:, fixed] @ y[fixed], rcond=None)[0]
-            if np.all(np.abs(y) <= 1.0 + 1e-12) and np.linalg.norm(G @ y - target) <= 1e-10 * self._size:
-                return np.clip(y, -1.0, 1.0)
-        y = self._feasible_y(v, 1.0 + 1e-9)
+        A vertex v has F v on the face of Z maximising d = the sum of its facets' zonotope
+        normals: y_j = sign(g_j . d) where g_j . d != 0, free otherwise. Solving
+        F v - G_free y_free = c + G_fixed y_fixed (square for a vertex in general position; one
+        batched solve) gives v and its joint values to round-off; Qhull's vertex, accurate to
+        the conditioning of its facets, is kept where this does not confirm it.
+        """
+        F, c, G = self._F, self._c, self._G
+        (p, m), n = F.shape, G.shape[1]
+        V = rep["vertices"]
+        d = hull.normal_sums(self._cache["z_normals"][hull.facet_rows])
+        proj = d @ G
+        fixed = np.abs(proj) > 1e-9 * np.linalg.norm(d, axis=1, keepdims=True) * np.linalg.norm(G, axis=0)
+        Y = np.where(fixed, np.sign(proj), 0.0)
+        target = c + Y @ G.T
+        free_count = n - fixed.sum(axis=1)
+        exact, ok = V.copy(), np.zeros(len(V), dtype=bool)
+        generic = np.flatnonzero(free_count == p - m)
+        if len(generic):
+            free = np.argsort(fixed[generic], axis=1, kind="stable")[:, : p - m]  # free columns first
+            M = np.concatenate([np.broadcast_to(F, (len(generic), p, m)), -G.T[free].transpose(0, 2, 1)], axis=2)
+            with np.errstate(all="ignore"):
+                try:
+                    x = np.linalg.solve(M, target[generic][:, :, None])[:, :, 0]
+                except np.linalg.LinAlgError:
+                    x = np.full((len(generic), p), np.nan)
+            good = np.all(np.isfinite(x), axis=1) & np.all(np.abs(x[:, m:]) <= 1.0 + 1e-9, axis=1)
+            good &= np.max(np.abs(x[:, :m] - V[generic]), axis=1) <= 1e-6 * self._size
+            rows = generic[good]
+            exact[rows] = x[good, :m]
+            Y[rows[:, None], free[good]] = x[good, m:]
+            ok[rows] = True
+        for i in np.flatnonzero(~ok):  # more free generators than p - m (parallel generators)
+            cols = np.flatnonzero(~fixed[i])
+            M = np.hstack([F, -G[:, cols]])
+            _, sv, vt = np.linalg.svd(M)
+            null = vt[int(np.sum(sv > _RANK_RTOL * sv[0])) :]
+            x = np.linalg.lstsq(M, target[i], rcond=None)[0]
+            if np.max(np.abs(null[:, :m]), initial=0.0) > 1e-9 or np.max(np.abs(x[:m] - V[i])) > 1e-6 * self._size:
+                continue  # the face does not pin the vertex down: keep Qhull's
+            exact[i] = x[:m]  # unique, whatever the free joint values are
+            if np.all(np.abs(x[m:]) <= 1.0 + 1e-9):
+                Y[i, cols], ok[i] = x[m:], True
+        rep["vertices"] = exact
+        rep["Y"] = np.where(ok[:, None], np.clip(Y, -1.0, 1.0), np.nan)
+
+    def _vertex_y(self, v) -> np.ndarray:
+        """Box coordinates reaching the point v (a linear program, polished)."""
+        y = self._feasible_y(v, 1.0)
+        if y is None:
+            y = self._feasible_y(v, 1.0 + 1e-9)
         if y is None:
             raise TaskError(f"vertex {v.tolist()} could not be reached within the limits (numerical failure)")
         return np.clip(y, -1.0, 1.0)
