@@ -67,7 +67,7 @@ class Polytope(TaskSet):
     def __init__(self, F, c, G, input_limits=None, *, _center=None, _effort=None):
         F, c, G = (np.array(x, dtype=float) for x in (F, c, G))
         if F.ndim != 2 or G.ndim != 2 or c.shape != (F.shape[0],) or G.shape[0] != F.shape[0]:
-            raise TaskError(f"polytope needs F (p, m), c (p,), G (p, n); got {F.shape}, {c.shape}, {G.shape}")
+            raise TaskError(f"polytope needs shapes F (p, m), c (p,), G (p, n); got {F.shape}, {c.shape}, {G.shape}")
         for name, x in (("F", F), ("c", c), ("G", G)):
             if not np.all(np.isfinite(x)):
                 raise TaskError(f"polytope {name} has a non-finite entry at {np.argwhere(~np.isfinite(x))[0].tolist()}")
@@ -352,7 +352,7 @@ class Polytope(TaskSet):
             y = None if self.empty else self._feasible_y(p, 1.0 + tol)
             if y is None:
                 raise TaskError(
-                    f"point {p.tolist()} is not in the polytope: no joint values within the limits reach it"
+                    f"point {p.tolist()} is outside the polytope: no joint values within the limits reach it"
                 )
             out.append(y)
         return np.array(out).reshape(len(P), -1) * self._limits
@@ -388,9 +388,12 @@ class Polytope(TaskSet):
             out["faces"] = [f.tolist() for f in self.faces]
         if self.is_zonotope:
             out["generators"] = self._G.tolist()
-        out["volume"] = self.volume
-        out["isotropy"] = self.isotropy
-        out["chebyshev"] = {"center": self.chebyshev_center.tolist(), "radius": self.chebyshev_radius}
+        try:
+            out["volume"] = self.volume
+            out["isotropy"] = self.isotropy
+            out["chebyshev"] = {"center": self.chebyshev_center.tolist(), "radius": self.chebyshev_radius}
+        except TaskError:  # no halfspaces to measure from (see "halfspaces_omitted")
+            out["volume"] = out["isotropy"] = out["chebyshev"] = None
         return out
 
     def __repr__(self) -> str:
