@@ -193,3 +193,97 @@ def max_norm(G: np.ndarray, limit: int = 20) -> float | None:
     for row in part_b:
         best = max(best, float(np.max(np.sum((part_a + row) ** 2, axis=1))))
     return math.sqrt(best)
+
+
+def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
+    """Vertices, faces and facets of a full-dimensional zonotope in R^2 or R^3, combinatorially.
+
+    Parallel generators are merged first (their sum) and zero ones dropped. In R^3 the facets
+    are then the parallelograms c + G s +- g_i +- g_j, s_k = sign(nu . g_k) for nu = g_i x g_j,
+    when no three generators are coplanar (else None: the caller takes the general route); in
+    R^2 the edges are c + G s +- g_k. Vertices are identified by their sign vectors, so they
+    are exact (c + G s) and come with their box coordinates.
+
+    Returns:
+        None, or a dict with ``vertices`` (v, m), ``Y`` (v, n) in {-1, 0, 1} (0 for zero
+        generators), ``normals`` (f, m) unit outward, ``offsets`` (f,) = normal . c,
+        ``widths`` (f,) = sum_j |normal . g_j|, ``faces`` (list of index arrays, counter-clockwise
+        seen from outside for m = 3, edges in boundary order for m = 2).
+    """
+    m, n = G.shape
+    norms = np.linalg.norm(G, axis=0)
+    scale = float(norms.max(initial=0.0))
+    if m not in (2, 3) or scale == 0.0:
+        return None
+    live = np.flatnonzero(norms > 1e-12 * scale)
+    unit = G[:, live] / norms[live]
+    lead = unit[np.argmax(np.abs(unit), axis=0), np.arange(len(live))]
+    unit = unit * np.sign(lead)
+    _, group = np.unique(np.round(unit.T, 10), axis=0, return_inverse=True)
+    group = group.ravel()
+    sigma = np.sign(lead)  # y_k = sigma_k * (the merged generator's sign)
+    H = np.zeros((m, group.max() + 1))
+    np.add.at(H.T, group, (G[:, live] * sigma).T)
+    k = H.shape[1]
+    if k < m:
+        return None
+    if m == 2:
+        nu = np.stack([-H[1], H[0]], axis=1)
+        pairs = np.arange(k)[:, None]
+    else:
+        pairs = combinations(k, 2)
+        nu = np.cross(H[:, pairs[:, 0]].T, H[:, pairs[:, 1]].T)
+    length = np.linalg.norm(nu, axis=1)
+    nu = nu / length[:, None]
+    dots = nu @ H
+    rows = np.arange(len(pairs))[:, None]
+    dots[rows, pairs] = 0.0
+    tiny = 1e-12 * np.linalg.norm(H, axis=0)
+    hits = np.abs(dots) <= tiny
+    hits[rows, pairs] = False
+    if np.any(length <= 1e-12 * scale * scale) or hits.any():
+        return None  # three coplanar (m = 3) generators: not parallelograms
+    S = np.sign(dots)  # (f, k), zero on the facet's own generators
+    if m == 2:
+        corners = np.array([[1.0], [-1.0]])
+    else:  # counter-clockwise seen from +nu, nu = g_i x g_j
+        corners = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    f, per = len(pairs), len(corners)
+    signs = np.empty((2, f, per, k))
+    for a, (side, order) in enumerate(((1.0, corners), (-1.0, corners[::-1]))):
+        for b, corner in enumerate(order):
+            s = side * S
+            s[rows, pairs] = corner
+            signs[a, :, b] = s
+    keys, vid = np.unique(signs.reshape(-1, k), axis=0, return_inverse=True)
+    vid = vid.ravel()
+    vertices = center + keys @ H.T
+    Y = np.zeros((len(keys), n))
+    Y[:, live] = keys[:, group] * sigma
+    face_ids = vid.reshape(2 * f, per)
+    normals = np.vstack([nu, -nu])
+    widths = np.concatenate([np.abs(nu @ H).sum(axis=1)] * 2)
+    if m == 2:  # edges, in boundary order: sort vertices by angle
+        order = np.argsort(np.arctan2(*(vertices - center).T[::-1]))
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        ends = np.sort(rank[face_ids], axis=1)
+        wrap = (ends[:, 0] == 0) & (ends[:, 1] == len(order) - 1)
+        ends[wrap] = ends[wrap][:, ::-1]
+        pos = np.argsort(ends[:, 0])
+        return {
+            "vertices": vertices[order],
+            "Y": Y[order],
+            "normals": normals[pos],
+            "offsets": normals[pos] @ center,
+            "widths": widths[pos],
+            "faces": list(ends[pos]),
+        }
+    return {
+        "vertices": vertices,
+        "Y": Y,
+        "normals": normals,
+        "offsets": normals @ center,
+        "widths": widths,
+        "faces": list(face_ids),
+    }

@@ -44,6 +44,9 @@ from .measure import TaskSet
 
 _RANK_RTOL = 1e-10
 _EMPTY_TOL = 1e-9  # least effort above 1 + this: empty; above 1 - this: no interior
+#: Above 3 dimensions, vertices (for volume and isotropy) are enumerated only up to this many
+#: halfspaces: beyond, Qhull's output explodes (a 6-D kinematic section of TIAGo++ has ~5,000).
+_MAX_HIGH_DIM_ROWS = 400
 
 
 class Polytope(TaskSet):
@@ -461,8 +464,10 @@ class Polytope(TaskSet):
         """Vertices, faces and facet rows (m <= 3, not empty)."""
         if "vrep" in self._cache:
             return self._cache["vrep"]
-        A, b0, h = self._inequalities()
         k = self._affine_dim
+        if self.is_zonotope and k == self.dim and "ineq" not in self._cache and self._fast_zonotope():
+            return self._cache["vrep"]
+        A, b0, h = self._inequalities()
         if k <= 0:
             rep = {"vertices": self.center[None, :].copy(), "faces": [], "facet_rows": np.zeros(0, dtype=int)}
             rep["hull"] = None
@@ -476,6 +481,25 @@ class Polytope(TaskSet):
         rep["vertices"].setflags(write=False)
         self._cache["vrep"] = rep
         return rep
+
+    def _fast_zonotope(self) -> bool:
+        """Vertices, faces and halfspaces of a 2-D or 3-D zonotope from its generators alone."""
+        fast = _zonotope.low_dim_faces(self._c, self._G)
+        if fast is None:
+            return False
+        normals = fast["normals"]
+        self._cache["ineq"] = (normals, fast["offsets"], fast["widths"])
+        self._cache["z_normals"] = normals  # F = I: the zonotope's normals are the set's
+        vertices = fast["vertices"]
+        vertices.setflags(write=False)
+        self._cache["vrep"] = {
+            "vertices": vertices,
+            "faces": fast["faces"],
+            "facet_rows": np.arange(len(normals)),
+            "hull": None,
+            "Y": fast["Y"],
+        }
+        return True
 
     def _exact_vertices(self, rep, hull):
         """Recompute each vertex with its joint values from the zonotope face it lies on.
@@ -603,7 +627,7 @@ class Polytope(TaskSet):
         if self.dim <= 3:
             return self.vertices
         if "all_vertices" not in self._cache:
-            from scipy.spatial import HalfspaceIntersection
+            from scipy.spatial import HalfspaceIntersection, QhullError
 
             from ._hull import _groups
 
@@ -617,7 +641,16 @@ class Polytope(TaskSet):
                 if k == 1 or k <= 3:
                     U = enumerate_hull(An, s).vertices
                 else:
-                    U = HalfspaceIntersection(np.hstack([An, -s[:, None]]), np.zeros(k)).intersections
+                    if len(An) > _MAX_HIGH_DIM_ROWS:
+                        raise TaskError(
+                            f"this {self.dim}-D polytope has {len(An)} halfspaces: enumerating its vertices (for its "
+                            "volume or isotropy) is impractical; use support, contains, project or slice"
+                        )
+                    halfspaces = np.hstack([An, -s[:, None]])
+                    try:
+                        U = HalfspaceIntersection(halfspaces, np.zeros(k)).intersections
+                    except QhullError:  # nearly degenerate input: Qhull's joggle, accurate to ~1e-10
+                        U = HalfspaceIntersection(halfspaces, np.zeros(k), qhull_options="QJ").intersections
                     U = U[_groups(U)[1]]
                 V = p0 + U @ self._N.T
             self._cache["all_vertices"] = V
@@ -638,4 +671,4 @@ class Polytope(TaskSet):
             return float(abs(np.einsum("ti,ti->t", T[:, 0], np.cross(T[:, 1], T[:, 2])).sum()) / 6.0)
         from scipy.spatial import ConvexHull
 
-        return float(ConvexHull(self._all_vertices()).volume)
+        return float(ConvexHull(self._all_vertices(), qhull_options="Qt QJ").volume)
