@@ -217,11 +217,11 @@ def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
         return None
     live = np.flatnonzero(norms > 1e-12 * scale)
     unit = G[:, live] / norms[live]
-    lead = unit[np.argmax(np.abs(unit), axis=0), np.arange(len(live))]
-    unit = unit * np.sign(lead)
-    _, group = np.unique(np.round(unit.T, 10), axis=0, return_inverse=True)
-    group = group.ravel()
-    sigma = np.sign(lead)  # y_k = sigma_k * (the merged generator's sign)
+    cos = unit.T @ unit
+    parallel = np.abs(cos) >= 1.0 - 1e-12
+    leader = np.argmax(parallel, axis=1)  # first generator parallel to each
+    _, group = np.unique(leader, return_inverse=True)
+    sigma = np.sign(cos[np.arange(len(live)), leader])  # y_k = sigma_k * (the merged generator's sign)
     H = np.zeros((m, group.max() + 1))
     np.add.at(H.T, group, (G[:, live] * sigma).T)
     k = H.shape[1]
@@ -255,7 +255,13 @@ def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
             s = side * S
             s[rows, pairs] = corner
             signs[a, :, b] = s
-    keys, vid = np.unique(signs.reshape(-1, k), axis=0, return_inverse=True)
+    flat = signs.reshape(-1, k)
+    if k <= 39:  # a sign vector as one integer (base 3) makes the deduplication one-dimensional
+        code = (flat + 1.0).astype(np.int64) @ (3 ** np.arange(k, dtype=np.int64))
+        _, first, vid = np.unique(code, return_index=True, return_inverse=True)
+        keys = flat[first]
+    else:
+        keys, vid = np.unique(flat, axis=0, return_inverse=True)
     vid = vid.ravel()
     vertices = center + keys @ H.T
     Y = np.zeros((len(keys), n))

@@ -79,12 +79,16 @@ class Polytope(TaskSet):
         if limits.shape != (n,) or not np.all(np.isfinite(limits)) or np.any(limits < 0):
             raise TaskError(f"input_limits must be {n} finite non-negative numbers, got {input_limits!r}")
         p, m = F.shape
-        Uf, sf, Vtf = np.linalg.svd(F, full_matrices=False)
+        if p == m and np.array_equal(F, np.eye(m)):  # already a zonotope (the usual dynamic case)
+            Uf, sf, Vtf = F, np.ones(m), F
+        else:
+            Uf, sf, Vtf = np.linalg.svd(F, full_matrices=False)
         if m and (sf.size < m or sf[-1] <= _RANK_RTOL * max(sf[0], 1e-300)):
             raise TaskError(f"polytope map F {F.shape} is not injective (singular values {sf.tolist()})")
         if p == m and m:  # a plain zonotope: a = F^-1 c + F^-1 G y
-            F_inv = (Vtf.T / sf) @ Uf.T
-            c, G, F = F_inv @ c, F_inv @ G, np.eye(m)
+            if not np.array_equal(F, np.eye(m)):
+                F_inv = (Vtf.T / sf) @ Uf.T
+                c, G, F = F_inv @ c, F_inv @ G, np.eye(m)
             if _center is None:
                 _center, _effort = c.copy(), 0.0
         self._F, self._c, self._G, self._limits = F, c, G, limits
@@ -535,17 +539,24 @@ class Polytope(TaskSet):
             exact[rows] = x[good, :m]
             Y[rows[:, None], free[good]] = x[good, m:]
             ok[rows] = True
-        for i in np.flatnonzero(~ok):  # more free generators than p - m (parallel generators)
-            cols = np.flatnonzero(~fixed[i])
-            M = np.hstack([F, -G[:, cols]])
-            _, sv, vt = np.linalg.svd(M)
-            null = vt[int(np.sum(sv > _RANK_RTOL * sv[0])) :]
-            x = np.linalg.lstsq(M, target[i], rcond=None)[0]
-            if np.max(np.abs(null[:, :m]), initial=0.0) > 1e-9 or np.max(np.abs(x[:m] - V[i])) > 1e-6 * self._size:
-                continue  # the face does not pin the vertex down: keep Qhull's
-            exact[i] = x[:m]  # unique, whatever the free joint values are
-            if np.all(np.abs(x[m:]) <= 1.0 + 1e-9):
-                Y[i, cols], ok[i] = x[m:], True
+        rest = np.flatnonzero(~ok)  # more free generators than p - m (e.g. parallel generators)
+        if len(rest):
+            width = int(free_count[rest].max())
+            free = np.argsort(fixed[rest], axis=1, kind="stable")[:, :width]
+            valid = np.arange(width)[None, :] < free_count[rest][:, None]
+            cols = np.where(valid[:, None, :], -G.T[free].transpose(0, 2, 1), 0.0)  # zero padding
+            M = np.concatenate([np.broadcast_to(F, (len(rest), p, m)), cols], axis=2)
+            M_pinv = np.linalg.pinv(M, rcond=_RANK_RTOL)
+            x = (M_pinv @ target[rest][:, :, None])[:, :, 0]
+            # v is pinned down when no null vector of M moves it: (I - M^+ M) has a zero v-block
+            moves = np.eye(M.shape[2])[None, :m] - (M_pinv @ M)[:, :m]
+            pinned = np.max(np.abs(moves), axis=(1, 2)) <= 1e-9
+            pinned &= np.max(np.abs(x[:, :m] - V[rest]), axis=1) <= 1e-6 * self._size
+            exact[rest[pinned]] = x[pinned, :m]
+            inside = pinned & np.all(np.abs(x[:, m:]) <= 1.0 + 1e-9, axis=1)
+            for j in np.flatnonzero(inside):
+                Y[rest[j], free[j, valid[j]]] = x[j, m:][valid[j]]
+            ok[rest[inside]] = True
         rep["vertices"] = exact
         rep["Y"] = np.where(ok[:, None], np.clip(Y, -1.0, 1.0), np.nan)
 

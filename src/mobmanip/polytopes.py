@@ -267,8 +267,8 @@ def _check_jacobian_grasp(J_u, W) -> tuple[np.ndarray, np.ndarray]:
     if W.ndim != 2 or W.shape[1] != J_u.shape[0]:
         raise TaskError(f"W must have shape (m, {J_u.shape[0]}) to match J_u's rows, got {W.shape}")
     J_u, W = _array(J_u, "J_u", J_u.shape), _array(W, "W", W.shape)
-    s = np.linalg.svd(W, compute_uv=False)
-    if W.shape[0] > W.shape[1] or s[-1] <= _RANK_RTOL * max(s[0], 1e-300):
+    s = np.sqrt(np.maximum(np.linalg.eigvalsh(W @ W.T), 0.0))[::-1]  # singular values of W (m x m problem)
+    if W.shape[0] > W.shape[1] or s[-1] <= 1e-7 * max(s[0], 1e-300):
         raise TaskError(f"grasp matrix W {W.shape} must have full row rank (singular values {s.tolist()})")
     return J_u, W
 
@@ -281,7 +281,7 @@ def _check_dynamic(J_u, W, P, Q, xi, M_o, g_o):
     xi = _array(xi, "xi", (nx,))
     M_o = _array(M_o, "M_o", (m, m))
     g_o = _array(g_o, "g_o", (m,))
-    if np.linalg.matrix_rank(Q) < nx:
+    if not _is_identity(Q) and np.linalg.matrix_rank(Q) < nx:
         raise ModelError("the input matrix Q is singular: some reduced velocity has no actuator")
     return J_u, W, P, Q, xi, M_o, g_o
 
