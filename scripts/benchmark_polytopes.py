@@ -119,7 +119,8 @@ def pycapacity_child(path: str, kind: str) -> None:
 
 
 def _pycapacity(kind: str, arrays: list[dict], timeout: float) -> float | None:
-    """Median ms of pycapacity on these matrices, or None when it did not finish in time."""
+    """Median ms of pycapacity on these matrices, or None when it did not finish in time (or
+    failed: then its last error line is printed)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "matrices.npz"
         flat = {f"{k}{i}": v for i, item in enumerate(arrays) for k, v in item.items()}
@@ -133,6 +134,10 @@ def _pycapacity(kind: str, arrays: list[dict], timeout: float) -> float | None:
                 check=True,
             )
         except subprocess.TimeoutExpired:
+            return None
+        except subprocess.CalledProcessError as error:
+            last = (error.stderr or "").strip().splitlines()
+            print(f"  pycapacity ({kind}) failed: {last[-1] if last else 'no message'}")
             return None
     return json.loads(child.stdout.strip().splitlines()[-1])["median_s"] * 1e3
 
@@ -213,7 +218,7 @@ def run(quick: bool = False, timeout: float | None = None) -> int:
             zonotopes = [{"G": p.generators} for p in polys[: max(2, count // 10)]]
             theirs = _pycapacity("zonotope", zonotopes, timeout)
             label = "tiago_dual spatial dynamic, exact (pycapacity: + vertices)"
-            row(label, t_build, theirs, f"> {timeout:g} s")
+            row(label, t_build, theirs, f"> {timeout:g} s / failed")
 
     # One fixed-base arm, no object: pycapacity's own use case
     for name in ("ur5", "panda"):

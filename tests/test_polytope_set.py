@@ -270,3 +270,24 @@ def test_batch_indices_are_those_of_each_configuration(robot, rng):
         np.testing.assert_allclose(batch.radius_along[i], [single.radius_along(x) for x in d], rtol=1e-12)
     with pytest.raises(TaskError, match="unknown polytope kind"):
         polytope_indices("nope", J_u=J, W=W)
+
+
+def test_six_dimensional_volumes_against_brute_force(rng):
+    G = rng.normal(size=(6, 8))
+    zono = Polytope.zonotope(np.zeros(6), G)
+    signs = ((np.arange(2**8)[:, None] >> np.arange(8)) & 1) * 2.0 - 1.0
+    corners = signs @ G.T
+    assert zono.volume == pytest.approx(ConvexHull(corners).volume, rel=1e-9)
+    assert zono.circumradius == pytest.approx(np.linalg.norm(corners, axis=1).max(), rel=1e-12)
+    # a box section with few halfspaces: every vertex solves 6 of them, found by brute force
+    F, c = rng.normal(size=(9, 6)), 0.2 * rng.normal(size=9)
+    poly = Polytope(F, c, np.eye(9))
+    A, b = np.vstack([F, -F]), np.concatenate([1.0 + c, 1.0 - c])
+    subsets = _zonotope.combinations(18, 6)
+    subsets = subsets[np.all(np.sort(subsets % 9, axis=1)[:, 1:] != np.sort(subsets % 9, axis=1)[:, :-1], axis=1)]
+    M = A[subsets]
+    good = np.abs(np.linalg.det(M)) > 1e-9
+    X = np.linalg.solve(M[good], b[subsets[good]][:, :, None])[:, :, 0]
+    X = X[np.all(X @ A.T <= b + 1e-9, axis=1)]
+    assert poly.volume == pytest.approx(ConvexHull(X).volume, rel=1e-7)
+    assert poly.circumradius == pytest.approx(np.linalg.norm(X - poly.center, axis=1).max(), rel=1e-9)

@@ -10,6 +10,7 @@ from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
 from .ellipsoids import Ellipsoid
 from .errors import MobmanipError
 from .model import Robot, load_robot
+from .polytope import Polytope
 from .spec import RobotSpec, load_spec
 
 __all__ = [
@@ -17,6 +18,7 @@ __all__ = [
     "BatchAnalysis",
     "Ellipsoid",
     "MobmanipError",
+    "Polytope",
     "ReducedDynamics",
     "Robot",
     "RobotSpec",

@@ -14,12 +14,15 @@ import numpy as np
 
 from .errors import ModelError
 
-try:
-    import highspy
-except ImportError:  # pragma: no cover - highspy is a dependency
-    highspy = None
-
 _INF = float("inf")
+
+
+def _highspy():
+    try:
+        import highspy
+    except ImportError:  # pragma: no cover - highspy is a dependency
+        raise ModelError("polytope queries need the 'highspy' package (HiGHS): pip install highspy") from None
+    return highspy
 
 
 class LinearProgram:
@@ -34,8 +37,7 @@ class LinearProgram:
         A = np.asarray(A, dtype=float)
         self.n_rows, self.n_cols = A.shape
         self._lock = threading.Lock()
-        if highspy is None:  # pragma: no cover
-            raise ModelError("polytope queries need the 'highspy' package (HiGHS): pip install highspy")
+        highspy = self._highspy = _highspy()
         h = highspy._Highs()  # the bindings' core class: no banner on standard output
         h.setOptionValue("output_flag", False)
         h.setOptionValue("presolve", "off")
@@ -45,10 +47,11 @@ class LinearProgram:
         lp.num_col_ = self.n_cols
         lp.num_row_ = self.n_rows
         lp.col_cost_ = np.zeros(self.n_cols)
-        lp.col_lower_ = _finite(col_lo, self.n_cols)
-        lp.col_upper_ = _finite(col_hi, self.n_cols)
-        lp.row_lower_ = _finite(row_lo, self.n_rows)
-        lp.row_upper_ = _finite(row_hi, self.n_rows)
+        self._inf = highspy.kHighsInf
+        lp.col_lower_ = self._finite(col_lo, self.n_cols)
+        lp.col_upper_ = self._finite(col_hi, self.n_cols)
+        lp.row_lower_ = self._finite(row_lo, self.n_rows)
+        lp.row_upper_ = self._finite(row_hi, self.n_rows)
         cols, rows = np.nonzero(A.T)  # column-wise order
         lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
         lp.a_matrix_.start_ = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.n_cols))]).astype(
@@ -67,12 +70,14 @@ class LinearProgram:
             ModelError: HiGHS reports neither an optimum nor infeasibility (e.g. unbounded:
                 the polytope's description was not bounded).
         """
-        h = self._h
+        h, highspy = self._h, self._highspy
         with self._lock:
             h.changeObjectiveSense(highspy.ObjSense.kMaximize if maximize else highspy.ObjSense.kMinimize)
             h.changeColsCost(self.n_cols, self._all, np.asarray(cost, dtype=float))
             if col_lo is not None:
-                h.changeColsBounds(self.n_cols, self._all, _finite(col_lo, self.n_cols), _finite(col_hi, self.n_cols))
+                h.changeColsBounds(
+                    self.n_cols, self._all, self._finite(col_lo, self.n_cols), self._finite(col_hi, self.n_cols)
+                )
             h.run()
             status = h.getModelStatus()
             if status == highspy.HighsModelStatus.kOptimal:
@@ -83,11 +88,9 @@ class LinearProgram:
             h.clearSolver()  # a failed basis must not seed the next call
             raise ModelError(f"the linear program of a polytope query ended as {h.modelStatusToString(status)}")
 
-
-def _finite(values, n: int) -> np.ndarray:
-    """Bounds with +-inf mapped to HiGHS's infinity, (n,)."""
-    out = np.broadcast_to(np.asarray(values, dtype=float), (n,)).copy()
-    inf = highspy.kHighsInf
-    out[out == _INF] = inf
-    out[out == -_INF] = -inf
-    return out
+    def _finite(self, values, n: int) -> np.ndarray:
+        """Bounds with +-inf mapped to HiGHS's infinity, (n,)."""
+        out = np.broadcast_to(np.asarray(values, dtype=float), (n,)).copy()
+        out[out == _INF] = self._inf
+        out[out == -_INF] = -self._inf
+        return out

@@ -680,6 +680,9 @@ class Polytope(TaskSet):
                 return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
             T = V[self.triangles] - self.center
             return float(abs(np.einsum("ti,ti->t", T[:, 0], np.cross(T[:, 1], T[:, 2])).sum()) / 6.0)
-        from scipy.spatial import ConvexHull
+        from scipy.spatial import ConvexHull, QhullError
 
-        return float(ConvexHull(self._all_vertices(), qhull_options="Qt QJ").volume)
+        try:
+            return float(ConvexHull(self._all_vertices()).volume)
+        except QhullError:  # nearly degenerate vertex set: Qhull's joggle (accurate to ~1e-7)
+            return float(ConvexHull(self._all_vertices(), qhull_options="QJ").volume)
