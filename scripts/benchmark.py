@@ -21,6 +21,7 @@ Usage::
 
     python scripts/benchmark.py            # full run (a few minutes)
     python scripts/benchmark.py --quick    # smoke run (seconds)
+    python scripts/benchmark.py --polytopes [--quick]   # the capacity polytopes instead
 """
 
 from __future__ import annotations
@@ -194,10 +195,17 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="small sizes, for a fast smoke run")
     parser.add_argument("--rounds", type=int, help="interleaved measurement rounds (default 7; quick 2)")
     parser.add_argument("--memory-child", type=int, metavar="N", help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--polytopes", action="store_true", help="only the capacity polytopes (scripts/benchmark_polytopes.py)"
+    )
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
         return 0
+    if args.polytopes:
+        from benchmark_polytopes import run
+
+        return run(quick=args.quick)
     quick = args.quick
     rounds = args.rounds or (2 if quick else 7)
     n_single, n_batch = (200, 2000) if quick else (1000, 10000)

@@ -29,6 +29,7 @@ from .measures import (
     unregister_measure,
 )
 from .model import Robot, load_robot
+from .polytope import Polytope
 from .spec import RobotSpec, load_spec
 from .sweep import SweepGrid, SweepResult, SweepSpec, run_sweep
 
@@ -43,6 +44,7 @@ __all__ = [
     "Measure",
     "MeasureTerms",
     "MobmanipError",
+    "Polytope",
     "Quantity",
     "ReducedDynamics",
     "Robot",
