@@ -7,6 +7,7 @@ h_o = sum_i W_i h_i. Rows of W_i: force, then moment = r_i x f_i + n_i, restrict
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,7 +62,7 @@ class HeldObject:
     offsets: np.ndarray
 
     def __post_init__(self):
-        if not np.isfinite(self.mass) or self.mass < 0.0:
+        if not math.isfinite(self.mass) or self.mass < 0.0:
             raise TaskError(f"object mass must be a finite non-negative number, got {self.mass!r}")
 
     @classmethod
@@ -73,11 +74,12 @@ class HeldObject:
         between the hands. Coincident grasp points give a point mass.
         """
         points = np.asarray(grasp_points, dtype=float).reshape(-1, 3)
-        center = points.sum(axis=0) / points.shape[0]
+        center = np.add.reduce(points, axis=0) / points.shape[0]
         offsets = points - center
-        if inertia is None:
-            radius2 = float((offsets * offsets).sum(axis=1).max())
-            inertia = (0.4 * mass * radius2) * np.eye(3)
+        if inertia is None:  # per-call cost matters here: analyze builds one per configuration
+            radius2 = float(np.maximum.reduce(np.einsum("ij,ij->i", offsets, offsets)))
+            inertia = np.zeros((3, 3))
+            inertia.flat[::4] = 0.4 * mass * radius2
         return cls(float(mass), np.asarray(inertia, dtype=float), center, offsets)
 
     def inertia_matrix(self, task: str | TaskSpace) -> np.ndarray:
