@@ -274,3 +274,15 @@ def test_init_spec_command_on_the_husky(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "skid_steer" in done.stdout
     assert 'platform = "skid_steer"' in out.read_text()
+
+
+def test_the_viewer_builds_the_husky_with_its_meshes(husky):
+    """The viewer reads the URDF as the loader does ($(optenv ...) at its default) and finds the
+    meshes of both the Husky and the iiwa."""
+    from mobmanip.viz.scene import visual_model
+
+    model, geometry = visual_model(husky)
+    assert list(model.names) == list(husky.model.names)
+    meshes = {Path(g.meshPath).name for g in geometry.geometryObjects if g.meshPath}
+    assert {"wheel.stl", "base_link.stl"} <= meshes
+    assert any(name.startswith("link_") for name in meshes)

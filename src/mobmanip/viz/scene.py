@@ -77,6 +77,7 @@ from ..errors import MobmanipError, ModelError
 from ..io import write_text
 from ..measures import Quantity, default_measures, get_measure, measure_names, resolve_measures
 from ..model import Robot, locked_joints
+from ..urdf import urdf_text
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, MIN_SEMI_AXIS, _translation, drawn_ellipsoid, drawn_extent, ellipsoid_frame
 from .shapes import _aligned as _aligned  # noqa: F401 - re-exported: the animation tests use it
@@ -158,12 +159,17 @@ def visual_model(robot: Robot) -> tuple[pin.Model, pin.GeometryModel]:
     """
     spec = robot.spec
     package_dirs = [str(p) for p in spec.package_dirs]
-    model, geometry = pin.buildModelsFromUrdf(
-        str(spec.urdf),
-        package_dirs=package_dirs,
-        root_joint=pin.JointModelPlanar(),
-        geometry_types=pin.GeometryType.VISUAL,
-    )
+    text = urdf_text(spec.urdf)  # with xacro optenv defaults filled in, as load_robot reads it
+    if text is None:
+        model, geometry = pin.buildModelsFromUrdf(
+            str(spec.urdf),
+            package_dirs=package_dirs,
+            root_joint=pin.JointModelPlanar(),
+            geometry_types=pin.GeometryType.VISUAL,
+        )
+    else:
+        model = pin.buildModelFromXML(text, pin.JointModelPlanar())
+        geometry = pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL, package_dirs=package_dirs)
     locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
     if locked:
         model, (geometry,) = pin.buildReducedModel(model, [geometry], locked, q_ref)
