@@ -393,3 +393,16 @@ def test_other_xacro_substitution_is_a_urdf_error_naming_it_and_its_line(tmp_pat
     line = text[: text.index(substitution)].count("\n") + 1
     with pytest.raises(UrdfError, match=rf"line {line}: unexpanded xacro substitution '{re.escape(substitution)}'"):
         mobmanip.load_robot(write_variant(tmp_path, text))
+
+
+def test_substitutions_in_comments_simulator_sections_and_mesh_names_are_left_alone(tmp_path):
+    """As in TIAGo Pro's shipped URDF: a commented-out xacro include, and others where no model is built from."""
+    extra = (
+        '<!-- <xacro:include filename="$(find gripper)/urdf/g.xacro"/> -->'
+        '<gazebo reference="base_link"><plugin filename="$(arg plugin)"/></gazebo>'
+        '<transmission name="t"><joint name="$(arg j)"/></transmission>'
+    )
+    text = PAPER_URDF.read_text().replace("</robot>", extra + "</robot>")
+    text = replace_joint_block(text, "arm_right_2_joint", 'rpy="0 0 0"', 'rpy="$(optenv R 0 0 0)"')
+    robot = mobmanip.load_robot(write_variant(tmp_path, text))
+    assert robot.nx == mobmanip.load_robot("planar_dual_arm").nx
