@@ -23,7 +23,7 @@ import pytest
 import mobmanip
 from mobmanip.detect import detect_spec, spec_to_toml
 from mobmanip.ellipsoids import kinematic_ellipsoid
-from mobmanip.errors import MissingLimitError
+from mobmanip.errors import MissingLimitError, WheelError
 
 pybullet_data = pytest.importorskip("pybullet_data", reason="the Husky and iiwa URDFs ship with pybullet")
 
@@ -286,3 +286,9 @@ def test_the_viewer_builds_the_husky_with_its_meshes(husky):
     meshes = {Path(g.meshPath).name for g in geometry.geometryObjects if g.meshPath}
     assert {"wheel.stl", "base_link.stl"} <= meshes
     assert any(name.startswith("link_") for name in meshes)
+
+
+def test_wheels_on_the_command_line_are_a_differential_drive_pair_only(tmp_path):
+    urdf = husky_with_arm(tmp_path)
+    with pytest.raises(WheelError, match=r"give a skid_steer platform's wheels in its spec's \[wheels\] table"):
+        detect_spec(urdf, [EE], wheels=("front_right_wheel", "front_left_wheel"), platform="skid_steer")

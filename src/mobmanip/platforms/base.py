@@ -190,7 +190,12 @@ class PlatformKind(ABC):
         """The ``[wheels]`` spec from joint names given on the command line (``--wheels``)."""
         from ..errors import WheelError
 
-        raise WheelError(f"a {self.name} platform takes no wheel joints")
+        if not self.takes_wheels:
+            raise WheelError(f"a {self.name} platform takes no wheel joints")
+        raise WheelError(
+            f"--wheels names a differential drive's RIGHT,LEFT pair; give a {self.name} platform's wheels in "
+            f"its spec's [wheels] table ({', '.join(self.wheel_keys)}), or let init-spec detect them"
+        )
 
     def limit_names(self, wheels: WheelsSpec | None) -> tuple[str, ...]:
         """Names, other than URDF joints, that ``[limits.*]`` may set (e.g. ``base_x``)."""
