@@ -92,19 +92,19 @@ def frame_jacobian_derivative(model: pin.Model, data: pin.Data, frame_id: int) -
 
 @dataclass(frozen=True)
 class ConfigurationDerivatives:
-    """Kinematic and dynamic terms at one configuration with their tangent-space derivatives.
+    """Kinematic and dynamic terms at N configurations with their tangent-space derivatives.
 
-    Derivative arrays put the tangent direction k first.
+    Derivative arrays put the configuration first, then the tangent direction k.
 
     Attributes:
-        J: end-effector Jacobians restricted to the task rows, stacked arm by arm, (m k_a, nv).
-        dJ: dJ/dq_k, (nv, m k_a, nv).
-        positions: end-effector positions in the world (m), (k_a, 3).
-        J_linear: the end effectors' linear Jacobians (all three rows), (k_a, 3, nv).
-        M: mass matrix, (nv, nv).
-        dM: dM/dq_k, (nv, nv, nv).
-        g: generalized gravity, (nv,).
-        dg: dg/dq_k, (nv, nv) (row k).
+        J: end-effector Jacobians restricted to the task rows, stacked arm by arm, (N, m k_a, nv).
+        dJ: dJ/dq_k, (N, nv, m k_a, nv).
+        positions: end-effector positions in the world (m), (N, k_a, 3).
+        J_linear: the end effectors' linear Jacobians (all three rows), (N, k_a, 3, nv).
+        M: mass matrix, (N, nv, nv).
+        dM: dM/dq_k, (N, nv, nv, nv).
+        g: generalized gravity, (N, nv).
+        dg: dg/dq_k, (N, nv, nv) (row k).
     """
 
     J: np.ndarray
@@ -127,40 +127,60 @@ class DerivativeWorkspace:
         model = robot.model
         self.rows = list(self.task.rows)
         self.frames = [arm.frame_id for arm in robot.arms]
-        self.joints = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0.0 or _has_inertia(model, j)]
+        self.joints = [j for j in range(1, model.njoints) if np.any(model.inertias[j].matrix() != 0.0)]
         self.inertias = np.array([model.inertias[j].matrix() for j in self.joints])  # (nb, 6, 6)
 
-    def evaluate(self, q: np.ndarray) -> ConfigurationDerivatives:
-        """The terms and their derivatives at configuration q, (nq,)."""
+    def evaluate(self, qs: np.ndarray) -> ConfigurationDerivatives:
+        """The terms and their derivatives at the configurations qs, (N, nq) (checked by the caller).
+
+        Pinocchio runs once per configuration; everything else is stacked over N.
+        """
         model, data = self.robot.model, self.robot.data
         nv = model.nv
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        pin.computeJointKinematicHessians(model, data)
-        J6 = np.array([pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED) for f in self.frames])
-        H6 = np.array([frame_jacobian_derivative(model, data, f) for f in self.frames])  # (ka, 6, nv, nv)
-        positions = np.array([data.oMf[f].translation for f in self.frames])
-        J = J6[:, self.rows].reshape(-1, nv)
-        dJ = np.moveaxis(H6[:, self.rows].reshape(-1, nv, nv), 2, 0)
-        # mass matrix and its derivative from the bodies' local Jacobians and Hessians
-        nb = len(self.joints)
-        Jl = np.empty((nb, 6, nv))
-        Hl = np.empty((nb, 6, nv, nv))
-        for b, j in enumerate(self.joints):
-            Jl[b] = pin.getJointJacobian(model, data, j, pin.LOCAL)
-            Hl[b] = read_hessian(pin.getJointKinematicHessian(model, data, j, pin.LOCAL))
-        IJ = np.einsum("bxy,byi->bxi", self.inertias, Jl)  # (nb, 6, nv)
-        M = np.einsum("bxi,bxj->ij", Jl, IJ)
-        # T[k, i, j] = sum_b (dJ_b/dq_k)^T_i I_b J_b,j
-        T = np.tensordot(Hl, IJ, axes=([0, 1], [0, 1]))  # (nv_i, nv_k, nv_j)
-        T = T.transpose(1, 0, 2)
-        dM = T + T.transpose(0, 2, 1)
-        g = pin.computeGeneralizedGravity(model, data, q).copy()
-        dg = pin.computeGeneralizedGravityDerivatives(model, data, q).T.copy()
+        n, ka, nb = qs.shape[0], len(self.frames), len(self.joints)
+        J6 = np.empty((n, ka, 6, nv))
+        H6 = np.empty((n, ka, 6 * nv * nv))  # raw Hessian memory, read below
+        positions = np.empty((n, ka, 3))
+        Jl = np.empty((n, nb, 6, nv))
+        Hl = np.empty((n, nb, 6 * nv * nv))
+        g = np.empty((n, nv))
+        dg = np.empty((n, nv, nv))
+        frame_hessian, joint_hessian = pin.getFrameKinematicHessian, pin.getJointKinematicHessian
+        lwa, local = pin.LOCAL_WORLD_ALIGNED, pin.LOCAL
+        for i, q in enumerate(qs):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            pin.computeJointKinematicHessians(model, data)
+            for a, f in enumerate(self.frames):
+                J6[i, a] = pin.getFrameJacobian(model, data, f, lwa)
+                H6[i, a] = frame_hessian(model, data, f, lwa).reshape(-1)
+                positions[i, a] = data.oMf[f].translation
+            for b, j in enumerate(self.joints):
+                Jl[i, b] = pin.getJointJacobian(model, data, j, local)
+                Hl[i, b] = joint_hessian(model, data, j, local).reshape(-1)
+            g[i] = pin.computeGeneralizedGravity(model, data, q)
+            dg[i] = pin.computeGeneralizedGravityDerivatives(model, data, q).T
+        H6 = _read_stacked(H6, nv)  # (n, ka, 6, nv, nv)
+        Hl = _read_stacked(Hl, nv)
+        J = J6[:, :, self.rows].reshape(n, -1, nv)
+        dJ = np.moveaxis(H6[:, :, self.rows].reshape(n, -1, nv, nv), 3, 1)
+        # M = sum_b J_b^T I_b J_b; T[n, i, k, j] = sum_b (dJ_b/dq_k)_i^T I_b J_b,j
+        IJ = np.einsum("bxy,nbyi->nbxi", self.inertias, Jl).reshape(n, nb * 6, nv)
+        M = np.matmul(_T(Jl.reshape(n, nb * 6, nv)), IJ)
+        T = np.matmul(_T(Hl.reshape(n, nb * 6, nv * nv)), IJ).reshape(n, nv, nv, nv)
+        T = T.transpose(0, 2, 1, 3)
+        dM = T + _T(T)
         return ConfigurationDerivatives(
-            J=J, dJ=dJ, positions=positions, J_linear=J6[:, :3], M=0.5 * (M + M.T), dM=dM, g=g, dg=dg
+            J=J, dJ=dJ, positions=positions, J_linear=J6[:, :, :3], M=0.5 * (M + _T(M)), dM=dM, g=g, dg=dg
         )
 
 
-def _has_inertia(model: pin.Model, j: int) -> bool:
-    return bool(np.any(model.inertias[j].matrix() != 0.0))
+def _T(a: np.ndarray) -> np.ndarray:
+    return np.swapaxes(a, -1, -2)
+
+
+def _read_stacked(raw: np.ndarray, nv: int) -> np.ndarray:
+    """Hessians stored as their arrays' C-order contents, (..., 6 nv nv) -> (..., 6, nv, nv)."""
+    if hessian_layout() == "fortran":  # element [x, i, k] at x + 6 i + 6 nv k
+        return np.moveaxis(raw.reshape(raw.shape[:-1] + (nv, nv, 6)), (-3, -2, -1), (-1, -2, -3))
+    return raw.reshape(raw.shape[:-1] + (6, nv, nv))

@@ -41,7 +41,6 @@ import numpy as np
 
 from .analysis import _check_mass
 from .derivatives import ConfigurationDerivatives, DerivativeWorkspace
-from .dynamics import decouple
 from .errors import ArgumentError, MeasureError, ModelError, TaskError
 from .grasp import HeldObject
 from .model import Robot
@@ -219,84 +218,104 @@ class GradientEvaluator:
 
     def __call__(self, q: np.ndarray) -> tuple[float, np.ndarray, bool]:
         """(value, gradient (nv,), defined) at configuration q, (nq,)."""
-        self.evaluations += 1
         q = self.robot.check_configuration(q)
-        d = self.workspace.evaluate(q)
-        return self._from_derivatives(d)
+        out = self._chunk(q[None, :])
+        return float(out[0][0]), out[1][0], bool(out[2][0])
 
-    def batch(self, qs: np.ndarray) -> GradientBatch:
-        """The objective and its gradient at every row of qs, (N, nq)."""
-        qs = np.asarray(qs, dtype=float)
-        nq, nv = self.robot.model.nq, self.robot.model.nv
-        if qs.ndim != 2 or qs.shape[1] != nq:
-            raise ArgumentError(f"configurations must have shape (N, {nq}), got {qs.shape}")
-        n = qs.shape[0]
+    def batch(self, qs: np.ndarray, chunk_size: int = 256) -> GradientBatch:
+        """The objective and its gradient at every row of qs, (N, nq), ``chunk_size`` at a time.
+
+        Raises:
+            ConfigurationError: qs is not (N, nq) or has a NaN/infinite entry.
+        """
+        from .batch import check_configurations
+
+        qs = check_configurations(self.robot, qs)
+        n, nv = qs.shape[0], self.robot.model.nv
         value, grad, ok = np.zeros(n), np.zeros((n, nv)), np.zeros(n, dtype=bool)
-        for i in range(n):
-            value[i], grad[i], ok[i] = self(qs[i])
+        for start in range(0, n, chunk_size):
+            stop = min(start + chunk_size, n)
+            value[start:stop], grad[start:stop], ok[start:stop] = self._chunk(qs[start:stop])
         return GradientBatch(self.objective, value, grad, ok)
+
+    def shape(self, qs: np.ndarray):
+        """The ellipsoids' shape C (N, m, m), its derivative dC (N, nv, m, m), centre c (N, m),
+        dc (N, nv, m) and the mask of configurations where they are differentiable (N,)."""
+        self.evaluations += qs.shape[0]
+        terms = self._terms(self.workspace.evaluate(qs))
+        if self.objective.ellipsoid == "kinematic":
+            return _kinematic_shape(terms, self.velocity_limits)
+        return _dynamic_shape(terms, None if self.Q_identity else self.Q, self.Z)
 
     # ----- the chain -----
 
-    def _from_derivatives(self, d: ConfigurationDerivatives) -> tuple[float, np.ndarray, bool]:
-        terms = self._terms(d)
-        if self.objective.ellipsoid == "kinematic":
-            shape = _kinematic_shape(terms, self.velocity_limits)
-        else:
-            shape = _dynamic_shape(terms, self.Q if not self.Q_identity else None, self.Z)
-        if shape is None:
-            return 0.0, np.zeros(self.robot.model.nv), False
-        C, dC, c, dc = shape
+    def _chunk(self, qs: np.ndarray):
+        C, dC, c, dc, ok = self.shape(qs)
         value, grad = _index(self.objective, C, dC, c, dc)
-        return value, grad, True
+        value[~ok] = 0.0
+        grad[~ok] = 0.0
+        return value, grad, ok
 
     def _terms(self, d: ConfigurationDerivatives) -> dict:
-        """J_u, P, xi, W, M_o, g_o and their derivatives (direction k first)."""
+        """J_u, P, xi, W, M_o, g_o and their derivatives, stacked (configuration, direction k, ...)."""
         S = self.S
         J_u = d.J @ S
         dJ_u = d.dJ @ S
         P = S.T @ d.M @ S
-        dP = np.einsum("vi,kvw,wj->kij", S, d.dM, S, optimize=True)
+        dP = S.T @ d.dM @ S
         if self.decoupled:
-            P = decouple(self.robot, P)
-            dP = np.array([decouple(self.robot, x) for x in dP])
-        xi = -S.T @ d.g
+            ne = self.robot.platform.n_reduced
+            for X in (P, dP):
+                X[..., :ne, ne:] = 0.0
+                X[..., ne:, :ne] = 0.0
+        xi = -d.g @ S
         dxi = -d.dg @ S
         W, dW, M_o, dM_o, g_o = self._object(d)
         return {"J": J_u, "dJ": dJ_u, "P": P, "dP": dP, "xi": xi, "dxi": dxi, "W": W, "dW": dW, "M_o": M_o,
                 "dM_o": dM_o, "g_o": g_o}  # fmt: skip
 
     def _object(self, d: ConfigurationDerivatives):
-        """W, dW, M_o, dM_o, g_o: constant for an explicit object; for the default object held
-        between the hands the offsets r_i = p_i - mean(p) move with q."""
+        """W, dW, M_o, dM_o, g_o stacked: constant for an explicit object; for the default object
+        held between the hands the offsets r_i = p_i - mean(p) move with q."""
         task = self.task
-        nv = d.J.shape[1]
-        if self.held_object is not None:
-            obj = self.held_object
-            W, M_o = obj.grasp_matrix(task), obj.inertia_matrix(task)
-            return W, np.zeros((nv,) + W.shape), M_o, np.zeros((nv,) + M_o.shape), obj.gravity_vector(task)
-        obj = HeldObject.between(d.positions, self.mass)
+        n, nv = d.J.shape[0], d.J.shape[2]
+        obj = self.held_object
+        if obj is None:
+            obj = HeldObject.between(d.positions[0], self.mass)
         W, M_o, g_o = obj.grasp_matrix(task), obj.inertia_matrix(task), obj.gravity_vector(task)
-        dW = np.zeros((nv,) + W.shape)
-        dM_o = np.zeros((nv,) + M_o.shape)
-        if not task.angular_rows or len(d.positions) < 2:
+        W = np.repeat(W[None], n, axis=0)
+        M_o = np.repeat(M_o[None], n, axis=0)
+        dW = np.zeros((n, nv) + W.shape[1:])
+        dM_o = np.zeros((n, nv) + M_o.shape[1:])
+        if self.held_object is not None or not task.angular_rows or d.positions.shape[1] < 2:
             return W, dW, M_o, dM_o, g_o
         rows = list(task.rows)
         m = task.dim
-        dr = d.J_linear - d.J_linear.mean(axis=0)  # (k_a, 3, nv): dr_i/dq
-        for i in range(len(d.positions)):
-            full = np.zeros((nv, 6, 6))
-            full[:, 3:, :3] = _skew_stack(dr[i].T)
-            dW[:, :, i * m : (i + 1) * m] = full[:, rows][:, :, rows]
+        offsets = d.positions - d.positions.mean(axis=1, keepdims=True)  # (n, ka, 3)
+        dr = d.J_linear - d.J_linear.mean(axis=1, keepdims=True)  # (n, ka, 3, nv): dr_i/dq
+        full = np.zeros((n, 6, 6))
+        full[:, :3, :3] = np.eye(3)
+        full[:, 3:, 3:] = np.eye(3)
+        dfull = np.zeros((n, nv, 6, 6))
+        for i in range(offsets.shape[1]):
+            full[:, 3:, :3] = _skew_stack(offsets[:, i])
+            dfull[:, :, 3:, :3] = _skew_stack(_T(dr[:, i]).reshape(-1, 3)).reshape(n, nv, 3, 3)
+            W[:, :, i * m : (i + 1) * m] = full[:, rows][:, :, rows]
+            dW[:, :, :, i * m : (i + 1) * m] = dfull[:, :, rows][:, :, :, rows]
         # inertia 2/5 m R^2 I with R the farthest grasp point (HeldObject.between)
-        radius2 = np.einsum("ij,ij->i", obj.offsets, obj.offsets)
-        far = int(np.argmax(radius2))
-        dR2 = 2.0 * obj.offsets[far] @ dr[far]  # (nv,)
-        full = np.zeros((nv, 6, 6))
+        radius2 = np.einsum("nij,nij->ni", offsets, offsets)
+        far = np.argmax(radius2, axis=1)
+        take = np.arange(n)
+        R2 = radius2[take, far]
+        dR2 = 2.0 * np.einsum("nx,nxk->nk", offsets[take, far], dr[take, far])  # (n, nv)
+        full = np.zeros((n, 6, 6))
+        dfull = np.zeros((n, nv, 6, 6))
+        for a in range(3):
+            full[:, a, a] = self.mass
         for a in range(3, 6):
-            full[:, a, a] = 0.4 * self.mass * dR2
-        dM_o = full[:, rows][:, :, rows]
-        return W, dW, M_o, dM_o, g_o
+            full[:, a, a] = 0.4 * self.mass * R2
+            dfull[:, :, a, a] = 0.4 * self.mass * dR2
+        return W, dW, full[:, rows][:, :, rows], dfull[:, :, rows][:, :, :, rows], g_o
 
 
 def _skew_stack(r: np.ndarray) -> np.ndarray:
@@ -312,110 +331,126 @@ def _T(a: np.ndarray) -> np.ndarray:
     return np.swapaxes(a, -1, -2)
 
 
-def _well_conditioned(A: np.ndarray) -> bool:
-    """Full rank (min(rows, cols) singular values above SINGULAR_RTOL times the largest)."""
+def _full_rank(A: np.ndarray) -> np.ndarray:
+    """Per stacked matrix: min(rows, cols) singular values above SINGULAR_RTOL times the largest."""
     s = np.linalg.svd(A, compute_uv=False)
-    return bool(s.size and s[-1] > SINGULAR_RTOL * s[0])
+    return s[..., -1] > SINGULAR_RTOL * s[..., 0]
+
+
+def _guarded(A: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """A with the matrices where not ``ok`` replaced by a full-rank stand-in (results there are
+    discarded; this only keeps the stacked solves from failing)."""
+    if ok.all():
+        return A
+    A = A.copy()
+    A[~ok] = np.eye(A.shape[-2], A.shape[-1])
+    return A
 
 
 def _kinematic_shape(t: dict, velocity_limits: np.ndarray):
-    """C = (W K^-1 W^T)^-1 with K = J_hat J_hat^T, c = 0, and their derivatives; None if singular."""
+    """C = (W K^-1 W^T)^-1 with K = J_hat J_hat^T, c = 0, their derivatives and the mask."""
     Jh = t["J"] * velocity_limits
-    if not _well_conditioned(Jh):
-        return None
+    ok = _full_rank(Jh)
+    Jh = _guarded(Jh, ok)
     dJh = t["dJ"] * velocity_limits
     W, dW = t["W"], t["dW"]
-    K = Jh @ Jh.T
-    dK = dJh @ Jh.T
+    K = Jh @ _T(Jh)
+    dK = dJh @ _T(Jh)[:, None]
     dK = dK + _T(dK)
-    X = np.linalg.solve(K, W.T)  # K^-1 W^T, (mk, m)
+    X = np.linalg.solve(K, _T(W))  # K^-1 W^T, (n, mk, m)
     A = W @ X
-    dWX = dW @ X
-    dA = dWX + _T(dWX) - _T(X) @ dK @ X
+    dWX = dW @ X[:, None]
+    dA = dWX + _T(dWX) - _T(X)[:, None] @ dK @ X[:, None]
     C = np.linalg.inv(A)
-    C = 0.5 * (C + C.T)
-    dC = -C @ dA @ C
-    m = W.shape[0]
-    return C, dC, np.zeros(m), np.zeros((dC.shape[0], m))
+    C = 0.5 * (C + _T(C))
+    dC = -C[:, None] @ dA @ C[:, None]
+    n, m = W.shape[0], W.shape[1]
+    return C, dC, np.zeros((n, m)), np.zeros((n, dC.shape[1], m)), ok
 
 
 def _pinv_rows(A: np.ndarray, dA: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A^+ = A^T (A A^T)^-1 of a full-row-rank A and its derivative."""
-    G = np.linalg.inv(A @ A.T)
-    Ap = A.T @ G
-    dAAt = dA @ A.T
+    """A^+ = A^T (A A^T)^-1 of full-row-rank stacked A, (n, r, c), and its derivative, (n, nv, c, r)."""
+    G = np.linalg.inv(A @ _T(A))[:, None]
+    Ap = _T(A) @ G[:, 0]
+    dAAt = dA @ _T(A)[:, None]
     dAAt = dAAt + _T(dAAt)
-    dAp = _T(dA) @ G - Ap @ dAAt @ G
+    dAp = _T(dA) @ G - Ap[:, None] @ dAAt @ G
     return Ap, dAp
 
 
 def _dynamic_shape(t: dict, Q: np.ndarray | None, Z: np.ndarray):
-    """C = rho^2 F^-1, c = -F^-1 L^T mu_bar (F = L^T L) and derivatives; None if singular or empty."""
+    """C = rho^2 F^-1, c = -F^-1 L^T mu_bar (F = L^T L), their derivatives and the mask
+    (J_u and L of full rank, rho^2 > 0)."""
     J, dJ, W, dW = t["J"], t["dJ"], t["W"], t["dW"]
-    if not _well_conditioned(J):
-        return None
+    ok = _full_rank(J)
+    J = _guarded(J, ok)
     Jp, dJp = _pinv_rows(J, dJ)
     Wp, dWp = _pinv_rows(W, dW)
     P, dP, M_o, dM_o, g_o = t["P"], t["dP"], t["M_o"], t["dM_o"], t["g_o"]
-    JpWt = Jp @ W.T
+    JpWt = Jp @ _T(W)
     WpM = Wp @ M_o
-    Lam = P @ JpWt + J.T @ WpM
-    dLam = dP @ JpWt + P @ (dJp @ W.T + Jp @ _T(dW)) + _T(dJ) @ WpM + J.T @ (dWp @ M_o + Wp @ dM_o)
-    Wpg = Wp @ g_o
-    mu = -t["xi"] + J.T @ Wpg
-    dmu = -t["dxi"] + _T(dJ) @ Wpg + (J.T @ (dWp @ g_o).T).T
+    Jt = _T(J)[:, None]
+    Lam = P @ JpWt + _T(J) @ WpM
+    dLam = (
+        dP @ JpWt[:, None]
+        + P[:, None] @ (dJp @ _T(W)[:, None] + Jp[:, None] @ _T(dW))
+        + _T(dJ) @ WpM[:, None]
+        + Jt @ (dWp @ M_o[:, None] + Wp[:, None] @ dM_o)
+    )
+    Wpg = Wp @ g_o  # (n, mk)
+    mu = -t["xi"] + np.einsum("nij,nj->ni", _T(J), Wpg)
+    dmu = -t["dxi"] + np.einsum("nkij,nj->nki", _T(dJ), Wpg) + np.einsum("nji,nkj->nki", J, dWp @ g_o)
     if Q is not None:
-        Lam, mu = np.linalg.solve(Q, Lam), np.linalg.solve(Q, mu)
-        dLam = np.linalg.solve(Q, dLam)
-        dmu = np.linalg.solve(Q, dmu.T).T
+        Qi = np.linalg.inv(Q)
+        Lam, dLam, mu, dmu = Qi @ Lam, Qi @ dLam, mu @ Qi.T, dmu @ Qi.T
     L = Z[:, None] * Lam
     dL = Z[:, None] * dLam
     mb = Z * mu
     dmb = Z * dmu
-    if not _well_conditioned(L):
-        return None
-    F = L.T @ L
-    dF = _T(dL) @ L
+    okL = _full_rank(L)
+    ok &= okL
+    L = _guarded(L, okL)
+    F = _T(L) @ L
+    dF = _T(dL) @ L[:, None]
     dF = dF + _T(dF)
-    b = L.T @ mb
-    db = (_T(dL) @ mb) + dmb @ L  # (nv, m)
+    b = np.einsum("nij,ni->nj", L, mb)
+    db = np.einsum("nkij,ni->nkj", dL, mb) + np.einsum("nki,nij->nkj", dmb, L)
     Fi = np.linalg.inv(F)
-    Fi = 0.5 * (Fi + Fi.T)
-    c = -Fi @ b
-    dc = -(dF @ c + db) @ Fi  # Fi symmetric: rows (Fi (dF c + db))^T
-    rho2 = 1.0 - mb @ mb - b @ c
-    if rho2 <= 1e-12:
-        return None
-    drho2 = -2.0 * dmb @ mb - db @ c - dc @ b
-    C = rho2 * Fi
-    dC = drho2[:, None, None] * Fi - rho2 * (Fi @ dF @ Fi)
-    return C, dC, c, dc
+    Fi = 0.5 * (Fi + _T(Fi))
+    c = -np.einsum("nij,nj->ni", Fi, b)
+    dc = -np.einsum("nkj,nij->nki", np.einsum("nkij,nj->nki", dF, c) + db, Fi)
+    rho2 = 1.0 - np.einsum("ni,ni->n", mb, mb) - np.einsum("ni,ni->n", b, c)
+    ok &= rho2 > 1e-12
+    drho2 = -2.0 * np.einsum("nki,ni->nk", dmb, mb) - np.einsum("nki,ni->nk", db, c) - np.einsum("nki,ni->nk", dc, b)
+    C = rho2[:, None, None] * Fi
+    dC = drho2[:, :, None, None] * Fi[:, None] - rho2[:, None, None, None] * (Fi[:, None] @ dF @ Fi[:, None])
+    C = _guarded(C, ok)  # an empty set's C is not positive definite
+    return C, dC, c, dc, ok
 
 
-def _index(objective: Objective, C, dC, c, dc) -> tuple[float, np.ndarray]:
-    """The objective's value and gradient from the shape C, centre c and their derivatives."""
-    m = C.shape[0]
+def _index(objective: Objective, C, dC, c, dc) -> tuple[np.ndarray, np.ndarray]:
+    """The objective's values (n,) and gradients (n, nv) from stacked C, c and their derivatives."""
+    m = C.shape[-1]
     index = objective.index
-    if index == "log_volume":
-        sign, logdet = np.linalg.slogdet(C)
-        unit = 0.5 * m * math.log(math.pi) - math.lgamma(0.5 * m + 1.0)
-        Ci = np.linalg.inv(C)
-        return unit + 0.5 * logdet, 0.5 * np.einsum("ij,kji->k", Ci, dC)
-    if index == "log_isotropy":
+    if index in ("log_volume", "log_isotropy"):
         _, logdet = np.linalg.slogdet(C)
-        trace = float(np.trace(C))
-        Ci = np.linalg.inv(C)
-        value = logdet / m - math.log(trace / m)
-        return value, np.einsum("ij,kji->k", Ci, dC) / m - np.trace(dC, axis1=1, axis2=2) / trace
+        trace_Ci_dC = np.einsum("nij,nkji->nk", np.linalg.inv(C), dC)
+        if index == "log_volume":
+            unit = 0.5 * m * math.log(math.pi) - math.lgamma(0.5 * m + 1.0)
+            return unit + 0.5 * logdet, 0.5 * trace_Ci_dC
+        trace = np.trace(C, axis1=1, axis2=2)
+        value = logdet / m - np.log(trace / m)
+        return value, trace_Ci_dC / m - np.trace(dC, axis1=2, axis2=3) / trace[:, None]
     if index == "capacity":
         d = np.asarray(objective.direction)
-        spread = math.sqrt(max(float(d @ C @ d), 0.0))
-        return float(d @ c) + spread, dc @ d + np.einsum("i,kij,j->k", d, dC, d) / (2.0 * spread)
+        spread = np.sqrt(np.maximum(np.einsum("i,nij,j->n", d, C, d), 1e-300))
+        value = c @ d + spread
+        return value, dc @ d + np.einsum("i,nkij,j->nk", d, dC, d) / (2.0 * spread[:, None])
     # minor_axis
     lam, U = np.linalg.eigh(C)
-    u = U[:, 0]
-    s = math.sqrt(max(float(lam[0]), 0.0))
-    return s, np.einsum("i,kij,j->k", u, dC, u) / (2.0 * s)
+    u = U[:, :, 0]
+    s = np.sqrt(np.maximum(lam[:, 0], 1e-300))
+    return s, np.einsum("ni,nkij,nj->nk", u, dC, u) / (2.0 * s[:, None])
 
 
 def measure_gradient(
