@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -69,6 +69,7 @@ class Objective:
     ellipsoid: str
     index: str
     direction: tuple[float, ...] | None = None
+    text: str | None = field(default=None, compare=False)
 
     def __post_init__(self):
         if self.ellipsoid not in ELLIPSOIDS:
@@ -93,7 +94,9 @@ class Objective:
 
     @property
     def name(self) -> str:
-        """``ellipsoid:index`` (and ``:d1,d2,...`` for a capacity)."""
+        """``ellipsoid:index`` (and ``:d1,d2,...`` for a capacity), or the text it was parsed from."""
+        if self.text is not None:
+            return self.text
         tail = "" if self.direction is None else ":" + ",".join(f"{v:g}" for v in self.direction)
         return f"{self.ellipsoid}:{self.index}{tail}"
 
@@ -115,7 +118,7 @@ class Objective:
         direction = None if len(parts) == 2 else _parse_direction(parts[2], task)
         if direction is None and parts[1:2] == ["capacity"]:
             raise ArgumentError(f"objective {text!r}: a capacity needs a direction, e.g. {parts[0]}:capacity:+x")
-        return cls(parts[0], parts[1], direction)
+        return cls(parts[0], parts[1], direction, text=str(text))
 
     def check_task(self, task: TaskSpace) -> None:
         """Raises ArgumentError when the capacity direction does not have the task's dimension."""
