@@ -48,8 +48,8 @@ def main() -> None:
     for name in ("planar_dual_arm", "tiago_dual"):
         robot = mobmanip.load_robot(name)
         qs = random_configurations(robot, rng, N)
-        kernel = per_config(lambda x: mobmanip.analyze_batch(robot, x, method="auto"), qs)
-        numpy_path = per_config(lambda x: mobmanip.analyze_batch(robot, x, method="numpy"), qs)
+        kernel = per_config(lambda x, r=robot: mobmanip.analyze_batch(r, x, method="auto"), qs)
+        numpy_path = per_config(lambda x, r=robot: mobmanip.analyze_batch(r, x, method="numpy"), qs)
         for objective in ("kinematic:log_volume", "dynamic:log_volume"):
             ev = GradientEvaluator(robot, objective)
             grad = per_config(ev.batch, qs)
