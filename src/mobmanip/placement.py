@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import minimize
 
-from .errors import ArgumentError, MobmanipError
+from .errors import ArgumentError, UnreachableObjectError
 from .gradients import GradientEvaluator, Objective, platform_gradient
 from .model import Robot
 from .posture import hold_from
@@ -48,10 +48,6 @@ from .tasks import get_task
 CONSTRAINT_TOLERANCE = 1e-6
 #: Default number of starts (platform headings around the object).
 DEFAULT_STARTS = 8
-
-
-class UnreachableObjectError(MobmanipError):
-    """No start reached a pose that holds the object at the requested point (within the region)."""
 
 
 @dataclass(frozen=True)
