@@ -133,6 +133,11 @@ class UnreachableGridError(GridError):
     """No grid point is within the arms' reach: the message names the grid's distances and angles."""
 
 
+class UnreachableObjectError(ArgumentError):
+    """No platform pose and posture hold the object at the requested point (within the region):
+    the message names the point and the region."""
+
+
 class OutputError(MobmanipError):
     """An output file cannot be written."""
 
