@@ -238,3 +238,51 @@ def test_sweep_indices_equal_single_analyses(rng):
     np.testing.assert_array_equal(kin[:, 0, :, :, 0], kin[:, 0, :, :, 1])
     assert not np.allclose(dyn[:, 0, :, 0, 0], dyn[:, 0, :, 0, 1])
     np.testing.assert_array_equal(dyn[:, 0, :, 0, :], dyn[:, 0, :, 1, :])
+
+
+# --------------------------------------------------------------------------- the paper's figures
+
+
+def test_paper_figures_draw_the_sets_of_the_joint_box(tmp_path, rng):
+    """The extra Fig. 3 and Fig. 4 draw, for each case, polygons whose vertices (unscaled, from
+    the task point) have the supports of independent programs over the joint box of that case's
+    robot (wheel limits varied as the paper), and the case's ellipse beside them."""
+    from mobmanip.casestudy import run_case_study
+    from mobmanip.commands.paper import FIGURES, write_figures
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    study = run_case_study(robot, angles_deg=(45.0,), platform_speeds=(0.5,), wheel_torques=(50.0,), measures=POLYTOPES)
+    drawn = write_figures(study, tmp_path)
+    for name in FIGURES:
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    radius = robot.platform.radius
+
+    def check(record, lp):
+        assert record["kind"] == "polytope"
+        local = (record["points"] - record["point"]) / record["scale"]
+        for d in _unit(rng, 16, 2):
+            expected = lp(d)
+            assert float(np.max(local @ d)) == pytest.approx(expected, abs=1e-9 * max(abs(expected), 1.0))
+
+    records = drawn["fig3_kinematic_polytopes.png"]
+    assert len(records) == 2 * len(study.kinematic)
+    for case, (poly, ell) in zip(study.kinematic, zip(records[::2], records[1::2])):
+        speed = case.platform_speed_max
+        variant = robot.with_platform("fixed") if speed is None else robot.with_wheel_limits(velocity=speed / radius)
+        _, t = terms(variant, case.analysis.q, "planar")
+        check(poly, kinematic_lp(t["J_u"], t["W"], t["velocity_limits"]))
+        assert ell["kind"] == "ellipsoid" and ell["label"].startswith("_")
+    decoupled = [c for c in study.dynamic if c.decoupled]
+    records = drawn["fig4_dynamic_polytopes.png"]
+    assert len(records) == 3 * len(decoupled)
+    for k, case in enumerate(decoupled):
+        exact, policy, ell = records[3 * k : 3 * k + 3]
+        variant = robot.with_wheel_limits(effort=case.wheel_torque_max)
+        an, t = terms(variant, case.analysis.q, "planar")
+        t["P"] = an.reduced_inertia_decoupled
+        lps = _reference_lps(t)
+        check(exact, lps["dynamic_polytope"])
+        check(policy, lps["dynamic_polytope_min_norm"])
+        assert ell["kind"] == "ellipsoid"
+    # the paper's own figures draw ellipses only
+    assert {r["kind"] for r in drawn["fig3_kinematic.png"] + drawn["fig4_dynamic.png"]} == {"ellipsoid"}
