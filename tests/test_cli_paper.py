@@ -20,11 +20,37 @@ def paper_run(tmp_path_factory):
     return out
 
 
-def test_writes_json_and_three_figures(paper_run):
-    for name in ("case_study.json", "fig3_kinematic.png", "fig4_dynamic.png", "fig4_dynamic_coupled.png"):
+FIGURES = (
+    "fig3_kinematic.png",
+    "fig4_dynamic.png",
+    "fig4_dynamic_coupled.png",
+    "fig3_kinematic_polytopes.png",
+    "fig4_dynamic_polytopes.png",
+)
+
+
+def test_writes_json_and_the_figures(paper_run):
+    assert (paper_run / "case_study.json").stat().st_size > 0
+    for name in FIGURES:
         assert (paper_run / name).stat().st_size > 0
-    for name in ("fig3_kinematic.png", "fig4_dynamic.png", "fig4_dynamic_coupled.png"):
         assert (paper_run / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_json_lists_each_cases_polytopes_beside_its_ellipse(paper_run):
+    """Velocity cases carry the kinematic polytope, acceleration cases both dynamic ones; each
+    contains its ellipse (the ellipse's support never exceeds the polytope's)."""
+    doc = json.loads((paper_run / "case_study.json").read_text())
+    for key, names in (
+        ("kinematic", ["kinematic_polytope"]),
+        ("dynamic", ["dynamic_polytope", "dynamic_polytope_min_norm"]),
+    ):
+        for case in doc[key]:
+            assert [k for k in case if k.endswith("polytope") or k.endswith("min_norm")] == names
+            axes, semi = np.array(case["axes"]), np.array(case["semi_axes"])
+            for name in names:
+                V = np.array(case[name]["vertices"])
+                for axis, s in zip(axes, semi):
+                    assert np.max(V @ axis) >= s * (1.0 - 1e-9) and np.max(-V @ axis) >= s * (1.0 - 1e-9)
 
 
 def test_json_layout(paper_run):

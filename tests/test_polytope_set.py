@@ -291,3 +291,47 @@ def test_six_dimensional_volumes_against_brute_force(rng):
     X = X[np.all(X @ A.T <= b + 1e-9, axis=1)]
     assert poly.volume == pytest.approx(ConvexHull(X).volume, rel=1e-7)
     assert poly.circumradius == pytest.approx(np.linalg.norm(X - poly.center, axis=1).max(), rel=1e-9)
+
+
+def test_3d_zonotopes_with_coplanar_generators_against_the_hull_of_all_corners(rng):
+    """Arms with parallel joint axes give coplanar velocity generators: the facets are then
+    polygons, built combinatorially. Vertices equal the convex hull of all 2^n corners (Qhull),
+    reached by their sign vectors; faces are outward and counter-clockwise; the volume is the
+    hull's."""
+    checked = 0
+    for trial in range(60):
+        normal = rng.normal(size=3)
+        normal /= np.linalg.norm(normal)
+        plane = rng.normal(size=(3, int(rng.integers(3, 6))))
+        plane -= np.outer(normal, normal @ plane)
+        G = np.hstack([plane, rng.normal(size=(3, int(rng.integers(0, 4))))])
+        if trial % 3 == 0:  # a second family of coplanar generators
+            other = rng.normal(size=3)
+            other /= np.linalg.norm(other)
+            extra = rng.normal(size=(3, 3))
+            G = np.hstack([G, extra - np.outer(other, other @ extra)])
+        if np.linalg.matrix_rank(G) < 3:  # all in one plane: a flat zonotope (the general route)
+            continue
+        c = rng.normal(size=3)
+        out = _zonotope.low_dim_faces(c, G)
+        assert out is not None
+        signs = ((np.arange(2 ** G.shape[1])[:, None] >> np.arange(G.shape[1])) & 1) * 2.0 - 1.0
+        corners = c + signs @ G.T
+        hull = ConvexHull(corners)
+        V = out["vertices"]
+        assert len(V) == len(hull.vertices)
+        for v in corners[hull.vertices]:
+            assert np.min(np.linalg.norm(V - v, axis=1)) <= 1e-9 * np.abs(G).sum()
+        np.testing.assert_allclose(V, c + out["Y"] @ G.T, rtol=0, atol=1e-12 * np.abs(G).sum())
+        for face, normal_out in zip(out["faces"], out["normals"]):
+            w = V[face]
+            turns = np.cross(np.roll(w, -1, axis=0) - w, np.roll(w, -2, axis=0) - np.roll(w, -1, axis=0))
+            assert np.all(turns @ normal_out > 0.0)  # convex, counter-clockwise seen from outside
+        zono = Polytope.zonotope(c, G)
+        assert zono.volume == pytest.approx(hull.volume, rel=1e-9)
+        T = zono.vertices[zono.triangles] - c
+        assert abs(np.einsum("ti,ti->t", T[:, 0], np.cross(T[:, 1], T[:, 2])).sum()) / 6.0 == pytest.approx(
+            hull.volume, rel=1e-9
+        )
+        checked += 1
+    assert checked >= 40

@@ -200,8 +200,10 @@ def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
 
     Parallel generators are merged first (their sum) and zero ones dropped. In R^3 the facets
     are then the parallelograms c + G s +- g_i +- g_j, s_k = sign(nu . g_k) for nu = g_i x g_j,
-    when no three generators are coplanar (else None: the caller takes the general route); in
-    R^2 the edges are c + G s +- g_k. Vertices are identified by their sign vectors, so they
+    when no three generators are coplanar; with coplanar generators (e.g. an arm with parallel
+    joint axes) a facet is the polygon those generators span (:func:`_coplanar_faces`). In R^2
+    the edges are c + G s +- g_k. None when the combinatorics do not check out (the caller then
+    takes the general route). Vertices are identified by their sign vectors, so they
     are exact (c + G s) and come with their box coordinates.
 
     Returns:
@@ -241,8 +243,10 @@ def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
     tiny = 1e-12 * np.linalg.norm(H, axis=0)
     hits = np.abs(dots) <= tiny
     hits[rows, pairs] = False
-    if np.any(length <= 1e-12 * scale * scale) or hits.any():
-        return None  # three coplanar (m = 3) generators: not parallelograms
+    if np.any(length <= 1e-12 * scale * scale):
+        return None
+    if hits.any():  # three or more coplanar generators (m = 3): polygonal facets
+        return _coplanar_faces(center, H, nu, pairs, hits, n, live, group, sigma)
     S = np.sign(dots)  # (f, k), zero on the facet's own generators
     if m == 2:
         corners = np.array([[1.0], [-1.0]])
@@ -293,3 +297,81 @@ def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
         "widths": widths,
         "faces": list(face_ids),
     }
+
+
+def _coplanar_faces(center, H, nu, pairs, hits, n, live, group, sigma) -> dict | None:
+    """Facets of a 3-D zonotope some of whose (merged) generators are coplanar.
+
+    Each facet is orthogonal to the cross product nu of a pair of generators; its generators are
+    all those orthogonal to nu (``hits`` and the pair), and it is the 2-D zonotope they span,
+    shifted by c + sum_k sign(nu . h_k) h_k over the others. Its 2 q vertices, counter-clockwise
+    seen from +nu, follow from the generators sorted by angle in the facet's plane (each turned
+    into the half-plane [0, pi)): all at -1, then switched to +1 one by one, then back to -1.
+
+    Returns:
+        The dict of :func:`low_dim_faces`, or None when Euler's formula or the facets' support
+        values do not check out (inconsistent near-coplanarity).
+    """
+    k = H.shape[1]
+    members = hits.copy()
+    rows = np.arange(len(pairs))
+    members[rows, pairs[:, 0]] = members[rows, pairs[:, 1]] = True
+    codes = members.astype(np.int64) @ (np.int64(1) << np.arange(k, dtype=np.int64)) if k <= 62 else None
+    if codes is None:
+        return None
+    _, first = np.unique(codes, return_index=True)
+    first = np.sort(first)
+    facet_nu = nu[first]
+    others = np.where(members[first], 0.0, np.sign(facet_nu @ H))  # (f, k)
+    flat, sizes = [], []
+    for r, nu_r, rest in zip(first, facet_nu, others):
+        M = np.flatnonzero(members[r])
+        h0 = H[:, M[0]]
+        e1 = h0 / math.sqrt(h0 @ h0)
+        e2 = np.array(
+            [nu_r[1] * e1[2] - nu_r[2] * e1[1], nu_r[2] * e1[0] - nu_r[0] * e1[2], nu_r[0] * e1[1] - nu_r[1] * e1[0]]
+        )
+        a, b = e1 @ H[:, M], e2 @ H[:, M]
+        turn = np.where((b < 0.0) | ((b == 0.0) & (a < 0.0)), -1.0, 1.0)
+        order = np.argsort(np.arctan2(b * turn, a * turn), kind="stable")
+        q = len(M)
+        polygon = np.zeros((2 * q, k))
+        polygon[:, M[order]] = _polygon_walk(q) * turn[order]
+        up = polygon + rest
+        down = polygon - rest
+        flat += [up, down[::-1]]
+        sizes += [2 * q, 2 * q]
+    normals = np.empty((2 * len(first), 3))
+    normals[0::2], normals[1::2] = facet_nu, -facet_nu
+    flat = np.vstack(flat)
+    code = (flat + 1.0).astype(np.int64) @ (3 ** np.arange(k, dtype=np.int64)) if k <= 39 else None
+    if code is not None:
+        _, first_vertex, vid = np.unique(code, return_index=True, return_inverse=True)
+        keys = flat[first_vertex]
+    else:
+        keys, vid = np.unique(flat, axis=0, return_inverse=True)
+    vid = vid.ravel()
+    bounds = np.cumsum(sizes)
+    faces = np.split(vid, bounds[:-1])
+    vertices = center + keys @ H.T
+    widths = np.abs(normals @ H).sum(axis=1)
+    offsets = normals @ center
+    if len(keys) - bounds[-1] // 2 + len(faces) != 2:  # Euler: V - E + F = 2
+        return None
+    owner = np.repeat(np.arange(len(faces)), sizes)
+    gap = np.einsum("ij,ij->i", vertices[vid], normals[owner]) - (offsets + widths)[owner]
+    if np.max(np.abs(gap)) > 1e-9 * max(float(np.abs(H).sum()), 1e-300):
+        return None
+    Y = np.zeros((len(keys), n))
+    Y[:, live] = keys[:, group] * sigma
+    return {"vertices": vertices, "Y": Y, "normals": normals, "offsets": offsets, "widths": widths, "faces": faces}
+
+
+@functools.lru_cache(maxsize=32)
+def _polygon_walk(q: int) -> np.ndarray:
+    """Signs (2 q, q) of the vertices of a 2-D zonotope whose q generators are sorted by angle in
+    [0, pi), counter-clockwise: all -1, then switched to +1 one by one, then back to -1."""
+    steps = np.tril(np.ones((q, q)), -1)  # row i: the first i generators switched
+    walk = np.vstack([2.0 * np.vstack([steps, np.ones((1, q))]) - 1.0, 1.0 - 2.0 * steps[1:]])
+    walk.setflags(write=False)
+    return walk

@@ -26,7 +26,13 @@ Adding a measure is one :class:`Measure` definition and one :func:`register_meas
 
 Registered measures (in order): ``kinematic`` (the unified kinematic ellipsoid, Eq. 23-26,
 JSON ``kinematic_ellipsoid``) and ``dynamic`` (the unified dynamic ellipsoid, Eq. 27-38, JSON
-``dynamic_ellipsoid``), both computed by default and both sweepable. A measure registered at run
+``dynamic_ellipsoid``), both computed by default; then the exact capacity polytopes of
+:mod:`mobmanip.polytopes`, computed when asked for: ``kinematic_polytope`` (object velocities,
+every wheel and joint within its own speed limit), ``dynamic_polytope`` (object accelerations
+at rest, every torque within its own limit, any internal force) and ``dynamic_polytope_min_norm``
+(the same under the paper's minimum-norm policy), each under the JSON key of its name. All five
+are sweepable; a polytope's sweep indices add ``width_1`` .. ``width_m``, its extent along each
+task axis. A measure registered at run
 time exists in the processes that register it: a sweep on a process pool that does not fork
 needs it registered at import of a module the workers import.
 """
@@ -413,6 +419,118 @@ DYNAMIC = register_measure(
 )
 
 
+# ----------------------------------------------------------------------------------------------
+# the exact capacity polytopes (mobmanip.polytopes): box limits instead of the unit sphere
+
+#: Polytope measures by name -> the kind :func:`mobmanip.polytopes.polytopes` builds.
+POLYTOPE_KINDS = {
+    "kinematic_polytope": "kinematic",
+    "dynamic_polytope": "dynamic",
+    "dynamic_polytope_min_norm": "dynamic_min_norm",
+}
+
+
+def _polytope_compute(kind: str) -> Compute:
+    def compute(terms: MeasureTerms) -> TaskSet:
+        from .polytopes import polytopes
+
+        if kind == "kinematic":
+            return polytopes(kind, J_u=terms.J_u, W=terms.W, velocity_limits=terms.velocity_limits)
+        return polytopes(
+            kind,
+            J_u=terms.J_u,
+            W=terms.W,
+            P=terms.P,
+            Q=terms.Q,
+            xi=terms.xi,
+            M_o=terms.M_o,
+            g_o=terms.g_o,
+            effort_limits=terms.effort_limits,
+        )
+
+    return compute
+
+
+def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
+    """The polytopes of a chunk, one configuration at a time from the chunk's terms (the
+    engine's J_u, P, xi and grasp; the same arrays :class:`MeasureTerms` holds)."""
+    from .engine.terms import ChunkTerms, numpy_terms
+    from .polytopes import polytope_batch
+
+    setup, t = request.setup, request.terms
+    # The compiled kernel fills the terms only of the rows it does not certify: compute them all
+    # here, from the chunk's Pinocchio outputs, on a fresh copy.
+    t = ChunkTerms(t.n, t.Ja, t.Ma, t.positions.copy())
+    numpy_terms(setup, t)
+    W = setup.W if t.W is None else t.W
+    M_o = np.diag(setup.Mo) if t.Mo is None else np.einsum("ni,ij->nij", t.Mo, np.eye(setup.m))
+    P = t.P
+    if request.decoupled:
+        e = setup.n_eta
+        P = P.copy()
+        P[:, :e, e:] = 0.0
+        P[:, e:, :e] = 0.0
+    out = {}
+    for name, limits in request.limits.items():
+        kind = POLYTOPE_KINDS[name]
+        if kind == "kinematic":
+            out[name] = polytope_batch(kind, J_u=t.J_u, W=W, velocity_limits=limits)
+        else:
+            out[name] = polytope_batch(
+                kind, J_u=t.J_u, W=W, P=P, Q=setup.robot.Q, xi=t.xi, M_o=M_o, g_o=setup.g_o, effort_limits=limits
+            )
+    return out
+
+
+_POLYTOPE_AXES = (("widths", "width"),)
+
+KINEMATIC_POLYTOPE = register_measure(
+    Measure(
+        name="kinematic_polytope",
+        json_key="kinematic_polytope",
+        quantity=VELOCITY,
+        label="kinematic polytope",
+        set_kind="polytope",
+        color=0x0B7A75,  # teal
+        locked_color=0xB8860B,  # dark gold
+        compute=_polytope_compute("kinematic"),
+        batch=_polytopes_batch,
+        axis_indices=_POLYTOPE_AXES,
+        description="exact set of object velocities, every wheel and joint within its own speed limit",
+    )
+)
+DYNAMIC_POLYTOPE = register_measure(
+    Measure(
+        name="dynamic_polytope",
+        json_key="dynamic_polytope",
+        quantity=ACCELERATION,
+        label="dynamic polytope",
+        set_kind="polytope",
+        color=0x6A3FB5,  # violet
+        locked_color=0xA0522D,  # sienna
+        compute=_polytope_compute("dynamic"),
+        batch=_polytopes_batch,
+        axis_indices=_POLYTOPE_AXES,
+        description="exact set of object accelerations at rest, every torque within its own limit",
+    )
+)
+DYNAMIC_POLYTOPE_MIN_NORM = register_measure(
+    Measure(
+        name="dynamic_polytope_min_norm",
+        json_key="dynamic_polytope_min_norm",
+        quantity=ACCELERATION,
+        label="dynamic polytope, minimum-norm policy",
+        set_kind="polytope",
+        color=0xE0559F,  # pink
+        locked_color=0xFF8C1A,  # orange
+        compute=_polytope_compute("dynamic_min_norm"),
+        batch=_polytopes_batch,
+        axis_indices=_POLYTOPE_AXES,
+        description="object accelerations at rest of the paper's minimum-norm policy under box torque limits",
+    )
+)
+
+
 def measure_help() -> str:
     """One line per registered measure, for help texts."""
     lines = []
@@ -425,8 +543,12 @@ def measure_help() -> str:
 __all__ = [
     "ACCELERATION",
     "DYNAMIC",
+    "DYNAMIC_POLYTOPE",
+    "DYNAMIC_POLYTOPE_MIN_NORM",
     "KINEMATIC",
+    "KINEMATIC_POLYTOPE",
     "MEASURES",
+    "POLYTOPE_KINDS",
     "VELOCITY",
     "BatchForm",
     "BatchRequest",

@@ -187,8 +187,9 @@ class PolytopeIndices:
     """Scalar indices of one kind of polytope over N configurations.
 
     Attributes:
-        volume: (N,), in the task's units to the power m.
-        isotropy: (N,), in [0, 1].
+        volume: (N,), in the task's units to the power m; NaN where unavailable (a 6-D set
+            with too many facets to enumerate its vertices, see :attr:`Polytope.volume`).
+        isotropy: (N,), in [0, 1]; NaN where unavailable, as ``volume``.
         empty: (N,) bool.
         degenerate: (N,) bool.
         support: max of d . a per direction, (N, k) (k = number of directions; 0 when none).
@@ -203,7 +204,134 @@ class PolytopeIndices:
     radius_along: np.ndarray
 
 
+class PolytopeBatch:
+    """N capacity polytopes of one kind in an m-dimensional task space (a sweep's chunk).
+
+    A :class:`mobmanip.measure.TaskSetBatch`: row n is the :class:`Polytope` ``batch[n]``; the
+    properties answer for every row at once. Volumes and isotropies are computed on first use.
+
+    Args:
+        polytopes: the sets, all of one task dimension.
+
+    Raises:
+        TaskError: no sets, or sets of different dimensions.
+    """
+
+    def __init__(self, polytopes):
+        self.polytopes = tuple(polytopes)
+        dims = {p.dim for p in self.polytopes}
+        if len(dims) > 1:
+            raise TaskError(f"a polytope batch needs sets of one task dimension, got dimensions {sorted(dims)}")
+        self._dim = dims.pop() if dims else 0
+        self.empty = np.array([p.empty for p in self.polytopes], dtype=bool)
+        self.degenerate = np.array([p.degenerate for p in self.polytopes], dtype=bool)
+        self._cache: dict[str, np.ndarray] = {}
+
+    def __len__(self) -> int:
+        return len(self.polytopes)
+
+    def __getitem__(self, index: int) -> Polytope:
+        return self.polytopes[index]
+
+    @property
+    def dim(self) -> int:
+        """Task dimension m."""
+        return self._dim
+
+    def _scalar(self, name: str) -> np.ndarray:
+        if name not in self._cache:
+            out = np.empty(len(self))
+            for i, p in enumerate(self.polytopes):
+                try:
+                    out[i] = getattr(p, name)
+                except TaskError:  # a 6-D set whose vertices are impractical to enumerate
+                    out[i] = np.nan
+            self._cache[name] = out
+        return self._cache[name]
+
+    @property
+    def volume(self) -> np.ndarray:
+        """Volumes, (N,) (0 where empty or degenerate; NaN where unavailable: a 6-D set with
+        too many facets to enumerate its vertices)."""
+        return self._scalar("volume")
+
+    @property
+    def isotropy(self) -> np.ndarray:
+        """Isotropies in [0, 1], (N,) (0 where empty or degenerate; NaN where unavailable)."""
+        return self._scalar("isotropy")
+
+    def _rows(self, direction) -> np.ndarray:
+        d = np.asarray(direction, dtype=float)
+        if d.ndim == 1:
+            d = np.broadcast_to(d, (len(self), d.shape[0]))
+        if d.shape != (len(self), self.dim) or not np.all(np.isfinite(d)):
+            raise TaskError(
+                f"directions must be finite, ({self.dim},) or ({len(self)}, {self.dim}), "
+                f"got shape {np.shape(direction)}"
+            )
+        return d
+
+    def support(self, direction) -> np.ndarray:
+        """max over set n of d . a, (N,), for one direction (m,) or one per row (N, m); 0 where empty."""
+        d = self._rows(direction)
+        return np.array([p.support(row) for p, row in zip(self.polytopes, d)])
+
+    def radius_along(self, direction) -> np.ndarray:
+        """How far set n reaches from its centre along the unit direction of d, (N,); 0 where empty."""
+        d = self._rows(direction)
+        norms = np.linalg.norm(d, axis=1)
+        if np.any(norms == 0.0):
+            raise TaskError("radius_along needs non-zero directions")
+        return np.array([p.radius_along(row) for p, row in zip(self.polytopes, d)])
+
+    @property
+    def widths(self) -> np.ndarray:
+        """Extent along each task axis, support(e_k) + support(-e_k), (N, m) (0 where empty)."""
+        if "widths" not in self._cache:
+            axes = np.vstack([np.eye(self.dim), -np.eye(self.dim)])
+            out = np.zeros((len(self), self.dim))
+            for i, p in enumerate(self.polytopes):
+                if not p.empty:
+                    s = p.supports(axes)
+                    out[i] = np.maximum(s[: self.dim] + s[self.dim :], 0.0)
+            self._cache["widths"] = out
+        return self._cache["widths"]
+
+
 _STACKED = {"J_u": 3, "W": 3, "P": 3, "Q": 3, "xi": 2, "M_o": 3, "g_o": 2, "velocity_limits": 2, "effort_limits": 2}
+
+
+def polytope_batch(kind: str, **terms) -> PolytopeBatch:
+    """One kind of polytope for N configurations.
+
+    Args:
+        kind: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
+        **terms: the arrays of :func:`polytopes`, each stacked with a leading axis N
+            (``J_u`` (N, m k, nx), ``xi`` (N, nx), ...); an array without it (``Q`` (nx, nx),
+            limits (nx,), ``M_o`` (m, m), ...) is shared by every configuration.
+
+    Raises:
+        TaskError: J_u not stacked, an unknown term, or terms with different counts.
+    """
+    if kind not in KINDS:
+        raise TaskError(f"unknown polytope kind {kind!r}; choose one of {', '.join(KINDS)}")
+    if "J_u" not in terms:
+        raise TaskError("polytope_batch needs J_u stacked as (N, m k, nx)")
+    if np.ndim(terms["J_u"]) != 3:
+        raise TaskError(f"J_u must be stacked as (N, m k, nx), got shape {np.shape(terms['J_u'])}")
+    count = np.shape(terms["J_u"])[0]
+    rows = []
+    for name, value in terms.items():
+        stacked = _STACKED.get(name)
+        if stacked is None:
+            raise TaskError(f"unknown term {name!r}; expected some of {', '.join(_STACKED)}")
+        value = np.asarray(value, dtype=float)
+        if value.ndim == stacked and value.shape[0] != count:
+            raise TaskError(f"{name} has {value.shape[0]} rows but J_u has {count}")
+        rows.append((name, value, value.ndim == stacked))
+    return PolytopeBatch(
+        polytopes(kind, **{name: (v[i] if per_row else v) for name, v, per_row in rows}) for i in range(count)
+    )
 
 
 def polytope_indices(kind: str, directions: np.ndarray | None = None, **terms) -> PolytopeIndices:
@@ -212,38 +340,16 @@ def polytope_indices(kind: str, directions: np.ndarray | None = None, **terms) -
     Args:
         kind: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
         directions: task directions (k, m) for ``support`` and ``radius_along``; optional.
-        **terms: the arrays of :func:`polytopes`, each stacked with a leading axis N
-            (``J_u`` (N, m k, nx), ``xi`` (N, nx), ...); an array without it (``Q`` (nx, nx),
-            limits (nx,), ``M_o`` (m, m), ...) is shared by every configuration.
+        **terms: as :func:`polytope_batch`.
     """
-    if "J_u" not in terms:
-        raise TaskError("polytope_indices needs J_u stacked as (N, m k, nx)")
-    count = np.asarray(terms["J_u"]).shape[0] if np.ndim(terms["J_u"]) == 3 else None
-    if count is None:
-        raise TaskError(f"J_u must be stacked as (N, m k, nx), got shape {np.shape(terms['J_u'])}")
-    rows = []
-    for name, value in terms.items():
-        value = np.asarray(value, dtype=float)
-        stacked = _STACKED.get(name)
-        if stacked is None:
-            raise TaskError(f"unknown term {name!r}; expected some of {', '.join(_STACKED)}")
-        if value.ndim == stacked and value.shape[0] != count:
-            raise TaskError(f"{name} has {value.shape[0]} rows but J_u has {count}")
-        rows.append((name, value, value.ndim == stacked))
+    batch = polytope_batch(kind, **terms)
     D = None if directions is None else np.atleast_2d(np.asarray(directions, dtype=float))
     k = 0 if D is None else len(D)
-    out = {key: np.zeros(count) for key in ("volume", "isotropy")}
-    flags = {key: np.zeros(count, dtype=bool) for key in ("empty", "degenerate")}
-    support, radius = np.zeros((count, k)), np.zeros((count, k))
-    for i in range(count):
-        poly = polytopes(kind, **{name: (v[i] if per_row else v) for name, v, per_row in rows})
-        out["volume"][i], out["isotropy"][i] = poly.volume, poly.isotropy
-        flags["empty"][i], flags["degenerate"][i] = poly.empty, poly.degenerate
-        if k:
-            support[i] = poly.supports(D)
-            unit = D / np.linalg.norm(D, axis=1, keepdims=True)
-            radius[i] = 0.0 if poly.empty else np.maximum(poly.supports(unit) - unit @ poly.center, 0.0)
-    return PolytopeIndices(out["volume"], out["isotropy"], flags["empty"], flags["degenerate"], support, radius)
+    support, radius = np.zeros((len(batch), k)), np.zeros((len(batch), k))
+    for j in range(k):
+        support[:, j] = batch.support(D[j])
+        radius[:, j] = batch.radius_along(D[j])
+    return PolytopeIndices(batch.volume, batch.isotropy, batch.empty, batch.degenerate, support, radius)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,4 +1,9 @@
-"""``mobmanip analyze ROBOT``: analyse one configuration, print a summary, optionally write JSON."""
+"""``mobmanip analyze ROBOT``: analyse one configuration, print a summary, optionally write JSON.
+
+``--polytope`` adds the exact capacity polytopes to the measures; the summary gives each
+polytope's reach along its ellipsoid's principal axes (the ellipsoid of the same quantity, from
+its centre, both ways) beside the ellipsoid's semi-axes, and their ratio.
+"""
 
 from __future__ import annotations
 
@@ -17,8 +22,18 @@ def register(sub) -> None:
     parser = sub.add_parser("analyze", help="analyse one configuration")
     add_robot_options(parser)
     add_analysis_options(parser)
+    parser.add_argument(
+        "--polytope",
+        action="store_true",
+        help="also the exact capacity polytopes (" + ", ".join(POLYTOPES) + "): the measures asked for "
+        "(default: the default ones) and these",
+    )
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.set_defaults(func=run)
+
+
+#: The measures ``--polytope`` adds.
+POLYTOPES = ("kinematic_polytope", "dynamic_polytope", "dynamic_polytope_min_norm")
 
 
 def _describe_ellipsoid(name: str, ellipsoid, unit: str) -> str:
@@ -43,25 +58,89 @@ def _describe_set(name: str, task_set, unit: str) -> str:
     return text
 
 
+def _volume_text(task_set, reference=None) -> str:
+    """``volume V`` (and its ratio to the reference's), or ``volume n/a (why)``: never NaN."""
+    from ..errors import MobmanipError
+
+    try:
+        volume = float(task_set.volume)
+    except MobmanipError as error:
+        return f"volume n/a ({error})"
+    text = f"volume {volume:.4g}"
+    if reference is not None and not reference.empty and reference.volume > 0.0:
+        text += f" ({volume / reference.volume:.3f} x the ellipsoid's)"
+    return text
+
+
+def _describe_polytope(name: str, polytope, unit: str, ellipsoid=None) -> str:
+    """A polytope: its reach along the ellipsoid's axes (both ways, from the ellipsoid's centre)
+    beside the ellipsoid's semi-axes and the ratio; without an ellipsoid, along the task axes."""
+    if ellipsoid is None or ellipsoid.empty or ellipsoid.dim != polytope.dim:
+        return f"{_describe_set(name, polytope, unit)}; {_volume_text(polytope)}"
+    lines = [f"{name} ({unit}): reach along the ellipsoid's axes, from its centre"]
+    c = ellipsoid.center
+    for k, (axis, s) in enumerate(zip(ellipsoid.axes, ellipsoid.semi_axes), start=1):
+        plus = polytope.support(axis) - float(axis @ c)
+        minus = polytope.support(-axis) + float(axis @ c)
+        if s > 0.0:
+            ratio = f"ratio {plus / s:.3f} / {minus / s:.3f}"
+        else:
+            ratio = "ratio n/a (zero semi-axis)"
+        direction = "(" + ", ".join(f"{v:.3f}" for v in np.round(axis, 3) + 0.0) + ")"  # no "-0.000"
+        lines.append(f"  axis {k} {direction}: ellipsoid {s:.4f}, polytope +{plus:.4f} / -{minus:.4f}, {ratio}")
+    isotropy = f"isotropy {polytope.isotropy:.3f}" if _available(lambda: polytope.isotropy) else "isotropy n/a"
+    tail = f"  {_volume_text(polytope, ellipsoid)}; {isotropy}"
+    if polytope.degenerate:
+        tail += " [degenerate: no reach in some direction]"
+    lines.append(tail)
+    return "\n".join(lines)
+
+
+def _available(get) -> bool:
+    from ..errors import MobmanipError
+
+    try:
+        get()
+    except MobmanipError:
+        return False
+    return True
+
+
 #: How the summary describes a set, by its kind (other kinds: :func:`_describe_set`).
-DESCRIBE = {"ellipsoid": _describe_ellipsoid}
+DESCRIBE = {"ellipsoid": _describe_ellipsoid, "polytope": _describe_polytope}
 
 
-def _describe(name: str, task_set, unit: str) -> str:
+def _describe(name: str, task_set, unit: str, ellipsoid=None) -> str:
     if task_set.empty:
         return f"{name}: EMPTY (the limits cannot hold the load still)"
-    return DESCRIBE.get(task_set.kind, _describe_set)(name, task_set, unit)
+    describe = DESCRIBE.get(task_set.kind, _describe_set)
+    if task_set.kind == "polytope":
+        return describe(name, task_set, unit, ellipsoid)
+    return describe(name, task_set, unit)
+
+
+def _ellipsoid_of(result, quantity):
+    """The first ellipsoid of ``quantity`` the analysis holds (the polytopes are compared with it)."""
+    from ..measures import get_measure
+
+    for name, task_set in result.measures.items():
+        if task_set.kind == "ellipsoid" and get_measure(name).quantity == quantity:
+            return task_set
+    return None
 
 
 def run(args) -> int:
     from ..analysis import analyze
     from ..io import write_json
-    from ..measures import get_measure
+    from ..measures import default_measures, get_measure
 
     robot, q = load_robot_and_configuration(args)
     robot = apply_analysis_options(robot, args)
+    measures = args.measures
+    if getattr(args, "polytope", False):
+        measures = (*(measures or default_measures()), *POLYTOPES)
     result = analyze(
-        robot, q, task=args.task, object_mass=args.object_mass, decoupled=args.decoupled, measures=args.measures
+        robot, q, task=args.task, object_mass=args.object_mass, decoupled=args.decoupled, measures=measures
     )
     print(f"robot {robot.name} ({robot.platform.kind}), task {result.task}, {robot.nx} reduced velocities")
     print("reduced velocities: " + ", ".join(robot.reduced_velocity_names))
@@ -77,7 +156,7 @@ def run(args) -> int:
     for name, task_set in result.measures.items():
         measure = get_measure(name)
         label = f"{measure.label} ({coupling})" if measure.quantity.inertial else measure.label
-        print(_describe(label, task_set, measure.quantity.units))
+        print(_describe(label, task_set, measure.quantity.units, _ellipsoid_of(result, measure.quantity)))
     if args.json:
         write_json(args.json, result.to_dict())
         print(f"wrote {args.json}")

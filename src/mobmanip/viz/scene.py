@@ -11,15 +11,21 @@ Scene paths (under meshcat's root ``/meshcat``; the control panel toggles each b
                                ellipsoid; it holds ``shape`` (a semi-transparent unit sphere) and
                                ``axes`` (its principal axes: unit line segments along the local x,
                                y and z axes, scaled by the same transform)
+``mobmanip/polytopes/K``       ``K`` = ``kinematic_polytope``, ``dynamic_polytope`` or
+                               ``dynamic_polytope_min_norm`` (when analysed): a group at the task
+                               point holding ``shape`` (3-D tasks: a translucent triangle mesh)
+                               and ``edges`` (its edges; the outline of a planar set)
 ``mobmanip/locked``            the same for the locked platform (arms only), ``locked/K``,
-                               whose ``shape`` is three unit circles (the principal sections)
+                               whose ``shape`` is three unit circles (the principal sections);
+                               a locked polytope is its ``edges`` only
 ============================== =================================================================
 
 Every measure of :mod:`mobmanip.measures` an analysis holds is drawn the same way: at its
 :attr:`~mobmanip.measures.Measure.scene_path` (``ellipsoids/<name>`` for an ellipsoid) and
 ``locked/<name>``, in its colours, at the scale of its quantity, by the drawing of its set kind
-(:mod:`mobmanip.viz.shapes`; sets of a kind without a drawing, e.g. polytopes for now, are left
-out and listed in :attr:`EllipsoidViewer.undrawn`).
+(:mod:`mobmanip.viz.shapes`; sets of a kind without a drawing are left out and listed in
+:attr:`EllipsoidViewer.undrawn`). Polytopes are sent whole (``set_object``) at each show, as
+their shape changes with the configuration; an animation shows them as at its first frame.
 
 Colours (from the registry): kinematic green ``#1fbf3f``, dynamic magenta ``#d81bd8``
 (semi-transparent, opacity 0.5, Lambert shading without specular highlights); the locked pair as
@@ -55,7 +61,8 @@ to see the robot and the ellipsoids from 30 deg above the ground.
 The viewer loads every mesh once (``set_object``): those of the measures it is created for when
 it is created, those of another measure the first time an analysis brings it;
 :meth:`EllipsoidViewer.show` and :meth:`EllipsoidViewer.update` send only transforms and
-visibility, and :meth:`EllipsoidViewer.animate` sends one meshcat animation.
+visibility (and the polytopes' meshes, which change shape), and :meth:`EllipsoidViewer.animate`
+sends one meshcat animation.
 """
 
 from __future__ import annotations

@@ -10,11 +10,14 @@ of a registered kind and lists the others in :attr:`mobmanip.viz.scene.Ellipsoid
   for the locked platform three unit circles, the principal sections) and ``axes`` (the
   principal axes, unit segments along local x, y, z, in a darker shade). See
   :func:`ellipsoid_frame` for the transform.
-- ``"polytope"``: not drawn yet. Its drawing (issue 12) is a :class:`SetDrawing` registered with
-  :func:`register_drawing`: a translucent triangle mesh of the drawn part (3-D tasks) or its
-  outline (planar tasks), sent with ``set_object`` at each :meth:`SetDrawing.draw` (its shape
-  changes with the configuration, so :meth:`SetDrawing.keyframe` returns ``None`` and
-  animations show it at its first frame).
+- ``"polytope"`` (:class:`PolytopeDrawing`): a group at the scene path, translated to the task
+  point, holding ``shape`` (3-D tasks: a translucent triangle mesh of the drawn part, from its
+  :attr:`~mobmanip.polytope.Polytope.triangles`; not for the locked platform) and ``edges`` (its
+  edges as line segments: the outline of a planar set, drawn ``thickness`` above the task point
+  so that it lies on the ellipses' discs). Both are sent with ``set_object`` at each
+  :meth:`SetDrawing.draw`, in metres relative to the task point (its shape changes with the
+  configuration, so :meth:`SetDrawing.keyframe` returns ``None`` and animations show it at its
+  first frame). See :func:`polytope_geometry`.
 
 Only the *linear* part of a task space is drawn: ``planar`` and ``planar_rigid`` as the (x, y)
 set, ``translational`` as it is, ``spatial`` as its projection (shadow) onto (x, y, z), i.e. the
@@ -213,8 +216,102 @@ class EllipsoidDrawing:
         return pose, semi
 
 
-#: How each kind of set is drawn (see the module's docstring; "polytope" is not drawn yet).
-DRAWINGS: dict[str, SetDrawing] = {"ellipsoid": EllipsoidDrawing()}
+# --------------------------------------------------------------------------- polytopes
+
+POLYTOPE_OPACITY = 0.3  # of the robot's own 3-D polytopes (they enclose the ellipsoids)
+
+
+def drawn_polytope(polytope, task: str):
+    """The part of a task-space polytope that is drawn, and where its coordinates point.
+
+    Returns:
+        (linear, E): ``linear`` is the polytope itself when the task is all linear, else its
+        projection (shadow) onto the linear coordinates; ``E`` (3, k) maps its k coordinates to
+        world directions (as :func:`drawn_ellipsoid`).
+    """
+    space = get_task(task)
+    linear = space.linear_rows
+    if not linear:
+        raise ViewerError(f"task {task!r} has no linear rows to draw")
+    E = np.zeros((3, len(linear)))
+    for column, i in enumerate(linear):
+        E[space.rows[i], column] = 1.0
+    if len(linear) == space.dim:
+        return polytope, E
+    return polytope.project(tuple(linear)), E
+
+
+def polytope_geometry(polytope, task: str, scale: float, thickness: float = 0.0):
+    """What is drawn of a polytope, in metres relative to the task point.
+
+    Args:
+        polytope: the task-space polytope (rows in world axes), not empty.
+        task: its task space.
+        scale: metres of scene per unit of the polytope.
+        thickness: height (m) above the task point of a planar set's outline.
+
+    Returns:
+        (points, triangles, segments): the drawn vertices ``points`` (v, 3) = scale E V (lifted by
+        ``thickness`` for a 2-D set), the boundary triangles (t, 3) into them (none for a 2-D
+        set) and the edges (e, 2) into them (the outline of a 2-D set).
+    """
+    linear, E = drawn_polytope(polytope, task)
+    V = linear.vertices
+    points = scale * V @ E.T
+    k = linear.dim
+    if k == 2:
+        points[:, 2] += thickness
+    elif k != 3:
+        raise ViewerError(f"cannot draw a {k}-dimensional polytope")
+    triangles = linear.triangles if k == 3 else np.zeros((0, 3), dtype=int)
+    edges = set()
+    for face in linear.faces if len(V) > 2 else [np.arange(len(V))]:
+        face = np.asarray(face, dtype=int)
+        pairs = zip(face, np.roll(face, -1)) if len(face) > 2 else [tuple(face)] if len(face) == 2 else []
+        edges.update((int(min(a, b)), int(max(a, b))) for a, b in pairs)
+    segments = np.array(sorted(edges), dtype=int).reshape(-1, 2)
+    return points, np.asarray(triangles, dtype=int), segments
+
+
+class PolytopeDrawing:
+    """Polytopes: a translucent mesh (3-D, not locked) and the edges, re-sent at each draw; see
+    the module's docstring. It remembers, per scene path, the colour and whether it is locked."""
+
+    def __init__(self):
+        self._styles: dict[str, tuple[int, bool]] = {}
+
+    def load(self, vis, path: str, color: int, locked: bool) -> None:
+        self._styles[path] = (color, locked)
+
+    def extent(self, task_set, task: str) -> float:
+        if task_set.empty:
+            return 0.0
+        linear, _ = drawn_polytope(task_set, task)
+        return float(np.max(np.linalg.norm(linear.vertices, axis=1), initial=0.0))
+
+    def draw(self, vis, path, task_set, task, origin, scale, thickness) -> None:
+        import meshcat.geometry as mg
+
+        color, locked = self._styles.get(path, (0x888888, False))
+        points, triangles, segments = polytope_geometry(task_set, task, scale, thickness)
+        vis[path].set_transform(_translation(origin))
+        if len(triangles) and not locked:
+            material = mg.MeshLambertMaterial(color=color, opacity=POLYTOPE_OPACITY, transparent=True, depthWrite=False)
+            geometry = mg.TriangularMeshGeometry(points.astype(np.float32), triangles.astype(np.uint32))
+            vis[f"{path}/shape"].set_object(geometry, material)
+        else:
+            vis[f"{path}/shape"].delete()
+        lines = points[segments.reshape(-1)].T.astype(np.float32) if len(segments) else np.zeros((3, 0), np.float32)
+        edge_color = color if locked or len(triangles) == 0 else _darker(color, 0.7)
+        vis[f"{path}/edges"].set_object(mg.LineSegments(mg.PointsGeometry(lines), _line_material(edge_color)))
+        vis[f"{path}/edges/<object>"].set_property("renderOrder", 1)
+
+    def keyframe(self, task_set, task, origin, scale, thickness, previous):
+        return None  # the mesh changes shape with the configuration: shown as first drawn
+
+
+#: How each kind of set is drawn (see the module's docstring).
+DRAWINGS: dict[str, SetDrawing] = {"ellipsoid": EllipsoidDrawing(), "polytope": PolytopeDrawing()}
 
 
 def register_drawing(kind: str, drawing: SetDrawing) -> None:
