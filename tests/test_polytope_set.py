@@ -16,7 +16,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 import mobmanip
-from mobmanip import _zonotope
+from mobmanip import zonotope
 from mobmanip.errors import LimitError, MobmanipError, ModelError, TaskError
 from mobmanip.polytope import Polytope
 from mobmanip.polytopes import dynamic_polytope, kinematic_polytope, polytope_indices
@@ -210,7 +210,7 @@ def test_too_many_candidate_facets_fall_back_to_linear_programs(rng):
     F = np.vstack([np.eye(6), np.eye(6)])
     G = rng.normal(size=(12, 40))  # C(40, 11) candidate facets
     poly = Polytope(F, np.zeros(12), G)
-    assert _zonotope.subset_count(40, 11) > _zonotope.MAX_SUBSETS
+    assert zonotope.subset_count(40, 11) > zonotope.MAX_SUBSETS
     assert poly.contains(np.zeros(6)).all()
     d = _unit(rng, 3, 6)
     np.testing.assert_allclose(poly.supports(d), [_lp_support(F, np.zeros(12), G, x) for x in d], rtol=1e-9)
@@ -283,7 +283,7 @@ def test_six_dimensional_volumes_against_brute_force(rng):
     F, c = rng.normal(size=(9, 6)), 0.2 * rng.normal(size=9)
     poly = Polytope(F, c, np.eye(9))
     A, b = np.vstack([F, -F]), np.concatenate([1.0 + c, 1.0 - c])
-    subsets = _zonotope.combinations(18, 6)
+    subsets = zonotope.combinations(18, 6)
     subsets = subsets[np.all(np.sort(subsets % 9, axis=1)[:, 1:] != np.sort(subsets % 9, axis=1)[:, :-1], axis=1)]
     M = A[subsets]
     good = np.abs(np.linalg.det(M)) > 1e-9
@@ -313,7 +313,7 @@ def test_3d_zonotopes_with_coplanar_generators_against_the_hull_of_all_corners(r
         if np.linalg.matrix_rank(G) < 3:  # all in one plane: a flat zonotope (the general route)
             continue
         c = rng.normal(size=3)
-        out = _zonotope.low_dim_faces(c, G)
+        out = zonotope.low_dim_faces(c, G)
         assert out is not None
         signs = ((np.arange(2 ** G.shape[1])[:, None] >> np.arange(G.shape[1])) & 1) * 2.0 - 1.0
         corners = c + signs @ G.T

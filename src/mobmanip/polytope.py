@@ -13,9 +13,9 @@ of F) and under slicing (the fixed coordinates move into c), so these stay exact
 
 Queries and how they are answered:
 
-- halfspaces ``A a <= b``: the zonotope's facets (:mod:`mobmanip._zonotope`) pulled back by F,
+- halfspaces ``A a <= b``: the zonotope's facets (:mod:`mobmanip.zonotope`) pulled back by F,
   plus the equalities of the directions in which the zonotope is flat; irredundant for m <= 3;
-- vertices and faces (m <= 3): one Qhull call on the polar set (:mod:`mobmanip._hull`);
+- vertices and faces (m <= 3): one Qhull call on the polar set (:mod:`mobmanip.hull`);
   a zonotope's vertices are then recomputed exactly as c + G sign(G^T d) from their normals;
 - support: sum_j |g_j . d| for a zonotope, the vertices for m <= 3, otherwise a linear program
   on HiGHS kept warm between directions;
@@ -36,10 +36,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from . import _zonotope
-from ._hull import enumerate_hull
-from ._lp import LinearProgram
+from . import zonotope
 from .errors import TaskError
+from .hull import enumerate_hull
+from .linear_programs import LinearProgram
 from .measure import TaskSet
 
 _RANK_RTOL = 1e-10
@@ -283,7 +283,7 @@ class Polytope(TaskSet):
         if self.empty:
             return 0.0
         if "circumradius" not in self._cache:
-            far = _zonotope.max_norm(self._G) if self.is_zonotope and self.dim > 3 else None
+            far = zonotope.max_norm(self._G) if self.is_zonotope and self.dim > 3 else None
             if far is None:
                 far = float(np.max(np.linalg.norm(self._all_vertices() - self.center, axis=1), initial=0.0))
             self._cache["circumradius"] = far
@@ -447,7 +447,7 @@ class Polytope(TaskSet):
                 h = np.zeros(0)
             else:
                 Gr = Ur.T @ G
-                nu = _zonotope.facet_normals(Gr)
+                nu = zonotope.facet_normals(Gr)
                 h = np.abs(nu @ Gr).sum(axis=1)
                 rows = nu @ Ur.T  # zonotope normals in R^p
                 rows, h = np.vstack([rows, -rows]), np.concatenate([h, h])
@@ -488,7 +488,7 @@ class Polytope(TaskSet):
 
     def _fast_zonotope(self) -> bool:
         """Vertices, faces and halfspaces of a 2-D or 3-D zonotope from its generators alone."""
-        fast = _zonotope.low_dim_faces(self._c, self._G)
+        fast = zonotope.low_dim_faces(self._c, self._G)
         if fast is None:
             return False
         normals = fast["normals"]
@@ -640,7 +640,7 @@ class Polytope(TaskSet):
         if "all_vertices" not in self._cache:
             from scipy.spatial import HalfspaceIntersection, QhullError
 
-            from ._hull import _groups
+            from .hull import _groups
 
             A, b0, h = self._inequalities()
             k = self._affine_dim
@@ -669,8 +669,8 @@ class Polytope(TaskSet):
 
     def _volume(self) -> float:
         m = self.dim
-        if self.is_zonotope and _zonotope.subset_count(self._G.shape[1], m) <= _zonotope.MAX_SUBSETS:
-            return _zonotope.volume(self._G)
+        if self.is_zonotope and zonotope.subset_count(self._G.shape[1], m) <= zonotope.MAX_SUBSETS:
+            return zonotope.volume(self._G)
         if m <= 3:
             V = self.vertices
             if m == 1:
