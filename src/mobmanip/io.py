@@ -13,7 +13,7 @@ from typing import IO
 
 import numpy as np
 
-from .errors import ConfigurationError, OutputError
+from .errors import ConfigurationError, NumericalError, OutputError
 from .model import Robot
 
 
@@ -115,7 +115,38 @@ def write_json(path: str | Path, document: object) -> None:
     Raises:
         OutputError: the directory does not exist or is not writable.
     """
-    write_text(path, json.dumps(document, indent=2, allow_nan=False) + "\n")
+    try:
+        text = json.dumps(document, indent=2, allow_nan=False)
+    except ValueError:  # json's only complaint with allow_nan=False: a NaN or an infinity
+        raise NumericalError(f"not writing {path}: {_first_non_finite(document)} is not finite") from None
+    write_text(path, text + "\n")
+
+
+def _first_non_finite(document: object, where: str = "the result") -> str:
+    """Where the first NaN or infinity of a JSON-ready document is, as ``key.key[i]``."""
+    if isinstance(document, float) and not math.isfinite(document):
+        return where
+    if isinstance(document, dict):
+        items = ((f"{where}.{k}", v) for k, v in document.items())
+    elif isinstance(document, (list, tuple)):
+        items = ((f"{where}[{i}]", v) for i, v in enumerate(document))
+    else:
+        return ""
+    for key, value in items:
+        found = _first_non_finite(value, key)
+        if found:
+            return found
+    return ""
+
+
+def require_finite(document: object, what: str = "the result") -> None:
+    """Raise :class:`NumericalError` naming the first NaN or infinity in a JSON-ready document.
+
+    Commands call it before printing a result, so no NaN or inf reaches the user as a number.
+    """
+    found = _first_non_finite(document, what)
+    if found:
+        raise NumericalError(f"{found} is not finite; the inputs lie outside the range where results are certified")
 
 
 def save_figure(figure, path: str | Path, **options) -> Path:

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ._native_stderr import captured_native_stderr
 from .errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -32,6 +33,7 @@ from .errors import (
     _closest_first,
 )
 from .platforms import LockedPlatform, Platform, get_kind
+from .ranges import check_limit, check_limit_ratio
 from .spec import RobotSpec, find_spec
 from .urdf import (
     MOVING_JOINT_TYPES,
@@ -127,6 +129,7 @@ class Robot:
                 if name not in table:
                     raise LimitError(name, kind, None)
                 values.append(table[name])
+            check_limit_ratio(kind, dict(zip(names, values)))
             array = np.array(values, dtype=float)
             array.setflags(write=False)
             object.__setattr__(self, attr, array)
@@ -386,7 +389,7 @@ def _positive_limit(name: str, kind: str, value) -> float:
         raise LimitError(name, kind, value) from None
     if not math.isfinite(value) or value <= 0.0:
         raise LimitError(name, kind, value)
-    return value
+    return check_limit(name, kind, value)
 
 
 def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
@@ -452,14 +455,20 @@ def locked_joints(model: pin.Model, reference: Mapping[str, float], keep: set[st
 
 
 def _build_model(spec: RobotSpec) -> pin.Model:
-    try:
-        text = urdf_text(spec.urdf)
-        if text is None:
-            model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
-        else:
-            model = pin.buildModelFromXML(text, pin.JointModelPlanar())
-    except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
-        raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {exc}") from exc
+    text = urdf_text(spec.urdf)
+    failure: Exception | None = None
+    with captured_native_stderr() as native:
+        try:
+            if text is None:
+                model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
+            else:
+                model = pin.buildModelFromXML(text, pin.JointModelPlanar())
+        except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
+            model, failure = None, exc
+    if model is None or "Error:" in native.text:
+        # urdfdom's own message names the element; Pinocchio's only says the model is invalid.
+        reason = native.first_error() or (str(failure).splitlines() or [type(failure).__name__])[0]
+        raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {reason}")
     locked, q_ref = locked_joints(model, spec.reference, keep=set(spec.active_joint_names))
     unknown_ref = sorted(set(spec.reference) - {model.names[j] for j in range(2, model.njoints)})
     if unknown_ref:

@@ -1,0 +1,72 @@
+"""The ranges of input numbers mobmanip supports, in one place.
+
+Outside them double precision no longer carries the analysis: a wheel speed limit a million
+times the arms' makes the rank decisions of the kinematic ellipsoid meaningless (on the paper's
+robot its minor semi-axis collapsed from 1.6e5 to 0.74 m/s at a ratio of 1e6), a limit of 1e-300
+underflows when squared, a platform 1e13 m from the origin loses the arm's geometry to rounding.
+Rather than return such numbers, mobmanip refuses the input and states the range. The ranges are
+wide enough for any real robot (the built-in robots use ratios of limits below 700).
+"""
+
+from __future__ import annotations
+
+import math
+
+from .errors import RangeError
+
+#: Velocity limits (rad/s or m/s) of wheels, joints and platform coordinates.
+VELOCITY_LIMIT = (1e-6, 1e6)
+#: Effort limits (N m or N).
+EFFORT_LIMIT = (1e-6, 1e7)
+#: Largest ratio of the largest to the smallest limit of one kind (velocity, effort) of a robot.
+LIMIT_RATIO = 1e5
+#: Wheel radii, half-tracks and wheel offsets (m).
+WHEEL_LENGTH = (1e-4, 1e3)
+#: Mass of a held object (kg).
+OBJECT_MASS = (0.0, 1e6)
+#: Mass of a link (kg) and the magnitude of its moments of inertia (kg m^2).
+LINK_MASS = (0.0, 1e6)
+LINK_INERTIA = 1e6
+#: Distance of a joint origin or centre of mass from its parent frame (m).
+LINK_OFFSET = 1e4
+#: Platform position (m): |x| and |y|.
+PLATFORM_POSITION = 1e6
+#: Position of a joint (rad or m): its magnitude.
+JOINT_POSITION = 1e6
+
+_LIMITS = {"velocity": (VELOCITY_LIMIT, "rad/s or m/s"), "effort": (EFFORT_LIMIT, "N m or N")}
+
+
+def check_in_range(what: str, value: float, low: float, high: float, unit: str = "", why: str = "") -> float:
+    """``value`` when ``low <= value <= high``, else a :class:`RangeError` naming ``what``."""
+    if not (math.isfinite(value) and low <= value <= high):
+        raise RangeError(what, value, low, high, unit, why)
+    return value
+
+
+def check_limit(name: str, kind: str, value: float) -> float:
+    """A velocity or effort limit within :data:`VELOCITY_LIMIT` / :data:`EFFORT_LIMIT`."""
+    (low, high), unit = _LIMITS[kind]
+    return check_in_range(f"{kind} limit of {name!r}", value, low, high, unit)
+
+
+def check_limit_ratio(kind: str, limits: dict[str, float]) -> None:
+    """The largest limit of one kind at most :data:`LIMIT_RATIO` times the smallest.
+
+    Raises:
+        RangeError: naming the two limits and their ratio.
+    """
+    if not limits:
+        return
+    largest = max(limits, key=limits.get)
+    smallest = min(limits, key=limits.get)
+    ratio = limits[largest] / limits[smallest]
+    if ratio > LIMIT_RATIO:
+        raise RangeError(
+            f"the ratio of the largest to the smallest {kind} limit ({largest!r} {limits[largest]:g} / "
+            f"{smallest!r} {limits[smallest]:g})",
+            float(f"{ratio:.3g}"),
+            1.0,
+            LIMIT_RATIO,
+            why="beyond it the ellipsoids' rank decisions are not reliable in double precision",
+        )
