@@ -6,9 +6,9 @@ from __future__ import annotations
 import os
 
 import pytest
-from tests.hostile_util import assert_one_line_error, run_cli, write_robot
 
 import mobmanip
+from hostile_util import assert_one_line_error, run_cli, write_robot
 from mobmanip._native_stderr import captured_native_stderr
 from mobmanip.errors import LimitError, RangeError, UrdfError, WheelError
 from mobmanip.ranges import EFFORT_LIMIT, LIMIT_RATIO, VELOCITY_LIMIT

@@ -16,6 +16,7 @@ import numpy as np
 from . import __version__
 from .commands import COMMANDS
 from .errors import MobmanipError
+from .io import protect_inputs, publish_together
 
 
 class _Parser(argparse.ArgumentParser):
@@ -38,16 +39,19 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the command; every failure is one ``mobmanip: error: ...`` line and exit code 2.
 
-    NumPy's floating-point warnings (overflow, division by zero, invalid value) are not shown:
-    inputs outside the ranges mobmanip certifies are refused with a message of their own, and
-    no result that is not finite is printed or written. A failure that is not one of mobmanip's
+    Files given as inputs are never replaced by outputs, and the files a command writes are
+    published together once it has succeeded (none if it fails midway). NumPy's floating-point
+    warnings (overflow, division by zero, invalid value) are not shown: inputs outside the
+    ranges mobmanip supports are refused with a message of their own, and no result that is not
+    finite is printed or written. A failure that is not one of mobmanip's
     errors (a bug) is reported in one line too, saying so; set ``MOBMANIP_TRACEBACK=1`` in the
     environment to see its traceback instead.
     """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        with warnings.catch_warnings(), np.errstate(all="ignore"):
+        # A command's output files are published together when it succeeds, all or none.
+        with warnings.catch_warnings(), np.errstate(all="ignore"), protect_inputs(), publish_together():
             warnings.simplefilter("ignore", RuntimeWarning)
             return args.func(args)
     except MobmanipError as exc:

@@ -70,9 +70,12 @@ def read_urdf(path: str | Path):
     """
     import yourdfpy
 
+    from .io import note_input
+
     path = Path(path)
     if not path.is_file():
         raise UrdfError(str(path), "file not found")
+    note_input(path)
     text = urdf_text(path)
     source = path if text is None else io.StringIO(text)
     # yourdfpy's parser recovers from broken XML (and logs about it); parse strictly first so a
