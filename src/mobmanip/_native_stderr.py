@@ -12,6 +12,7 @@ import os
 import re
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -55,3 +56,34 @@ def captured_native_stderr() -> Iterator[NativeOutput]:
             os.close(saved)
             sink.seek(0)
             out.text = sink.read().decode("utf-8", "replace")
+
+
+#: Stack (bytes) of the thread that runs Pinocchio's URDF parser: it recurses once per joint
+#: and link, and a chain of 5,000 links overflows the main thread's usual 8 MB.
+PARSER_STACK = 512 * 1024 * 1024
+
+
+def call_with_large_stack(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` in a thread with a :data:`PARSER_STACK` stack; its result,
+    or its exception raised here."""
+    result: dict = {}
+
+    def run():
+        try:
+            result["value"] = function(*args, **kwargs)
+        except BaseException as exc:  # handed to the calling thread
+            result["error"] = exc
+
+    previous = threading.stack_size()
+    try:
+        threading.stack_size(PARSER_STACK)
+        worker = threading.Thread(target=run, name="mobmanip-urdf-parser")
+        worker.start()
+    except (ValueError, RuntimeError):  # the platform refuses such a stack: parse here
+        return function(*args, **kwargs)
+    finally:
+        threading.stack_size(previous)
+    worker.join()
+    if "error" in result:
+        raise result["error"]
+    return result["value"]

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ._native_stderr import captured_native_stderr
+from ._native_stderr import call_with_large_stack, captured_native_stderr
 from .errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -33,7 +33,7 @@ from .errors import (
     _closest_first,
 )
 from .platforms import LockedPlatform, Platform, get_kind
-from .ranges import check_limit, check_limit_ratio
+from .ranges import MAX_MODEL_DOF, check_limit, check_limit_ratio
 from .spec import RobotSpec, find_spec
 from .urdf import (
     MOVING_JOINT_TYPES,
@@ -460,15 +460,21 @@ def _build_model(spec: RobotSpec) -> pin.Model:
     with captured_native_stderr() as native:
         try:
             if text is None:
-                model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
+                model = call_with_large_stack(pin.buildModelFromUrdf, str(spec.urdf), pin.JointModelPlanar())
             else:
-                model = pin.buildModelFromXML(text, pin.JointModelPlanar())
+                model = call_with_large_stack(pin.buildModelFromXML, text, pin.JointModelPlanar())
         except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
             model, failure = None, exc
     if model is None or "Error:" in native.text:
         # urdfdom's own message names the element; Pinocchio's only says the model is invalid.
         reason = native.first_error() or (str(failure).splitlines() or [type(failure).__name__])[0]
         raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {reason}")
+    moving = sum(1 for name in spec.active_joint_names if model.existJointName(name))
+    if moving > MAX_MODEL_DOF:
+        raise SpecError(
+            f"robot {spec.name!r} has {moving:,} moving joints; mobmanip analyses at most {MAX_MODEL_DOF} "
+            "(Pinocchio's data and the mass matrix grow with the square of that number)"
+        )
     locked, q_ref = locked_joints(model, spec.reference, keep=set(spec.active_joint_names))
     unknown_ref = sorted(set(spec.reference) - {model.names[j] for j in range(2, model.njoints)})
     if unknown_ref:

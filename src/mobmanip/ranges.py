@@ -34,6 +34,13 @@ PLATFORM_POSITION = 1e6
 #: Position of a joint (rad or m): its magnitude.
 JOINT_POSITION = 1e6
 
+#: Links (and joints) a URDF may have: parsing and detection are linear in it, Pinocchio's URDF
+#: parser a little worse (20,000 fixed links: 3.4 s).
+MAX_URDF_LINKS = 10_000
+#: Degrees of freedom of the analysed model (after locking): Pinocchio's data holds a dozen
+#: nv x nv matrices, so memory and the mass matrix grow with the square (5,000: gigabytes).
+MAX_MODEL_DOF = 500
+
 _LIMITS = {"velocity": (VELOCITY_LIMIT, "rad/s or m/s"), "effort": (EFFORT_LIMIT, "N m or N")}
 
 

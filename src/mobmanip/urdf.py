@@ -11,7 +11,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from .errors import UrdfError
-from .ranges import LINK_INERTIA, LINK_MASS, LINK_OFFSET
+from .ranges import LINK_INERTIA, LINK_MASS, LINK_OFFSET, MAX_URDF_LINKS
 
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
 
@@ -225,6 +225,9 @@ def check_physical(urdf, path: str | Path = "URDF") -> None:
         UrdfError: the first violation found.
     """
     path = str(path)
+    for kind, items in (("links", urdf.robot.links), ("joints", urdf.robot.joints)):
+        if len(items) > MAX_URDF_LINKS:
+            raise UrdfError(path, f"{len(items):,} {kind}; mobmanip reads URDFs of at most {MAX_URDF_LINKS:,}")
     for kind, names in (
         ("link", [link.name for link in urdf.robot.links]),
         ("joint", [j.name for j in urdf.robot.joints]),
@@ -384,14 +387,24 @@ def zero_configuration_placements(urdf) -> dict[str, np.ndarray]:
     """Placement (4 x 4) of every joint frame in the root link's frame with all joints at zero.
 
     At zero a joint's motion is the identity, so its frame is the composition of the origins
-    from the root; the child link's frame is the joint frame.
+    from the root; the child link's frame is the joint frame. One pass down the tree: linear in
+    the number of joints.
     """
+    below: dict[str, list] = {}
+    carried = set()
+    for joint in urdf.robot.joints:
+        below.setdefault(joint.parent, []).append(joint)
+        carried.add(joint.child)
     out: dict[str, np.ndarray] = {}
-    for link in urdf.link_map:
-        pose = np.eye(4)
-        for joint in joint_path(urdf, link):
-            pose = pose @ _origin(joint)
-            out.setdefault(joint.name, pose.copy())
+    stack = [(link.name, np.eye(4)) for link in urdf.robot.links if link.name not in carried]
+    while stack:
+        link, pose = stack.pop()
+        for joint in below.get(link, ()):
+            if joint.name in out:  # a loop (check_supported reports it): do not walk it twice
+                continue
+            placement = pose @ _origin(joint)
+            out[joint.name] = placement
+            stack.append((joint.child, placement))
     return out
 
 

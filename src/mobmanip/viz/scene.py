@@ -158,7 +158,7 @@ def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Mode
     Raises:
         ModelError: the reduced model does not match ``robot.model`` (names or sizes differ).
     """
-    from .._native_stderr import captured_native_stderr
+    from .._native_stderr import call_with_large_stack, captured_native_stderr
     from .meshes import strip_meshes, visual_urdf
 
     spec = robot.spec
@@ -166,16 +166,20 @@ def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Mode
     visual = visual_urdf(spec.urdf, spec.package_dirs)
     notes.extend(visual.skipped)
     package_dirs = [str(p) for p in spec.package_dirs]
-    model = pin.buildModelFromXML(visual.text, pin.JointModelPlanar())
+    model = call_with_large_stack(pin.buildModelFromXML, visual.text, pin.JointModelPlanar())
     with captured_native_stderr() as native:
         try:
-            geometry = pin.buildGeomFromUrdfString(model, visual.text, pin.GeometryType.VISUAL, None, package_dirs)
+            geometry = call_with_large_stack(
+                pin.buildGeomFromUrdfString, model, visual.text, pin.GeometryType.VISUAL, None, package_dirs
+            )
         except Exception as exc:  # a mesh file Pinocchio cannot load: draw without meshes
             reason = native.first_error() or (str(exc).splitlines() or [type(exc).__name__])[0]
             notes.append(f"the meshes of {robot.name!r} could not be loaded ({reason}); drawn without them")
             geometry = None
     if geometry is None:
-        geometry = pin.buildGeomFromUrdfString(model, strip_meshes(visual.text), pin.GeometryType.VISUAL)
+        geometry = call_with_large_stack(
+            pin.buildGeomFromUrdfString, model, strip_meshes(visual.text), pin.GeometryType.VISUAL
+        )
     locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
     if locked:
         model, (geometry,) = pin.buildReducedModel(model, [geometry], locked, q_ref)
