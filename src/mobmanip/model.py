@@ -11,6 +11,7 @@ and effort limits of every reduced velocity. Its reduced velocity ``x`` is order
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import numbers
 from collections.abc import Mapping
@@ -33,7 +34,14 @@ from .errors import (
     _closest_first,
 )
 from .platforms import LockedPlatform, Platform, get_kind
-from .ranges import MAX_MODEL_DOF, check_limit, check_limit_ratio
+from .ranges import (
+    JOINT_POSITION,
+    MAX_MODEL_DOF,
+    PLATFORM_POSITION,
+    UNIT_PAIR_TOLERANCE,
+    check_limit,
+    check_limit_ratio,
+)
 from .spec import RobotSpec, find_spec
 from .urdf import (
     MOVING_JOINT_TYPES,
@@ -354,7 +362,64 @@ class Robot:
                 if self.model.joints[j].idx_q <= index < self.model.joints[j].idx_q + self.model.joints[j].nq
             )
             raise ConfigurationError(f"configuration entry {index} (joint {self.model.names[joint]!r}) is {q[index]!r}")
+        self.check_configuration_values(q[None, :])
         return q
+
+    @functools.cached_property
+    def _q_layout(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
+        """Indices in q of the (cos, sin) pairs (planar root, continuous joints), of the one-entry
+        joints, and the names of both."""
+        cos_index, pair_names, single_index, single_names = [], [], [], []
+        for j in range(1, self.model.njoints):
+            joint, name = self.model.joints[j], self.model.names[j]
+            if j == 1:  # the planar root: x, y, cos, sin
+                cos_index.append(joint.idx_q + 2)
+                pair_names.append(f"{name} (platform yaw)")
+            elif joint.nq == 2:
+                cos_index.append(joint.idx_q)
+                pair_names.append(name)
+            elif joint.nq == 1:
+                single_index.append(joint.idx_q)
+                single_names.append(name)
+        return (np.array(cos_index), np.array(single_index, dtype=int), tuple(pair_names), tuple(single_names))
+
+    def check_configuration_values(self, qs: np.ndarray) -> None:
+        """Finite configurations (N, nq) whose values lie in the supported ranges.
+
+        The platform's x and y lie within :data:`mobmanip.ranges.PLATFORM_POSITION` m of the
+        origin, every (cos, sin) pair (the platform's yaw, continuous joints) is a unit vector to
+        1e-6, every other joint within :data:`mobmanip.ranges.JOINT_POSITION`.
+
+        Raises:
+            ConfigurationError: naming the row, the joint and the value.
+        """
+        cos_index, single_index, pair_names, single_names = self._q_layout
+        where = (lambda row: f"configuration row {row}: ") if qs.shape[0] > 1 else (lambda row: "configuration: ")
+        xy = np.abs(qs[:, :2])
+        if np.any(xy > PLATFORM_POSITION):
+            row, axis = (int(i) for i in np.argwhere(xy > PLATFORM_POSITION)[0])
+            raise ConfigurationError(
+                f"{where(row)}platform {'xy'[axis]} = {float(qs[row, axis])!r} m lies outside the supported range "
+                f"[-{PLATFORM_POSITION:g}, {PLATFORM_POSITION:g}] m"
+            )
+        norms = np.hypot(qs[:, cos_index], qs[:, cos_index + 1])
+        off = np.abs(norms - 1.0) > UNIT_PAIR_TOLERANCE
+        if np.any(off):
+            row, k = (int(i) for i in np.argwhere(off)[0])
+            c, s = float(qs[row, cos_index[k]]), float(qs[row, cos_index[k] + 1])
+            raise ConfigurationError(
+                f"{where(row)}the (cos, sin) pair of {pair_names[k]} is ({c!r}, {s!r}), of norm {norms[row, k]:.6g}; "
+                "it must be a unit vector (build q with Robot.configuration, or normalise it)"
+            )
+        if single_index.size:
+            big = np.abs(qs[:, single_index]) > JOINT_POSITION
+            if np.any(big):
+                row, k = (int(i) for i in np.argwhere(big)[0])
+                value = float(qs[row, single_index[k]])
+                raise ConfigurationError(
+                    f"{where(row)}joint {single_names[k]!r} = {value!r} lies outside the supported "
+                    f"range [-{JOINT_POSITION:g}, {JOINT_POSITION:g}]"
+                )
 
     def frame_id(self, name: str) -> int:
         """Pinocchio index of a frame by name.
