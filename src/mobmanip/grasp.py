@@ -64,17 +64,24 @@ class HeldObject:
 
     def __post_init__(self):
         object.__setattr__(self, "mass", _object_mass(self.mass))
-        for name, shape in (("inertia", (3, 3)), ("center", (3,))):
-            value = getattr(self, name)
+        inertia, center, offsets = self.inertia, self.center, self.offsets
+        arrays = all(type(a) is np.ndarray and a.dtype == np.float64 for a in (inertia, center, offsets))
+        if arrays and inertia.shape == (3, 3) and center.shape == (3,) and offsets.ndim == 2 and offsets.shape[1] == 3:
+            # the common case (analyze builds one per call): one cheap test, the exact one if it fails
+            if math.isfinite(float(inertia.sum()) + float(center.sum()) + float(offsets.sum())):
+                return
+        for name, value, shape in (
+            ("inertia", inertia, "(3, 3)"),
+            ("center", center, "(3,)"),
+            ("offsets", offsets, "(k, 3)"),
+        ):
             try:
                 array = np.asarray(value, dtype=float)
             except (TypeError, ValueError):
                 raise TaskError(f"object {name} must be numbers of shape {shape}, got {value!r}") from None
-            if array.shape != shape or not np.all(np.isfinite(array)):
+            good_shape = array.shape == {"inertia": (3, 3), "center": (3,)}.get(name, (len(array), 3))
+            if array.ndim != (1 if name == "center" else 2) or not good_shape or not np.all(np.isfinite(array)):
                 raise TaskError(f"object {name} must be finite numbers of shape {shape}, got {value!r}")
-        offsets = np.asarray(self.offsets, dtype=float) if not isinstance(self.offsets, np.ndarray) else self.offsets
-        if offsets.ndim != 2 or offsets.shape[1] != 3 or not np.all(np.isfinite(offsets)):
-            raise TaskError(f"object grasp offsets must be finite numbers of shape (k, 3), got {self.offsets!r}")
 
     @classmethod
     def between(cls, grasp_points: np.ndarray, mass: float, inertia: np.ndarray | None = None) -> HeldObject:

@@ -383,6 +383,16 @@ class Robot:
                 single_names.append(name)
         return (np.array(cos_index), np.array(single_index, dtype=int), tuple(pair_names), tuple(single_names))
 
+    def _values_in_range(self, q: list[float]) -> bool:
+        """Whether one configuration passes :meth:`check_configuration_values` (no message)."""
+        cos_index, single_index, _, _ = self._q_layout
+        if abs(q[0]) > PLATFORM_POSITION or abs(q[1]) > PLATFORM_POSITION:
+            return False
+        for k in cos_index.tolist():
+            if not abs(math.hypot(q[k], q[k + 1]) - 1.0) <= UNIT_PAIR_TOLERANCE:
+                return False
+        return all(abs(q[k]) <= JOINT_POSITION for k in single_index.tolist())
+
     def check_configuration_values(self, qs: np.ndarray) -> None:
         """Finite configurations (N, nq) whose values lie in the supported ranges.
 
@@ -394,6 +404,8 @@ class Robot:
             ConfigurationError: naming the row, the joint and the value.
         """
         cos_index, single_index, pair_names, single_names = self._q_layout
+        if qs.shape[0] == 1 and self._values_in_range(qs[0].tolist()):  # one q (analyze): plain floats
+            return
         where = (lambda row: f"configuration row {row}: ") if qs.shape[0] > 1 else (lambda row: "configuration: ")
         xy = np.abs(qs[:, :2])
         if np.any(xy > PLATFORM_POSITION):
