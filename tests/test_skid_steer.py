@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -46,13 +47,17 @@ def husky_with_arm(directory: Path, wheel_limits: dict[str, tuple[float, float]]
     iiwa = (DATA / "kuka_iiwa" / "model.urdf").read_text()
     body = iiwa[iiwa.index(">", iiwa.index("<robot")) + 1 : iiwa.rindex("</robot>")]
     body = re.sub(r'<material name="(\w+)">.*?</material>', "", body, flags=re.S)  # Husky defines its own
-    body = body.replace('filename="meshes/', f'filename="{(DATA / "kuka_iiwa" / "meshes").as_posix()}/')
+    body = body.replace('filename="meshes/', 'filename="iiwa_meshes/')
     mount = (
         '<joint name="arm_mount" type="fixed"><parent link="top_plate_link"/><child link="lbr_iiwa_link_0"/>'
         '<origin xyz="0.15 0 0.01" rpy="0 0 0"/></joint>'
     )
     text = husky.replace("</robot>", body + mount + "</robot>")
-    text = text.replace('filename="meshes/', f'filename="{(DATA / "husky" / "meshes").as_posix()}/')
+    text = text.replace('filename="meshes/', 'filename="husky_meshes/')
+    # the meshes travel with the URDF: the viewer reads meshes only inside the robot's package
+    for name, source in (("husky_meshes", DATA / "husky" / "meshes"), ("iiwa_meshes", DATA / "kuka_iiwa" / "meshes")):
+        if not (directory / name).exists():
+            shutil.copytree(source, directory / name)
     for joint, (velocity, effort) in (wheel_limits or {}).items():
         pattern = rf'(<joint name="{joint}" type="continuous">)'
         text, count = re.subn(pattern, rf'\1<limit velocity="{velocity}" effort="{effort}"/>', text)

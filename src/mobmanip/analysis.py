@@ -22,6 +22,7 @@ from .grasp import HeldObject
 from .measure import TaskSet
 from .measures import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
 from .model import Robot
+from .ranges import OBJECT_MASS, check_in_range
 from .tasks import get_task
 
 
@@ -127,8 +128,11 @@ def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> He
 
 
 def _check_mass(mass) -> None:
-    if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
+    if isinstance(mass, bool) or not isinstance(mass, (int, float, np.floating, np.integer)):
         raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
+    if not np.isfinite(mass) or mass < 0:
+        raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
+    check_in_range("object mass", float(mass), *OBJECT_MASS, unit="kg")
 
 
 def _end_effectors(robot: Robot, q: np.ndarray) -> np.ndarray:

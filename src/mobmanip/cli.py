@@ -7,11 +7,16 @@ bad input prints one line ``mobmanip: error: ...`` on standard error and exits w
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import warnings
+
+import numpy as np
 
 from . import __version__
 from .commands import COMMANDS
 from .errors import MobmanipError
+from .io import protect_inputs, publish_together
 
 
 class _Parser(argparse.ArgumentParser):
@@ -32,19 +37,46 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the command; every failure is one ``mobmanip: error: ...`` line and exit code 2.
+
+    Files given as inputs are never replaced by outputs, and the files a command writes are
+    published together once it has succeeded (none if it fails midway). NumPy's floating-point
+    warnings (overflow, division by zero, invalid value) are not shown: inputs outside the
+    ranges mobmanip supports are refused with a message of their own, and no result that is not
+    finite is printed or written. A failure that is not one of mobmanip's
+    errors (a bug) is reported in one line too, saying so; set ``MOBMANIP_TRACEBACK=1`` in the
+    environment to see its traceback instead.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.func(args)
+        # A command's output files are published together when it succeeds, all or none.
+        with warnings.catch_warnings(), np.errstate(all="ignore"), protect_inputs(), publish_together():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return args.func(args)
     except MobmanipError as exc:
-        print(f"mobmanip: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(str(exc))
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
     except KeyboardInterrupt:
         print("mobmanip: interrupted", file=sys.stderr)
         return 130
+    except RecursionError:
+        return _fail("an input is nested too deeply to read")
+    except MemoryError:
+        return _fail("out of memory: the request is too large for this machine")
+    except Exception as exc:
+        if os.environ.get("MOBMANIP_TRACEBACK"):
+            raise
+        return _fail(f"internal error ({type(exc).__name__}: {exc}); please report it with the command that caused it")
+
+
+def _fail(message: str) -> int:
+    """Print ``message`` as the one line ``mobmanip: error: ...`` on standard error; return 2."""
+    line = " ".join(part.strip() for part in str(message).splitlines() if part.strip())
+    print(f"mobmanip: error: {line}", file=sys.stderr)
+    return 2
 
 
 if __name__ == "__main__":

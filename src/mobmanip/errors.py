@@ -173,3 +173,21 @@ class SetQueryError(MeasureError, ValueError):
     """A query on a task-space set that makes no sense: a zero or non-finite direction, points
     or coordinates of the wrong dimension, task coordinates out of range. Also a ``ValueError``,
     as bad arguments to a function usually are."""
+
+
+class RangeError(ArgumentError):
+    """A finite number outside the range where mobmanip's results are certified (a limit of
+    1e-300 or 1e12, a platform 1e13 m from the origin, ...); the message states the range."""
+
+    def __init__(self, what: str, value: object, low: float, high: float, unit: str = "", why: str = ""):
+        self.what = what
+        self.value = value
+        self.low = low
+        self.high = high
+        unit = f" {unit}" if unit else ""
+        why = f" ({why})" if why else ""
+        super().__init__(f"{what} = {value!r} is outside the supported range [{low:g}, {high:g}]{unit}{why}")
+
+
+class NumericalError(MobmanipError):
+    """A result that is not finite: mobmanip reports it instead of printing or writing NaN or inf."""

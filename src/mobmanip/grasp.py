@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import TaskError
+from .ranges import OBJECT_MASS, check_in_range
 from .tasks import TaskSpace, get_task
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame (z up), as Pinocchio's default
@@ -62,8 +63,25 @@ class HeldObject:
     offsets: np.ndarray
 
     def __post_init__(self):
-        if not math.isfinite(self.mass) or self.mass < 0.0:
-            raise TaskError(f"object mass must be a finite non-negative number, got {self.mass!r}")
+        object.__setattr__(self, "mass", _object_mass(self.mass))
+        inertia, center, offsets = self.inertia, self.center, self.offsets
+        arrays = all(type(a) is np.ndarray and a.dtype == np.float64 for a in (inertia, center, offsets))
+        if arrays and inertia.shape == (3, 3) and center.shape == (3,) and offsets.ndim == 2 and offsets.shape[1] == 3:
+            # the common case (analyze builds one per call): one cheap test, the exact one if it fails
+            if math.isfinite(float(inertia.sum()) + float(center.sum()) + float(offsets.sum())):
+                return
+        for name, value, shape in (
+            ("inertia", inertia, "(3, 3)"),
+            ("center", center, "(3,)"),
+            ("offsets", offsets, "(k, 3)"),
+        ):
+            try:
+                array = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise TaskError(f"object {name} must be numbers of shape {shape}, got {value!r}") from None
+            good_shape = array.shape == {"inertia": (3, 3), "center": (3,)}.get(name, (len(array), 3))
+            if array.ndim != (1 if name == "center" else 2) or not good_shape or not np.all(np.isfinite(array)):
+                raise TaskError(f"object {name} must be finite numbers of shape {shape}, got {value!r}")
 
     @classmethod
     def between(cls, grasp_points: np.ndarray, mass: float, inertia: np.ndarray | None = None) -> HeldObject:
@@ -73,6 +91,7 @@ class HeldObject:
         radius reaches the farthest grasp point (I = 2/5 m R^2), a neutral default for a box held
         between the hands. Coincident grasp points give a point mass.
         """
+        mass = _object_mass(mass)
         points = np.asarray(grasp_points, dtype=float).reshape(-1, 3)
         center = np.add.reduce(points, axis=0) / points.shape[0]
         offsets = points - center
@@ -107,3 +126,20 @@ class HeldObject:
     def grasp_matrix(self, task: str | TaskSpace) -> np.ndarray:
         """W for this object's grasp points, (m, m k)."""
         return grasp_matrix(task, self.offsets)
+
+
+def _object_mass(value: object) -> float:
+    """An object mass (kg): a real number in :data:`mobmanip.ranges.OBJECT_MASS`.
+
+    Raises:
+        TaskError: not a number, not finite or negative; RangeError: above the supported range.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TaskError(f"object mass must be a finite non-negative number of kg, got {value!r}")
+    try:
+        mass = float(value)
+    except OverflowError:
+        mass = math.inf
+    if not math.isfinite(mass) or mass < 0.0:
+        raise TaskError(f"object mass must be a finite non-negative number of kg, got {value!r}")
+    return check_in_range("object mass", mass, *OBJECT_MASS, unit="kg")

@@ -11,6 +11,7 @@ and effort limits of every reduced velocity. Its reduced velocity ``x`` is order
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import numbers
 from collections.abc import Mapping
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ._native_stderr import call_with_large_stack, captured_native_stderr
 from .errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -32,6 +34,14 @@ from .errors import (
     _closest_first,
 )
 from .platforms import LockedPlatform, Platform, get_kind
+from .ranges import (
+    JOINT_POSITION,
+    MAX_MODEL_DOF,
+    PLATFORM_POSITION,
+    UNIT_PAIR_TOLERANCE,
+    check_limit,
+    check_limit_ratio,
+)
 from .spec import RobotSpec, find_spec
 from .urdf import (
     MOVING_JOINT_TYPES,
@@ -127,6 +137,7 @@ class Robot:
                 if name not in table:
                     raise LimitError(name, kind, None)
                 values.append(table[name])
+            check_limit_ratio(kind, dict(zip(names, values)))
             array = np.array(values, dtype=float)
             array.setflags(write=False)
             object.__setattr__(self, attr, array)
@@ -351,7 +362,76 @@ class Robot:
                 if self.model.joints[j].idx_q <= index < self.model.joints[j].idx_q + self.model.joints[j].nq
             )
             raise ConfigurationError(f"configuration entry {index} (joint {self.model.names[joint]!r}) is {q[index]!r}")
+        self.check_configuration_values(q[None, :])
         return q
+
+    @functools.cached_property
+    def _q_layout(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
+        """Indices in q of the (cos, sin) pairs (planar root, continuous joints), of the one-entry
+        joints, and the names of both."""
+        cos_index, pair_names, single_index, single_names = [], [], [], []
+        for j in range(1, self.model.njoints):
+            joint, name = self.model.joints[j], self.model.names[j]
+            if j == 1:  # the planar root: x, y, cos, sin
+                cos_index.append(joint.idx_q + 2)
+                pair_names.append(f"{name} (platform yaw)")
+            elif joint.nq == 2:
+                cos_index.append(joint.idx_q)
+                pair_names.append(name)
+            elif joint.nq == 1:
+                single_index.append(joint.idx_q)
+                single_names.append(name)
+        return (np.array(cos_index), np.array(single_index, dtype=int), tuple(pair_names), tuple(single_names))
+
+    def _values_in_range(self, q: list[float]) -> bool:
+        """Whether one configuration passes :meth:`check_configuration_values` (no message)."""
+        cos_index, single_index, _, _ = self._q_layout
+        if abs(q[0]) > PLATFORM_POSITION or abs(q[1]) > PLATFORM_POSITION:
+            return False
+        for k in cos_index.tolist():
+            if not abs(math.hypot(q[k], q[k + 1]) - 1.0) <= UNIT_PAIR_TOLERANCE:
+                return False
+        return all(abs(q[k]) <= JOINT_POSITION for k in single_index.tolist())
+
+    def check_configuration_values(self, qs: np.ndarray) -> None:
+        """Finite configurations (N, nq) whose values lie in the supported ranges.
+
+        The platform's x and y lie within :data:`mobmanip.ranges.PLATFORM_POSITION` m of the
+        origin, every (cos, sin) pair (the platform's yaw, continuous joints) is a unit vector to
+        1e-6, every other joint within :data:`mobmanip.ranges.JOINT_POSITION`.
+
+        Raises:
+            ConfigurationError: naming the row, the joint and the value.
+        """
+        cos_index, single_index, pair_names, single_names = self._q_layout
+        if qs.shape[0] == 1 and self._values_in_range(qs[0].tolist()):  # one q (analyze): plain floats
+            return
+        where = (lambda row: f"configuration row {row}: ") if qs.shape[0] > 1 else (lambda row: "configuration: ")
+        xy = np.abs(qs[:, :2])
+        if np.any(xy > PLATFORM_POSITION):
+            row, axis = (int(i) for i in np.argwhere(xy > PLATFORM_POSITION)[0])
+            raise ConfigurationError(
+                f"{where(row)}platform {'xy'[axis]} = {float(qs[row, axis])!r} m lies outside the supported range "
+                f"[-{PLATFORM_POSITION:g}, {PLATFORM_POSITION:g}] m"
+            )
+        norms = np.hypot(qs[:, cos_index], qs[:, cos_index + 1])
+        off = np.abs(norms - 1.0) > UNIT_PAIR_TOLERANCE
+        if np.any(off):
+            row, k = (int(i) for i in np.argwhere(off)[0])
+            c, s = float(qs[row, cos_index[k]]), float(qs[row, cos_index[k] + 1])
+            raise ConfigurationError(
+                f"{where(row)}the (cos, sin) pair of {pair_names[k]} is ({c!r}, {s!r}), of norm {norms[row, k]:.6g}; "
+                "it must be a unit vector (build q with Robot.configuration, or normalise it)"
+            )
+        if single_index.size:
+            big = np.abs(qs[:, single_index]) > JOINT_POSITION
+            if np.any(big):
+                row, k = (int(i) for i in np.argwhere(big)[0])
+                value = float(qs[row, single_index[k]])
+                raise ConfigurationError(
+                    f"{where(row)}joint {single_names[k]!r} = {value!r} lies outside the supported "
+                    f"range [-{JOINT_POSITION:g}, {JOINT_POSITION:g}]"
+                )
 
     def frame_id(self, name: str) -> int:
         """Pinocchio index of a frame by name.
@@ -386,7 +466,7 @@ def _positive_limit(name: str, kind: str, value) -> float:
         raise LimitError(name, kind, value) from None
     if not math.isfinite(value) or value <= 0.0:
         raise LimitError(name, kind, value)
-    return value
+    return check_limit(name, kind, value)
 
 
 def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
@@ -452,14 +532,26 @@ def locked_joints(model: pin.Model, reference: Mapping[str, float], keep: set[st
 
 
 def _build_model(spec: RobotSpec) -> pin.Model:
-    try:
-        text = urdf_text(spec.urdf)
-        if text is None:
-            model = pin.buildModelFromUrdf(str(spec.urdf), pin.JointModelPlanar())
-        else:
-            model = pin.buildModelFromXML(text, pin.JointModelPlanar())
-    except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
-        raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {exc}") from exc
+    text = urdf_text(spec.urdf)
+    failure: Exception | None = None
+    with captured_native_stderr() as native:
+        try:
+            if text is None:
+                model = call_with_large_stack(pin.buildModelFromUrdf, str(spec.urdf), pin.JointModelPlanar())
+            else:
+                model = call_with_large_stack(pin.buildModelFromXML, text, pin.JointModelPlanar())
+        except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
+            model, failure = None, exc
+    if model is None or "Error:" in native.text:
+        # urdfdom's own message names the element; Pinocchio's only says the model is invalid.
+        reason = native.first_error() or (str(failure).splitlines() or [type(failure).__name__])[0]
+        raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {reason}")
+    moving = sum(1 for name in spec.active_joint_names if model.existJointName(name))
+    if moving > MAX_MODEL_DOF:
+        raise SpecError(
+            f"robot {spec.name!r} has {moving:,} moving joints; mobmanip analyses at most {MAX_MODEL_DOF} "
+            "(Pinocchio's data and the mass matrix grow with the square of that number)"
+        )
     locked, q_ref = locked_joints(model, spec.reference, keep=set(spec.active_joint_names))
     unknown_ref = sorted(set(spec.reference) - {model.names[j] for j in range(2, model.njoints)})
     if unknown_ref:

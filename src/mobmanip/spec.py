@@ -304,7 +304,10 @@ def load_spec(path: str | Path) -> RobotSpec:
     Raises:
         SpecError: the file cannot be read or parsed, or its content is inconsistent.
     """
+    from .io import note_input
+
     path = Path(path)
+    note_input(path)
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:

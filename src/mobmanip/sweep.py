@@ -64,6 +64,14 @@ from .planar_postures import (
     postures_at_reaches,
 )
 from .posture import POSITION_TOLERANCE, IKPostureTable, reference_configuration, solve_postures
+from .sweep_budget import (
+    MAX_GRID_POINTS,
+    check_axis_count,
+    check_grid,
+    check_scaled_limits,
+    check_values,
+    exit_with_parent,
+)
 from .sweep_results import AXES, FLAGS, SCALAR_INDICES, SweepResult, check_index_name, index_names, plot_sweep
 from .tasks import get_task
 
@@ -116,6 +124,7 @@ def parse_grid(text: str, name: str = "grid", positive: bool = False) -> np.ndar
         count_text = parts[2].strip()
         if not count_text.isdigit() or int(count_text) < 1:
             raise GridError(f"{name}: COUNT must be a positive integer, got {parts[2]!r} in {text!r}")
+        check_axis_count(int(count_text), name)
         try:
             start, stop = float(parts[0]), float(parts[1])
         except ValueError:
@@ -163,6 +172,7 @@ class SweepGrid:
                 raise GridError(f"{name}: a non-empty list of finite numbers is needed")
             if name in ("distance", "wheel_velocity_scale", "wheel_effort_scale") and np.any(values <= 0.0):
                 raise GridError(f"{name}: values must be positive")
+            check_values(name, values)
             object.__setattr__(self, name, values)
 
     @classmethod
@@ -487,7 +497,12 @@ def _local_pool(workers: int, mp_context: str | None) -> cf.ProcessPoolExecutor:
     cache), else "spawn"."""
     if mp_context is None:
         mp_context = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(mp_context))
+    return cf.ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context(mp_context),
+        initializer=exit_with_parent,  # no orphaned workers when this process is killed
+        initargs=(os.getpid(),),
+    )
 
 
 def run_sweep(
@@ -499,6 +514,7 @@ def run_sweep(
     chunk_size: int = 4096,
     progress: bool = False,
     mp_context: str | None = None,
+    max_points: int | None = MAX_GRID_POINTS,
 ) -> SweepResult:
     """Run a sweep, serially, on local processes, or on any ``concurrent.futures.Executor``.
 
@@ -515,6 +531,7 @@ def run_sweep(
         mp_context: start method of the local pool ("fork", "spawn", "forkserver"); default
             "fork" where available. With "spawn"/"forkserver", scripts need the usual
             ``if __name__ == "__main__":`` guard.
+        max_points: the largest grid (points) to run; ``None``: any that fits in memory.
 
     Raises:
         SpecError: ``postures="planar"`` on a robot without planar 3-joint arms sharing their base.
@@ -526,7 +543,9 @@ def run_sweep(
         raise ArgumentError(f"chunk size must be a positive integer, got {chunk_size!r}")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise ArgumentError(f"workers must be a positive integer, got {workers!r}")
+    check_grid(grid.shape, max_points)  # before anything is allocated
     robot = spec.load()
+    check_scaled_limits(robot, grid)
     task = get_task(spec.task or robot.spec.default_task)
     measures = tuple(measure.name for measure in resolve_measures(spec.measures, sweep=True))
     spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim), measures=measures)

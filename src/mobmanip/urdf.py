@@ -11,6 +11,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from .errors import UrdfError
+from .ranges import LINK_INERTIA, LINK_MASS, LINK_OFFSET, MAX_URDF_LINKS
 
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
 
@@ -81,9 +82,12 @@ def read_urdf(path: str | Path):
     """
     import yourdfpy
 
+    from .io import note_input
+
     path = Path(path)
     if not path.is_file():
         raise UrdfError(str(path), "file not found")
+    note_input(path)
     text = urdf_text(path)
     source = path if text is None else io.StringIO(text)
     # yourdfpy's parser recovers from broken XML (and logs about it); parse strictly first so a
@@ -114,7 +118,139 @@ def read_urdf(path: str | Path):
         logger.setLevel(level)
     if not urdf.robot.links:
         raise UrdfError(str(path), "no links")
+    check_physical(urdf, path)
     return urdf
+
+
+def _duplicates(names) -> list[str]:
+    seen, repeated = set(), []
+    for name in names:
+        if name in seen and name not in repeated:
+            repeated.append(name)
+        seen.add(name)
+    return repeated
+
+
+def _finite_array(value, what: str, path: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise UrdfError(path, f"{what} is not numeric: {value!r}") from None
+    if not np.all(np.isfinite(array)):
+        raise UrdfError(path, f"{what} is not finite: {np.array2string(array, separator=', ')}")
+    return array
+
+
+def _check_placement(origin, what: str, path: str) -> None:
+    """An <origin>: finite, its translation within :data:`mobmanip.ranges.LINK_OFFSET`."""
+    if origin is None:
+        return
+    placement = _finite_array(origin, f"{what} <origin>", path)
+    offset = float(np.linalg.norm(placement[:3, 3]))
+    if offset > LINK_OFFSET:
+        raise UrdfError(path, f"{what} <origin> lies {offset:g} m from its parent frame (at most {LINK_OFFSET:g} m)")
+
+
+#: How far (kg m^2) a link's principal moments may miss positivity and the triangle inequality.
+#: Vendor URDFs carry such rounding on parts of a few grams (TIAGo++'s antennas: 9e-8 kg m^2);
+#: it is negligible next to the links that move and the analysis accepts it.
+INERTIA_SLACK = 1e-5
+
+
+def _check_inertial(link, path: str) -> None:
+    """Mass finite, non-negative and at most :data:`LINK_MASS`; the inertia tensor symmetric
+    positive semi-definite with principal moments that satisfy the triangle inequality."""
+    inertial = link.inertial
+    if inertial is None:
+        return
+    where = f"link {link.name!r}"
+    _check_placement(inertial.origin, f"{where} <inertial>", path)
+    mass = inertial.mass if inertial.mass is not None else 0.0
+    mass = float(_finite_array(mass, f"{where} mass", path))
+    if not LINK_MASS[0] <= mass <= LINK_MASS[1]:
+        raise UrdfError(path, f"{where} has mass {mass:g} kg; a mass must lie in [0, {LINK_MASS[1]:g}] kg")
+    if inertial.inertia is None:
+        return
+    inertia = _finite_array(inertial.inertia, f"{where} inertia", path)
+    scale = float(np.max(np.abs(inertia)))
+    if scale > LINK_INERTIA:
+        raise UrdfError(path, f"{where} has a moment of inertia of {scale:g} kg m^2 (at most {LINK_INERTIA:g})")
+    if scale == 0.0:
+        return
+    moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
+    tolerance = max(1e-9 * scale, INERTIA_SLACK)
+    names = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+    values = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2])
+    entries = " ".join(f"{n}={v:g}" for n, v in zip(names, values))
+    if moments[0] < -tolerance:
+        raise UrdfError(
+            path, f"{where} inertia ({entries}) is not positive semi-definite: principal moment {moments[0]:g}"
+        )
+    if moments[2] > moments[0] + moments[1] + tolerance:
+        raise UrdfError(
+            path,
+            f"{where} inertia ({entries}) is not physical: principal moments {moments[0]:g}, {moments[1]:g}, "
+            f"{moments[2]:g} violate the triangle inequality (the largest exceeds the sum of the others)",
+        )
+
+
+def _check_joint(joint, path: str) -> None:
+    """Origin finite; axis finite and not zero; limits finite, lower <= upper, velocity and
+    effort not negative; dynamics and mimic coefficients finite."""
+    where = f"joint {joint.name!r}"
+    _check_placement(joint.origin, where, path)
+    if joint.axis is not None:
+        axis = _finite_array(joint.axis, f"{where} <axis>", path)
+        if joint.type not in ("fixed", "floating", "planar") and not np.linalg.norm(axis) > 1e-9:
+            raise UrdfError(path, f"{where} has a zero <axis xyz=...> ({np.array2string(axis, separator=' ')})")
+    limit = joint.limit
+    if limit is not None:
+        for attribute in ("lower", "upper", "velocity", "effort"):
+            value = getattr(limit, attribute, None)
+            if value is not None:
+                _finite_array(value, f"{where} <limit {attribute}>", path)
+        for attribute in ("velocity", "effort"):
+            value = getattr(limit, attribute, None)
+            if value is not None and float(value) < 0.0:
+                raise UrdfError(path, f"{where} has a negative <limit {attribute}={float(value):g}>")
+        lower, upper = getattr(limit, "lower", None), getattr(limit, "upper", None)
+        if joint.type in ("revolute", "prismatic") and lower is not None and upper is not None and lower > upper:
+            raise UrdfError(path, f"{where} has <limit lower={lower:g}> above upper={upper:g}")
+    for part, attributes in (("dynamics", ("damping", "friction")), ("mimic", ("multiplier", "offset"))):
+        element = getattr(joint, part, None)
+        for attribute in attributes if element is not None else ():
+            value = getattr(element, attribute, None)
+            if value is not None:
+                _finite_array(value, f"{where} <{part} {attribute}>", path)
+
+
+def check_physical(urdf, path: str | Path = "URDF") -> None:
+    """Reject a URDF that describes no physical robot, naming the link or joint and the value.
+
+    Checks that link and joint names are unique, every inertial has a finite non-negative mass
+    and a symmetric positive semi-definite inertia whose principal moments satisfy the triangle
+    inequality, every origin is finite, every moving joint's axis is finite and not zero, and
+    every limit is finite with ``lower <= upper`` and non-negative velocity and effort. The sizes
+    must lie in the ranges of :mod:`mobmanip.ranges`.
+
+    Raises:
+        UrdfError: the first violation found.
+    """
+    path = str(path)
+    for kind, items in (("links", urdf.robot.links), ("joints", urdf.robot.joints)):
+        if len(items) > MAX_URDF_LINKS:
+            raise UrdfError(path, f"{len(items):,} {kind}; mobmanip reads URDFs of at most {MAX_URDF_LINKS:,}")
+    for kind, names in (
+        ("link", [link.name for link in urdf.robot.links]),
+        ("joint", [j.name for j in urdf.robot.joints]),
+    ):
+        repeated = _duplicates(names)
+        if repeated:
+            raise UrdfError(path, f"{kind} name {repeated[0]!r} is defined more than once")
+    for link in urdf.robot.links:
+        _check_inertial(link, path)
+    for joint in urdf.robot.joints:
+        _check_joint(joint, path)
 
 
 def _rotation(origin) -> np.ndarray:
@@ -263,14 +399,24 @@ def zero_configuration_placements(urdf) -> dict[str, np.ndarray]:
     """Placement (4 x 4) of every joint frame in the root link's frame with all joints at zero.
 
     At zero a joint's motion is the identity, so its frame is the composition of the origins
-    from the root; the child link's frame is the joint frame.
+    from the root; the child link's frame is the joint frame. One pass down the tree: linear in
+    the number of joints.
     """
+    below: dict[str, list] = {}
+    carried = set()
+    for joint in urdf.robot.joints:
+        below.setdefault(joint.parent, []).append(joint)
+        carried.add(joint.child)
     out: dict[str, np.ndarray] = {}
-    for link in urdf.link_map:
-        pose = np.eye(4)
-        for joint in joint_path(urdf, link):
-            pose = pose @ _origin(joint)
-            out.setdefault(joint.name, pose.copy())
+    stack = [(link.name, np.eye(4)) for link in urdf.robot.links if link.name not in carried]
+    while stack:
+        link, pose = stack.pop()
+        for joint in below.get(link, ()):
+            if joint.name in out:  # a loop (check_supported reports it): do not walk it twice
+                continue
+            placement = pose @ _origin(joint)
+            out[joint.name] = placement
+            stack.append((joint.child, placement))
     return out
 
 

@@ -131,7 +131,7 @@ def _ellipsoid_of(result, quantity):
 
 def run(args) -> int:
     from ..analysis import analyze
-    from ..io import write_json
+    from ..io import require_finite, write_json
     from ..measures import default_measures, get_measure
 
     robot, q = load_robot_and_configuration(args)
@@ -142,6 +142,8 @@ def run(args) -> int:
     result = analyze(
         robot, q, task=args.task, object_mass=args.object_mass, decoupled=args.decoupled, measures=measures
     )
+    document = result.to_dict()
+    require_finite(document)  # never a NaN or an infinity printed as a result
     print(f"robot {robot.name} ({robot.platform.kind}), task {result.task}, {robot.nx} reduced velocities")
     print("reduced velocities: " + ", ".join(robot.reduced_velocity_names))
     for arm, pos in zip(robot.arms, result.end_effector_positions):
@@ -158,6 +160,6 @@ def run(args) -> int:
         label = f"{measure.label} ({coupling})" if measure.quantity.inertial else measure.label
         print(_describe(label, task_set, measure.quantity.units, _ellipsoid_of(result, measure.quantity)))
     if args.json:
-        write_json(args.json, result.to_dict())
+        write_json(args.json, document)
         print(f"wrote {args.json}")
     return 0

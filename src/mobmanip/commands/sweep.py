@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..sweep_budget import MAX_GRID_POINTS
+
 GRID_HELP = """\
 grid syntax (each axis): START:STOP:COUNT gives COUNT evenly spaced values from START to STOP,
 both included (0:360:37 is every 10 deg); V1,V2,... lists values; V is a single value.
@@ -100,6 +102,13 @@ def register(sub) -> None:
     run.add_argument("--plot", action="store_true", help="also write OUT.png")
     run.add_argument("--index", help="index to plot (default: the first measure's volume, kinematic.volume)")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument(
+        "--max-points",
+        type=int,
+        default=MAX_GRID_POINTS,
+        metavar="N",
+        help="refuse grids of more points than this (default: %(default)s; the estimate is printed first)",
+    )
     parser.set_defaults(func=run_command)
 
 
@@ -121,7 +130,8 @@ def run_command(args) -> int:
     from ..io import OutputError
     from ..measures import resolve_measures
     from ..spec import find_spec
-    from ..sweep import SweepGrid, SweepSpec, check_index_name, plot_sweep, run_sweep
+    from ..sweep import SweepGrid, SweepSpec, check_index_name, default_workers, plot_sweep, run_sweep
+    from ..sweep_budget import check_grid
     from ..tasks import TASKS
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
@@ -161,12 +171,23 @@ def run_command(args) -> int:
             out.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise OutputError(f"cannot create output directory {out.parent}: {exc.strerror or exc}") from exc
+    if args.max_points < 1:
+        raise UsageError(f"--max-points must be at least 1, got {args.max_points}")
+    cost = check_grid(grid.shape, args.max_points, args.workers or default_workers())
     a, d, h, v, e = grid.shape
+    print(f"estimate: {cost.describe()}")
     print(
         f"sweep {args.robot}: {a} angles x {d} distances x {h} headings = {grid.n_configurations} configurations, "
         f"x {v} velocity x {e} effort scales"
     )
-    result = run_sweep(spec, grid, workers=args.workers, chunk_size=args.chunk_size, progress=not args.no_progress)
+    result = run_sweep(
+        spec,
+        grid,
+        workers=args.workers,
+        chunk_size=args.chunk_size,
+        progress=not args.no_progress,
+        max_points=args.max_points,
+    )
     table = result.postures
     if table.method == "ik":
         hold = table.hold

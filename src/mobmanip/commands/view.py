@@ -116,7 +116,7 @@ def run(args) -> int:
             print(f"task point (object): ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m")
             notes = _describe_empty("the", analysis) + _describe_empty("the locked-platform", locked)
         print(f"scale: {viewer.scales.describe()}")
-        for note in notes:
+        for note in viewer.mesh_notes + notes:
             print(note)
         if args.export:
             path = viewer.export_html(args.export)

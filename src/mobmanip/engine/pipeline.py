@@ -59,6 +59,7 @@ def check_configurations(robot: Robot, qs) -> np.ndarray:
         raise ConfigurationError(
             f"configuration row {row}, entry {index} (joint {model.names[joint]!r}) is {float(qs[row, index])!r}"
         )
+    robot.check_configuration_values(qs)
     return qs
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError, TaskError
-from ..grasp import GRAVITY
+from ..grasp import GRAVITY, _object_mass
 from ..model import Robot
 from ..tasks import TaskSpace, get_task
 from ..tolerances import RANK_RTOL
@@ -93,8 +93,7 @@ class BatchSetup:
     ):
         task = get_task(task or robot.spec.default_task)
         mass = robot.spec.object_mass if object_mass is None else object_mass
-        if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not np.isfinite(mass) or mass < 0:
-            raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
+        mass = _object_mass(mass)  # a number within mobmanip.ranges.OBJECT_MASS
         self.robot = robot
         self.task = task
         self.mass = float(mass)

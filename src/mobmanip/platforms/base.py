@@ -33,14 +33,18 @@ DEFAULT_OUTLINE = ((-0.25, -0.2), (0.25, -0.2), (0.25, 0.2), (-0.25, 0.2))
 
 
 def positive_length(label: str, value: object) -> float:
-    """A positive finite number (m), else a LimitError naming ``label`` and the value."""
-    from ..errors import LimitError
+    """A wheel length (m) within :data:`mobmanip.ranges.WHEEL_LENGTH`, else a WheelError naming
+    ``label`` and the value."""
+    from ..errors import WheelError
+    from ..ranges import WHEEL_LENGTH
 
+    low, high = WHEEL_LENGTH
+    message = f"{label} must be a length in [{low:g}, {high:g}] m, got {value!r}"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LimitError(label, "geometry", value)
+        raise WheelError(message)
     value = float(value)
-    if not math.isfinite(value) or value <= 0.0:
-        raise LimitError(label, "geometry", value)
+    if not (math.isfinite(value) and low <= value <= high):
+        raise WheelError(message)
     return value
 
 

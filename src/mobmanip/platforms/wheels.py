@@ -13,6 +13,7 @@ import pinocchio as pin
 
 from ..errors import WheelError
 from ..urdf import joint_axis, joint_limits, joint_path, wheel_radius, zero_configuration_placements
+from .base import positive_length
 
 #: |cos| between a wheel axis and the platform's lateral axis above which the wheel counts as
 #: lateral (rolling along the platform's x axis).
@@ -155,14 +156,14 @@ def radius_of(urdf, name: str, override: float | None) -> float:
         WheelError: no override and no cylinder about the axis or sphere in the URDF.
     """
     if override is not None:
-        return float(override)
+        return positive_length(f"[wheels] radius of {name!r}", override)
     radius = wheel_radius(urdf, name)
     if radius is None:
         raise WheelError(
             f"wheel {name!r} has no cylinder about its axis or sphere to read a radius from; "
             "set [wheels] radius in the spec"
         )
-    return float(radius)
+    return positive_length(f"radius of wheel {name!r} (its URDF cylinder or sphere)", radius)
 
 
 def side_by_side_message(right: str, left: str, y_right: float, y_left: float) -> str:

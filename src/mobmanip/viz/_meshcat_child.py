@@ -19,6 +19,24 @@ LOOPBACK = "127.0.0.1"
 PORT_BUSY_EXIT = 3
 
 
+#: Host names a request to the viewer may carry (with the server's port): a page of any other
+#: origin, e.g. a DNS-rebinding attacker's name resolving to 127.0.0.1, is refused.
+LOCAL_HOSTS = ("127.0.0.1", "localhost", "[::1]")
+#: The HTTP port once the server listens (set in :func:`main`).
+_SERVER = {"port": None}
+
+
+def local_request(host: str | None, origin: str | None) -> bool:
+    """Whether a request's Host (and Origin, if any) header names this server on loopback."""
+    port = _SERVER["port"]
+    allowed = {f"{name}:{port}" for name in LOCAL_HOSTS}
+    if host is None or host.lower() not in allowed:
+        return False
+    if origin is None:
+        return True
+    return origin.lower() in {f"http://{name}" for name in allowed}
+
+
 def _bridge_class():
     import tornado.web
     from meshcat.servers import zmqserver
@@ -27,18 +45,37 @@ def _bridge_class():
         def listen(self, port, address=LOOPBACK, **kwargs):
             return super().listen(port, address=address, **kwargs)
 
+    class LocalStaticFiles(zmqserver.StaticFileHandlerNoCache):
+        """The viewer's files, for requests naming this server only."""
+
+        def prepare(self):
+            if not local_request(self.request.headers.get("Host"), self.request.headers.get("Origin")):
+                raise tornado.web.HTTPError(403, "foreign Host or Origin")
+            return super().prepare()
+
+    class LocalWebSocket(zmqserver.WebSocketHandler):
+        """The scene's websocket, for pages served by this server only."""
+
+        def prepare(self):
+            if not local_request(self.request.headers.get("Host"), self.request.headers.get("Origin")):
+                raise tornado.web.HTTPError(403, "foreign Host or Origin")
+            return super().prepare()
+
+        def check_origin(self, origin):
+            return local_request(self.request.headers.get("Host"), origin)
+
     class LoopbackBridge(zmqserver.ZMQWebSocketBridge):
-        """meshcat's bridge with its web server bound to 127.0.0.1."""
+        """meshcat's bridge with its web server bound to 127.0.0.1, answering local pages only."""
 
         def make_app(self):
             return LoopbackApplication(
                 [
                     (
                         r"/static/(.*)",
-                        zmqserver.StaticFileHandlerNoCache,
+                        LocalStaticFiles,
                         {"path": zmqserver.VIEWER_ROOT, "default_filename": zmqserver.VIEWER_HTML},
                     ),
-                    (r"/", zmqserver.WebSocketHandler, {"bridge": self}),
+                    (r"/", LocalWebSocket, {"bridge": self}),
                 ]
             )
 
@@ -72,6 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # only with an explicit --port: without it meshcat scans on
         print(f"port {args.port} is in use: {exc}", file=sys.stderr)
         return PORT_BUSY_EXIT
+    _SERVER["port"] = int(bridge.web_url.rsplit(":", 1)[1].split("/", 1)[0])
     print(f"zmq_url={bridge.zmq_url}")
     print(f"web_url={bridge.web_url}")
     sys.stdout.flush()

@@ -84,7 +84,6 @@ from ..errors import MobmanipError, ModelError
 from ..io import write_text
 from ..measures import Quantity, default_measures, get_measure, measure_names, resolve_measures
 from ..model import Robot, locked_joints
-from ..urdf import urdf_text
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, MIN_SEMI_AXIS, _translation, drawn_ellipsoid, drawn_extent, ellipsoid_frame
 from .shapes import _aligned as _aligned  # noqa: F401 - re-exported: the animation tests use it
@@ -154,29 +153,40 @@ PLANAR_THICKNESS = _of_defaults(planar_thickness)
 # --------------------------------------------------------------------------- visual model
 
 
-def visual_model(robot: Robot) -> tuple[pin.Model, pin.GeometryModel]:
+def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Model, pin.GeometryModel]:
     """The visual geometry of ``robot`` on a model that matches ``robot.model`` joint for joint.
 
-    The URDF is built again with the planar root joint and its visual geometry (meshes resolved
-    in ``spec.package_dirs``), and both are reduced with the joints the robot locks (those not in
-    ``robot.model.names``) at the spec's reference positions, as :func:`mobmanip.load_robot` does.
+    The URDF is built again with the planar root joint and its visual geometry, and both are
+    reduced with the joints the robot locks (those not in ``robot.model.names``) at the spec's
+    reference positions, as :func:`mobmanip.load_robot` does. Meshes are read only from inside
+    the spec's package directories (:mod:`mobmanip.viz.meshes`); those outside, missing or
+    unreadable are left out, with a line appended to ``notes`` for each.
 
     Raises:
         ModelError: the reduced model does not match ``robot.model`` (names or sizes differ).
     """
+    from .._native_stderr import call_with_large_stack, captured_native_stderr
+    from .meshes import strip_meshes, visual_urdf
+
     spec = robot.spec
+    notes = [] if notes is None else notes
+    visual = visual_urdf(spec.urdf, spec.package_dirs)
+    notes.extend(visual.skipped)
     package_dirs = [str(p) for p in spec.package_dirs]
-    text = urdf_text(spec.urdf)  # with xacro optenv defaults filled in, as load_robot reads it
-    if text is None:
-        model, geometry = pin.buildModelsFromUrdf(
-            str(spec.urdf),
-            package_dirs=package_dirs,
-            root_joint=pin.JointModelPlanar(),
-            geometry_types=pin.GeometryType.VISUAL,
+    model = call_with_large_stack(pin.buildModelFromXML, visual.text, pin.JointModelPlanar())
+    with captured_native_stderr() as native:
+        try:
+            geometry = call_with_large_stack(
+                pin.buildGeomFromUrdfString, model, visual.text, pin.GeometryType.VISUAL, None, package_dirs
+            )
+        except Exception as exc:  # a mesh file Pinocchio cannot load: draw without meshes
+            reason = native.first_error() or (str(exc).splitlines() or [type(exc).__name__])[0]
+            notes.append(f"the meshes of {robot.name!r} could not be loaded ({reason}); drawn without them")
+            geometry = None
+    if geometry is None:
+        geometry = call_with_large_stack(
+            pin.buildGeomFromUrdfString, model, strip_meshes(visual.text), pin.GeometryType.VISUAL
         )
-    else:
-        model = pin.buildModelFromXML(text, pin.JointModelPlanar())
-        geometry = pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL, package_dirs=package_dirs)
     locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
     if locked:
         model, (geometry,) = pin.buildReducedModel(model, [geometry], locked, q_ref)
@@ -356,7 +366,9 @@ class EllipsoidViewer:
             socket.setsockopt(zmq.LINGER, 0)
             socket.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
             socket.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
-            self.model, self.visual_model = visual_model(robot)
+            #: One line per mesh left out of the drawing (outside the package roots, missing, unreadable).
+            self.mesh_notes: list[str] = []
+            self.model, self.visual_model = visual_model(robot, self.mesh_notes)
             self._pin = MeshcatVisualizer(self.model, None, self.visual_model)
             with self._commands():
                 self._pin.initViewer(viewer=self._vis)
