@@ -155,3 +155,21 @@ def test_outputs_outside_a_command_may_replace_files_read_before(tmp_path):
     with atomic_output(path) as handle:
         handle.write("[]")
     assert np.array_equal(json.loads(path.read_text()), [])
+
+
+def test_a_bad_output_file_is_refused_before_any_work(tmp_path, capsys):
+    """Nothing is computed or printed when the output would replace an input or is a device."""
+    from mobmanip.cli import main
+
+    q = tmp_path / "q.json"
+    q.write_text('{"platform": [0, 0, 0]}')
+    for argv in (
+        ["analyze", "planar_dual_arm", "--q", str(q), "--json", str(q)],
+        ["analyze", "planar_dual_arm", "--json", "/dev/null"],
+        ["analyze", "planar_dual_arm", "--json", str(tmp_path)],
+    ):
+        assert main(argv) == 2
+        out, err = capsys.readouterr()
+        assert out == ""
+        assert err.startswith("mobmanip: error: ") and err.count("\n") == 1
+    assert q.read_text() == '{"platform": [0, 0, 0]}'

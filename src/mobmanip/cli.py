@@ -16,7 +16,7 @@ import numpy as np
 from . import __version__
 from .commands import COMMANDS
 from .errors import MobmanipError
-from .io import protect_inputs, publish_together
+from .io import check_output, note_input, protect_inputs, publish_together
 
 
 class _Parser(argparse.ArgumentParser):
@@ -53,6 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         # A command's output files are published together when it succeeds, all or none.
         with warnings.catch_warnings(), np.errstate(all="ignore"), protect_inputs(), publish_together():
             warnings.simplefilter("ignore", RuntimeWarning)
+            _check_outputs_first(args)
             return args.func(args)
     except MobmanipError as exc:
         return _fail(str(exc))
@@ -70,6 +71,23 @@ def main(argv: list[str] | None = None) -> int:
         if os.environ.get("MOBMANIP_TRACEBACK"):
             raise
         return _fail(f"internal error ({type(exc).__name__}: {exc}); please report it with the command that caused it")
+
+
+#: Options that name one output file (a directory or prefix option is checked when written).
+_OUTPUT_FILES = ("json", "save_q", "export")
+
+
+def _check_outputs_first(args) -> None:
+    """Refuse a bad output file before any work: one that is also a file the command was
+    given, or a directory, FIFO or device (so a long computation is not thrown away)."""
+    outputs = [getattr(args, dest) for dest in _OUTPUT_FILES if getattr(args, dest, None)]
+    if not outputs:
+        return
+    for dest, value in vars(args).items():
+        if dest not in _OUTPUT_FILES and isinstance(value, str) and os.path.isfile(value):
+            note_input(value)
+    for path in outputs:
+        check_output(path)
 
 
 def _fail(message: str) -> int:

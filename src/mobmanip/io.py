@@ -159,6 +159,16 @@ def _publish_all(pending: list[tuple[str, Path]]) -> None:
                 os.unlink(backup)
 
 
+def check_output(path: str | Path) -> None:
+    """Refuse, before any work, an output path that :func:`atomic_output` would refuse later
+    (an input of the command, a directory, FIFO, device or socket).
+
+    Raises:
+        OutputError: naming the path and why.
+    """
+    _check_target(Path(path))
+
+
 def _check_target(path: Path) -> tuple[Path, int | None]:
     """The file to replace (a symlink's target) and its permission bits, or ``None`` if absent.
 
