@@ -190,6 +190,18 @@ class PlatformKind(ABC):
 
         raise SpecError(f"{where}: a {self.name} platform takes no [wheels] table")
 
+    def check_wheel_keys(self, table: Mapping, where: str) -> None:
+        """Refuse keys of a ``[wheels]`` table that the kind does not know.
+
+        Raises:
+            SpecError: naming the unknown keys and ``where``.
+        """
+        from ..errors import SpecError
+
+        extra = sorted(set(table) - set(self.wheel_keys))
+        if extra:
+            raise SpecError(f"{where}: unknown keys in [wheels]: {extra}; expected some of {list(self.wheel_keys)}")
+
     def wheels_from_joints(self, joints: Sequence[str]) -> WheelsSpec:
         """The ``[wheels]`` spec from joint names given on the command line (``--wheels``)."""
         from ..errors import WheelError

@@ -151,9 +151,7 @@ class DifferentialDriveKind(PlatformKind):
     wheel_keys = ("right", "left", "radius", "half_track")
 
     def parse_wheels(self, table: Mapping, where: str) -> WheelSpec:
-        extra = sorted(set(table) - set(self.wheel_keys))
-        if extra:
-            raise SpecError(f"{where}: unknown keys in [wheels]: {extra}")
+        self.check_wheel_keys(table, where)
         names = []
         for key in ("right", "left"):
             if key not in table:

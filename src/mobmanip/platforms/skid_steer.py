@@ -166,9 +166,7 @@ class SkidSteerKind(PlatformKind):
     wheel_keys = ("right", "left", "radius", "half_track")
 
     def parse_wheels(self, table: Mapping, where: str) -> SkidSteerWheels:
-        extra = sorted(set(table) - set(self.wheel_keys))
-        if extra:
-            raise SpecError(f"{where}: unknown keys in [wheels]: {extra}")
+        self.check_wheel_keys(table, where)
         return SkidSteerWheels(
             right=_names(table, "right", where),
             left=_names(table, "left", where),

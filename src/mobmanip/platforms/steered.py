@@ -182,9 +182,7 @@ class SteeredKind(PlatformKind):
     wheel_keys = ("drive", "steer", "rear", "radius", "rear_radius")
 
     def parse_wheels(self, table: Mapping, where: str) -> SteeredWheels:
-        extra = sorted(set(table) - set(self.wheel_keys))
-        if extra:
-            raise SpecError(f"{where}: unknown keys in [wheels]: {extra}")
+        self.check_wheel_keys(table, where)
         rear = table.get("rear")
         if not isinstance(rear, list) or not rear or not all(isinstance(v, str) for v in rear):
             raise SpecError(f"{where} [wheels]: 'rear' must be a non-empty list of wheel joint names, got {rear!r}")
