@@ -286,3 +286,18 @@ def test_paper_figures_draw_the_sets_of_the_joint_box(tmp_path, rng):
         assert ell["kind"] == "ellipsoid"
     # the paper's own figures draw ellipses only
     assert {r["kind"] for r in drawn["fig3_kinematic.png"] + drawn["fig4_dynamic.png"]} == {"ellipsoid"}
+
+
+def test_polytope_flag_adds_the_registered_polytopes_on_analyze_view_and_sweep():
+    from mobmanip.cli import build_parser
+    from mobmanip.commands.common import requested_measures
+
+    polytopes = tuple(name for name in measure_names() if get_measure(name).set_kind == "polytope")
+    assert set(polytopes) == set(POLYTOPES)
+    parser = build_parser()
+    for command in ("analyze", "view", "sweep"):
+        args = parser.parse_args([command, "planar_dual_arm", "--polytope"])
+        assert requested_measures(args) == default_measures() + polytopes
+        args = parser.parse_args([command, "planar_dual_arm", "--measure", "kinematic", "--polytope"])
+        assert requested_measures(args) == ("kinematic", *polytopes)
+        assert requested_measures(parser.parse_args([command, "planar_dual_arm"])) is None

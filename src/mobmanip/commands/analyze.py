@@ -15,6 +15,7 @@ from .common import (
     apply_analysis_options,
     format_matrix,
     load_robot_and_configuration,
+    requested_measures,
 )
 
 
@@ -22,18 +23,8 @@ def register(sub) -> None:
     parser = sub.add_parser("analyze", help="analyse one configuration")
     add_robot_options(parser)
     add_analysis_options(parser)
-    parser.add_argument(
-        "--polytope",
-        action="store_true",
-        help="also the exact capacity polytopes (" + ", ".join(POLYTOPES) + "): the measures asked for "
-        "(default: the default ones) and these",
-    )
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.set_defaults(func=run)
-
-
-#: The measures ``--polytope`` adds.
-POLYTOPES = ("kinematic_polytope", "dynamic_polytope", "dynamic_polytope_min_norm")
 
 
 def _describe_ellipsoid(name: str, ellipsoid, unit: str) -> str:
@@ -132,13 +123,11 @@ def _ellipsoid_of(result, quantity):
 def run(args) -> int:
     from ..analysis import analyze
     from ..io import require_finite, write_json
-    from ..measures import default_measures, get_measure
+    from ..measures import get_measure
 
     robot, q = load_robot_and_configuration(args)
     robot = apply_analysis_options(robot, args)
-    measures = args.measures
-    if getattr(args, "polytope", False):
-        measures = (*(measures or default_measures()), *POLYTOPES)
+    measures = requested_measures(args)
     result = analyze(
         robot, q, task=args.task, object_mass=args.object_mass, decoupled=args.decoupled, measures=measures
     )

@@ -108,6 +108,30 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
         help=f"a measure to compute (repeat for several; default: {', '.join(default_measures())}; "
         f"registered: {', '.join(measure_names())})",
     )
+    parser.add_argument(
+        "--polytope",
+        action="store_true",
+        help="also the exact capacity polytopes (" + ", ".join(polytope_measures()) + "): the measures asked "
+        "for (default: the default ones) and these",
+    )
+
+
+def polytope_measures() -> tuple[str, ...]:
+    """The registered measures whose sets are polytopes (what ``--polytope`` adds)."""
+    from ..measures import MEASURES
+
+    return tuple(name for name, measure in MEASURES.items() if measure.set_kind == "polytope")
+
+
+def requested_measures(args) -> tuple[str, ...] | None:
+    """The measures ``--measure`` and ``--polytope`` ask for (``None``: the default ones)."""
+    from ..measures import default_measures
+
+    measures = getattr(args, "measures", None)
+    if getattr(args, "polytope", False):
+        wanted = tuple(measures or default_measures())
+        measures = wanted + tuple(name for name in polytope_measures() if name not in wanted)
+    return measures
 
 
 def apply_analysis_options(robot, args):

@@ -133,11 +133,12 @@ def run_command(args) -> int:
     from ..sweep import SweepGrid, SweepSpec, check_index_name, default_workers, plot_sweep, run_sweep
     from ..sweep_budget import check_grid
     from ..tasks import TASKS
+    from .common import requested_measures
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
     if args.task is not None and args.task not in TASKS:
         raise UsageError(f"unknown task {args.task!r}; expected one of {', '.join(TASKS)}")
-    measures = tuple(m.name for m in resolve_measures(args.measures, sweep=True))  # before the sweep runs
+    measures = tuple(m.name for m in resolve_measures(requested_measures(args), sweep=True))  # before the sweep runs
     index = args.index or f"{measures[0]}.volume"
     if args.plot:  # check the index name before the sweep runs
         check_index_name(index, len(TASKS[args.task or find_spec(args.robot).default_task].rows), measures)

@@ -15,7 +15,13 @@ import signal
 import sys
 import time
 
-from .common import add_analysis_options, add_robot_options, apply_analysis_options, load_robot_and_configuration
+from .common import (
+    add_analysis_options,
+    add_robot_options,
+    apply_analysis_options,
+    load_robot_and_configuration,
+    requested_measures,
+)
 
 
 def register(sub) -> None:
@@ -94,7 +100,7 @@ def run(args) -> int:
     _check(args)
     robot, q = load_robot_and_configuration(args)
     robot = apply_analysis_options(robot, args)
-    options = {"object_mass": args.object_mass, "decoupled": args.decoupled, "measures": args.measures}
+    options = {"object_mass": args.object_mass, "decoupled": args.decoupled, "measures": requested_measures(args)}
     frames = None
     if args.sweep:
         frames = sweep_frames(args.sweep, robot, q if args.q else None, args.task, locked=not args.no_locked, **options)
