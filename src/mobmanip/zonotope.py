@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from . import zonotope_kernel
 from .errors import TaskError
 
 #: Largest number of generator subsets enumerated for facets or volume; beyond it the count of
@@ -196,6 +197,17 @@ def max_norm(G: np.ndarray, limit: int = 20) -> float | None:
 
 
 def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
+    """Vertices, faces and facets of a full-dimensional zonotope in R^2 or R^3, combinatorially.
+
+    One compiled pass (:mod:`mobmanip.zonotope_kernel`) when Numba is installed, else (or when
+    the kernel declines) :func:`low_dim_faces_numpy`, the reference it is tested against; both
+    give the same dict, described there.
+    """
+    out = zonotope_kernel.faces(center, G)
+    return out if out is not None else low_dim_faces_numpy(center, G)
+
+
+def low_dim_faces_numpy(center: np.ndarray, G: np.ndarray) -> dict | None:
     """Vertices, faces and facets of a full-dimensional zonotope in R^2 or R^3, combinatorially.
 
     Parallel generators are merged first (their sum) and zero ones dropped. In R^3 the facets
