@@ -161,8 +161,15 @@ def facet_normals(G: np.ndarray) -> np.ndarray:
     # One sign per normal (largest entry positive), then drop repeats (parallel generators).
     lead = normals[np.arange(len(normals)), np.argmax(np.abs(normals), axis=1)]
     normals = normals * np.sign(lead)[:, None]
-    _, first = np.unique(np.round(normals, 12), axis=0, return_index=True)
-    return normals[np.sort(first)]
+    # Rows equal after rounding are one normal; keep each one's first occurrence, in order (a
+    # lexicographic sort and a scan: ``numpy.unique`` over rows costs ~50 us on a few dozen rows).
+    rounded = np.round(normals, 12) + 0.0  # + 0.0: -0.0 and 0.0 are one value
+    order = np.lexsort(rounded.T[::-1])  # stable: within equal rows, increasing index
+    ranked = rounded[order]
+    new = np.empty(len(order), dtype=bool)
+    new[:1] = True
+    np.any(ranked[1:] != ranked[:-1], axis=1, out=new[1:])
+    return normals[np.sort(order[new])]
 
 
 def volume(G: np.ndarray) -> float:
