@@ -93,6 +93,7 @@ class Polytope(TaskSet):
                 _center, _effort = c.copy(), 0.0
         self._F, self._c, self._G, self._limits = F, c, G, limits
         self.is_zonotope = bool(p == m and np.array_equal(F, np.eye(m)))
+        self._F_min_sv = 1.0 if self.is_zonotope else float(sf[-1]) if m else 0.0
         self._cache: dict = {}
         for x in (F, c, G, limits):
             x.setflags(write=False)
@@ -115,21 +116,27 @@ class Polytope(TaskSet):
         U, s, _ = np.linalg.svd(G, full_matrices=True)
         r = int(np.sum(s > _RANK_RTOL * max(s[0] if s.size else 0.0, 1e-300))) if s.size else 0
         self._Ur, self._scale = U[:, :r], float(s[0]) if r else 0.0
+        size = self._scale / max(self._F_min_sv, 1e-300) if m else 0.0
+        self._size = max(size, float(np.linalg.norm(c)), 1e-300)
+        if r == p:  # G spans R^p (the usual case): no equalities, the set is full-dimensional
+            self._eq_A, self._eq_b = np.zeros((0, m)), np.zeros(0)
+            self._consistent, self._N = True, np.eye(m)
+            return
         E, f = U[:, r:].T @ F, U[:, r:].T @ c
         Ue, se, Vte = np.linalg.svd(E, full_matrices=True) if E.size else (np.eye(0), np.zeros(0), np.eye(m))
         q = int(np.sum(se > _RANK_RTOL * max(float(np.abs(F).max(initial=0.0)), 1e-300)))
         proj = Ue.T @ f
         self._eq_A = Vte[:q].copy()  # orthonormal rows: eq_A a = eq_b
         self._eq_b = proj[:q] / se[:q]
-        size = self._scale / max(float(np.linalg.svd(F, compute_uv=False)[-1]), 1e-300) if m else 0.0
-        self._size = max(size, float(np.linalg.norm(c)), 1e-300)
         self._consistent = bool(np.linalg.norm(proj[q:]) <= 1e-9 * max(float(np.linalg.norm(c)), self._scale, 1e-300))
         self._N = Vte[q:].T.copy()  # directions of the affine hull, (m, k)
 
     def _setup_center(self, center, effort):
         m = self.dim
         self.symmetric = False
-        if center is None and self._consistent:
+        if center is None and self._consistent and not self._c.any():  # a velocity set: the origin
+            center, effort = np.zeros(m), 0.0
+        elif center is None and self._consistent:
             a = np.linalg.lstsq(self._F, self._c, rcond=None)[0]
             if np.linalg.norm(self._F @ a - self._c) <= 1e-12 * max(
                 float(np.linalg.norm(self._c)), self._scale, 1e-300
