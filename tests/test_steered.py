@@ -246,3 +246,13 @@ def test_detection_finds_the_tricycle(tmp_path):
     assert found.spec.platform == "steered"
     assert found.spec.wheels.drive == "drive_wheel" and found.spec.wheels.steer == "steer_joint"
     assert set(found.spec.wheels.rear) == {"rear_right_wheel", "rear_left_wheel"}
+
+
+def test_null_space_of_a_bad_configuration_or_velocity_is_an_error_naming_it(tricycle):
+    from mobmanip.errors import ConfigurationError
+
+    q = tricycle.neutral()
+    with pytest.raises(ConfigurationError, match="configuration must have shape"):
+        tricycle.null_space(q[:-1])
+    with pytest.raises(ConfigurationError, match=f"reduced velocity must be {tricycle.nx} finite numbers"):
+        tricycle.null_space_rate(q, np.full(tricycle.nx, np.nan))

@@ -173,7 +173,7 @@ class Robot:
         """
         if self.constant_null_space:
             return self.S
-        return self._assemble_null_space(self.platform.tangent_block(np.asarray(q, dtype=float)))
+        return self._assemble_null_space(self.platform.tangent_block(self.check_configuration(q)))
 
     def null_space_rate(self, q: np.ndarray, x: np.ndarray) -> np.ndarray:
         """dS/dt, (nv, nx), along the motion with reduced velocity x at configuration q.
@@ -183,7 +183,10 @@ class Robot:
         out = np.zeros((self.model.nv, self.nx))
         if self.constant_null_space or not self.platform.n_reduced:
             return out
-        rows, block = self.platform.tangent_block_rate(np.asarray(q, dtype=float), np.asarray(x, dtype=float))
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self.nx,) or not np.all(np.isfinite(x)):
+            raise ConfigurationError(f"reduced velocity must be {self.nx} finite numbers, got shape {x.shape}")
+        rows, block = self.platform.tangent_block_rate(self.check_configuration(q), x)
         out[np.ix_(rows, range(self.platform.n_reduced))] = block
         return out
 

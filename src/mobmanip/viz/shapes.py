@@ -69,12 +69,12 @@ class SetDrawing(Protocol):
 # --------------------------------------------------------------------------- ellipsoid math
 
 
-def drawn_ellipsoid(ellipsoid: Ellipsoid, task: str) -> tuple[Ellipsoid, np.ndarray]:
-    """The part of a task-space ellipsoid that is drawn, and where its coordinates point.
+def drawn_linear_part(task_set: TaskSet, task: str) -> tuple[TaskSet, np.ndarray]:
+    """The part of a task-space set that is drawn, and where its coordinates point.
 
     Returns:
-        (linear, E): ``linear`` is the ellipsoid itself when the task is all linear
-        (``planar``, ``translational``), else its projection onto the linear coordinates
+        (linear, E): ``linear`` is the set itself when the task is all linear (``planar``,
+        ``translational``), else its projection (shadow) onto the linear coordinates
         (``planar_rigid`` -> (x, y), ``spatial`` -> (x, y, z)); ``E`` (3, k) maps its k
         coordinates to world directions.
     """
@@ -86,8 +86,13 @@ def drawn_ellipsoid(ellipsoid: Ellipsoid, task: str) -> tuple[Ellipsoid, np.ndar
     for column, i in enumerate(linear):
         E[space.rows[i], column] = 1.0
     if len(linear) == space.dim:
-        return ellipsoid, E
-    return ellipsoid.project(tuple(linear)), E
+        return task_set, E
+    return task_set.project(tuple(linear)), E
+
+
+def drawn_ellipsoid(ellipsoid: Ellipsoid, task: str) -> tuple[Ellipsoid, np.ndarray]:
+    """:func:`drawn_linear_part` of an ellipsoid."""
+    return drawn_linear_part(ellipsoid, task)
 
 
 def drawn_extent(ellipsoid: Ellipsoid, task: str) -> float:
@@ -222,23 +227,8 @@ POLYTOPE_OPACITY = 0.3  # of the robot's own 3-D polytopes (they enclose the ell
 
 
 def drawn_polytope(polytope, task: str):
-    """The part of a task-space polytope that is drawn, and where its coordinates point.
-
-    Returns:
-        (linear, E): ``linear`` is the polytope itself when the task is all linear, else its
-        projection (shadow) onto the linear coordinates; ``E`` (3, k) maps its k coordinates to
-        world directions (as :func:`drawn_ellipsoid`).
-    """
-    space = get_task(task)
-    linear = space.linear_rows
-    if not linear:
-        raise ViewerError(f"task {task!r} has no linear rows to draw")
-    E = np.zeros((3, len(linear)))
-    for column, i in enumerate(linear):
-        E[space.rows[i], column] = 1.0
-    if len(linear) == space.dim:
-        return polytope, E
-    return polytope.project(tuple(linear)), E
+    """:func:`drawn_linear_part` of a polytope (a spatial task's is its shadow on x, y, z)."""
+    return drawn_linear_part(polytope, task)
 
 
 def polytope_geometry(polytope, task: str, scale: float, thickness: float = 0.0):
