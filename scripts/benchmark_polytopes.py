@@ -234,11 +234,12 @@ def run(quick: bool = False, timeout: float | None = None) -> int:
 
     print()
     print(f"capacity polytopes, ms per configuration (median over {count} random configurations, one run)")
-    header = f"{'set':<62}{'mobmanip':>10}{'pycapacity':>14}{'speed-up':>10}"
+    width = max(62, *(len(label) + 2 for label, *_ in rows))
+    header = f"{'set':<{width}}{'mobmanip':>10}{'pycapacity':>16}{'speed-up':>10}"
     print(header)
     print("-" * len(header))
     for label, ours, theirs, ratio in rows:
-        print(f"{label:<62}{ours:>10}{theirs:>14}{ratio:>10}")
+        print(f"{label:<{width}}{ours:>10}{theirs:>16}{ratio:>10}")
     print(f"  (pycapacity's section method is iterative, to tol = {PYCAPACITY_TOL:g}; its time limit {timeout:g} s)")
     print()
     for text, ok in verdicts:

@@ -6,6 +6,10 @@ hull of the points w_i = An_i / s_i: its facets are the polytope's vertices (a f
 Qhull call (``scipy.spatial.ConvexHull``) therefore gives vertices, facets and their incidence.
 Qhull triangulates its output, so a vertex where more than k facets meet comes out once per
 triangle of its polar facet; those copies (equal to round-off) are merged.
+
+In the plane (k = 2) the polar hull is found without Qhull, by a few array passes over the polar
+points in angular order (see :func:`_polygon`): for the few dozen rows of a capacity polygon
+that costs less than a Qhull call with its set-up.
 """
 
 from __future__ import annotations
@@ -66,6 +70,8 @@ def enumerate_hull(An: np.ndarray, s: np.ndarray) -> Hull:
         lo, hi = int(np.argmin(w)), int(np.argmax(w))  # w[lo] < 0 < w[hi]
         ends = np.array([[1.0 / w[lo]], [1.0 / w[hi]]])
         return Hull(ends, use[[lo, hi]], [np.array([0]), np.array([1])], np.array([[0, 0], [1, 1]]))
+    if k == 2:
+        return _polygon(W, use)
     hull = ConvexHull(W)
     eq = hull.equations
     U = eq[:, :k] / -eq[:, k:]
@@ -101,6 +107,51 @@ def enumerate_hull(An: np.ndarray, s: np.ndarray) -> Hull:
     ordered = vertex[np.lexsort((angle, facet))]
     faces = np.split(ordered, np.cumsum(counts)[:-1])
     return Hull(U, use[facets], faces, np.stack([facet, vertex], axis=1))
+
+
+def _polygon(W: np.ndarray, use: np.ndarray) -> Hull:
+    """The polygon whose polar points (rows ``use`` of the caller) are W, (r, 2)."""
+    radius = np.hypot(W[:, 0], W[:, 1])
+    angle = np.arctan2(W[:, 1], W[:, 0])
+    order = np.argsort(angle)
+    ray = np.cumsum(np.diff(angle[order], prepend=-np.inf) > 1e-12) - 1  # one number per ray
+    if angle[order[0]] + 2.0 * np.pi - angle[order[-1]] <= 1e-12:  # a ray along the cut at +-pi
+        ray[ray == ray[-1]] = 0
+    if ray[-1] < len(ray) - 1:  # of points on one ray only the farthest can be on the hull
+        by_ray = np.lexsort((-radius[order], ray))
+        order, ray = order[by_ray], ray[by_ray]
+        order = order[np.diff(ray, prepend=-1) > 0]
+    keep = order
+    # Around the origin (inside the hull) the points in angular order form a star-shaped
+    # polygon; a hull vertex always turns left in it, so removing every point that does not,
+    # pass after pass, leaves the hull.
+    x, y = W[keep, 0], W[keep, 1]
+    tol = 1e-12 * float(radius.max()) ** 2
+    while len(x) > 3:
+        before, after = np.arange(-1, len(x) - 1), np.arange(1, len(x) + 1)
+        after[-1] = 0
+        left = (x - x[before]) * (y[after] - y) - (y - y[before]) * (x[after] - x) > tol
+        if left.all():
+            break
+        keep, x, y = keep[left], x[left], y[left]
+    # Facet i (polar point w_i) and facet i + 1 meet at the vertex u with w_i . u = w_(i+1) . u = 1.
+    n = len(keep)
+    after = np.arange(1, n + 1)
+    after[-1] = 0
+    xa, ya = x[after], y[after]
+    det = x * ya - y * xa
+    U = np.empty((n, 2))
+    U[:, 0], U[:, 1] = (ya - y) / det, (x - xa) / det
+    # Vertex j lies between facets j and j + 1: edge e runs from vertex e to e + 1 (cyclically)
+    # along facet e + 1; vertices are numbered from the smallest angle, counter-clockwise.
+    start = int(np.argmin(np.arctan2(U[:, 1], U[:, 0])))
+    U = np.roll(U, -start, axis=0)
+    facets = np.roll(keep, -start - 1)
+    ends = np.empty((n, 2), dtype=np.intp)
+    ends[:, 0], ends[:, 1] = np.arange(n), np.roll(np.arange(n), -1)
+    pairs = np.empty((2 * n, 2), dtype=np.intp)
+    pairs[:, 0], pairs[:, 1] = np.repeat(np.arange(n), 2), ends.ravel()
+    return Hull(U, use[facets], list(ends), pairs)
 
 
 def _groups(U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

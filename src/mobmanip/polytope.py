@@ -488,7 +488,8 @@ class Polytope(TaskSet):
             hull = enumerate_hull(A @ self._N, s)
             V = p0 + hull.vertices @ self._N.T
             rep = {"vertices": V, "faces": hull.faces, "facet_rows": hull.facet_rows, "hull": hull}
-            self._exact_vertices(rep, hull)
+            if k > 2:  # a polygon's vertex is two facet lines meeting, accurate as it stands
+                self._exact_vertices(rep, hull)
         rep["vertices"].setflags(write=False)
         self._cache["vrep"] = rep
         return rep
