@@ -96,10 +96,7 @@
     let position = request.position;
     const target = request.target;
     if (request.mode === "fit") {
-      const [lo, hi] = request.box;
-      const corners = [];
-      for (const x of [lo[0], hi[0]]) for (const y of [lo[1], hi[1]]) for (const z of [lo[2], hi[2]]) corners.push([x, y, z]);
-      const d = fitDistance(camera, target, request.direction, corners, request.margin || 0.95);
+      const d = fitDistance(camera, target, request.direction, request.points, request.margin || 0.95);
       position = target.map((c, i) => c + d * request.direction[i]);
     }
     camera.position.set(...toThree(position));

@@ -12,10 +12,10 @@ live and the exported page show the same legend and camera. The property is a di
   (``solid`` for the robot's own sets, ``ring`` for the locked platform's, ``dot`` for the
   object) and ``text`` (the set's name and its scale, e.g. ``1 m/s = 0.227 m``);
 - ``notes``: lines under the rows (empty sets, magnified sets, the drawn part of the task);
-- ``camera``: ``{"mode": "fit", "box": [lower, upper], "target", "direction", "margin",
-  "serial"}`` (the page places the camera along ``direction`` from ``target``, the box's centre,
-  at the smallest distance at which the box's corners fill ``margin`` of the view, for the page's
-  own aspect ratio) or ``{"mode": "look", "position", "target", "serial"}``; world coordinates
+- ``camera``: ``{"mode": "fit", "box": [lower, upper], "points", "target", "direction",
+  "margin", "serial"}`` (the page places the camera along ``direction`` from ``target``, the
+  box's centre, at the smallest distance at which all ``points`` fall within ``margin`` of the
+  view, for the page's own aspect ratio) or ``{"mode": "look", "position", "target", "serial"}``; world coordinates
   (z up), metres. The page applies each serial once, so a user's own camera moves are kept.
 
 Magnification: within one quantity, the sets share one scale (the largest drawn extent is the
@@ -26,6 +26,7 @@ says so with its own scale.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -80,10 +81,18 @@ def format_factor(factor: float) -> str:
 # --------------------------------------------------------------------------- framing
 
 
-def visual_box(model: pin.Model, visual: pin.GeometryModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Axis-aligned box (lower (3,), upper (3,), m, world) around the robot's visual geometry at
-    ``q``: each geometry's own bounding box, placed, and its corners; the joint origins when the
-    robot has no geometry."""
+def _corners(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    return np.array(list(itertools.product(*zip(lower, upper))), dtype=float)
+
+
+#: 26 unit directions (the cube's faces, edges and corners): samples of a drawn ellipsoid.
+DIRECTIONS = np.array([d for d in itertools.product((-1, 0, 1), repeat=3) if any(d)], dtype=float)
+DIRECTIONS /= np.linalg.norm(DIRECTIONS, axis=1, keepdims=True)
+
+
+def visual_points(model: pin.Model, visual: pin.GeometryModel, q: np.ndarray) -> np.ndarray:
+    """Points (n, 3), m, world, whose hull holds the robot's visual geometry at ``q``: the corners
+    of each geometry's own bounding box, placed, and the joint origins."""
     data, geometry_data = model.createData(), visual.createData()
     pin.forwardKinematics(model, data, q)
     pin.updateGeometryPlacements(model, data, visual, geometry_data)
@@ -94,27 +103,38 @@ def visual_box(model: pin.Model, visual: pin.GeometryModel, q: np.ndarray) -> tu
         lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
             continue
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
         placement = geometry_data.oMg[index]
-        points.extend(corners @ placement.rotation.T + placement.translation)
-    points = np.array(points, dtype=float).reshape(-1, 3)
+        points.extend(_corners(lo, hi) @ placement.rotation.T + placement.translation)
+    return np.array(points, dtype=float).reshape(-1, 3)
+
+
+def visual_box(model: pin.Model, visual: pin.GeometryModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned box (lower (3,), upper (3,), m, world) around the robot's visual geometry at
+    ``q`` (around :func:`visual_points`)."""
+    points = visual_points(model, visual, q)
     return points.min(axis=0), points.max(axis=0)
 
 
 def fit_request(
-    boxes: list[tuple[np.ndarray, np.ndarray]], heading: float, serial: int, margin: float = CAMERA_MARGIN
+    points: np.ndarray,
+    boxes: list[tuple[np.ndarray, np.ndarray]],
+    heading: float,
+    serial: int,
+    margin: float = CAMERA_MARGIN,
 ) -> dict:
-    """A ``fit`` camera request for the union of ``boxes`` (lower, upper), seen from
-    :data:`CAMERA_ELEVATION_DEG` above the horizon and :data:`CAMERA_AZIMUTH_DEG` from the
-    platform ``heading`` (rad)."""
-    lower = np.min([b[0] for b in boxes], axis=0)
-    upper = np.max([b[1] for b in boxes], axis=0)
+    """A ``fit`` camera request for ``points`` (n, 3) and the corners of ``boxes`` (lower,
+    upper), seen from :data:`CAMERA_ELEVATION_DEG` above the horizon and
+    :data:`CAMERA_AZIMUTH_DEG` from the platform ``heading`` (rad), aimed at the centre of
+    their bounding box."""
+    every = np.vstack([np.asarray(points, dtype=float).reshape(-1, 3), *(_corners(*box) for box in boxes)])
+    lower, upper = every.min(axis=0), every.max(axis=0)
     el = math.radians(CAMERA_ELEVATION_DEG)
     az = heading + math.radians(CAMERA_AZIMUTH_DEG)
     direction = [math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)]
     return {
         "mode": "fit",
         "box": [[float(v) for v in lower], [float(v) for v in upper]],
+        "points": np.round(every, 4).tolist(),
         "target": [float(v) for v in 0.5 * (lower + upper)],
         "direction": direction,
         "margin": float(margin),

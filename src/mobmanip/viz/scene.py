@@ -455,19 +455,26 @@ class EllipsoidViewer:
             The camera request sent (see :mod:`mobmanip.viz.page`); its ``box`` is the framed
             box (lower, upper), m.
         """
-        boxes = [_page.visual_box(self.model, self.visual_model, frame.q)]
+        points, boxes = _page.visual_points(self.model, self.visual_model, frame.q), []
         for source, locked in ((frame.analysis, False), (frame.locked, True)):
             if source is None:
                 continue
             center = source.held_object.center
             boxes.append(_page.sphere_box(center, OBJECT_RADIUS))
             for (_, name), task_set in self._drawn(source, locked).items():
-                if not task_set.empty:
-                    reach = DRAWINGS[task_set.kind].extent(task_set, source.task) * self._set_scale((locked, name))
-                    boxes.append(_page.sphere_box(center, reach))
+                if task_set.empty:
+                    continue
+                scale = self._set_scale((locked, name))
+                if task_set.kind == "ellipsoid":  # points on the drawn ellipsoid
+                    T = ellipsoid_matrix(task_set, source.task, center, scale, planar_thickness(name, locked))
+                    points = np.vstack([points, _page.DIRECTIONS @ T[:3, :3].T + T[:3, 3]])
+                else:
+                    boxes.append(
+                        _page.sphere_box(center, DRAWINGS[task_set.kind].extent(task_set, source.task) * scale)
+                    )
         heading = math.atan2(frame.q[3], frame.q[2]) if self.model.nq >= 4 else 0.0
         self._camera_serial += 1
-        request = _page.fit_request(boxes, heading, self._camera_serial)
+        request = _page.fit_request(points, boxes, heading, self._camera_serial)
         with self._commands():
             self._send_page(camera=request)
         return request
