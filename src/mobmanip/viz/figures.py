@@ -234,6 +234,7 @@ def sweep_figure(
     legend_loc: str = "upper center",
     limits: Sequence[tuple[tuple, tuple]] | None = None,
     formats: Sequence[str] = FORMATS,
+    keep: list | None = None,
 ) -> float:
     """One panel per configuration, each with the robot and nested sets at the task point.
 
@@ -259,6 +260,7 @@ def sweep_figure(
         limits: axis limits per panel (see :func:`panel_limits`); by default those of
             this figure alone.
         formats: file formats written beside each other (``png``, ``pdf``, ``svg``).
+        keep: if given, the figure is appended to it and left open (the caller closes it).
 
     Returns:
         The scale used (m per task unit).
@@ -273,7 +275,7 @@ def sweep_figure(
     fig, axes = plt.subplots(
         1,
         len(panels),
-        figsize=(width, width / len(panels) * (y1 - y0) / (x1 - x0) + 1.3),
+        figsize=(width, width / len(panels) * (y1 - y0) / (x1 - x0) + 1.0),
         squeeze=False,
         layout="constrained",
     )
@@ -337,7 +339,10 @@ def sweep_figure(
         for fmt in formats:
             save_figure(fig, Path(path).with_suffix("." + fmt), dpi=200)
     finally:
-        plt.close(fig)
+        if keep is None:
+            plt.close(fig)
+        else:
+            keep.append(fig)
     return scale
 
 

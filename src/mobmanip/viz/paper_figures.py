@@ -41,8 +41,13 @@ def angle_caption(angle_deg: float) -> str:
     return f"object at {angle_deg:g}\N{DEGREE SIGN}"
 
 
-def write_figures(study, out: Path) -> dict[str, list]:
+def write_figures(study, out: Path, keep: dict | None = None) -> dict[str, list]:
     """Write the paper's figures and the figures with the polytopes into ``out``.
+
+    Args:
+        study: a :class:`mobmanip.casestudy.CaseStudy`.
+        out: the output directory.
+        keep: if given, each matplotlib figure, left open, by file name (the caller closes them).
 
     Returns:
         What each figure drew, by file name: the records of
@@ -85,6 +90,7 @@ def write_figures(study, out: Path) -> dict[str, list]:
         VELOCITY_UNIT,
         out / FIGURES[0],
         drawn=drawn[FIGURES[0]],
+        keep=_keeper(keep, FIGURES[0]),
     )
     twins = {}
     for decoupled in (True, False):
@@ -106,6 +112,7 @@ def write_figures(study, out: Path) -> dict[str, list]:
             scale=scale,
             limits=limits,
             drawn=drawn[name],
+            keep=_keeper(keep, name),
             note=note,
         )
 
@@ -124,6 +131,7 @@ def write_figures(study, out: Path) -> dict[str, list]:
         VELOCITY_UNIT,
         out / FIGURES[3],
         drawn=drawn[FIGURES[3]],
+        keep=_keeper(keep, FIGURES[3]),
         note="solid: exact polytope (every wheel and joint within its own speed limit); dashed: the ellipse",
     )
 
@@ -141,7 +149,23 @@ def write_figures(study, out: Path) -> dict[str, list]:
         ACCELERATION_UNIT,
         out / FIGURES[4],
         drawn=drawn[FIGURES[4]],
+        keep=_keeper(keep, FIGURES[4]),
         note="decoupled; solid: exact polytope (any internal force); dotted: the paper's minimum-norm policy; "
         "dashed: the ellipse",
     )
     return drawn
+
+
+class _Keeper(list):
+    """A list that files the figure appended to it under a name in a dict."""
+
+    def __init__(self, into: dict, name: str):
+        super().__init__()
+        self._into, self._name = into, name
+
+    def append(self, figure) -> None:
+        self._into[self._name] = figure
+
+
+def _keeper(keep: dict | None, name: str):
+    return None if keep is None else _Keeper(keep, name)

@@ -73,7 +73,7 @@ def index_label(index: str, task: str) -> str:
 
 
 def plot_sweep(result, index: str, path: str | Path, max_panels: int = 6, formats: Sequence[str] = FORMATS) -> Path:
-    """Plot one index over the sweep's varying grid axes (see the module's docstring).
+    """Plot one index over the sweep's varying grid axes (see the module's docstring) and save it.
 
     Args:
         result: a :class:`mobmanip.sweep_results.SweepResult`.
@@ -85,6 +85,15 @@ def plot_sweep(result, index: str, path: str | Path, max_panels: int = 6, format
     Returns:
         ``path``.
     """
+    fig = sweep_plot_figure(result, index, max_panels)
+    path = Path(path)
+    for fmt in formats:
+        save_figure(fig, path.with_suffix("." + fmt), dpi=150, bbox_inches="tight")
+    return path
+
+
+def sweep_plot_figure(result, index: str, max_panels: int = 6):
+    """The matplotlib ``Figure`` :func:`plot_sweep` saves."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -142,10 +151,7 @@ def plot_sweep(result, index: str, path: str | Path, max_panels: int = 6, format
     if fixed:
         title += "; at " + ", ".join(fixed)
     fig.suptitle(title, fontsize=10)
-    path = Path(path)
-    for fmt in formats:
-        save_figure(fig, path.with_suffix("." + fmt), dpi=150, bbox_inches="tight")
-    return path
+    return fig
 
 
 def _polar_panel(ax, angles_deg: np.ndarray, distances: np.ndarray, data: np.ndarray, vmin: float, vmax: float):
