@@ -6,10 +6,10 @@ multiplying them by a scale (e.g. 0.2 m per m/s), stated under the panels. Sets 
 colour-blind-safe Okabe-Ito palette (:data:`SET_COLORS`); the arms are drawn in greys
 (:data:`ARM_COLORS`), never in a set's colour, and named in the legend; the platform carries an
 arrow along its heading. One legend for the figure, outside the panels; sets of a panel that
-coincide (the same support in every direction, within :data:`COINCIDE_RTOL`) are drawn once and
-a note says so. Every panel of a figure has the same metres per inch, and panels of twin
-figures (e.g. Fig. 4 and its coupled counterpart) can share their axis limits
-(:func:`panel_limits`). Each figure is written as PNG and as vector PDF (``formats``).
+coincide (the same support in every direction, within :data:`COINCIDE_RTOL`) are drawn once
+(the last of them, which would be on top) and a note says so. Every panel of a figure has the
+same metres per inch, and panels of twin figures (e.g. Fig. 4 and its coupled counterpart) can
+share their axis limits (:func:`panel_limits`). Each figure is written as PNG and as vector PDF (``formats``).
 """
 
 from __future__ import annotations
@@ -282,15 +282,17 @@ def sweep_figure(
     notes: dict[tuple[str, str], list[str]] = {}
     for index, (ax, (caption, robot, q, point, sets)) in enumerate(zip(axes[0], panels)):
         draw_robot(ax, robot, q)
-        kept = []  # (label, set) drawn in this panel
+        twins: list[str | None] = [None] * len(sets)  # a set coinciding with a later one is drawn as that one
+        for i in reversed(range(len(sets))):
+            later = (j for j in range(i + 1, len(sets)) if twins[j] is None and coincide(sets[i][1], sets[j][1]))
+            twins[i] = next((sets[j][0] for j in later), None)
         for k, (label, task_set, *style) in enumerate(sets):
             look = {"color": SET_COLORS[k % len(SET_COLORS)], "lw": 1.6, **(style[0] if style else {})}
-            twin = next((other_label for other_label, other in kept if coincide(task_set, other)), None)
+            twin = twins[k]
             draw = draw_ellipse if task_set.kind == "ellipsoid" else draw_polygon
             if twin is None:
                 points = draw(ax, task_set, point, scale, label=label, **look)
-                kept.append((label, task_set))
-            else:  # drawn already: record where it would be, and say so once
+            else:  # drawn as its twin: record where it would be, and say so once
                 points = _points(task_set, point, scale)
                 if not label.startswith("_"):
                     notes.setdefault((label, twin), []).append(caption)

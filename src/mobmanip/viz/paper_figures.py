@@ -63,12 +63,10 @@ def write_figures(study, out: Path, keep: dict | None = None) -> dict[str, list]
     speeds = sorted({c.platform_speed_max for c in study.kinematic if c.platform_speed_max is not None})
     torques = sorted({c.wheel_torque_max for c in study.dynamic}, reverse=True)
 
-    def panels(cases, entries, locked_first: bool = False):
+    def panels(cases, entries):
         result = []
         for angle in angles:
             chosen = [c for c in cases if c.angle_deg == angle]
-            if locked_first:  # the locked platform is drawn (and kept, when another coincides) first
-                chosen.sort(key=lambda c: c.platform_speed_max is not None)
             analysis = chosen[0].analysis
             sets = [entry for c in chosen for entry in entries(c)]
             result.append((angle_caption(angle), robot, analysis.q, analysis.held_object.center, sets))
@@ -83,9 +81,7 @@ def write_figures(study, out: Path, keep: dict | None = None) -> dict[str, list]
         return {"color": SET_COLORS[torques.index(c.wheel_torque_max) % len(SET_COLORS)]}
 
     sweep_figure(
-        panels(
-            study.kinematic, lambda c: [(speed_label(c.platform_speed_max), c.analysis.kinematic, speed_look(c))], True
-        ),
+        panels(study.kinematic, lambda c: [(speed_label(c.platform_speed_max), c.analysis.kinematic, speed_look(c))]),
         "",
         VELOCITY_UNIT,
         out / FIGURES[0],
@@ -126,7 +122,7 @@ def write_figures(study, out: Path, keep: dict | None = None) -> dict[str, list]
         ]
 
     sweep_figure(
-        panels(study.kinematic, kinematic_entries, True),
+        panels(study.kinematic, kinematic_entries),
         "",
         VELOCITY_UNIT,
         out / FIGURES[3],
