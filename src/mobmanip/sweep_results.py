@@ -9,7 +9,6 @@ define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, .
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -17,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import ArgumentError
-from .io import atomic_output, save_figure
+from .io import atomic_output
 from .measures import Measure, resolve_measures
 from .planar_postures import PostureTable
 from .posture import IKPostureTable
@@ -210,83 +209,10 @@ def index_names(m: int, measures=None) -> list[str]:
 # ----------------------------------------------------------------------------------------------
 # plot
 
-_AXIS_LABELS = {
-    "angle_deg": "object direction (deg)",
-    "distance": "object distance (m)",
-    "heading_deg": "platform heading (deg)",
-    "wheel_velocity_scale": "wheel velocity scale",
-    "wheel_effort_scale": "wheel effort scale",
-}
-
 
 def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: int = 6) -> Path:
-    """Plot one index over the sweep's varying grid axes and save it (PNG, matplotlib Agg).
+    """Plot one index over the sweep's varying grid axes and save it (PNG and PDF beside it); see
+    :func:`mobmanip.viz.sweep_plot.plot_sweep`."""
+    from .viz.sweep_plot import plot_sweep as plot
 
-    Two varying axes: a heat map, polar when they are angle and distance (0 deg up, 90 deg to
-    the left, like the robot seen from above facing up). A third varying axis gives one panel per
-    value (up to ``max_panels``, evenly picked); further axes are taken at their first value.
-    One varying axis: a line plot.
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    values = result.index(index)
-    grid = result.grid
-    varying = [i for i, n in enumerate(grid.shape) if n > 1]
-    if 0 in varying and 1 in varying:
-        pair = [0, 1]
-    else:
-        pair = varying[:2]
-    rest = [i for i in varying if i not in pair]
-    panel_axis = rest[0] if rest and len(pair) == 2 else None
-    n_panel = 1 if panel_axis is None else grid.shape[panel_axis]
-    picks = np.unique(np.linspace(0, n_panel - 1, min(n_panel, max_panels)).round().astype(int))
-    polar = pair == [0, 1]
-    cols = min(len(picks), 3)
-    rows = math.ceil(len(picks) / cols)
-    fig = Figure(figsize=(4.2 * cols + 0.8, 4.0 * rows), layout="constrained")
-    FigureCanvasAgg(fig)
-    finite = values[np.isfinite(values)]
-    vmin, vmax = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-    mesh = None
-    for p, pick in enumerate(picks):
-        ax = fig.add_subplot(rows, cols, p + 1, projection="polar" if polar else None)
-        index_tuple = [0] * 5
-        if panel_axis is not None:
-            index_tuple[panel_axis] = pick
-        sl = tuple(slice(None) if i in pair else index_tuple[i] for i in range(5))
-        data = values[sl]
-        if len(pair) == 2:
-            x = getattr(grid, AXES[pair[0]])
-            y = getattr(grid, AXES[pair[1]])
-            if polar:
-                ax.set_theta_zero_location("N")
-                mesh = ax.pcolormesh(np.radians(x), y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
-                ax.set_rlim(0.0, float(y.max()) * 1.05)
-            else:
-                mesh = ax.pcolormesh(x, y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
-                ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])
-                ax.set_ylabel(_AXIS_LABELS[AXES[pair[1]]])
-        elif len(pair) == 1:
-            x = getattr(grid, AXES[pair[0]])
-            ax.plot(x, data, marker=".")
-            ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])
-            ax.set_ylabel(index)
-        else:
-            ax.bar([index], [float(data)])
-        if panel_axis is not None:
-            ax.set_title(f"{_AXIS_LABELS[AXES[panel_axis]]} = {getattr(grid, AXES[panel_axis])[pick]:g}", fontsize=9)
-    if mesh is not None:
-        fig.colorbar(mesh, ax=fig.axes, label=index, shrink=0.8)
-    fixed = [
-        f"{_AXIS_LABELS[AXES[i]]} {getattr(grid, AXES[i])[0]:g}"
-        for i in range(5)
-        if i not in pair and i != panel_axis and grid.shape[i] > 1
-    ]
-    title = f"{result.spec.robot}: {index} ({result.task} task)"
-    if polar:
-        title += "\nradius: object distance (m), angle: object direction (deg)"
-    if fixed:
-        title += "\nat " + ", ".join(fixed)
-    fig.suptitle(title, fontsize=10)
-    return save_figure(fig, path, dpi=110)
+    return plot(result, index, path, max_panels)

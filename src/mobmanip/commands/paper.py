@@ -36,16 +36,7 @@ def _table(study) -> str:
     return "\n".join(lines)
 
 
-#: The polytopes the case study computes beside the paper's ellipses (drawn in the extra figures).
-POLYTOPES = ("kinematic_polytope", "dynamic_polytope", "dynamic_polytope_min_norm")
-#: The figures :func:`write_figures` writes: the paper's, then the ellipses with the polytopes.
-FIGURES = (
-    "fig3_kinematic.png",
-    "fig4_dynamic.png",
-    "fig4_dynamic_coupled.png",
-    "fig3_kinematic_polytopes.png",
-    "fig4_dynamic_polytopes.png",
-)
+from ..viz.paper_figures import FIGURES, POLYTOPES  # noqa: E402  (names only; no plotting imports)
 
 
 def run(args) -> int:
@@ -91,95 +82,7 @@ def _polytope_table(study) -> str:
 
 
 def write_figures(study, out: Path) -> dict[str, list]:
-    """Write the paper's figures and the figures with the polytopes into ``out``.
+    """Write the figures into ``out`` (see :func:`mobmanip.viz.paper_figures.write_figures`)."""
+    from ..viz.paper_figures import write_figures as write
 
-    Returns:
-        What each figure drew, by file name: the records of
-        :func:`mobmanip.viz.figures.sweep_figure` (``panel``, ``label``, ``kind``, ``point``,
-        ``scale``, ``points``).
-    """
-    from ..viz.figures import sweep_figure
-
-    robot = study.robot
-    angles = sorted({c.angle_deg for c in study.kinematic})
-    drawn: dict[str, list] = {name: [] for name in FIGURES}
-
-    def panels(cases, entries):
-        result = []
-        for angle in angles:
-            chosen = [c for c in cases if c.angle_deg == angle]
-            analysis = chosen[0].analysis
-            sets = [entry for c in chosen for entry in entries(c)]
-            result.append((f"object at {angle:g} deg", robot, analysis.q, analysis.held_object.center, sets))
-        return result
-
-    def speed_label(c):
-        return "locked platform" if c.platform_speed_max is None else f"platform v_max = {c.platform_speed_max:g} m/s"
-
-    def speed_style(c):
-        return {"color": "black", "ls": "--", "lw": 1.2} if c.platform_speed_max is None else {}
-
-    sweep_figure(
-        panels(study.kinematic, lambda c: [(speed_label(c), c.analysis.kinematic, speed_style(c))]),
-        "Fig. 3: kinematic ellipses, varying platform speed",
-        "m/s",
-        out / FIGURES[0],
-        drawn=drawn[FIGURES[0]],
-    )
-    for decoupled, name, caption in (
-        (True, FIGURES[1], "Fig. 4: dynamic ellipses, varying wheel torque (decoupled, as in the paper)"),
-        (False, FIGURES[2], "Dynamic ellipses with platform-arm coupling, varying wheel torque"),
-    ):
-        cases = [c for c in study.dynamic if c.decoupled == decoupled]
-        sweep_figure(
-            panels(cases, lambda c: [(f"wheel tau_max = {c.wheel_torque_max:g} N m", c.analysis.dynamic)]),
-            caption,
-            "m/s^2",
-            out / name,
-            drawn=drawn[name],
-        )
-
-    # The same with the exact polytopes: one colour per case, polytope solid, ellipse thin dashed.
-    colors = ("#1b9e77", "#d95f02", "#7570b3", "#222222")
-
-    speeds = sorted({c.platform_speed_max for c in study.kinematic if c.platform_speed_max is not None})
-
-    def kinematic_entries(c):
-        if c.platform_speed_max is None:  # the locked platform: black dash-dot, over the slowest platform
-            look, solid = {"color": colors[3]}, {"lw": 1.3, "ls": "-."}
-        else:
-            look, solid = {"color": colors[speeds.index(c.platform_speed_max) % 3]}, {"lw": 2.2}
-        return [
-            (speed_label(c), c.analysis.measure(POLYTOPES[0]), {**look, **solid}),
-            ("_ellipse", c.analysis.kinematic, {**look, "lw": 1.0, "ls": "--"}),
-        ]
-
-    sweep_figure(
-        panels(study.kinematic, kinematic_entries),
-        "Fig. 3 with the exact kinematic polytopes",
-        "m/s",
-        out / FIGURES[3],
-        drawn=drawn[FIGURES[3]],
-        note="solid: exact polytope (every wheel and joint within its own speed limit); dashed: the ellipse",
-        legend_loc="upper left",
-    )
-    torques = sorted({c.wheel_torque_max for c in study.dynamic}, reverse=True)
-
-    def dynamic_entries(c):
-        look = {"color": colors[torques.index(c.wheel_torque_max) % 3]}
-        return [
-            (f"wheel tau_max = {c.wheel_torque_max:g} N m", c.analysis.measure(POLYTOPES[1]), {**look, "lw": 1.8}),
-            ("_policy", c.analysis.measure(POLYTOPES[2]), {**look, "lw": 1.2, "ls": ":"}),
-            ("_ellipse", c.analysis.dynamic, {**look, "lw": 1.0, "ls": "--"}),
-        ]
-
-    sweep_figure(
-        panels([c for c in study.dynamic if c.decoupled], dynamic_entries),
-        "Fig. 4 with the exact dynamic polytopes (decoupled)",
-        "m/s^2",
-        out / FIGURES[4],
-        drawn=drawn[FIGURES[4]],
-        note="solid: exact polytope (any internal force); dotted: the paper's minimum-norm policy; dashed: the ellipse",
-        legend_loc="upper left",
-    )
-    return drawn
+    return write(study, out)

@@ -122,6 +122,9 @@ def run(args) -> int:
             print(f"task point (object): ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m")
             notes = _describe_empty("the", analysis) + _describe_empty("the locked-platform", locked)
         print(f"scale: {viewer.scales.describe()}")
+        for (is_locked, name), factor in viewer.magnified.items():
+            if factor != 1.0:  # too small to see at its quantity's scale (the page's legend says so too)
+                print(f"{'locked-platform ' if is_locked else ''}{name}: drawn {factor:g} times larger")
         for note in viewer.mesh_notes + notes:
             print(note)
         if args.export:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from pathlib import Path
 
 # Run by path, this file's folder heads sys.path; keep its sibling modules from shadowing others.
 if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(__file__)):
@@ -17,6 +18,7 @@ if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(
 
 LOOPBACK = "127.0.0.1"
 PORT_BUSY_EXIT = 3
+PAGE_SCRIPT = Path(__file__).with_name("page.js")  # mobmanip's part of the page (mobmanip.viz.page)
 
 
 #: Host names a request to the viewer may carry (with the server's port): a page of any other
@@ -53,6 +55,21 @@ def _bridge_class():
                 raise tornado.web.HTTPError(403, "foreign Host or Origin")
             return super().prepare()
 
+    class Page(tornado.web.RequestHandler):
+        """meshcat's page with mobmanip's script (legend, camera; see ``page.js``) before ``</body>``."""
+
+        def prepare(self):
+            if not local_request(self.request.headers.get("Host"), self.request.headers.get("Origin")):
+                raise tornado.web.HTTPError(403, "foreign Host or Origin")
+
+        def get(self, _name=None):
+            html = Path(zmqserver.VIEWER_ROOT, zmqserver.VIEWER_HTML).read_text(encoding="utf-8")
+            script = "<script>\n" + PAGE_SCRIPT.read_text(encoding="utf-8") + "\n</script>\n"
+            at = html.rfind("</body>")
+            self.set_header("Content-Type", "text/html; charset=utf-8")
+            self.set_header("Cache-Control", "no-store, no-cache, must-revalidate, max-age=0")
+            self.write(html[:at] + script + html[at:] if at >= 0 else html + script)
+
     class LocalWebSocket(zmqserver.WebSocketHandler):
         """The scene's websocket, for pages served by this server only."""
 
@@ -70,6 +87,7 @@ def _bridge_class():
         def make_app(self):
             return LoopbackApplication(
                 [
+                    (r"/static/(index\.html)?", Page),
                     (
                         r"/static/(.*)",
                         LocalStaticFiles,

@@ -1,7 +1,15 @@
-"""Top-view figures of a planar mobile manipulator with its task-space sets (matplotlib).
+"""Top-view figures of a planar mobile manipulator with its task-space sets (matplotlib), made
+to go into a paper as they are.
 
 Ellipses (and the outlines of capacity polytopes) are drawn at the task point in metres after
-multiplying them by a scale (e.g. 0.2 m per m/s); the scale is printed in each figure's title.
+multiplying them by a scale (e.g. 0.2 m per m/s), stated under the panels. Sets use the
+colour-blind-safe Okabe-Ito palette (:data:`SET_COLORS`); the arms are drawn in greys
+(:data:`ARM_COLORS`), never in a set's colour, and named in the legend; the platform carries an
+arrow along its heading. One legend for the figure, outside the panels; sets of a panel that
+coincide (the same support in every direction, within :data:`COINCIDE_RTOL`) are drawn once
+(the last of them, which would be on top) and a note says so. Every panel of a figure has the
+same metres per inch, and panels of twin figures (e.g. Fig. 4 and its coupled counterpart) can
+share their axis limits (:func:`panel_limits`). Each figure is written as PNG and as vector PDF (``formats``).
 """
 
 from __future__ import annotations
@@ -15,13 +23,34 @@ matplotlib.use("Agg")  # figures are written to files; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
-from matplotlib.patches import Polygon  # noqa: E402
+from matplotlib.patches import FancyArrow, Polygon  # noqa: E402
 
 from ..ellipsoids import Ellipsoid  # noqa: E402
 from ..io import save_figure  # noqa: E402
 from ..model import Robot  # noqa: E402
 
-COLORS = ("#1b9e77", "#d95f02", "#7570b3", "#444444", "#e7298a", "#66a61e")
+#: The Okabe-Ito palette (colour-blind safe), by name.
+OKABE_ITO = {
+    "black": "#000000",
+    "orange": "#E69F00",
+    "sky_blue": "#56B4E9",
+    "bluish_green": "#009E73",
+    "yellow": "#F0E442",
+    "blue": "#0072B2",
+    "vermillion": "#D55E00",
+    "reddish_purple": "#CC79A7",
+}
+#: Colours of the sets, in order (Okabe-Ito; yellow left out: too light on white).
+SET_COLORS = tuple(OKABE_ITO[k] for k in ("blue", "vermillion", "bluish_green", "reddish_purple", "orange", "sky_blue"))
+COLORS = SET_COLORS  # the former name
+#: Colours of the arms (greys, so that no arm looks like a set).
+ARM_COLORS = ("#4a4a4a", "#9a9a9a")
+PLATFORM_FACE, PLATFORM_EDGE = "#e6e6e6", "#6e6e6e"
+#: Sets of a panel whose supports differ by at most this fraction of the larger are drawn once.
+COINCIDE_RTOL = 2e-3
+#: Margin around a panel's content (fraction of its span).
+PAD = 0.06
+FORMATS = ("png", "pdf")
 
 
 def _platform_outline(robot: Robot) -> np.ndarray:
@@ -30,15 +59,53 @@ def _platform_outline(robot: Robot) -> np.ndarray:
     return platform.outline()
 
 
-def draw_robot(ax, robot: Robot, q: np.ndarray) -> None:
-    """Draw the platform, its wheels and the arms (links as lines through the joints) from above."""
+def arm_label(robot: Robot, k: int) -> str:
+    """Legend label of arm ``k``: ``arm 1 (right)``."""
+    name = robot.arms[k].name
+    return f"arm {k + 1}" + (f" ({name})" if name and name != str(k + 1) else "")
+
+
+def robot_points(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """What :func:`draw_robot` draws, as points (k, 2), m: the platform's corners, the joints
+    and the end effectors."""
     model, data = robot.model, robot.data
     pin.framesForwardKinematics(model, data, q)
     yaw = float(np.arctan2(q[3], q[2]))
     R = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
-    origin = np.asarray(q[:2])
-    body = _platform_outline(robot) @ R.T + origin
-    ax.add_patch(Polygon(body, closed=True, facecolor="#d9d9d9", edgecolor="#555555", lw=1.0, zorder=1))
+    points = [_platform_outline(robot) @ R.T + np.asarray(q[:2])]
+    for arm in robot.arms:
+        points.append([data.oMi[model.getJointId(name)].translation[:2] for name in arm.joint_names])
+        points.append([data.oMf[arm.frame_id].translation[:2]])
+    return np.vstack(points)
+
+
+def draw_robot(ax, robot: Robot, q: np.ndarray, label_arms: bool = True) -> None:
+    """Draw the platform with an arrow along its heading, its wheels and the arms (links as
+    lines through the joints, in greys, labelled ``arm 1 (right)``, ... for the legend) from above."""
+    model, data = robot.model, robot.data
+    pin.framesForwardKinematics(model, data, q)
+    yaw = float(np.arctan2(q[3], q[2]))
+    R = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    origin = np.asarray(q[:2], dtype=float)
+    outline = _platform_outline(robot)
+    body = outline @ R.T + origin
+    ax.add_patch(Polygon(body, closed=True, facecolor=PLATFORM_FACE, edgecolor=PLATFORM_EDGE, lw=0.8, zorder=1))
+    length = 0.8 * float(np.max(outline[:, 0]))  # the arrow reaches most of the way to the front
+    if length > 0:
+        heading = R[:, 0] * length
+        ax.add_patch(
+            FancyArrow(
+                *origin,
+                *heading,
+                width=0.012,
+                head_width=0.06,
+                head_length=0.06,
+                length_includes_head=True,
+                color="black",
+                lw=0,
+                zorder=2,
+            )
+        )
     platform = robot.wheel_platform
     wheels = platform.wheels() if platform is not None else ()
     if wheels:
@@ -49,12 +116,14 @@ def draw_robot(ax, robot: Robot, q: np.ndarray) -> None:
         rolling = np.cross(axle, (0.0, 0.0, 1.0))[:2]
         tip = radius * rolling / max(float(np.linalg.norm(rolling)), 1e-12)
         centre = data.oMi[joint_id].translation[:2]
-        ax.plot(*np.array([centre - tip, centre + tip]).T, color="black", lw=5, solid_capstyle="butt", zorder=2)
+        ax.plot(*np.array([centre - tip, centre + tip]).T, color="black", lw=4, solid_capstyle="butt", zorder=2)
     for k, arm in enumerate(robot.arms):
         points = [data.oMi[model.getJointId(name)].translation[:2] for name in arm.joint_names]
         points.append(data.oMf[arm.frame_id].translation[:2])
         points = np.array(points)
-        ax.plot(points[:, 0], points[:, 1], "-o", color=("#c05a1f", "#3a6fb0")[k % 2], lw=2.5, ms=4, zorder=3)
+        label = arm_label(robot, k) if label_arms else "_arm"
+        color = ARM_COLORS[k % len(ARM_COLORS)]
+        ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, zorder=3, label=label)
 
 
 def draw_ellipse(ax, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style) -> np.ndarray:
@@ -93,6 +162,67 @@ def _extent(task_set) -> float:
     return float(np.max(np.linalg.norm(flat.vertices, axis=1), initial=0.0))
 
 
+_DIRECTIONS = np.column_stack(
+    [np.cos(np.linspace(0, 2 * np.pi, 90, endpoint=False)), np.sin(np.linspace(0, 2 * np.pi, 90, endpoint=False))]
+)
+
+
+def support(task_set, directions: np.ndarray = _DIRECTIONS) -> np.ndarray:
+    """Support function of the drawn (x, y) part of a set along unit ``directions`` (k, 2):
+    ``max <d, x>`` over the set, task units; ``-inf`` for an empty set."""
+    if task_set.empty:
+        return np.full(len(directions), -np.inf)
+    flat = task_set if task_set.dim == 2 else task_set.project((0, 1))
+    if flat.kind == "ellipsoid":
+        return directions @ flat.center + np.linalg.norm(directions @ flat.generator, axis=1)
+    return np.max(directions @ flat.vertices.T, axis=1)
+
+
+def coincide(a, b, rtol: float = COINCIDE_RTOL) -> bool:
+    """Whether two sets draw the same curve: supports within ``rtol`` of the larger set's reach."""
+    ha, hb = support(a), support(b)
+    if not (np.all(np.isfinite(ha)) and np.all(np.isfinite(hb))):
+        return bool(a.empty and b.empty)
+    reach = max(float(np.max(np.abs(ha))), float(np.max(np.abs(hb))), 1e-300)
+    return bool(np.max(np.abs(ha - hb)) <= rtol * reach)
+
+
+def _scale_of(panels) -> float:
+    largest = max(_extent(entry[1]) for *_, entries in panels for entry in entries)
+    return 0.9 / largest if largest > 0 else 1.0
+
+
+def panel_bounds(panels, scale: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(lower (2,), upper (2,)), m, of what each panel draws: the robot and its sets at ``scale``."""
+    bounds = []
+    for _, robot, q, point, sets in panels:
+        points = [robot_points(robot, q), np.asarray(point[:2], dtype=float)[None]]
+        for _, task_set, *_ in sets:
+            if not task_set.empty:
+                h = support(task_set, np.vstack([np.eye(2), -np.eye(2)]))
+                points.append(np.asarray(point[:2]) + scale * np.array([[h[0], h[1]], [-h[2], -h[3]]]))
+        points = np.vstack(points)
+        bounds.append((points.min(axis=0), points.max(axis=0)))
+    return bounds
+
+
+def panel_limits(*bounds: list[tuple[np.ndarray, np.ndarray]], pad: float = PAD) -> list[tuple[tuple, tuple]]:
+    """Axis limits ((x0, x1), (y0, y1)) per panel: each panel's content (the union over the given
+    figures' :func:`panel_bounds`, panel by panel) centred in a box as wide and as tall as the
+    widest and tallest content of any panel, plus ``pad``. Every panel thus shows the same
+    metres per inch, and figures given together get the same limits."""
+    joined = [
+        (np.min([b[i][0] for b in bounds], axis=0), np.max([b[i][1] for b in bounds], axis=0))
+        for i in range(len(bounds[0]))
+    ]
+    span = np.max([hi - lo for lo, hi in joined], axis=0) * (1.0 + 2.0 * pad)
+    limits = []
+    for lo, hi in joined:
+        middle = 0.5 * (lo + hi)
+        limits.append(tuple((float(middle[i] - span[i] / 2), float(middle[i] + span[i] / 2)) for i in range(2)))
+    return limits
+
+
 def sweep_figure(
     panels: Sequence[tuple[str, Robot, np.ndarray, np.ndarray, Sequence[tuple]]],
     title: str,
@@ -101,7 +231,10 @@ def sweep_figure(
     scale: float | None = None,
     drawn: list | None = None,
     note: str = "",
-    legend_loc: str = "lower right",
+    legend_loc: str = "upper center",
+    limits: Sequence[tuple[tuple, tuple]] | None = None,
+    formats: Sequence[str] = FORMATS,
+    keep: list | None = None,
 ) -> float:
     """One panel per configuration, each with the robot and nested sets at the task point.
 
@@ -109,38 +242,60 @@ def sweep_figure(
         panels: per panel (caption, robot, q, task point (m), [(legend label, set[, style]), ...]),
             where a set is an ellipse or a polytope (drawn as its outline) and the optional style
             is a dict of matplotlib line properties; a label starting with ``_`` is left out of
-            the legend.
-        title: figure title.
-        unit: unit of the sets (e.g. "m/s").
-        path: PNG file to write.
+            the legend. Labels and captions may use mathtext (``$\\tau_{\\max}$``).
+        title: figure title above the panels; empty (as for a paper, whose caption says it)
+            for none.
+        unit: unit of the sets, mathtext allowed (e.g. ``m/s$^2$``).
+        path: the file to write (its suffix is replaced by each of ``formats``).
         scale: metres drawn per task unit; by default the largest extent (an ellipse's largest
             semi-axis, a polygon's farthest vertex) becomes 0.9 m.
-        drawn: if given, a record of each curve drawn is appended to it: a dict with
-            ``panel`` (index), ``caption``, ``label``, ``kind`` (the set's), ``point`` (the task
-            point (2,), m), ``scale`` and ``points`` (k, 2), m: an ellipse's boundary points or a
-            polygon's vertices.
-        note: a second title line (e.g. what the line styles mean).
-        legend_loc: where matplotlib puts each panel's legend.
+        drawn: if given, a record of each set is appended to it: a dict with ``panel``
+            (index), ``caption``, ``label``, ``kind`` (the set's), ``point`` (the task point (2,),
+            m), ``scale``, ``points`` (k, 2), m (an ellipse's boundary points or a polygon's
+            vertices) and ``coincides_with`` (the label of the set it coincides with and is drawn
+            as, or ``None`` when drawn itself).
+        note: a line under the panels (e.g. what the line styles mean).
+        legend_loc: where the figure's legend goes, outside the panels: ``"upper center"``
+            (above them) or ``"lower center"`` (below them).
+        limits: axis limits per panel (see :func:`panel_limits`); by default those of
+            this figure alone.
+        formats: file formats written beside each other (``png``, ``pdf``, ``svg``).
+        keep: if given, the figure is appended to it and left open (the caller closes it).
 
     Returns:
         The scale used (m per task unit).
     """
     if scale is None:
-        largest = max(_extent(entry[1]) for *_, entries in panels for entry in entries)
-        scale = 0.9 / largest if largest > 0 else 1.0
+        scale = _scale_of(panels)
+    if limits is None:
+        limits = panel_limits(panel_bounds(panels, scale))
     polygons = any(entry[1].kind != "ellipsoid" for *_, entries in panels for entry in entries)
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 5.4 + 0.3 * bool(note)), squeeze=False)
+    (x0, x1), (y0, y1) = limits[0]
+    width = 3.3 * len(panels)
+    fig, axes = plt.subplots(
+        1,
+        len(panels),
+        figsize=(width, width / len(panels) * (y1 - y0) / (x1 - x0) + 1.0),
+        squeeze=False,
+        layout="constrained",
+    )
+    notes: dict[tuple[str, str], list[str]] = {}
     for index, (ax, (caption, robot, q, point, sets)) in enumerate(zip(axes[0], panels)):
         draw_robot(ax, robot, q)
-        low, high = np.array([-1.0, -1.0]), np.array([2.2, 2.2])
-        top = -np.inf
+        twins: list[str | None] = [None] * len(sets)  # a set coinciding with a later one is drawn as that one
+        for i in reversed(range(len(sets))):
+            later = (j for j in range(i + 1, len(sets)) if twins[j] is None and coincide(sets[i][1], sets[j][1]))
+            twins[i] = next((sets[j][0] for j in later), None)
         for k, (label, task_set, *style) in enumerate(sets):
-            look = {"color": COLORS[k % len(COLORS)], "lw": 1.8, **(style[0] if style else {})}
+            look = {"color": SET_COLORS[k % len(SET_COLORS)], "lw": 1.6, **(style[0] if style else {})}
+            twin = twins[k]
             draw = draw_ellipse if task_set.kind == "ellipsoid" else draw_polygon
-            points = draw(ax, task_set, point, scale, label=label, **look)
-            if len(points):
-                low, high = np.minimum(low, points.min(axis=0) - 0.1), np.maximum(high, points.max(axis=0) + 0.1)
-                top = max(top, float(points[:, 1].max()))
+            if twin is None:
+                points = draw(ax, task_set, point, scale, label=label, **look)
+            else:  # drawn as its twin: record where it would be, and say so once
+                points = _points(task_set, point, scale)
+                if not label.startswith("_"):
+                    notes.setdefault((label, twin), []).append(caption)
             if drawn is not None:
                 drawn.append(
                     {
@@ -151,27 +306,52 @@ def sweep_figure(
                         "point": np.asarray(point[:2], dtype=float),
                         "scale": scale,
                         "points": points,
+                        "coincides_with": twin,
                     }
                 )
-        if legend_loc.startswith("upper"):  # room above the sets for the legend
-            high[1] = max(high[1], top + 0.6)
-        ax.plot(*point[:2], "k+", ms=10, zorder=5)
-        ax.set_title(caption)
+        ax.plot(*point[:2], "k+", ms=8, mew=1.0, zorder=5)
+        ax.set_title(caption, fontsize=10)
         ax.set_aspect("equal", adjustable="box")
-        side = float(np.max(high - low))  # a square view holding every set
-        middle = 0.5 * (low + high)
-        ax.set_xlim(middle[0] - side / 2, middle[0] + side / 2)
-        ax.set_ylim(middle[1] - side / 2, middle[1] + side / 2)
-        ax.grid(True, lw=0.3)
-        ax.set_xlabel("x (m)")
-        ax.set_ylabel("y (m)")
-        ax.legend(loc=legend_loc, fontsize=8)
+        (x0, x1), (y0, y1) = limits[index]
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+        ax.grid(True, lw=0.3, color="#dddddd")
+        ax.set_xlabel("$x$ (m)")
+        if index == 0:
+            ax.set_ylabel("$y$ (m)")
+        ax.tick_params(labelsize=8)
+    handles, labels = [], []
+    for ax in axes[0]:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            if label not in labels:
+                handles.append(handle)
+                labels.append(label)
     what = "scale" if polygons else "ellipse scale"
-    heading = f"{title}  ({what}: 1 {unit} = {scale:.3g} m)"
-    fig.suptitle(f"{heading}\n{note}" if note else heading)
-    fig.tight_layout()
+    lines = [f"{what}: 1 {unit} = {scale:.3g} m"]
+    for (label, twin), captions in notes.items():
+        where = "every panel" if len(captions) == len(panels) else ", ".join(captions)
+        lines.append(f"{label} coincides with {twin} ({where}): drawn once")
+    if note:
+        lines.append(note)
+    fig.legend(handles, labels, loc=f"outside {legend_loc}", ncol=min(len(labels), 4), fontsize=8, frameon=False)
+    fig.supxlabel("\n".join(lines), fontsize=8)
+    if title:
+        fig.suptitle(title, fontsize=10)
     try:
-        save_figure(fig, path, dpi=110)
+        for fmt in formats:
+            save_figure(fig, Path(path).with_suffix("." + fmt), dpi=200)
     finally:
-        plt.close(fig)
+        if keep is None:
+            plt.close(fig)
+        else:
+            keep.append(fig)
     return scale
+
+
+def _points(task_set, at: np.ndarray, scale: float) -> np.ndarray:
+    """The points :func:`draw_ellipse` / :func:`draw_polygon` would draw, without drawing them."""
+    if task_set.kind == "ellipsoid":
+        flat = task_set if task_set.dim == 2 else task_set.project((0, 1))
+        return Ellipsoid.from_generator(np.asarray(at[:2]) + scale * flat.center, scale * flat.generator).boundary(240)
+    flat = task_set if task_set.dim == 2 else task_set.project((0, 1))
+    return np.zeros((0, 2)) if flat.empty else np.asarray(at[:2]) + scale * flat.vertices

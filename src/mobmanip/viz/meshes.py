@@ -14,10 +14,16 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.etree import ElementTree
 
 from ..errors import UrdfError
 from ..urdf import urdf_text
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from ..model import Robot
 
 
 @dataclass
@@ -113,3 +119,51 @@ def strip_meshes(text: str) -> str:
             if visual.find("geometry/mesh") is not None:
                 link.remove(visual)
     return ElementTree.tostring(root, encoding="unicode")
+
+
+def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Model, pin.GeometryModel]:
+    """The visual geometry of ``robot`` on a model that matches ``robot.model`` joint for joint.
+
+    The URDF is built again with the planar root joint and its visual geometry, and both are
+    reduced with the joints the robot locks (those not in ``robot.model.names``) at the spec's
+    reference positions, as :func:`mobmanip.load_robot` does. Meshes are read only from inside
+    the spec's package directories (:mod:`mobmanip.viz.meshes`); those outside, missing or
+    unreadable are left out, with a line appended to ``notes`` for each.
+
+    Raises:
+        ModelError: the reduced model does not match ``robot.model`` (names or sizes differ).
+    """
+    import pinocchio as pin
+
+    from .._native_stderr import call_with_large_stack, captured_native_stderr
+    from ..errors import ModelError
+    from ..model import locked_joints
+
+    spec = robot.spec
+    notes = [] if notes is None else notes
+    visual = visual_urdf(spec.urdf, spec.package_dirs)
+    notes.extend(visual.skipped)
+    package_dirs = [str(p) for p in spec.package_dirs]
+    model = call_with_large_stack(pin.buildModelFromXML, visual.text, pin.JointModelPlanar())
+    with captured_native_stderr() as native:
+        try:
+            geometry = call_with_large_stack(
+                pin.buildGeomFromUrdfString, model, visual.text, pin.GeometryType.VISUAL, None, package_dirs
+            )
+        except Exception as exc:  # a mesh file Pinocchio cannot load: draw without meshes
+            reason = native.first_error() or (str(exc).splitlines() or [type(exc).__name__])[0]
+            notes.append(f"the meshes of {robot.name!r} could not be loaded ({reason}); drawn without them")
+            geometry = None
+    if geometry is None:
+        geometry = call_with_large_stack(
+            pin.buildGeomFromUrdfString, model, strip_meshes(visual.text), pin.GeometryType.VISUAL
+        )
+    locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
+    if locked:
+        model, (geometry,) = pin.buildReducedModel(model, [geometry], locked, q_ref)
+    if list(model.names) != list(robot.model.names) or model.nq != robot.model.nq:
+        raise ModelError(
+            f"the visual model of {robot.name!r} does not match its analysis model: joints "
+            f"{list(model.names)} vs {list(robot.model.names)}"
+        )
+    return model, geometry

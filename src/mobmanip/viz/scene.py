@@ -54,9 +54,10 @@ What is drawn, and how
   ``size`` = 0.5 m; fixed at the first :meth:`EllipsoidViewer.show` (or over all frames of an
   animation) so that later updates stay comparable.
 
-Camera: meshcat 0.3.2 always aims its camera at the world origin (see
-:meth:`EllipsoidViewer.set_camera`); the first :meth:`EllipsoidViewer.show` places it far enough
-to see the robot and the ellipsoids from 30 deg above the ground.
+The page explains itself (:mod:`mobmanip.viz.page`): a legend names each drawn set by its
+colour with its scale (``1 m/s = 0.227 m``), the first :meth:`EllipsoidViewer.show` frames the
+robot's visual geometry, the object and the sets, and a set too small to see at its quantity's
+scale is drawn larger by a factor the legend states (:attr:`EllipsoidViewer.magnified`).
 
 The viewer loads every mesh once (``set_object``): those of the measures it is created for when
 it is created, those of another measure the first time an analysis brings it;
@@ -80,10 +81,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..analysis import Analysis, analyze
-from ..errors import MobmanipError, ModelError
 from ..io import write_text
-from ..measures import Quantity, default_measures, get_measure, measure_names, resolve_measures
-from ..model import Robot, locked_joints
+from ..measures import default_measures, get_measure, measure_names, resolve_measures
+from ..model import Robot
+from . import page as _page
+from .meshes import visual_model as visual_model
+from .scales import DEFAULT_SIZE as DEFAULT_SIZE
+from .scales import ScaleFactors as ScaleFactors
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, MIN_SEMI_AXIS, _translation, drawn_ellipsoid, drawn_extent, ellipsoid_frame
 from .shapes import _aligned as _aligned  # noqa: F401 - re-exported: the animation tests use it
@@ -96,7 +100,6 @@ ELLIPSOIDS_PATH = f"{ROOT}/ellipsoids"
 LOCKED_PATH = f"{ROOT}/locked"
 OBJECT_COLOR = 0xF0F0F0
 OBJECT_RADIUS = 0.035  # m
-DEFAULT_SIZE = 0.5  # m: the largest drawn extent of each quantity's sets
 
 __all__ = [
     "COLORS",
@@ -150,129 +153,7 @@ COLORS = _of_defaults(scene_color)
 PLANAR_THICKNESS = _of_defaults(planar_thickness)
 
 
-# --------------------------------------------------------------------------- visual model
-
-
-def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Model, pin.GeometryModel]:
-    """The visual geometry of ``robot`` on a model that matches ``robot.model`` joint for joint.
-
-    The URDF is built again with the planar root joint and its visual geometry, and both are
-    reduced with the joints the robot locks (those not in ``robot.model.names``) at the spec's
-    reference positions, as :func:`mobmanip.load_robot` does. Meshes are read only from inside
-    the spec's package directories (:mod:`mobmanip.viz.meshes`); those outside, missing or
-    unreadable are left out, with a line appended to ``notes`` for each.
-
-    Raises:
-        ModelError: the reduced model does not match ``robot.model`` (names or sizes differ).
-    """
-    from .._native_stderr import call_with_large_stack, captured_native_stderr
-    from .meshes import strip_meshes, visual_urdf
-
-    spec = robot.spec
-    notes = [] if notes is None else notes
-    visual = visual_urdf(spec.urdf, spec.package_dirs)
-    notes.extend(visual.skipped)
-    package_dirs = [str(p) for p in spec.package_dirs]
-    model = call_with_large_stack(pin.buildModelFromXML, visual.text, pin.JointModelPlanar())
-    with captured_native_stderr() as native:
-        try:
-            geometry = call_with_large_stack(
-                pin.buildGeomFromUrdfString, model, visual.text, pin.GeometryType.VISUAL, None, package_dirs
-            )
-        except Exception as exc:  # a mesh file Pinocchio cannot load: draw without meshes
-            reason = native.first_error() or (str(exc).splitlines() or [type(exc).__name__])[0]
-            notes.append(f"the meshes of {robot.name!r} could not be loaded ({reason}); drawn without them")
-            geometry = None
-    if geometry is None:
-        geometry = call_with_large_stack(
-            pin.buildGeomFromUrdfString, model, strip_meshes(visual.text), pin.GeometryType.VISUAL
-        )
-    locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
-    if locked:
-        model, (geometry,) = pin.buildReducedModel(model, [geometry], locked, q_ref)
-    if list(model.names) != list(robot.model.names) or model.nq != robot.model.nq:
-        raise ModelError(
-            f"the visual model of {robot.name!r} does not match its analysis model: joints "
-            f"{list(model.names)} vs {list(robot.model.names)}"
-        )
-    return model, geometry
-
-
 # --------------------------------------------------------------------------- scales
-
-
-@dataclass(frozen=True)
-class ScaleFactors:
-    """How long 1 unit of each quantity is drawn (metres of scene per m/s, per m/s^2, ...).
-
-    Index it by a quantity, its name (``"velocity"``), its label (``"kinematic"``) or the name of
-    a measure of it (``scales["kinematic"]``); labels also work as attributes
-    (``scales.kinematic``, ``scales.dynamic``).
-
-    Attributes:
-        values: metres of scene per unit, by quantity.
-    """
-
-    values: Mapping[Quantity, float]
-
-    def _quantity(self, key) -> Quantity:
-        if isinstance(key, Quantity):
-            return key
-        for quantity in self.values:
-            if key in (quantity.name, quantity.label):
-                return quantity
-        return get_measure(key).quantity
-
-    def __getitem__(self, key) -> float:
-        quantity = self._quantity(key)
-        try:
-            return self.values[quantity]
-        except KeyError:
-            raise ViewerError(f"no scale for {quantity.name} ({key!r}); scales: {self.describe()}") from None
-
-    def __getattr__(self, name: str) -> float:
-        if name.startswith("_") or name == "values":
-            raise AttributeError(name)
-        try:
-            return self[name]
-        except MobmanipError:
-            raise AttributeError(name) from None
-
-    @classmethod
-    def fit(
-        cls, analyses: Sequence[Analysis | None], size: float = DEFAULT_SIZE, measures: Iterable[str] | None = None
-    ) -> ScaleFactors:
-        """Scales that draw the largest extent (|centre| + largest semi-axis for an ellipsoid) of
-        each quantity's drawable sets, over all given analyses, ``size`` metres long (1 when
-        everything is zero or empty). Quantities: those of ``measures`` (default: the default
-        measures) and of every measure the analyses hold, in the registry's order."""
-        present = {name for a in analyses if a is not None for name in a.measures}
-        present.update(m.name for m in resolve_measures(measures))
-        values: dict[Quantity, float] = {}
-        for name in measure_names():
-            quantity = get_measure(name).quantity
-            if name not in present or quantity in values:
-                continue
-            extent = max(
-                (
-                    DRAWINGS[s.kind].extent(s, a.task)
-                    for a in analyses
-                    if a is not None
-                    for key, s in a.measures.items()
-                    if get_measure(key).quantity == quantity and s.kind in DRAWINGS
-                ),
-                default=0.0,
-            )
-            values[quantity] = size / extent if extent > 0.0 else 1.0
-        return cls(values)
-
-    def including(self, other: ScaleFactors) -> ScaleFactors:
-        """These scales, and those of ``other`` for the quantities these do not have."""
-        return ScaleFactors({**other.values, **self.values})
-
-    def describe(self) -> str:
-        """E.g. ``kinematic: 1 m/s = 0.0974 m; dynamic: 1 m/s^2 = 0.0190 m``."""
-        return "; ".join(f"{q.label}: 1 {q.unit} = {v:.4g} m" for q, v in self.values.items())
 
 
 # --------------------------------------------------------------------------- frames
@@ -327,6 +208,9 @@ class EllipsoidViewer:
         timeout: seconds to wait for the server to answer a command.
         measures: the measures whose meshes are loaded now (default: the default ones); another
             measure's are loaded the first time an analysis brings it.
+        magnify: draw a set too small to see at its quantity's scale larger, by a 1-2-5 factor
+            the page's legend states (:func:`mobmanip.viz.page.magnification`); ``False`` draws
+            every set of a quantity at one scale.
 
     Raises:
         PortBusyError: ``port`` is in use.
@@ -343,6 +227,7 @@ class EllipsoidViewer:
         size: float = DEFAULT_SIZE,
         timeout: float = 60.0,
         measures: Iterable[str] | None = None,
+        magnify: bool = True,
     ):
         import zmq
 
@@ -354,6 +239,11 @@ class EllipsoidViewer:
         self.robot = robot
         self.scales = scales
         self.size = size
+        self.magnify = magnify
+        #: How many times larger each magnified set is drawn, by (locked, measure name).
+        self.magnified: dict[tuple[bool, str], float] = {}
+        self._page: dict = {}  # what page.js shows (see mobmanip.viz.page)
+        self._camera_serial = 0
         self._closed = False
         self._visible: dict[tuple[bool, str], bool | None] = {}  # loaded sets, visibility as last sent
         #: Measures whose sets were not drawn: no drawing for their set kind yet (by name: kind).
@@ -378,7 +268,6 @@ class EllipsoidViewer:
             self._server.stop()
             raise
         self._locked_visible: bool | None = None
-        self._camera_set = False
         self.last: Frame | None = None
         if open_browser:
             self.open()
@@ -461,33 +350,102 @@ class EllipsoidViewer:
 
     # ----- camera
 
-    def set_camera(self, distance: float, elevation_deg: float = 30.0, azimuth_deg: float = -120.0) -> None:
-        """Place meshcat's camera ``distance`` m from the world origin, ``elevation_deg`` above
-        the horizon, in the horizontal direction ``azimuth_deg`` from +x.
+    def set_camera(
+        self, distance: float, elevation_deg: float = 30.0, azimuth_deg: float = -120.0, target=(0.0, 0.0, 0.0)
+    ) -> None:
+        """Place the camera ``distance`` m from ``target`` (world, m), ``elevation_deg`` above the
+        horizon, in the horizontal direction ``azimuth_deg`` from +x, looking at ``target``.
 
-        meshcat 0.3.2's orbit controls always aim the camera at the world origin (they call
-        ``lookAt`` with their target, the origin, in world coordinates, whatever the transform of
-        ``/Cameras/default``), so the camera is placed through its position property at
-        ``/Cameras/default/rotated/<object>`` (a y-up frame) and ``/Cameras/default`` is left at
-        the identity. Drag with the right mouse button to pan to another point.
+        meshcat 0.3.2's orbit controls aim the camera at their target, the world origin, and
+        meshcat has no command to move it; the page's script (:mod:`mobmanip.viz.page`) sets
+        both. The position is also sent as the camera's position property
+        (``/Cameras/default/rotated/<object>``, a y-up frame), which a page without the script
+        follows. Drag with the right mouse button to pan.
         """
         el, az = math.radians(elevation_deg), math.radians(azimuth_deg)
         offset = distance * np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+        position = np.asarray(target, dtype=float) + offset
+        self._camera_serial += 1
         with self._commands():
             # world (x, y, z) = rotated-frame (x, -z, y)
-            local = [float(offset[0]), float(offset[2]), float(-offset[1])]
+            local = [float(position[0]), float(position[2]), float(-position[1])]
             self._vis["/Cameras/default/rotated/<object>"].set_property("position", local)
-        self._camera_set = True
+            self._send_page(camera=_page.look_request(position, target, self._camera_serial))
 
-    def _fit_camera(self, frame: Frame) -> None:
-        """A camera distance that shows everything within reach of the origin (where meshcat's
-        camera looks): the robot's joints, the task point and the ellipsoids around it."""
-        data = self.model.createData()
-        pin.forwardKinematics(self.model, data, frame.q)
-        points = np.array([data.oMi[j].translation for j in range(1, self.model.njoints)])
-        reach = max(float(np.max(np.linalg.norm(points, axis=1))), 0.5)
-        reach = max(reach, float(np.linalg.norm(frame.analysis.held_object.center)) + self.size)
-        self.set_camera(1.35 * reach)
+    def frame_camera(self, frame: Frame) -> dict:
+        """Frame the robot at ``frame.q`` (its visual geometry), the held object and the drawn
+        sets: the page places the camera so that their bounding box fills most of its view, seen
+        from the front right of the platform and 25 deg above the horizon.
+
+        Returns:
+            The camera request sent (see :mod:`mobmanip.viz.page`); its ``box`` is the framed
+            box (lower, upper), m.
+        """
+        points, boxes = _page.visual_points(self.model, self.visual_model, frame.q), []
+        for source, locked in ((frame.analysis, False), (frame.locked, True)):
+            if source is None:
+                continue
+            center = source.held_object.center
+            boxes.append(_page.sphere_box(center, OBJECT_RADIUS))
+            for (_, name), task_set in self._drawn(source, locked).items():
+                if task_set.empty:
+                    continue
+                scale = self._set_scale((locked, name))
+                if task_set.kind == "ellipsoid":  # points on the drawn ellipsoid
+                    T = ellipsoid_matrix(task_set, source.task, center, scale, planar_thickness(name, locked))
+                    points = np.vstack([points, _page.DIRECTIONS @ T[:3, :3].T + T[:3, 3]])
+                else:
+                    boxes.append(
+                        _page.sphere_box(center, DRAWINGS[task_set.kind].extent(task_set, source.task) * scale)
+                    )
+        heading = math.atan2(frame.q[3], frame.q[2]) if self.model.nq >= 4 else 0.0
+        self._camera_serial += 1
+        request = _page.fit_request(points, boxes, heading, self._camera_serial)
+        with self._commands():
+            self._send_page(camera=request)
+        return request
+
+    def _send_page(self, **changes) -> None:
+        """Update what the page shows (legend, camera) if it changed."""
+        page = {**self._page, **changes}
+        if page != self._page:
+            self._vis[ROOT].set_property(_page.PAGE_PROPERTY, page)
+            self._page = page
+
+    def _legend(self, sets: dict, title: str, notes: Sequence[str] = ()) -> None:
+        """Show the legend of the drawn ``sets`` (by (locked, measure name))."""
+        rows, more = _page.legend_rows(sets, self.scales, self.magnified, OBJECT_COLOR)
+        with self._commands():
+            self._send_page(title=title, rows=rows, notes=[*more, *notes])
+
+    def _title(self, analysis: Analysis) -> str:
+        title = f"{self.robot.name} ({self.robot.platform.kind.replace('_', ' ')}), {analysis.task} task"
+        if analysis.task in ("spatial", "planar_rigid"):
+            title += " (linear part drawn)"
+        return title
+
+    def _set_scale(self, key: tuple[bool, str]) -> float:
+        """Metres of scene per task unit of set ``key``: its quantity's scale, magnified."""
+        return self.scales[key[1]] * self.magnified.get(key, 1.0)
+
+    def _fit_magnified(self, per_key: Mapping[tuple[bool, str], float]) -> None:
+        """Decide the magnification of sets seen for the first time, from their largest extent
+        (task units) by key."""
+        for key, extent in per_key.items():
+            if key not in self.magnified:
+                drawn = extent * self.scales[key[1]]
+                self.magnified[key] = _page.magnification(drawn, self.size) if self.magnify else 1.0
+
+    @staticmethod
+    def _extents(frames: Iterable[Frame]) -> dict[tuple[bool, str], float]:
+        out: dict[tuple[bool, str], float] = {}
+        for frame in frames:
+            for source, locked in ((frame.analysis, False), (frame.locked, True)):
+                for name, task_set in ({} if source is None else source.measures).items():
+                    if task_set.kind in DRAWINGS:
+                        extent = DRAWINGS[task_set.kind].extent(task_set, source.task)
+                        out[locked, name] = max(out.get((locked, name), 0.0), extent)
+        return out
 
     # ----- showing one configuration
 
@@ -502,6 +460,7 @@ class EllipsoidViewer:
         q = self.robot.check_configuration(analysis.q if q is None else q)
         frame = Frame(q, analysis, locked)
         self._fit_scales([analysis, locked])
+        self._fit_magnified(self._extents([frame]))
         sets = {**self._drawn(analysis, False), **self._drawn(locked, True)}
         with self._commands():
             self._pin.display(q)
@@ -517,7 +476,7 @@ class EllipsoidViewer:
                         task_set,
                         source.task,
                         source.held_object.center,
-                        self.scales[key[1]],
+                        self._set_scale(key),
                         planar_thickness(key[1], key[0]),
                     )
                 self._set_visible(key, visible)
@@ -526,8 +485,9 @@ class EllipsoidViewer:
                     self._set_visible(key, False)
             if self._locked_visible != (locked is not None):
                 self.set_locked_visible(locked is not None)
-        if not self._camera_set:
-            self._fit_camera(frame)
+        self._legend(sets, self._title(analysis))
+        if self._camera_serial == 0:
+            self.frame_camera(frame)
         self.last = frame
 
     def _set_visible(self, key: tuple[bool, str], visible: bool) -> None:
@@ -551,7 +511,7 @@ class EllipsoidViewer:
             analysis.measure(name),
             analysis.task,
             analysis.held_object.center,
-            self.scales[name],
+            self._set_scale(key),
             planar_thickness(name, locked),
         )
 
@@ -581,6 +541,7 @@ class EllipsoidViewer:
         if not frames:
             raise ViewerError("an animation needs at least one frame")
         self._fit_scales([a for f in frames for a in (f.analysis, f.locked)])
+        self._fit_magnified(self._extents(frames))
         any_locked = any(f.locked is not None for f in frames)
         per_frame = [{**self._drawn(f.analysis, False), **self._drawn(f.locked, True)} for f in frames]
         order = {name: i for i, name in enumerate(measure_names())}
@@ -588,6 +549,11 @@ class EllipsoidViewer:
         kinds = {key: sets[key].kind for sets in per_frame for key in sets}
         first = frames[0]
         self.show(first.q, first.analysis, first.locked)
+        shown: dict = {}  # each set as drawn in the legend: its first non-empty frame
+        for key in keys:
+            shown[key] = next((s[key] for s in per_frame if key in s and not s[key].empty), None)
+            shown[key] = shown[key] or next(s[key] for s in per_frame if key in s)
+        self._legend(shown, f"{self._title(first.analysis)}, {len(frames)} frames (play them in Animations)")
         if any_locked and not self._locked_visible:
             self.set_locked_visible(True)
         with self._commands():  # a set empty (or absent) in the first frame may appear later: scale hides it
@@ -618,7 +584,7 @@ class EllipsoidViewer:
                     task_set,
                     source.task,
                     source.held_object.center,
-                    self.scales[key[1]],
+                    self._set_scale(key),
                     planar_thickness(key[1], key[0]),
                     None if last is None else last[0][:3, :3],
                 )
@@ -645,7 +611,7 @@ class EllipsoidViewer:
     def static_html(self) -> str:
         """The scene as one self-contained HTML page (meshcat's ``static_html``)."""
         with self._commands():
-            return self._vis.static_html()
+            return _page.inject(self._vis.static_html())
 
     def export_html(self, path: str | Path) -> Path:
         """Write the scene (with its animation, if any) as a self-contained HTML page."""
