@@ -16,7 +16,8 @@ import numpy as np
 
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid
-from .engine import evaluate_one, kernel_available
+from .engine import evaluate_one
+from .engine.compiled import kernel_ready
 from .errors import ArgumentError, MeasureError, TaskError
 from .grasp import HeldObject
 from .measure import TaskSet
@@ -170,9 +171,12 @@ def analyze(
             registry's order.
         method: ``"auto"``: the compiled kernel of :mod:`mobmanip.engine` (closed forms with an
             a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
-            at a singularity, is computed by the exact path); ``"exact"``: always the SVD-based
-            :mod:`mobmanip.ellipsoids` (the reference; about 4x slower). Without Numba,
-            ``"auto"`` is ``"exact"``.
+            at a singularity, is computed by the exact path) where this process has already
+            compiled it for this robot's number of arms and task dimension (a batch or a sweep
+            did, or :func:`mobmanip.batch.warm_kernel`), else the exact path: one configuration
+            never waits tens of seconds for a compile to save a fraction of a millisecond.
+            ``"exact"``: always the SVD-based :mod:`mobmanip.ellipsoids` (the reference; about
+            4x slower than the kernel, a fraction of a millisecond).
 
     Raises:
         UnknownMeasureError: a measure name that is not registered (the message lists them).
@@ -191,7 +195,8 @@ def analyze(
             raise TaskError(
                 f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
             )
-    if method == "auto" and kernel_available() and robot.constant_null_space:  # the kernel freezes S
+    fast = method == "auto" and robot.constant_null_space  # the fast paths freeze S
+    if fast and kernel_ready(len(robot.arms), task.dim):
         analysis = _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
     else:
         analysis = _analyze_exact(robot, q, task, float(mass), held_object, decoupled)

@@ -94,7 +94,9 @@ def run(args) -> int:
         write_json(args.save_q, robot.configuration_dict(result.q))
         print(f"wrote {args.save_q}")
     if args.json:
-        analysis = analyze(robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled)
+        analysis = analyze(  # as `mobmanip analyze` computes it: the reference path
+            robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled, method="exact"
+        )
         write_json(args.json, placement_document(robot, result, analysis))
         print(f"wrote {args.json}")
     return 0
