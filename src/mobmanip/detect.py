@@ -427,7 +427,11 @@ def spec_to_toml(
             f"end_effector = {_string(arm.end_effector)}",
             "",
         ]
-    out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg", ""]
+    out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg"]
+    if spec.grasp_offsets:
+        rows = ", ".join("[" + ", ".join(_number(v) for v in row) + "]" for row in spec.grasp_offsets)
+        out.append(f"grasp_offsets = [{rows}]  # m, where each arm grasps it, from its centre")
+    out.append("")
     hints = dict(kind.toml_limit_hints(spec.wheels))
     joints = [j for j in spec.active_joint_names if kind.limits_by_joint or j not in spec.wheel_joint_names]
     active = list(kind.limit_names(spec.wheels)) + joints
@@ -458,8 +462,14 @@ def spec_to_toml(
     out += [
         "",
         "# Optional: arm (and torso) positions of a posture in which the end effectors hold an",
-        "# object together; `mobmanip sweep` starts its inverse kinematics from it (else from home).",
-        "# [hold]",
-        f"# {_key(first)} = 0.0",
+        "# object together (`--posture hold`); `mobmanip sweep` starts its inverse kinematics from",
+        "# it (else from home).",
     ]
+    if spec.hold:
+        out += ["[hold]", *(f"{_key(joint)} = {_number(value)}" for joint, value in spec.hold.items())]
+    else:
+        out += ["# [hold]", f"# {_key(first)} = 0.0"]
+    for posture, joints in spec.postures.items():
+        out += ["", f"# Posture {posture!r} (`--posture {posture}`).", f"[postures.{_key(posture)}]"]
+        out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
     return "\n".join(out) + "\n"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from ..platforms import KINDS
@@ -25,6 +26,14 @@ def register(sub) -> None:
         "--torso", action="store_true", help="actuate the joints shared by all arms (default: lock them)"
     )
     parser.add_argument("--name", help="robot name (default: the URDF's)")
+    parser.add_argument(
+        "--posture",
+        action="append",
+        default=[],
+        metavar="NAME=Q.json",
+        help="record the arm and torso joints of a configuration file as a named posture "
+        "(NAME hold: the [hold] posture); repeat for several",
+    )
     parser.add_argument("--out", metavar="SPEC.toml", help="write here (default: standard output)")
     parser.set_defaults(func=run)
 
@@ -35,6 +44,8 @@ def run(args) -> int:
 
     wheels = None if args.wheels is None else parse_wheel_list(args.wheels)
     found = detect_spec(args.urdf, args.ee, wheels, args.platform, torso=args.torso, name=args.name)
+    if args.posture:
+        found = dataclasses.replace(found, spec=_with_postures(found.spec, args.posture))
     base_dir = Path(args.out).resolve().parent if args.out else None
     text = spec_to_toml(
         found.spec,
@@ -50,3 +61,35 @@ def run(args) -> int:
     spec = found.spec
     print(f"wrote {args.out}: {spec.platform}, {len(spec.arms)} arm(s), {len(spec.active_joint_names)} active joints")
     return 0
+
+
+def _with_postures(spec, items):
+    """The spec with the postures NAME=Q.json recorded (their arm and torso joints only).
+
+    Raises:
+        UsageError: an item not of the form NAME=PATH, or a name given twice or reserved.
+    """
+    from ..errors import UsageError
+    from ..io import read_configuration
+    from ..model import load_robot
+
+    robot = None
+    hold, postures = dict(spec.hold), dict(spec.postures)
+    for item in items:
+        name, sep, path = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not path:
+            raise UsageError(f"--posture takes NAME=Q.json, got {item!r}")
+        if name == "home":
+            raise UsageError("--posture home: the home posture is the [reference] one; record another name")
+        if name in postures or (name == "hold" and hold):
+            raise UsageError(f"--posture {name} is given twice")
+        if robot is None:
+            robot = load_robot(spec)  # the configuration file is read against the model
+        joints = robot.configuration_dict(read_configuration(robot, path))["joints"]
+        kept = {j: joints[j] for j in spec.torso + spec.arm_joint_names}
+        if name == "hold":
+            hold = kept
+        else:
+            postures[name] = kept
+    return dataclasses.replace(spec, hold=hold, postures=postures)
