@@ -212,11 +212,16 @@ def run_command(args) -> int:
     unreachable = int((~result.reachable).sum())
     if unreachable:
         print(f"{unreachable} of {result.reachable.size} configurations are out of the arms' reach (NaN indices)")
+    task = TASKS[result.spec.task]
+    mixed = bool(task.linear_rows) and bool(task.angular_rows)
     for measure in result.measures:
         kind = measure.name
         values = result.index(f"{kind}.volume")
         if result.reachable.any():
-            print(f"{kind} volume: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
+            label = f"{kind} volume"
+            if mixed:  # m^k rad^(m-k): only comparable within this task and quantity
+                label += f" ({task.dim}-D, mixing {measure.quantity.units}: compare only within this sweep)"
+            print(f"{label}: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
     written = [result.save_npz(out.with_name(out.name + ".npz"))]
     if not args.no_csv:
         written.append(result.save_csv(out.with_name(out.name + ".csv")))
