@@ -12,9 +12,9 @@ import pytest
 import mobmanip
 from conftest import PAPER_SPEC, write_variant
 from mobmanip.cli import main
-from mobmanip.errors import SpecError
+from mobmanip.errors import SpecError, UnknownPostureError
 from mobmanip.grasp import HeldObject
-from mobmanip.named_postures import UnknownPostureError, named_configuration, posture_names
+from mobmanip.named_postures import named_configuration, posture_names
 from mobmanip.plausibility import block_indices, limit_warnings, weight_warnings
 from mobmanip.spec import load_spec
 

@@ -20,7 +20,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .errors import SpecError
+from .errors import UnknownPostureError
 from .model import Robot
 from .spec import RobotSpec
 
@@ -29,15 +29,6 @@ HOME, HOLD = "home", "hold"
 #: Slack on the declared distance between two grasp points before a wider spread of the hands
 #: is warned about: a tenth of that distance, and at least this many metres (a hand's width).
 SPREAD_SLACK = 0.05
-
-
-class UnknownPostureError(SpecError):
-    """A posture name the spec does not define; lists the ones it does."""
-
-    def __init__(self, robot: str, name: object, available):
-        self.name = name
-        self.available = list(available)
-        super().__init__(f"robot {robot!r} has no posture {name!r}; its postures: {', '.join(self.available)}")
 
 
 def posture_names(spec: RobotSpec) -> tuple[str, ...]:
