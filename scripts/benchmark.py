@@ -44,7 +44,7 @@ import pinocchio as pin  # noqa: E402
 from pycapacity.robot import acceleration_ellipsoid, velocity_ellipsoid  # noqa: E402
 
 import mobmanip  # noqa: E402
-from mobmanip.batch import BatchSetup, Workspace, pinocchio_pass  # noqa: E402
+from mobmanip.batch import BatchSetup, Workspace, pinocchio_pass, warm_kernel  # noqa: E402
 from mobmanip.dynamics import reduced_dynamics, unified_jacobian  # noqa: E402
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep  # noqa: E402
 
@@ -100,6 +100,7 @@ class Case:
         # precomputed for pycapacity (not timed): the unified Jacobian and reduced inertia
         self.precomputed = [(unified_jacobian(robot, q, task), reduced_dynamics(robot, q).P) for q in self.qs_single]
         self.setup = BatchSetup(robot, task)
+        warm_kernel(robot, task)  # analyze takes the compiled kernel only once it is compiled
         self.workspace = Workspace(self.setup.probed, n_single)
 
     def floor(self):

@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import types
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -16,7 +17,8 @@ import numpy as np
 
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid
-from .engine import evaluate_one, kernel_available
+from .engine import evaluate_one
+from .engine.compiled import kernel_ready
 from .errors import ArgumentError, MeasureError, TaskError
 from .grasp import HeldObject
 from .measure import TaskSet
@@ -45,6 +47,12 @@ class Analysis:
         grasp_matrix: W, (m, m * n_arms).
         measures: the task-space sets computed, by measure name, in the registry's order
             (read-only); see :mod:`mobmanip.measures`. By default ``kinematic`` and ``dynamic``.
+        object_given: whether the object was given (``held_object=``) rather than the default
+            one between the hands.
+
+    ``warnings`` (computed on first access) says what makes the numbers doubtful: placeholder
+    limits, torques that cannot hold the robot up, hands further apart than the object's grasp
+    points (see :mod:`mobmanip.plausibility`).
     """
 
     robot: Robot
@@ -60,6 +68,7 @@ class Analysis:
     held_object: HeldObject
     grasp_matrix: np.ndarray
     measures: Mapping[str, TaskSet]
+    object_given: bool = False
 
     def measure(self, name: str) -> TaskSet:
         """The set of measure ``name``.
@@ -76,6 +85,14 @@ class Analysis:
                 f"measure {name!r} was not computed in this analysis ({', '.join(self.measures)}); "
                 f"ask analyze(..., measures=(..., {name!r}))"
             ) from None
+
+    @functools.cached_property
+    def warnings(self) -> tuple[str, ...]:
+        """Plausibility warnings of this configuration (:func:`mobmanip.plausibility.analysis_warnings`)."""
+        from .plausibility import analysis_warnings
+
+        explicit = self.held_object if self.object_given else None
+        return analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
 
     @property
     def kinematic(self) -> Ellipsoid:
@@ -113,8 +130,23 @@ class Analysis:
             "velocity_limits": robot.velocity_limits.tolist(),
             "effort_limits": robot.effort_limits.tolist(),
             "grasp_matrix": self.grasp_matrix.tolist(),
+            "warnings": list(self.warnings),
+            **self._block_document(),
             **{get_measure(name).json_key: s.to_dict() for name, s in self.measures.items()},
         }
+
+    def block_indices(self) -> dict | None:
+        """Unit-consistent indices per block (linear, angular) of each set, for a task that mixes
+        m and rad (``None`` otherwise): see :func:`mobmanip.plausibility.block_indices`."""
+        from .plausibility import block_indices
+
+        return block_indices(get_task(self.task), self.measures)
+
+    def _block_document(self) -> dict:
+        blocks = self.block_indices()
+        if blocks is None:
+            return {}
+        return {"block_indices": {get_measure(name).json_key: value for name, value in blocks.items()}}
 
 
 def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> HeldObject:
@@ -170,9 +202,12 @@ def analyze(
             registry's order.
         method: ``"auto"``: the compiled kernel of :mod:`mobmanip.engine` (closed forms with an
             a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
-            at a singularity, is computed by the exact path); ``"exact"``: always the SVD-based
-            :mod:`mobmanip.ellipsoids` (the reference; about 4x slower). Without Numba,
-            ``"auto"`` is ``"exact"``.
+            at a singularity, is computed by the exact path) where this process has already
+            compiled it for this robot's number of arms and task dimension (a batch or a sweep
+            did, or :func:`mobmanip.batch.warm_kernel`), else the exact path: one configuration
+            never waits tens of seconds for a compile to save a fraction of a millisecond.
+            ``"exact"``: always the SVD-based :mod:`mobmanip.ellipsoids` (the reference; about
+            4x slower than the kernel, a fraction of a millisecond).
 
     Raises:
         UnknownMeasureError: a measure name that is not registered (the message lists them).
@@ -191,7 +226,8 @@ def analyze(
             raise TaskError(
                 f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
             )
-    if method == "auto" and kernel_available() and robot.constant_null_space:  # the kernel freezes S
+    fast = method == "auto" and robot.constant_null_space  # the fast paths freeze S
+    if fast and kernel_ready(len(robot.arms), task.dim):
         analysis = _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
     else:
         analysis = _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
@@ -206,7 +242,19 @@ def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
     J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
     positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
     obj = held_object if held_object is not None else HeldObject.between(positions, mass)
-    return _assemble(robot, q, task, decoupled, J_u, dyn.P, dyn.xi, positions, obj, obj.grasp_matrix(task))
+    return _assemble(
+        robot,
+        q,
+        task,
+        decoupled,
+        J_u,
+        dyn.P,
+        dyn.xi,
+        positions,
+        obj,
+        obj.grasp_matrix(task),
+        given_object=held_object is not None,
+    )
 
 
 def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
@@ -215,12 +263,24 @@ def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
     row = evaluate_one(robot, q, task, mass, held_object, decoupled, method="kernel", validate=False)
     obj = held_object if held_object is not None else HeldObject.between(row.positions, mass)
     return _assemble(
-        robot, q, task, decoupled, row.J_u, row.P, row.xi, row.positions, obj, row.W, row.kinematic, row.dynamic
+        robot,
+        q,
+        task,
+        decoupled,
+        row.J_u,
+        row.P,
+        row.xi,
+        row.positions,
+        obj,
+        row.W,
+        row.kinematic,
+        row.dynamic,
+        given_object=held_object is not None,
     )
 
 
 def _assemble(
-    robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None, measures=None
+    robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None, measures=None, given_object=False
 ) -> Analysis:
     """The Analysis from the terms, with the measures ``measures`` (names; default: the default
     ones). The kinematic and dynamic ellipsoids may be given (the compiled path computes them);
@@ -262,6 +322,7 @@ def _assemble(
         held_object=obj,
         grasp_matrix=W,
         measures=types.MappingProxyType(sets),
+        object_given=given_object,
     )
 
 

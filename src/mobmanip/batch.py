@@ -27,7 +27,10 @@ from .engine import (
     evaluate_one,
     iter_terms,
     kernel_available,
+    kernel_cached,
+    kernel_ready,
     pinocchio_pass,
+    warm_kernel,
 )
 from .tolerances import FAST_PATH_TOLERANCE
 
@@ -51,5 +54,8 @@ __all__ = [
     "evaluate_one",
     "iter_terms",
     "kernel_available",
+    "kernel_cached",
+    "kernel_ready",
     "pinocchio_pass",
+    "warm_kernel",
 ]

@@ -25,6 +25,7 @@ The rules:
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -33,10 +34,11 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
 from .errors import FrameNotFoundError, JointNotFoundError, SpecError, UrdfError, WheelError
 from .platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
 from .platforms.wheels import WheelCandidate, wheel_candidates
-from .resources import EXAMPLE_ROBOT_DATA_PREFIX, example_robot_data_share
+from .resources import EXAMPLE_ROBOT_DATA_PREFIX, STRETCH_URDF_PREFIX, example_robot_data_share, stretch_urdf_dir
 from .spec import ArmSpec, RobotSpec
 from .urdf import (
     MOVING_JOINT_TYPES,
@@ -72,12 +74,18 @@ class Detection:
         shared_joints: actuated joints on the path of more than one arm (torso or locked).
         notes: one-line remarks for the user (written as comments by ``init-spec``).
         urdf_limits: ``{joint: (velocity, effort)}`` from the URDF for every active joint.
+        considered: what detection looked at and why it chose the platform kind: every
+            wheel-like joint and what became of it, each wheeled kind's verdict, the choice.
+        missing: values the spec still needs (wheel radii, limits), with the flags that give
+            them; empty when the spec loads as it is.
     """
 
     spec: RobotSpec
     shared_joints: tuple[str, ...]
     notes: tuple[str, ...]
     urdf_limits: Mapping[str, tuple[float | None, float | None]]
+    considered: tuple[str, ...] = ()
+    missing: tuple[Missing, ...] = ()
 
 
 def detect_platform(urdf, candidates, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
@@ -188,6 +196,9 @@ def detect_spec(
     torso: bool = False,
     name: str | None = None,
     default_task: str | None = None,
+    wheel_radius: float | None = None,
+    wheel_limits: tuple[float | None, float | None] = (None, None),
+    limits: Mapping[str, tuple[float | None, float | None]] | None = None,
 ) -> Detection:
     """Infer a spec from a URDF; see the module docstring for the rules.
 
@@ -202,6 +213,11 @@ def detect_spec(
         name: robot name (default: the URDF's robot name).
         default_task: task space (default: ``"planar"`` if every arm joint moves in the
             horizontal plane, else ``"spatial"``).
+        wheel_radius: radius (m) of wheels known by their name only (mesh geometry); written
+            as the spec's ``[wheels] radius``.
+        wheel_limits: ``(velocity, effort)`` for each of the platform's wheel coordinates the
+            URDF gives no limit (``None``: leave it to the URDF).
+        limits: ``{joint: (velocity, effort)}`` overrides of any active joint's limits.
 
     Raises:
         UrdfError: unreadable URDF, unsupported construct, or a mimic joint on an arm.
@@ -220,8 +236,12 @@ def detect_spec(
         raise SpecError(f"{path}: name at least one end-effector frame")
     notes: list[str] = [f"platform frame: root link {root_link(urdf, path)!r} (forward = +x, left = +y)"]
 
-    on_arm_paths = {j for ee in end_effectors for j in arm_joints(urdf, ee, (), path)}
-    candidates = wheel_candidates(urdf, exclude=on_arm_paths)
+    on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(urdf, ee, (), path)}
+    candidates = wheel_candidates(urdf, exclude=on_arm_paths, radius=wheel_radius)
+    on_arms = {
+        c.name: on_arm_paths[c.name] for c in wheel_candidates(urdf, radius=wheel_radius) if c.name in on_arm_paths
+    }
+    how = "wheels" if wheels is not None else ("platform" if platform is not None else "detected")
     wheel_spec: WheelsSpec | None = None
     if wheels is not None:
         for joint in wheels:
@@ -253,6 +273,17 @@ def detect_spec(
             notes.extend(detected.notes)
     platform = kind.name
     drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
+    considered = explain_wheels(urdf, candidates, drive if kind.takes_wheels else (), on_arms)
+    if candidates and how == "detected":
+        considered += platform_reasons(urdf, candidates, str(path))
+    considered.append(choice_reason(kind.name, how, candidates))
+    unmeasured = [c.name for c in candidates if c.radius is None and c.name in drive]
+    if wheel_spec is not None and wheel_radius is not None and hasattr(wheel_spec, "radius"):
+        wheel_spec = dataclasses.replace(wheel_spec, radius=float(wheel_radius))
+        unmeasured = []
+    extra = [c.name for c in candidates if c.name not in drive]
+    if extra and kind.takes_wheels:
+        notes.append(f"wheel-like joints that are not platform wheels are locked: {', '.join(extra)}")
     paths = [arm_joints(urdf, ee, drive, path) for ee in end_effectors]
     counts: dict[str, int] = {}
     for joints in paths:
@@ -302,6 +333,9 @@ def detect_spec(
 
     urdf_limits = {j: joint_limits(urdf, j) for j in sorted(active)}
     urdf_limits.update(kind.urdf_limits(wheel_spec, urdf))
+    wheel_names = set(kind.urdf_limits(wheel_spec, urdf)) | set(wheel_spec.joint_names if wheel_spec else ())
+    platform_limits = {n: pair for n, pair in urdf_limits.items() if n in wheel_names}
+    given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
     spec = RobotSpec(
         name=name or urdf.robot.name or path.stem,
         urdf=path.resolve(),
@@ -311,8 +345,11 @@ def detect_spec(
         default_task=default_task,
         reference=reference,
         torso=torso_joints,
+        velocity_limits=given_v,
+        effort_limits=given_e,
         package_dirs=(path.resolve().parent,),
     )
+    missing = _missing(spec, kind, urdf_limits, unmeasured)
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
     needed += [name for name, pair in kind.urdf_limits(wheel_spec, urdf).items() if None in pair]
     if needed:
@@ -320,7 +357,56 @@ def detect_spec(
             f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "
             "[limits.effort] (the URDF gives none)"
         )
-    return Detection(spec=spec, shared_joints=shared, notes=tuple(notes), urdf_limits=urdf_limits)
+    return Detection(
+        spec=spec,
+        shared_joints=shared,
+        notes=tuple(notes),
+        urdf_limits=urdf_limits,
+        considered=tuple(considered),
+        missing=tuple(missing),
+    )
+
+
+def _given_limits(platform_limits, wheel_limits, limits) -> tuple[dict, dict]:
+    """Spec limit overrides from the command line: the wheel values for every platform
+    coordinate whose URDF limit is missing, then explicit ones by name."""
+    velocity, effort = {}, {}
+    for name, (vel, eff) in platform_limits.items():
+        if vel is None and wheel_limits[0] is not None:
+            velocity[name] = float(wheel_limits[0])
+        if eff is None and wheel_limits[1] is not None:
+            effort[name] = float(wheel_limits[1])
+    for name, (vel, eff) in limits.items():
+        if vel is not None:
+            velocity[name] = float(vel)
+        if eff is not None:
+            effort[name] = float(eff)
+    return velocity, effort
+
+
+def _missing(spec: RobotSpec, kind: PlatformKind, urdf_limits, unmeasured) -> list[Missing]:
+    """What the spec still lacks, grouped, with the flags that give it."""
+    out = []
+    if unmeasured:
+        out.append(Missing("wheel radius (mesh geometry)", tuple(unmeasured), "--wheel-radius M"))
+    platform_names = set(kind.limit_names(spec.wheels)) | set(spec.wheel_joint_names)
+    for what, table, index, wheel_flag, flag in (
+        ("velocity limit", spec.velocity_limits, 0, "--wheel-velocity-limit RAD_S", "--velocity-limit NAME=V"),
+        ("effort limit", spec.effort_limits, 1, "--wheel-effort-limit NM", "--effort-limit NAME=E"),
+    ):
+        hinted = [name for name, _ in kind.toml_limit_hints(spec.wheels) if name not in table]
+        lacking = [
+            name
+            for name, pair in urdf_limits.items()
+            if pair[index] is None and name not in table and name not in hinted
+        ]
+        wheels = [n for n in lacking if n in platform_names]
+        others = [n for n in lacking if n not in platform_names] + hinted
+        if wheels:
+            out.append(Missing(what, tuple(wheels), wheel_flag))
+        if others:
+            out.append(Missing(what, tuple(others), flag))
+    return out
 
 
 def spec_from_urdf(
@@ -371,6 +457,10 @@ def _urdf_reference(urdf: Path, base_dir: Path | None) -> str:
     try:
         robots = (example_robot_data_share() / "example-robot-data" / "robots").resolve()
         return EXAMPLE_ROBOT_DATA_PREFIX + urdf.relative_to(robots).as_posix()
+    except (ValueError, SpecError):
+        pass
+    try:
+        return STRETCH_URDF_PREFIX + urdf.relative_to(stretch_urdf_dir().resolve()).as_posix()
     except (ValueError, SpecError):
         pass
     if base_dir is not None:
@@ -427,7 +517,11 @@ def spec_to_toml(
             f"end_effector = {_string(arm.end_effector)}",
             "",
         ]
-    out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg", ""]
+    out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg"]
+    if spec.grasp_offsets:
+        rows = ", ".join("[" + ", ".join(_number(v) for v in row) + "]" for row in spec.grasp_offsets)
+        out.append(f"grasp_offsets = [{rows}]  # m, where each arm grasps it, from its centre")
+    out.append("")
     hints = dict(kind.toml_limit_hints(spec.wheels))
     joints = [j for j in spec.active_joint_names if kind.limits_by_joint or j not in spec.wheel_joint_names]
     active = list(kind.limit_names(spec.wheels)) + joints
@@ -458,8 +552,14 @@ def spec_to_toml(
     out += [
         "",
         "# Optional: arm (and torso) positions of a posture in which the end effectors hold an",
-        "# object together; `mobmanip sweep` starts its inverse kinematics from it (else from home).",
-        "# [hold]",
-        f"# {_key(first)} = 0.0",
+        "# object together (`--posture hold`); `mobmanip sweep` starts its inverse kinematics from",
+        "# it (else from home).",
     ]
+    if spec.hold:
+        out += ["[hold]", *(f"{_key(joint)} = {_number(value)}" for joint, value in spec.hold.items())]
+    else:
+        out += ["# [hold]", f"# {_key(first)} = 0.0"]
+    for posture, joints in spec.postures.items():
+        out += ["", f"# Posture {posture!r} (`--posture {posture}`).", f"[postures.{_key(posture)}]"]
+        out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
     return "\n".join(out) + "\n"

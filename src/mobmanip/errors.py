@@ -39,6 +39,15 @@ class SpecError(MobmanipError):
     """A robot spec (TOML) is unreadable, malformed or inconsistent with its URDF."""
 
 
+class UnknownPostureError(SpecError):
+    """A posture name the spec does not define (``--posture``); lists the ones it does."""
+
+    def __init__(self, robot: str, name: object, available: Iterable[str]):
+        self.name = name
+        self.available = list(available)
+        super().__init__(f"robot {robot!r} has no posture {name!r}; its postures: {', '.join(self.available)}")
+
+
 class UrdfError(MobmanipError):
     """A URDF file is missing, unreadable, malformed or uses a construct mobmanip cannot model."""
 

@@ -1,4 +1,5 @@
-"""Where robot files live: the project's built-in robots and the example-robot-data package."""
+"""Where robot files live: the project's built-in robots, the example-robot-data package and
+Hello Robot's hello-robot-stretch-urdf package."""
 
 from __future__ import annotations
 
@@ -10,6 +11,9 @@ from .errors import SpecError
 
 #: URDF paths in a spec may start with this prefix to point into example-robot-data's robots.
 EXAMPLE_ROBOT_DATA_PREFIX = "example-robot-data:"
+
+#: ... or with this one to point into hello-robot-stretch-urdf's ``stretch_urdf`` directory.
+STRETCH_URDF_PREFIX = "hello-robot-stretch-urdf:"
 
 
 def builtin_robots_dir() -> Path:
@@ -51,12 +55,31 @@ def example_robot_data_share() -> Path:
     raise SpecError("example-robot-data is installed but its robots directory was not found")
 
 
+@cache
+def stretch_urdf_dir() -> Path:
+    """The ``stretch_urdf`` directory of the installed hello-robot-stretch-urdf distribution
+    (Hello Robot's URDFs of Stretch, one folder per model: RE1V0, RE2V0, SE3), found through
+    the distribution's metadata like :func:`example_robot_data_share`."""
+    try:
+        dist = importlib.metadata.distribution("hello-robot-stretch-urdf")
+    except importlib.metadata.PackageNotFoundError as exc:
+        raise SpecError("hello-robot-stretch-urdf is not installed (pip install hello-robot-stretch-urdf)") from exc
+    for file in dist.files or ():
+        parts = Path(str(file)).parts
+        if parts and parts[0] == "stretch_urdf" and str(file).endswith(".urdf"):
+            folder = Path(str(dist.locate_file("stretch_urdf")))
+            if folder.is_dir():
+                return folder
+    raise SpecError("hello-robot-stretch-urdf is installed but its stretch_urdf directory was not found")
+
+
 def resolve_urdf_reference(reference: str, base_dir: Path) -> tuple[Path, tuple[Path, ...]]:
     """Turn a spec's ``urdf`` entry into a path and the package directories for its meshes.
 
     Args:
-        reference: a path relative to ``base_dir``, an absolute path, or
-            ``"example-robot-data:<path under its robots directory>"``.
+        reference: a path relative to ``base_dir``, an absolute path,
+            ``"example-robot-data:<path under its robots directory>"`` or
+            ``"hello-robot-stretch-urdf:<path under stretch_urdf>"``.
         base_dir: directory of the spec file.
 
     Returns:
@@ -66,6 +89,9 @@ def resolve_urdf_reference(reference: str, base_dir: Path) -> tuple[Path, tuple[
         share = example_robot_data_share()
         relative = reference[len(EXAMPLE_ROBOT_DATA_PREFIX) :].lstrip("/")
         return share / "example-robot-data" / "robots" / relative, (share,)
+    if reference.startswith(STRETCH_URDF_PREFIX):
+        path = stretch_urdf_dir() / reference[len(STRETCH_URDF_PREFIX) :].lstrip("/")
+        return path, (path.parent,)  # meshes are "./meshes/..." beside the URDF
     path = Path(reference)
     if not path.is_absolute():
         path = base_dir / path

@@ -22,6 +22,7 @@ A spec is a small TOML file next to its URDF::
 
     [object]
     mass = 2.0                              # kg, default object for multi-arm tasks
+    grasp_offsets = [[0, -0.15, 0], [0, 0.15, 0]]   # optional: where each arm grasps it (m)
 
     [limits.velocity]                       # optional overrides by joint name
     [limits.effort]
@@ -31,6 +32,8 @@ A spec is a small TOML file next to its URDF::
     [hold]                                  # optional: arm/torso positions of a posture in which
     arm_right_1_joint = 1.08                # the hands hold the default object (sweeps start
                                             # their inverse kinematics from it)
+    [postures.tucked]                       # optional: more named postures (--posture tucked);
+    arm_right_1_joint = 0.2                 # "home" is the home configuration, "hold" is [hold]
 
 The reduced velocity is ordered [platform, torso joints, arm 1 joints, arm 2 joints, ...].
 
@@ -109,7 +112,13 @@ class RobotSpec:
         hold: positions of arm and torso joints (joints not named stay at home) of a posture in
             which the end effectors hold the default object together; sweeps take it as the
             reference posture of their inverse kinematics (see :mod:`mobmanip.sweep`). Empty:
-            the home configuration is that reference.
+            the home configuration is that reference. It is the posture named ``"hold"``.
+        postures: further named postures, name -> (joint -> position), arm and torso joints as
+            in ``hold``; ``"home"`` and ``"hold"`` are reserved (see
+            :mod:`mobmanip.named_postures`).
+        grasp_offsets: where each arm grasps the default object, from its centre (m), one row
+            per arm, in the frame of the hold; empty when not declared. The distances between
+            them are how far apart holding hands may be (a larger spread is warned about).
         package_dirs: directories where ``package://`` mesh URIs are resolved.
         source: the spec file this came from, if any.
     """
@@ -126,6 +135,8 @@ class RobotSpec:
     reference: Mapping[str, float] = field(default_factory=dict)
     torso: tuple[str, ...] = ()
     hold: Mapping[str, float] = field(default_factory=dict)
+    postures: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    grasp_offsets: tuple[tuple[float, float, float], ...] = ()
     package_dirs: tuple[Path, ...] = ()
     source: Path | None = None
 
@@ -172,17 +183,20 @@ class RobotSpec:
                 raise SpecError(f"reference position of {joint!r} must be a finite number, got {value!r}")
             reference[str(joint)] = float(value)
         object.__setattr__(self, "reference", MappingProxyType(reference))
-        hold = {}
-        for joint, value in dict(self.hold).items():
-            if joint not in seen:
+        object.__setattr__(self, "hold", _posture_table(self.name, "[hold]", self.hold, seen))
+        postures = {}
+        for name, table in dict(self.postures).items():
+            if name in ("home", "hold"):
                 raise SpecError(
-                    f"robot {self.name!r}: [hold] names {joint!r}, which is not an arm or torso joint; "
-                    f"expected some of {list(seen)}"
+                    f"robot {self.name!r}: [postures.{name}] is reserved ({name!r} is "
+                    + ("the home configuration" if name == "home" else "[hold]")
+                    + "); give it another name"
                 )
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise SpecError(f"hold position of {joint!r} must be a finite number, got {value!r}")
-            hold[str(joint)] = float(value)
-        object.__setattr__(self, "hold", MappingProxyType(hold))
+            if not isinstance(table, Mapping):
+                raise SpecError(f"robot {self.name!r}: [postures.{name}] must be a table of joint positions")
+            postures[str(name)] = _posture_table(self.name, f"[postures.{name}]", table, seen)
+        object.__setattr__(self, "postures", MappingProxyType(postures))
+        object.__setattr__(self, "grasp_offsets", _grasp_offsets(self.name, self.grasp_offsets, len(self.arms)))
         object.__setattr__(self, "arms", tuple(self.arms))
         object.__setattr__(self, "package_dirs", tuple(Path(p) for p in self.package_dirs))
 
@@ -205,6 +219,43 @@ class RobotSpec:
     def platform_limit_names(self) -> tuple[str, ...]:
         """Names other than joints that ``[limits.*]`` may set (the platform kind's own)."""
         return get_kind(self.platform).limit_names(self.wheels)
+
+
+def _posture_table(robot: str, where: str, table: Mapping, joints: Mapping[str, str]) -> Mapping[str, float]:
+    """A posture's joint positions checked: arm or torso joints only, finite numbers."""
+    out = {}
+    for joint, value in dict(table).items():
+        if joint not in joints:
+            raise SpecError(
+                f"robot {robot!r}: {where} names {joint!r}, which is not an arm or torso joint; "
+                f"expected some of {list(joints)}"
+            )
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            label = "hold" if where == "[hold]" else where
+            raise SpecError(f"robot {robot!r}: {label} position of {joint!r} must be a finite number, got {value!r}")
+        out[str(joint)] = float(value)
+    return MappingProxyType(out)
+
+
+def _grasp_offsets(robot: str, rows, n_arms: int) -> tuple[tuple[float, float, float], ...]:
+    """[object] grasp_offsets checked: one (x, y, z) row of finite metres per arm, or none."""
+    rows = tuple(rows)
+    if not rows:
+        return ()
+    bad = SpecError(
+        f"robot {robot!r}: [object] grasp_offsets must be {n_arms} rows [x, y, z] of finite metres "
+        f"(one per arm), got {[list(r) if isinstance(r, (list, tuple)) else r for r in rows]!r}"
+    )
+    if len(rows) != n_arms:
+        raise bad
+    out = []
+    for row in rows:
+        if not isinstance(row, (list, tuple)) or len(row) != 3:
+            raise bad
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in row):
+            raise bad
+        out.append(tuple(float(v) for v in row))
+    return tuple(out)
 
 
 def _wheels_not_taken(robot: str, platform: str) -> SpecError:
@@ -237,7 +288,7 @@ def _optional(table: Mapping, key: str, kind: type, where: str, default):
 def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) -> RobotSpec:
     """Build a :class:`RobotSpec` from parsed TOML; ``base_dir`` anchors a relative URDF path."""
     where = str(source) if source else "spec"
-    known = set("name urdf platform default_task wheels torso arms object limits reference hold".split())
+    known = set("name urdf platform default_task wheels torso arms object limits reference hold postures".split())
     unknown = sorted(set(data) - known)
     if unknown:
         raise SpecError(f"{where}: unknown keys {unknown}; expected some of {sorted(known)}")
@@ -277,9 +328,12 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
     extra = sorted(set(limits) - {"velocity", "effort"})
     if extra:
         raise SpecError(f"{where}: unknown keys in [limits]: {extra}; expected 'velocity' and 'effort'")
-    extra = sorted(set(obj) - {"mass"})
+    extra = sorted(set(obj) - {"mass", "grasp_offsets"})
     if extra:
-        raise SpecError(f"{where}: unknown keys in [object]: {extra}; expected 'mass'")
+        raise SpecError(f"{where}: unknown keys in [object]: {extra}; expected 'mass' and 'grasp_offsets'")
+    grasp_offsets = obj.get("grasp_offsets", [])
+    if not isinstance(grasp_offsets, list):
+        raise SpecError(f"{where}: [object] grasp_offsets must be a list of [x, y, z] rows, got {grasp_offsets!r}")
     return RobotSpec(
         name=name,
         urdf=urdf,
@@ -293,6 +347,8 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
         reference=_optional(data, "reference", dict, where, {}),
         torso=tuple(torso),
         hold=_optional(data, "hold", dict, where, {}),
+        postures=_optional(data, "postures", dict, where, {}),
+        grasp_offsets=tuple(grasp_offsets),
         package_dirs=package_dirs,
         source=source,
     )

@@ -49,10 +49,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pinocchio as pin
 
-from .batch import BatchSetup, check_configurations, default_chunk, iter_terms
+from .batch import BatchSetup, check_configurations, default_chunk, iter_terms, warm_kernel
 from .errors import ArgumentError, GridError, MobmanipError, SpecError, UnreachableGridError
 from .measure import TaskSetBatch
-from .measures import BatchRequest, Measure, evaluate_batch, resolve_measures
+from .measures import BatchRequest, Measure, evaluate_batch, get_measure, resolve_measures
 from .model import Robot, load_robot
 from .planar_postures import (
     PlanarArm,
@@ -550,6 +550,10 @@ def run_sweep(
     measures = tuple(measure.name for measure in resolve_measures(spec.measures, sweep=True))
     spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim), measures=measures)
     BatchSetup(robot, task.name, spec.object_mass)  # validate the object mass here, once
+    if executor is None and any(get_measure(name).set_kind == "ellipsoid" for name in measures):
+        # compile (or load) the kernel here, once: before the progress bar counts throughput and
+        # before local workers fork from this process (they inherit it)
+        warm_kernel(robot, task.name, spec.object_mass)
     n_workers = workers or default_workers()
     with contextlib.ExitStack() as stack:
         if executor is None and n_workers > 1:

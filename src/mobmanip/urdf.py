@@ -265,6 +265,14 @@ def wheel_radius(urdf, joint_name: str) -> float | None:
     Returns:
         The radius in metres, or ``None`` when the link carries no such shape.
     """
+    shape = wheel_shape(urdf, joint_name)
+    return None if shape is None else shape[1]
+
+
+def wheel_shape(urdf, joint_name: str) -> tuple[str, float] | None:
+    """The wheel shape of a joint's child link: ``("cylinder", r)`` for a cylinder about the
+    joint axis, ``("sphere", r)``, from its collision (preferred) or visual geometry; ``None``
+    when it carries neither (e.g. only meshes)."""
     joint = urdf.joint_map[joint_name]
     link = urdf.link_map[joint.child]
     axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=float)
@@ -275,9 +283,9 @@ def wheel_radius(urdf, joint_name: str) -> float | None:
             if geometry.cylinder is not None:
                 cylinder_axis = _rotation(shape.origin)[:, 2]
                 if abs(abs(float(cylinder_axis @ axis)) - 1.0) < 1e-6:
-                    return float(geometry.cylinder.radius)
+                    return "cylinder", float(geometry.cylinder.radius)
             elif geometry.sphere is not None:
-                return float(geometry.sphere.radius)
+                return "sphere", float(geometry.sphere.radius)
     return None
 
 

@@ -15,6 +15,7 @@ from .common import (
     apply_analysis_options,
     format_matrix,
     load_robot_and_configuration,
+    print_warnings,
     requested_measures,
 )
 
@@ -87,6 +88,24 @@ def _describe_polytope(name: str, polytope, unit: str, ellipsoid=None) -> str:
     return "\n".join(lines)
 
 
+def _describe_blocks(blocks: dict, units: str) -> str:
+    """The per-block (linear, angular) indices of a set in a mixed task, each in its own unit."""
+    linear_unit, _, angular_unit = units.partition(", ")
+    parts = []
+    for block, unit in (("linear", linear_unit), ("angular", angular_unit or linear_unit)):
+        entry = blocks[block]
+        values = []
+        if entry.get("semi_axes"):
+            values.append("semi-axes " + ", ".join(f"{v:.4g}" for v in entry["semi_axes"]))
+        for key, fmt in (("reach", ".4g"), ("volume", ".4g"), ("isotropy", ".3f")):
+            if key == "reach" and entry.get("semi_axes"):
+                continue
+            value = entry.get(key)
+            values.append(f"{key} {'n/a' if value is None else format(value, fmt)}")
+        parts.append(f"{block} ({unit}): " + ", ".join(values))
+    return "  per block: " + "; ".join(parts)
+
+
 def _available(get) -> bool:
     from ..errors import MobmanipError
 
@@ -128,8 +147,16 @@ def run(args) -> int:
     robot, q = load_robot_and_configuration(args)
     robot = apply_analysis_options(robot, args)
     measures = requested_measures(args)
+    # one configuration: the reference path, which needs no compiled kernel and gives the same
+    # numbers whatever this process ran before
     result = analyze(
-        robot, q, task=args.task, object_mass=args.object_mass, decoupled=args.decoupled, measures=measures
+        robot,
+        q,
+        task=args.task,
+        object_mass=args.object_mass,
+        decoupled=args.decoupled,
+        measures=measures,
+        method="exact",
     )
     document = result.to_dict()
     require_finite(document)  # never a NaN or an infinity printed as a result
@@ -144,10 +171,19 @@ def run(args) -> int:
     eigenvalues = np.linalg.eigvalsh(result.reduced_inertia)
     print(f"reduced inertia P: eigenvalues {np.array2string(eigenvalues, precision=4)}")
     coupling = "decoupled" if result.decoupled else "coupled"
+    blocks = result.block_indices()
     for name, task_set in result.measures.items():
         measure = get_measure(name)
         label = f"{measure.label} ({coupling})" if measure.quantity.inertial else measure.label
         print(_describe(label, task_set, measure.quantity.units, _ellipsoid_of(result, measure.quantity)))
+        if blocks is not None and not task_set.empty:
+            print(_describe_blocks(blocks[name], measure.quantity.units))
+    if blocks is not None:
+        print(
+            f"(task {result.task} mixes linear and angular rows: its volumes and isotropies multiply metres by "
+            "radians; compare the per-block ones)"
+        )
+    print_warnings(result)
     if args.json:
         write_json(args.json, document)
         print(f"wrote {args.json}")

@@ -35,7 +35,17 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--q", metavar="Q.json", help='configuration {"platform": [x, y, yaw], "joints": {NAME: value}}'
     )
+    add_posture_option(parser, "the configuration: a named posture of the spec, platform at the origin")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+
+
+def add_posture_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """--posture NAME: home, hold or a [postures.NAME] of the spec."""
+    parser.add_argument(
+        "--posture",
+        metavar="NAME",
+        help=f"{what} (home, hold, or any [postures.NAME] of the spec; default: home)",
+    )
 
 
 def robot_spec_from_args(args):
@@ -66,7 +76,6 @@ def robot_spec_from_args(args):
 def load_robot_and_configuration(args):
     """The robot named on the command line and its configuration (home pose without --q)."""
     from ..errors import MissingLimitError
-    from ..io import read_configuration
     from ..model import load_robot
 
     spec = robot_spec_from_args(args)
@@ -77,8 +86,34 @@ def load_robot_and_configuration(args):
             raise
         hint = f"{exc.source} (with --urdf there is no spec yet: `mobmanip init-spec {args.urdf} --ee ...` writes one)"
         raise MissingLimitError(exc.name, exc.kind, hint) from None
-    q = read_configuration(robot, args.q) if args.q else robot.neutral()
-    return robot, q
+    return robot, configuration_from_args(robot, args)
+
+
+def configuration_from_args(robot, args):
+    """The configuration --q or --posture names (the home configuration without either).
+
+    Raises:
+        UsageError: both --q and --posture.
+        UnknownPostureError: a posture the spec does not define (the message lists them).
+    """
+    from ..errors import UsageError
+    from ..io import read_configuration
+    from ..named_postures import named_configuration
+
+    q_file, posture = getattr(args, "q", None), getattr(args, "posture", None)
+    if q_file and posture:
+        raise UsageError(f"give either --q ({q_file}) or --posture ({posture}), not both")
+    if q_file:
+        return read_configuration(robot, q_file)
+    return named_configuration(robot, posture or "home")
+
+
+def print_warnings(analysis, stream=None) -> None:
+    """The analysis's plausibility warnings, one line each, on standard error."""
+    import sys
+
+    for text in analysis.warnings:
+        print(f"warning: {text}", file=stream or sys.stderr)
 
 
 def format_matrix(matrix: np.ndarray, indent: str = "  ") -> str:

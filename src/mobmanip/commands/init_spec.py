@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
+import sys
 from pathlib import Path
 
 from ..platforms import KINDS
@@ -15,7 +18,10 @@ def register(sub) -> None:
         description="Detect the drive wheels and the arms of a URDF and write a commented spec to edit.",
     )
     parser.add_argument("urdf", metavar="PATH", help="the URDF file")
-    add_urdf_options(parser, ee_required=True)
+    add_urdf_options(parser)
+    parser.add_argument(
+        "--list-frames", action="store_true", help="list the links that could be end effectors (for --ee) and exit"
+    )
     parser.add_argument(
         "--platform",
         choices=list(KINDS),
@@ -25,28 +31,149 @@ def register(sub) -> None:
         "--torso", action="store_true", help="actuate the joints shared by all arms (default: lock them)"
     )
     parser.add_argument("--name", help="robot name (default: the URDF's)")
+    parser.add_argument(
+        "--posture",
+        action="append",
+        default=[],
+        metavar="NAME=Q.json",
+        help="record the arm and torso joints of a configuration file as a named posture "
+        "(NAME hold: the [hold] posture); repeat for several",
+    )
     parser.add_argument("--out", metavar="SPEC.toml", help="write here (default: standard output)")
+    given = parser.add_argument_group("values the URDF may lack")
+    given.add_argument("--wheel-radius", type=float, metavar="M", help="radius of wheels with mesh geometry (m)")
+    given.add_argument(
+        "--wheel-velocity-limit", type=float, metavar="RAD_S", help="each platform wheel's qdot_max the URDF lacks"
+    )
+    given.add_argument(
+        "--wheel-effort-limit", type=float, metavar="NM", help="each platform wheel's tau_max the URDF lacks"
+    )
+    given.add_argument(
+        "--velocity-limit", action="append", default=[], metavar="NAME=V", help="a joint's velocity limit (repeat)"
+    )
+    given.add_argument(
+        "--effort-limit", action="append", default=[], metavar="NAME=E", help="a joint's effort limit (repeat)"
+    )
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     from ..detect import detect_spec, parse_wheel_list, spec_to_toml
+    from ..detect_report import missing_message
+    from ..errors import UsageError
     from ..io import write_text
 
+    if args.list_frames:
+        return _list_frames(args.urdf)
+    if not args.ee:
+        raise UsageError(f"init-spec needs at least one --ee FRAME (`mobmanip init-spec {args.urdf} --list-frames`)")
+    for name in ("wheel_radius", "wheel_velocity_limit", "wheel_effort_limit"):
+        value = getattr(args, name)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise UsageError(f"--{name.replace('_', '-')} must be a positive number, got {value!r}")
+    limits: dict = {}
+    for index, items in ((0, args.velocity_limit), (1, args.effort_limit)):
+        for joint, value in _pairs(items, "--velocity-limit" if index == 0 else "--effort-limit"):
+            pair = list(limits.get(joint, (None, None)))
+            pair[index] = value
+            limits[joint] = tuple(pair)
     wheels = None if args.wheels is None else parse_wheel_list(args.wheels)
-    found = detect_spec(args.urdf, args.ee, wheels, args.platform, torso=args.torso, name=args.name)
+    found = detect_spec(
+        args.urdf,
+        args.ee,
+        wheels,
+        args.platform,
+        torso=args.torso,
+        name=args.name,
+        wheel_radius=args.wheel_radius,
+        wheel_limits=(args.wheel_velocity_limit, args.wheel_effort_limit),
+        limits=limits,
+    )
+
+    if args.posture:
+        found = dataclasses.replace(found, spec=_with_postures(found.spec, args.posture))
     base_dir = Path(args.out).resolve().parent if args.out else None
     text = spec_to_toml(
         found.spec,
         base_dir,
-        notes=found.notes,
+        notes=found.considered + found.notes,
         urdf_limits=found.urdf_limits,
         shared_joints=found.shared_joints,
     )
     if not args.out:
         print(text, end="")
-        return 0
-    write_text(args.out, text)
-    spec = found.spec
-    print(f"wrote {args.out}: {spec.platform}, {len(spec.arms)} arm(s), {len(spec.active_joint_names)} active joints")
+    else:
+        write_text(args.out, text)
+        print("detection (also written as comments at the top of the spec):")
+        for line in found.considered + found.notes:
+            print(f"  {line}")
+        spec = found.spec
+        print(
+            f"wrote {args.out}: {spec.platform}, {len(spec.arms)} arm(s), {len(spec.active_joint_names)} active joints"
+        )
+    if found.missing:
+        print(f"warning: {missing_message(found.missing, args.urdf)}", file=sys.stderr)
     return 0
+
+
+def _pairs(items, option: str):
+    """NAME=VALUE items as (name, positive float) pairs."""
+    from ..errors import UsageError
+
+    for item in items:
+        name, sep, text = item.partition("=")
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not sep or not name.strip() or not (math.isfinite(value) and value > 0):
+            raise UsageError(f"{option} takes NAME=VALUE with a positive VALUE, got {item!r}")
+        yield name.strip(), value
+
+
+def _list_frames(path) -> int:
+    """Print the candidate end-effector frames of a URDF, the most likely first."""
+    from ..detect_report import candidate_frames
+    from ..platforms.wheels import wheel_candidates
+    from ..urdf import check_supported, read_urdf
+
+    urdf = read_urdf(path)
+    check_supported(urdf, path)
+    rows = candidate_frames(urdf, exclude=[c.name for c in wheel_candidates(urdf)])
+    print(f"{len(rows)} candidate end-effector frames of {path} (for --ee), the most likely first:")
+    for link, count, leaf, tool in rows:
+        kind = ", ".join(t for t, flag in (("leaf", leaf), ("named like a tool", tool)) if flag)
+        print(f"  {link:<40} {count} actuated joint{'s' if count != 1 else ''} from the root; {kind}")
+    return 0
+
+
+def _with_postures(spec, items):
+    """The spec with the postures NAME=Q.json recorded (their arm and torso joints only).
+
+    Raises:
+        UsageError: an item not of the form NAME=PATH, or a name given twice or reserved.
+    """
+    from ..errors import UsageError
+    from ..io import read_configuration
+    from ..model import load_robot
+
+    robot = None
+    hold, postures = dict(spec.hold), dict(spec.postures)
+    for item in items:
+        name, sep, path = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not path:
+            raise UsageError(f"--posture takes NAME=Q.json, got {item!r}")
+        if name == "home":
+            raise UsageError("--posture home: the home posture is the [reference] one; record another name")
+        if name in postures or (name == "hold" and hold):
+            raise UsageError(f"--posture {name} is given twice")
+        if robot is None:
+            robot = load_robot(spec)  # the configuration file is read against the model
+        joints = robot.configuration_dict(read_configuration(robot, path))["joints"]
+        kept = {j: joints[j] for j in spec.torso + spec.arm_joint_names}
+        if name == "hold":
+            hold = kept
+        else:
+            postures[name] = kept
+    return dataclasses.replace(spec, hold=hold, postures=postures)

@@ -41,6 +41,12 @@ def register(sub) -> None:
     parser.add_argument("--region", metavar="XMIN,XMAX,YMIN,YMAX", help="rectangle for the platform origin (m)")
     parser.add_argument("--starts", type=int, default=8, help="number of starts (default 8)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
+    parser.add_argument(
+        "--posture",
+        metavar="NAME",
+        help="the posture whose grasp the hands keep: home, hold or a [postures.NAME] of the spec "
+        "(default: hold where the spec gives one, else home)",
+    )
     parser.add_argument("--json", metavar="OUT.json", help="write the result and its analysis as JSON")
     parser.add_argument("--save-q", metavar="Q.json", help="write the configuration for `analyze --q`")
     parser.set_defaults(func=run)
@@ -62,11 +68,14 @@ def run(args) -> int:
     from ..analysis import analyze
     from ..io import write_json
     from ..model import load_robot
+    from ..named_postures import named_configuration
     from ..placement import Region, place, placement_document
     from ..spec import find_spec
+    from .common import print_warnings
 
     robot = load_robot(find_spec(args.robot))
     target = _parse_point(args.object)
+    reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
     result = place(
         robot,
@@ -77,6 +86,7 @@ def run(args) -> int:
         decoupled=args.decoupled,
         region=region,
         starts=args.starts,
+        reference=reference,
     )
     x, y, heading = result.platform
     print(f"robot {robot.name}: object at ({target[0]:g}, {target[1]:g}, {target[2]:g}) m, {result.objective.name}")
@@ -94,7 +104,10 @@ def run(args) -> int:
         write_json(args.save_q, robot.configuration_dict(result.q))
         print(f"wrote {args.save_q}")
     if args.json:
-        analysis = analyze(robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled)
+        analysis = analyze(  # as `mobmanip analyze` computes it: the reference path
+            robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled, method="exact"
+        )
         write_json(args.json, placement_document(robot, result, analysis))
+        print_warnings(analysis)
         print(f"wrote {args.json}")
     return 0

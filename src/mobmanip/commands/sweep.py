@@ -94,6 +94,11 @@ def register(sub) -> None:
         metavar="Q.json",
         help='reference posture for ik, {"joints": {NAME: value}} (platform ignored; default: [hold] of the spec)',
     )
+    postures.add_argument(
+        "--posture",
+        metavar="NAME",
+        help="reference posture for ik by name: home, hold or a [postures.NAME] of the spec (instead of --reference)",
+    )
     run = parser.add_argument_group("execution and output")
     run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
     run.add_argument("--chunk-size", type=int, default=4096, metavar="N", help="configurations per task")
@@ -147,12 +152,19 @@ def run_command(args) -> int:
     if args.chunk_size < 1:
         raise UsageError(f"--chunk-size must be at least 1, got {args.chunk_size}")
     reference = None
-    if args.reference is not None:
+    if args.reference is not None and args.posture is not None:
+        raise UsageError(f"give either --reference ({args.reference}) or --posture ({args.posture}), not both")
+    if args.reference is not None or args.posture is not None:
         from ..io import read_configuration
         from ..model import load_robot
+        from ..named_postures import named_configuration
 
         robot = load_robot(args.robot)
-        reference = robot.configuration_dict(read_configuration(robot, args.reference))["joints"]
+        if args.reference is not None:
+            q_ref = read_configuration(robot, args.reference)
+        else:
+            q_ref = named_configuration(robot, args.posture)
+        reference = robot.configuration_dict(q_ref)["joints"]
     spec = SweepSpec(
         robot=args.robot,
         task=args.task,
@@ -200,11 +212,16 @@ def run_command(args) -> int:
     unreachable = int((~result.reachable).sum())
     if unreachable:
         print(f"{unreachable} of {result.reachable.size} configurations are out of the arms' reach (NaN indices)")
+    task = TASKS[result.spec.task]
+    mixed = bool(task.linear_rows) and bool(task.angular_rows)
     for measure in result.measures:
         kind = measure.name
         values = result.index(f"{kind}.volume")
         if result.reachable.any():
-            print(f"{kind} volume: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
+            label = f"{kind} volume"
+            if mixed:  # m^k rad^(m-k): only comparable within this task and quantity
+                label += f" ({task.dim}-D, mixing {measure.quantity.units}: compare only within this sweep)"
+            print(f"{label}: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
     written = [result.save_npz(out.with_name(out.name + ".npz"))]
     if not args.no_csv:
         written.append(result.save_csv(out.with_name(out.name + ".csv")))

@@ -20,6 +20,7 @@ from .common import (
     add_robot_options,
     apply_analysis_options,
     load_robot_and_configuration,
+    print_warnings,
     requested_measures,
 )
 
@@ -54,8 +55,8 @@ def _check(args) -> None:
         raise UsageError(f"--size must be a positive number of metres, got {args.size!r}")
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration >= 0):
         raise UsageError(f"--duration must be a non-negative number of seconds, got {args.duration!r}")
-    if args.sweep in ("fig3", "fig4") and args.q:
-        raise UsageError(f"--sweep {args.sweep} places the paper's robot itself; leave out --q")
+    if args.sweep in ("fig3", "fig4") and (args.q or args.posture):
+        raise UsageError(f"--sweep {args.sweep} places the paper's robot itself; leave out --q and --posture")
     if args.sweep == "fig3" and args.wheel_velocity_limit is not None:
         raise UsageError("--sweep fig3 sets the wheel speed limit itself; leave out --wheel-velocity-limit")
     if args.sweep == "fig4" and args.wheel_effort_limit is not None:
@@ -103,7 +104,8 @@ def run(args) -> int:
     options = {"object_mass": args.object_mass, "decoupled": args.decoupled, "measures": requested_measures(args)}
     frames = None
     if args.sweep:
-        frames = sweep_frames(args.sweep, robot, q if args.q else None, args.task, locked=not args.no_locked, **options)
+        given = args.q or args.posture
+        frames = sweep_frames(args.sweep, robot, q if given else None, args.task, locked=not args.no_locked, **options)
         first = frames[0]
     else:
         analysis, locked = analyze_pair(robot, q, args.task, locked=not args.no_locked, **options)
@@ -121,6 +123,7 @@ def run(args) -> int:
             c = analysis.held_object.center
             print(f"task point (object): ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m")
             notes = _describe_empty("the", analysis) + _describe_empty("the locked-platform", locked)
+            print_warnings(analysis)
         print(f"scale: {viewer.scales.describe()}")
         for (is_locked, name), factor in viewer.magnified.items():
             if factor != 1.0:  # too small to see at its quantity's scale (the page's legend says so too)

@@ -55,14 +55,14 @@ Modules, one concept each:
 :mod:`.stacked_linalg`        small linear algebra over stacks of matrices
 :mod:`.svd_path`              the SVD path and its backlog over chunks
 :mod:`.kernel`                the compiled kernel (Numba)
-:mod:`.compiled`              loading and calling the kernel
+:mod:`.compiled`              loading and calling the kernel, and when to compile it
 :mod:`.pipeline`              :func:`analyze_batch`, :func:`iter_terms`,
                               :func:`ellipsoids_from_terms`
 :mod:`.one_row`               :func:`evaluate_one`
 ============================  ===============================================================
 """
 
-from .compiled import KernelOutcome, kernel_available
+from .compiled import KernelOutcome, kernel_available, kernel_cached, kernel_ready
 from .one_row import OneRow, evaluate_one
 from .pipeline import (
     DEFAULT_CHUNK,
@@ -73,6 +73,7 @@ from .pipeline import (
     default_chunk,
     ellipsoids_from_terms,
     iter_terms,
+    warm_kernel,
 )
 from .probed import ProbedModel, Workspace, pinocchio_pass
 from .results import BatchAnalysis, EllipsoidBatch
@@ -100,5 +101,8 @@ __all__ = [
     "evaluate_one",
     "iter_terms",
     "kernel_available",
+    "kernel_cached",
+    "kernel_ready",
     "pinocchio_pass",
+    "warm_kernel",
 ]

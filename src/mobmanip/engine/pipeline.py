@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import ConfigurationError, TaskError
 from ..model import Robot
-from .compiled import kernel_available, run_kernel
+from .compiled import kernel_available, kernel_ready, run_kernel
 from .numpy_path import dynamic_fast, kinematic_fast
 from .probed import Workspace
 from .results import BatchAnalysis, EllipsoidBatch
@@ -144,6 +144,27 @@ def ellipsoids_from_terms(
                 dynamic.put_rows(rows[bad_dyn], result)
         svd_rows |= bad_dyn
     return svd_rows
+
+
+def warm_kernel(robot: Robot, task: str | None = None, object_mass: float | None = None) -> bool:
+    """Compile the kernel for the robot's arms and task now, or load it from Numba's disk cache
+    (the first compile announces itself on standard error), so that what follows -- a sweep
+    and its progress bar, a pool of worker processes forked from this one -- does not pay it.
+
+    Args:
+        robot: the robot (its number of end effectors and the task fix the kernel).
+        task: task-space name; defaults to the spec's ``default_task``.
+        object_mass: mass of the default object (kg); defaults to the spec's.
+
+    Returns:
+        Whether the kernel is ready in this process (False without Numba).
+    """
+    if not kernel_available():
+        return False
+    setup = BatchSetup(robot, task, object_mass)
+    if not kernel_ready(setup.k, setup.m):
+        analyze_batch(robot, robot.neutral()[None, :], setup.task.name, object_mass=setup.mass)
+    return kernel_ready(setup.k, setup.m)
 
 
 def iter_terms(setup: BatchSetup, qs: np.ndarray, chunk_size: int = DEFAULT_CHUNK):

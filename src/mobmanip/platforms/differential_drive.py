@@ -214,7 +214,13 @@ class DifferentialDriveKind(PlatformKind):
                 f"{path}: wheels {right.name!r} and {left.name!r} sit at the same lateral position; "
                 "name the pair explicitly (--wheels RIGHT,LEFT)"
             )
-        note = f"drive wheels: right {right.name!r}, left {left.name!r} (radius {right.radius:g} m from the URDF)"
+        if right.radius is None or left.radius is None:
+            size = "radius unknown: mesh geometry; set [wheels] radius"
+        elif right.shape == "mesh":
+            size = f"radius {right.radius:g} m as given"
+        else:
+            size = f"radius {right.radius:g} m from the URDF"
+        note = f"drive wheels: right {right.name!r}, left {left.name!r} ({size})"
         return Detected(WheelSpec(right=right.name, left=left.name), (note,))
 
     def toml_lines(self, wheels: WheelSpec) -> list[str]:

@@ -226,7 +226,7 @@ class SkidSteerKind(PlatformKind):
             ys, xs = [float(c.position[1]) for c in side], [float(c.position[0]) for c in side]
             if max(ys) - min(ys) > 0.05 * track or len({round(x, 6) for x in xs}) != len(xs):
                 return None
-        radii = {round(c.radius, 9) for c in lateral}
+        radii = {None if c.radius is None else round(c.radius, 9) for c in lateral}
         if len(radii) != 1:
             raise WheelError(
                 f"{path}: {len(lateral)} lateral wheels of different radii "
@@ -234,9 +234,10 @@ class SkidSteerKind(PlatformKind):
             )
         order = sorted(right, key=lambda c: -float(c.position[0])), sorted(left, key=lambda c: -float(c.position[0]))
         wheels = SkidSteerWheels(right=tuple(c.name for c in order[0]), left=tuple(c.name for c in order[1]))
-        note = (
-            f"skid-steer wheels: right {', '.join(wheels.right)}; left {', '.join(wheels.left)} "
-            f"(radius {lateral[0].radius:g} m from the URDF)"
+        note = f"skid-steer wheels: right {', '.join(wheels.right)}; left {', '.join(wheels.left)} " + (
+            "(radius unknown: mesh geometry; set [wheels] radius)"
+            if lateral[0].radius is None
+            else f"(radius {lateral[0].radius:g} m from the URDF)"
         )
         return Detected(wheels, (note,))
 

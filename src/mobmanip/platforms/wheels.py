@@ -6,27 +6,38 @@ geometry once the Pinocchio model exists (:func:`wheel_geometry`).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import WheelError
-from ..urdf import joint_axis, joint_limits, joint_path, wheel_radius, zero_configuration_placements
+from ..urdf import joint_axis, joint_limits, joint_path, wheel_radius, wheel_shape, zero_configuration_placements
 from .base import positive_length
 
 #: |cos| between a wheel axis and the platform's lateral axis above which the wheel counts as
 #: lateral (rolling along the platform's x axis).
 LATERAL = 0.99
 
+#: A continuous joint (or its child link) whose name matches this is named like a wheel.
+WHEEL_NAME = re.compile(r"wheel", re.IGNORECASE)
+
+
+def named_like_wheel(urdf, joint_name: str) -> bool:
+    """Whether a joint or its child link is named like a wheel (contains "wheel")."""
+    joint = urdf.joint_map[joint_name]
+    return bool(WHEEL_NAME.search(joint.name) or WHEEL_NAME.search(joint.child))
+
 
 @dataclass(frozen=True)
 class WheelCandidate:
-    """A continuous joint whose child link is wheel-shaped.
+    """A continuous joint whose child link is wheel-shaped, or named like a wheel.
 
     Attributes:
         name: joint name.
-        radius: wheel radius from the geometry (m).
+        radius: wheel radius (m): from the geometry, or given (``--wheel-radius``) for a wheel
+            known by its name only; ``None`` when neither gives one.
         position: joint origin in the root link's frame at the zero configuration (m), (3,).
         axis: joint axis in the root link's frame, (3,).
         carried_by_rotating_joint: whether a revolute/continuous joint lies between it and the root.
@@ -42,6 +53,7 @@ class WheelCandidate:
     carried_by_rotating_joint: bool
     driven: bool
     steering_joint: str | None = None
+    shape: str = "cylinder"
 
     @property
     def lateral(self) -> bool:
@@ -50,20 +62,36 @@ class WheelCandidate:
 
     def describe(self) -> str:
         x, y, _ = self.position
-        return f"{self.name} (r = {self.radius:g} m at x = {x:.3f}, y = {y:.3f} m)"
+        size = "r unknown" if self.radius is None else f"r = {self.radius:g} m"
+        return f"{self.name} ({size} at x = {x:.3f}, y = {y:.3f} m)"
+
+    def explain(self) -> str:
+        """One line: its shape and radius, axis, whether driven, on a swivel."""
+        if self.shape in ("cylinder", "sphere"):
+            size = f"{self.shape} of radius {self.radius:g} m"
+        elif self.radius is not None:
+            size = f"named like a wheel, mesh geometry, radius {self.radius:g} m as given"
+        else:
+            size = "named like a wheel, mesh geometry (no cylinder or sphere to read a radius from)"
+        axis = "lateral axis" if self.lateral else f"axis {np.round(self.axis, 3).tolist()}"
+        extra = f", on swivel {self.steering_joint!r}" if self.steering_joint else ""
+        driven = "driven (positive effort limit)" if self.driven else "no effort limit"
+        return f"{self.describe()}: {size}, {axis}, {driven}{extra}"
 
 
-def wheel_candidates(urdf, exclude=()) -> list[WheelCandidate]:
-    """Every continuous joint with a wheel-shaped child link, in URDF order (``exclude`` left out)."""
+def wheel_candidates(urdf, exclude=(), radius: float | None = None) -> list[WheelCandidate]:
+    """Every continuous joint with a wheel-shaped child link, or named like a wheel (a mesh
+    wheel: radius ``radius``, unknown without it), in URDF order (``exclude`` left out)."""
     placements = zero_configuration_placements(urdf)
     exclude = set(exclude)
     out = []
     for joint in urdf.robot.joints:
         if joint.type != "continuous" or joint.name in exclude:
             continue
-        radius = wheel_radius(urdf, joint.name)
-        if radius is None:
+        found = wheel_shape(urdf, joint.name)
+        if found is None and not named_like_wheel(urdf, joint.name):
             continue
+        shape, size = found if found is not None else ("mesh", radius)
         pose = placements[joint.name]
         ancestors = joint_path(urdf, joint.parent)
         _, effort = joint_limits(urdf, joint.name)
@@ -77,12 +105,13 @@ def wheel_candidates(urdf, exclude=()) -> list[WheelCandidate]:
         out.append(
             WheelCandidate(
                 name=joint.name,
-                radius=radius,
+                radius=size,
                 position=pose[:3, 3].copy(),
                 axis=pose[:3, :3] @ joint_axis(joint),
                 carried_by_rotating_joint=any(j.type in ("revolute", "continuous") for j in ancestors),
                 driven=effort is not None and effort > 0.0,
                 steering_joint=steering,
+                shape=shape,
             )
         )
     return out
@@ -161,7 +190,7 @@ def radius_of(urdf, name: str, override: float | None) -> float:
     if radius is None:
         raise WheelError(
             f"wheel {name!r} has no cylinder about its axis or sphere to read a radius from; "
-            "set [wheels] radius in the spec"
+            "set [wheels] radius in the spec (mobmanip init-spec --wheel-radius M writes it)"
         )
     return positive_length(f"radius of wheel {name!r} (its URDF cylinder or sphere)", radius)
 

@@ -1,0 +1,227 @@
+"""Named postures (--posture), the hands-apart warning, placeholder limits, weight, and the
+unit-consistent per-block indices of mixed (linear and angular) tasks."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from conftest import PAPER_SPEC, write_variant
+from mobmanip.cli import main
+from mobmanip.errors import SpecError, UnknownPostureError
+from mobmanip.grasp import HeldObject
+from mobmanip.named_postures import named_configuration, posture_names
+from mobmanip.plausibility import block_indices, limit_warnings, weight_warnings
+from mobmanip.spec import load_spec
+
+
+def _run(argv, capsys):
+    code = main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def tiago():
+    return mobmanip.load_robot("tiago_dual")
+
+
+# ----- named postures -----
+
+
+def _paper_variant(tmp_path, extra: str):
+    urdf = PAPER_SPEC.parent / "planar_dual_arm.urdf"
+    spec = PAPER_SPEC.read_text().replace('urdf = "planar_dual_arm.urdf"', f'urdf = "{urdf}"') + extra
+    path = tmp_path / "variant.toml"
+    path.write_text(spec)
+    return path
+
+
+def test_named_postures_set_their_joints(tmp_path):
+    path = _paper_variant(tmp_path, "\n[postures.reach]\narm_right_2_joint = 0.25\narm_left_3_joint = -1.5\n")
+    robot = mobmanip.load_robot(load_spec(path))
+    assert posture_names(robot.spec) == ("home", "reach")
+    q = named_configuration(robot, "reach", (1.0, -2.0, 0.5))
+    joints = robot.configuration_dict(q)["joints"]
+    assert joints["arm_right_2_joint"] == 0.25 and joints["arm_left_3_joint"] == -1.5
+    assert joints["arm_right_1_joint"] == 0.0  # not named: at home
+    np.testing.assert_allclose(robot.configuration_dict(q)["platform"], [1.0, -2.0, 0.5], atol=1e-15)
+    np.testing.assert_array_equal(named_configuration(robot, "home"), robot.neutral())
+    with pytest.raises(UnknownPostureError, match="'stretched'.*home, reach"):
+        named_configuration(robot, "stretched")
+
+
+def test_hold_is_the_spec_hold(tiago):
+    assert posture_names(tiago.spec)[:2] == ("home", "hold")
+    np.testing.assert_array_equal(named_configuration(tiago, "hold"), tiago.hold_configuration())
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        ("\n[postures.home]\narm_right_2_joint = 0.1\n", "reserved"),
+        ("\n[postures.up]\nwheel_right_joint = 0.1\n", "not an arm or torso joint"),
+        ('\n[postures.up]\narm_right_2_joint = "x"\n', "must be a finite number"),
+        ("\n[postures]\nup = 3\n", "must be a table"),
+    ],
+)
+def test_bad_postures_are_refused(tmp_path, extra, message):
+    with pytest.raises(SpecError, match=message):
+        load_spec(_paper_variant(tmp_path, extra))
+
+
+def test_bad_grasp_offsets_are_refused(tmp_path):
+    text = PAPER_SPEC.read_text()
+    assert "[object]\nmass = 2.0\n" in text
+    for rows in ("[[0, 0, 0]]", "[[0, 0], [0, 0]]", '[[0, 0, "a"], [0, 0, 0]]'):
+        path = write_variant(
+            tmp_path, (PAPER_SPEC.parent / "planar_dual_arm.urdf").read_text(),
+            [("[object]\nmass = 2.0\n", f"[object]\nmass = 2.0\ngrasp_offsets = {rows}\n")],
+        )  # fmt: skip
+        with pytest.raises(SpecError, match="grasp_offsets"):
+            load_spec(path)
+
+
+# ----- the README's TIAGo++ example, by posture -----
+
+
+def _hands(document):
+    return np.array([arm["position"] for arm in document["arms"]])
+
+
+def test_hold_posture_holds_the_object_and_home_warns(tmp_path, capsys, tiago):
+    out = tmp_path / "hold.json"
+    argv = ["analyze", "tiago_dual", "--object-mass", "2", "--task", "spatial", "--posture", "hold", "--json", out]
+    code, printed, err = _run(argv, capsys)
+    assert code == 0 and "warning" not in err
+    doc = json.loads(out.read_text())
+    assert doc["dynamic_ellipsoid"]["empty"] is False and min(doc["dynamic_ellipsoid"]["semi_axes"]) > 0.0
+    # the hands, by forward kinematics here, are the declared 0.30 m apart
+    q = named_configuration(tiago, "hold")
+    pin.framesForwardKinematics(tiago.model, tiago.data, q)
+    hands = np.array([tiago.data.oMf[arm.frame_id].translation for arm in tiago.arms])
+    np.testing.assert_allclose(_hands(doc), hands, atol=1e-12)
+    assert abs(np.linalg.norm(hands[0] - hands[1]) - 0.30) < 1e-3
+    assert doc["warnings"] == []
+
+    home = tmp_path / "home.json"
+    code, _, err = _run(argv[:-4] + ["--json", home], capsys)
+    assert code == 0
+    doc = json.loads(home.read_text())
+    assert doc["dynamic_ellipsoid"]["empty"] is True
+    apart = np.linalg.norm(np.subtract(*_hands(doc)))
+    assert apart > 1.9
+    assert f"are {apart:.3f} m apart" in err and "0.300 m apart" in err and err.startswith("warning: ")
+    assert len(doc["warnings"]) == 1 and f"{apart:.3f} m" in doc["warnings"][0]
+
+
+def test_q_and_posture_together_is_a_usage_error(tmp_path, capsys):
+    q = tmp_path / "q.json"
+    q.write_text('{"joints": {}}')
+    code, _, err = _run(["analyze", "planar_dual_arm", "--q", q, "--posture", "home"], capsys)
+    assert code == 2 and "--posture" in err
+    code, _, err = _run(["analyze", "planar_dual_arm", "--posture", "nowhere"], capsys)
+    assert code == 2 and "'nowhere'" in err and "home" in err
+
+
+def test_an_explicit_object_warns_by_its_own_offsets(robot):
+    """The paper's robot at home: both hands at the same point (the object's centre). An object
+    declared with grasp points 0.4 m apart is fine (hands closer than allowed); hands 1 m apart
+    on a 0.4 m object warn."""
+    q = robot.neutral()
+    an = mobmanip.analyze(robot, q, "planar")
+    assert an.warnings == ()
+    centre = an.end_effector_positions.mean(axis=0)
+    narrow = HeldObject(2.0, np.eye(3), centre, np.array([[0, -0.2, 0], [0, 0.2, 0]]))
+    assert mobmanip.analyze(robot, q, "planar", held_object=narrow).warnings == ()
+    q2 = robot.configuration((0, 0, 0), {"arm_right_1_joint": -0.5, "arm_left_1_joint": 0.5})
+    spread = mobmanip.analyze(robot, q2, "planar", held_object=narrow)
+    pos = spread.end_effector_positions
+    apart = np.linalg.norm(pos[0] - pos[1])
+    assert apart > 0.4 * 1.1 + 0.05
+    assert len(spread.warnings) == 1 and f"{apart:.3f} m apart" in spread.warnings[0]
+
+
+# ----- placeholder limits and weight -----
+
+
+def test_identical_round_limits_are_flagged(tmp_path):
+    text = (PAPER_SPEC.parent / "planar_dual_arm.urdf").read_text()
+    efforts = "".join(f"arm_right_{i}_joint = 100.0\n" for i in (1, 2, 3))
+    path = write_variant(tmp_path, text, [("# [limits.effort]\n", f"[limits.effort]\n{efforts}")])
+    robot = mobmanip.load_robot(load_spec(path))
+    found = limit_warnings(robot)
+    assert len(found) == 1 and "'right'" in found[0] and "100 N m" in found[0] and "effort" in found[0]
+    # the paper's own limits (Table 1: 3.14 rad/s on every joint, not a round value) pass
+    assert limit_warnings(mobmanip.load_robot("planar_dual_arm")) == ()
+
+
+def test_weight_warning_matches_the_generalized_gravity(tiago):
+    """An arm whose shoulder limit is below the torque gravity needs there is named; the torque
+    is checked against Pinocchio's generalized gravity (computed independently of xi)."""
+    q = named_configuration(tiago, "hold")
+    g = pin.computeGeneralizedGravity(tiago.model, tiago.data, q)
+    names = tiago.reduced_velocity_names
+    joint = "arm_right_2_joint"
+    need = abs(g[tiago.model.joints[tiago.model.getJointId(joint)].idx_v])
+    assert need > 1.0
+    weak = tiago.with_limits(effort={joint: 0.5 * need})
+    an = mobmanip.analyze(weak, q, "spatial")
+    found = weight_warnings(weak, an.bias)
+    assert len(found) == 1 and found[0].startswith(joint) and f"{need:.3g}" in found[0]
+    assert names.index(joint) >= 2
+
+
+# ----- per-block indices of a mixed task -----
+
+
+def test_block_indices_are_the_shadows_of_each_block(tiago):
+    q = named_configuration(tiago, "hold")
+    an = mobmanip.analyze(tiago, q, "spatial", object_mass=2.0)
+    blocks = block_indices(mobmanip.tasks.get_task("spatial"), an.measures)
+    doc = an.to_dict()["block_indices"]
+    for name, ellipsoid in an.measures.items():
+        for block, rows in (("linear", (0, 1, 2)), ("angular", (3, 4, 5))):
+            entry = blocks[name][block]
+            assert doc[mobmanip.measures.get_measure(name).json_key][block] == entry
+            # the shadow reaches along each unit direction u of the block exactly as far as the
+            # 6-D set does along u padded with zeros (its support function), here on 40 directions
+            rng = np.random.default_rng(1)
+            shadow = ellipsoid.project(rows)
+            for u in rng.normal(size=(40, 3)):
+                u /= np.linalg.norm(u)
+                full = np.zeros(6)
+                full[list(rows)] = u
+                assert abs(shadow.support(u) - ellipsoid.support(full)) < 1e-9 * ellipsoid.semi_axes[0]
+            # its volume is that of a 3-D ellipsoid with the shadow's semi-axes
+            a = np.array(entry["semi_axes"])
+            assert abs(entry["volume"] - 4.0 / 3.0 * np.pi * np.prod(a)) < 1e-9 * entry["volume"]
+            assert abs(entry["isotropy"] - a[-1] / a[0]) < 1e-12
+    assert block_indices(mobmanip.tasks.get_task("translational"), an.measures) is None
+
+
+def test_init_spec_records_postures_that_load_back(tmp_path, capsys, robot):
+    """init-spec --posture NAME=Q.json writes [postures.NAME] (and [hold]) with the arm joints of
+    the file; the spec reads back and the named configuration is the file's configuration."""
+    urdf = PAPER_SPEC.parent / "planar_dual_arm.urdf"
+    q_file = tmp_path / "reach.json"
+    q_file.write_text(json.dumps({"joints": {"arm_right_2_joint": 0.7, "arm_left_2_joint": -0.7}}))
+    out = tmp_path / "spec.toml"
+    tools = ["arm_right_tool_link", "arm_left_tool_link"]
+    argv = ["init-spec", urdf, "--ee", tools[0], "--ee", tools[1], "--out", out]
+    code, _, _ = _run(argv + ["--posture", f"reach={q_file}", "--posture", f"hold={q_file}"], capsys)
+    assert code == 0
+    text = out.read_text()
+    assert "[postures.reach]" in text and "[hold]" in text
+    spec = load_spec(out)
+    assert spec.postures["reach"]["arm_right_2_joint"] == 0.7 and spec.hold["arm_left_2_joint"] == -0.7
+    loaded = mobmanip.load_robot(spec)
+    q_named = named_configuration(loaded, "reach")
+    q_file_cfg = mobmanip.io.read_configuration(loaded, q_file)
+    np.testing.assert_allclose(q_named, q_file_cfg, atol=0)
+    code, _, err = _run(argv + ["--posture", "reach"], capsys)
+    assert code == 2 and "NAME=Q.json" in err
