@@ -13,13 +13,17 @@ one robot: the unified kinematic and dynamic ellipsoids and the exact capacity p
   may push while another pulls.
 
 **Which robot limits the team along a direction.** :meth:`TeamAnalysis.contributions` gives, for
-each robot, the elasticity of the team's reach along a direction d (its
-:meth:`~mobmanip.measure.TaskSet.radius_along`, from the set's centre) with respect to that
-robot's limits: d log r(d) / d log s_i when all of robot i's limits (speed limits for velocity
-measures, effort limits for acceleration measures) are scaled by s_i. A robot whose limits do
-not bound the team along d contributes 0; for the kinematic polytope, the one robot whose own
-set is the narrowest along d contributes 1. The velocity sets are homogeneous in the limits, so
-their contributions sum to 1.
+each robot, the elasticity of the team's reach along a direction d with respect to that robot's
+limits: d log r(d) / d log s_i when all of robot i's limits (speed limits for velocity measures,
+effort limits for acceleration measures) are scaled by s_i. The reach is, by default
+(``along="ray"``), how far the set extends from its centre exactly in the direction d
+(:func:`ray_radius`: the largest t with c + t d / |d| in the set); ``along="support"`` takes the
+set's :meth:`~mobmanip.measure.TaskSet.radius_along` instead (its extent along d, any motion
+across d allowed). A robot whose limits do not bound the team along d contributes 0. For the
+kinematic polytope along a ray, the team's set being the intersection of the robots' own sets,
+the robot whose own set is the shortest along d contributes 1 and the others 0 (0.5 each on a
+tie). The velocity sets are homogeneous of degree one in the limits, so their contributions sum
+to 1 (Euler's theorem); the acceleration sets under gravity are not.
 
 **Load sharing.** :meth:`TeamAnalysis.load_sharing` chooses the hands' wrenches h on the object
 (W h = M_o a_o + g_o: the object's equation of motion) so that the worst normalised torque over
@@ -43,13 +47,15 @@ import scipy.linalg
 from scipy.optimize import linprog
 
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians
+from .ellipsoids import Ellipsoid
 from .errors import ArgumentError, NumericalError, SetQueryError
-from .measure import TaskSet
+from .measure import TaskSet, check_direction
 from .measures import MeasureTerms, get_measure, resolve_measures
+from .polytope import Polytope
 from .tasks import get_task
 from .team import Member, Team
 
-__all__ = ["LoadSharing", "MemberTerms", "TeamAnalysis", "analyze_team", "member_terms"]
+__all__ = ["LoadSharing", "MemberTerms", "TeamAnalysis", "analyze_team", "member_terms", "ray_radius", "stack_terms"]
 
 
 @dataclass(frozen=True)
@@ -219,41 +225,47 @@ class TeamAnalysis:
         )
         return measure.compute(terms)
 
-    def contributions(self, name: str, directions: np.ndarray, step: float = 1e-4) -> np.ndarray:
+    def contributions(self, name: str, directions: np.ndarray, *, along: str = "ray", step: float = 1e-4) -> np.ndarray:
         """Each robot's share in limiting the team along each direction (see the module's
         docstring): the elasticity of the reach r(d) with respect to the robot's limits, by a
-        central difference in log s_i of width ``step`` (exact where r is linear in s_i).
+        central difference in log s_i of width ``step`` (exact where r is linear in s_i; at a
+        kink, the mean of the two one-sided values).
 
         Args:
             name: a measure name.
             directions: (n, m) or (m,), not necessarily unit.
+            along: ``"ray"`` (:func:`ray_radius`) or ``"support"`` (``radius_along``).
             step: the relative change of the limits.
 
         Returns:
             (n, k): rows per direction, columns per robot (0 where the set has no reach).
         """
         measure = get_measure(name)
+        if along not in ("ray", "support"):
+            raise ArgumentError(f"along must be 'ray' or 'support', got {along!r}")
         d = np.atleast_2d(np.asarray(directions, dtype=float))
         if d.ndim != 2 or d.shape[1] != self.terms.W.shape[0] or not np.all(np.isfinite(d)):
             raise SetQueryError(f"directions must be finite, of shape (n, {self.terms.W.shape[0]}), got {d.shape}")
-        base = self.measure(name)
-        r0 = np.array([base.radius_along(v) for v in d])
+
+        def reach(task_set):
+            return np.array([ray_radius(task_set, v) if along == "ray" else task_set.radius_along(v) for v in d])
+
+        r0 = reach(self.measure(name))
         out = np.zeros((len(d), len(self.parts)))
         width = math.log1p(step) - math.log1p(-step)
         for i in range(len(self.parts)):
-            up, down = (
-                measure.compute(stack_terms(self.team, self.parts, {i: s}, quantity=measure.quantity))
+            r_up, r_down = (
+                reach(measure.compute(stack_terms(self.team, self.parts, {i: s}, quantity=measure.quantity)))
                 for s in (1.0 + step, 1.0 - step)
             )
-            r_up = np.array([up.radius_along(v) for v in d])
-            r_down = np.array([down.radius_along(v) for v in d])
             ok = (r0 > 0) & (r_up > 0) & (r_down > 0)
             out[ok, i] = (np.log(r_up[ok]) - np.log(r_down[ok])) / width
         return out
 
-    def limiting_robots(self, name: str, directions: np.ndarray) -> list[str]:
-        """The name of the robot that limits the team most along each direction."""
-        shares = self.contributions(name, directions)
+    def limiting_robots(self, name: str, directions: np.ndarray, *, along: str = "ray") -> list[str]:
+        """The name of the robot that limits the team most along each direction (``""`` where
+        the set has no reach)."""
+        shares = self.contributions(name, directions, along=along)
         return [self.team.members[int(np.argmax(row))].name if np.any(row > 0) else "" for row in shares]
 
     def load_sharing(self, acceleration: np.ndarray | None = None) -> LoadSharing:
@@ -317,11 +329,44 @@ class TeamAnalysis:
         names = [f"+{a}" for a in labels] + [f"-{a}" for a in labels]
         out = {}
         for measure in self.measures:
-            shares = self.contributions(measure, directions)
+            shares = self.contributions(measure, directions)  # along rays
             out[measure] = {
                 n: {member.name: float(s) for member, s in zip(self.team.members, row)} for n, row in zip(names, shares)
             }
         return out
+
+
+def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
+    """How far a set extends from its centre c exactly along a direction d: the largest t >= 0
+    with c + t d / |d| in the set (0 when the set is empty or flat across d).
+
+    Ellipsoids: 1 / sqrt(u^T A u) for the unit u, u in the span of the positive semi-axes.
+    Polytopes: the nearest facet hit, min over facets a . u > 0 of (b - a . c) / (a . u).
+
+    Raises:
+        SetQueryError: a zero or non-finite direction; ArgumentError: a kind of set without a
+            ray radius here.
+    """
+    u = check_direction(direction, task_set.dim)
+    u = u / np.linalg.norm(u)
+    if task_set.empty:
+        return 0.0
+    if isinstance(task_set, Ellipsoid):
+        coords = task_set.axes @ u
+        positive = task_set.semi_axes > 0
+        if np.any(np.abs(coords[~positive]) > 1e-12):
+            return 0.0
+        return float(1.0 / np.linalg.norm(coords[positive] / task_set.semi_axes[positive]))
+    if isinstance(task_set, Polytope):
+        A, b = task_set.halfspaces
+        slack = b - A @ task_set.center
+        rate = A @ u
+        scale = max(float(np.abs(b).max()), 1e-300)
+        hit = rate > 1e-12
+        if np.any(slack[hit] <= 1e-12 * scale) or not np.any(hit):
+            return 0.0
+        return float(np.min(slack[hit] / rate[hit]))
+    raise ArgumentError(f"ray_radius knows ellipsoids and polytopes, not {task_set.kind!r} sets")
 
 
 def analyze_team(team: Team, measures: Iterable[str] | str | None = None) -> TeamAnalysis:
