@@ -227,9 +227,9 @@ class TeamAnalysis:
 
     def contributions(self, name: str, directions: np.ndarray, *, along: str = "ray", step: float = 1e-4) -> np.ndarray:
         """Each robot's share in limiting the team along each direction (see the module's
-        docstring): the elasticity of the reach r(d) with respect to the robot's limits, by a
-        central difference in log s_i of width ``step`` (exact where r is linear in s_i; at a
-        kink, the mean of the two one-sided values).
+        docstring): the elasticity of the reach r(d) with respect to the robot's limits, as the
+        mean of the one-sided differences in log s_i over ``step`` (exact where r is linear in
+        s_i on both sides; at a kink, the mean of the two one-sided elasticities).
 
         Args:
             name: a measure name.
@@ -252,14 +252,16 @@ class TeamAnalysis:
 
         r0 = reach(self.measure(name))
         out = np.zeros((len(d), len(self.parts)))
-        width = math.log1p(step) - math.log1p(-step)
         for i in range(len(self.parts)):
             r_up, r_down = (
                 reach(measure.compute(stack_terms(self.team, self.parts, {i: s}, quantity=measure.quantity)))
                 for s in (1.0 + step, 1.0 - step)
             )
             ok = (r0 > 0) & (r_up > 0) & (r_down > 0)
-            out[ok, i] = (np.log(r_up[ok]) - np.log(r_down[ok])) / width
+            # the mean of the one-sided differences: exact on each linear piece of a polytope's reach
+            up = np.log(r_up[ok] / r0[ok]) / math.log1p(step)
+            down = np.log(r0[ok] / r_down[ok]) / -math.log1p(-step)
+            out[ok, i] = 0.5 * (up + down)
         return out
 
     def limiting_robots(self, name: str, directions: np.ndarray, *, along: str = "ray") -> list[str]:
