@@ -264,11 +264,17 @@ class TeamAnalysis:
             out[ok, i] = 0.5 * (up + down)
         return out
 
-    def limiting_robots(self, name: str, directions: np.ndarray, *, along: str = "ray") -> list[str]:
-        """The name of the robot that limits the team most along each direction (``""`` where
-        the set has no reach)."""
+    def limiting_robots(self, name: str, directions: np.ndarray, *, along: str = "ray", tie: float = 1e-6) -> list[str]:
+        """The robot that limits the team most along each direction: the largest contribution,
+        robots within ``tie`` of it joined by ``"+"`` (a shared limit, e.g. in a symmetric
+        team); ``""`` where the set has no reach."""
         shares = self.contributions(name, directions, along=along)
-        return [self.team.members[int(np.argmax(row))].name if np.any(row > 0) else "" for row in shares]
+        names = [m.name for m in self.team.members]
+        out = []
+        for row in shares:
+            top = float(row.max()) if row.size else 0.0
+            out.append("+".join(n for n, v in zip(names, row) if v >= top - tie) if top > 0 else "")
+        return out
 
     def load_sharing(self, acceleration: np.ndarray | None = None) -> LoadSharing:
         """The hands' wrenches that hold (or accelerate) the object with the smallest worst

@@ -72,7 +72,8 @@ def run(args) -> int:
                 e = np.zeros(task.dim)
                 e[j] = 1.0 if sign == "+" else -1.0
                 shares = table[f"{sign}{label}"]
-                top = max(shares, key=shares.get) if any(v > 0 for v in shares.values()) else "-"
+                best = max(shares.values())
+                top = "+".join(n for n in names if shares[n] >= best - 0.005) if best > 0 else "-"  # as printed
                 parts = ", ".join(f"{n} {shares[n]:.2f}" for n in names)
                 cells.append(f"{sign}{ray_radius(task_set, e):.4f} limited by {top} ({parts})")
             print(f"  {label}: " + "; ".join(cells))
