@@ -403,3 +403,92 @@ def test_accelerating_the_object_meets_its_equation_of_motion(arms_team):
     np.testing.assert_allclose(an.terms.J_u @ qdd, W.T @ a_o, rtol=0, atol=1e-9)
     tau = np.concatenate(share.torques)
     np.testing.assert_allclose(an.terms.P @ qdd, an.terms.xi + tau - an.terms.J_u.T @ h, atol=1e-8 * np.abs(tau).max())
+
+
+# ----------------------------------------------------------------------------------------------
+# robots that differ: TIAGo++ and the paper's robot, decoupled dynamics, a locked platform
+
+
+@pytest.fixture(scope="module")
+def mixed_team(robot, posture):
+    tiago = mobmanip.load_robot("tiago_dual")
+    q_t = tiago.hold_configuration()
+    q_t[:4] = (0.4, 0.9, math.cos(-1.2), math.sin(-1.2))
+    paper = paper_member(robot, posture, "paper", 0.1, -1.3, math.radians(70.0), angle_deg=10.0)
+    return Team.holding([Member("tiago", tiago, q_t, (0, 1)), paper], 3.0, task="planar_rigid", decoupled=True)
+
+
+def test_different_robots_kinematic_set_equals_the_lp(mixed_team, rng):
+    an = analyze_team(mixed_team, measures=("kinematic_polytope",))
+    lp = independent_kinematic_support(mixed_team.members, mixed_team.held_object.center)
+    d = unit_directions(rng, 300, 3)
+    np.testing.assert_allclose(an.measure("kinematic_polytope").supports(d), [lp(v) for v in d], rtol=1e-7)
+
+
+def test_decoupled_team_dynamics_zero_each_robots_platform_arm_blocks(mixed_team):
+    import scipy.linalg
+
+    an = analyze_team(mixed_team)
+    obj = mixed_team.held_object
+    Js, Ps, xis, Ws = [], [], [], []
+    for mem in mixed_team.members:
+        J, P, xi, hands = pinocchio_blocks(mem, RIGID)
+        P = P.copy()
+        P[:2, 2:] = 0.0  # both platforms are differential drives: two wheel rates first
+        P[2:, :2] = 0.0
+        Js.append(J)
+        Ps.append(P)
+        xis.append(xi)
+        Ws.extend(grasp_block_rigid(p - obj.center) for p in hands)
+    tau_max = np.concatenate([m.robot.effort_limits for m in mixed_team.members])
+    M_o = np.diag([obj.mass, obj.mass, obj.inertia[2, 2]])
+    ref = dynamic_ellipsoid(
+        scipy.linalg.block_diag(*Js),
+        np.hstack(Ws),
+        scipy.linalg.block_diag(*Ps),
+        np.eye(len(tau_max)),
+        np.concatenate(xis),
+        M_o,
+        np.zeros(3),
+        tau_max,
+    )
+    got = an.measure("dynamic")
+    np.testing.assert_allclose(got.semi_axes, ref.semi_axes, rtol=1e-10)
+    np.testing.assert_allclose(got.matrix, ref.matrix, rtol=1e-9, atol=1e-12 * np.abs(ref.matrix).max())
+
+
+def test_a_locked_platform_takes_no_part(robot, posture, rng):
+    """With one robot's platform fixed, its wheels leave the stacked terms, and the team's
+    kinematic set can only shrink (the locked robot's own set is a subset of its mobile one)."""
+    a = paper_member(robot, posture, "a", 0.0, -0.45, 0.0, angle_deg=20.0)
+    b = paper_member(robot, posture, "b", 0.0, 0.45, 0.0, angle_deg=-20.0)
+    locked = robot.with_platform("fixed")
+    b_locked = Member("b", locked, b.q, (0, 1))
+    mobile = analyze_team(Team.holding([a, b], 2.0, task="planar_rigid"), ("kinematic_polytope",))
+    fixed = analyze_team(Team.holding([a, b_locked], 2.0, task="planar_rigid"), ("kinematic_polytope",))
+    assert fixed.terms.J_u.shape[1] == mobile.terms.J_u.shape[1] - 2
+    d = unit_directions(rng, 200, 3)
+    lp = independent_kinematic_support([a, b_locked], fixed.team.held_object.center)
+    got = fixed.measure("kinematic_polytope").supports(d)
+    np.testing.assert_allclose(got, [lp(v) for v in d], rtol=1e-7)
+    assert np.all(got <= mobile.measure("kinematic_polytope").supports(d) * (1 + 1e-9))
+
+
+def test_ray_radius_is_the_nearest_facet_and_the_ellipsoid_quadratic(side_by_side, rng):
+    _, an = side_by_side
+    polytope = an.measure("kinematic_polytope")
+    A, b = polytope.halfspaces  # facets from the hull enumeration; the ray uses one LP
+    for u in unit_directions(rng, 100, 3):
+        rate = A @ u
+        hit = rate > 1e-12
+        expected = np.min((b[hit] - A[hit] @ polytope.center) / rate[hit])
+        assert ray_radius(polytope, u) == pytest.approx(expected, rel=1e-9)
+        # the point reached lies on the boundary: inside, and a little further is outside
+        r = ray_radius(polytope, u)
+        assert (
+            polytope.contains(polytope.center + r * u)[0] and not polytope.contains(polytope.center + 1.001 * r * u)[0]
+        )
+    ellipsoid = an.measure("kinematic")
+    for u in unit_directions(rng, 20, 3):
+        r = ray_radius(ellipsoid, 2.0 * u)
+        assert (r * u) @ ellipsoid.matrix @ (r * u) == pytest.approx(1.0, rel=1e-12)

@@ -349,7 +349,7 @@ def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
     with c + t d / |d| in the set (0 when the set is empty or flat across d).
 
     Ellipsoids: 1 / sqrt(u^T A u) for the unit u, u in the span of the positive semi-axes.
-    Polytopes: the nearest facet hit, min over facets a . u > 0 of (b - a . c) / (a . u).
+    Polytopes: :meth:`mobmanip.polytope.Polytope.ray_radius` (one linear program).
 
     Raises:
         SetQueryError: a zero or non-finite direction; ArgumentError: a kind of set without a
@@ -366,14 +366,7 @@ def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
             return 0.0
         return float(1.0 / np.linalg.norm(coords[positive] / task_set.semi_axes[positive]))
     if isinstance(task_set, Polytope):
-        A, b = task_set.halfspaces
-        slack = b - A @ task_set.center
-        rate = A @ u
-        scale = max(float(np.abs(b).max()), 1e-300)
-        hit = rate > 1e-12
-        if np.any(slack[hit] <= 1e-12 * scale) or not np.any(hit):
-            return 0.0
-        return float(np.min(slack[hit] / rate[hit]))
+        return task_set.ray_radius(u)
     raise ArgumentError(f"ray_radius knows ellipsoids and polytopes, not {task_set.kind!r} sets")
 
 
