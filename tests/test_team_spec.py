@@ -120,3 +120,21 @@ def test_a_robot_spec_path_is_found_next_to_the_description(tmp_path, example_da
     data = _broken(example_data, _set(("robots", 1, "robot"), "mine.toml"))
     team = team_from_dict(data, tmp_path)
     assert team.members[1].robot.name == "planar_dual_arm"
+
+
+def test_the_shadow_of_each_robots_own_set_is_the_hull_of_its_vertices(example):
+    """Regression: projecting an intersection-form polytope whose shadow has several candidate
+    facets through one vertex once failed in the 2-D hull enumeration."""
+    from scipy.spatial import ConvexHull
+
+    from mobmanip.team_analysis import analyze_team
+
+    an = analyze_team(example, measures=("kinematic_polytope",))
+    sets = [an.measure("kinematic_polytope")] + [an.member_set("kinematic_polytope", i) for i in range(2)]
+    d = np.random.default_rng(3).normal(size=(200, 2))
+    for polytope in sets:
+        shadow = polytope.project((0, 1)).vertices
+        V = polytope.vertices[:, :2]
+        hull = V[ConvexHull(V).vertices]
+        assert len(shadow) == len(hull)
+        np.testing.assert_allclose((d @ shadow.T).max(axis=1), (d @ hull.T).max(axis=1), rtol=1e-12, atol=1e-12)
