@@ -4,7 +4,8 @@ Prints the team (robots, hands, object), each measure's reach along the task axe
 robot that limits the team there and every robot's share (:meth:`TeamAnalysis.contributions`),
 and the load sharing that holds the object still. ``--json`` writes everything,
 ``--sweep-heading GRID`` turns the object through heading changes (deg) with the robots reaching
-for the moved grasp points, ``--plot FILE`` draws the top view (and the sweep).
+for the moved grasp points, ``--plot FILE`` draws the top view (and the sweep), ``--export
+SCENE.html`` writes the meshcat scene of all robots, the object and the team's sets.
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ def register(sub) -> None:
     add_measure_option(parser)
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.add_argument("--plot", metavar="FILE", help="write a figure (top view; with a sweep, its curves too)")
+    parser.add_argument(
+        "--export", metavar="SCENE.html", help="write the 3-D scene (robots, object, sets) as a self-contained page"
+    )
     parser.add_argument(
         "--sweep-heading",
         metavar="GRID",
@@ -113,4 +117,12 @@ def run(args) -> int:
 
         team_figure(analysis, args.plot, sweep)
         print(f"wrote {args.plot}")
+    if args.export:
+        from ..viz.team_scene import TeamViewer
+
+        with TeamViewer(analysis) as viewer:
+            viewer.export_html(args.export)
+            for note in viewer.mesh_notes:
+                print(f"note: {note}")
+        print(f"wrote {args.export}")
     return 0
