@@ -130,6 +130,12 @@ def test_team_of_one_reproduces_analyze(robot, posture, rng):
     d = unit_directions(rng, 200, 3)
     for name in ("kinematic_polytope", "dynamic_polytope"):
         np.testing.assert_allclose(got.measure(name).supports(d), ref.measure(name).supports(d), rtol=1e-12)
+    # and analyze's default (compiled) path, certified to 1e-9 of each ellipsoid's size
+    fast = mobmanip.analyze(robot, q, "planar_rigid", object_mass=3.0)
+    for name in ("kinematic", "dynamic"):
+        a, b = got.measure(name), fast.measure(name)
+        np.testing.assert_allclose(a.semi_axes, b.semi_axes, rtol=0, atol=1e-9 * b.semi_axes[0])
+        np.testing.assert_allclose(a.center, b.center, rtol=0, atol=1e-9 * b.semi_axes[0])
 
 
 def test_team_of_one_from_a_description_reproduces_analyze_in_space():
