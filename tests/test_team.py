@@ -389,8 +389,14 @@ def test_an_overload_is_flagged_empty(arms_team):
     share = analyze_team(team).load_sharing()
     best = independent_worst(team.members, team.held_object.center, 400.0, team.held_object.inertia, np.zeros(6))[0]
     assert best > 1.0 and share.empty and share.worst == pytest.approx(best, rel=1e-7)
-    light = analyze_team(Team.holding([a, b], 1.0, task="spatial")).load_sharing()
+    light_team = analyze_team(Team.holding([a, b], 1.0, task="spatial"), ("dynamic_polytope",))
+    light = light_team.load_sharing()
     assert not light.empty and light.worst < 1.0
+    # each UR5's Jacobian is square and invertible: holding still forces qdd = 0, so the exact
+    # dynamic set (any internal forces) holds a_o = 0 exactly when the load sharing fits
+    heavy = analyze_team(team, ("dynamic_polytope",)).measure("dynamic_polytope")
+    assert not heavy.contains(np.zeros(6))[0]
+    assert light_team.measure("dynamic_polytope").contains(np.zeros(6))[0]
 
 
 def test_accelerating_the_object_meets_its_equation_of_motion(arms_team):

@@ -69,6 +69,12 @@ def run(args) -> int:
             print(f"{measure.label}: EMPTY (the limits cannot hold the load still)")
             continue
         print(f"{measure.label} ({measure.quantity.units}): reach from its centre along each task axis, both ways")
+        if np.any(task_set.center != 0.0):
+            held = bool(task_set.contains(np.zeros(task.dim))[0])
+            print(
+                f"  centre {np.array2string(task_set.center, precision=4)}; "
+                + ("the object at rest is inside" if held else "the object cannot be held still (rest is outside)")
+            )
         table = document["limiting_robot"][name]
         for j, label in enumerate(task.labels):
             cells = []
@@ -76,8 +82,8 @@ def run(args) -> int:
                 e = np.zeros(task.dim)
                 e[j] = 1.0 if sign == "+" else -1.0
                 shares = table[f"{sign}{label}"]
-                best = max(shares.values())
-                top = "+".join(n for n in names if shares[n] >= best - 0.005) if best > 0 else "-"  # as printed
+                best = round(max(shares.values()), 2)  # ties as printed
+                top = "+".join(n for n in names if round(shares[n], 2) >= best) if best > 0 else "-"
                 parts = ", ".join(f"{n} {shares[n]:.2f}" for n in names)
                 cells.append(f"{sign}{ray_radius(task_set, e):.4f} limited by {top} ({parts})")
             print(f"  {label}: " + "; ".join(cells))
