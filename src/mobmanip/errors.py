@@ -200,3 +200,8 @@ class RangeError(ArgumentError):
 
 class NumericalError(MobmanipError):
     """A result that is not finite: mobmanip reports it instead of printing or writing NaN or inf."""
+
+
+class TeamError(SpecError):
+    """A team description (several robots holding one object) is malformed or inconsistent: an
+    unknown robot or arm, a duplicate name, a hand too far from its grasp point, ..."""

@@ -80,6 +80,11 @@ def enumerate_hull(An: np.ndarray, s: np.ndarray) -> Hull:
     # Incidence polar vertex (our facet) x polar facet (our vertex), from the triangulation.
     key = np.unique(hull.simplices.ravel().astype(np.int64) * len(U) + np.repeat(group, k))
     row, vertex = key // len(U), key % len(U)
+    # A row that touches the set in fewer than k distinct vertices (its polar point lies on the
+    # hull but its candidate vertices merged into one) is no facet: a zero-size face.
+    rows, count = np.unique(row, return_counts=True)
+    keep = np.isin(row, rows[count >= k])
+    row, vertex = row[keep], vertex[keep]
     facets, facet = np.unique(row, return_inverse=True)
     counts = np.bincount(facet)
     if k == 2:

@@ -204,8 +204,30 @@ class Polytope(TaskSet):
         if self.is_zonotope:
             return D @ self._c + np.abs(D @ self._G).sum(axis=1)
         if self.dim <= 3:
-            return (D @ self.vertices.T).max(axis=1)
+            try:
+                return (D @ self.vertices.T).max(axis=1)
+            except TaskError:  # too many candidate facets to enumerate (e.g. a team of robots)
+                pass
         return np.array([self._support_lp(d) for d in D])
+
+    def ray_radius(self, direction) -> float:
+        """How far the set extends from its centre exactly along d: the largest t >= 0 with
+        centre + t d / |d| in the set (one linear program; 0 when empty or flat across d)."""
+        from scipy.optimize import linprog
+
+        d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
+        norm = float(np.linalg.norm(d))
+        if norm == 0.0:
+            raise TaskError("ray_radius needs a non-zero direction")
+        if self.empty:
+            return 0.0
+        n = self._G.shape[1]
+        # columns (t, y): F u t - G y = c - F centre, t >= 0, |y| <= 1; maximise t
+        A = np.hstack([(self._F @ (d / norm))[:, None], -self._G])
+        b = self._c - self._F @ self.center
+        cost = np.r_[-1.0, np.zeros(n)]
+        result = linprog(cost, A_eq=A, b_eq=b, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs")
+        return float(result.x[0]) if result.status == 0 else 0.0
 
     def radius_along(self, direction) -> float:
         d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]

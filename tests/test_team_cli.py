@@ -1,0 +1,113 @@
+"""``mobmanip team`` and the heading sweep: the JSON against the stacked terms and an
+independent LP, the sweep's postures against forward kinematics, and the errors."""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from mobmanip import load_robot
+from mobmanip.cli import main
+from mobmanip.team import load_team
+from mobmanip.team_analysis import analyze_team, ray_radius
+from mobmanip.team_sweep import sweep_heading
+from polytope_util import kinematic_lp
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+BEAM = EXAMPLES / "beam_team.toml"
+
+
+@pytest.fixture(scope="module")
+def beam_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("team")
+    code = main(["team", str(BEAM), "--polytope", "--json", str(out / "beam.json"), "--plot", str(out / "beam.png")])
+    return code, json.loads((out / "beam.json").read_text()), out
+
+
+def test_the_json_holds_the_stacked_terms_and_the_exact_set(beam_run):
+    code, doc, out = beam_run
+    assert code == 0
+    J = np.array(doc["unified_jacobian"])
+    W = np.array(doc["grasp_matrix"])
+    limits = np.array(doc["velocity_limits"])
+    # block structure: each robot's 8 reduced velocities move only its own two hands
+    assert J.shape == (12, 16)
+    assert np.all(J[:6, 8:] == 0) and np.all(J[6:, :8] == 0)
+    # the kinematic polytope's support against an LP over both robots' joint boxes
+    lp = kinematic_lp(J, W, limits)
+    rng = np.random.default_rng(7)
+    polytope = doc["kinematic_polytope"]
+    vertices = np.array(polytope["vertices"])
+    for d in rng.normal(size=(50, 3)):
+        assert np.max(vertices @ d) == pytest.approx(lp(d), rel=1e-7)
+    # velocity shares sum to one; the load sharing holds the beam (no gravity in the plane)
+    for measure in ("kinematic", "kinematic_polytope"):
+        for shares in doc["limiting_robot"][measure].values():
+            assert sum(shares.values()) == pytest.approx(1.0, abs=1e-8)
+    sharing = doc["load_sharing"]
+    assert not sharing["empty"] and sharing["worst_normalised_torque"] == pytest.approx(0.0, abs=1e-9)
+    assert (out / "beam.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_bad_description_is_one_error_line(tmp_path, capsys):
+    text = BEAM.read_text().replace('name = "north"', 'name = "south"')
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text)
+    assert main(["team", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'south'" in err[0] and "already used" in err[0]
+
+
+def _rot_z(yaw):
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_the_heading_sweep_turns_the_grasps_and_flags_what_cannot_be_reached():
+    data = tomllib.loads(BEAM.read_text())
+    offsets = [-20.0, 0.0, 25.0, 90.0]
+    sweep = sweep_heading(data, offsets, base_dir=EXAMPLES, measures=("kinematic",))
+    assert sweep.reachable.tolist() == [True, True, True, False]
+    # at its own heading the sweep is the description's analysis
+
+    direct = analyze_team(load_team(BEAM), ("kinematic",)).measure("kinematic")
+    np.testing.assert_allclose(
+        sweep.points[1].reach["kinematic"], [ray_radius(direct, e) for e in np.eye(3)], rtol=1e-9
+    )
+    # at every reachable heading each hand is at its grasp point, turned with the beam (FK here)
+    center = np.array(data["object"]["position"])
+    for point in sweep.points[:3]:
+        R = _rot_z(math.radians(data["object"]["yaw_deg"] + point.offset_deg))
+        for entry in data["robots"]:
+            robot = load_robot(entry["robot"])
+            q = robot.configuration((*entry["position"], math.radians(entry["yaw_deg"])), point.joints[entry["name"]])
+            pin.framesForwardKinematics(robot.model, robot.data, q)
+            for grasp in entry["grasps"]:
+                arm = next(a for a in robot.arms if a.name == grasp["arm"])
+                hand = robot.data.oMf[arm.frame_id].translation
+                target = center + R @ np.array(grasp["point"])
+                assert np.linalg.norm((hand - target)[:2]) < 1e-6
+    assert sweep.to_dict()["points"][3] == {
+        "offset_deg": 90.0,
+        "reachable": False,
+        "reach": {},
+        "limiting_robot": {},
+        "volume": {},
+        "worst_normalised_torque": None,
+        "overload": None,
+        "joints": {},
+    }
+
+
+def test_the_sweep_option_writes_its_points(tmp_path):
+    out = tmp_path / "s.json"
+    assert main(["team", str(BEAM), "--json", str(out), "--sweep-heading", "0,10"]) == 0
+    doc = json.loads(out.read_text())
+    points = doc["heading_sweep"]["points"]
+    assert [p["offset_deg"] for p in points] == [0.0, 10.0] and all(p["reachable"] for p in points)
