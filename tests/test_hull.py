@@ -81,3 +81,15 @@ def test_rows_on_the_cut_at_pi(far_first):
     s = np.ones(5) if far_first else np.r_[1.0, 1.0, 1.0, 1.0, 1.0]
     hull = _check(An, s)
     assert len(hull.vertices) == 4
+
+
+def test_lines_through_one_vertex_up_to_round_off():
+    # as the shadows of intersected sets give: several lines through a vertex, each off by ~1e-11
+    rng = np.random.default_rng(11)
+    angles = np.linspace(0.1, np.pi / 2 - 0.1, 7)
+    normals = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    An = np.vstack([normals, -normals])
+    s = np.r_[normals @ np.ones(2), normals @ np.ones(2)] + rng.uniform(-1e-11, 1e-11, size=14)
+    hull = _check(An, s)
+    assert len(hull.vertices) == 4  # a rhombus: the two vertices where the 7 lines meet, two others
+    assert np.abs(hull.vertices - [1.0, 1.0]).max(axis=1).min() <= 1e-9

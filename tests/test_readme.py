@@ -73,6 +73,8 @@ def _argv(command: str) -> list[str]:
     words = shlex.split(command)
     if words[:2] == [".venv/bin/mobmanip", "paper"]:
         words[0] = "mobmanip"
+    # the README's own example files are named from the repository's root
+    words = [str(ROOT / w) if w.startswith("examples/") else w for w in words]
     return [PLACEHOLDERS[w]() if w in PLACEHOLDERS else w for w in words[1:]]
 
 

@@ -130,23 +130,37 @@ def _polygon(W: np.ndarray, use: np.ndarray) -> Hull:
     # Around the origin (inside the hull) the points in angular order form a star-shaped
     # polygon; a hull vertex always turns left in it, so removing every point that does not,
     # pass after pass, leaves the hull.
+    # A turn counts as left beyond round-off and a 1e-12 relative collinearity (a point that close
+    # to the segment of its neighbours moves no vertex by more than that).
     x, y = W[keep, 0], W[keep, 1]
-    tol = 1e-12 * float(radius.max()) ** 2
+    scale = float(radius.max())
     while len(x) > 3:
         before, after = np.arange(-1, len(x) - 1), np.arange(1, len(x) + 1)
         after[-1] = 0
-        left = (x - x[before]) * (y[after] - y) - (y - y[before]) * (x[after] - x) > tol
+        ax, ay, bx, by = x - x[before], y - y[before], x[after] - x, y[after] - y
+        la, lb = np.hypot(ax, ay), np.hypot(bx, by)
+        left = ax * by - ay * bx > 1e-12 * la * lb + 1e-14 * scale * (la + lb)
         if left.all():
             break
         keep, x, y = keep[left], x[left], y[left]
     # Facet i (polar point w_i) and facet i + 1 meet at the vertex u with w_i . u = w_(i+1) . u = 1.
-    n = len(keep)
-    after = np.arange(1, n + 1)
-    after[-1] = 0
-    xa, ya = x[after], y[after]
-    det = x * ya - y * xa
-    U = np.empty((n, 2))
-    U[:, 0], U[:, 1] = (ya - y) / det, (x - xa) / det
+    # A facet whose two vertices coincide to round-off (a third line through a vertex, nearly but
+    # not exactly collinear in the polar picture) is no facet: dropped, as Qhull's copies merge.
+    while True:
+        n = len(keep)
+        after = np.arange(1, n + 1)
+        after[-1] = 0
+        xa, ya = x[after], y[after]
+        det = x * ya - y * xa
+        U = np.empty((n, 2))
+        U[:, 0], U[:, 1] = (ya - y) / det, (x - xa) / det
+        edge = np.abs(U[after] - U).max(axis=1)  # the length of facet i + 1's edge
+        short = edge <= MERGE_RTOL * np.abs(U).max()
+        if not short.any() or n <= 3:
+            break
+        drop = np.zeros(n, dtype=bool)
+        drop[after[np.flatnonzero(short)[:1]]] = True  # one at a time: its neighbours' vertex stays
+        keep, x, y = keep[~drop], x[~drop], y[~drop]
     # Vertex j lies between facets j and j + 1: edge e runs from vertex e to e + 1 (cyclically)
     # along facet e + 1; vertices are numbered from the smallest angle, counter-clockwise.
     start = int(np.argmin(np.arctan2(U[:, 1], U[:, 0])))
