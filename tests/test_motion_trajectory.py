@@ -1,0 +1,149 @@
+"""Trajectory analysis: estimated rates, the exact time-scaling margin, CSV in and out, the command."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from mobmanip.cli import main
+from mobmanip.errors import ArgumentError, JointNotFoundError
+from mobmanip.motion import motion_terms
+from mobmanip.trajectory import read_trajectory, trajectory_from_samples
+from mobmanip.trajectory_analysis import analyze_trajectory, write_trajectory_csv
+
+
+@pytest.fixture(scope="module")
+def tiago():
+    return mobmanip.load_robot("tiago_dual")
+
+
+def arc_motion(robot, n=60, duration=6.0, speed=0.3, yaw_rate=0.15, amplitude=0.25):
+    """A platform on a circle (no slip) with every arm joint swinging: closed-form samples and
+    the exact reduced velocities and accelerations of the arm joints."""
+    q0 = robot.hold_configuration()
+    t = np.linspace(0.0, duration, n)
+    base = robot.configuration_dict(q0)["joints"]
+    arms = [name for arm in robot.arms for name in arm.joint_names]
+    qs = []
+    for ti in t:
+        yaw = yaw_rate * ti
+        radius = speed / yaw_rate
+        joints = dict(base)
+        for k, name in enumerate(arms):
+            joints[name] = base[name] + amplitude * math.sin(0.8 * ti + k)
+        qs.append(robot.configuration((radius * math.sin(yaw), radius * (1 - math.cos(yaw)), yaw), joints))
+    return t, np.array(qs), arms
+
+
+def test_estimated_rates_match_the_closed_form(tiago):
+    t, qs, arms = arc_motion(tiago, n=400)
+    tr = trajectory_from_samples(tiago, t, qs, known_joints=arms)
+    assert tr.slip.max() < 1e-9  # a circle driven by the wheels: no lateral slip
+    names = tiago.reduced_velocity_names
+    i = 200
+    for k, name in enumerate(arms):
+        j = names.index(name)
+        assert tr.x[i, j] == pytest.approx(0.25 * 0.8 * math.cos(0.8 * t[i] + k), abs=2e-5)
+        assert tr.xdot[i, j] == pytest.approx(-0.25 * 0.64 * math.sin(0.8 * t[i] + k), abs=2e-4)
+    # the wheels drive the platform at 0.3 m/s turning at 0.15 rad/s: S x gives the platform's twist
+    v = tiago.null_space(qs[i]) @ tr.x[i]
+    np.testing.assert_allclose(v[:3], [0.3, 0.0, 0.15], atol=1e-9)
+
+
+def _limit_use(robot, trajectory):
+    """Largest |x_i|/xdot_max_i and |tau_i|/tau_max_i, efforts from Pinocchio's RNEA directly."""
+    vel = np.max(np.abs(trajectory.x) / robot.velocity_limits)
+    eff = 0.0
+    data = robot.model.createData()
+    for q, x, xdot in zip(trajectory.q, trajectory.x, trajectory.xdot):
+        terms = motion_terms(robot, q, x)
+        S = terms.S
+        tau = S.T @ pin.rnea(robot.model, data, q, S @ x, S @ xdot)
+        a_o = terms.object_acceleration(xdot)
+        tau = np.linalg.solve(terms.Q, tau + terms.J_u.T @ np.linalg.pinv(terms.W) @ (terms.M_o @ a_o + terms.c_o + terms.g_o))
+        eff = max(eff, float(np.max(np.abs(tau) / robot.effort_limits)))
+    return vel, eff
+
+
+@pytest.mark.parametrize("limit", ["effort", "velocity"])
+def test_time_scaling_margin_is_exact(tiago, limit):
+    # make the other kind of limit slack, so that the kind under test decides the margin
+    names = tiago.reduced_velocity_names
+    if limit == "effort":
+        robot = tiago.with_limits(velocity=dict(zip(names, 50.0 * tiago.velocity_limits)))
+    else:
+        robot = tiago.with_limits(effort=dict(zip(names, 50.0 * tiago.effort_limits)))
+    t, qs, arms = arc_motion(robot, n=40)
+    tr = trajectory_from_samples(robot, t, qs, known_joints=arms)
+    result = analyze_trajectory(robot, tr)
+    k = result.scaling.k_max
+    assert result.scaling.feasible and k is not None
+    assert result.scaling.limit.startswith(limit)
+    # the same configurations with time stamps t / k, rates re-estimated, efforts from RNEA
+    fast = trajectory_from_samples(robot, t / k, qs, known_joints=arms)
+    vel, eff = _limit_use(robot, fast)
+    assert max(vel, eff) <= 1.0 + 1e-9
+    assert max(vel, eff) == pytest.approx(1.0, abs=1e-9)
+    faster = trajectory_from_samples(robot, t / (1.001 * k), qs, known_joints=arms)
+    vel, eff = _limit_use(robot, faster)
+    assert max(vel, eff) > 1.0 + 1e-4
+
+
+def test_demands_against_capacity(robot, rng):
+    """The paper's robot on a straight drive: v_o is the platform's speed; in the planar task the
+    kinematic capacity along v_o is the ellipse's reach in that direction."""
+    q0 = robot.hold_configuration()
+    t = np.linspace(0.0, 2.0, 21)
+    qs = np.array([robot.configuration((0.2 * ti, 0.0, 0.0), robot.configuration_dict(q0)["joints"]) for ti in t])
+    arms = [name for arm in robot.arms for name in arm.joint_names]
+    tr = trajectory_from_samples(robot, t, qs, known_joints=arms)
+    result = analyze_trajectory(robot, tr)
+    np.testing.assert_allclose(result.object_velocity, np.tile([0.2, 0.0], (21, 1)), atol=1e-9)
+    np.testing.assert_allclose(result.object_acceleration, 0.0, atol=1e-9)
+    kin = mobmanip.analyze(robot, qs[0], "planar").kinematic
+    assert result.velocity_capacity[5] == pytest.approx(kin.radius_along(np.array([1.0, 0.0])), rel=1e-9)
+    # constant speed: no effort but gravity's (none on a horizontal plane); margin from the wheels' speed
+    wheel = robot.reduced_velocity_names.index("wheel_right_joint")
+    assert result.scaling.k_max == pytest.approx(robot.velocity_limits[wheel] / abs(tr.x[0, wheel]), rel=1e-9)
+
+
+def test_csv_round_trip_and_command(tiago, tmp_path):
+    t, qs, arms = arc_motion(tiago, n=30)
+    path = tmp_path / "traj.csv"
+    write_trajectory_csv(tiago, path, t, qs)
+    header = next(csv.reader(open(path)))
+    assert header[:4] == ["t", "platform_x", "platform_y", "platform_yaw"]
+    tr = read_trajectory(tiago, path)
+    for a, b in zip(tr.q, qs):
+        np.testing.assert_allclose(pin.difference(tiago.model, a, b), 0.0, atol=1e-12)
+    out = tmp_path / "out"
+    out.mkdir()
+    assert main(["trajectory", "tiago_dual", str(path), "--out", str(out)]) == 0
+    doc = json.loads((out / "analysis.json").read_text())
+    direct = analyze_trajectory(tiago, tr)
+    assert doc["time_scaling"]["k_max"] == pytest.approx(direct.scaling.k_max, rel=1e-12)
+    assert (out / "analysis.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    rows = list(csv.reader(open(out / "analysis.csv")))
+    assert len(rows) == 31
+
+
+def test_bad_trajectories_are_refused(tiago, tmp_path):
+    q = tiago.hold_configuration()
+    with pytest.raises(ArgumentError, match="increase"):
+        trajectory_from_samples(tiago, [0.0, 1.0, 1.0], np.array([q, q, q]))
+    with pytest.raises(ArgumentError, match="at least 3"):
+        trajectory_from_samples(tiago, [0.0, 1.0], np.array([q, q]))
+    path = tmp_path / "bad.csv"
+    path.write_text("t,platform_x,platform_y,platform_yaw,no_such_joint\n0,0,0,0,0\n1,0,0,0,0\n2,0,0,0,0\n")
+    with pytest.raises(JointNotFoundError, match="no_such_joint"):
+        read_trajectory(tiago, path)
+    path.write_text("t,platform_x,platform_y,platform_yaw\n0,0,0,0\n1,0,x,0\n2,0,0,0\n")
+    with pytest.raises(ArgumentError, match="line 3, column 'platform_y'"):
+        read_trajectory(tiago, path)
+    assert main(["trajectory", "tiago_dual", str(path)]) == 2
