@@ -40,7 +40,8 @@ def main() -> None:
     result = analyze_trajectory(robot, trajectory)
     seconds = time.perf_counter() - start
     print(f"tiago_dual, {args.samples} samples: {seconds:.2f} s ({1e3 * seconds / args.samples:.2f} ms per sample)")
-    print(f"time-scaling margin {result.scaling.k_max:.4f} ({result.scaling.limit}), max slip {trajectory.slip.max():.1e}")
+    scaling = result.scaling
+    print(f"time-scaling margin {scaling.k_max:.4f} ({scaling.limit}), max slip {trajectory.slip.max():.1e}")
 
 
 if __name__ == "__main__":

@@ -66,7 +66,8 @@ def _limit_use(robot, trajectory):
         S = terms.S
         tau = S.T @ pin.rnea(robot.model, data, q, S @ x, S @ xdot)
         a_o = terms.object_acceleration(xdot)
-        tau = np.linalg.solve(terms.Q, tau + terms.J_u.T @ np.linalg.pinv(terms.W) @ (terms.M_o @ a_o + terms.c_o + terms.g_o))
+        wrench = terms.M_o @ a_o + terms.c_o + terms.g_o
+        tau = np.linalg.solve(terms.Q, tau + terms.J_u.T @ np.linalg.pinv(terms.W) @ wrench)
         eff = max(eff, float(np.max(np.abs(tau) / robot.effort_limits)))
     return vel, eff
 

@@ -198,7 +198,8 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
             try:
                 value = float(cell)
             except ValueError:
-                raise ArgumentError(f"trajectory {path} line {i}, column {header[j]!r}: not a number: {cell!r}") from None
+                where = f"trajectory {path} line {i}, column {header[j]!r}"
+                raise ArgumentError(f"{where}: not a number: {cell!r}") from None
             if not math.isfinite(value):
                 raise ArgumentError(f"trajectory {path} line {i}, column {header[j]!r}: {cell!r} is not finite")
             values[i - 2, j] = value

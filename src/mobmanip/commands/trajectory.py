@@ -53,7 +53,8 @@ def run(args) -> int:
     trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled)
     s = result.scaling
-    print(f"robot {robot.name}, task {result.task}: {len(trajectory)} samples over {trajectory.t[-1] - trajectory.t[0]:g} s")
+    duration = trajectory.t[-1] - trajectory.t[0]
+    print(f"robot {robot.name}, task {result.task}: {len(trajectory)} samples over {duration:g} s")
     print(f"largest velocity use {result.velocity_use.max():.4f}, largest effort use {result.effort_use.max():.4f}")
     print(f"largest platform slip {trajectory.slip.max():.2e}")
     print(
