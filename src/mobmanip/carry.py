@@ -127,9 +127,7 @@ def read_path(path: str | Path) -> ObjectPath:
     header = [c.strip() for c in rows[0]]
     unknown = [c for c in header if c not in PATH_COLUMNS]
     if unknown or not {"t", "x", "y"} <= set(header) or len(set(header)) != len(header):
-        raise ArgumentError(
-            f"object path {path}: header {header} must name t, x, y and optionally z, yaw (each once)"
-        )
+        raise ArgumentError(f"object path {path}: header {header} must name t, x, y and optionally z, yaw (each once)")
     values = np.zeros((len(rows) - 1, len(header)))
     for i, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
@@ -302,7 +300,9 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain) -> CarryRun:
         qs[k] = q
         value, grad, ok = evaluator(q)
         if not ok:
-            raise MeasureError(f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the {method} motion")
+            raise MeasureError(
+                f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the {method} motion"
+            )
         capacity[k] = value
         S = robot.null_space(q)
         J_u = _jacobian(robot, q, rows) @ S  # also updates the frame placements
@@ -334,7 +334,9 @@ def _jacobian(robot: Robot, q: np.ndarray, rows: list[int]) -> np.ndarray:
     model, data = robot.model, robot.data
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
-    return np.vstack([pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)[rows] for arm in robot.arms])
+    return np.vstack(
+        [pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)[rows] for arm in robot.arms]
+    )
 
 
 def carry(
@@ -378,3 +380,39 @@ def carry(
     motion = _run(robot, q0, path, evaluator, task, float(step), "qp", float(gain))
     baseline = _run(robot, q0, path, evaluator, task, float(step), "pinv", 0.0)
     return CarryResult(evaluator.objective, task.name, motion, baseline)
+
+
+def carry_outputs(robot: Robot, result: CarryResult, out_dir) -> list[str]:
+    """trajectory.csv, baseline.csv, carry.json and capacity.png in ``out_dir``; returns the paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .io import save_figure, write_json
+    from .trajectory_analysis import write_trajectory_csv
+
+    out = Path(out_dir)
+    motion, base = result.motion, result.baseline
+    paths = [out / "trajectory.csv", out / "baseline.csv", out / "carry.json", out / "capacity.png"]
+    write_trajectory_csv(
+        robot,
+        paths[0],
+        motion.t,
+        motion.q,
+        {"capacity": motion.capacity, "baseline_capacity": base.capacity, "tracking_error": motion.tracking_error},
+    )
+    write_trajectory_csv(
+        robot, paths[1], base.t, base.q, {"capacity": base.capacity, "tracking_error": base.tracking_error}
+    )
+    write_json(paths[2], {"robot": robot.name, **result.summary()})
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.plot(motion.t, motion.capacity, label="QP with capacity term")
+    ax.plot(base.t, base.capacity, label="weighted pseudo-inverse")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel(result.objective.name)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    save_figure(fig, paths[3], dpi=100)
+    plt.close(fig)
+    return [str(p) for p in paths]

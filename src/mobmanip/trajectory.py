@@ -9,7 +9,8 @@ determines. Scaling every time stamp by 1/k scales the estimates by exactly k an
 
 The CSV form has a header: ``t`` (s), ``platform_x``, ``platform_y`` (m), ``platform_yaw`` (rad), then
 one column per moving joint named as in q.json (rad or m); joints without a column stay at their
-home position and, if they are wheels, their rates follow from the platform's motion.
+home position and, if they are wheels, their rates follow from the platform's motion. The
+columns of :data:`ANNOTATION_COLUMNS` are allowed and ignored.
 """
 
 from __future__ import annotations
@@ -27,6 +28,9 @@ from .errors import ArgumentError, JointNotFoundError
 from .model import Robot
 
 PLATFORM_COLUMNS = ("platform_x", "platform_y", "platform_yaw")
+#: Columns a trajectory file may carry beside the configuration (``mobmanip carry`` writes them);
+#: they are not read.
+ANNOTATION_COLUMNS = ("capacity", "baseline_capacity", "tracking_error")
 
 
 @dataclass(frozen=True)
@@ -185,7 +189,8 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
             raise ArgumentError(f"trajectory {path}: no column {needed!r} in the header {header}")
     if len(set(header)) != len(header):
         raise ArgumentError(f"trajectory {path}: repeated column names in the header {header}")
-    joints = [name for name in header if name != "t" and name not in PLATFORM_COLUMNS]
+    skip = {"t", *PLATFORM_COLUMNS, *ANNOTATION_COLUMNS}
+    joints = [name for name in header if name not in skip]
     known = set(robot.joint_names)
     for name in joints:
         if name not in known:

@@ -1,5 +1,5 @@
 """Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
 
-from . import analyze, init_spec, paper, place, sweep, trajectory, view
+from . import analyze, carry, init_spec, paper, place, sweep, trajectory, view
 
-COMMANDS = (analyze, paper, init_spec, view, sweep, place, trajectory)
+COMMANDS = (analyze, paper, init_spec, view, sweep, place, trajectory, carry)
