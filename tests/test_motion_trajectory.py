@@ -125,7 +125,11 @@ def test_csv_round_trip_and_command(tiago, tmp_path):
         np.testing.assert_allclose(pin.difference(tiago.model, a, b), 0.0, atol=1e-12)
     out = tmp_path / "out"
     out.mkdir()
-    assert main(["trajectory", "tiago_dual", str(path), "--out", str(out)]) == 0
+    page = tmp_path / "motion.html"
+    assert main(["trajectory", "tiago_dual", str(path), "--out", str(out), "--export", str(page), "--every", "10"]) == 0
+    html = page.read_text()
+    # self-contained: meshes and animation embedded, nothing fetched (the browser test plays such a page)
+    assert "<html" in html.lower() and len(html) > 100_000 and 'src="http' not in html
     doc = json.loads((out / "analysis.json").read_text())
     direct = analyze_trajectory(tiago, tr)
     assert doc["time_scaling"]["k_max"] == pytest.approx(direct.scaling.k_max, rel=1e-12)

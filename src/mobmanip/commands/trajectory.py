@@ -17,7 +17,7 @@ wheel and joint within its velocity and effort limits (efforts: RNEA in motion, 
 carried by the hands with the paper's policy).
 
 example:
-  mobmanip trajectory tiago_dual motion.csv --out results/
+  mobmanip trajectory tiago_dual motion.csv --out results/ --export motion.html
 """
 
 
@@ -37,6 +37,14 @@ def register(sub) -> None:
     parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
+    parser.add_argument(
+        "--export",
+        metavar="PAGE.html",
+        help="write a self-contained page that plays the motion with its ellipsoids (in motion) moving along",
+    )
+    parser.add_argument(
+        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    )
     parser.set_defaults(func=run)
 
 
@@ -76,4 +84,12 @@ def run(args) -> int:
             raise OutputError(f"--out {args.out}: not an existing directory")
         for path in write_outputs(robot, result, args.out):
             print(f"wrote {path}")
+    if args.export:
+        from ..viz.trajectory_page import export_trajectory_page
+
+        page = export_trajectory_page(
+            robot, trajectory, args.export, result.task, every=args.every, object_mass=args.object_mass,
+            decoupled=args.decoupled,
+        )  # fmt: skip
+        print(f"wrote {page}")
     return 0
