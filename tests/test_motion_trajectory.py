@@ -88,6 +88,9 @@ def test_time_scaling_margin_is_exact(tiago, limit):
     assert result.scaling.limit.startswith(limit)
     # the same configurations with time stamps t / k, rates re-estimated, efforts from RNEA
     fast = trajectory_from_samples(robot, t / k, qs, known_joints=arms)
+    scaled = tr.scaled(k)
+    np.testing.assert_allclose(scaled.x, fast.x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(scaled.xdot, fast.xdot, rtol=1e-7, atol=1e-9)
     vel, eff = _limit_use(robot, fast)
     assert max(vel, eff) <= 1.0 + 1e-9
     assert max(vel, eff) == pytest.approx(1.0, abs=1e-9)

@@ -56,10 +56,14 @@ class Trajectory:
     def __len__(self) -> int:
         return int(self.t.shape[0])
 
-    def scaled(self, robot: Robot, factor: float) -> Trajectory:
-        """The same path run ``factor`` times faster (time stamps divided by it), re-estimated
-        from its configurations when this one was (:func:`trajectory_from_samples`)."""
-        factor = float(factor)
+    def scaled(self, factor: float) -> Trajectory:
+        """The same path run ``factor`` times faster: time stamps divided by it, velocities
+        multiplied by it and accelerations by its square (what re-estimating the rates from the
+        configurations at the new time stamps gives, :func:`trajectory_from_samples`)."""
+        try:
+            factor = float(factor)
+        except (TypeError, ValueError):
+            factor = math.nan
         if not (math.isfinite(factor) and factor > 0.0):
             raise ArgumentError(f"time-scaling factor must be a finite positive number, got {factor!r}")
         return Trajectory(self.t / factor, self.q, self.x * factor, self.xdot * factor**2, self.slip * factor)
