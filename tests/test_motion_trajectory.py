@@ -14,7 +14,13 @@ import mobmanip
 from mobmanip.cli import main
 from mobmanip.errors import ArgumentError, JointNotFoundError
 from mobmanip.motion import motion_terms
-from mobmanip.trajectory import read_trajectory, trajectory_from_samples
+from mobmanip.trajectory import (
+    planar_exp,
+    planar_log,
+    read_trajectory,
+    tangent_difference,
+    trajectory_from_samples,
+)
 from mobmanip.trajectory_analysis import analyze_trajectory, write_trajectory_csv
 
 
@@ -155,3 +161,33 @@ def test_bad_trajectories_are_refused(tiago, tmp_path):
     with pytest.raises(ArgumentError, match="line 3, column 'platform_y'"):
         read_trajectory(tiago, path)
     assert main(["trajectory", "tiago_dual", str(path)]) == 2
+
+
+def _planar(x, y, yaw):
+    return np.array([x, y, math.cos(yaw), math.sin(yaw)])
+
+
+def test_planar_log_and_exp_against_pinocchio(rng):
+    """Away from tiny turns the SE(2) log and exp are Pinocchio's planar difference and
+    integrate; exp undoes log; and a turn of 1e-8 rad about yaw 0 is recovered to rounding,
+    where cos(yaw) is 1 in floating point."""
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelPlanar(), pin.SE3.Identity(), "root")
+    for _ in range(50):
+        qa = _planar(*rng.uniform(-2.0, 2.0, 2), rng.uniform(-math.pi, math.pi))
+        qb = _planar(*rng.uniform(-2.0, 2.0, 2), rng.uniform(-math.pi, math.pi))
+        xi = planar_log(qa, qb)
+        np.testing.assert_allclose(xi, pin.difference(model, qa, qb), atol=1e-12)
+        np.testing.assert_allclose(planar_exp(qa, xi), qb, atol=1e-12)
+        step = rng.uniform(-0.5, 0.5, 3)
+        np.testing.assert_allclose(planar_exp(qa, step), pin.integrate(model, qa, step), atol=1e-12)
+        np.testing.assert_allclose(tangent_difference(model, qa, qb), xi, atol=0.0)
+    for tiny in (1e-8, -3e-9, 1e-5):
+        qa, qb = _planar(0.3, -0.1, 0.0), _planar(0.3, -0.1, tiny)
+        assert planar_log(qa, qb)[2] == pytest.approx(tiny, rel=1e-9)
+        # moving straight ahead by 2 mm while turning: the chord's lateral part is tiny * 1 mm
+        qb = planar_exp(qa, np.array([2e-3, 0.0, tiny]))
+        chord = qb[:2] - qa[:2]
+        assert chord[1] == pytest.approx(2e-3 * math.sin(tiny / 2.0), rel=1e-9)
+        # to the rounding of a 2 mm step
+        np.testing.assert_allclose(planar_log(qa, qb), [2e-3, 0.0, tiny], rtol=1e-12, atol=1e-16)

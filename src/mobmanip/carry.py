@@ -7,7 +7,8 @@ rates, so the platform's nonholonomic constraints hold exactly: v = S x has no l
     subject to  J_u(q) x = b                                   (the hands follow the object)
                 max(-xdot_max, (q_lo - q) / dt) <= x <= min(xdot_max, (q_hi - q) / dt)
 
-and q advances by ``pin.integrate(q, S x dt)``. The hands keep the grasp of the start posture:
+and q advances by ``pin.integrate(q, S x dt)`` (the platform's pose by the exact SE(2)
+exponential, :func:`mobmanip.trajectory.planar_exp`). The hands keep the grasp of the start posture:
 hand i's target pose at the next step is the object's path applied to its start pose (the
 object translates along the path and turns about the vertical by the path's change of heading,
 or by its ``yaw`` column), and b is the task velocity that reaches it in one step, so tracking
@@ -34,6 +35,7 @@ from .errors import ArgumentError, MeasureError, NumericalError
 from .gradients import GradientEvaluator, Objective
 from .model import Robot
 from .tasks import get_task
+from .trajectory import tangent_integrate
 
 PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
 #: Default time step of the synthesis (s).
@@ -326,7 +328,7 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain) -> CarryRun:
                     "the velocity or joint limits allow; slow the path down"
                 )
         xs[k] = x
-        q = pin.integrate(model, q, S @ x * h)
+        q = tangent_integrate(model, q, S @ x * h)
     return CarryRun(method, times, qs, xs, capacity, track, hand)
 
 

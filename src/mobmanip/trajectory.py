@@ -4,7 +4,8 @@ A trajectory is N samples (t_i, q_i). Its reduced velocities x_i and acceleratio
 given, or estimated from the configurations: at each sample a quadratic through the tangent
 displacements ``pin.difference(q_i, q_{i-1})`` and ``pin.difference(q_i, q_{i+1})`` gives the joint
 rates v_i and accelerations a_i (exact for motions of constant acceleration in the tangent space,
-and for any time grid), then ``x = S^+ v`` and ``xdot = S^+ (a - Sdot x)`` over the rows the file
+and for any time grid; a planar root's displacement comes from :func:`planar_log`, which keeps
+yaw changes too small for ``pin.difference``), then ``x = S^+ v`` and ``xdot = S^+ (a - Sdot x)`` over the rows the file
 determines. Scaling every time stamp by 1/k scales the estimates by exactly k and k^2.
 
 The CSV form has a header: ``t`` (s), ``platform_x``, ``platform_y`` (m), ``platform_yaw`` (rad), then
@@ -83,6 +84,68 @@ def _check_times(t) -> np.ndarray:
     return t
 
 
+def planar_log(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+    """The SE(2) logarithm of the planar pose b relative to a: (v_x, v_y, theta) in a's frame.
+
+    Args:
+        qa, qb: planar joint configurations (x m, y m, cos yaw, sin yaw), (4,) each.
+
+    The turn is ``atan2`` of the relative rotation's (sin, cos) pair, so a yaw change of 1e-8 rad
+    is kept where ``cos(yaw)`` rounds to 1 (``pin.difference`` reads 0 there); the translation
+    is ``V(theta)^-1 R_a^T (p_b - p_a)`` with the series of ``(theta/2) cot(theta/2)`` near 0.
+    """
+    ca, sa, cb, sb = qa[2], qa[3], qb[2], qb[3]
+    theta = math.atan2(ca * sb - sa * cb, ca * cb + sa * sb)
+    dx, dy = qb[0] - qa[0], qb[1] - qa[1]
+    tx, ty = ca * dx + sa * dy, -sa * dx + ca * dy
+    half = 0.5 * theta
+    if abs(theta) < 1e-4:
+        a = 1.0 - theta * theta / 12.0 - theta**4 / 720.0
+    else:
+        a = half / math.tan(half)
+    return np.array([a * tx + half * ty, -half * tx + a * ty, theta])
+
+
+def planar_exp(qa: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """The planar pose reached from qa by the SE(2) displacement xi = (v_x, v_y, theta) in qa's
+    frame (the inverse of :func:`planar_log`), as (x, y, cos yaw, sin yaw), (4,).
+
+    Unlike ``pin.integrate`` it keeps the effect of a turn of 1e-8 rad on the translation, so a
+    wheeled step with no lateral part leaves none (series of ``sin(t)/t`` and ``(1 - cos t)/t``
+    near 0).
+    """
+    vx, vy, theta = (float(v) for v in xi)
+    if abs(theta) < 1e-4:
+        sinc = 1.0 - theta * theta / 6.0 + theta**4 / 120.0
+        cosc = 0.5 * theta - theta**3 / 24.0
+    else:
+        sinc, cosc = math.sin(theta) / theta, (1.0 - math.cos(theta)) / theta
+    tx, ty = sinc * vx - cosc * vy, cosc * vx + sinc * vy
+    ca, sa = qa[2], qa[3]
+    c, s = math.cos(theta), math.sin(theta)
+    cb, sb = ca * c - sa * s, sa * c + ca * s
+    norm = math.hypot(cb, sb)
+    return np.array([qa[0] + ca * tx - sa * ty, qa[1] + sa * tx + ca * ty, cb / norm, sb / norm])
+
+
+def tangent_integrate(model: pin.Model, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
+    """``pin.integrate(model, q, dv)`` (nq,), with a planar root's block from :func:`planar_exp`."""
+    out = pin.integrate(model, q, dv)
+    root = model.joints[1]
+    if root.shortname() == "JointModelPlanar":
+        out[root.idx_q : root.idx_q + 4] = planar_exp(q[root.idx_q : root.idx_q + 4], dv[root.idx_v : root.idx_v + 3])
+    return out
+
+
+def tangent_difference(model: pin.Model, qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+    """``pin.difference(model, qa, qb)`` (nv,), with a planar root's block from :func:`planar_log`."""
+    d = pin.difference(model, qa, qb)
+    root = model.joints[1]
+    if root.shortname() == "JointModelPlanar":
+        d[root.idx_v : root.idx_v + 3] = planar_log(qa[root.idx_q : root.idx_q + 4], qb[root.idx_q : root.idx_q + 4])
+    return d
+
+
 def tangent_derivatives(robot: Robot, t: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joint rates v (N, nv) and accelerations a (N, nv) of sampled configurations (module doc).
 
@@ -97,14 +160,14 @@ def tangent_derivatives(robot: Robot, t: np.ndarray, q: np.ndarray) -> tuple[np.
     a = np.zeros((n, model.nv))
     for i in range(1, n - 1):
         h1, h2 = t[i] - t[i - 1], t[i + 1] - t[i]
-        dm = pin.difference(model, q[i], q[i - 1])
-        dp = pin.difference(model, q[i], q[i + 1])
+        dm = tangent_difference(model, q[i], q[i - 1])
+        dp = tangent_difference(model, q[i], q[i + 1])
         den = h1 * h2 * (h1 + h2)
         v[i] = (h1 * h1 * dp - h2 * h2 * dm) / den
         a[i] = 2.0 * (h1 * dp + h2 * dm) / den
     for end, near, sign in ((0, 1, 1.0), (n - 1, n - 2, -1.0)):
         h = abs(t[near] - t[end])
-        d = pin.difference(model, q[end], q[near])
+        d = tangent_difference(model, q[end], q[near])
         a[end] = a[near]
         v[end] = sign * (d / h - 0.5 * a[near] * h)
     return v, a
