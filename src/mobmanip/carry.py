@@ -17,6 +17,15 @@ fixed at the first step so that the capacity term alone would move at half the v
 (in the D-weighted norm). The baseline tracks the same targets with the weighted pseudo-inverse
 ``x = D^2 J_u^T (J_u D^2 J_u^T)^-1 b`` (no capacity term, no limits).
 
+The start. Many postures hold the object at the path's start (the redundancy), and the minimum
+capacity along a path is often the start's. So the capacity-aware motion first moves to a
+better one: a *self-motion* before the path starts, the same QP with the object held still
+(the hands' targets are their start poses), run until the objective rises by less than
+:data:`PREPARE_TOLERANCE` (relative) over :data:`PREPARE_WINDOW` seconds or for at most
+``prepare`` seconds (:attr:`CarryResult.preparation`). The path's motion starts where it ends;
+the baseline starts from the given (or default) start posture, as a controller without a
+capacity term would.
+
 The path (CSV, :func:`read_path`) has ``t`` and the object's ``x``, ``y`` (m) and optionally ``z``
 (m) and ``yaw`` (rad); by default it is relative to where the start posture holds the object.
 """
@@ -42,6 +51,12 @@ PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
 DEFAULT_STEP = 0.02
 #: The capacity term's share of the velocity limits at the first step.
 DEFAULT_GAIN = 0.5
+#: Longest self-motion before the path (s); 0 starts the path from the start posture.
+DEFAULT_PREPARE = 30.0
+#: The self-motion stops when the objective rose by less than this fraction of its value ...
+PREPARE_TOLERANCE = 1e-4
+#: ... over this long (s).
+PREPARE_WINDOW = 1.0
 
 
 @dataclass(frozen=True)
@@ -154,7 +169,8 @@ class CarryRun:
     """One synthesised motion.
 
     Attributes:
-        method: ``"qp"`` (capacity-maximising) or ``"pinv"`` (the weighted pseudo-inverse baseline).
+        method: ``"qp"`` (capacity-maximising), ``"pinv"`` (the weighted pseudo-inverse baseline) or
+            ``"self-motion"`` (the QP with the object held still, before the path).
         t: time stamps (s), (N,).
         q: configurations, (N, nq).
         x: reduced velocities held over each step [t_k, t_k+1], (N - 1, nx).
@@ -178,14 +194,40 @@ class CarryResult:
 
     Attributes:
         objective: the measure maximised (and reported as capacity).
-        task: task-space name.
-        motion: the QP motion; baseline: the pseudo-inverse one.
+        task: task space name.
+        motion: the QP motion along the path; baseline: the pseudo-inverse one.
+        preparation: the self-motion that took the start posture to ``motion``'s first
+            configuration (time stamps ending at the path's start), or ``None`` when the motion
+            starts from the start posture (``prepare=0``).
+        start: which start posture both runs set out from, in words.
     """
 
     objective: Objective
     task: str
     motion: CarryRun
     baseline: CarryRun
+    preparation: CarryRun | None = None
+    start: str = "the given start configuration"
+
+    def starts(self) -> dict:
+        """What each run started from, in words and numbers (JSON-ready)."""
+        base = {
+            "posture": self.start,
+            "capacity": float(self.baseline.capacity[0]),
+        }
+        prep = self.preparation
+        if prep is None:
+            qp = dict(base)
+        else:
+            qp = {
+                "posture": f"the end of a self-motion from {self.start} with the object held still",
+                "capacity": float(self.motion.capacity[0]),
+                "self_motion_seconds": float(prep.t[-1] - prep.t[0]),
+                "self_motion_start_capacity": float(prep.capacity[0]),
+                "self_motion_max_hand_error": float(prep.hand_error.max()),
+                "self_motion_max_tracking_error": float(prep.tracking_error.max()),
+            }
+        return {"qp": qp, "pinv": base}
 
     def summary(self) -> dict:
         """Minimum capacities, their ratio, tracking and limit figures (JSON-ready)."""
@@ -197,6 +239,8 @@ class CarryResult:
                 "max_tracking_error": float(run.tracking_error.max()),
                 "max_hand_error": float(run.hand_error.max()),
             }
+        for method, start in self.starts().items():
+            out[method]["start"] = start
         base = self.baseline.capacity.min()
         out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
         return out
@@ -276,13 +320,24 @@ def default_start(robot: Robot) -> np.ndarray:
         return robot.neutral()
 
 
+def _default_start_label(robot: Robot, q0: np.ndarray) -> str:
+    if robot.spec.hold:
+        return "the spec's hold posture"
+    if np.array_equal(q0, robot.neutral()):
+        return "the home configuration"
+    return "the case-study posture (both arms at their optimum, object straight ahead)"
+
+
 def _solve_qp(H, c, A, b, lo, hi) -> np.ndarray | None:
     from qpsolvers import solve_qp
 
     return solve_qp(H, c, A=A, b=b, lb=lo, ub=hi, solver="daqp")
 
 
-def _run(robot, q0, path, evaluator, task, dt, method, gain) -> CarryRun:
+def _run(robot, q0, path, evaluator, task, dt, method, gain, weight=None, converge=False) -> tuple[CarryRun, float]:
+    """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
+    ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
+    over :data:`PREPARE_WINDOW` (the self-motion)."""
     model = robot.model
     n = int(math.floor((path.t[-1] - path.t[0]) / dt + 1e-9)) + 1
     times = path.t[0] + dt * np.arange(n)
@@ -297,7 +352,7 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain) -> CarryRun:
     xs = np.zeros((n - 1, robot.nx))
     capacity, track, hand = np.zeros(n), np.zeros(n), np.zeros(n)
     q = q0.copy()
-    weight = None
+    window = max(1, int(round(PREPARE_WINDOW / dt)))
     for k in range(n):
         qs[k] = q
         value, grad, ok = evaluator(q)
@@ -309,6 +364,9 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain) -> CarryRun:
         S = robot.null_space(q)
         J_u = _jacobian(robot, q, rows) @ S  # also updates the frame placements
         track[k], hand[k] = _errors(robot, targets, k)
+        if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
+            n = k + 1
+            break
         if k == n - 1:
             break
         h = times[k + 1] - times[k]
@@ -329,7 +387,8 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain) -> CarryRun:
                 )
         xs[k] = x
         q = tangent_integrate(model, q, S @ x * h)
-    return CarryRun(method, times, qs, xs, capacity, track, hand)
+    run = CarryRun(method, times[:n], qs[:n], xs[: n - 1], capacity[:n], track[:n], hand[:n])
+    return run, (0.0 if weight is None else weight)
 
 
 def _jacobian(robot: Robot, q: np.ndarray, rows: list[int]) -> np.ndarray:
@@ -351,6 +410,7 @@ def carry(
     object_mass: float | None = None,
     step: float = DEFAULT_STEP,
     gain: float = DEFAULT_GAIN,
+    prepare: float = DEFAULT_PREPARE,
 ) -> CarryResult:
     """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -364,9 +424,11 @@ def carry(
         object_mass: mass of the object held between the hands (kg); default the spec's.
         step: time step (s).
         gain: the capacity term's share of the velocity limits at the first step.
+        prepare: longest self-motion (s) before the path (module doc); 0: the QP motion
+            starts from ``start`` like the baseline.
 
     Raises:
-        ArgumentError: a bad step or gain.
+        ArgumentError: a bad step, gain or prepare.
         MeasureError: the objective is not defined along a motion (a singular posture).
         NumericalError: the QP has no solution (the path is too fast for the limits).
     """
@@ -374,18 +436,34 @@ def carry(
         raise ArgumentError(f"step must be a time in (0, 1] s, got {step!r}")
     if not (isinstance(gain, (int, float)) and math.isfinite(gain) and gain >= 0.0):
         raise ArgumentError(f"gain must be a finite non-negative number, got {gain!r}")
+    if not (isinstance(prepare, (int, float)) and math.isfinite(prepare) and prepare >= 0.0):
+        raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
     if not isinstance(path, ObjectPath):
         raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
     q0 = default_start(robot) if start is None else robot.check_configuration(start)
-    motion = _run(robot, q0, path, evaluator, task, float(step), "qp", float(gain))
-    baseline = _run(robot, q0, path, evaluator, task, float(step), "pinv", 0.0)
-    return CarryResult(evaluator.objective, task.name, motion, baseline)
+    label = "the given start configuration" if start is not None else _default_start_label(robot, q0)
+    step, gain = float(step), float(gain)
+    preparation, weight, q_path = None, None, q0
+    if prepare > 0.0 and gain > 0.0:
+        still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
+        preparation, weight = _run(robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True)
+        shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
+        preparation = CarryRun(
+            preparation.method,
+            preparation.t + shift,
+            *(getattr(preparation, f) for f in ("q", "x", "capacity", "tracking_error", "hand_error")),
+        )
+        q_path = preparation.q[-1]
+    motion, _ = _run(robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight)
+    baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
+    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
 
 
 def carry_outputs(robot: Robot, result: CarryResult, out_dir) -> list[str]:
-    """trajectory.csv, baseline.csv, carry.json and capacity.png in ``out_dir``; returns the paths."""
+    """trajectory.csv, baseline.csv, carry.json and capacity.png in ``out_dir``, and
+    preparation.csv (the self-motion before the path, when there is one); returns the paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -409,6 +487,13 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir) -> list[str]:
     )
     write_json(paths[2], {"robot": robot.name, **result.summary()})
     fig, ax = plt.subplots(figsize=(7, 3.5))
+    prep = result.preparation
+    if prep is not None:
+        paths.append(out / "preparation.csv")
+        write_trajectory_csv(
+            robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
+        )
+        ax.plot(prep.t, prep.capacity, color="0.5", label="self-motion before the path (object held still)")
     ax.plot(motion.t, motion.capacity, label="QP with capacity term")
     ax.plot(base.t, base.capacity, label="weighted pseudo-inverse")
     ax.set_xlabel("t (s)")

@@ -14,10 +14,15 @@ turns with the path's direction of travel.
 Each step solves a QP over the wheel and joint rates (the platform cannot slide sideways):
 the hands follow the object, joint position and velocity limits hold, and the objective's
 gradient is climbed. The baseline tracks the same path with the weighted pseudo-inverse.
+Before the path, the QP motion first moves to a better posture holding the object where it
+is (a self-motion: the same QP with the object held still, until the objective stops rising
+or for at most --prepare seconds); the path's motion starts there, the baseline starts from
+the start posture. --prepare 0 starts both from the start posture.
 
 --out DIR writes trajectory.csv (t, platform_x, platform_y, platform_yaw, one column per joint
 as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
-motion), carry.json (summary) and capacity.png (both capacity profiles). trajectory.csv is a
+motion), preparation.csv (the self-motion), carry.json (summary, with what each run started
+from) and capacity.png (the capacity profiles). trajectory.csv is a
 valid input of `mobmanip trajectory`.
 
 examples:
@@ -47,6 +52,13 @@ def register(sub) -> None:
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
     parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--step", type=float, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument(
+        "--prepare",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="longest self-motion before the path (s, default 30; 0: none)",
+    )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
     parser.set_defaults(func=run)
 
@@ -66,9 +78,25 @@ def run(args) -> int:
     start = read_configuration(robot, args.start) if args.start else None
     if args.out and not Path(args.out).is_dir():
         raise OutputError(f"--out {args.out}: not an existing directory")
-    result = carry(robot, path, args.objective, args.task, start=start, object_mass=args.object_mass, step=args.step)
+    result = carry(
+        robot,
+        path,
+        args.objective,
+        args.task,
+        start=start,
+        object_mass=args.object_mass,
+        step=args.step,
+        prepare=args.prepare,
+    )
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
+    prep = result.preparation
+    if prep is not None:
+        print(
+            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
+            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
+            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the start posture"
+        )
     for run in (result.motion, result.baseline):
         s = summary[run.method]
         label = "QP with capacity" if run.method == "qp" else "pseudo-inverse baseline"
