@@ -191,3 +191,45 @@ def test_planar_log_and_exp_against_pinocchio(rng):
         assert chord[1] == pytest.approx(2e-3 * math.sin(tiny / 2.0), rel=1e-9)
         # to the rounding of a 2 mm step
         np.testing.assert_allclose(planar_log(qa, qb), [2e-3, 0.0, tiny], rtol=1e-12, atol=1e-16)
+
+
+def test_polytope_reach_along_the_object_velocity(tiago):
+    """--polytope: at every sample the kinematic polytope's radius along v_o's direction d (its
+    support function, as the ellipsoid's velocity_capacity) equals the optimum of an independent
+    LP over object velocities and joint rates (max d . v with W^T v = J_u x, |x_i| <= xdot_max_i);
+    it is at least the ellipsoid's (the ellipsoid lies inside the polytope) and at least the
+    largest speed straight along d (a second LP: max s with J_u x = s W^T d)."""
+    from scipy.optimize import linprog
+
+    t, qs, arms = arc_motion(tiago, n=12)
+    result = analyze_trajectory(tiago, trajectory_from_samples(tiago, t, qs, known_joints=arms), polytope=True)
+    reach = result.velocity_polytope_capacity
+    assert reach.shape == (12,)
+    assert np.all(reach >= result.velocity_capacity * (1 - 1e-9))
+    nx = tiago.nx
+    bounds = [(-v, v) for v in tiago.velocity_limits]
+    for i in (0, 5, 11):
+        terms = motion_terms(tiago, result.trajectory.q[i], result.trajectory.x[i])
+        d = result.object_velocity[i] / np.linalg.norm(result.object_velocity[i])
+        m, mk = terms.W.shape
+        support = linprog(
+            np.r_[-d, np.zeros(nx)],
+            A_eq=np.hstack([terms.W.T, -terms.J_u]),
+            b_eq=np.zeros(mk),
+            bounds=[(None, None)] * m + bounds,
+            method="highs",
+        )
+        assert support.status == 0
+        assert reach[i] == pytest.approx(-support.fun, rel=1e-7)
+        ray = linprog(
+            np.r_[np.zeros(nx), -1.0],
+            A_eq=np.hstack([terms.J_u, -(terms.W.T @ d)[:, None]]),
+            b_eq=np.zeros(mk),
+            bounds=bounds + [(0, None)],
+            method="highs",
+        )
+        assert ray.status == 0 and 0.0 < ray.x[-1] <= reach[i] * (1 + 1e-9)
+    header, values = result.table()
+    assert header[-1] == "velocity_polytope_capacity"
+    np.testing.assert_array_equal(values[:, -1], reach)
+    assert result.to_dict()["min_velocity_polytope_capacity"] == reach.min()

@@ -26,6 +26,7 @@ from .errors import ArgumentError
 from .grasp import HeldObject
 from .model import Robot
 from .motion import motion_terms
+from .polytopes import kinematic_polytope
 from .tasks import get_task
 from .trajectory import Trajectory, trajectory_table
 
@@ -133,6 +134,11 @@ class TrajectoryAnalysis:
         acceleration_capacity: how far the in-motion dynamic ellipsoid reaches from the origin
             along a_o's direction (N,).
         efforts: the wheel and joint efforts the motion needs (N m, N), (N, nx).
+        velocity_polytope_capacity: the kinematic polytope's ``radius_along`` v_o's direction d
+            (N,) (m/s, rad/s): like ``velocity_capacity`` for the ellipsoid, the support function
+            max d . v over the set (the largest component along d of a velocity the wheels and
+            joints can give; the speed straight along d can be less), or ``None`` when not asked
+            for. At least ``velocity_capacity``: the ellipsoid lies inside the polytope.
         velocity_use, effort_use: |x| / xdot_max and |tau| / tau_max per sample, (N, nx). The
             Euclidean norm of an effort_use row (the CSV's ``effort_norm``) is the dynamic
             ellipsoid's measure of the demand: 1 on its boundary when the motion's
@@ -157,6 +163,7 @@ class TrajectoryAnalysis:
     velocity_use: np.ndarray = field(repr=False)
     effort_use: np.ndarray = field(repr=False)
     scaling: TimeScaling = field(repr=False)
+    velocity_polytope_capacity: np.ndarray | None = None
 
     def table(self) -> tuple[list[str], np.ndarray]:
         """Per-sample CSV columns: header and values."""
@@ -168,6 +175,9 @@ class TrajectoryAnalysis:
         header += [f"kinematic_semi_axis_{k + 1}" for k in range(m)] + [f"dynamic_semi_axis_{k + 1}" for k in range(m)]
         header += ["dynamic_empty", "max_velocity_use", "max_effort_use", "effort_norm", "slip"]
         header += [f"effort_{n}" for n in self.names]
+        polytope = [] if self.velocity_polytope_capacity is None else [self.velocity_polytope_capacity[:, None]]
+        if polytope:
+            header.append("velocity_polytope_capacity")
         cols = [
             self.trajectory.t[:, None],
             self.object_velocity,
@@ -184,12 +194,16 @@ class TrajectoryAnalysis:
             np.linalg.norm(self.effort_use, axis=1)[:, None],
             self.trajectory.slip[:, None],
             self.efforts,
+            *polytope,
         ]
         return header, np.hstack(cols)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary and the per-sample columns."""
         header, values = self.table()
+        extra = {}
+        if self.velocity_polytope_capacity is not None:
+            extra["min_velocity_polytope_capacity"] = float(self.velocity_polytope_capacity.min())
         return {
             "robot": self.robot_name,
             "task": self.task,
@@ -202,6 +216,7 @@ class TrajectoryAnalysis:
             "max_slip": float(self.trajectory.slip.max()),
             "min_velocity_capacity": float(self.velocity_capacity.min()),
             "min_acceleration_capacity": float(self.acceleration_capacity.min()),
+            **extra,
             "columns": {name: values[:, k].tolist() for k, name in enumerate(header)},
         }
 
@@ -214,6 +229,7 @@ def analyze_trajectory(
     object_mass: float | None = None,
     held_object: HeldObject | None = None,
     decoupled: bool = False,
+    polytope: bool = False,
 ) -> TrajectoryAnalysis:
     """Both measures, the demands and the time-scaling margin along a trajectory.
 
@@ -223,6 +239,9 @@ def analyze_trajectory(
             :func:`mobmanip.trajectory.trajectory_from_samples`.
         task, object_mass, held_object, decoupled: as :func:`mobmanip.analysis.analyze` (the
             default object sits between the hands at every sample).
+        polytope: also the kinematic polytope's reach along v_o
+            (:attr:`TrajectoryAnalysis.velocity_polytope_capacity`; one LP-backed support query per
+            sample).
     """
     if not isinstance(trajectory, Trajectory):
         raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
@@ -233,6 +252,7 @@ def analyze_trajectory(
     v_o, a_o = np.zeros((n, m)), np.zeros((n, m))
     v_cap, a_cap = np.zeros(n), np.zeros(n)
     tau, tau_static = np.zeros((n, nx)), np.zeros((n, nx))
+    v_poly = np.zeros(n) if polytope else None
     for i in range(n):
         terms = motion_terms(
             robot,
@@ -253,6 +273,8 @@ def analyze_trajectory(
         speed = float(np.linalg.norm(v_o[i]))
         d = v_o[i] / speed if speed > 0.0 else kin.axes[0]
         v_cap[i] = kin.radius_along(d) if not kin.empty else 0.0
+        if polytope:
+            v_poly[i] = kinematic_polytope(terms.J_u, terms.W, terms.velocity_limits).radius_along(d)
         acc = float(np.linalg.norm(a_o[i]))
         d = a_o[i] / acc if acc > 0.0 else dyn.axes[0]
         a_cap[i] = _reach(dyn.center, dyn.generator, d, dyn.empty)
@@ -278,6 +300,7 @@ def analyze_trajectory(
         velocity_use=np.abs(trajectory.x) / vlim,
         effort_use=np.abs(tau) / elim,
         scaling=scaling,
+        velocity_polytope_capacity=v_poly,
     )
 
 
@@ -294,6 +317,8 @@ def trajectory_figure(result: TrajectoryAnalysis):
     ax = axes[0]
     ax.plot(t, np.linalg.norm(result.object_velocity, axis=1), label="object speed |v_o|")
     ax.plot(t, result.velocity_capacity, label="kinematic capacity along v_o")
+    if result.velocity_polytope_capacity is not None:
+        ax.plot(t, result.velocity_polytope_capacity, label="kinematic polytope along v_o")
     ax.plot(t, result.kinematic_semi_axes[:, -1], "--", label="kinematic minor semi-axis")
     ax.set_ylabel("m/s (rad/s)")
     ax.legend(loc="best", fontsize=8)

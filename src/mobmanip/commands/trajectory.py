@@ -36,6 +36,11 @@ def register(sub) -> None:
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
+    parser.add_argument(
+        "--polytope",
+        action="store_true",
+        help="also the exact kinematic polytope's reach along the object's velocity (slower)",
+    )
     parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
     parser.add_argument(
         "--export",
@@ -59,7 +64,9 @@ def run(args) -> int:
     note_input(args.trajectory)
     robot = load_robot(find_spec(args.robot))
     trajectory = read_trajectory(robot, args.trajectory)
-    result = analyze_trajectory(robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled)
+    result = analyze_trajectory(
+        robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled, polytope=args.polytope
+    )
     s = result.scaling
     duration = trajectory.t[-1] - trajectory.t[0]
     print(f"robot {robot.name}, task {result.task}: {len(trajectory)} samples over {duration:g} s")
@@ -69,6 +76,8 @@ def run(args) -> int:
         f"smallest velocity capacity along v_o {result.velocity_capacity.min():.4g}, "
         f"acceleration capacity along a_o {result.acceleration_capacity.min():.4g}"
     )
+    if result.velocity_polytope_capacity is not None:
+        print(f"smallest kinematic polytope reach along v_o {result.velocity_polytope_capacity.min():.4g}")
     if not s.feasible:
         print("time-scaling margin: none (gravity alone breaks an effort limit)")
     elif s.k_max is None:
