@@ -11,12 +11,15 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+import mobmanip.carry as carry_module
 from mobmanip.carry import ObjectPath, carry, carry_outputs, default_start, read_path
 from mobmanip.cli import main
 from mobmanip.dynamics import end_effector_positions
 from mobmanip.errors import ArgumentError
+from mobmanip.motion import motion_terms
 from mobmanip.placement import place
-from mobmanip.trajectory import read_trajectory
+from mobmanip.trajectory import read_trajectory, trajectory_from_samples
+from mobmanip.trajectory_analysis import analyze_trajectory
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -129,11 +132,26 @@ def test_capacity_beats_the_baseline_by_20_percent(paper_run):
     assert minima[0] >= 1.2 * minima[1]
 
 
+def _check_efforts(robot, result):
+    """The QP motions' wheel and joint efforts are within their limits: per step, from the
+    step's change of rates by the paper's policy (MotionTerms.torques, not the QP's own matrix),
+    and per sample as mobmanip trajectory estimates them from the configurations alone."""
+    previous = np.zeros(robot.nx)
+    for run in (result.preparation, result.motion):
+        for q, x, dt in zip(run.q[:-1], run.x, np.diff(run.t)):
+            tau = motion_terms(robot, q, previous).torques((x - previous) / dt)
+            assert np.all(np.abs(tau) <= carry_module.EFFORT_SHARE * robot.effort_limits * (1 + 1e-9))
+            previous = x
+        sampled = trajectory_from_samples(robot, run.t, run.q)
+        assert analyze_trajectory(robot, sampled).effort_use.max() <= 1.0
+
+
 @pytest.mark.parametrize("name", ["carry_line.csv", "carry_turn.csv"])
 def test_tiago_capacity_against_the_baseline_and_the_best_start(name):
     """TIAGo++ with the default objective (the kinematic minor semi-axis, spatial task).
 
-    On the turn the QP's minimum along the path is at least 1.2 times the baseline's. On the
+    Its efforts stay within the limits (the QP bounds them; an unbounded step once asked 1.5
+    times a wheel's limit). On the turn the QP's minimum along the path is at least 1.2 times the baseline's. On the
     line the baseline's minimum is its start's, and no motion can beat the best posture holding
     the object at the path's start: base placement (SLSQP from 8 platform headings, free grasp
     turn) finds that best hold independently, the self-motion's start reaches it within 0.1%
@@ -144,6 +162,7 @@ def test_tiago_capacity_against_the_baseline_and_the_best_start(name):
     result = carry(robot, read_path(EXAMPLES / name))
     motion, base = result.motion, result.baseline
     assert motion.tracking_error.max() <= 1e-3 and result.preparation.tracking_error.max() <= 1e-3
+    _check_efforts(robot, result)
     values = [mobmanip.analyze(robot, q, "spatial").kinematic.semi_axes[-1] for q in (motion.q[0], base.q[0])]
     np.testing.assert_allclose(values, [motion.capacity[0], base.capacity[0]], rtol=1e-9)
     if name == "carry_turn.csv":

@@ -5,9 +5,14 @@ rates, so the platform's nonholonomic constraints hold exactly: v = S x has no l
 
     minimise    1/2 x^T D^-2 x - w (S^T grad f(q))^T x       (D = diag(xdot_max))
     subject to  J_u(q) x = b                                   (the hands follow the object)
-                max(-xdot_max, (q_lo - q) / dt) <= x <= min(xdot_max, (q_hi - q) / dt)
+                max(-xdot_max, (q_lo - q) / T) <= x <= min(xdot_max, (q_hi - q) / T)
+                |tau(q, x_prev, (x - x_prev) / dt)| <= 0.99 tau_max    (wheel and joint efforts)
 
-and q advances by ``pin.integrate(q, S x dt)`` (the platform's pose by the exact SE(2)
+where T = max(dt, :data:`LIMIT_HORIZON`) (a joint slows down smoothly near a position limit)
+and tau is the efforts of the paper's policy (:meth:`mobmanip.motion.MotionTerms.torques`),
+affine in x with the velocity terms taken at the previous step's rates x_prev (the 1% margin
+covers that). Without the effort rows a switch of the climbed gradient (e.g. when two
+semi-axes cross) once asked 1.5 times a wheel's effort limit in a single step. q advances by ``pin.integrate(q, S x dt)`` (the platform's pose by the exact SE(2)
 exponential, :func:`mobmanip.trajectory.planar_exp`). The hands keep the grasp of the start posture:
 hand i's target pose at the next step is the object's path applied to its start pose (the
 object translates along the path and turns about the vertical by the path's change of heading,
@@ -51,6 +56,12 @@ PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
 DEFAULT_STEP = 0.02
 #: The capacity term's share of the velocity limits at the first step.
 DEFAULT_GAIN = 0.5
+#: A joint approaches a position limit at most at (distance to the limit) / this (s): it slows
+#: down smoothly (exponentially) instead of stopping within one step.
+LIMIT_HORIZON = 0.2
+#: The QP keeps each step's efforts within this share of their limits (its model takes the
+#: velocity terms at the previous step's rates; the margin covers the difference).
+EFFORT_SHARE = 0.99
 #: Longest self-motion before the path (s); 0 starts the path from the start posture.
 DEFAULT_PREPARE = 30.0
 #: The self-motion stops when the objective rose by less than this fraction of its value ...
@@ -290,6 +301,7 @@ def _bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndar
     hi = np.array(robot.velocity_limits, dtype=float)
     lo = -hi
     model = robot.model
+    horizon = max(dt, LIMIT_HORIZON)
     S = robot.null_space(q)
     n_eta = robot.platform.n_reduced
     for k in range(n_eta, robot.nx):
@@ -300,9 +312,9 @@ def _bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndar
         qk = q[joint.idx_q]
         lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
         if np.isfinite(lower):
-            lo[k] = max(lo[k], min((lower - qk) / dt, 0.0))
+            lo[k] = max(lo[k], min((lower - qk) / horizon, 0.0))
         if np.isfinite(upper):
-            hi[k] = min(hi[k], max((upper - qk) / dt, 0.0))
+            hi[k] = min(hi[k], max((upper - qk) / horizon, 0.0))
     return lo, hi
 
 
@@ -328,16 +340,36 @@ def _default_start_label(robot: Robot, q0: np.ndarray) -> str:
     return "the case-study posture (both arms at their optimum, object straight ahead)"
 
 
-def _solve_qp(H, c, A, b, lo, hi) -> np.ndarray | None:
+def _solve_qp(H, c, A, b, lo, hi, G=None, h=None) -> np.ndarray | None:
     from qpsolvers import solve_qp
 
-    return solve_qp(H, c, A=A, b=b, lb=lo, ub=hi, solver="daqp")
+    return solve_qp(H, c, G=G, h=h, A=A, b=b, lb=lo, ub=hi, solver="daqp")
 
 
-def _run(robot, q0, path, evaluator, task, dt, method, gain, weight=None, converge=False) -> tuple[CarryRun, float]:
+def _effort_rows(robot, q, x_prev, dt, task, object_mass, limits) -> tuple[np.ndarray, np.ndarray]:
+    """Linear inequalities G x <= h that keep the wheel and joint efforts of the step within
+    their limits: with xdot = (x - x_prev) / dt the efforts are affine in x, tau = c + A xdot
+    (:meth:`mobmanip.motion.MotionTerms.torques`, the velocity terms at x_prev), and
+    -s tau_max <= tau <= s tau_max with s = :data:`EFFORT_SHARE`."""
+    from .motion import motion_terms
+
+    terms = motion_terms(robot, q, x_prev, task, object_mass=object_mass)
+    c = terms.torques(np.zeros(robot.nx))
+    # d tau / d xdot = Q^-1 (P + J_u^T W^+ M_o (W^T)^+ J_u)
+    inertia = terms.P + terms.J_u.T @ terms.W_pinv @ terms.M_o @ np.linalg.pinv(terms.W.T) @ terms.J_u
+    A = np.linalg.solve(terms.Q, inertia) / dt
+    shift = A @ x_prev
+    bound = EFFORT_SHARE * limits
+    return np.vstack([A, -A]), np.concatenate([bound - c + shift, bound + c - shift])
+
+
+def _run(
+    robot, q0, path, evaluator, task, dt, method, gain, weight=None, converge=False, object_mass=None, x_start=None
+) -> tuple[CarryRun, float]:
     """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
     ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
-    over :data:`PREPARE_WINDOW` (the self-motion)."""
+    over :data:`PREPARE_WINDOW` (the self-motion). ``x_start``: the reduced velocity before the
+    first step (default rest), from which the first step's efforts are counted."""
     model = robot.model
     n = int(math.floor((path.t[-1] - path.t[0]) / dt + 1e-9)) + 1
     times = path.t[0] + dt * np.arange(n)
@@ -352,6 +384,8 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain, weight=None, conver
     xs = np.zeros((n - 1, robot.nx))
     capacity, track, hand = np.zeros(n), np.zeros(n), np.zeros(n)
     q = q0.copy()
+    x_prev = np.zeros(robot.nx) if x_start is None else np.asarray(x_start, dtype=float)
+    effort_limits = np.asarray(robot.effort_limits, dtype=float)
     window = max(1, int(round(PREPARE_WINDOW / dt)))
     for k in range(n):
         qs[k] = q
@@ -379,13 +413,15 @@ def _run(robot, q0, path, evaluator, task, dt, method, gain, weight=None, conver
                 norm = float(np.linalg.norm(np.sqrt(D2) * g))
                 weight = gain / norm if norm > 0 else 0.0
             lo, hi = _bounds(robot, q, h)
-            x = _solve_qp(H, -weight * g, J_u, b, lo, hi)
+            G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
+            x = _solve_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
             if x is None:
                 raise NumericalError(
                     f"the carry QP has no solution at step {k} (t = {times[k]:g} s): the path asks for more than "
-                    "the velocity or joint limits allow; slow the path down"
+                    "the velocity, effort or joint limits allow; slow the path down"
                 )
         xs[k] = x
+        x_prev = x
         q = tangent_integrate(model, q, S @ x * h)
     run = CarryRun(method, times[:n], qs[:n], xs[: n - 1], capacity[:n], track[:n], hand[:n])
     return run, (0.0 if weight is None else weight)
@@ -448,7 +484,9 @@ def carry(
     preparation, weight, q_path = None, None, q0
     if prepare > 0.0 and gain > 0.0:
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
-        preparation, weight = _run(robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True)
+        preparation, weight = _run(
+            robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass
+        )
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
             preparation.method,
@@ -456,7 +494,10 @@ def carry(
             *(getattr(preparation, f) for f in ("q", "x", "capacity", "tracking_error", "hand_error")),
         )
         q_path = preparation.q[-1]
-    motion, _ = _run(robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight)
+    x_start = None if preparation is None else preparation.x[-1]
+    motion, _ = _run(
+        robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass, x_start=x_start
+    )
     baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
     return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
 
