@@ -12,9 +12,10 @@ where T = max(dt, :data:`LIMIT_HORIZON`) (a joint slows down smoothly near a pos
 and tau is the efforts of the paper's policy (:meth:`mobmanip.motion.MotionTerms.torques`),
 affine in x with the velocity terms taken at the previous step's rates x_prev (the 1% margin
 covers that). Without the effort rows a switch of the climbed gradient (e.g. when two
-semi-axes cross) once asked 1.5 times a wheel's effort limit in a single step. q advances by ``pin.integrate(q, S x dt)`` (the platform's pose by the exact SE(2)
-exponential, :func:`mobmanip.trajectory.planar_exp`). The hands keep the grasp of the start posture:
-hand i's target pose at the next step is the object's path applied to its start pose (the
+semi-axes cross) once asked 1.5 times a wheel's effort limit in a single step. q advances by
+``pin.integrate(q, S x dt)`` (the platform's pose by the exact SE(2) exponential,
+:func:`mobmanip.trajectory.planar_exp`). The hands keep the grasp of the start posture: hand i's
+target pose at the next step is the object's path applied to its start pose (the
 object translates along the path and turns about the vertical by the path's change of heading,
 or by its ``yaw`` column), and b is the task velocity that reaches it in one step, so tracking
 errors do not accumulate. f is the chosen measure (:mod:`mobmanip.gradients`, at rest); w is

@@ -12,7 +12,7 @@ where the start posture holds it (the first row is where it starts). Without yaw
 turns with the path's direction of travel.
 
 Each step solves a QP over the wheel and joint rates (the platform cannot slide sideways):
-the hands follow the object, joint position and velocity limits hold, and the objective's
+the hands follow the object, joint position, velocity and effort limits hold, and the objective's
 gradient is climbed. The baseline tracks the same path with the weighted pseudo-inverse.
 Before the path, the QP motion first moves to a better posture holding the object where it
 is (a self-motion: the same QP with the object held still, until the objective stops rising
