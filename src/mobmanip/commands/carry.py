@@ -1,0 +1,113 @@
+"""``mobmanip carry ROBOT --path PATH.csv``: a whole-body motion that carries the object along a path."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..tasks import TASKS
+
+CARRY_HELP = """\
+PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
+where the start posture holds it (the first row is where it starts). Without yaw the object
+turns with the path's direction of travel.
+
+Each step solves a QP over the wheel and joint rates (the platform cannot slide sideways):
+the hands follow the object, joint position, velocity and effort limits hold, and the objective's
+gradient is climbed. The baseline tracks the same path with the weighted pseudo-inverse.
+Before the path, the QP motion first moves to a better posture holding the object where it
+is (a self-motion: the same QP with the object held still, until the objective stops rising
+or for at most --prepare seconds); the path's motion starts there, the baseline starts from
+the start posture. --prepare 0 starts both from the start posture.
+
+--out DIR writes trajectory.csv (t, platform_x, platform_y, platform_yaw, one column per joint
+as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
+motion), preparation.csv (the self-motion), carry.json (summary, with what each run started
+from) and capacity.png (the capacity profiles). trajectory.csv is a
+valid input of `mobmanip trajectory`.
+
+examples:
+  mobmanip carry planar_dual_arm --path examples/carry_turn.csv --out results/
+  mobmanip carry tiago_dual --path examples/carry_line.csv --objective dynamic:minor_axis
+"""
+
+
+def register(sub) -> None:
+    parser = sub.add_parser(
+        "carry",
+        help="whole-body motion carrying the object along a path with the most capacity",
+        description="Synthesise wheel and joint motions that carry the held object along a path while "
+        "maximising a measure, and compare with a pseudo-inverse baseline.",
+        epilog=CARRY_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("--path", required=True, metavar="PATH.csv", help="the object's path (see below)")
+    parser.add_argument(
+        "--objective",
+        default="kinematic:minor_axis",
+        metavar="ELLIPSOID:INDEX[:DIR]",
+        help="what to maximise (as for `place`; default kinematic:minor_axis)",
+    )
+    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
+    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--step", type=float, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument(
+        "--prepare",
+        type=float,
+        default=30.0,
+        metavar="S",
+        help="longest self-motion before the path (s, default 30; 0: none)",
+    )
+    parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from ..carry import carry, carry_outputs, read_path
+    from ..errors import OutputError
+    from ..io import note_input, read_configuration
+    from ..model import load_robot
+    from ..spec import find_spec
+
+    note_input(args.path)
+    robot = load_robot(find_spec(args.robot))
+    path = read_path(args.path)
+    start = read_configuration(robot, args.start) if args.start else None
+    if args.out and not Path(args.out).is_dir():
+        raise OutputError(f"--out {args.out}: not an existing directory")
+    result = carry(
+        robot,
+        path,
+        args.objective,
+        args.task,
+        start=start,
+        object_mass=args.object_mass,
+        step=args.step,
+        prepare=args.prepare,
+    )
+    summary = result.summary()
+    print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
+    prep = result.preparation
+    if prep is not None:
+        print(
+            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
+            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
+            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the start posture"
+        )
+    for run in (result.motion, result.baseline):
+        s = summary[run.method]
+        label = "QP with capacity" if run.method == "qp" else "pseudo-inverse baseline"
+        print(
+            f"{label}: min {result.objective.name} {s['min_capacity']:.4g}, mean {s['mean_capacity']:.4g}, "
+            f"max tracking error {1e3 * s['max_tracking_error']:.3f} mm"
+        )
+    ratio = summary["min_capacity_ratio"]
+    if ratio is not None:
+        print(f"min capacity ratio (QP / baseline): {ratio:.3f}")
+    if args.out:
+        for written in carry_outputs(robot, result, args.out):
+            print(f"wrote {written}")
+    return 0

@@ -1,0 +1,104 @@
+"""``mobmanip trajectory ROBOT TRAJ.csv``: both measures, demands and the time-scaling margin along a motion."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..tasks import TASKS
+
+TRAJECTORY_HELP = """\
+TRAJ.csv has a header: t (s), platform_x, platform_y (m), platform_yaw (rad), then one column
+per moving joint named as in q.json; joints without a column stay at home (wheels without a
+column turn as the platform's motion needs). Rates and accelerations are estimated from the
+samples; `slip` reports motion the platform cannot make (lateral sliding).
+
+time-scaling margin: the largest factor k by which the whole motion can be sped up with every
+wheel and joint within its velocity and effort limits (efforts: RNEA in motion, the object
+carried by the hands with the paper's policy).
+
+example:
+  mobmanip trajectory tiago_dual motion.csv --out results/ --export motion.html
+"""
+
+
+def register(sub) -> None:
+    parser = sub.add_parser(
+        "trajectory",
+        help="measures, demands and time-scaling margin along a whole-body trajectory",
+        description="Analyse a time-stamped whole-body trajectory: per sample the kinematic and the in-motion "
+        "dynamic ellipsoid, the object's velocity and acceleration against them, efforts against limits, and "
+        "by how much the motion could be sped up.",
+        epilog=TRAJECTORY_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("trajectory", metavar="TRAJ.csv", help="the trajectory (see below)")
+    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
+    parser.add_argument(
+        "--polytope",
+        action="store_true",
+        help="also the exact kinematic polytope's reach along the object's velocity (slower)",
+    )
+    parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
+    parser.add_argument(
+        "--export",
+        metavar="PAGE.html",
+        help="write a self-contained page that plays the motion with its ellipsoids (in motion) moving along",
+    )
+    parser.add_argument(
+        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    )
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..errors import OutputError
+    from ..io import note_input
+    from ..model import load_robot
+    from ..spec import find_spec
+    from ..trajectory import read_trajectory
+    from ..trajectory_analysis import analyze_trajectory, write_outputs
+
+    note_input(args.trajectory)
+    robot = load_robot(find_spec(args.robot))
+    trajectory = read_trajectory(robot, args.trajectory)
+    result = analyze_trajectory(
+        robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled, polytope=args.polytope
+    )
+    s = result.scaling
+    duration = trajectory.t[-1] - trajectory.t[0]
+    print(f"robot {robot.name}, task {result.task}: {len(trajectory)} samples over {duration:g} s")
+    print(f"largest velocity use {result.velocity_use.max():.4f}, largest effort use {result.effort_use.max():.4f}")
+    print(f"largest platform slip {trajectory.slip.max():.2e}")
+    print(
+        f"smallest velocity capacity along v_o {result.velocity_capacity.min():.4g}, "
+        f"acceleration capacity along a_o {result.acceleration_capacity.min():.4g}"
+    )
+    if result.velocity_polytope_capacity is not None:
+        print(f"smallest kinematic polytope reach along v_o {result.velocity_polytope_capacity.min():.4g}")
+    if not s.feasible:
+        print("time-scaling margin: none (gravity alone breaks an effort limit)")
+    elif s.k_max is None:
+        print("time-scaling margin: unbounded (the motion stands still)")
+    else:
+        print(f"time-scaling margin {s.k_max:.6g} (decided by the {s.limit} limit at sample {s.sample})")
+        if s.k_min > 0.0:
+            print(f"slowest feasible speed-up {s.k_min:.6g}")
+    if args.out:
+        from pathlib import Path
+
+        if not Path(args.out).is_dir():
+            raise OutputError(f"--out {args.out}: not an existing directory")
+        for path in write_outputs(robot, result, args.out):
+            print(f"wrote {path}")
+    if args.export:
+        from ..viz.trajectory_page import export_trajectory_page
+
+        page = export_trajectory_page(
+            robot, trajectory, args.export, result.task, every=args.every, object_mass=args.object_mass,
+            decoupled=args.decoupled,
+        )  # fmt: skip
+        print(f"wrote {page}")
+    return 0

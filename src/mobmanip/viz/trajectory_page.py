@@ -1,0 +1,120 @@
+"""A trajectory in the viewer: the robot moving with its ellipsoids, and a self-contained page.
+
+Each frame is one sample of the trajectory: the robot at q, the kinematic ellipsoid and the
+dynamic ellipsoid *in motion* (:mod:`mobmanip.motion`) around the object. Frames follow each
+other at the trajectory's own pace (meshcat interpolates between them), so the exported page
+plays the motion in real time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis import Analysis, analyze
+from ..errors import ArgumentError
+from ..grasp import HeldObject
+from ..model import Robot
+from ..motion import motion_terms
+from ..trajectory import Trajectory
+from .scene import Frame
+
+#: Frames drawn at most: a longer trajectory is thinned to about this many.
+MAX_FRAMES = 200
+
+
+def motion_analysis(
+    robot: Robot,
+    q: np.ndarray,
+    x: np.ndarray,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    held_object: HeldObject | None = None,
+    decoupled: bool = False,
+) -> Analysis:
+    """``analyze`` at q with its ``dynamic`` ellipsoid replaced by the one in motion at x."""
+    analysis = analyze(
+        robot, q, task, object_mass=object_mass, held_object=held_object, decoupled=decoupled, method="exact"
+    )
+    terms = motion_terms(
+        robot, q, x, analysis.task, object_mass=object_mass, held_object=held_object, decoupled=decoupled
+    )
+    measures = dict(analysis.measures)
+    measures["dynamic"] = terms.dynamic()
+    return dataclasses.replace(analysis, measures=types.MappingProxyType(measures))
+
+
+def frame_samples(n: int, every: int | None = None) -> np.ndarray:
+    """The sample indices drawn: every ``every``-th (default: about :data:`MAX_FRAMES` in all),
+    always the last."""
+    if every is None:
+        every = max(1, int(np.ceil((n - 1) / (MAX_FRAMES - 1)))) if n > 1 else 1
+    if not isinstance(every, (int, np.integer)) or every < 1:
+        raise ArgumentError(f"every must be a positive whole number of samples, got {every!r}")
+    picked = list(range(0, n, int(every)))
+    if picked[-1] != n - 1:
+        picked.append(n - 1)
+    return np.array(picked)
+
+
+def trajectory_frames(
+    robot: Robot,
+    trajectory: Trajectory,
+    task: str | None = None,
+    *,
+    every: int | None = None,
+    object_mass: float | None = None,
+    decoupled: bool = False,
+) -> tuple[list[Frame], np.ndarray]:
+    """The frames of a trajectory's animation and the time (s) of each frame from the start.
+
+    Args:
+        robot: the robot.
+        trajectory: the motion.
+        task, object_mass, decoupled: as :func:`mobmanip.analysis.analyze`.
+        every: draw every ``every``-th sample (default: about :data:`MAX_FRAMES` frames).
+    """
+    picked = frame_samples(len(trajectory), every)
+    frames = []
+    for i in picked:
+        analysis = motion_analysis(
+            robot, trajectory.q[i], trajectory.x[i], task, object_mass=object_mass, decoupled=decoupled
+        )
+        frames.append(Frame(trajectory.q[i], analysis, None, 0.0, f"t = {trajectory.t[i]:.3f} s"))
+    return frames, trajectory.t[picked] - trajectory.t[0]
+
+
+def animate_trajectory(viewer, frames: list[Frame], times: np.ndarray, *, play: bool = True):
+    """Send the frames to an :class:`~mobmanip.viz.scene.EllipsoidViewer` as one animation at
+    the trajectory's pace (frames equally spaced in time; the last at the trajectory's end)."""
+    step = float(times[-1] / (len(times) - 1)) if len(times) > 1 else 0.1
+    return viewer.animate(frames, step=step, play=play)
+
+
+def export_trajectory_page(
+    robot: Robot,
+    trajectory: Trajectory,
+    path: str | Path,
+    task: str | None = None,
+    *,
+    every: int | None = None,
+    object_mass: float | None = None,
+    decoupled: bool = False,
+) -> Path:
+    """Write a self-contained HTML page that plays the trajectory with its ellipsoids moving along.
+
+    Returns:
+        The page's path.
+    """
+    from .scene import EllipsoidViewer
+
+    frames, times = trajectory_frames(
+        robot, trajectory, task, every=every, object_mass=object_mass, decoupled=decoupled
+    )
+    with EllipsoidViewer(robot) as viewer:
+        animate_trajectory(viewer, frames, times)
+        return viewer.export_html(path)

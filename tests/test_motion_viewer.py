@@ -1,0 +1,91 @@
+"""A trajectory in the viewer: the exported page plays the motion with the in-motion ellipsoids.
+
+The browser test opens the exported page in headless Chromium (see ``browser_util``) and reads
+the three.js scene back; it is skipped, with the reason, only when Chromium or Playwright is
+missing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mobmanip
+from browser_util import VIEWPORT, chromium, missing_browser, world_matrix
+from mobmanip.carry import ObjectPath, carry
+from mobmanip.errors import ArgumentError
+from mobmanip.motion import analyze_motion
+from mobmanip.trajectory import trajectory_from_samples
+from mobmanip.viz.scene import ELLIPSOID_PATHS, OBJECT_PATH, PLANAR_THICKNESS, EllipsoidViewer
+from mobmanip.viz.trajectory_page import animate_trajectory, frame_samples, trajectory_frames
+
+M = "meshcat/"
+TOL = 1e-5
+
+
+@pytest.fixture(scope="module")
+def motion():
+    """The paper's robot carrying the object 0.6 m along a bend in 3 s (the carry QP)."""
+    robot = mobmanip.load_robot("planar_dual_arm")
+    t = np.linspace(0.0, 3.0, 31)
+    s = 0.6 * (3 * (t / 3) ** 2 - 2 * (t / 3) ** 3)
+    path = ObjectPath(t, np.column_stack([s, 0.3 * s**2]))
+    run = carry(robot, path, step=0.05).motion
+    return robot, trajectory_from_samples(robot, run.t, run.q)
+
+
+def test_frames_hold_the_in_motion_dynamic_ellipsoid(motion):
+    robot, trajectory = motion
+    frames, times = trajectory_frames(robot, trajectory, "planar", every=10)
+    assert [round(t, 9) for t in times] == [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0]
+    for frame, i in zip(frames, frame_samples(len(trajectory), 10)):
+        direct = analyze_motion(robot, trajectory.q[i], trajectory.x[i], "planar")
+        np.testing.assert_allclose(frame.analysis.dynamic.center, direct.dynamic.center, atol=1e-12)
+        np.testing.assert_allclose(frame.analysis.dynamic.semi_axes, direct.dynamic.semi_axes, atol=1e-12)
+    rest = mobmanip.analyze(robot, trajectory.q[10], "planar").dynamic
+    assert not np.allclose(frames[1].analysis.dynamic.center, rest.center, atol=1e-6)  # it moves: not at rest
+
+
+def test_frame_samples_thin_long_trajectories():
+    assert list(frame_samples(5, 2)) == [0, 2, 4]
+    assert list(frame_samples(6, 2)) == [0, 2, 4, 5]
+    assert len(frame_samples(10_000)) <= 201
+    with pytest.raises(ArgumentError, match="every"):
+        frame_samples(10, 0)
+
+
+def test_exported_page_plays_the_trajectory(motion, tmp_path):
+    reason = missing_browser()
+    if reason is not None:
+        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
+    robot, trajectory = motion
+    frames, times = trajectory_frames(robot, trajectory, "planar", every=10)
+    with EllipsoidViewer(robot) as viewer:
+        schedule = animate_trajectory(viewer, frames, times)
+        path = viewer.export_html(tmp_path / "trajectory.html")
+        scales = viewer.scales
+        n_tracks = viewer.visual_model.ngeoms + 1 + 2  # robot, object, the two ellipsoids (no locked pair)
+    assert [start for start, _, _ in schedule] == pytest.approx(list(times))
+    with chromium() as browser:
+        page = browser.new_page(viewport=VIEWPORT)
+        page.goto(path.as_uri())
+        page.wait_for_function(
+            f"() => typeof viewer !== 'undefined' && viewer.animator.actions.length == {n_tracks}", timeout=30000
+        )
+        assert page.evaluate("() => viewer.animator.duration") == pytest.approx(3.0, abs=0.05)
+        for k in (1, 4, 6):
+            page.evaluate(f"() => {{ viewer.animator.pause(); viewer.animator.seek({times[k]}); }}")
+            i = frame_samples(len(trajectory), 10)[k]
+            direct = analyze_motion(robot, trajectory.q[i], trajectory.x[i], "planar")
+            centre = direct.terms.held_object.center
+            drawn_object = world_matrix(page, f"{M}{OBJECT_PATH}")
+            np.testing.assert_allclose(drawn_object[:3, 3], centre, atol=TOL)
+            for name in ("kinematic", "dynamic"):
+                e = getattr(direct, name)
+                drawn = world_matrix(page, f"{M}{ELLIPSOID_PATHS[False, name]}/shape")
+                E = np.eye(3)[:, :2]
+                np.testing.assert_allclose(drawn[:3, 3], centre + scales[name] * E @ e.center, atol=TOL)
+                G = scales[name] * E @ e.generator
+                expected = G @ G.T + np.diag([0.0, 0.0, PLANAR_THICKNESS[False, name] ** 2])
+                np.testing.assert_allclose(drawn[:3, :3] @ drawn[:3, :3].T, expected, atol=TOL)
+        page.close()
