@@ -122,9 +122,13 @@ def test_readme_command_gives_a_meaningful_result(command, tmp_path, monkeypatch
     assert code == 0, printed.err
     assert printed.out.strip()
     assert "EMPTY" not in printed.out  # every example shows a set that exists
-    for name in _outputs(argv):
-        path = tmp_path / name
-        assert path.is_file() and path.stat().st_size > 0, name
+    outputs = [tmp_path / name for name in _outputs(argv)]
+    for directory in [p for p in outputs if p.is_dir()]:  # an --out DIR: what it holds instead
+        written = sorted(directory.iterdir())
+        assert written and all(p.stat().st_size > 0 for p in written), directory
+        outputs += [p for p in written if p.suffix == ".json"]
+    for path in [p for p in outputs if not p.is_dir()]:
+        assert path.is_file() and path.stat().st_size > 0, path.name
         if path.suffix == ".json":
             document = json.loads(path.read_text())
             document = document.get("analysis", document)

@@ -159,6 +159,22 @@ def _publish_all(pending: list[tuple[str, Path]]) -> None:
                 os.unlink(backup)
 
 
+def output_directory(path: str | Path, option: str = "--out") -> Path:
+    """Create an output directory (with its parents) if it is missing, before any work is done.
+
+    Raises:
+        OutputError: the path names a file, or the directory cannot be created.
+    """
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except FileExistsError as exc:
+        raise OutputError(f"{option} {out}: a file of that name exists, not a directory") from exc
+    except OSError as exc:
+        raise OutputError(f"{option} {out}: cannot create the directory ({exc.strerror or exc})") from exc
+    return out
+
+
 def check_output(path: str | Path) -> None:
     """Refuse, before any work, an output path that :func:`atomic_output` would refuse later
     (an input of the command, a directory, FIFO, device or socket).

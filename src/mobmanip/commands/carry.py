@@ -64,11 +64,9 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from pathlib import Path
 
     from ..carry import carry, carry_outputs, read_path
-    from ..errors import OutputError
-    from ..io import note_input, read_configuration
+    from ..io import note_input, output_directory, read_configuration
     from ..model import load_robot
     from ..spec import find_spec
 
@@ -76,8 +74,8 @@ def run(args) -> int:
     robot = load_robot(find_spec(args.robot))
     path = read_path(args.path)
     start = read_configuration(robot, args.start) if args.start else None
-    if args.out and not Path(args.out).is_dir():
-        raise OutputError(f"--out {args.out}: not an existing directory")
+    if args.out:
+        output_directory(args.out)
     result = carry(
         robot,
         path,

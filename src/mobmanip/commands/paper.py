@@ -41,14 +41,10 @@ from ..viz.paper_figures import FIGURES, POLYTOPES  # noqa: E402  (names only; n
 
 def run(args) -> int:
     from ..casestudy import run_case_study
-    from ..io import OutputError, write_json
+    from ..io import output_directory, write_json
     from ..model import load_robot
 
-    out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create output directory {out}: {exc.strerror or exc}") from exc
+    out = output_directory(args.out)
     robot = load_robot(args.robot)
     print(f"[1/4] loaded {robot.name}: {robot.nx} reduced velocities")
     study = run_case_study(robot, progress=lambda message: print(f"[2/4] {message}"), measures=POLYTOPES)

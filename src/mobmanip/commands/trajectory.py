@@ -54,14 +54,15 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..errors import OutputError
-    from ..io import note_input
+    from ..io import note_input, output_directory
     from ..model import load_robot
     from ..spec import find_spec
     from ..trajectory import read_trajectory
     from ..trajectory_analysis import analyze_trajectory, write_outputs
 
     note_input(args.trajectory)
+    if args.out:
+        output_directory(args.out)
     robot = load_robot(find_spec(args.robot))
     trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(
@@ -87,10 +88,6 @@ def run(args) -> int:
         if s.k_min > 0.0:
             print(f"slowest feasible speed-up {s.k_min:.6g}")
     if args.out:
-        from pathlib import Path
-
-        if not Path(args.out).is_dir():
-            raise OutputError(f"--out {args.out}: not an existing directory")
         for path in write_outputs(robot, result, args.out):
             print(f"wrote {path}")
     if args.export:
