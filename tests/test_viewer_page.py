@@ -130,8 +130,9 @@ def _rgb(color: int) -> str:
 def _open(browser, url: str):
     page = browser.new_page(viewport=VIEW)
     page.goto(url)
-    page.wait_for_function("() => document.getElementById('mobmanip-legend') !== null", timeout=30000)
-    wait_for_scene(page, stable=0.5)
+    # a robot with many meshes (Stretch) takes tens of seconds to load on a busy 2-core machine
+    page.wait_for_function("() => document.getElementById('mobmanip-legend') !== null", timeout=90000)
+    wait_for_scene(page, timeout=90.0, stable=0.5)
     return page
 
 
