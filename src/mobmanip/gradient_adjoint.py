@@ -194,7 +194,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
     objective at qs (n, nq), by the reverse chain."""
     from .gradients import _full_rank, _guarded
 
-    t: TreePass = tree.run(qs)
+    t: TreePass = tree.run(qs, dynamics=ev.objective.ellipsoid == "dynamic")
     n, nv = qs.shape[0], tree.nv
     task, S = ev.task, ev.S
     rows = list(task.rows)

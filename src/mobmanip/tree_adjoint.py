@@ -22,13 +22,15 @@ turns with it: dI/dq_k = -ad(xi_k)^T I - I ad(xi_k).
   the parent of joint(k). Gravity is the same form with b's twists replaced by the constant
   spatial acceleration A0 = -gravity (g = sum_b J_b^T I_b A0, Pinocchio's RNEA at rest).
 
-The world joint Jacobians, M, g, the end effectors' positions and every joint frame's pose come
-from one CRBA call of the robot's model with massless probe joints
-(:class:`mobmanip.engine.probed.ProbedModel`), probes at the end effectors and at every joint.
+The world joint Jacobians, the end effectors' positions and every joint frame's pose come from
+one ``computeJointJacobians`` call of the robot's model with massless probe joints
+(:class:`mobmanip.engine.probed.ProbedModel`), probes at the end effectors and at every joint;
+M and g follow from the bodies' world inertias through their subtrees' composite inertias.
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,8 +60,8 @@ class TreePass:
     """
 
     xi: np.ndarray
-    M: np.ndarray
-    g: np.ndarray
+    M: np.ndarray | None
+    g: np.ndarray | None
     positions: np.ndarray
     frames: np.ndarray
     rotations: np.ndarray
@@ -73,13 +75,15 @@ class TreeAdjoint:
     Args:
         model: the robot's Pinocchio model.
         frame_ids: the end-effector frames, in arm order.
+        compiled: use the compiled row loops (:mod:`mobmanip.tree_kernel`); default where Numba
+            is available. ``False`` runs the stacked NumPy forms (the reference).
 
     Raises:
         ModelError: a joint kind outside :data:`SUPPORTED_JOINTS`, or a joint without its
             ``JOINT`` frame (the caller then uses the kinematic Hessians).
     """
 
-    def __init__(self, model: pin.Model, frame_ids):
+    def __init__(self, model: pin.Model, frame_ids, compiled: bool | None = None):
         nj = model.njoints - 1
         joint_frames = []
         for j in range(1, model.njoints):
@@ -111,9 +115,8 @@ class TreeAdjoint:
         self.desc = desc
         self.anc = desc[:, self.dof_joint].T.copy()  # anc[i, b]: dof i's joint is an ancestor of (or is) b
         self.suffix = desc[self.dof_joint][:, self.dof_joint].copy()  # suffix[i, k]: dof i in subtree of joint(k)
-        self.pre = np.array(
-            [model.parents[int(j) + 1] for j in self.dof_joint]
-        )  # 0 = universe, else joint index (1-based)
+        self.joint_parent = np.array([model.parents[j] for j in range(1, model.njoints)])  # 0 = universe
+        self.upper = self.anc[:, self.dof_joint] > 0  # upper[i, k]: joint(i) is an ancestor of (or) joint(k)
         self.supports = np.zeros((self.k, model.nv))
         for a, f in enumerate(frame_ids):
             parent = model.frames[f].parentJoint
@@ -123,28 +126,31 @@ class TreeAdjoint:
         self.lever = np.array([np.asarray(inr.lever, dtype=float) for inr in inertias])
         self.rot_inertia = np.array([np.asarray(inr.inertia, dtype=float) for inr in inertias])
         self.vmap = self.probed.vmap.astype(int)
+        self.kernel = _kernel() if compiled is None or compiled else None
+        if compiled and self.kernel is None:
+            raise ModelError("the compiled tree loops need Numba")
+        self.parent0 = np.array([model.parents[j] - 1 for j in range(1, model.njoints)], dtype=np.int64)
+        self.dof_start = np.array([model.joints[j].idx_v for j in range(1, model.njoints)], dtype=np.int64)
+        self.dof_count = np.array([model.joints[j].nv for j in range(1, model.njoints)], dtype=np.int64)
+        self.armature = np.asarray(model.armature, dtype=float)
         self._buffers: dict[int, tuple] = {}
 
     # ----- the Pinocchio pass -----
 
-    def run(self, qs: np.ndarray) -> TreePass:
-        """One CRBA call per configuration of qs, (n, nq), and the quantities read from it."""
+    def run(self, qs: np.ndarray, dynamics: bool = True) -> TreePass:
+        """The quantities at qs, (n, nq), from one ``computeJointJacobians`` call per configuration
+        of the probed model; M and g only with ``dynamics``."""
         n = qs.shape[0]
         probed = self.probed
         model, data = probed.model, probed.data
         if n not in self._buffers:
-            self._buffers[n] = (np.zeros((n, model.nq)), np.empty((n, model.nv, model.nv)), np.empty((n, 6, model.nv)))
-        qp, Ma, Ja = self._buffers[n]
+            self._buffers[n] = (np.zeros((n, model.nq)), np.empty((n, 6, model.nv)))
+        qp, Ja = self._buffers[n]
         qp[:, probed.qmap] = qs
-        crba, J, world = pin.crba, data.J, pin.Convention.WORLD
-        for q, M, Jw in zip(qp, Ma, Ja):
-            M[...] = crba(model, data, q, world)
-            Jw[...] = J
-        v = self.vmap
-        xi = Ja[:, :, v]
-        Mr = Ma[:, v[:, None], v]
-        Mr = np.triu(Mr) + np.swapaxes(np.triu(Mr, 1), 1, 2)  # CRBA fills the upper triangle
-        g = probed.gravity * Ma[:, 0, v]
+        jacobians = pin.computeJointJacobians
+        for q, Jw in zip(qp, Ja):
+            Jw[...] = jacobians(model, data, q)
+        xi = Ja[:, :, self.vmap]
         cols = probed.probe_cols.astype(int)
         x_cols, y_cols = Ja[:, :, cols[:, 0]], Ja[:, :, cols[:, 1]]
         points = frame_positions(x_cols, y_cols)  # (n, k + nj, 3)
@@ -155,13 +161,48 @@ class TreeAdjoint:
         w = xi[:, 3:]
         for a in range(self.k):
             p = positions[:, a, :, None]
-            frames[:, a, :3] = xi[:, :3] + np.cross(w, p, axisa=1, axisb=1, axisc=1)
+            frames[:, a, :3] = xi[:, :3] + _cross(w, p)
             frames[:, a, 3:] = w
             frames[:, a] *= self.supports[a]
-        return TreePass(xi, Mr, g, positions, frames, rotations, points[:, self.k :])
+        t = TreePass(xi, None, None, positions, frames, rotations, points[:, self.k :])
+        if dynamics:
+            self._mass_and_gravity(t)
+        return t
+
+    def _mass_and_gravity(self, t: TreePass) -> None:
+        """M and g from the bodies' world inertias: with Ic_j the composite inertia of joint j's
+        subtree, M_ik = xi_i^T Ic_joint(k) xi_k for joint(i) an ancestor of (or) joint(k), and
+        g_k = xi_k^T Ic_joint(k) A0 (CRBA and RNEA at rest in the world frame)."""
+        I = self.inertias(t)
+        n, nj = I.shape[:2]
+        if self.kernel is not None:
+            t.M, t.g = np.empty((n, self.nv, self.nv)), np.empty((n, self.nv))
+            self.kernel.mass_and_gravity(
+                t.xi,
+                I,
+                self.parent0,
+                self.dof_start,
+                self.dof_count,
+                self.gravity_acceleration,
+                self.armature,
+                t.M,
+                t.g,
+            )
+            return
+        Ic = (I.reshape(n, nj, 36).transpose(0, 2, 1).reshape(-1, nj) @ self.desc).reshape(n, 36, nj)
+        Ic = Ic[..., self.dof_joint].reshape(n, 6, 6, self.nv)  # (n, 6, 6, nv): Ic of each dof's joint
+        F = np.einsum("nxyk,nyk->nxk", Ic, t.xi)  # (n, 6, nv)
+        X = np.swapaxes(t.xi, 1, 2) @ F  # X[i, k] = xi_i . Ic_joint(k) xi_k
+        M = np.where(self.upper, X, np.swapaxes(X, 1, 2) * self.upper.T)
+        M[:, np.arange(self.nv), np.arange(self.nv)] += self.model.armature
+        t.M = M
+        t.g = np.einsum("nxyk,y,nxk->nk", Ic, self.gravity_acceleration, t.xi)
 
     def inertias(self, t: TreePass) -> np.ndarray:
         """The joints' body spatial inertias in the world frame at its origin, (n, nj, 6, 6)."""
+        if t.inertia is None and self.kernel is not None:
+            t.inertia = np.empty(t.rotations.shape[:2] + (6, 6))
+            self.kernel.world_inertias(t.rotations, t.origins, self.mass, self.lever, self.rot_inertia, t.inertia)
         if t.inertia is None:
             R, o = t.rotations, t.origins
             c = o + np.einsum("njab,jb->nja", R, self.lever)  # centres of mass
@@ -193,12 +234,14 @@ class TreeAdjoint:
             Jb = J_bar[:, a] * self.supports[a]
             bl, ba = Jb[:, :3], Jb[:, 3:]
             p = t.positions[:, a, :, None]
-            ba = ba + np.cross(p, bl, axisa=1, axisb=1, axisc=1)  # beta = X_p^T J_bar
-            gamma = np.concatenate(
-                [np.cross(w, bl, axis=1), np.cross(v, bl, axis=1) + np.cross(w, ba, axis=1)], axis=1
-            )  # (n, 6, nv)
-            out += np.einsum("nxk,nxk->nk", xi, gamma @ self.suffix) * self.supports[a]
-            rho = -np.cross(w, bl, axis=1).sum(axis=2)  # (n, 3)
+            ba = ba + _cross(p, bl)  # beta = X_p^T J_bar
+            w_bl = _cross(w, bl)
+            gamma = np.concatenate([w_bl, _cross(v, bl) + _cross(w, ba)], axis=1)  # (n, 6, nv)
+            out += (
+                np.einsum("nxk,nxk->nk", xi, (gamma.reshape(-1, self.nv) @ self.suffix).reshape(gamma.shape))
+                * self.supports[a]
+            )
+            rho = -w_bl.sum(axis=2)  # (n, 3)
             if p_bar is not None:
                 rho = rho + p_bar[:, a]
             out += np.einsum("nx,nxk->nk", rho, t.frames[:, a, :3])
@@ -212,31 +255,74 @@ class TreeAdjoint:
             a, b: the pairs, (n, R, nv).
             g_bar: sensitivity of generalized gravity, (n, nv), or ``None``.
         """
-        n = a.shape[0]
+        n, R = a.shape[:2]
+        if n == 0:
+            return np.zeros((0, self.nv))
         I = self.inertias(t)
         xi = t.xi
-        offset = np.zeros((a.shape[1], 6))
+        nv, nj = self.nv, self.desc.shape[0]
+        offset = np.zeros((6, 2 * R))
         if g_bar is not None:  # gravity: the pair (g_bar, 0) with b's twists the constant A0
             a = np.concatenate([a, g_bar[:, None]], axis=1)
             b = np.concatenate([b, np.zeros_like(g_bar)[:, None]], axis=1)
-            offset = np.vstack([offset, self.gravity_acceleration])
-        Va = (xi[:, None] * a[:, :, None, :]) @ self.anc  # (n, R, 6, nj)
-        Vb = (xi[:, None] * b[:, :, None, :]) @ self.anc + offset[None, :, :, None]
-        Ha = np.einsum("njxy,nryj->nrxj", I, Va) @ self.desc
-        Hb = np.einsum("njxy,nryj->nrxj", I, Vb) @ self.desc
-        zero = np.zeros(Va.shape[:3] + (1,))
-        Va_pre = np.concatenate([zero, Va], axis=3)[..., self.pre]  # (n, R, 6, nv)
-        Vb_pre = np.concatenate([zero + offset[None, :, :, None], Vb], axis=3)[..., self.pre]
-        Ha_k, Hb_k = Ha[..., self.dof_joint], Hb[..., self.dof_joint]
-        gam = _gamma(Va_pre, Hb_k) + _gamma(Vb_pre, Ha_k)  # (n, R, 6, nv)
-        return -np.einsum("nxk,nxk->nk", xi, gam.sum(axis=1)) if n else np.zeros((0, self.nv))
+            R += 1
+            offset = np.zeros((6, 2 * R))
+            offset[:, -1] = self.gravity_acceleration
+        coef = np.concatenate([a, b], axis=1)  # (n, 2R, nv): a's then b's
+        if self.kernel is not None:
+            out = np.empty((n, nv))
+            self.kernel.bilinear_rows(xi, coef, offset, I, self.parent0, self.dof_start, self.dof_count, R, out)
+            return out
+        # twists of every joint's body (n, 6, 2R, nj): V_j = offset + sum_(i <= j) xi_i c_i
+        V = ((xi[:, :, None, :] * coef[:, None, :, :]).reshape(-1, nv) @ self.anc).reshape(n, 6, 2 * R, nj)
+        V += offset[None, :, :, None]
+        h = I @ V.transpose(0, 3, 1, 2)  # (n, nj, 6, 2R) momenta of the bodies
+        H = (h.transpose(0, 2, 3, 1).reshape(-1, nj) @ self.desc).reshape(n, 6, 2 * R, nj)  # of the subtrees
+        pre = np.concatenate([np.broadcast_to(offset[None, :, :, None], (n, 6, 2 * R, 1)), V], axis=3)
+        pre = pre[..., self.joint_parent]  # twists of each joint's parent, (n, 6, 2R, nj)
+        swap = np.r_[R : 2 * R, 0:R]  # pair each a with its b: gamma(V^a_pre, H^b) + gamma(V^b_pre, H^a)
+        gam = _gamma_sum(pre, H[:, :, swap])[..., self.dof_joint]  # (n, 6, nv)
+        return -np.einsum("nxk,nxk->nk", xi, gam)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u x v for 3-vectors on axis 1 (any trailing axes)."""
+    return np.stack(
+        [
+            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        ],
+        axis=1,
+    )
 
 
 def _gamma(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     """gamma with x . ad(z) y = z . gamma(y, x) for every z: (w_y x x_l, v_y x x_l + w_y x x_a),
-    spatial vectors on axis -2."""
-    vy, wy, xl, xa = y[..., :3, :], y[..., 3:, :], x[..., :3, :], x[..., 3:, :]
-    return np.concatenate([np.cross(wy, xl, axis=-2), np.cross(vy, xl, axis=-2) + np.cross(wy, xa, axis=-2)], axis=-2)
+    spatial vectors on axis 1."""
+    vy, wy, xl, xa = y[:, :3], y[:, 3:], x[:, :3], x[:, 3:]
+    return np.concatenate([_cross(wy, xl), _cross(vy, xl) + _cross(wy, xa)], axis=1)
+
+
+@functools.cache
+def _kernel():
+    """The compiled row loops' module, or ``None`` where Numba is missing or unusable."""
+    try:
+        from . import tree_kernel
+    except ImportError:
+        return None
+    return tree_kernel
+
+
+def _gamma_sum(y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """sum_r gamma(y_r, x_r) for spatial vectors on axis 1 and pairs r on axis 2, through the
+    pairs' summed outer products O = sum_r y_r x_r^T (u x v = the axial vector of u v^T - v u^T)."""
+    O = np.einsum("nbrj,ncrj->nbcj", y, x)
+
+    def axial(B):  # sum_r u_r x v_r from B = sum_r u_r v_r^T
+        return np.stack([B[:, 1, 2] - B[:, 2, 1], B[:, 2, 0] - B[:, 0, 2], B[:, 0, 1] - B[:, 1, 0]], axis=1)
+
+    return np.concatenate([axial(O[:, 3:, :3]), axial(O[:, :3, :3]) + axial(O[:, 3:, 3:])], axis=1)
 
 
 def _skew(r: np.ndarray) -> np.ndarray:
