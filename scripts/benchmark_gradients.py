@@ -55,7 +55,8 @@ def per_config(fn, qs) -> float:
 def main() -> None:
     rng = np.random.default_rng(0)
     print(f"medians of {REPEATS} interleaved runs, {N} configurations, microseconds per configuration")
-    print(f"{'robot':16s} {'value: kernel':>14s} {'value: numpy':>13s} {'objective':>22s} {'gradient':>9s} {'ratio':>6s}")
+    header = ("robot", "value: kernel", "value: numpy", "objective", "gradient", "ratio")
+    print("{:16s} {:>14s} {:>13s} {:>22s} {:>9s} {:>6s}".format(*header))
     for name in ("planar_dual_arm", "tiago_dual"):
         robot = mobmanip.load_robot(name)
         qs = random_configurations(robot, rng, N)

@@ -66,6 +66,31 @@ def _pinv_rows_adjoint(A, G, Ap_bar):
     return G @ _T(Ap_bar) + _sym(K_bar) @ A
 
 
+#: A row's rank is certified without an SVD where ||G||_F ||G^-1||_F of its Gram matrix G is
+#: below this (then cond(A) < 1e6, far inside :data:`mobmanip.gradients.SINGULAR_RTOL`).
+GRAM_CERTIFICATE = 1e12
+
+
+def full_rank(A: np.ndarray) -> np.ndarray:
+    """Per stacked matrix, whether all min(rows, cols) singular values exceed
+    :data:`mobmanip.gradients.SINGULAR_RTOL` times the largest: certified from the condition of
+    the smaller Gram matrix where that is clear, by an SVD of the remaining rows otherwise."""
+    from .gradients import _full_rank
+
+    G = A @ _T(A) if A.shape[-2] <= A.shape[-1] else _T(A) @ A
+    try:
+        Gi = np.linalg.inv(G)
+    except np.linalg.LinAlgError:
+        return _full_rank(A)
+    with np.errstate(invalid="ignore", over="ignore"):
+        bound = np.sqrt(np.sum(G * G, axis=(1, 2)) * np.sum(Gi * Gi, axis=(1, 2)))
+    ok = bound < GRAM_CERTIFICATE
+    if not ok.all():
+        unsure = ~ok
+        ok[unsure] = _full_rank(A[unsure])
+    return ok
+
+
 def kinematic_adjoint(objective, J_u, W, velocity_limits, guard):
     """Value and sensitivities to J_u and W of a kinematic measure.
 
@@ -192,7 +217,7 @@ def grasp_position_adjoint(positions, W_bar, M_o_bar, mass, rows, linear_rows, a
 def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
     """(values, gradients (n, nv), defined) of a :class:`mobmanip.gradients.GradientEvaluator`'s
     objective at qs (n, nq), by the reverse chain."""
-    from .gradients import _full_rank, _guarded
+    from .gradients import _guarded
 
     t: TreePass = tree.run(qs, dynamics=ev.objective.ellipsoid == "dynamic")
     n, nv = qs.shape[0], tree.nv
@@ -204,7 +229,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
     W, M_o, g_o, moving = ev._object_terms(t.positions)
     if ev.objective.ellipsoid == "kinematic":
         Jh = J_u * ev.velocity_limits
-        ok = _full_rank(Jh)
+        ok = full_rank(Jh)
         value, J_u_bar, W_bar = kinematic_adjoint(ev.objective, J_u, W, ev.velocity_limits, lambda A: _guarded(A, ok))
         M_o_bar = None
         grad = np.zeros((n, nv))
@@ -216,7 +241,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
             P[:, ne:, :ne] = 0.0
         xi = -t.g @ S
         Qi = None if ev.Q_identity else np.linalg.inv(ev.Q)
-        value, ok, bars = dynamic_adjoint(ev.objective, J_u, P, xi, W, M_o, g_o, Qi, ev.Z, _guarded, _full_rank)
+        value, ok, bars = dynamic_adjoint(ev.objective, J_u, P, xi, W, M_o, g_o, Qi, ev.Z, _guarded, full_rank)
         J_u_bar, W_bar, M_o_bar = bars["J"], bars["W"], bars["M_o"]
         Lb, B = bars["Lam"], bars["B"]
         if ev.decoupled:  # P_bar = mask * (Lam_bar B^T): two pairs per column

@@ -49,14 +49,20 @@ SUPPORTED_JOINTS = ("RX", "RY", "RZ", "RUBX", "RUBY", "RUBZ", "PX", "PY", "PZ", 
 class TreePass:
     """One chunk's Pinocchio outputs in the robot's degrees of freedom.
 
+    Spatial vectors are world-aligned about the point ``reference`` (the first joint's origin),
+    not the world origin; the closed forms hold about any fixed point.
+
     Attributes:
-        xi: world joint Jacobian columns, (n, 6, nv).
-        M: mass matrices, (n, nv, nv).
-        g: generalized gravity, (n, nv).
-        positions: end-effector positions, (n, k, 3).
+        xi: joint Jacobian columns about ``reference``, (n, 6, nv).
+        M: mass matrices, (n, nv, nv) (with ``dynamics``).
+        g: generalized gravity, (n, nv) (with ``dynamics``).
+        positions: end-effector positions relative to ``reference``, (n, k, 3).
         frames: end-effector ``LOCAL_WORLD_ALIGNED`` Jacobians (support only), (n, k, 6, nv).
-        inertia: joints' body spatial inertias in the world frame at its origin, (n, nj, 6, 6);
-            ``None`` until :meth:`TreeAdjoint.inertias` fills it.
+        rotations: joint frames' orientations, (n, nj, 3, 3); origins: their positions relative to
+            ``reference``, (n, nj, 3).
+        reference: the reference point in the world (m), (n, 3).
+        inertia: bodies' spatial inertias about ``reference``, (n, nj, 6, 6); ``None`` until
+            :meth:`TreeAdjoint.inertias` fills it.
     """
 
     xi: np.ndarray
@@ -66,6 +72,7 @@ class TreePass:
     frames: np.ndarray
     rotations: np.ndarray
     origins: np.ndarray
+    reference: np.ndarray
     inertia: np.ndarray | None = None
 
 
@@ -156,15 +163,20 @@ class TreeAdjoint:
         points = frame_positions(x_cols, y_cols)  # (n, k + nj, 3)
         ex, ey = np.swapaxes(x_cols[:, 3:], 1, 2), np.swapaxes(y_cols[:, 3:], 1, 2)  # (n, k + nj, 3)
         rotations = np.stack([ex, ey, np.cross(ex, ey)], axis=-1)[:, self.k :]  # (n, nj, 3, 3) columns
+        # spatial vectors about the first joint's origin (world-aligned): M's terms m |c|^2 then
+        # stay of the robot's size wherever it stands, which keeps round-off off the values
+        reference = points[:, self.k].copy()
+        points -= reference[:, None, :]
+        w = xi[:, 3:]
+        xi[:, :3] += _cross(w, reference[:, :, None])
         positions = points[:, : self.k]
         frames = np.empty((n, self.k, 6, self.nv))
-        w = xi[:, 3:]
         for a in range(self.k):
             p = positions[:, a, :, None]
             frames[:, a, :3] = xi[:, :3] + _cross(w, p)
             frames[:, a, 3:] = w
             frames[:, a] *= self.supports[a]
-        t = TreePass(xi, None, None, positions, frames, rotations, points[:, self.k :])
+        t = TreePass(xi, None, None, positions, frames, rotations, points[:, self.k :], reference)
         if dynamics:
             self._mass_and_gravity(t)
         return t
@@ -199,7 +211,7 @@ class TreeAdjoint:
         t.g = np.einsum("nxyk,y,nxk->nk", Ic, self.gravity_acceleration, t.xi)
 
     def inertias(self, t: TreePass) -> np.ndarray:
-        """The joints' body spatial inertias in the world frame at its origin, (n, nj, 6, 6)."""
+        """The bodies' spatial inertias about ``t.reference`` (world-aligned), (n, nj, 6, 6)."""
         if t.inertia is None and self.kernel is not None:
             t.inertia = np.empty(t.rotations.shape[:2] + (6, 6))
             self.kernel.world_inertias(t.rotations, t.origins, self.mass, self.lever, self.rot_inertia, t.inertia)
