@@ -100,6 +100,7 @@ class Placement:
         constraint_evaluations: constraint (forward kinematics) evaluations.
         runs: per start: (start value or None, final value or None when the run failed).
         seconds: wall time (s).
+        start_q: the configuration of the best start (``start_value``), or ``None``.
     """
 
     q: np.ndarray
@@ -113,6 +114,7 @@ class Placement:
     constraint_evaluations: int
     runs: tuple[tuple[float | None, float | None], ...] = field(default=())
     seconds: float = 0.0
+    start_q: np.ndarray | None = None
 
     @property
     def platform(self) -> tuple[float, float, float]:
@@ -344,6 +346,7 @@ def place(
     starts: int = DEFAULT_STARTS,
     max_iterations: int = 100,
     tolerance: float = 1e-9,
+    hold_turn: float | None = None,
 ) -> Placement:
     """The platform pose and arm posture that hold the object at ``target`` and maximise ``objective``.
 
@@ -360,6 +363,8 @@ def place(
         starts: number of starts (platform headings spread evenly around the object).
         max_iterations: SLSQP iterations per start.
         tolerance: SLSQP's ``ftol``: a run stops when the objective changes less than this.
+        hold_turn: a fixed turn psi of the hold about the vertical (rad), i.e. a fixed object
+            orientation (the reference hold's turned by psi); default free.
 
     Returns:
         The best placement found (see :class:`Placement`).
@@ -380,9 +385,13 @@ def place(
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
     problem = _Problem(robot, evaluator, target, region, q_ref)
     bounds = problem.bounds()
+    if hold_turn is not None:
+        hold_turn = _check_turn(hold_turn)
+        bounds[-1] = (hold_turn, hold_turn)
     best = None
     runs = []
     best_start = None
+    best_start_q = None
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:
         raise UnreachableObjectError(
@@ -391,7 +400,10 @@ def place(
         )
     rng = np.random.default_rng(0)
     for s in range(starts):
-        z0 = _project(problem, problem.start(2.0 * math.pi * s / starts, rng), bounds)
+        z0 = problem.start(2.0 * math.pi * s / starts, rng)
+        if hold_turn is not None:  # the object's orientation fixed: the arms turn it from the start's
+            z0[-1] = hold_turn
+        z0 = _project(problem, z0, bounds)
         if z0 is None:
             runs.append((None, None))
             continue
@@ -399,6 +411,7 @@ def place(
         start_value = None if start_value <= -1e6 else start_value
         if start_value is not None and (best_start is None or start_value > best_start):
             best_start = start_value
+            best_start_q = problem.configuration(z0)
         res = minimize(
             problem.objective,
             z0,
@@ -441,7 +454,18 @@ def place(
         constraint_evaluations=problem.constraint_evaluations,
         runs=tuple(runs),
         seconds=time.perf_counter() - started,
+        start_q=best_start_q,
     )
+
+
+def _check_turn(value) -> float:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not math.isfinite(value)
+    ):
+        raise ArgumentError(f"object yaw (hold turn) must be a finite angle in radians, got {value!r}")
+    return float(math.remainder(float(value), 2.0 * math.pi))
 
 
 def _region_text(region: Region) -> str:

@@ -30,7 +30,14 @@ from scipy.optimize import minimize
 from .errors import ArgumentError, UnreachableObjectError
 from .gradients import GradientEvaluator, Objective
 from .model import Robot
-from .placement import CONSTRAINT_TOLERANCE, _check_target, _clip_to_bounds, _Problem, _slsqp_constraints
+from .placement import (
+    CONSTRAINT_TOLERANCE,
+    _check_target,
+    _check_turn,
+    _clip_to_bounds,
+    _Problem,
+    _slsqp_constraints,
+)
 from .tasks import get_task
 
 #: Largest grid (cells per axis) a map accepts.
@@ -124,10 +131,8 @@ class PlacementMap:
     def plot(self, path, title: str | None = None) -> None:
         """A heat map of the best value over headings, arrows for the best heading, the object
         (star) and the best cell (circle); PNG or SVG by the file's suffix."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        from .io import save_figure
+        from .viz.figures import plt  # the file back end, set there
 
         values, heading = self.best_over_headings()
         fig, ax = plt.subplots(figsize=(6.4, 5.4))
@@ -152,8 +157,10 @@ class PlacementMap:
         ax.set_title(title or f"best {self.objective.name} over heading and posture")
         ax.legend(loc="upper right", fontsize=8)
         fig.tight_layout()
-        fig.savefig(path)
-        plt.close(fig)
+        try:
+            save_figure(fig, path, dpi=110)
+        finally:
+            plt.close(fig)
 
 
 def reach_bound(robot: Robot, reference: np.ndarray) -> float:
@@ -212,6 +219,7 @@ def placement_map(
     reference: np.ndarray | None = None,
     max_iterations: int = 60,
     tolerance: float = 1e-7,
+    hold_turn: float | None = None,
 ) -> PlacementMap:
     """The best achievable objective at every platform position (x, y) of a grid.
 
@@ -224,6 +232,7 @@ def placement_map(
         task, object_mass, decoupled, reference: as :func:`mobmanip.placement.place`.
         headings: fixed platform headings (rad), one layer each; default the heading is free.
         max_iterations, tolerance: SLSQP's per cell.
+        hold_turn: a fixed object orientation, as :func:`mobmanip.placement.place`'s.
 
     Raises:
         ArgumentError: a malformed target or grid; a fixed platform.
@@ -241,6 +250,7 @@ def placement_map(
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
     problem = _Problem(robot, evaluator, target, None, q_ref)
     reach = reach_bound(robot, q_ref)
+    turn = None if hold_turn is None else _check_turn(hold_turn)
     nq = robot.model.nq
     shape = (len(ys), len(xs)) if layers is None else (len(layers), len(ys), len(xs))
     values = np.full(shape, np.nan)
@@ -257,7 +267,7 @@ def placement_map(
                 continue
             seeds = [previous] if previous is not None else []
             seeds += [solved[n] for n in _neighbours(iy, ix) if n in solved and solved[n] is not previous][:1]
-            result = _solve_cell(problem, p, fixed_heading, seeds, max_iterations, tolerance)
+            result = _solve_cell(problem, p, fixed_heading, turn, seeds, max_iterations, tolerance)
             if result is None:
                 previous = None
                 continue
@@ -288,9 +298,11 @@ def placement_map(
     return out
 
 
-def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, seeds, max_iterations, tolerance):
+def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance):
     """(value, z) of the best run at platform position p, or None where nothing holds the object."""
     bounds = problem.bounds()
+    if turn is not None:
+        bounds[-1] = (turn, turn)
     bounds[0] = (float(p[0]), float(p[0]))
     bounds[1] = (float(p[1]), float(p[1]))
     if fixed_heading is not None:
@@ -302,6 +314,8 @@ def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, seeds, max_iter
         heading = toward - math.atan2(hold.center[1], hold.center[0]) + turn if fixed_heading is None else fixed_heading
         z = problem.start(heading, np.random.default_rng(len(fresh)))
         z[:2] = p
+        if turn is not None:
+            z[-1] = turn
         fresh.append(z)
         if fixed_heading is not None:
             break
