@@ -57,6 +57,7 @@ class PlacementMap:
             holds the object.
         heading: the best heading per cell (rad), same shape; NaN where unreachable.
         configurations: the configuration per cell, values' shape + (nq,); NaN where unreachable.
+        hold_turn: the hold's turn psi about the vertical per cell (rad), values' shape.
         evaluations: objective evaluations (value and gradient) spent.
         seconds: wall time (s).
     """
@@ -71,6 +72,7 @@ class PlacementMap:
     configurations: np.ndarray
     evaluations: int
     seconds: float
+    hold_turn: np.ndarray | None = None
 
     def best(self) -> tuple[float, np.ndarray, tuple[int, ...]]:
         """(best value, its configuration, its index into ``values``).
@@ -104,6 +106,7 @@ class PlacementMap:
             values=self.values,
             heading=self.heading,
             configurations=self.configurations,
+            hold_turn=self.hold_turn,
             target=self.target,
             objective=np.array(self.objective.name),
             **extra,
@@ -186,7 +189,7 @@ def reach_bound(robot: Robot, reference: np.ndarray) -> float:
             j = model.parents[j]
         chain.reverse()
         points = [data.oMi[j].translation for j in chain] + [data.oMf[arm.frame_id].translation]
-        total = float(np.linalg.norm(points[0]))
+        total = float(np.linalg.norm(points[0][:2]))  # horizontal: the platform turns about the vertical
         total += sum(float(np.linalg.norm(b - a)) for a, b in zip(points[:-1], points[1:]))
         for j in chain:
             joint = model.joints[j]
@@ -249,12 +252,19 @@ def placement_map(
     evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
     problem = _Problem(robot, evaluator, target, None, q_ref)
+    fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
+    if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:  # e.g. the height of planar arms' hands
+        raise UnreachableObjectError(
+            f"no pose holds the object at {target.tolist()} m: {robot.name}'s hands cannot reach it there "
+            f"from any platform position (the hold misses by {np.abs(fixed).max():.4g} in what no joint changes)"
+        )
     reach = reach_bound(robot, q_ref)
     turn = None if hold_turn is None else _check_turn(hold_turn)
     nq = robot.model.nq
     shape = (len(ys), len(xs)) if layers is None else (len(layers), len(ys), len(xs))
     values = np.full(shape, np.nan)
     heading = np.full(shape, np.nan)
+    turns = np.full(shape, np.nan)
     configurations = np.full(shape + (nq,), np.nan)
     for layer in [None] if layers is None else range(len(layers)):
         fixed_heading = None if layer is None else float(layers[layer])
@@ -277,6 +287,7 @@ def placement_map(
             index = (iy, ix) if layer is None else (layer, iy, ix)
             values[index] = value
             heading[index] = math.atan2(math.sin(z[2]), math.cos(z[2]))
+            turns[index] = z[-1]
             configurations[index] = problem.configuration(z)
     out = PlacementMap(
         objective=evaluator.objective,
@@ -289,6 +300,7 @@ def placement_map(
         configurations=configurations,
         evaluations=evaluator.evaluations,
         seconds=time.perf_counter() - started,
+        hold_turn=turns,
     )
     if np.all(np.isnan(values)):
         raise UnreachableObjectError(
