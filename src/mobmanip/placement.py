@@ -23,8 +23,9 @@ platform at evenly spread headings, first projected onto the constraints (the ne
 holds the object; no measure evaluations), then optimised. The best run whose result satisfies
 the constraints within :data:`CONSTRAINT_TOLERANCE` wins.
 
-Self-collision is not considered (arms and platform may intersect); check the result in the
-viewer (``mobmanip view ROBOT --q``).
+Self-collision: with ``collision`` (:class:`mobmanip.collision.SelfCollision`), every shape
+pair that may meet keeps the margin, as inequality constraints with analytic distance
+gradients; without it arms and platform may intersect.
 """
 
 from __future__ import annotations
@@ -125,7 +126,8 @@ class Placement:
 class _Problem:
     """Decision variables, objective and constraints of one placement."""
 
-    def __init__(self, robot, evaluator, target, region, reference):
+    def __init__(self, robot, evaluator, target, region, reference, collision=None):
+        self.collision = collision
         self.robot = robot
         self.model = robot.model
         self.data = robot.data
@@ -275,7 +277,18 @@ class _Problem:
         return (value, np.vstack(rows)) if jacobian else value
 
     def residual(self, z: np.ndarray) -> float:
-        return float(np.abs(self.constraints(z, jacobian=False)).max())
+        """Largest hold error at z, or the clearance's shortfall below the margin if larger."""
+        error = float(np.abs(self.constraints(z, jacobian=False)).max())
+        if self.collision is not None:
+            error = max(error, -float(np.min(self.clearances(z)[0], initial=np.inf)))
+        return error
+
+    def clearances(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Signed distances minus the margin of the shape pairs that may meet, (P,) (to keep
+        >= 0), and their Jacobian over z, (P, n)."""
+        q = self.configuration(z)
+        d, G = self.collision._raw(q)  # q from the optimiser: finite, unit (cos, sin) by construction
+        return d - self.collision.margin, self._to_z(q, G)
 
     # ----- starts -----
 
@@ -299,13 +312,18 @@ def _grasp_spread(hold) -> float:
 
 
 def _slsqp_constraints(problem: _Problem) -> list[dict]:
-    return [
+    out = [
         {
             "type": "eq",
             "fun": lambda z: problem.constraints(z, jacobian=False),
             "jac": lambda z: problem.constraints(z)[1],
         }
     ]
+    if problem.collision is not None and problem.collision.pairs:
+        out.append(
+            {"type": "ineq", "fun": lambda z: problem.clearances(z)[0], "jac": lambda z: problem.clearances(z)[1]}
+        )
+    return out
 
 
 def _clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
@@ -347,6 +365,7 @@ def place(
     max_iterations: int = 100,
     tolerance: float = 1e-9,
     hold_turn: float | None = None,
+    collision=None,
 ) -> Placement:
     """The platform pose and arm posture that hold the object at ``target`` and maximise ``objective``.
 
@@ -365,6 +384,8 @@ def place(
         tolerance: SLSQP's ``ftol``: a run stops when the objective changes less than this.
         hold_turn: a fixed turn psi of the hold about the vertical (rad), i.e. a fixed object
             orientation (the reference hold's turned by psi); default free.
+        collision: a :class:`mobmanip.collision.SelfCollision`: keep its shape pairs at least its
+            margin apart (inequality constraints with their distance gradients); default none.
 
     Returns:
         The best placement found (see :class:`Placement`).
@@ -383,7 +404,7 @@ def place(
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = _Problem(robot, evaluator, target, region, q_ref)
+    problem = _Problem(robot, evaluator, target, region, q_ref, collision)
     bounds = problem.bounds()
     if hold_turn is not None:
         hold_turn = _check_turn(hold_turn)

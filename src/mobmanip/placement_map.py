@@ -223,6 +223,7 @@ def placement_map(
     max_iterations: int = 60,
     tolerance: float = 1e-7,
     hold_turn: float | None = None,
+    collision=None,
 ) -> PlacementMap:
     """The best achievable objective at every platform position (x, y) of a grid.
 
@@ -235,7 +236,8 @@ def placement_map(
         task, object_mass, decoupled, reference: as :func:`mobmanip.placement.place`.
         headings: fixed platform headings (rad), one layer each; default the heading is free.
         max_iterations, tolerance: SLSQP's per cell.
-        hold_turn: a fixed object orientation, as :func:`mobmanip.placement.place`'s.
+        hold_turn, collision: a fixed object orientation and self-collision avoidance, as
+            :func:`mobmanip.placement.place`'s.
 
     Raises:
         ArgumentError: a malformed target or grid; a fixed platform.
@@ -251,7 +253,7 @@ def placement_map(
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = _Problem(robot, evaluator, target, None, q_ref)
+    problem = _Problem(robot, evaluator, target, None, q_ref, collision)
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:  # e.g. the height of planar arms' hands
         raise UnreachableObjectError(
@@ -348,7 +350,7 @@ def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, ma
         z = res.x
         if problem.residual(z) > CONSTRAINT_TOLERANCE:
             z = _newton_project(problem, z, bounds)
-            if z is None:
+            if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding
                 continue
         value, _, ok = problem.ev(problem.configuration(z))
         if ok and (best is None or value > best[0]):
@@ -382,7 +384,8 @@ def _newton_project(problem: _Problem, z: np.ndarray, bounds, iterations: int = 
             damping *= 10.0
             if damping > 1e6:
                 break
-    return z if problem.residual(z) <= CONSTRAINT_TOLERANCE else None
+    hold_error = float(np.abs(problem.constraints(z, jacobian=False)).max())
+    return z if hold_error <= CONSTRAINT_TOLERANCE else None
 
 
 def _seeded(z: np.ndarray, p: np.ndarray, fixed_heading) -> np.ndarray:
