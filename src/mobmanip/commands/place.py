@@ -15,8 +15,9 @@ DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0).
 
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
-platform origin in a rectangle. Self-collision is not checked: look at the result with
-`mobmanip view ROBOT --q Q.json` (written by --save-q).
+platform origin in a rectangle. --avoid-collision M keeps the shapes that may meet at least M
+metres apart (pairs touching in the reference posture, such as hands meeting at the object,
+excepted); without it self-collision is not checked.
 
 --object-yaw fixes the object's orientation: the hold turned by YAW degrees about the vertical
 from its reference posture's (default: free).
@@ -52,6 +53,12 @@ def register(sub) -> None:
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument("--json", metavar="OUT.json", help="write the result and its analysis as JSON")
     parser.add_argument("--save-q", metavar="Q.json", help="write the configuration for `analyze --q`")
+    parser.add_argument(
+        "--avoid-collision",
+        type=float,
+        metavar="M",
+        help="keep shapes that may meet (URDF collision shapes, else visual ones) at least M metres apart",
+    )
     parser.add_argument("--object-yaw", type=float, metavar="DEG", help="fixed object orientation (default: free)")
     parser.add_argument("--figure", metavar="OUT.png", help="write the start and the optimum from above (PNG or SVG)")
     parser.add_argument("--view", action="store_true", help="show the optimum in the meshcat viewer (Ctrl-C stops)")
@@ -89,6 +96,11 @@ def run(args) -> int:
     extent = _check_map_options(args)
     _check_outputs(args)
     yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    collision = None
+    if args.avoid_collision is not None:
+        from ..collision import SelfCollision
+
+        collision = SelfCollision(robot, margin=args.avoid_collision)
     result = place(
         robot,
         target,
@@ -99,6 +111,7 @@ def run(args) -> int:
         region=region,
         starts=args.starts,
         hold_turn=yaw,
+        collision=collision,
     )
     x, y, heading = result.platform
     print(f"robot {robot.name}: object at ({target[0]:g}, {target[1]:g}, {target[2]:g}) m, {result.objective.name}")
@@ -112,6 +125,9 @@ def run(args) -> int:
         f"{result.evaluations} measure evaluations, {len(result.runs)} starts, hold error {result.residual:.1e}, "
         f"{result.seconds:.2f} s"
     )
+    if collision is not None:
+        print(f"self-collision: {len(collision.pairs)} shape pairs kept >= {collision.margin:g} m apart; "
+              f"clearance {collision.clearance(result.q):.4f} m")  # fmt: skip
     if args.save_q:
         write_json(args.save_q, robot.configuration_dict(result.q))
         print(f"wrote {args.save_q}")
@@ -125,7 +141,7 @@ def run(args) -> int:
         path = placement_figure(robot, result, args.figure, args.task, object_mass=args.mass, decoupled=args.decoupled)
         print(f"wrote {path}")
     if args.map:
-        _write_map(args, robot, target, result, extent, yaw)
+        _write_map(args, robot, target, result, extent, yaw, collision)
     if args.view or args.export:
         _show(args, robot, result)
     return 0
@@ -180,7 +196,7 @@ def _check_map_options(args):
     return values
 
 
-def _write_map(args, robot, target, result, extent, yaw) -> None:
+def _write_map(args, robot, target, result, extent, yaw, collision) -> None:
     from pathlib import Path
 
     import numpy as np
@@ -190,7 +206,7 @@ def _write_map(args, robot, target, result, extent, yaw) -> None:
     x0, x1, y0, y1 = extent if extent is not None else default_extent(robot, target)
     xs, ys = np.linspace(x0, x1, args.map_cells), np.linspace(y0, y1, args.map_cells)
     grid = placement_map(robot, target, args.objective, xs, ys, args.task, object_mass=args.mass,
-                         decoupled=args.decoupled, hold_turn=yaw)  # fmt: skip
+                         decoupled=args.decoupled, hold_turn=yaw, collision=collision)  # fmt: skip
     out = Path(args.map)
     out.mkdir(parents=True, exist_ok=True)
     grid.write_npz(out / "map.npz")
