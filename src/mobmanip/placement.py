@@ -522,3 +522,56 @@ def placement_document(robot: Robot, placement: Placement, analysis) -> dict:
         "q": robot.configuration_dict(placement.q),
         "analysis": analysis.to_dict(),
     }
+
+
+def object_gradient(
+    robot: Robot,
+    placement: Placement,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    decoupled: bool = False,
+    region: Region | None = None,
+    active_tolerance: float = 1e-7,
+) -> np.ndarray:
+    """d(best value)/d(object centre), (3,) (per m, world), at a placement's optimum.
+
+    By the envelope theorem the optimal value V(X) of max f(z) s.t. h(z, X) = 0 changes with the
+    object centre X as lambda^T dh/dX, with the multipliers lambda of the hold constraints from
+    the optimum's stationarity, grad f = J_h^T lambda over the variables not at a bound (least
+    squares). The hold's position errors are p_i - X - R_z(psi) r_i, so dh/dX = -I on each
+    hand's position rows. A direction no variable can follow (the height of a planar arm's
+    hands) gets NaN: the object cannot move that way while held.
+
+    Args:
+        robot, placement: the robot and :func:`place`'s result for it.
+        task, object_mass, decoupled, region: as given to :func:`place`.
+        active_tolerance: a variable this close to a bound (rad or m) counts as held there.
+
+    Raises:
+        MeasureError: the objective is not differentiable at the optimum.
+    """
+    from .errors import MeasureError
+
+    task = get_task(task or robot.spec.default_task)
+    evaluator = GradientEvaluator(robot, placement.objective, task, object_mass=object_mass, decoupled=decoupled)
+    problem = _Problem(robot, evaluator, placement.target, region, robot.hold_configuration())
+    z = problem.variables(placement.q, placement.hold_turn)
+    cost, grad = problem.objective(z)
+    if cost >= 1e6:
+        raise MeasureError(f"{placement.objective.name} is not differentiable at the placement's optimum")
+    _, J = problem.constraints(z)
+    free = np.ones(problem.n, dtype=bool)
+    for k, (lo, hi) in enumerate(problem.bounds()):
+        if (lo is not None and z[k] <= lo + active_tolerance) or (hi is not None and z[k] >= hi - active_tolerance):
+            free[k] = False
+    lam, *_ = np.linalg.lstsq(J[:, free].T, -grad[free], rcond=None)  # grad f = J^T lambda (f = -cost)
+    # the full (unreduced) rows: positions then, with orientation, three more per hand
+    per_hand = 6 if problem.orientation else 3
+    dh_dX = np.zeros((per_hand * len(problem.frames), 3))
+    for i in range(len(problem.frames)):
+        dh_dX[per_hand * i : per_hand * i + 3] = -np.eye(3)
+    dh_dX = dh_dX[problem.rows]
+    out = -(lam @ dh_dX)  # dV/dX = d(f - lambda^T h)/dX
+    followed = np.abs(dh_dX).sum(axis=0) > 0
+    return np.where(followed, out, np.nan)
