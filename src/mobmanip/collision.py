@@ -9,7 +9,8 @@ model that matches ``robot.model`` joint for joint, and keeps the pairs that can
   touch by design, as the paper's two arms mounted at one point and grasping at one point
   (MoveIt's "default" disabled pairs follow the same rule).
 
-Pairs whose bounding spheres are farther apart than :attr:`SelfCollision.activation` count as
+Meshes are replaced by their convex hulls (conservative, and GJK on a hull is far cheaper than
+a mesh's BVH traversal). Pairs whose bounding spheres are farther apart than :attr:`SelfCollision.activation` count as
 that far without an exact distance (continuous: the exact distance is larger there). The signed
 distance d of a pair (negative when the shapes overlap, hpp-fcl's GJK/EPA) changes
 along a tangent direction as n . (v_2 - v_1), the normal n from shape 1 to shape 2 and v_i the
@@ -195,6 +196,11 @@ def _geometry(robot: Robot, source: str) -> pin.GeometryModel:
             bodies.add(body)
             merged.addGeometryObject(obj)
         covered |= bodies
+    for obj in merged.geometryObjects:  # meshes by their convex hulls: GJK instead of BVH traversal
+        shape = obj.geometry
+        if hasattr(shape, "buildConvexRepresentation"):
+            shape.buildConvexRepresentation(False)
+            obj.geometry = shape.convex
     locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
     if locked:
         model, (merged,) = pin.buildReducedModel(model, [merged], locked, q_ref)
