@@ -24,7 +24,11 @@ differentiable; see :attr:`GradientBatch.defined`), are
   C = rho^2 (L^T L)^-1 and c = -(L^T L)^-1 L^T mu_bar, rho^2 = 1 - |mu_bar|^2 - mu_bar^T L c;
   empty (not differentiable) when rho^2 <= 0.
 
-Their derivatives follow by the product rule from dJ_u/dq (frame Hessians), dP/dq = S^T dM/dq S,
+:meth:`GradientEvaluator.batch` (and ``__call__``) run the chain in reverse
+(:mod:`mobmanip.gradient_adjoint`, contractions with the configuration in closed form by
+:mod:`mobmanip.tree_adjoint`), where every joint kind has those closed forms; otherwise, and in
+:meth:`GradientEvaluator.forward_chunk` and :meth:`GradientEvaluator.shape`, the derivatives follow
+forwards by the product rule from dJ_u/dq (frame Hessians), dP/dq = S^T dM/dq S,
 dxi/dq = -S^T dg/dq and, for the default object held between the hands, the derivatives of the
 grasp matrix W and the object inertia M_o through the hands' positions. S must not depend on q
 (every platform kind but ``steered``). An explicit :class:`mobmanip.grasp.HeldObject` is taken
