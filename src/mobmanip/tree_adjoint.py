@@ -140,7 +140,7 @@ class TreeAdjoint:
         self.dof_start = np.array([model.joints[j].idx_v for j in range(1, model.njoints)], dtype=np.int64)
         self.dof_count = np.array([model.joints[j].nv for j in range(1, model.njoints)], dtype=np.int64)
         self.armature = np.asarray(model.armature, dtype=float)
-        self._buffers: dict[int, tuple] = {}
+        self._buffers: tuple[np.ndarray, np.ndarray] | None = None  # the largest chunk's so far
 
     # ----- the Pinocchio pass -----
 
@@ -150,9 +150,9 @@ class TreeAdjoint:
         n = qs.shape[0]
         probed = self.probed
         model, data = probed.model, probed.data
-        if n not in self._buffers:
-            self._buffers[n] = (np.zeros((n, model.nq)), np.empty((n, 6, model.nv)))
-        qp, Ja = self._buffers[n]
+        if self._buffers is None or self._buffers[0].shape[0] < n:
+            self._buffers = (np.zeros((n, model.nq)), np.empty((n, 6, model.nv)))
+        qp, Ja = self._buffers[0][:n], self._buffers[1][:n]
         qp[:, probed.qmap] = qs
         jacobians = pin.computeJointJacobians
         for q, Jw in zip(qp, Ja):
