@@ -3,21 +3,32 @@
 Prints, for the paper's robot and TIAGo++, microseconds per configuration of
 ``analyze_batch`` (both ellipsoids' values; compiled kernel and NumPy path) and of
 ``GradientEvaluator.batch`` (one objective's value and tangent-space gradient), on 2000 random
-configurations. Run: ``python scripts/benchmark_gradients.py``.
+configurations, and the ratio of the gradient to the compiled value. Every timing is the median
+of REPEATS runs taken in turn (value, gradient, value, ...), so that a busy machine slows both
+alike. NumPy's BLAS is limited to one thread (per-configuration cost, as the value's kernel).
+Run: ``python scripts/benchmark_gradients.py``.
 """
 
 from __future__ import annotations
 
-import math
-import time
+import os
 
-import numpy as np
-import pinocchio as pin
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before NumPy loads its BLAS
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import mobmanip
-from mobmanip.gradients import GradientEvaluator
+import math  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pinocchio as pin  # noqa: E402
+
+import mobmanip  # noqa: E402
+from mobmanip.gradients import GradientEvaluator  # noqa: E402
 
 N = 2000
+REPEATS = 7
+OBJECTIVES = ("kinematic:log_volume", "dynamic:log_volume", "dynamic:capacity:+x")
 
 
 def random_configurations(robot, rng, n):
@@ -36,7 +47,6 @@ def random_configurations(robot, rng, n):
 
 
 def per_config(fn, qs) -> float:
-    fn(qs[:20])  # warm up (compiles the kernel on first use)
     started = time.perf_counter()
     fn(qs)
     return (time.perf_counter() - started) / len(qs) * 1e6
@@ -44,16 +54,31 @@ def per_config(fn, qs) -> float:
 
 def main() -> None:
     rng = np.random.default_rng(0)
-    print(f"{'robot':16s} {'value: kernel':>14s} {'value: numpy':>13s} {'objective':>24s} {'gradient':>9s}")
+    print(f"medians of {REPEATS} interleaved runs, {N} configurations, microseconds per configuration")
+    header = ("robot", "value: kernel", "value: numpy", "objective", "gradient", "ratio")
+    print("{:16s} {:>14s} {:>13s} {:>22s} {:>9s} {:>6s}".format(*header))
     for name in ("planar_dual_arm", "tiago_dual"):
         robot = mobmanip.load_robot(name)
         qs = random_configurations(robot, rng, N)
-        kernel = per_config(lambda x, r=robot: mobmanip.analyze_batch(r, x, method="auto"), qs)
-        numpy_path = per_config(lambda x, r=robot: mobmanip.analyze_batch(r, x, method="numpy"), qs)
-        for objective in ("kinematic:log_volume", "dynamic:log_volume"):
-            ev = GradientEvaluator(robot, objective)
-            grad = per_config(ev.batch, qs)
-            print(f"{name:16s} {kernel:11.1f} us {numpy_path:10.1f} us {objective:>24s} {grad:6.1f} us")
+        timed = {
+            "kernel": lambda x, r=robot: mobmanip.analyze_batch(r, x, method="auto"),
+            "numpy": lambda x, r=robot: mobmanip.analyze_batch(r, x, method="numpy"),
+        }
+        for objective in OBJECTIVES:
+            timed[objective] = GradientEvaluator(robot, objective).batch
+        for fn in timed.values():
+            fn(qs[:20])  # warm up (compiles the kernel on first use)
+        runs = {key: [] for key in timed}
+        for _ in range(REPEATS):
+            for key, fn in timed.items():
+                runs[key].append(per_config(fn, qs))
+        median = {key: statistics.median(values) for key, values in runs.items()}
+        for objective in OBJECTIVES:
+            ratio = median[objective] / median["kernel"]
+            print(
+                f"{name:16s} {median['kernel']:11.1f} us {median['numpy']:10.1f} us {objective:>22s} "
+                f"{median[objective]:6.1f} us {ratio:5.1f}x"
+            )
 
 
 if __name__ == "__main__":

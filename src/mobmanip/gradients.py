@@ -24,7 +24,11 @@ differentiable; see :attr:`GradientBatch.defined`), are
   C = rho^2 (L^T L)^-1 and c = -(L^T L)^-1 L^T mu_bar, rho^2 = 1 - |mu_bar|^2 - mu_bar^T L c;
   empty (not differentiable) when rho^2 <= 0.
 
-Their derivatives follow by the product rule from dJ_u/dq (frame Hessians), dP/dq = S^T dM/dq S,
+:meth:`GradientEvaluator.batch` (and ``__call__``) run the chain in reverse
+(:mod:`mobmanip.gradient_adjoint`, contractions with the configuration in closed form by
+:mod:`mobmanip.tree_adjoint`), where every joint kind has those closed forms; otherwise, and in
+:meth:`GradientEvaluator.forward_chunk` and :meth:`GradientEvaluator.shape`, the derivatives follow
+forwards by the product rule from dJ_u/dq (frame Hessians), dP/dq = S^T dM/dq S,
 dxi/dq = -S^T dg/dq and, for the default object held between the hands, the derivatives of the
 grasp matrix W and the object inertia M_o through the hands' positions. S must not depend on q
 (every platform kind but ``steered``). An explicit :class:`mobmanip.grasp.HeldObject` is taken
@@ -42,9 +46,11 @@ import numpy as np
 from .analysis import _check_mass
 from .derivatives import ConfigurationDerivatives, DerivativeWorkspace
 from .errors import ArgumentError, MeasureError, ModelError, TaskError
+from .gradient_adjoint import gradient_chunk
 from .grasp import HeldObject
 from .model import Robot
 from .tasks import TaskSpace, get_task
+from .tree_adjoint import TreeAdjoint
 
 #: The ellipsoids with gradients.
 ELLIPSOIDS = ("kinematic", "dynamic")
@@ -216,6 +222,10 @@ class GradientEvaluator:
         self.velocity_limits = np.asarray(robot.velocity_limits, dtype=float)
         self.Z = 1.0 / np.asarray(robot.effort_limits, dtype=float)
         self.evaluations = 0
+        try:  # the reverse chain's closed forms, where every joint kind has them
+            self.tree = TreeAdjoint(robot.model, [arm.frame_id for arm in robot.arms])
+        except ModelError:
+            self.tree = None
 
     # ----- public -----
 
@@ -253,6 +263,14 @@ class GradientEvaluator:
     # ----- the chain -----
 
     def _chunk(self, qs: np.ndarray):
+        if self.tree is not None:
+            self.evaluations += qs.shape[0]
+            return gradient_chunk(self, self.tree, qs)
+        return self.forward_chunk(qs)
+
+    def forward_chunk(self, qs: np.ndarray):
+        """(values, gradients, defined) at qs (n, nq) by the forward chain (dC along every tangent
+        direction from the kinematic Hessians): the reference the reverse chain is tested against."""
         C, dC, c, dc, ok = self.shape(qs)
         value, grad = _index(self.objective, C, dC, c, dc)
         value[~ok] = 0.0
@@ -276,6 +294,33 @@ class GradientEvaluator:
         W, dW, M_o, dM_o, g_o = self._object(d)
         return {"J": J_u, "dJ": dJ_u, "P": P, "dP": dP, "xi": xi, "dxi": dxi, "W": W, "dW": dW, "M_o": M_o,
                 "dM_o": dM_o, "g_o": g_o}  # fmt: skip
+
+    def _object_terms(self, positions: np.ndarray):
+        """W (n, m, m k), M_o (n, m, m), g_o (m,) at the hands' positions (n, k, 3), and whether
+        they move with the hands (the default object held between them, a task with rotations)."""
+        task = self.task
+        n, k = positions.shape[:2]
+        obj = self.held_object
+        moving = obj is None and bool(task.angular_rows) and k >= 2
+        if obj is None:
+            obj = HeldObject.between(positions[0], self.mass)
+        g_o = obj.gravity_vector(task)
+        if not moving:
+            W, M_o = obj.grasp_matrix(task), obj.inertia_matrix(task)
+            return np.repeat(W[None], n, axis=0), np.repeat(M_o[None], n, axis=0), g_o, False
+        rows, m = list(task.rows), task.dim
+        offsets = positions - positions.mean(axis=1, keepdims=True)
+        full = np.zeros((n, 6, 6))
+        full[:, np.arange(6), np.arange(6)] = 1.0
+        W = np.empty((n, m, k * m))
+        for i in range(k):
+            full[:, 3:, :3] = _skew_stack(offsets[:, i])
+            W[:, :, i * m : (i + 1) * m] = full[:, rows][:, :, rows]
+        radius2 = np.max(np.einsum("nij,nij->ni", offsets, offsets), axis=1)
+        diag = np.where(task.angular[None, :], 0.4 * self.mass * radius2[:, None], self.mass)
+        M_o = np.zeros((n, m, m))
+        M_o[:, np.arange(m), np.arange(m)] = diag
+        return W, M_o, g_o, True
 
     def _object(self, d: ConfigurationDerivatives):
         """W, dW, M_o, dM_o, g_o stacked: constant for an explicit object; for the default object

@@ -23,8 +23,9 @@ platform at evenly spread headings, first projected onto the constraints (the ne
 holds the object; no measure evaluations), then optimised. The best run whose result satisfies
 the constraints within :data:`CONSTRAINT_TOLERANCE` wins.
 
-Self-collision is not considered (arms and platform may intersect); check the result in the
-viewer (``mobmanip view ROBOT --q``).
+Self-collision: with ``collision`` (:class:`mobmanip.collision.SelfCollision`), every shape
+pair that may meet keeps the margin, as inequality constraints with analytic distance
+gradients; without it arms and platform may intersect.
 """
 
 from __future__ import annotations
@@ -100,6 +101,7 @@ class Placement:
         constraint_evaluations: constraint (forward kinematics) evaluations.
         runs: per start: (start value or None, final value or None when the run failed).
         seconds: wall time (s).
+        start_q: the configuration of the best start (``start_value``), or ``None``.
     """
 
     q: np.ndarray
@@ -113,6 +115,7 @@ class Placement:
     constraint_evaluations: int
     runs: tuple[tuple[float | None, float | None], ...] = field(default=())
     seconds: float = 0.0
+    start_q: np.ndarray | None = None
 
     @property
     def platform(self) -> tuple[float, float, float]:
@@ -123,7 +126,8 @@ class Placement:
 class _Problem:
     """Decision variables, objective and constraints of one placement."""
 
-    def __init__(self, robot, evaluator, target, region, reference):
+    def __init__(self, robot, evaluator, target, region, reference, collision=None):
+        self.collision = collision
         self.robot = robot
         self.model = robot.model
         self.data = robot.data
@@ -273,7 +277,18 @@ class _Problem:
         return (value, np.vstack(rows)) if jacobian else value
 
     def residual(self, z: np.ndarray) -> float:
-        return float(np.abs(self.constraints(z, jacobian=False)).max())
+        """Largest hold error at z, or the clearance's shortfall below the margin if larger."""
+        error = float(np.abs(self.constraints(z, jacobian=False)).max())
+        if self.collision is not None:
+            error = max(error, -float(np.min(self.clearances(z)[0], initial=np.inf)))
+        return error
+
+    def clearances(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Signed distances minus the margin of the shape pairs that may meet, (P,) (to keep
+        >= 0), and their Jacobian over z, (P, n)."""
+        q = self.configuration(z)
+        d, G = self.collision._raw(q)  # q from the optimiser: finite, unit (cos, sin) by construction
+        return d - self.collision.margin, self._to_z(q, G)
 
     # ----- starts -----
 
@@ -297,13 +312,18 @@ def _grasp_spread(hold) -> float:
 
 
 def _slsqp_constraints(problem: _Problem) -> list[dict]:
-    return [
+    out = [
         {
             "type": "eq",
             "fun": lambda z: problem.constraints(z, jacobian=False),
             "jac": lambda z: problem.constraints(z)[1],
         }
     ]
+    if problem.collision is not None and problem.collision.pairs:
+        out.append(
+            {"type": "ineq", "fun": lambda z: problem.clearances(z)[0], "jac": lambda z: problem.clearances(z)[1]}
+        )
+    return out
 
 
 def _clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
@@ -344,6 +364,8 @@ def place(
     starts: int = DEFAULT_STARTS,
     max_iterations: int = 100,
     tolerance: float = 1e-9,
+    hold_turn: float | None = None,
+    collision=None,
 ) -> Placement:
     """The platform pose and arm posture that hold the object at ``target`` and maximise ``objective``.
 
@@ -360,6 +382,10 @@ def place(
         starts: number of starts (platform headings spread evenly around the object).
         max_iterations: SLSQP iterations per start.
         tolerance: SLSQP's ``ftol``: a run stops when the objective changes less than this.
+        hold_turn: a fixed turn psi of the hold about the vertical (rad), i.e. a fixed object
+            orientation (the reference hold's turned by psi); default free.
+        collision: a :class:`mobmanip.collision.SelfCollision`: keep its shape pairs at least its
+            margin apart (inequality constraints with their distance gradients); default none.
 
     Returns:
         The best placement found (see :class:`Placement`).
@@ -378,11 +404,15 @@ def place(
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = _Problem(robot, evaluator, target, region, q_ref)
+    problem = _Problem(robot, evaluator, target, region, q_ref, collision)
     bounds = problem.bounds()
+    if hold_turn is not None:
+        hold_turn = _check_turn(hold_turn)
+        bounds[-1] = (hold_turn, hold_turn)
     best = None
     runs = []
     best_start = None
+    best_start_q = None
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:
         raise UnreachableObjectError(
@@ -391,7 +421,10 @@ def place(
         )
     rng = np.random.default_rng(0)
     for s in range(starts):
-        z0 = _project(problem, problem.start(2.0 * math.pi * s / starts, rng), bounds)
+        z0 = problem.start(2.0 * math.pi * s / starts, rng)
+        if hold_turn is not None:  # the object's orientation fixed: the arms turn it from the start's
+            z0[-1] = hold_turn
+        z0 = _project(problem, z0, bounds)
         if z0 is None:
             runs.append((None, None))
             continue
@@ -399,6 +432,7 @@ def place(
         start_value = None if start_value <= -1e6 else start_value
         if start_value is not None and (best_start is None or start_value > best_start):
             best_start = start_value
+            best_start_q = problem.configuration(z0)
         res = minimize(
             problem.objective,
             z0,
@@ -441,7 +475,18 @@ def place(
         constraint_evaluations=problem.constraint_evaluations,
         runs=tuple(runs),
         seconds=time.perf_counter() - started,
+        start_q=best_start_q,
     )
+
+
+def _check_turn(value) -> float:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not math.isfinite(value)
+    ):
+        raise ArgumentError(f"object yaw (hold turn) must be a finite angle in radians, got {value!r}")
+    return float(math.remainder(float(value), 2.0 * math.pi))
 
 
 def _region_text(region: Region) -> str:
@@ -477,3 +522,56 @@ def placement_document(robot: Robot, placement: Placement, analysis) -> dict:
         "q": robot.configuration_dict(placement.q),
         "analysis": analysis.to_dict(),
     }
+
+
+def object_gradient(
+    robot: Robot,
+    placement: Placement,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    decoupled: bool = False,
+    region: Region | None = None,
+    active_tolerance: float = 1e-7,
+) -> np.ndarray:
+    """d(best value)/d(object centre), (3,) (per m, world), at a placement's optimum.
+
+    By the envelope theorem the optimal value V(X) of max f(z) s.t. h(z, X) = 0 changes with the
+    object centre X as lambda^T dh/dX, with the multipliers lambda of the hold constraints from
+    the optimum's stationarity, grad f = J_h^T lambda over the variables not at a bound (least
+    squares). The hold's position errors are p_i - X - R_z(psi) r_i, so dh/dX = -I on each
+    hand's position rows. A direction no variable can follow (the height of a planar arm's
+    hands) gets NaN: the object cannot move that way while held.
+
+    Args:
+        robot, placement: the robot and :func:`place`'s result for it.
+        task, object_mass, decoupled, region: as given to :func:`place`.
+        active_tolerance: a variable this close to a bound (rad or m) counts as held there.
+
+    Raises:
+        MeasureError: the objective is not differentiable at the optimum.
+    """
+    from .errors import MeasureError
+
+    task = get_task(task or robot.spec.default_task)
+    evaluator = GradientEvaluator(robot, placement.objective, task, object_mass=object_mass, decoupled=decoupled)
+    problem = _Problem(robot, evaluator, placement.target, region, robot.hold_configuration())
+    z = problem.variables(placement.q, placement.hold_turn)
+    cost, grad = problem.objective(z)
+    if cost >= 1e6:
+        raise MeasureError(f"{placement.objective.name} is not differentiable at the placement's optimum")
+    _, J = problem.constraints(z)
+    free = np.ones(problem.n, dtype=bool)
+    for k, (lo, hi) in enumerate(problem.bounds()):
+        if (lo is not None and z[k] <= lo + active_tolerance) or (hi is not None and z[k] >= hi - active_tolerance):
+            free[k] = False
+    lam, *_ = np.linalg.lstsq(J[:, free].T, -grad[free], rcond=None)  # grad f = J^T lambda (f = -cost)
+    # the full (unreduced) rows: positions then, with orientation, three more per hand
+    per_hand = 6 if problem.orientation else 3
+    dh_dX = np.zeros((per_hand * len(problem.frames), 3))
+    for i in range(len(problem.frames)):
+        dh_dX[per_hand * i : per_hand * i + 3] = -np.eye(3)
+    dh_dX = dh_dX[problem.rows]
+    out = -(lam @ dh_dX)  # dV/dX = d(f - lambda^T h)/dX
+    followed = np.abs(dh_dX).sum(axis=0) > 0
+    return np.where(followed, out, np.nan)

@@ -15,12 +15,22 @@ DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0).
 
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
-platform origin in a rectangle. Self-collision is not checked: look at the result with
-`mobmanip view ROBOT --q Q.json` (written by --save-q).
+platform origin in a rectangle. --avoid-collision M keeps the shapes that may meet at least M
+metres apart (pairs touching in the reference posture, such as hands meeting at the object,
+excepted); without it self-collision is not checked.
+
+--object-yaw fixes the object's orientation: the hold turned by YAW degrees about the vertical
+from its reference posture's (default: free).
+
+--map OUT_DIR also maps the best value over heading and posture at every platform position of
+a grid around the object (--map-extent, --map-cells) and writes OUT_DIR/map.npz, map.csv and
+map.png. --figure writes the result from above (PNG or SVG); --view serves it in the meshcat
+viewer, --export writes the viewer's scene as a self-contained HTML page.
 
 examples:
   mobmanip place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x
   mobmanip place tiago_dual --object 2,1,0.85 --mass 3 --objective dynamic:log_volume --json out.json
+  mobmanip place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x --map maps/
 """
 
 
@@ -49,6 +59,21 @@ def register(sub) -> None:
     )
     parser.add_argument("--json", metavar="OUT.json", help="write the result and its analysis as JSON")
     parser.add_argument("--save-q", metavar="Q.json", help="write the configuration for `analyze --q`")
+    parser.add_argument(
+        "--avoid-collision",
+        type=float,
+        metavar="M",
+        help="keep shapes that may meet (URDF collision shapes, else visual ones) at least M metres apart",
+    )
+    parser.add_argument("--object-yaw", type=float, metavar="DEG", help="fixed object orientation (default: free)")
+    parser.add_argument("--figure", metavar="OUT.png", help="write the start and the optimum from above (PNG or SVG)")
+    parser.add_argument("--view", action="store_true", help="show the optimum in the meshcat viewer (Ctrl-C stops)")
+    parser.add_argument("--export", metavar="PAGE.html", help="write the optimum's viewer scene as an HTML page")
+    parser.add_argument("--map", metavar="OUT_DIR", help="also map the best value over platform positions")
+    parser.add_argument(
+        "--map-extent", metavar="XMIN,XMAX,YMIN,YMAX", help="the map's platform positions (default: the arms' reach)"
+    )
+    parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
     parser.set_defaults(func=run)
 
 
@@ -77,6 +102,14 @@ def run(args) -> int:
     target = _parse_point(args.object)
     reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
+    extent = _check_map_options(args)
+    _check_outputs(args)
+    yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    collision = None
+    if args.avoid_collision is not None:
+        from ..collision import SelfCollision
+
+        collision = SelfCollision(robot, margin=args.avoid_collision)
     result = place(
         robot,
         target,
@@ -87,6 +120,8 @@ def run(args) -> int:
         region=region,
         starts=args.starts,
         reference=reference,
+        hold_turn=yaw,
+        collision=collision,
     )
     x, y, heading = result.platform
     print(f"robot {robot.name}: object at ({target[0]:g}, {target[1]:g}, {target[2]:g}) m, {result.objective.name}")
@@ -100,6 +135,9 @@ def run(args) -> int:
         f"{result.evaluations} measure evaluations, {len(result.runs)} starts, hold error {result.residual:.1e}, "
         f"{result.seconds:.2f} s"
     )
+    if collision is not None:
+        print(f"self-collision: {len(collision.pairs)} shape pairs kept >= {collision.margin:g} m apart; "
+              f"clearance {collision.clearance(result.q):.4f} m")  # fmt: skip
     if args.save_q:
         write_json(args.save_q, robot.configuration_dict(result.q))
         print(f"wrote {args.save_q}")
@@ -110,4 +148,107 @@ def run(args) -> int:
         write_json(args.json, placement_document(robot, result, analysis))
         print_warnings(analysis)
         print(f"wrote {args.json}")
+    if args.figure:
+        from ..viz.placement import placement_figure
+
+        path = placement_figure(robot, result, args.figure, args.task, object_mass=args.mass, decoupled=args.decoupled)
+        print(f"wrote {path}")
+    if args.map:
+        _write_map(args, robot, target, result, extent, yaw, collision, reference)
+    if args.view or args.export:
+        _show(args, robot, result)
     return 0
+
+
+def _check_outputs(args) -> None:
+    """Refuse unwritable output paths before any work."""
+    from pathlib import Path
+
+    from ..errors import UsageError
+    from ..io import check_output
+
+    for option, path in (("--json", args.json), ("--save-q", args.save_q), ("--figure", args.figure),
+                         ("--export", args.export)):  # fmt: skip
+        if path:
+            check_output(path)
+            if not Path(path).resolve().parent.is_dir():
+                raise UsageError(f"{option} {path}: its directory does not exist")
+    if args.map and Path(args.map).exists() and not Path(args.map).is_dir():
+        raise UsageError(f"--map {args.map}: not a directory")
+
+
+def _check_yaw(degrees: float) -> float:
+    from ..errors import UsageError
+
+    if not math.isfinite(degrees):
+        raise UsageError(f"--object-yaw must be a finite angle in degrees, got {degrees!r}")
+    return math.radians(degrees)
+
+
+def _check_map_options(args):
+    """The map's extent (or None for the default) after checking --map-extent and --map-cells."""
+    from ..errors import UsageError
+    from ..placement_map import MAX_CELLS_PER_AXIS
+
+    if not 2 <= args.map_cells <= MAX_CELLS_PER_AXIS:
+        raise UsageError(f"--map-cells must be between 2 and {MAX_CELLS_PER_AXIS}, got {args.map_cells}")
+    if args.map_extent is None:
+        return None
+    try:
+        values = [float(v) for v in args.map_extent.split(",")]
+    except ValueError:
+        values = []
+    if (
+        len(values) != 4
+        or not all(math.isfinite(v) for v in values)
+        or values[0] >= values[1]
+        or values[2] >= values[3]
+    ):
+        raise UsageError(f"--map-extent must be XMIN,XMAX,YMIN,YMAX in metres with XMIN < XMAX, YMIN < YMAX, "
+                         f"got {args.map_extent!r}")  # fmt: skip
+    return values
+
+
+def _write_map(args, robot, target, result, extent, yaw, collision, reference) -> None:
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..placement_map import default_extent, placement_map
+
+    x0, x1, y0, y1 = extent if extent is not None else default_extent(robot, target)
+    xs, ys = np.linspace(x0, x1, args.map_cells), np.linspace(y0, y1, args.map_cells)
+    grid = placement_map(robot, target, args.objective, xs, ys, args.task, object_mass=args.mass,
+                         decoupled=args.decoupled, hold_turn=yaw, collision=collision, reference=reference)  # fmt: skip
+    out = Path(args.map)
+    out.mkdir(parents=True, exist_ok=True)
+    grid.write_npz(out / "map.npz")
+    grid.write_csv(out / "map.csv")
+    grid.plot(out / "map.png")
+    value, q, _ = grid.best()
+    reachable = int(np.sum(~np.isnan(grid.values)))
+    print(
+        f"map: {reachable} of {grid.values.size} platform positions hold the object; best {value:.6g} at "
+        f"x {q[0]:.4f} m, y {q[1]:.4f} m, heading {math.degrees(math.atan2(q[3], q[2])):.2f} deg "
+        f"(place: {result.value:.6g}); {grid.evaluations} evaluations, {grid.seconds:.2f} s"
+    )
+    print(f"wrote {out / 'map.npz'}, {out / 'map.csv'}, {out / 'map.png'}")
+
+
+def _show(args, robot, result) -> None:
+    import time
+
+    from ..viz.scene import EllipsoidViewer, analyze_pair
+
+    analysis, locked = analyze_pair(robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled)
+    with EllipsoidViewer(robot) as viewer:
+        viewer.show(result.q, analysis, locked)
+        if args.export:
+            print(f"wrote {viewer.export_html(args.export)}")
+        if args.view:
+            print(f"meshcat viewer: {viewer.url}  (Ctrl-C to stop)", flush=True)
+            try:
+                while viewer.server_running:
+                    time.sleep(0.1)
+            except KeyboardInterrupt:
+                pass

@@ -1,0 +1,178 @@
+"""Placement maps against place and the reference path; a fixed object orientation; the
+command's map, figure and yaw options."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+import mobmanip
+from mobmanip.cli import main
+from mobmanip.errors import ArgumentError
+from mobmanip.placement import UnreachableObjectError, place
+from mobmanip.placement_map import placement_map, reach_bound
+from test_placement import check_holds, reference_value
+
+TARGET = [1.0, 0.5, 0.35]
+OBJECTIVE = "kinematic:capacity:+x"
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return mobmanip.load_robot("planar_dual_arm")
+
+
+@pytest.fixture(scope="module")
+def paper_map(paper):
+    """A 13 x 13 grid of 0.25 m that contains place's optimum platform positions, (1, -1) and (1, 2)."""
+    return placement_map(paper, TARGET, OBJECTIVE, np.arange(-0.5, 2.51, 0.25), np.arange(-1.0, 2.01, 0.25))
+
+
+@pytest.fixture(scope="module")
+def paper_place(paper):
+    return place(paper, TARGET, OBJECTIVE)
+
+
+def test_best_cell_agrees_with_place(paper_map, paper_place):
+    """The grid holds place's optimum platform position: the map's best cell reaches place's value
+    (to 1e-6 relative), and no cell (a problem with the platform position fixed) beats it."""
+    best, q, index = paper_map.best()
+    assert best == pytest.approx(paper_place.value, rel=1e-6)
+    assert np.nanmax(paper_map.values) <= paper_place.value * (1 + 1e-6)
+    np.testing.assert_allclose(q[:2], [paper_map.x[index[1]], paper_map.y[index[0]]], atol=1e-9)
+
+
+def test_cells_equal_direct_evaluation_and_hold_the_object(paper, paper_map):
+    """Every reachable cell: its configuration stands the platform on the cell, Pinocchio's forward
+    kinematics puts both hands where the reference hold turned by the cell's hold turn puts them
+    around the object, the joints are within limits, and the cell's value is the reference
+    path's value there."""
+    from mobmanip.placement import Placement
+
+    objective = paper_map.objective
+    reachable = np.argwhere(~np.isnan(paper_map.values))
+    assert len(reachable) >= 60
+    for iy, ix in reachable:
+        q = paper_map.configurations[iy, ix]
+        np.testing.assert_allclose(q[:2], [paper_map.x[ix], paper_map.y[iy]], atol=1e-9)
+        assert math.atan2(q[3], q[2]) == pytest.approx(paper_map.heading[iy, ix], abs=1e-9)
+        cell = Placement(q, objective, 0.0, None, np.array(TARGET), paper_map.hold_turn[iy, ix], 0.0, 0, 0)
+        check_holds(paper, cell, orientation=False)  # forward kinematics and joint limits
+        assert paper_map.values[iy, ix] == pytest.approx(reference_value(paper, q, objective), rel=1e-9)
+
+
+def test_cells_beyond_the_reach_bound_are_empty_and_the_bound_holds(paper, paper_map):
+    """No reachable cell lies beyond the reach bound, and the bound is not loose by more than the
+    grid's diagonal: the farthest reachable cell is within 0.36 m of it."""
+    bound = reach_bound(paper, paper.hold_configuration())
+    X, Y = np.meshgrid(paper_map.x, paper_map.y)
+    distance = np.hypot(X - TARGET[0], Y - TARGET[1])
+    reachable = ~np.isnan(paper_map.values)
+    assert distance[reachable].max() <= bound
+    assert distance[reachable].max() >= bound - 0.36
+
+
+def test_map_files(paper_map, tmp_path):
+    """NPZ arrays equal the map's; the CSV has one row per cell with the same values (empty where
+    unreachable); the heat map is a PNG image."""
+    paper_map.write_npz(tmp_path / "map.npz")
+    with np.load(tmp_path / "map.npz") as saved:
+        np.testing.assert_array_equal(saved["values"], paper_map.values)
+        np.testing.assert_array_equal(saved["x"], paper_map.x)
+        np.testing.assert_array_equal(saved["configurations"], paper_map.configurations)
+        assert str(saved["objective"]) == OBJECTIVE
+    paper_map.write_csv(tmp_path / "map.csv")
+    with open(tmp_path / "map.csv") as stream:
+        rows = list(csv.reader(stream))
+    assert rows[0] == ["x_m", "y_m", "heading_deg", OBJECTIVE]
+    assert len(rows) - 1 == paper_map.values.size
+    for row in rows[1:]:
+        ix = int(np.argmin(np.abs(paper_map.x - float(row[0]))))
+        iy = int(np.argmin(np.abs(paper_map.y - float(row[1]))))
+        want = paper_map.values[iy, ix]
+        if math.isnan(want):
+            assert row[3] == ""
+        else:
+            assert float(row[3]) == pytest.approx(want, rel=1e-9)
+    paper_map.plot(tmp_path / "map.png")
+    assert (tmp_path / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_fixed_headings_layers(paper):
+    """With fixed headings, every cell's configuration has its layer's heading, and a layer's best
+    value never beats the free-heading map's at the same cell."""
+    xs, ys = np.array([1.0]), np.array([-1.0, -0.75])
+    headings = np.array([math.pi, math.pi / 2])
+    layered = placement_map(paper, TARGET, OBJECTIVE, xs, ys, headings=headings)
+    free = placement_map(paper, TARGET, OBJECTIVE, xs, ys)
+    for layer, heading in enumerate(headings):
+        for iy in range(len(ys)):
+            q = layered.configurations[layer, iy, 0]
+            if not np.isnan(q[0]):
+                assert math.remainder(math.atan2(q[3], q[2]) - heading, 2 * math.pi) == pytest.approx(0, abs=1e-9)
+                assert layered.values[layer, iy, 0] <= free.values[iy, 0] * (1 + 1e-6)
+    values, _ = layered.best_over_headings()
+    assert np.nanmax(values) == pytest.approx(np.nanmax(layered.values))
+
+
+def test_map_bad_requests(paper):
+    with pytest.raises(UnreachableObjectError, match=r"\[1.0, 0.5, 3.0\]"):
+        placement_map(paper, [1.0, 0.5, 3.0], OBJECTIVE, [0.0, 0.5], [0.0, 0.5])
+    with pytest.raises(ArgumentError, match="map x must increase"):
+        placement_map(paper, TARGET, OBJECTIVE, [1.0, 0.0], [0.0])
+    with pytest.raises(ArgumentError, match="map y must be 1 to"):
+        placement_map(paper, TARGET, OBJECTIVE, [0.0], [])
+    with pytest.raises(ArgumentError, match="fixed platform"):
+        placement_map(paper.with_platform("fixed"), TARGET, OBJECTIVE, [0.0], [0.0])
+
+
+def test_fixed_object_orientation_on_tiago():
+    """A fixed hold turn is kept, the hands hold the object in that orientation (forward
+    kinematics), and the log-volume -- unchanged by turning the whole robot about the vertical --
+    equals the free optimum's."""
+    robot = mobmanip.load_robot("tiago_dual")
+    target = [2.0, 1.0, 0.85]
+    free = place(robot, target, "kinematic:log_volume", starts=4)
+    yaw = 1.0
+    fixed = place(robot, target, "kinematic:log_volume", starts=4, hold_turn=yaw)
+    assert fixed.hold_turn == pytest.approx(yaw, abs=1e-12)
+    check_holds(robot, fixed, orientation=True)
+    assert fixed.value == pytest.approx(free.value, rel=1e-6)
+    with pytest.raises(ArgumentError, match="object yaw"):
+        place(robot, target, "kinematic:log_volume", hold_turn=float("nan"))
+
+
+def test_command_writes_map_figure_and_keeps_the_yaw(tmp_path, capsys):
+    """place --map writes the three files whose best cell is printed; --figure a PNG; the
+    --json result carries the fixed yaw as its hold turn."""
+    out = tmp_path / "maps"
+    code = main(
+        ["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", OBJECTIVE, "--starts", "2",
+         "--object-yaw", "30", "--map", str(out), "--map-extent", "0.5,1.5,-1.25,-0.75", "--map-cells", "3",
+         "--figure", str(tmp_path / "place.png"), "--json", str(tmp_path / "place.json")]
+    )  # fmt: skip
+    assert code == 0
+    printed = capsys.readouterr().out
+    with np.load(out / "map.npz") as saved:
+        best = np.nanmax(saved["values"])
+        assert saved["values"].shape == (3, 3)
+    assert f"best {best:.6g}" in printed
+    assert (out / "map.csv").exists() and (out / "map.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "place.png").read_bytes()[:4] == b"\x89PNG"
+    import json
+
+    document = json.loads((tmp_path / "place.json").read_text())
+    assert document["hold_turn"] == pytest.approx(math.radians(30))
+
+
+def test_command_refuses_bad_map_options(tmp_path, capsys):
+    base = ["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", OBJECTIVE]
+    assert main(base + ["--map", str(tmp_path), "--map-extent", "1,0,0,1"]) == 2
+    assert "--map-extent" in capsys.readouterr().err
+    assert main(base + ["--map", str(tmp_path), "--map-cells", "1"]) == 2
+    assert "--map-cells" in capsys.readouterr().err
+    assert main(base + ["--figure", str(tmp_path / "missing" / "f.png")]) == 2
+    assert "directory does not exist" in capsys.readouterr().err
