@@ -21,7 +21,7 @@ differentiable; see :attr:`GradientBatch.defined`), are
 
 - kinematic: C = (W (J_hat J_hat^T)^-1 W^T)^-1, J_hat = J_u diag(qdot_max), c = 0;
 - dynamic: with L = Z Lambda_o and mu_bar = Z mu_o (:mod:`mobmanip.ellipsoids`),
-  C = rho^2 (L^T L)^-1 and c = -(L^T L)^-1 L^T mu_bar, rho^2 = 1 - |mu_bar|^2 - mu_bar^T L c;
+  ``C = rho^2 (L^T L)^-1`` and ``c = -(L^T L)^-1 L^T mu_bar``, ``rho^2 = 1 - |mu_bar|^2 - mu_bar^T L c``;
   empty (not differentiable) when rho^2 <= 0.
 
 Their derivatives follow by the product rule from dJ_u/dq (frame Hessians), dP/dq = S^T dM/dq S,

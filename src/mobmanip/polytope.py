@@ -17,7 +17,7 @@ Queries and how they are answered:
   plus the equalities of the directions in which the zonotope is flat; irredundant for m <= 3;
 - vertices and faces (m <= 3): one Qhull call on the polar set (:mod:`mobmanip.hull`);
   a zonotope's vertices are then recomputed exactly as c + G sign(G^T d) from their normals;
-- support: sum_j |g_j . d| for a zonotope, the vertices for m <= 3, otherwise a linear program
+- support: sum_j ``|g_j . d|`` for a zonotope, the vertices for m <= 3, otherwise a linear program
   on HiGHS kept warm between directions;
 - membership: the halfspaces; ``inputs`` gives joint values (within their limits) reaching
   given points.
@@ -105,7 +105,7 @@ class Polytope(TaskSet):
 
     @classmethod
     def zonotope(cls, center, generators, input_limits=None) -> Polytope:
-        """The zonotope {center + G y : |y_i| <= 1}, G (m, n)."""
+        """The zonotope ``{center + G y : |y_i| <= 1}``, G (m, n)."""
         center = np.asarray(center, dtype=float).reshape(-1)
         return cls(np.eye(center.shape[0]), center, generators, input_limits)
 
@@ -216,7 +216,7 @@ class Polytope(TaskSet):
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
     def contains(self, points, tol: float = 1e-9) -> np.ndarray:
-        """Whether each point (n, m) or (m,) is reached with every |y_i| <= 1 + tol.
+        """Whether each point (n, m) or (m,) is reached with every ``|y_i| <= 1 + tol``.
 
         That is: every joint within (1 + tol) times its own limit; the equalities (directions in
         which the set is flat) hold to ``tol`` times the set's size.
@@ -355,7 +355,7 @@ class Polytope(TaskSet):
         return rep["Y"] * self._limits
 
     def inputs(self, points, tol: float = 1e-9) -> np.ndarray:
-        """Joint values (|y_i| <= 1 + tol of their limits) reaching each point, (k, n) in physical units.
+        """Joint values (``|y_i| <= 1 + tol`` of their limits) reaching each point, (k, n) in physical units.
 
         Raises:
             TaskError: a point is not in the set.

@@ -129,7 +129,7 @@ def min_norm_dynamic_polytope(
 ) -> Polytope:
     """The object accelerations the paper's minimum-norm policy reaches within the torque box.
 
-    Same arguments as :func:`dynamic_polytope`. The set is {a_o : |Lambda_o a_o + mu_o| <= tau_max}
+    Same arguments as :func:`dynamic_polytope`. The set is ``{a_o : |Lambda_o a_o + mu_o| <= tau_max}``
     over the a_o with W^T a_o in range(J_u); its :meth:`~Polytope.inputs` are the policy's
     torques tau = Lambda_o a_o + mu_o.
 

@@ -33,7 +33,8 @@ rings, its three principal sections drawn as lines, kinematic yellow ``#f2d21b``
 ``#e0301e`` (in the paper's case the locked pair lies inside, or nearly on, the robot's own,
 which a solid would hide). Principal axes are drawn in a darker shade of the same colour.
 
-What is drawn, and how
+What is drawn, and how:
+
 - Only the *linear* part of a task space is drawn: ``planar`` and ``planar_rigid`` as the (x, y)
   ellipse, ``translational`` as it is, ``spatial`` as its projection (shadow) onto (x, y, z),
   i.e. the linear velocities (accelerations) reachable with any accompanying angular motion.
@@ -50,7 +51,7 @@ What is drawn, and how
   long; an empty set (e.g. the torques cannot hold the load) is hidden.
 - Scale factors (:class:`ScaleFactors`): metres of scene per m/s and per m/s^2 (one per
   quantity, shared by the measures of that quantity), chosen so that the largest drawn extent
-  (|centre| + largest semi-axis for an ellipsoid, over the robot's and the locked sets) is
+  (``|centre|`` + largest semi-axis for an ellipsoid, over the robot's and the locked sets) is
   ``size`` = 0.5 m; fixed at the first :meth:`EllipsoidViewer.show` (or over all frames of an
   animation) so that later updates stay comparable.
 
@@ -242,7 +243,7 @@ class ScaleFactors:
     def fit(
         cls, analyses: Sequence[Analysis | None], size: float = DEFAULT_SIZE, measures: Iterable[str] | None = None
     ) -> ScaleFactors:
-        """Scales that draw the largest extent (|centre| + largest semi-axis for an ellipsoid) of
+        """Scales that draw the largest extent (``|centre|`` + largest semi-axis for an ellipsoid) of
         each quantity's drawable sets, over all given analyses, ``size`` metres long (1 when
         everything is zero or empty). Quantities: those of ``measures`` (default: the default
         measures) and of every measure the analyses hold, in the registry's order."""

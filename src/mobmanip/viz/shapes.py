@@ -96,7 +96,7 @@ def drawn_ellipsoid(ellipsoid: Ellipsoid, task: str) -> tuple[Ellipsoid, np.ndar
 
 
 def drawn_extent(ellipsoid: Ellipsoid, task: str) -> float:
-    """|centre| + largest semi-axis of the drawn part (task units; 0 when empty)."""
+    """``|centre|`` + largest semi-axis of the drawn part (task units; 0 when empty)."""
     if ellipsoid.empty:
         return 0.0
     linear, _ = drawn_ellipsoid(ellipsoid, task)
