@@ -17,7 +17,7 @@ import numpy as np
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
 from .ellipsoids import Ellipsoid
 from .engine import evaluate_one, kernel_available
-from .errors import ArgumentError, MeasureError, TaskError
+from .errors import ArgumentError, MeasureError, MobmanipError, TaskError
 from .grasp import HeldObject
 from .measure import TaskSet
 from .measures import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
@@ -87,6 +87,45 @@ class Analysis:
         """The unified dynamic ellipsoid (m/s^2, rad/s^2): ``measures["dynamic"]``."""
         return self.measure(DYNAMIC.name)
 
+    def _set_summaries(self) -> list[tuple[str, str, str]]:
+        """(measure name, units, one-line summary) of each set, for the two representations below."""
+        rows = []
+        for name, task_set in self.measures.items():
+            units = get_measure(name).quantity.units
+            if task_set.empty:
+                rows.append((name, units, "empty"))
+                continue
+            semi_axes = getattr(task_set, "semi_axes", None)
+            shape = "" if semi_axes is None else "semi-axes " + ", ".join(f"{v:.4g}" for v in semi_axes) + "; "
+            flag = " (degenerate)" if task_set.degenerate else ""
+            rows.append(
+                (
+                    name,
+                    units,
+                    f"{shape}volume {_number(task_set, 'volume')}, isotropy {_number(task_set, 'isotropy')}{flag}",
+                )
+            )
+        return rows
+
+    def __repr__(self) -> str:
+        sets = "; ".join(f"{name}: {text} [{units}]" for name, units, text in self._set_summaries())
+        coupling = ", decoupled" if self.decoupled else ""
+        return f"Analysis(robot={self.robot.name!r}, task={self.task!r}{coupling}, {sets})"
+
+    def _repr_html_(self) -> str:
+        """A table of the measures, for Jupyter."""
+        from html import escape
+
+        rows = "".join(
+            f"<tr><td>{escape(name)}</td><td>{escape(units)}</td><td>{escape(text)}</td></tr>"
+            for name, units, text in self._set_summaries()
+        )
+        coupling = " (decoupled)" if self.decoupled else ""
+        return (
+            f"<p><b>Analysis</b> of {escape(self.robot.name)}, task {escape(self.task)}{coupling}</p>"
+            f"<table><tr><th>measure</th><th>units</th><th>set</th></tr>{rows}</table>"
+        )
+
     def to_dict(self) -> dict:
         """A JSON-ready dictionary (matrices as lists of rows); each measure under its JSON key
         (``kinematic_ellipsoid``, ``dynamic_ellipsoid``, ...)."""
@@ -115,6 +154,15 @@ class Analysis:
             "grasp_matrix": self.grasp_matrix.tolist(),
             **{get_measure(name).json_key: s.to_dict() for name, s in self.measures.items()},
         }
+
+
+def _number(task_set: TaskSet, index: str) -> str:
+    """An index of a set for printing, ``n/a`` where it cannot be computed (a 6-D polytope's volume)."""
+    try:
+        value = getattr(task_set, index)
+    except MobmanipError:
+        return "n/a"
+    return f"{value:.4g}" if value is not None and np.isfinite(value) else "n/a"
 
 
 def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> HeldObject:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import logging
 import math
 import numbers
 from collections.abc import Mapping
@@ -53,6 +54,8 @@ from .urdf import (
     subtree_links,
     urdf_text,
 )
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -154,6 +157,10 @@ class Robot:
         for k, v in enumerate(self.torso_v_indices + self.arm_v_indices):
             S[v, n_eta + k] = 1.0
         return S
+
+    def __repr__(self) -> str:
+        arms = ", ".join(arm.name for arm in self.arms)
+        return f"Robot({self.name!r}, platform={self.platform.kind!r}, arms=({arms}), nq={self.model.nq}, nx={self.nx})"
 
     @property
     def platform_locked(self) -> bool:
@@ -630,6 +637,9 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         torso_v_indices=torso_v,
     )
     _check_inertia(robot, urdf)
+    _log.info(
+        "loaded %s from %s: %s platform, %d arm(s), nx = %d", spec.name, spec.urdf, spec.platform, len(arms), robot.nx
+    )
     return robot
 
 

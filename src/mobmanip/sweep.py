@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import logging
 import math
 import multiprocessing
 import os
@@ -74,6 +75,8 @@ from .sweep_budget import (
 )
 from .sweep_results import AXES, FLAGS, SCALAR_INDICES, SweepResult, check_index_name, index_names, plot_sweep
 from .tasks import get_task
+
+_log = logging.getLogger(__name__)
 
 __all__ = [
     "AXES",
@@ -551,6 +554,13 @@ def run_sweep(
     spec = replace(spec, task=task.name, direction=_check_direction(spec.direction, task.dim), measures=measures)
     BatchSetup(robot, task.name, spec.object_mass)  # validate the object mass here, once
     n_workers = workers or default_workers()
+    _log.info(
+        "sweep of %s: %d grid points, measures %s, %d worker(s)",
+        robot.name,
+        math.prod(grid.shape),
+        ", ".join(measures),
+        1 if executor is None and n_workers == 1 else n_workers,
+    )
     with contextlib.ExitStack() as stack:
         if executor is None and n_workers > 1:
             executor = stack.enter_context(_local_pool(n_workers, mp_context))
