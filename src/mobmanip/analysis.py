@@ -11,6 +11,7 @@ import dataclasses
 import types
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -80,12 +81,12 @@ class Analysis:
     @property
     def kinematic(self) -> Ellipsoid:
         """The unified kinematic ellipsoid (m/s, rad/s): ``measures["kinematic"]``."""
-        return self.measure(KINEMATIC.name)
+        return cast(Ellipsoid, self.measure(KINEMATIC.name))
 
     @property
     def dynamic(self) -> Ellipsoid:
         """The unified dynamic ellipsoid (m/s^2, rad/s^2): ``measures["dynamic"]``."""
-        return self.measure(DYNAMIC.name)
+        return cast(Ellipsoid, self.measure(DYNAMIC.name))
 
     def _set_summaries(self) -> list[tuple[str, str, str]]:
         """(measure name, units, one-line summary) of each set, for the two representations below."""

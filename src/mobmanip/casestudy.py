@@ -215,7 +215,7 @@ def run_case_study(
         f"optimal arm posture q2 = {posture.q[1]:.4f}, q3 = {posture.q[2]:.4f} rad, "
         f"manipulability {posture.manipulability:.4f} m^2, reach {posture.reach:.4f} m"
     )
-    radius = robot.platform.radius
+    radius = robot.platform.radius  # type: ignore[attr-defined]  # a differential drive (checked)
     kinematic, dynamic = [], []
     for angle in angles_deg:
         q = configuration_at(robot, posture, angle)

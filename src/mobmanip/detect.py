@@ -182,7 +182,7 @@ def _planar(urdf, joints: Iterable[str]) -> bool:
 def detect_spec(
     path: str | Path,
     end_effectors: Sequence[str],
-    wheels: tuple[str, str] | None = None,
+    wheels: tuple[str, ...] | None = None,
     platform: str | None = None,
     *,
     torso: bool = False,
@@ -260,7 +260,8 @@ def detect_spec(
             counts[joint] = counts.get(joint, 0) + 1
     shared = tuple(j for j in dict.fromkeys(j for p in paths for j in p) if counts[j] > 1)
     mimics = mimic_joints(urdf)
-    arms, taken = [], set()
+    arms: list = []
+    taken: set[str] = set()
     for k, (ee, joints) in enumerate(zip(end_effectors, paths)):
         own = tuple(j for j in joints if j not in shared)
         if not own:
@@ -326,7 +327,7 @@ def detect_spec(
 def spec_from_urdf(
     path: str | Path,
     end_effectors: Sequence[str],
-    wheels: tuple[str, str] | None = None,
+    wheels: tuple[str, ...] | None = None,
     platform: str | None = None,
     **options,
 ) -> RobotSpec:

@@ -124,8 +124,13 @@ class TaskSetBatch(Protocol):
     def isotropy(self) -> np.ndarray:
         """Isotropies in [0, 1], (N,) (0 where empty or degenerate)."""
 
-    degenerate: np.ndarray
-    empty: np.ndarray
+    @property
+    def degenerate(self) -> np.ndarray:
+        """Whether each set has a zero extent in some direction, (N,) bool."""
+
+    @property
+    def empty(self) -> np.ndarray:
+        """Whether each set is empty, (N,) bool."""
 
     def support(self, direction: np.ndarray) -> np.ndarray:
         """max over set n of d . p, (N,), for one direction (m,) or one per row (N, m)."""
@@ -176,7 +181,7 @@ def check_dims(dims: Sequence[int], m: int) -> list[int]:
         SetQueryError: empty, repeated, not integers, or outside 0 .. m - 1.
     """
     try:
-        items = list(dims)
+        items: list = list(dims)
     except TypeError:
         items = [dims]
     ok = all(isinstance(i, (int, np.integer)) and not isinstance(i, bool) for i in items)

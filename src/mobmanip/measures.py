@@ -358,7 +358,7 @@ def _dynamic(terms: MeasureTerms) -> TaskSet:
     return dynamic_ellipsoid(terms.J_u, terms.W, terms.P, terms.Q, terms.xi, terms.M_o, terms.g_o, terms.effort_limits)
 
 
-def _ellipsoids_batch(request: BatchRequest) -> dict[str, EllipsoidBatch]:
+def _ellipsoids_batch(request: BatchRequest) -> Mapping[str, TaskSetBatch]:
     """Both ellipsoids of a chunk in one pass of :func:`mobmanip.batch.ellipsoids_from_terms`
     (one compiled-kernel call for the two)."""
     n, m = len(request.terms), request.setup.m
@@ -375,7 +375,7 @@ def _ellipsoids_batch(request: BatchRequest) -> dict[str, EllipsoidBatch]:
         kinematic=kin,
         dynamic=dyn,
     )
-    out = {}
+    out: dict[str, TaskSetBatch] = {}
     if kin is not None:
         out[KINEMATIC.name] = kin
     if dyn is not None:
@@ -463,14 +463,14 @@ def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
     t = ChunkTerms(t.n, t.Ja, t.Ma, t.positions.copy())
     numpy_terms(setup, t)
     W = setup.W if t.W is None else t.W
-    M_o = np.diag(setup.Mo) if t.Mo is None else np.einsum("ni,ij->nij", t.Mo, np.eye(setup.m))
+    M_o = np.diag(setup.Mo) if t.Mo is None else np.einsum("ni,ij->nij", t.Mo, np.eye(setup.m))  # type: ignore[arg-type]
     P = t.P
     if request.decoupled:
         e = setup.n_eta
         P = P.copy()
         P[:, :e, e:] = 0.0
         P[:, e:, :e] = 0.0
-    out = {}
+    out: dict[str, TaskSetBatch] = {}
     for name, limits in request.limits.items():
         kind = POLYTOPE_KINDS[name]
         if kind == "kinematic":

@@ -153,7 +153,7 @@ class Robot:
         n_eta = self.platform.n_reduced
         rows, block = platform_rows
         if n_eta:
-            S[np.ix_(rows, range(n_eta))] = block
+            S[np.ix_(rows, np.arange(n_eta))] = block
         for k, v in enumerate(self.torso_v_indices + self.arm_v_indices):
             S[v, n_eta + k] = 1.0
         return S
@@ -194,7 +194,7 @@ class Robot:
         if x.shape != (self.nx,) or not np.all(np.isfinite(x)):
             raise ConfigurationError(f"reduced velocity must be {self.nx} finite numbers, got shape {x.shape}")
         rows, block = self.platform.tangent_block_rate(self.check_configuration(q), x)
-        out[np.ix_(rows, range(self.platform.n_reduced))] = block
+        out[np.ix_(rows, np.arange(self.platform.n_reduced))] = block
         return out
 
     # ----- sizes and names -----
@@ -376,7 +376,7 @@ class Robot:
         return q
 
     @functools.cached_property
-    def _q_layout(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    def _q_layout(self) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
         """Indices in q of the (cos, sin) pairs (planar root, continuous joints), of the one-entry
         joints, and the names of both."""
         cos_index, pair_names, single_index, single_names = [], [], [], []
@@ -612,7 +612,8 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
 
     platform = get_kind(spec.platform).build(spec.wheels, urdf, model)
     from_urdf = dict(platform.urdf_limits(urdf))
-    velocity, effort = {}, {}
+    velocity: dict[str, float] = {}
+    effort: dict[str, float] = {}
     for name in platform.reduced_names + spec.torso + spec.arm_joint_names:
         vel, eff = from_urdf[name] if name in from_urdf else joint_limits(urdf, name)
         for table, kind, value in ((velocity, "velocity", vel), (effort, "effort", eff)):

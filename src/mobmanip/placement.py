@@ -150,12 +150,13 @@ class _Problem:
         are zero at a few random poses never move (e.g. the height of a planar arm's hand) and are
         left out (SLSQP needs independent constraints); they are checked at the starts instead."""
         rng = np.random.default_rng(0)
-        moving = None
+        moving: np.ndarray | None = None
         for _ in range(3):
             z = rng.uniform(-math.pi, math.pi, self.n)
             nonzero = np.abs(self.constraints(z)[1]).max(axis=1) > 1e-12
             moving = nonzero if moving is None else moving | nonzero
         self.constraint_evaluations = 0
+        assert moving is not None
         return np.flatnonzero(moving)
 
     def fixed_errors(self, z: np.ndarray) -> np.ndarray:
@@ -172,7 +173,7 @@ class _Problem:
     # ----- variables -----
 
     def bounds(self) -> list[tuple[float | None, float | None]]:
-        out = []
+        out: list[tuple[float | None, float | None]] = []
         if self.region is None:
             out += [(None, None), (None, None)]
         else:
@@ -381,7 +382,7 @@ def place(
     problem = _Problem(robot, evaluator, target, region, q_ref)
     bounds = problem.bounds()
     best = None
-    runs = []
+    runs: list[tuple[float | None, float | None]] = []
     best_start = None
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:

@@ -489,7 +489,7 @@ class Polytope(TaskSet):
             V = p0 + hull.vertices @ self._N.T
             rep = {"vertices": V, "faces": hull.faces, "facet_rows": hull.facet_rows, "hull": hull}
             self._exact_vertices(rep, hull)
-        rep["vertices"].setflags(write=False)
+        rep["vertices"].setflags(write=False)  # type: ignore[union-attr]
         self._cache["vrep"] = rep
         return rep
 

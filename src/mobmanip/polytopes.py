@@ -347,8 +347,8 @@ def polytope_indices(kind: str, directions: np.ndarray | None = None, **terms) -
     k = 0 if D is None else len(D)
     support, radius = np.zeros((len(batch), k)), np.zeros((len(batch), k))
     for j in range(k):
-        support[:, j] = batch.support(D[j])
-        radius[:, j] = batch.radius_along(D[j])
+        support[:, j] = batch.support(D[j])  # type: ignore[index]
+        radius[:, j] = batch.radius_along(D[j])  # type: ignore[index]
     return PolytopeIndices(batch.volume, batch.isotropy, batch.empty, batch.degenerate, support, radius)
 
 

@@ -286,8 +286,8 @@ class _Solver:
                 placed[row, i] = placement.rotation
                 if jacobians:
                     J = frame_jacobian(model, data, fid, lwa)
-                    J_p[row, 3 * i : 3 * i + 3, cols] = J[:3, v]
-                    J_o[row, 3 * i : 3 * i + 3, cols] = J[3:, v]
+                    J_p[row, 3 * i : 3 * i + 3, cols] = J[:3, v]  # type: ignore[index]
+                    J_o[row, 3 * i : 3 * i + 3, cols] = J[3:, v]  # type: ignore[index]
         e_p = (targets - positions).reshape(N, 3 * k)
         e_o = rotation_log(target_rotations @ np.swapaxes(placed, 2, 3)).reshape(N, 3 * k)
         return e_p, e_o, J_p, J_o
@@ -567,8 +567,8 @@ def _solve(solver: _Solver, hold: Hold, q0: np.ndarray, start: np.ndarray, end: 
 
 def solve_postures(
     robot: Robot,
-    angle_deg: Sequence[float],
-    distance: Sequence[float],
+    angle_deg: Sequence[float] | np.ndarray,
+    distance: Sequence[float] | np.ndarray,
     reference: np.ndarray | None = None,
 ) -> IKPostureTable:
     """Postures of all arms holding the object at every (angle, distance) of a grid.

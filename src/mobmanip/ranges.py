@@ -74,8 +74,8 @@ def check_limit_ratio(kind: str, limits: dict[str, float]) -> None:
     """
     if not limits:
         return
-    largest = max(limits, key=limits.get)
-    smallest = min(limits, key=limits.get)
+    largest = max(limits, key=limits.__getitem__)
+    smallest = min(limits, key=limits.__getitem__)
     ratio = limits[largest] / limits[smallest]
     bound = LIMIT_RATIOS[kind]
     if ratio > bound:

@@ -707,7 +707,9 @@ def _unreachable_message(robot: Robot, grid: SweepGrid, table) -> str:
     )
 
 
-def _assemble(spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable) -> SweepResult:
+def _assemble(
+    spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable | IKPostureTable
+) -> SweepResult:
     a, d, h, nv, ne = grid.shape
     indices = {}
     for measure in resolve_measures(spec.measures, sweep=True):

@@ -260,9 +260,9 @@ def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: in
             x = getattr(grid, AXES[pair[0]])
             y = getattr(grid, AXES[pair[1]])
             if polar:
-                ax.set_theta_zero_location("N")
+                ax.set_theta_zero_location("N")  # type: ignore[attr-defined]  # a polar Axes
                 mesh = ax.pcolormesh(np.radians(x), y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
-                ax.set_rlim(0.0, float(y.max()) * 1.05)
+                ax.set_rlim(0.0, float(y.max()) * 1.05)  # type: ignore[attr-defined]
             else:
                 mesh = ax.pcolormesh(x, y, data.T, shading="nearest", vmin=vmin, vmax=vmax)
                 ax.set_xlabel(_AXIS_LABELS[AXES[pair[0]]])

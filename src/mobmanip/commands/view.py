@@ -121,7 +121,7 @@ def run(args) -> int:
             c = analysis.held_object.center
             print(f"task point (object): ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m")
             notes = _describe_empty("the", analysis) + _describe_empty("the locked-platform", locked)
-        print(f"scale: {viewer.scales.describe()}")
+        print(f"scale: {viewer.scales.describe()}")  # type: ignore[union-attr]  # fitted by show/animate
         for note in viewer.mesh_notes + notes:
             print(note)
         if args.export:

@@ -23,7 +23,7 @@ PORT_BUSY_EXIT = 3
 #: origin, e.g. a DNS-rebinding attacker's name resolving to 127.0.0.1, is refused.
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "[::1]")
 #: The HTTP port once the server listens (set in :func:`main`).
-_SERVER = {"port": None}
+_SERVER: dict[str, int | None] = {"port": None}
 
 
 def local_request(host: str | None, origin: str | None) -> bool:

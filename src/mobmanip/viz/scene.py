@@ -83,6 +83,7 @@ import pinocchio as pin
 from ..analysis import Analysis, analyze
 from ..errors import MobmanipError, ModelError
 from ..io import write_text
+from ..measure import TaskSet
 from ..measures import Quantity, default_measures, get_measure, measure_names, resolve_measures
 from ..model import Robot, locked_joints
 from .server import MeshcatServer, ViewerError
@@ -444,10 +445,10 @@ class EllipsoidViewer:
             DRAWINGS[kind].load(self._vis, scene_path(name, locked), scene_color(name, locked), locked)
             self._visible[key] = None
 
-    def _drawn(self, analysis: Analysis | None, locked: bool) -> dict[tuple[bool, str], object]:
+    def _drawn(self, analysis: Analysis | None, locked: bool) -> dict[tuple[bool, str], TaskSet]:
         """The sets of an analysis the viewer draws, by (locked, measure name); the others are
         noted in :attr:`undrawn`."""
-        out = {}
+        out: dict[tuple[bool, str], TaskSet] = {}
         if analysis is not None:
             for name, task_set in analysis.measures.items():
                 if task_set.kind in DRAWINGS:
@@ -606,6 +607,7 @@ class EllipsoidViewer:
         for frame, sets in zip(frames, per_frame):
             pin.forwardKinematics(self.model, data, frame.q)
             pin.updateGeometryPlacements(self.model, data, self.visual_model, geometry_data)
+            poses: list[tuple[str, np.ndarray, np.ndarray | None]]
             poses = [(path, geometry_data.oMg[g].homogeneous, None) for g, path in enumerate(geometry_paths)]
             poses.append((OBJECT_PATH, _translation(frame.analysis.held_object.center), None))
             for key in keys:
