@@ -32,6 +32,7 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .errors import FrameNotFoundError, JointNotFoundError, SpecError, UrdfError, WheelError
 from .platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
@@ -80,7 +81,7 @@ class Detection:
     urdf_limits: Mapping[str, tuple[float | None, float | None]]
 
 
-def detect_platform(urdf, candidates, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
+def detect_platform(urdf: Any, candidates: Sequence, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
     """The platform kind the wheel candidates fit, and what it found (``None``: fixed).
 
     Every wheeled kind of :data:`mobmanip.platforms.KINDS` is asked; exactly one must fit.
@@ -121,7 +122,7 @@ def _frame_link(urdf, frame: str, path: str | Path) -> str:
     raise FrameNotFoundError(frame, list(urdf.link_map) + list(urdf.joint_map), where=str(path))
 
 
-def arm_joints(urdf, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF") -> list[str]:
+def arm_joints(urdf: Any, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF") -> list[str]:
     """The actuated joints from the root link to ``end_effector``, root first.
 
     Args:
@@ -329,7 +330,7 @@ def spec_from_urdf(
     end_effectors: Sequence[str],
     wheels: tuple[str, ...] | None = None,
     platform: str | None = None,
-    **options,
+    **options: Any,
 ) -> RobotSpec:
     """The spec :func:`detect_spec` infers (same arguments), without the notes."""
     return detect_spec(path, end_effectors, wheels, platform, **options).spec

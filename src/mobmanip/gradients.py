@@ -241,7 +241,7 @@ class GradientEvaluator:
             value[start:stop], grad[start:stop], ok[start:stop] = self._chunk(qs[start:stop])
         return GradientBatch(self.objective, value, grad, ok)
 
-    def shape(self, qs: np.ndarray):
+    def shape(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The ellipsoids' shape C (N, m, m), its derivative dC (N, nv, m, m), centre c (N, m),
         dc (N, nv, m) and the mask of configurations where they are differentiable (N,)."""
         self.evaluations += qs.shape[0]

@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import SetQueryError
 
@@ -140,7 +141,7 @@ class TaskSetBatch(Protocol):
     def __getitem__(self, index: int) -> TaskSet: ...
 
 
-def check_direction(direction, m: int, where: str = "direction") -> np.ndarray:
+def check_direction(direction: ArrayLike, m: int, where: str = "direction") -> np.ndarray:
     """A direction as a float array (m,), checked: finite and not zero.
 
     Raises:
@@ -157,7 +158,7 @@ def check_direction(direction, m: int, where: str = "direction") -> np.ndarray:
     return d
 
 
-def check_points(points, m: int) -> np.ndarray:
+def check_points(points: ArrayLike, m: int) -> np.ndarray:
     """Points as a float array (n, m) (one point (m,) becomes (1, m)), checked finite.
 
     Raises:

@@ -42,7 +42,7 @@ from __future__ import annotations
 import types
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -50,6 +50,9 @@ from .batch import BatchSetup, EllipsoidBatch, ellipsoids_from_terms
 from .ellipsoids import dynamic_ellipsoid, kinematic_ellipsoid
 from .errors import MeasureError, UnknownMeasureError
 from .measure import TaskSet, TaskSetBatch
+
+if TYPE_CHECKING:  # analysis imports this module
+    from .analysis import Analysis
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,7 @@ class MeasureTerms:
     decoupled: bool
 
     @classmethod
-    def of(cls, analysis) -> MeasureTerms:
+    def of(cls, analysis: Analysis) -> MeasureTerms:
         """The terms of an :class:`mobmanip.analysis.Analysis` (its P as its ``decoupled`` says)."""
         obj, robot = analysis.held_object, analysis.robot
         return cls(

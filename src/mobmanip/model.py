@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ._native_stderr import call_with_large_stack, captured_native_stderr
 from .errors import (
@@ -354,7 +355,7 @@ class Robot:
             joints[self.model.names[j]] = value
         return {"platform": [float(q[0]), float(q[1]), math.atan2(q[3], q[2])], "joints": joints}
 
-    def check_configuration(self, q) -> np.ndarray:
+    def check_configuration(self, q: ArrayLike) -> np.ndarray:
         """Return q as a float array after checking its size and finiteness.
 
         Raises:

@@ -35,8 +35,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
+from .analysis import Analysis
 from .errors import ArgumentError, UnreachableObjectError
 from .gradients import GradientEvaluator, Objective, platform_gradient
 from .model import Robot
@@ -334,7 +336,7 @@ def _project(problem: _Problem, z0: np.ndarray, bounds) -> np.ndarray | None:
 
 def place(
     robot: Robot,
-    target,
+    target: ArrayLike,
     objective: Objective | str,
     task: str | None = None,
     *,
@@ -459,7 +461,7 @@ def _check_target(target) -> np.ndarray:
     return t
 
 
-def placement_document(robot: Robot, placement: Placement, analysis) -> dict:
+def placement_document(robot: Robot, placement: Placement, analysis: Analysis) -> dict:
     """The JSON document of ``mobmanip place --json``: the configuration under ``"q"`` in the
     q.json form (``{"platform": [x, y, yaw], "joints": {...}}``), the objective, its value, the
     start's value, the search's cost and ``"analysis"``, the configuration's analysis as

@@ -35,6 +35,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import zonotope
 from .errors import TaskError
@@ -67,7 +68,16 @@ class Polytope(TaskSet):
 
     kind = "polytope"
 
-    def __init__(self, F, c, G, input_limits=None, *, _center=None, _effort=None):
+    def __init__(
+        self,
+        F: ArrayLike,
+        c: ArrayLike,
+        G: ArrayLike,
+        input_limits: ArrayLike | None = None,
+        *,
+        _center: ArrayLike | None = None,
+        _effort: ArrayLike | None = None,
+    ) -> None:
         F, c, G = (np.array(x, dtype=float) for x in (F, c, G))
         if F.ndim != 2 or G.ndim != 2 or c.shape != (F.shape[0],) or G.shape[0] != F.shape[0]:
             raise TaskError(f"polytope needs shapes F (p, m), c (p,), G (p, n); got {F.shape}, {c.shape}, {G.shape}")
@@ -104,7 +114,7 @@ class Polytope(TaskSet):
     # Construction
 
     @classmethod
-    def zonotope(cls, center, generators, input_limits=None) -> Polytope:
+    def zonotope(cls, center: ArrayLike, generators: ArrayLike, input_limits: ArrayLike | None = None) -> Polytope:
         """The zonotope ``{center + G y : |y_i| <= 1}``, G (m, n)."""
         center = np.asarray(center, dtype=float).reshape(-1)
         return cls(np.eye(center.shape[0]), center, generators, input_limits)
@@ -193,10 +203,10 @@ class Polytope(TaskSet):
             raise TaskError("this polytope is a section of a zonotope, not a zonotope: it has no generators")
         return self._G
 
-    def support(self, direction) -> float:
+    def support(self, direction: ArrayLike) -> float:
         return float(self.supports(np.asarray(direction, dtype=float).reshape(1, -1))[0])
 
-    def supports(self, directions) -> np.ndarray:
+    def supports(self, directions: ArrayLike) -> np.ndarray:
         """max over the set of d . a for each row d of ``directions`` (k, m); zeros when empty."""
         D = self._directions(directions)
         if self.empty:
@@ -207,7 +217,7 @@ class Polytope(TaskSet):
             return (D @ self.vertices.T).max(axis=1)
         return np.array([self._support_lp(d) for d in D])
 
-    def radius_along(self, direction) -> float:
+    def radius_along(self, direction: ArrayLike) -> float:
         d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
         norm = float(np.linalg.norm(d))
         if norm == 0.0:
@@ -215,7 +225,7 @@ class Polytope(TaskSet):
         d = d / norm
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
-    def contains(self, points, tol: float = 1e-9) -> np.ndarray:
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
         """Whether each point (n, m) or (m,) is reached with every ``|y_i| <= 1 + tol``.
 
         That is: every joint within (1 + tol) times its own limit; the equalities (directions in
@@ -354,7 +364,7 @@ class Polytope(TaskSet):
             rep["Y"] = Y
         return rep["Y"] * self._limits
 
-    def inputs(self, points, tol: float = 1e-9) -> np.ndarray:
+    def inputs(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
         """Joint values (``|y_i| <= 1 + tol`` of their limits) reaching each point, (k, n) in physical units.
 
         Raises:

@@ -53,11 +53,12 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .errors import SpecError
 from .model import Robot
@@ -116,7 +117,7 @@ class Hold:
         dx, dy = self.center[:2] - self.origin
         return math.atan2(dy, dx) if math.hypot(dx, dy) > 0.0 else 0.0
 
-    def targets(self, center_angle, distance, turn) -> tuple[np.ndarray, np.ndarray]:
+    def targets(self, center_angle: ArrayLike, distance: ArrayLike, turn: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """End-effector targets for object centres at polar (center_angle, distance) from o
         with the hold turned by ``turn`` (rad); at a grid point both angles are alpha.
 
@@ -139,7 +140,7 @@ class Hold:
         return positions, rotations
 
 
-def reference_configuration(robot: Robot, joints=None) -> np.ndarray:
+def reference_configuration(robot: Robot, joints: Mapping[str, float] | None = None) -> np.ndarray:
     """The reference posture: the home configuration with ``joints`` (name -> value) set, the
     platform at the origin with heading 0.
 

@@ -44,7 +44,7 @@ import logging
 import math
 import multiprocessing
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -235,7 +235,11 @@ def _posture_rows(table: IKPostureTable, first: int = 0, stop: int | None = None
 
 
 def sweep_postures(
-    robot: Robot, grid: SweepGrid, method: str = "auto", reference=None, map_fn=map
+    robot: Robot,
+    grid: SweepGrid,
+    method: str = "auto",
+    reference: Mapping[str, float] | None = None,
+    map_fn: Callable = map,
 ) -> PostureTable | IKPostureTable:
     """The arms' postures for a grid (see the module's docstring for the methods).
 

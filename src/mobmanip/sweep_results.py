@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -170,7 +171,7 @@ class SweepResult:
         return path
 
 
-def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | None]:
+def check_index_name(name: str, m: int, measures: Iterable[str] | None = None) -> tuple[str, str, int | None]:
     """Split an index name into (measure, index or per-axis array, axis number or None):
     ``"kinematic.volume"`` gives ``("kinematic", "volume", None)``, ``"dynamic.semi_axis_2"``
     gives ``("dynamic", "semi_axes", 2)``.
@@ -196,7 +197,7 @@ def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | 
     raise ArgumentError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
 
 
-def index_names(m: int, measures=None) -> list[str]:
+def index_names(m: int, measures: Iterable[str] | None = None) -> list[str]:
     """Names accepted by :meth:`SweepResult.index` for an m-dimensional task and the measures
     swept (names; ``None``: the default ones)."""
     out = []

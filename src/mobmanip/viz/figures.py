@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -15,11 +16,13 @@ matplotlib.use("Agg")  # figures are written to files; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from ..ellipsoids import Ellipsoid  # noqa: E402
 from ..io import save_figure  # noqa: E402
 from ..model import Robot  # noqa: E402
+from ..polytope import Polytope  # noqa: E402
 
 COLORS = ("#1b9e77", "#d95f02", "#7570b3", "#444444", "#e7298a", "#66a61e")
 
@@ -30,7 +33,7 @@ def _platform_outline(robot: Robot) -> np.ndarray:
     return platform.outline()
 
 
-def draw_robot(ax, robot: Robot, q: np.ndarray) -> None:
+def draw_robot(ax: Axes, robot: Robot, q: np.ndarray) -> None:
     """Draw the platform, its wheels and the arms (links as lines through the joints) from above."""
     model, data = robot.model, robot.data
     pin.framesForwardKinematics(model, data, q)
@@ -57,7 +60,7 @@ def draw_robot(ax, robot: Robot, q: np.ndarray) -> None:
         ax.plot(points[:, 0], points[:, 1], "-o", color=("#c05a1f", "#3a6fb0")[k % 2], lw=2.5, ms=4, zorder=3)
 
 
-def draw_ellipse(ax, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style) -> np.ndarray:
+def draw_ellipse(ax: Axes, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style: Any) -> np.ndarray:
     """Draw a 2-D ellipse (task units) at a point (m), semi-axes multiplied by ``scale``;
     returns the drawn boundary points (k, 2) in metres."""
     if ellipse.dim != 2:
@@ -68,7 +71,7 @@ def draw_ellipse(ax, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style) 
     return points
 
 
-def draw_polygon(ax, polytope, at: np.ndarray, scale: float, **style) -> np.ndarray:
+def draw_polygon(ax: Axes, polytope: Polytope, at: np.ndarray, scale: float, **style: Any) -> np.ndarray:
     """Draw a 2-D polytope (task units; its shadow on the first two coordinates otherwise) at a
     point (m), multiplied by ``scale``, as its closed outline; returns the drawn vertices (k, 2)
     in metres, counter-clockwise (none when empty)."""

@@ -76,6 +76,7 @@ import webbrowser
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -300,7 +301,7 @@ class Frame:
 
 
 def analyze_pair(
-    robot: Robot, q: np.ndarray, task: str | None = None, *, locked: bool = True, **options
+    robot: Robot, q: np.ndarray, task: str | None = None, *, locked: bool = True, **options: Any
 ) -> tuple[Analysis, Analysis | None]:
     """``analyze`` the robot and, if it has a moving platform and ``locked``, the same
     configuration with the platform locked (the arms alone)."""
