@@ -120,3 +120,14 @@ def test_analysis_html_is_a_table_of_its_measures(analysis):
     assert header == ["measure", "units", "set"]
     assert [row[0] for row in rows] == list(analysis.measures)
     assert rows[1][1] == "m/s^2, rad/s^2"
+
+
+def test_sweep_and_case_study_reprs_are_summaries():
+    """A sweep's repr counts what it holds (grid shape, reachable points) from its own arrays."""
+    from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
+
+    result = run_sweep(SweepSpec("planar_dual_arm"), SweepGrid(angle_deg=[0, 90], distance=[0.8, 5.0]), workers=1)
+    text = repr(result)
+    assert "\n" not in text and "grid 2 x 2 x 1 x 1 x 1" in text
+    assert f"reachable {int(result.reachable.sum())}/4" in text and "reachable 2/4" in text  # 5 m is out of reach
+    assert "measures kinematic, dynamic" in text

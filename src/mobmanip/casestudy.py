@@ -141,6 +141,13 @@ class CaseStudy:
     kinematic: tuple[KinematicCase, ...]
     dynamic: tuple[DynamicCase, ...]
 
+    def __repr__(self) -> str:
+        q = ", ".join(f"{v:.4f}" for v in self.posture.q)
+        return (
+            f"CaseStudy(robot={self.robot.name!r}, arm posture ({q}) rad, "
+            f"{len(self.kinematic)} kinematic and {len(self.dynamic)} dynamic cases)"
+        )
+
     def to_dict(self) -> dict:
         """JSON-ready: each case gives its figure's ellipsoid (``semi_axes``, ``axes``) and every
         other measure of the same quantity it was analysed with, under its JSON key (e.g. a

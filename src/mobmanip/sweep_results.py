@@ -66,6 +66,16 @@ class SweepResult:
     indices: dict
     postures: PostureTable | IKPostureTable
 
+    def __repr__(self) -> str:
+        shape = " x ".join(str(n) for n in self.grid.shape)
+        measures = ", ".join(m.name for m in self.measures)
+        reach = f"{int(np.count_nonzero(self.reachable))}/{self.reachable.size}"
+        return (
+            f"SweepResult(robot={str(self.spec.robot)!r}, task={self.task!r}, grid {shape} "
+            f"(angle x distance x heading x velocity scale x effort scale), measures {measures}, "
+            f"reachable {reach})"
+        )
+
     def joint_positions(self) -> tuple[tuple[str, ...], np.ndarray]:
         """The arm joints' names and positions (rad or m) at every (angle, distance), (A, D, n);
         NaN where unreachable. The platform heading turns the whole robot and does not change them."""
