@@ -29,6 +29,7 @@ viewer (``mobmanip view ROBOT --q``).
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -50,6 +51,9 @@ from .tasks import get_task
 CONSTRAINT_TOLERANCE = 1e-6
 #: Default number of starts (platform headings around the object).
 DEFAULT_STARTS = 8
+
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -432,6 +436,15 @@ def place(
             f"{robot.name}'s hold keeps the object {problem.hold.height:.3f} m high in its reference posture)"
         )
     value, z, residual = best
+    _log.info(
+        "placement of %s for %s: %.6g after %d evaluations from %d starts (best start %s)",
+        robot.name,
+        evaluator.objective.text,
+        value,
+        evaluator.evaluations,
+        starts,
+        "none" if best_start is None else f"{best_start:.6g}",
+    )
     return Placement(
         q=problem.configuration(z),
         objective=evaluator.objective,

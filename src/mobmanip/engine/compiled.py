@@ -9,6 +9,7 @@ reference path.
 from __future__ import annotations
 
 import functools
+import logging
 from typing import NamedTuple
 
 import numpy as np
@@ -17,6 +18,8 @@ from .. import tolerances
 from .results import EllipsoidBatch
 from .setup import BatchSetup
 from .terms import ChunkTerms
+
+_log = logging.getLogger(__name__)
 
 
 def kernel_available() -> bool:
@@ -27,9 +30,11 @@ def kernel_available() -> bool:
 @functools.cache
 def kernel_module():
     """The compiled kernel's module, or ``None`` where Numba is missing or unusable."""
+    _log.debug("loading the compiled kernel (the first run in an environment compiles it)")
     try:
         from . import kernel
     except ImportError:  # Numba missing or unusable on this platform: the NumPy paths remain
+        _log.info("the compiled kernel is not available (Numba missing or unusable): NumPy paths are used")
         return None
     return kernel
 
