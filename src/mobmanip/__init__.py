@@ -9,6 +9,8 @@ names: :mod:`mobmanip.sweep` (grids), :mod:`mobmanip.casestudy` (the paper's Sec
 and :mod:`mobmanip.viz` (the viewer and figures).
 """
 
+import logging
+
 from .analysis import Analysis, analyze
 from .batch import BatchAnalysis, EllipsoidBatch, analyze_batch
 from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
@@ -67,4 +69,17 @@ __all__ = [
     "unified_jacobian",
     "unregister_measure",
 ]
-__version__ = "0.1.0"
+
+
+def _installed_version() -> str:
+    """The version of the installed distribution (pyproject.toml is its one source)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("mobmanip")
+    except PackageNotFoundError:  # imported from a source tree that was never installed
+        return "0+unknown"
+
+
+__version__ = _installed_version()
+logging.getLogger(__name__).addHandler(logging.NullHandler())  # quiet unless the application configures logging

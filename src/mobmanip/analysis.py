@@ -12,6 +12,7 @@ import functools
 import types
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_e
 from .ellipsoids import Ellipsoid
 from .engine import evaluate_one
 from .engine.compiled import kernel_ready
-from .errors import ArgumentError, MeasureError, TaskError
+from .errors import ArgumentError, MeasureError, MobmanipError, TaskError
 from .grasp import HeldObject
 from .measure import TaskSet
 from .measures import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
@@ -97,12 +98,51 @@ class Analysis:
     @property
     def kinematic(self) -> Ellipsoid:
         """The unified kinematic ellipsoid (m/s, rad/s): ``measures["kinematic"]``."""
-        return self.measure(KINEMATIC.name)
+        return cast(Ellipsoid, self.measure(KINEMATIC.name))
 
     @property
     def dynamic(self) -> Ellipsoid:
         """The unified dynamic ellipsoid (m/s^2, rad/s^2): ``measures["dynamic"]``."""
-        return self.measure(DYNAMIC.name)
+        return cast(Ellipsoid, self.measure(DYNAMIC.name))
+
+    def _set_summaries(self) -> list[tuple[str, str, str]]:
+        """(measure name, units, one-line summary) of each set, for the two representations below."""
+        rows = []
+        for name, task_set in self.measures.items():
+            units = get_measure(name).quantity.units
+            if task_set.empty:
+                rows.append((name, units, "empty"))
+                continue
+            semi_axes = getattr(task_set, "semi_axes", None)
+            shape = "" if semi_axes is None else "semi-axes " + ", ".join(f"{v:.4g}" for v in semi_axes) + "; "
+            flag = " (degenerate)" if task_set.degenerate else ""
+            rows.append(
+                (
+                    name,
+                    units,
+                    f"{shape}volume {_number(task_set, 'volume')}, isotropy {_number(task_set, 'isotropy')}{flag}",
+                )
+            )
+        return rows
+
+    def __repr__(self) -> str:
+        sets = "; ".join(f"{name}: {text} [{units}]" for name, units, text in self._set_summaries())
+        coupling = ", decoupled" if self.decoupled else ""
+        return f"Analysis(robot={self.robot.name!r}, task={self.task!r}{coupling}, {sets})"
+
+    def _repr_html_(self) -> str:
+        """A table of the measures, for Jupyter."""
+        from html import escape
+
+        rows = "".join(
+            f"<tr><td>{escape(name)}</td><td>{escape(units)}</td><td>{escape(text)}</td></tr>"
+            for name, units, text in self._set_summaries()
+        )
+        coupling = " (decoupled)" if self.decoupled else ""
+        return (
+            f"<p><b>Analysis</b> of {escape(self.robot.name)}, task {escape(self.task)}{coupling}</p>"
+            f"<table><tr><th>measure</th><th>units</th><th>set</th></tr>{rows}</table>"
+        )
 
     def to_dict(self) -> dict:
         """A JSON-ready dictionary (matrices as lists of rows); each measure under its JSON key
@@ -147,6 +187,15 @@ class Analysis:
         if blocks is None:
             return {}
         return {"block_indices": {get_measure(name).json_key: value for name, value in blocks.items()}}
+
+
+def _number(task_set: TaskSet, index: str) -> str:
+    """An index of a set for printing, ``n/a`` where it cannot be computed (a 6-D polytope's volume)."""
+    try:
+        value = getattr(task_set, index)
+    except MobmanipError:
+        return "n/a"
+    return f"{value:.4g}" if value is not None and np.isfinite(value) else "n/a"
 
 
 def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> HeldObject:

@@ -141,6 +141,13 @@ class CaseStudy:
     kinematic: tuple[KinematicCase, ...]
     dynamic: tuple[DynamicCase, ...]
 
+    def __repr__(self) -> str:
+        q = ", ".join(f"{v:.4f}" for v in self.posture.q)
+        return (
+            f"CaseStudy(robot={self.robot.name!r}, arm posture ({q}) rad, "
+            f"{len(self.kinematic)} kinematic and {len(self.dynamic)} dynamic cases)"
+        )
+
     def to_dict(self) -> dict:
         """JSON-ready: each case gives its figure's ellipsoid (``semi_axes``, ``axes``) and every
         other measure of the same quantity it was analysed with, under its JSON key (e.g. a
@@ -215,7 +222,7 @@ def run_case_study(
         f"optimal arm posture q2 = {posture.q[1]:.4f}, q3 = {posture.q[2]:.4f} rad, "
         f"manipulability {posture.manipulability:.4f} m^2, reach {posture.reach:.4f} m"
     )
-    radius = robot.platform.radius
+    radius = robot.platform.radius  # type: ignore[attr-defined]  # a differential drive (checked)
     kinematic, dynamic = [], []
     for angle in angles_deg:
         q = configuration_at(robot, posture, angle)

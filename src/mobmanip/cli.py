@@ -7,6 +7,7 @@ bad input prints one line ``mobmanip: error: ...`` on standard error and exits w
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 import warnings
@@ -29,6 +30,13 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mobmanip", description="What a wheeled mobile manipulator can do at the end effector.")
     parser.add_argument("--version", action="version", version=f"mobmanip {__version__}")
+    parser.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0,
+        help="say what is being done on standard error (-vv: in more detail); quiet by default",
+    )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     for module in COMMANDS:
@@ -49,6 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     parser = build_parser()
     args = parser.parse_args(argv)
+    _configure_logging(args.verbose)
     try:
         # A command's output files are published together when it succeeds, all or none.
         with warnings.catch_warnings(), np.errstate(all="ignore"), protect_inputs(), publish_together():
@@ -71,6 +80,19 @@ def main(argv: list[str] | None = None) -> int:
         if os.environ.get("MOBMANIP_TRACEBACK"):
             raise
         return _fail(f"internal error ({type(exc).__name__}: {exc}); please report it with the command that caused it")
+
+
+def _configure_logging(verbosity: int) -> None:
+    """Show mobmanip's log records on standard error: warnings only by default, ``-v`` adds
+    what is being done (INFO), ``-vv`` the details (DEBUG)."""
+    level = {0: logging.WARNING, 1: logging.INFO}.get(verbosity, logging.DEBUG)
+    logger = logging.getLogger("mobmanip")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("mobmanip: %(levelname)s: %(message)s"))
+    logger.handlers = [h for h in logger.handlers if not getattr(h, "_mobmanip_cli", False)]
+    handler._mobmanip_cli = True  # type: ignore[attr-defined]
+    logger.addHandler(handler)
+    logger.setLevel(level)
 
 
 #: Options that name one output file (a directory or prefix option is checked when written).

@@ -33,6 +33,7 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
 from .errors import FrameNotFoundError, JointNotFoundError, SpecError, UrdfError, WheelError
@@ -88,7 +89,7 @@ class Detection:
     missing: tuple[Missing, ...] = ()
 
 
-def detect_platform(urdf, candidates, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
+def detect_platform(urdf: Any, candidates: Sequence, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
     """The platform kind the wheel candidates fit, and what it found (``None``: fixed).
 
     Every wheeled kind of :data:`mobmanip.platforms.KINDS` is asked; exactly one must fit.
@@ -129,7 +130,7 @@ def _frame_link(urdf, frame: str, path: str | Path) -> str:
     raise FrameNotFoundError(frame, list(urdf.link_map) + list(urdf.joint_map), where=str(path))
 
 
-def arm_joints(urdf, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF") -> list[str]:
+def arm_joints(urdf: Any, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF") -> list[str]:
     """The actuated joints from the root link to ``end_effector``, root first.
 
     Args:
@@ -190,7 +191,7 @@ def _planar(urdf, joints: Iterable[str]) -> bool:
 def detect_spec(
     path: str | Path,
     end_effectors: Sequence[str],
-    wheels: tuple[str, str] | None = None,
+    wheels: tuple[str, ...] | None = None,
     platform: str | None = None,
     *,
     torso: bool = False,
@@ -291,7 +292,8 @@ def detect_spec(
             counts[joint] = counts.get(joint, 0) + 1
     shared = tuple(j for j in dict.fromkeys(j for p in paths for j in p) if counts[j] > 1)
     mimics = mimic_joints(urdf)
-    arms, taken = [], set()
+    arms: list = []
+    taken: set[str] = set()
     for k, (ee, joints) in enumerate(zip(end_effectors, paths)):
         own = tuple(j for j in joints if j not in shared)
         if not own:
@@ -412,9 +414,9 @@ def _missing(spec: RobotSpec, kind: PlatformKind, urdf_limits, unmeasured) -> li
 def spec_from_urdf(
     path: str | Path,
     end_effectors: Sequence[str],
-    wheels: tuple[str, str] | None = None,
+    wheels: tuple[str, ...] | None = None,
     platform: str | None = None,
-    **options,
+    **options: Any,
 ) -> RobotSpec:
     """The spec :func:`detect_spec` infers (same arguments), without the notes."""
     return detect_spec(path, end_effectors, wheels, platform, **options).spec

@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import ClassVar
 
 import numpy as np
 
@@ -72,7 +71,7 @@ class Ellipsoid(TaskSet):
     degenerate: bool
     empty: bool
 
-    kind: ClassVar[str] = "ellipsoid"
+    kind = "ellipsoid"
 
     @property
     def dim(self) -> int:
@@ -302,7 +301,9 @@ def dynamic_ellipsoid(
     if N.shape[1] == 0:
         mu_bar = Z * _torque_offset(J_u, W_pinv, Q, xi, g_o)
         return Ellipsoid.from_generator(np.zeros(m), np.zeros((m, 1)), empty=bool(np.linalg.norm(mu_bar) >= 1.0))
-    return _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N)
+    ellipsoid = _dynamic_from(Z, J_u, J_pinv, W, W_pinv, P, Q, xi, M_o, g_o, N)
+    assert ellipsoid is not None  # with the null space N given, the general form always answers
+    return ellipsoid
 
 
 def _torque_offset(J_u, W_pinv, Q, xi, g_o) -> np.ndarray:

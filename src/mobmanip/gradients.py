@@ -21,7 +21,7 @@ differentiable; see :attr:`GradientBatch.defined`), are
 
 - kinematic: C = (W (J_hat J_hat^T)^-1 W^T)^-1, J_hat = J_u diag(qdot_max), c = 0;
 - dynamic: with L = Z Lambda_o and mu_bar = Z mu_o (:mod:`mobmanip.ellipsoids`),
-  C = rho^2 (L^T L)^-1 and c = -(L^T L)^-1 L^T mu_bar, rho^2 = 1 - |mu_bar|^2 - mu_bar^T L c;
+  ``C = rho^2 (L^T L)^-1`` and ``c = -(L^T L)^-1 L^T mu_bar``, ``rho^2 = 1 - |mu_bar|^2 - mu_bar^T L c``;
   empty (not differentiable) when rho^2 <= 0.
 
 :meth:`GradientEvaluator.batch` (and ``__call__``) run the chain in reverse
@@ -251,7 +251,7 @@ class GradientEvaluator:
             value[start:stop], grad[start:stop], ok[start:stop] = self._chunk(qs[start:stop])
         return GradientBatch(self.objective, value, grad, ok)
 
-    def shape(self, qs: np.ndarray):
+    def shape(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The ellipsoids' shape C (N, m, m), its derivative dC (N, nv, m, m), centre c (N, m),
         dc (N, nv, m) and the mask of configurations where they are differentiable (N,)."""
         self.evaluations += qs.shape[0]

@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import SetQueryError
 
@@ -124,8 +125,13 @@ class TaskSetBatch(Protocol):
     def isotropy(self) -> np.ndarray:
         """Isotropies in [0, 1], (N,) (0 where empty or degenerate)."""
 
-    degenerate: np.ndarray
-    empty: np.ndarray
+    @property
+    def degenerate(self) -> np.ndarray:
+        """Whether each set has a zero extent in some direction, (N,) bool."""
+
+    @property
+    def empty(self) -> np.ndarray:
+        """Whether each set is empty, (N,) bool."""
 
     def support(self, direction: np.ndarray) -> np.ndarray:
         """max over set n of d . p, (N,), for one direction (m,) or one per row (N, m)."""
@@ -135,7 +141,7 @@ class TaskSetBatch(Protocol):
     def __getitem__(self, index: int) -> TaskSet: ...
 
 
-def check_direction(direction, m: int, where: str = "direction") -> np.ndarray:
+def check_direction(direction: ArrayLike, m: int, where: str = "direction") -> np.ndarray:
     """A direction as a float array (m,), checked: finite and not zero.
 
     Raises:
@@ -152,7 +158,7 @@ def check_direction(direction, m: int, where: str = "direction") -> np.ndarray:
     return d
 
 
-def check_points(points, m: int) -> np.ndarray:
+def check_points(points: ArrayLike, m: int) -> np.ndarray:
     """Points as a float array (n, m) (one point (m,) becomes (1, m)), checked finite.
 
     Raises:
@@ -176,7 +182,7 @@ def check_dims(dims: Sequence[int], m: int) -> list[int]:
         SetQueryError: empty, repeated, not integers, or outside 0 .. m - 1.
     """
     try:
-        items = list(dims)
+        items: list = list(dims)
     except TypeError:
         items = [dims]
     ok = all(isinstance(i, (int, np.integer)) and not isinstance(i, bool) for i in items)

@@ -42,7 +42,7 @@ from __future__ import annotations
 import types
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -50,6 +50,9 @@ from .batch import BatchSetup, EllipsoidBatch, ellipsoids_from_terms
 from .ellipsoids import dynamic_ellipsoid, kinematic_ellipsoid
 from .errors import MeasureError, UnknownMeasureError
 from .measure import TaskSet, TaskSetBatch
+
+if TYPE_CHECKING:  # analysis imports this module
+    from .analysis import Analysis
 
 
 @dataclass(frozen=True)
@@ -116,7 +119,7 @@ class MeasureTerms:
     decoupled: bool
 
     @classmethod
-    def of(cls, analysis) -> MeasureTerms:
+    def of(cls, analysis: Analysis) -> MeasureTerms:
         """The terms of an :class:`mobmanip.analysis.Analysis` (its P as its ``decoupled`` says)."""
         obj, robot = analysis.held_object, analysis.robot
         return cls(
@@ -358,7 +361,7 @@ def _dynamic(terms: MeasureTerms) -> TaskSet:
     return dynamic_ellipsoid(terms.J_u, terms.W, terms.P, terms.Q, terms.xi, terms.M_o, terms.g_o, terms.effort_limits)
 
 
-def _ellipsoids_batch(request: BatchRequest) -> dict[str, EllipsoidBatch]:
+def _ellipsoids_batch(request: BatchRequest) -> Mapping[str, TaskSetBatch]:
     """Both ellipsoids of a chunk in one pass of :func:`mobmanip.batch.ellipsoids_from_terms`
     (one compiled-kernel call for the two)."""
     n, m = len(request.terms), request.setup.m
@@ -375,7 +378,7 @@ def _ellipsoids_batch(request: BatchRequest) -> dict[str, EllipsoidBatch]:
         kinematic=kin,
         dynamic=dyn,
     )
-    out = {}
+    out: dict[str, TaskSetBatch] = {}
     if kin is not None:
         out[KINEMATIC.name] = kin
     if dyn is not None:
@@ -463,14 +466,14 @@ def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
     t = ChunkTerms(t.n, t.Ja, t.Ma, t.positions.copy())
     numpy_terms(setup, t)
     W = setup.W if t.W is None else t.W
-    M_o = np.diag(setup.Mo) if t.Mo is None else np.einsum("ni,ij->nij", t.Mo, np.eye(setup.m))
+    M_o = np.diag(setup.Mo) if t.Mo is None else np.einsum("ni,ij->nij", t.Mo, np.eye(setup.m))  # type: ignore[arg-type]
     P = t.P
     if request.decoupled:
         e = setup.n_eta
         P = P.copy()
         P[:, :e, e:] = 0.0
         P[:, e:, :e] = 0.0
-    out = {}
+    out: dict[str, TaskSetBatch] = {}
     for name, limits in request.limits.items():
         kind = POLYTOPE_KINDS[name]
         if kind == "kinematic":

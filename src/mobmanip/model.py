@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import logging
 import math
 import numbers
 from collections.abc import Mapping
@@ -20,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ._native_stderr import call_with_large_stack, captured_native_stderr
 from .errors import (
@@ -53,6 +55,8 @@ from .urdf import (
     subtree_links,
     urdf_text,
 )
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -150,10 +154,14 @@ class Robot:
         n_eta = self.platform.n_reduced
         rows, block = platform_rows
         if n_eta:
-            S[np.ix_(rows, range(n_eta))] = block
+            S[np.ix_(rows, np.arange(n_eta))] = block
         for k, v in enumerate(self.torso_v_indices + self.arm_v_indices):
             S[v, n_eta + k] = 1.0
         return S
+
+    def __repr__(self) -> str:
+        arms = ", ".join(arm.name for arm in self.arms)
+        return f"Robot({self.name!r}, platform={self.platform.kind!r}, arms=({arms}), nq={self.model.nq}, nx={self.nx})"
 
     @property
     def platform_locked(self) -> bool:
@@ -187,7 +195,7 @@ class Robot:
         if x.shape != (self.nx,) or not np.all(np.isfinite(x)):
             raise ConfigurationError(f"reduced velocity must be {self.nx} finite numbers, got shape {x.shape}")
         rows, block = self.platform.tangent_block_rate(self.check_configuration(q), x)
-        out[np.ix_(rows, range(self.platform.n_reduced))] = block
+        out[np.ix_(rows, np.arange(self.platform.n_reduced))] = block
         return out
 
     # ----- sizes and names -----
@@ -347,7 +355,7 @@ class Robot:
             joints[self.model.names[j]] = value
         return {"platform": [float(q[0]), float(q[1]), math.atan2(q[3], q[2])], "joints": joints}
 
-    def check_configuration(self, q) -> np.ndarray:
+    def check_configuration(self, q: ArrayLike) -> np.ndarray:
         """Return q as a float array after checking its size and finiteness.
 
         Raises:
@@ -369,7 +377,7 @@ class Robot:
         return q
 
     @functools.cached_property
-    def _q_layout(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    def _q_layout(self) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
         """Indices in q of the (cos, sin) pairs (planar root, continuous joints), of the one-entry
         joints, and the names of both."""
         cos_index, pair_names, single_index, single_names = [], [], [], []
@@ -605,7 +613,8 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
 
     platform = get_kind(spec.platform).build(spec.wheels, urdf, model)
     from_urdf = dict(platform.urdf_limits(urdf))
-    velocity, effort = {}, {}
+    velocity: dict[str, float] = {}
+    effort: dict[str, float] = {}
     for name in platform.reduced_names + spec.torso + spec.arm_joint_names:
         vel, eff = from_urdf[name] if name in from_urdf else joint_limits(urdf, name)
         for table, kind, value in ((velocity, "velocity", vel), (effort, "effort", eff)):
@@ -630,6 +639,9 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         torso_v_indices=torso_v,
     )
     _check_inertia(robot, urdf)
+    _log.info(
+        "loaded %s from %s: %s platform, %d arm(s), nx = %d", spec.name, spec.urdf, spec.platform, len(arms), robot.nx
+    )
     return robot
 
 

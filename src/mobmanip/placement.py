@@ -30,14 +30,17 @@ gradients; without it arms and platform may intersect.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
+from .analysis import Analysis
 from .errors import ArgumentError, UnreachableObjectError
 from .gradients import GradientEvaluator, Objective, platform_gradient
 from .model import Robot
@@ -49,6 +52,9 @@ from .tasks import get_task
 CONSTRAINT_TOLERANCE = 1e-6
 #: Default number of starts (platform headings around the object).
 DEFAULT_STARTS = 8
+
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -154,12 +160,13 @@ class _Problem:
         are zero at a few random poses never move (e.g. the height of a planar arm's hand) and are
         left out (SLSQP needs independent constraints); they are checked at the starts instead."""
         rng = np.random.default_rng(0)
-        moving = None
+        moving: np.ndarray | None = None
         for _ in range(3):
             z = rng.uniform(-math.pi, math.pi, self.n)
             nonzero = np.abs(self.constraints(z)[1]).max(axis=1) > 1e-12
             moving = nonzero if moving is None else moving | nonzero
         self.constraint_evaluations = 0
+        assert moving is not None
         return np.flatnonzero(moving)
 
     def fixed_errors(self, z: np.ndarray) -> np.ndarray:
@@ -176,7 +183,7 @@ class _Problem:
     # ----- variables -----
 
     def bounds(self) -> list[tuple[float | None, float | None]]:
-        out = []
+        out: list[tuple[float | None, float | None]] = []
         if self.region is None:
             out += [(None, None), (None, None)]
         else:
@@ -353,7 +360,7 @@ def _project(problem: _Problem, z0: np.ndarray, bounds) -> np.ndarray | None:
 
 def place(
     robot: Robot,
-    target,
+    target: ArrayLike,
     objective: Objective | str,
     task: str | None = None,
     *,
@@ -410,7 +417,7 @@ def place(
         hold_turn = _check_turn(hold_turn)
         bounds[-1] = (hold_turn, hold_turn)
     best = None
-    runs = []
+    runs: list[tuple[float | None, float | None]] = []
     best_start = None
     best_start_q = None
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
@@ -463,6 +470,15 @@ def place(
             f"{robot.name}'s hold keeps the object {problem.hold.height:.3f} m high in its reference posture)"
         )
     value, z, residual = best
+    _log.info(
+        "placement of %s for %s: %.6g after %d evaluations from %d starts (best start %s)",
+        robot.name,
+        evaluator.objective.text,
+        value,
+        evaluator.evaluations,
+        starts,
+        "none" if best_start is None else f"{best_start:.6g}",
+    )
     return Placement(
         q=problem.configuration(z),
         objective=evaluator.objective,
@@ -503,7 +519,7 @@ def _check_target(target) -> np.ndarray:
     return t
 
 
-def placement_document(robot: Robot, placement: Placement, analysis) -> dict:
+def placement_document(robot: Robot, placement: Placement, analysis: Analysis) -> dict:
     """The JSON document of ``mobmanip place --json``: the configuration under ``"q"`` in the
     q.json form (``{"platform": [x, y, yaw], "joints": {...}}``), the objective, its value, the
     start's value, the search's cost and ``"analysis"``, the configuration's analysis as

@@ -248,7 +248,7 @@ class PostureTable:
         return np.stack(columns, axis=1), reachable
 
 
-def posture_table(robot: Robot, distances: Sequence[float], map_fn=map) -> PostureTable:
+def posture_table(robot: Robot, distances: Sequence[float] | np.ndarray, map_fn=map) -> PostureTable:
     """Postures of both arms (arm 1 bending right, arm 2 its mirror image) at each distance.
 
     ``map_fn`` (e.g. an executor's ``map``) runs the search on slices of the distances; each

@@ -17,7 +17,7 @@ Queries and how they are answered:
   plus the equalities of the directions in which the zonotope is flat; irredundant for m <= 3;
 - vertices and faces (m <= 3): one Qhull call on the polar set (:mod:`mobmanip.hull`);
   a zonotope's vertices are then recomputed exactly as c + G sign(G^T d) from their normals;
-- support: sum_j |g_j . d| for a zonotope, the vertices for m <= 3, otherwise a linear program
+- support: sum_j ``|g_j . d|`` for a zonotope, the vertices for m <= 3, otherwise a linear program
   on HiGHS kept warm between directions;
 - membership: the halfspaces; ``inputs`` gives joint values (within their limits) reaching
   given points.
@@ -35,6 +35,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import zonotope
 from .errors import TaskError
@@ -67,7 +68,16 @@ class Polytope(TaskSet):
 
     kind = "polytope"
 
-    def __init__(self, F, c, G, input_limits=None, *, _center=None, _effort=None):
+    def __init__(
+        self,
+        F: ArrayLike,
+        c: ArrayLike,
+        G: ArrayLike,
+        input_limits: ArrayLike | None = None,
+        *,
+        _center: ArrayLike | None = None,
+        _effort: ArrayLike | None = None,
+    ) -> None:
         F, c, G = (np.array(x, dtype=float) for x in (F, c, G))
         if F.ndim != 2 or G.ndim != 2 or c.shape != (F.shape[0],) or G.shape[0] != F.shape[0]:
             raise TaskError(f"polytope needs shapes F (p, m), c (p,), G (p, n); got {F.shape}, {c.shape}, {G.shape}")
@@ -104,8 +114,8 @@ class Polytope(TaskSet):
     # Construction
 
     @classmethod
-    def zonotope(cls, center, generators, input_limits=None) -> Polytope:
-        """The zonotope {center + G y : |y_i| <= 1}, G (m, n)."""
+    def zonotope(cls, center: ArrayLike, generators: ArrayLike, input_limits: ArrayLike | None = None) -> Polytope:
+        """The zonotope ``{center + G y : |y_i| <= 1}``, G (m, n)."""
         center = np.asarray(center, dtype=float).reshape(-1)
         return cls(np.eye(center.shape[0]), center, generators, input_limits)
 
@@ -193,10 +203,10 @@ class Polytope(TaskSet):
             raise TaskError("this polytope is a section of a zonotope, not a zonotope: it has no generators")
         return self._G
 
-    def support(self, direction) -> float:
+    def support(self, direction: ArrayLike) -> float:
         return float(self.supports(np.asarray(direction, dtype=float).reshape(1, -1))[0])
 
-    def supports(self, directions) -> np.ndarray:
+    def supports(self, directions: ArrayLike) -> np.ndarray:
         """max over the set of d . a for each row d of ``directions`` (k, m); zeros when empty."""
         D = self._directions(directions)
         if self.empty:
@@ -210,7 +220,7 @@ class Polytope(TaskSet):
                 pass
         return np.array([self._support_lp(d) for d in D])
 
-    def ray_radius(self, direction) -> float:
+    def ray_radius(self, direction: ArrayLike) -> float:
         """How far the set extends from its centre exactly along d: the largest t >= 0 with
         centre + t d / |d| in the set (one linear program; 0 when empty or flat across d)."""
         from scipy.optimize import linprog
@@ -229,7 +239,7 @@ class Polytope(TaskSet):
         result = linprog(cost, A_eq=A, b_eq=b, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs")
         return float(result.x[0]) if result.status == 0 else 0.0
 
-    def radius_along(self, direction) -> float:
+    def radius_along(self, direction: ArrayLike) -> float:
         d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
         norm = float(np.linalg.norm(d))
         if norm == 0.0:
@@ -237,8 +247,8 @@ class Polytope(TaskSet):
         d = d / norm
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
-    def contains(self, points, tol: float = 1e-9) -> np.ndarray:
-        """Whether each point (n, m) or (m,) is reached with every |y_i| <= 1 + tol.
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
+        """Whether each point (n, m) or (m,) is reached with every ``|y_i| <= 1 + tol``.
 
         That is: every joint within (1 + tol) times its own limit; the equalities (directions in
         which the set is flat) hold to ``tol`` times the set's size.
@@ -376,8 +386,8 @@ class Polytope(TaskSet):
             rep["Y"] = Y
         return rep["Y"] * self._limits
 
-    def inputs(self, points, tol: float = 1e-9) -> np.ndarray:
-        """Joint values (|y_i| <= 1 + tol of their limits) reaching each point, (k, n) in physical units.
+    def inputs(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
+        """Joint values (``|y_i| <= 1 + tol`` of their limits) reaching each point, (k, n) in physical units.
 
         Raises:
             TaskError: a point is not in the set.
@@ -512,7 +522,7 @@ class Polytope(TaskSet):
             rep = {"vertices": V, "faces": hull.faces, "facet_rows": hull.facet_rows, "hull": hull}
             if k > 2:  # a polygon's vertex is two facet lines meeting, accurate as it stands
                 self._exact_vertices(rep, hull)
-        rep["vertices"].setflags(write=False)
+        rep["vertices"].setflags(write=False)  # type: ignore[union-attr]
         self._cache["vrep"] = rep
         return rep
 

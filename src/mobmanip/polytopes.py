@@ -36,10 +36,13 @@ torque needed for any acceleration, min_a ||Z (Lambda_o a + mu_o)||_inf, exceeds
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from .ellipsoids import _RANK_RTOL, _is_identity, _null_space, _torque_offset
 from .errors import LimitError, ModelError, TaskError
@@ -129,7 +132,7 @@ def min_norm_dynamic_polytope(
 ) -> Polytope:
     """The object accelerations the paper's minimum-norm policy reaches within the torque box.
 
-    Same arguments as :func:`dynamic_polytope`. The set is {a_o : |Lambda_o a_o + mu_o| <= tau_max}
+    Same arguments as :func:`dynamic_polytope`. The set is ``{a_o : |Lambda_o a_o + mu_o| <= tau_max}``
     over the a_o with W^T a_o in range(J_u); its :meth:`~Polytope.inputs` are the policy's
     torques tau = Lambda_o a_o + mu_o.
 
@@ -163,7 +166,7 @@ def min_norm_dynamic_polytope(
     return Polytope(F, c, G, limits)
 
 
-def polytopes(kind: str, **terms) -> Polytope:
+def polytopes(kind: str, **terms: Any) -> Polytope:
     """One capacity polytope by name: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
 
     ``terms`` are the keyword arguments of the matching function (``J_u``, ``W`` and
@@ -217,7 +220,7 @@ class PolytopeBatch:
         TaskError: no sets, or sets of different dimensions.
     """
 
-    def __init__(self, polytopes):
+    def __init__(self, polytopes: Iterable[Polytope]) -> None:
         self.polytopes = tuple(polytopes)
         dims = {p.dim for p in self.polytopes}
         if len(dims) > 1:
@@ -271,12 +274,12 @@ class PolytopeBatch:
             )
         return d
 
-    def support(self, direction) -> np.ndarray:
+    def support(self, direction: ArrayLike) -> np.ndarray:
         """max over set n of d . a, (N,), for one direction (m,) or one per row (N, m); 0 where empty."""
         d = self._rows(direction)
         return np.array([p.support(row) for p, row in zip(self.polytopes, d)])
 
-    def radius_along(self, direction) -> np.ndarray:
+    def radius_along(self, direction: ArrayLike) -> np.ndarray:
         """How far set n reaches from its centre along the unit direction of d, (N,); 0 where empty."""
         d = self._rows(direction)
         norms = np.linalg.norm(d, axis=1)
@@ -301,7 +304,7 @@ class PolytopeBatch:
 _STACKED = {"J_u": 3, "W": 3, "P": 3, "Q": 3, "xi": 2, "M_o": 3, "g_o": 2, "velocity_limits": 2, "effort_limits": 2}
 
 
-def polytope_batch(kind: str, **terms) -> PolytopeBatch:
+def polytope_batch(kind: str, **terms: Any) -> PolytopeBatch:
     """One kind of polytope for N configurations.
 
     Args:
@@ -334,7 +337,7 @@ def polytope_batch(kind: str, **terms) -> PolytopeBatch:
     )
 
 
-def polytope_indices(kind: str, directions: np.ndarray | None = None, **terms) -> PolytopeIndices:
+def polytope_indices(kind: str, directions: ArrayLike | None = None, **terms: Any) -> PolytopeIndices:
     """Volume, isotropy, flags and directional capacity of one kind of polytope for N configurations.
 
     Args:
@@ -347,8 +350,8 @@ def polytope_indices(kind: str, directions: np.ndarray | None = None, **terms) -
     k = 0 if D is None else len(D)
     support, radius = np.zeros((len(batch), k)), np.zeros((len(batch), k))
     for j in range(k):
-        support[:, j] = batch.support(D[j])
-        radius[:, j] = batch.radius_along(D[j])
+        support[:, j] = batch.support(D[j])  # type: ignore[index]
+        radius[:, j] = batch.radius_along(D[j])  # type: ignore[index]
     return PolytopeIndices(batch.volume, batch.isotropy, batch.empty, batch.degenerate, support, radius)
 
 

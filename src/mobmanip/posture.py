@@ -53,11 +53,12 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .errors import SpecError
 from .model import Robot
@@ -116,7 +117,7 @@ class Hold:
         dx, dy = self.center[:2] - self.origin
         return math.atan2(dy, dx) if math.hypot(dx, dy) > 0.0 else 0.0
 
-    def targets(self, center_angle, distance, turn) -> tuple[np.ndarray, np.ndarray]:
+    def targets(self, center_angle: ArrayLike, distance: ArrayLike, turn: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """End-effector targets for object centres at polar (center_angle, distance) from o
         with the hold turned by ``turn`` (rad); at a grid point both angles are alpha.
 
@@ -139,7 +140,7 @@ class Hold:
         return positions, rotations
 
 
-def reference_configuration(robot: Robot, joints=None) -> np.ndarray:
+def reference_configuration(robot: Robot, joints: Mapping[str, float] | None = None) -> np.ndarray:
     """The reference posture: the home configuration with ``joints`` (name -> value) set, the
     platform at the origin with heading 0.
 
@@ -286,8 +287,8 @@ class _Solver:
                 placed[row, i] = placement.rotation
                 if jacobians:
                     J = frame_jacobian(model, data, fid, lwa)
-                    J_p[row, 3 * i : 3 * i + 3, cols] = J[:3, v]
-                    J_o[row, 3 * i : 3 * i + 3, cols] = J[3:, v]
+                    J_p[row, 3 * i : 3 * i + 3, cols] = J[:3, v]  # type: ignore[index]
+                    J_o[row, 3 * i : 3 * i + 3, cols] = J[3:, v]  # type: ignore[index]
         e_p = (targets - positions).reshape(N, 3 * k)
         e_o = rotation_log(target_rotations @ np.swapaxes(placed, 2, 3)).reshape(N, 3 * k)
         return e_p, e_o, J_p, J_o
@@ -567,8 +568,8 @@ def _solve(solver: _Solver, hold: Hold, q0: np.ndarray, start: np.ndarray, end: 
 
 def solve_postures(
     robot: Robot,
-    angle_deg: Sequence[float],
-    distance: Sequence[float],
+    angle_deg: Sequence[float] | np.ndarray,
+    distance: Sequence[float] | np.ndarray,
     reference: np.ndarray | None = None,
 ) -> IKPostureTable:
     """Postures of all arms holding the object at every (angle, distance) of a grid.

@@ -33,7 +33,7 @@ LINK_MASS = (0.0, 1e6)
 LINK_INERTIA = 1e6
 #: Distance of a joint origin or centre of mass from its parent frame (m).
 LINK_OFFSET = 1e4
-#: Platform position (m): |x| and |y|. Results must not depend on it, but the arms' geometry is
+#: Platform position (m): ``|x|`` and ``|y|``. Results must not depend on it, but the arms' geometry is
 #: computed in world coordinates: at 1e13 m rounding changed the ellipsoids by 0.16 %; within this
 #: range they agree with those at the origin to 1e-8 (tests/test_hostile_scaling.py).
 PLATFORM_POSITION = 1e6
@@ -74,8 +74,8 @@ def check_limit_ratio(kind: str, limits: dict[str, float]) -> None:
     """
     if not limits:
         return
-    largest = max(limits, key=limits.get)
-    smallest = min(limits, key=limits.get)
+    largest = max(limits, key=limits.__getitem__)
+    smallest = min(limits, key=limits.__getitem__)
     ratio = limits[largest] / limits[smallest]
     bound = LIMIT_RATIOS[kind]
     if ratio > bound:

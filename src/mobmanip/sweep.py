@@ -40,10 +40,11 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import logging
 import math
 import multiprocessing
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -74,6 +75,8 @@ from .sweep_budget import (
 )
 from .sweep_results import AXES, FLAGS, SCALAR_INDICES, SweepResult, check_index_name, index_names, plot_sweep
 from .tasks import get_task
+
+_log = logging.getLogger(__name__)
 
 __all__ = [
     "AXES",
@@ -232,7 +235,11 @@ def _posture_rows(table: IKPostureTable, first: int = 0, stop: int | None = None
 
 
 def sweep_postures(
-    robot: Robot, grid: SweepGrid, method: str = "auto", reference=None, map_fn=map
+    robot: Robot,
+    grid: SweepGrid,
+    method: str = "auto",
+    reference: Mapping[str, float] | None = None,
+    map_fn: Callable = map,
 ) -> PostureTable | IKPostureTable:
     """The arms' postures for a grid (see the module's docstring for the methods).
 
@@ -555,6 +562,13 @@ def run_sweep(
         # before local workers fork from this process (they inherit it)
         warm_kernel(robot, task.name, spec.object_mass)
     n_workers = workers or default_workers()
+    _log.info(
+        "sweep of %s: %d grid points, measures %s, %d worker(s)",
+        robot.name,
+        math.prod(grid.shape),
+        ", ".join(measures),
+        1 if executor is None and n_workers == 1 else n_workers,
+    )
     with contextlib.ExitStack() as stack:
         if executor is None and n_workers > 1:
             executor = stack.enter_context(_local_pool(n_workers, mp_context))
@@ -701,7 +715,9 @@ def _unreachable_message(robot: Robot, grid: SweepGrid, table) -> str:
     )
 
 
-def _assemble(spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable) -> SweepResult:
+def _assemble(
+    spec: SweepSpec, grid: SweepGrid, task, merged: dict, table: PostureTable | IKPostureTable
+) -> SweepResult:
     a, d, h, nv, ne = grid.shape
     indices = {}
     for measure in resolve_measures(spec.measures, sweep=True):

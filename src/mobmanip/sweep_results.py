@@ -9,6 +9,7 @@ define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, .
 from __future__ import annotations
 
 import csv
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -63,6 +64,16 @@ class SweepResult:
     reachable: np.ndarray
     indices: dict
     postures: PostureTable | IKPostureTable
+
+    def __repr__(self) -> str:
+        shape = " x ".join(str(n) for n in self.grid.shape)
+        measures = ", ".join(m.name for m in self.measures)
+        reach = f"{int(np.count_nonzero(self.reachable))}/{self.reachable.size}"
+        return (
+            f"SweepResult(robot={str(self.spec.robot)!r}, task={self.task!r}, grid {shape} "
+            f"(angle x distance x heading x velocity scale x effort scale), measures {measures}, "
+            f"reachable {reach})"
+        )
 
     def joint_positions(self) -> tuple[tuple[str, ...], np.ndarray]:
         """The arm joints' names and positions (rad or m) at every (angle, distance), (A, D, n);
@@ -169,7 +180,7 @@ class SweepResult:
         return path
 
 
-def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | None]:
+def check_index_name(name: str, m: int, measures: Iterable[str] | None = None) -> tuple[str, str, int | None]:
     """Split an index name into (measure, index or per-axis array, axis number or None):
     ``"kinematic.volume"`` gives ``("kinematic", "volume", None)``, ``"dynamic.semi_axis_2"``
     gives ``("dynamic", "semi_axes", 2)``.
@@ -195,7 +206,7 @@ def check_index_name(name: str, m: int, measures=None) -> tuple[str, str, int | 
     raise ArgumentError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
 
 
-def index_names(m: int, measures=None) -> list[str]:
+def index_names(m: int, measures: Iterable[str] | None = None) -> list[str]:
     """Names accepted by :meth:`SweepResult.index` for an m-dimensional task and the measures
     swept (names; ``None``: the default ones)."""
     out = []

@@ -381,7 +381,7 @@ def check_supported(urdf, path: str | Path) -> None:
 
 def joint_path(urdf, link: str) -> list:
     """The joints from the root link down to ``link``, root first (a tree is assumed)."""
-    parents = parent_joint_map(urdf)
+    parents: dict = parent_joint_map(urdf)
     path = []
     while link in parents:
         joint = parents[link]

@@ -31,7 +31,7 @@ _DEPENDENT_RTOL = 1e-12
 try:  # pragma: no cover - exercised when Numba is installed (the default)
     from numba import njit
 except ImportError:  # pragma: no cover
-    njit = None
+    njit = None  # type: ignore[assignment]
 
 
 def subset_count(n: int, k: int) -> int:

@@ -27,7 +27,7 @@ import numpy as np
 try:  # pragma: no cover - exercised when Numba is installed (the default)
     from numba import njit
 except ImportError:  # pragma: no cover
-    njit = None
+    njit = None  # type: ignore[assignment]
 
 #: Merged generators above this count do not fit a base-3 code in int64: the reference handles them.
 MAX_MERGED = 39

@@ -7,6 +7,8 @@ its centre, both ways) beside the ellipsoid's semi-axes, and their ratio.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from .common import (
@@ -117,7 +119,7 @@ def _available(get) -> bool:
 
 
 #: How the summary describes a set, by its kind (other kinds: :func:`_describe_set`).
-DESCRIBE = {"ellipsoid": _describe_ellipsoid, "polytope": _describe_polytope}
+DESCRIBE: dict[str, Callable[..., str]] = {"ellipsoid": _describe_ellipsoid, "polytope": _describe_polytope}
 
 
 def _describe(name: str, task_set, unit: str, ellipsoid=None) -> str:

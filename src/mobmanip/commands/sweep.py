@@ -203,9 +203,10 @@ def run_command(args) -> int:
     )
     table = result.postures
     if table.method == "ik":
-        hold = table.hold
+        hold = table.hold  # type: ignore[union-attr]
         print(
-            f"postures by inverse kinematics in {table.seconds:.2f} s: object at height {hold.height:.3f} m, "
+            f"postures by inverse kinematics in {table.seconds:.2f} s: "  # type: ignore[union-attr]
+            f"object at height {hold.height:.3f} m, "
             f"distances from ({hold.origin[0]:.3f}, {hold.origin[1]:.3f}) m; "
             f"{int(table.reachable.sum())} of {table.reachable.size} (angle, distance) points in reach"
         )

@@ -124,7 +124,7 @@ def run(args) -> int:
             print(f"task point (object): ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m")
             notes = _describe_empty("the", analysis) + _describe_empty("the locked-platform", locked)
             print_warnings(analysis)
-        print(f"scale: {viewer.scales.describe()}")
+        print(f"scale: {viewer.scales.describe()}")  # type: ignore[union-attr]  # fitted by show/animate
         for (is_locked, name), factor in viewer.magnified.items():
             if factor != 1.0:  # too small to see at its quantity's scale (the page's legend says so too)
                 print(f"{'locked-platform ' if is_locked else ''}{name}: drawn {factor:g} times larger")

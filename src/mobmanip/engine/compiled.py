@@ -17,6 +17,7 @@ caller pay it before a progress bar starts.
 from __future__ import annotations
 
 import functools
+import logging
 import sys
 import time
 from typing import NamedTuple
@@ -28,6 +29,8 @@ from .results import EllipsoidBatch
 from .setup import BatchSetup
 from .terms import ChunkTerms
 
+_log = logging.getLogger(__name__)
+
 
 def kernel_available() -> bool:
     """Whether the compiled kernel (:mod:`mobmanip.engine.kernel`, needs Numba) can run here."""
@@ -37,9 +40,11 @@ def kernel_available() -> bool:
 @functools.cache
 def kernel_module():
     """The compiled kernel's module, or ``None`` where Numba is missing or unusable."""
+    _log.debug("loading the compiled kernel (the first run in an environment compiles it)")
     try:
         from . import kernel
     except ImportError:  # Numba missing or unusable on this platform: the NumPy paths remain
+        _log.info("the compiled kernel is not available (Numba missing or unusable): NumPy paths are used")
         return None
     return kernel
 

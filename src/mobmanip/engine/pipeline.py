@@ -176,7 +176,7 @@ def iter_terms(setup: BatchSetup, qs: np.ndarray, chunk_size: int = DEFAULT_CHUN
 
 def analyze_batch(
     robot: Robot,
-    qs,
+    qs: np.ndarray,
     task: str | None = None,
     *,
     object_mass: float | None = None,

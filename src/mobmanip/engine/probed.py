@@ -51,7 +51,7 @@ class ProbedModel:
             parent = model.frames[f].parentJoint
             after.setdefault(max(model.subtrees[parent]) if parent > 0 else model.njoints - 1, []).append(a)
         new_id = {0: root}
-        probe_ids = [None] * len(frame_ids)
+        probe_ids: list = [None] * len(frame_ids)
 
         def add_probes(last: int) -> None:
             for a in after.get(last, ()):

@@ -117,7 +117,7 @@ class EllipsoidBatch:
             empty=np.zeros(n, dtype=bool),
         )
 
-    def put_rows(self, rows, other: EllipsoidBatch) -> None:
+    def put_rows(self, rows: np.ndarray | slice, other: EllipsoidBatch) -> None:
         """Write ``other``'s rows into rows ``rows`` (an index, mask or slice) of this batch."""
         self.center[rows] = other.center
         self.semi_axes[rows] = other.semi_axes

@@ -34,7 +34,7 @@ class Projection:
             else:
                 dense.append(j)
         # runs of consecutive columns mapped to consecutive rows -> slice copies
-        self.runs = []
+        self.runs: list[tuple[int, int, int, int]] = []
         for j, v in unit:
             if self.runs and self.runs[-1][1] == j and self.runs[-1][3] == v:
                 c0, _, r0, _ = self.runs[-1]

@@ -166,7 +166,7 @@ class DifferentialDriveKind(PlatformKind):
             raise WheelError(f"a differential drive takes two wheels, RIGHT,LEFT; got {list(joints)}")
         return WheelSpec(right=joints[0], left=joints[1])
 
-    def build(self, wheels: WheelSpec, urdf, model) -> DifferentialDrive:
+    def build(self, wheels: WheelSpec, urdf, model) -> DifferentialDrive:  # type: ignore[override]
         """Wheel radius, half-track, axis signs and axle centre from the URDF geometry."""
         right, left = wheel_geometry(model, (wheels.right, wheels.left), role="wheel")
         for side, geometry in (("right", right), ("left", left)):
@@ -223,7 +223,7 @@ class DifferentialDriveKind(PlatformKind):
         note = f"drive wheels: right {right.name!r}, left {left.name!r} ({size})"
         return Detected(WheelSpec(right=right.name, left=left.name), (note,))
 
-    def toml_lines(self, wheels: WheelSpec) -> list[str]:
+    def toml_lines(self, wheels: WheelSpec) -> list[str]:  # type: ignore[override]
         out = [
             "# Right and left drive wheel; radius and half-track are read from the URDF unless set.",
             "[wheels]",

@@ -146,8 +146,8 @@ def side_limits(urdf, right: Sequence[str], left: Sequence[str]) -> dict[str, tu
         limits = [joint_limits(urdf, name) for name in wheels]
         velocities, efforts = [v for v, _ in limits], [e for _, e in limits]
         out[side] = (
-            None if None in velocities else min(velocities),
-            None if None in efforts else float(sum(efforts)),
+            None if None in velocities else min(velocities),  # type: ignore[type-var]
+            None if None in efforts else float(sum(efforts)),  # type: ignore[arg-type]
         )
     return out
 
@@ -177,7 +177,7 @@ class SkidSteerKind(PlatformKind):
     def limit_names(self, wheels) -> tuple[str, ...]:
         return SIDES
 
-    def build(self, wheels: SkidSteerWheels, urdf, model) -> SkidSteer:
+    def build(self, wheels: SkidSteerWheels, urdf, model) -> SkidSteer:  # type: ignore[override]
         geometry = wheel_geometry(model, wheels.joint_names, role="skid-steer wheel")
         right, left = geometry[: len(wheels.right)], geometry[len(wheels.right) :]
         if max(g.center[1] for g in right) >= min(g.center[1] for g in left):
@@ -241,7 +241,7 @@ class SkidSteerKind(PlatformKind):
         )
         return Detected(wheels, (note,))
 
-    def toml_lines(self, wheels: SkidSteerWheels) -> list[str]:
+    def toml_lines(self, wheels: SkidSteerWheels) -> list[str]:  # type: ignore[override]
         out = [
             "# Skid steer: each side's wheels turn at one speed. Radius and the effective half-track are",
             "# read from the URDF (half the distance between the sides) unless set.",
@@ -255,7 +255,7 @@ class SkidSteerKind(PlatformKind):
 
     limits_by_joint = False
 
-    def urdf_limits(self, wheels: SkidSteerWheels, urdf) -> Mapping[str, tuple[float | None, float | None]]:
+    def urdf_limits(self, wheels: SkidSteerWheels, urdf) -> Mapping[str, tuple[float | None, float | None]]:  # type: ignore[override]
         return side_limits(urdf, wheels.right, wheels.left)
 
 

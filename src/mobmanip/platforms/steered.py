@@ -194,7 +194,7 @@ class SteeredKind(PlatformKind):
             rear_radius=table.get("rear_radius"),
         )
 
-    def build(self, wheels: SteeredWheels, urdf, model) -> Steered:
+    def build(self, wheels: SteeredWheels, urdf, model) -> Steered:  # type: ignore[override]
         drive, *rear = wheel_geometry(model, (wheels.drive, *wheels.rear), role="steered-base wheel")
         steer_id = model.getJointId(wheels.steer)
         steer_joint = model.joints[steer_id]
@@ -253,7 +253,7 @@ class SteeredKind(PlatformKind):
         )
         return Detected(wheels, (note,))
 
-    def toml_lines(self, wheels: SteeredWheels) -> list[str]:
+    def toml_lines(self, wheels: SteeredWheels) -> list[str]:  # type: ignore[override]
         out = [
             "# Steered base: the drive wheel, its steering joint and the free rear wheels (one axle).",
             "[wheels]",

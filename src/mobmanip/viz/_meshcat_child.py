@@ -25,7 +25,7 @@ PAGE_SCRIPT = Path(__file__).with_name("page.js")  # mobmanip's part of the page
 #: origin, e.g. a DNS-rebinding attacker's name resolving to 127.0.0.1, is refused.
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "[::1]")
 #: The HTTP port once the server listens (set in :func:`main`).
-_SERVER = {"port": None}
+_SERVER: dict[str, int | None] = {"port": None}
 
 
 def local_request(host: str | None, origin: str | None) -> bool:

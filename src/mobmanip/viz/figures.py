@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -23,11 +24,13 @@ matplotlib.use("Agg")  # figures are written to files; no display needed
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.patches import FancyArrow, Polygon  # noqa: E402
 
 from ..ellipsoids import Ellipsoid  # noqa: E402
 from ..io import save_figure  # noqa: E402
 from ..model import Robot  # noqa: E402
+from ..polytope import Polytope  # noqa: E402
 
 #: The Okabe-Ito palette (colour-blind safe), by name.
 OKABE_ITO = {
@@ -126,7 +129,7 @@ def draw_robot(ax, robot: Robot, q: np.ndarray, label_arms: bool = True) -> None
         ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, zorder=3, label=label)
 
 
-def draw_ellipse(ax, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style) -> np.ndarray:
+def draw_ellipse(ax: Axes, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style: Any) -> np.ndarray:
     """Draw a 2-D ellipse (task units) at a point (m), semi-axes multiplied by ``scale``;
     returns the drawn boundary points (k, 2) in metres."""
     if ellipse.dim != 2:
@@ -137,7 +140,7 @@ def draw_ellipse(ax, ellipse: Ellipsoid, at: np.ndarray, scale: float, **style) 
     return points
 
 
-def draw_polygon(ax, polytope, at: np.ndarray, scale: float, **style) -> np.ndarray:
+def draw_polygon(ax: Axes, polytope: Polytope, at: np.ndarray, scale: float, **style: Any) -> np.ndarray:
     """Draw a 2-D polytope (task units; its shadow on the first two coordinates otherwise) at a
     point (m), multiplied by ``scale``, as its closed outline; returns the drawn vertices (k, 2)
     in metres, counter-clockwise (none when empty)."""

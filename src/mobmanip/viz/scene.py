@@ -33,7 +33,8 @@ rings, its three principal sections drawn as lines, kinematic yellow ``#f2d21b``
 ``#e0301e`` (in the paper's case the locked pair lies inside, or nearly on, the robot's own,
 which a solid would hide). Principal axes are drawn in a darker shade of the same colour.
 
-What is drawn, and how
+What is drawn, and how:
+
 - Only the *linear* part of a task space is drawn: ``planar`` and ``planar_rigid`` as the (x, y)
   ellipse, ``translational`` as it is, ``spatial`` as its projection (shadow) onto (x, y, z),
   i.e. the linear velocities (accelerations) reachable with any accompanying angular motion.
@@ -50,7 +51,7 @@ What is drawn, and how
   long; an empty set (e.g. the torques cannot hold the load) is hidden.
 - Scale factors (:class:`ScaleFactors`): metres of scene per m/s and per m/s^2 (one per
   quantity, shared by the measures of that quantity), chosen so that the largest drawn extent
-  (|centre| + largest semi-axis for an ellipsoid, over the robot's and the locked sets) is
+  (``|centre|`` + largest semi-axis for an ellipsoid, over the robot's and the locked sets) is
   ``size`` = 0.5 m; fixed at the first :meth:`EllipsoidViewer.show` (or over all frames of an
   animation) so that later updates stay comparable.
 
@@ -76,12 +77,14 @@ import webbrowser
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..analysis import Analysis, analyze
 from ..io import write_text
+from ..measure import TaskSet
 from ..measures import default_measures, get_measure, measure_names, resolve_measures
 from ..model import Robot
 from . import page as _page
@@ -179,7 +182,7 @@ class Frame:
 
 
 def analyze_pair(
-    robot: Robot, q: np.ndarray, task: str | None = None, *, locked: bool = True, **options
+    robot: Robot, q: np.ndarray, task: str | None = None, *, locked: bool = True, **options: Any
 ) -> tuple[Analysis, Analysis | None]:
     """``analyze`` the robot and, if it has a moving platform and ``locked``, the same
     configuration with the platform locked (the arms alone)."""
@@ -332,10 +335,10 @@ class EllipsoidViewer:
             DRAWINGS[kind].load(self._vis, scene_path(name, locked), scene_color(name, locked), locked)
             self._visible[key] = None
 
-    def _drawn(self, analysis: Analysis | None, locked: bool) -> dict[tuple[bool, str], object]:
+    def _drawn(self, analysis: Analysis | None, locked: bool) -> dict[tuple[bool, str], TaskSet]:
         """The sets of an analysis the viewer draws, by (locked, measure name); the others are
         noted in :attr:`undrawn`."""
-        out = {}
+        out: dict[tuple[bool, str], TaskSet] = {}
         if analysis is not None:
             for name, task_set in analysis.measures.items():
                 if task_set.kind in DRAWINGS:
@@ -571,6 +574,7 @@ class EllipsoidViewer:
         for frame, sets in zip(frames, per_frame):
             pin.forwardKinematics(self.model, data, frame.q)
             pin.updateGeometryPlacements(self.model, data, self.visual_model, geometry_data)
+            poses: list[tuple[str, np.ndarray, np.ndarray | None]]
             poses = [(path, geometry_data.oMg[g].homogeneous, None) for g, path in enumerate(geometry_paths)]
             poses.append((OBJECT_PATH, _translation(frame.analysis.held_object.center), None))
             for key in keys:

@@ -92,11 +92,11 @@ def drawn_linear_part(task_set: TaskSet, task: str) -> tuple[TaskSet, np.ndarray
 
 def drawn_ellipsoid(ellipsoid: Ellipsoid, task: str) -> tuple[Ellipsoid, np.ndarray]:
     """:func:`drawn_linear_part` of an ellipsoid."""
-    return drawn_linear_part(ellipsoid, task)
+    return drawn_linear_part(ellipsoid, task)  # type: ignore[return-value]
 
 
 def drawn_extent(ellipsoid: Ellipsoid, task: str) -> float:
-    """|centre| + largest semi-axis of the drawn part (task units; 0 when empty)."""
+    """``|centre|`` + largest semi-axis of the drawn part (task units; 0 when empty)."""
     if ellipsoid.empty:
         return 0.0
     linear, _ = drawn_ellipsoid(ellipsoid, task)
@@ -254,12 +254,12 @@ def polytope_geometry(polytope, task: str, scale: float, thickness: float = 0.0)
     elif k != 3:
         raise ViewerError(f"cannot draw a {k}-dimensional polytope")
     triangles = linear.triangles if k == 3 else np.zeros((0, 3), dtype=int)
-    edges = set()
+    edges: set[tuple[int, int]] = set()
     for face in linear.faces if len(V) > 2 else [np.arange(len(V))]:
         face = np.asarray(face, dtype=int)
         pairs = zip(face, np.roll(face, -1)) if len(face) > 2 else [tuple(face)] if len(face) == 2 else []
         edges.update((int(min(a, b)), int(max(a, b))) for a, b in pairs)
-    segments = np.array(sorted(edges), dtype=int).reshape(-1, 2)
+    segments = np.array(sorted(edges), dtype=np.int64).reshape(-1, 2)
     return points, np.asarray(triangles, dtype=int), segments
 
 
@@ -301,7 +301,7 @@ class PolytopeDrawing:
 
 
 #: How each kind of set is drawn (see the module's docstring).
-DRAWINGS: dict[str, SetDrawing] = {"ellipsoid": EllipsoidDrawing(), "polytope": PolytopeDrawing()}
+DRAWINGS: dict[str, SetDrawing] = {"ellipsoid": EllipsoidDrawing(), "polytope": PolytopeDrawing()}  # type: ignore[dict-item]
 
 
 def register_drawing(kind: str, drawing: SetDrawing) -> None:

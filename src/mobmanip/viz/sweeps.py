@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -61,7 +62,7 @@ def object_angle_frames(
     *,
     angles_deg: Sequence[float] = tuple(range(0, 91, 3)),
     locked: bool = True,
-    **options,
+    **options: Any,
 ) -> list[Frame]:
     """Frames over the object direction (paper's robot) or the platform heading (any other).
 
@@ -103,7 +104,7 @@ def _limit_sweep(
     describe,
     locked: bool,
     angles_deg: Sequence[float],
-    **options,
+    **options: Any,
 ) -> list[Frame]:
     posture = optimal_posture(robot)  # raises SpecError for a robot unlike the paper's
     frames: list[Frame] = []
@@ -140,7 +141,7 @@ def fig3_frames(
     speeds: Sequence[float] = PLATFORM_SPEEDS,
     angles_deg: Sequence[float] = ANGLES_DEG,
     locked: bool = True,
-    **options,
+    **options: Any,
 ) -> list[Frame]:
     """Paper Fig. 3: the wheels' maximum rim speed (m/s) at each object direction."""
     _check_moving(robot, "fig3")
@@ -167,7 +168,7 @@ def fig4_frames(
     angles_deg: Sequence[float] = ANGLES_DEG,
     locked: bool = True,
     decoupled: bool = True,
-    **options,
+    **options: Any,
 ) -> list[Frame]:
     """Paper Fig. 4: the wheels' maximum torque (N m) at each object direction (decoupled
     dynamics by default, as in the paper)."""
@@ -186,7 +187,13 @@ def fig4_frames(
 
 
 def sweep_frames(
-    name: str, robot: Robot, q: np.ndarray | None = None, task: str | None = None, *, locked: bool = True, **options
+    name: str,
+    robot: Robot,
+    q: np.ndarray | None = None,
+    task: str | None = None,
+    *,
+    locked: bool = True,
+    **options: Any,
 ) -> list[Frame]:
     """The frames of the sweep ``name`` (one of :data:`SWEEPS`).
 
