@@ -42,6 +42,7 @@ import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -107,7 +108,7 @@ class ObjectPath:
         """Length of the path in the plane (m)."""
         return float(np.sum(np.linalg.norm(np.diff(self.xy, axis=0), axis=1)))
 
-    def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Displacement from the start (N, 3) (m) and turn from the start (N,) (rad) at ``times``
         (linear interpolation between the path's samples)."""
         d = np.zeros((len(times), 3))
@@ -243,7 +244,7 @@ class CarryResult:
 
     def summary(self) -> dict:
         """Minimum capacities, their ratio, tracking and limit figures (JSON-ready)."""
-        out = {"objective": self.objective.name, "task": self.task}
+        out: dict[str, Any] = {"objective": self.objective.name, "task": self.task}
         for run in (self.motion, self.baseline):
             out[run.method] = {
                 "min_capacity": float(run.capacity.min()),

@@ -280,7 +280,8 @@ def detect_spec(
     considered.append(choice_reason(kind.name, how, candidates))
     unmeasured = [c.name for c in candidates if c.radius is None and c.name in drive]
     if wheel_spec is not None and wheel_radius is not None and hasattr(wheel_spec, "radius"):
-        wheel_spec = dataclasses.replace(wheel_spec, radius=float(wheel_radius))
+        # kinds with a radius (checked just above); mypy sees only the base class
+        wheel_spec = dataclasses.replace(wheel_spec, radius=float(wheel_radius))  # type: ignore[call-arg]
         unmeasured = []
     extra = [c.name for c in candidates if c.name not in drive]
     if extra and kind.takes_wheels:

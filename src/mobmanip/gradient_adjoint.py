@@ -239,6 +239,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
         if ev.decoupled:
             P[:, :ne, ne:] = 0.0
             P[:, ne:, :ne] = 0.0
+        assert t.g is not None  # a pass with dynamics computes gravity
         xi = -t.g @ S
         Qi = None if ev.Q_identity else np.linalg.inv(ev.Q)
         value, ok, bars = dynamic_adjoint(ev.objective, J_u, P, xi, W, M_o, g_o, Qi, ev.Z, _guarded, full_rank)

@@ -222,6 +222,7 @@ class GradientEvaluator:
         self.velocity_limits = np.asarray(robot.velocity_limits, dtype=float)
         self.Z = 1.0 / np.asarray(robot.effort_limits, dtype=float)
         self.evaluations = 0
+        self.tree: TreeAdjoint | None
         try:  # the reverse chain's closed forms, where every joint kind has them
             self.tree = TreeAdjoint(robot.model, [arm.frame_id for arm in robot.arms])
         except ModelError:
@@ -268,7 +269,7 @@ class GradientEvaluator:
             return gradient_chunk(self, self.tree, qs)
         return self.forward_chunk(qs)
 
-    def forward_chunk(self, qs: np.ndarray):
+    def forward_chunk(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(values, gradients, defined) at qs (n, nq) by the forward chain (dC along every tangent
         direction from the kinematic Hessians): the reference the reverse chain is tested against."""
         C, dC, c, dc, ok = self.shape(qs)

@@ -34,6 +34,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -46,6 +47,9 @@ from .gradients import GradientEvaluator, Objective, platform_gradient
 from .model import Robot
 from .posture import hold_from
 from .tasks import get_task
+
+if TYPE_CHECKING:
+    from .collision import SelfCollision
 
 #: A run's result holds the object when every position error is at most this (m) and every
 #: orientation error (rad) too.
@@ -372,7 +376,7 @@ def place(
     max_iterations: int = 100,
     tolerance: float = 1e-9,
     hold_turn: float | None = None,
-    collision=None,
+    collision: SelfCollision | None = None,
 ) -> Placement:
     """The platform pose and arm posture that hold the object at ``target`` and maximise ``objective``.
 

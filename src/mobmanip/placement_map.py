@@ -106,10 +106,10 @@ class PlacementMap:
             values=self.values,
             heading=self.heading,
             configurations=self.configurations,
-            hold_turn=self.hold_turn,
+            hold_turn=np.asarray(self.hold_turn, dtype=float),  # NaN-filled where no cell holds
             target=self.target,
             objective=np.array(self.objective.name),
-            **extra,
+            **extra,  # type: ignore[arg-type]  # numpy's stub types **kwds as its allow_pickle flag
         )
 
     def write_csv(self, path) -> None:
@@ -269,7 +269,7 @@ def placement_map(
     turns = np.full(shape, np.nan)
     configurations = np.full(shape + (nq,), np.nan)
     for layer in [None] if layers is None else range(len(layers)):
-        fixed_heading = None if layer is None else float(layers[layer])
+        fixed_heading = None if layer is None or layers is None else float(layers[layer])
         solved: dict[tuple[int, int], np.ndarray] = {}
         previous = None
         for iy, ix in _serpentine(len(ys), len(xs)):
@@ -323,7 +323,7 @@ def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, ma
         bounds[2] = (fixed_heading, fixed_heading)
     toward = math.atan2(problem.target[1] - p[1], problem.target[0] - p[0])
     hold = problem.hold
-    fresh = []
+    fresh: list = []
     for turn in (0.0, math.pi / 2, -math.pi / 2, math.pi):
         heading = toward - math.atan2(hold.center[1], hold.center[0]) + turn if fixed_heading is None else fixed_heading
         z = problem.start(heading, np.random.default_rng(len(fresh)))

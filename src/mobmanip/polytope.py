@@ -222,7 +222,7 @@ class Polytope(TaskSet):
 
     def ray_radius(self, direction: ArrayLike) -> float:
         """How far the set extends from its centre exactly along d: the largest t >= 0 with
-        centre + t d / |d| in the set (one linear program; 0 when empty or flat across d)."""
+        ``centre + t d / |d|`` in the set (one linear program; 0 when empty or flat across d)."""
         from scipy.optimize import linprog
 
         d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]

@@ -254,7 +254,7 @@ def _grasp_offsets(robot: str, rows, n_arms: int) -> tuple[tuple[float, float, f
             raise bad
         if any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in row):
             raise bad
-        out.append(tuple(float(v) for v in row))
+        out.append((float(row[0]), float(row[1]), float(row[2])))
     return tuple(out)
 
 

@@ -280,7 +280,9 @@ def team_from_dict(data: Mapping, base_dir: Path | str = ".", where: str = "team
     yaw = math.radians(_number(obj.get("yaw_deg", 0.0), f"{where} [object] yaw_deg"))
     R = _rot_z(yaw)
 
-    members, grasp_points, seen = [], [], {}
+    members: list = []
+    grasp_points: list = []
+    seen: dict[str, int] = {}
     for k, entry in enumerate(robots):
         here = f"{where} [[robots]] #{k + 1}"
         if not isinstance(entry, dict):
@@ -433,7 +435,7 @@ def _inertia(obj: Mapping, mass: float, R: np.ndarray, here: str) -> np.ndarray 
         size = _vector(obj["size"], 3, f"{here} size")
         if np.any(size < 0):
             raise TeamError(f"{here}: size must be three non-negative lengths (m), got {obj['size']!r}")
-        return R @ np.diag(box_inertia(mass, size)) @ R.T
+        return R @ np.diag(box_inertia(mass, [float(v) for v in size])) @ R.T
     if "inertia" not in obj:
         return None
     value = obj["inertia"]

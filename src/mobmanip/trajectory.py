@@ -279,7 +279,12 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
     qs = np.array(
         [
             robot.configuration(
-                tuple(float(column[c][i]) for c in PLATFORM_COLUMNS), {name: column[name][i] for name in joints}
+                (
+                    float(column[PLATFORM_COLUMNS[0]][i]),
+                    float(column[PLATFORM_COLUMNS[1]][i]),
+                    float(column[PLATFORM_COLUMNS[2]][i]),
+                ),
+                {name: column[name][i] for name in joints},
             )
             for i in range(values.shape[0])
         ]

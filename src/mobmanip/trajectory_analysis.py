@@ -273,7 +273,7 @@ def analyze_trajectory(
         speed = float(np.linalg.norm(v_o[i]))
         d = v_o[i] / speed if speed > 0.0 else kin.axes[0]
         v_cap[i] = kin.radius_along(d) if not kin.empty else 0.0
-        if polytope:
+        if v_poly is not None:
             v_poly[i] = kinematic_polytope(terms.J_u, terms.W, terms.velocity_limits).radius_along(d)
         acc = float(np.linalg.norm(a_o[i]))
         d = a_o[i] / acc if acc > 0.0 else dyn.axes[0]

@@ -213,7 +213,7 @@ def run_command(args) -> int:
     unreachable = int((~result.reachable).sum())
     if unreachable:
         print(f"{unreachable} of {result.reachable.size} configurations are out of the arms' reach (NaN indices)")
-    task = TASKS[result.spec.task]
+    task = TASKS[str(result.spec.task)]
     mixed = bool(task.linear_rows) and bool(task.angular_rows)
     for measure in result.measures:
         kind = measure.name

@@ -47,7 +47,7 @@ class WheelCandidate:
     """
 
     name: str
-    radius: float
+    radius: float | None
     position: np.ndarray
     axis: np.ndarray
     carried_by_rotating_joint: bool

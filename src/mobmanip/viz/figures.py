@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import matplotlib
 
@@ -29,6 +29,7 @@ from matplotlib.patches import FancyArrow, Polygon  # noqa: E402
 
 from ..ellipsoids import Ellipsoid  # noqa: E402
 from ..io import save_figure  # noqa: E402
+from ..measure import TaskSet  # noqa: E402
 from ..model import Robot  # noqa: E402
 from ..polytope import Polytope  # noqa: E402
 
@@ -82,7 +83,7 @@ def robot_points(robot: Robot, q: np.ndarray) -> np.ndarray:
     return np.vstack(points)
 
 
-def draw_robot(ax, robot: Robot, q: np.ndarray, label_arms: bool = True) -> None:
+def draw_robot(ax: Axes, robot: Robot, q: np.ndarray, label_arms: bool = True) -> None:
     """Draw the platform with an arrow along its heading, its wheels and the arms (links as
     lines through the joints, in greys, labelled ``arm 1 (right)``, ... for the legend) from above."""
     model, data = robot.model, robot.data
@@ -170,18 +171,18 @@ _DIRECTIONS = np.column_stack(
 )
 
 
-def support(task_set, directions: np.ndarray = _DIRECTIONS) -> np.ndarray:
+def support(task_set: TaskSet, directions: np.ndarray = _DIRECTIONS) -> np.ndarray:
     """Support function of the drawn (x, y) part of a set along unit ``directions`` (k, 2):
     ``max <d, x>`` over the set, task units; ``-inf`` for an empty set."""
     if task_set.empty:
         return np.full(len(directions), -np.inf)
     flat = task_set if task_set.dim == 2 else task_set.project((0, 1))
-    if flat.kind == "ellipsoid":
+    if isinstance(flat, Ellipsoid):
         return directions @ flat.center + np.linalg.norm(directions @ flat.generator, axis=1)
-    return np.max(directions @ flat.vertices.T, axis=1)
+    return np.max(directions @ cast(Polytope, flat).vertices.T, axis=1)
 
 
-def coincide(a, b, rtol: float = COINCIDE_RTOL) -> bool:
+def coincide(a: TaskSet, b: TaskSet, rtol: float = COINCIDE_RTOL) -> bool:
     """Whether two sets draw the same curve: supports within ``rtol`` of the larger set's reach."""
     ha, hb = support(a), support(b)
     if not (np.all(np.isfinite(ha)) and np.all(np.isfinite(hb))):
@@ -195,7 +196,7 @@ def _scale_of(panels) -> float:
     return 0.9 / largest if largest > 0 else 1.0
 
 
-def panel_bounds(panels, scale: float) -> list[tuple[np.ndarray, np.ndarray]]:
+def panel_bounds(panels: Sequence[tuple], scale: float) -> list[tuple[np.ndarray, np.ndarray]]:
     """(lower (2,), upper (2,)), m, of what each panel draws: the robot and its sets at ``scale``."""
     bounds = []
     for _, robot, q, point, sets in panels:
@@ -209,7 +210,9 @@ def panel_bounds(panels, scale: float) -> list[tuple[np.ndarray, np.ndarray]]:
     return bounds
 
 
-def panel_limits(*bounds: list[tuple[np.ndarray, np.ndarray]], pad: float = PAD) -> list[tuple[tuple, tuple]]:
+def panel_limits(
+    *bounds: list[tuple[np.ndarray, np.ndarray]], pad: float = PAD
+) -> list[tuple[tuple[float, float], ...]]:
     """Axis limits ((x0, x1), (y0, y1)) per panel: each panel's content (the union over the given
     figures' :func:`panel_bounds`, panel by panel) centred in a box as wide and as tall as the
     widest and tallest content of any panel, plus ``pad``. Every panel thus shows the same
@@ -235,7 +238,7 @@ def sweep_figure(
     drawn: list | None = None,
     note: str = "",
     legend_loc: str = "upper center",
-    limits: Sequence[tuple[tuple, tuple]] | None = None,
+    limits: Sequence[tuple[tuple[float, float], ...]] | None = None,
     formats: Sequence[str] = FORMATS,
     keep: list | None = None,
 ) -> float:
@@ -336,7 +339,7 @@ def sweep_figure(
         lines.append(f"{label} coincides with {twin} ({where}): drawn once")
     if note:
         lines.append(note)
-    fig.legend(handles, labels, loc=f"outside {legend_loc}", ncol=min(len(labels), 4), fontsize=8, frameon=False)
+    fig.legend(handles, labels, loc=f"outside {legend_loc}", ncol=min(len(labels), 4), fontsize=8, frameon=False)  # type: ignore[call-overload]  # "outside ..." is built from a checked location
     fig.supxlabel("\n".join(lines), fontsize=8)
     if title:
         fig.suptitle(title, fontsize=10)

@@ -30,9 +30,13 @@ import itertools
 import math
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+
+if TYPE_CHECKING:
+    from ..measure import TaskSet
 
 PAGE_PROPERTY = "mobmanip_page"
 SCRIPT = Path(__file__).with_name("page.js")
@@ -162,7 +166,7 @@ def sphere_box(center, radius: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def legend_rows(
-    sets: Mapping[tuple[bool, str], object],
+    sets: Mapping[tuple[bool, str], TaskSet],
     scales,
     magnified: Mapping[tuple[bool, str], float],
     object_color: int,

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
 from ..analysis import analyze
+from ..ellipsoids import Ellipsoid
 from ..model import Robot
 
 
@@ -40,7 +42,8 @@ def placement_figure(
     ):
         if q is not None:
             analysis = analyze(robot, q, task, object_mass=object_mass, decoupled=decoupled)
-            panels.append((f"{caption}: {value:.4g}", q, analysis.measures[objective.ellipsoid], analysis))
+            ellipsoid = cast(Ellipsoid, analysis.measures[objective.ellipsoid])  # objectives are of ellipsoids
+            panels.append((f"{caption}: {value:.4g}", q, ellipsoid, analysis))
     largest = max((float(p[2].semi_axes[0]) for p in panels if not p[2].empty), default=1.0)
     scale = 0.6 / largest if largest > 0 else 1.0
     fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 5.6), squeeze=False)

@@ -55,7 +55,7 @@ class ScaleFactors:
     def fit(
         cls, analyses: Sequence[Analysis | None], size: float = DEFAULT_SIZE, measures: Iterable[str] | None = None
     ) -> ScaleFactors:
-        """Scales that draw the largest extent (|centre| + largest semi-axis for an ellipsoid) of
+        """Scales that draw the largest extent (``|centre|`` + largest semi-axis for an ellipsoid) of
         each quantity's drawable sets, over all given analyses, ``size`` metres long (1 when
         everything is zero or empty). Quantities: those of ``measures`` (default: the default
         measures) and of every measure the analyses hold, in the registry's order."""

@@ -81,6 +81,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..analysis import Analysis, analyze
 from ..io import write_text
@@ -354,7 +355,11 @@ class EllipsoidViewer:
     # ----- camera
 
     def set_camera(
-        self, distance: float, elevation_deg: float = 30.0, azimuth_deg: float = -120.0, target=(0.0, 0.0, 0.0)
+        self,
+        distance: float,
+        elevation_deg: float = 30.0,
+        azimuth_deg: float = -120.0,
+        target: ArrayLike = (0.0, 0.0, 0.0),
     ) -> None:
         """Place the camera ``distance`` m from ``target`` (world, m), ``elevation_deg`` above the
         horizon, in the horizontal direction ``azimuth_deg`` from +x, looking at ``target``.

@@ -45,7 +45,7 @@ def team_figure(analysis: TeamAnalysis, path: str | Path, sweep: TeamSweep | Non
     scale = scale if scale is not None else (0.25 * span / biggest if biggest > 0 else 1.0)
     for k, (name, task_set) in enumerate(sets.items()):
         draw = draw_ellipse if task_set.kind == "ellipsoid" else _draw_shadow
-        draw(ax, task_set, center, scale, color=COLORS[k % len(COLORS)], lw=2, label=f"team {name}")
+        draw(ax, task_set, center, scale, color=COLORS[k % len(COLORS)], lw=2, label=f"team {name}")  # type: ignore[arg-type]  # chosen by kind
     if "kinematic_polytope" in sets:
         for i, member in enumerate(team.members):
             own = analysis.member_set("kinematic_polytope", i)
