@@ -39,6 +39,15 @@ PUBLIC_MODULES = [
     "mobmanip.viz.scene",
     "mobmanip.viz.sweeps",
     "mobmanip.viz.figures",
+    "mobmanip.team",
+    "mobmanip.team_analysis",
+    "mobmanip.team_sweep",
+    "mobmanip.motion",
+    "mobmanip.trajectory",
+    "mobmanip.trajectory_analysis",
+    "mobmanip.carry",
+    "mobmanip.placement_map",
+    "mobmanip.collision",
 ]
 
 

@@ -1,7 +1,7 @@
 """Move with capacity: a whole-body motion that carries the held object along a path.
 
 One quadratic program per time step over the reduced velocities x (wheel rates and joint
-rates, so the platform's nonholonomic constraints hold exactly: v = S x has no lateral slip):
+rates, so the platform's nonholonomic constraints hold exactly: v = S x has no lateral slip)::
 
     minimise    1/2 x^T D^-2 x - w (S^T grad f(q))^T x       (D = diag(xdot_max))
     subject to  J_u(q) x = b                                   (the hands follow the object)
@@ -504,7 +504,7 @@ def carry(
     return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
 
 
-def carry_outputs(robot: Robot, result: CarryResult, out_dir) -> list[str]:
+def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> list[str]:
     """trajectory.csv, baseline.csv, carry.json and capacity.png in ``out_dir``, and
     preparation.csv (the self-motion before the path, when there is one); returns the paths."""
     import matplotlib

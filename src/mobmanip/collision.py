@@ -58,7 +58,9 @@ class SelfCollision:
         ModelError: no shapes, or a geometry that Pinocchio cannot load.
     """
 
-    def __init__(self, robot: Robot, margin: float = DEFAULT_MARGIN, source: str = "auto", reference=None):
+    def __init__(
+        self, robot: Robot, margin: float = DEFAULT_MARGIN, source: str = "auto", reference: np.ndarray | None = None
+    ) -> None:
         if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not 0.0 <= margin < 1.0:
             raise ArgumentError(f"collision margin must be between 0 and 1 m, got {margin!r}")
         if source not in ("collision", "visual", "auto"):

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .analysis import _check_mass
 from .dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
@@ -243,7 +244,7 @@ def grasp_matrix_rate(task: str | TaskSpace, offset_rates: np.ndarray) -> np.nda
     return np.hstack(blocks)
 
 
-def check_reduced_velocity(robot: Robot, x) -> np.ndarray:
+def check_reduced_velocity(robot: Robot, x: ArrayLike) -> np.ndarray:
     """x as a float array of shape (nx,), finite.
 
     Raises:

@@ -22,9 +22,12 @@ import csv
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
 from .errors import ArgumentError, UnreachableObjectError
@@ -39,6 +42,9 @@ from .placement import (
     _slsqp_constraints,
 )
 from .tasks import get_task
+
+if TYPE_CHECKING:
+    from .collision import SelfCollision
 
 #: Largest grid (cells per axis) a map accepts.
 MAX_CELLS_PER_AXIS = 400
@@ -95,7 +101,7 @@ class PlacementMap:
         values = np.take_along_axis(self.values, layer[None], axis=0)[0]
         return values, np.where(np.isnan(values), np.nan, self.headings[layer])
 
-    def write_npz(self, path) -> None:
+    def write_npz(self, path: str | Path) -> None:
         """Arrays ``x``, ``y``, ``values``, ``heading``, ``configurations``, ``target`` (and
         ``headings`` for fixed-heading layers), the objective's name under ``objective``."""
         extra = {} if self.headings is None else {"headings": self.headings}
@@ -112,7 +118,7 @@ class PlacementMap:
             **extra,  # type: ignore[arg-type]  # numpy's stub types **kwds as its allow_pickle flag
         )
 
-    def write_csv(self, path) -> None:
+    def write_csv(self, path: str | Path) -> None:
         """One row per cell (and layer): x_m, y_m, heading_deg, value; empty value and heading
         where no pose holds the object."""
         values = self.values if self.headings is None else self.values
@@ -131,7 +137,7 @@ class PlacementMap:
                              f"{v[iy, ix]:.10g}" if ok else ""]
                         )  # fmt: skip
 
-    def plot(self, path, title: str | None = None) -> None:
+    def plot(self, path: str | Path, title: str | None = None) -> None:
         """A heat map of the best value over headings, arrows for the best heading, the object
         (star) and the best cell (circle); PNG or SVG by the file's suffix."""
         from .io import save_figure
@@ -200,7 +206,9 @@ def reach_bound(robot: Robot, reference: np.ndarray) -> float:
     return bound
 
 
-def default_extent(robot: Robot, target, reference: np.ndarray | None = None) -> tuple[float, float, float, float]:
+def default_extent(
+    robot: Robot, target: ArrayLike, reference: np.ndarray | None = None
+) -> tuple[float, float, float, float]:
     """The square of platform positions around the target within the arms' reach bound (m)."""
     target = _check_target(target)
     reference = robot.hold_configuration() if reference is None else reference
@@ -210,20 +218,20 @@ def default_extent(robot: Robot, target, reference: np.ndarray | None = None) ->
 
 def placement_map(
     robot: Robot,
-    target,
+    target: ArrayLike,
     objective: Objective | str,
-    x,
-    y,
+    x: ArrayLike,
+    y: ArrayLike,
     task: str | None = None,
     *,
-    headings=None,
+    headings: ArrayLike | None = None,
     object_mass: float | None = None,
     decoupled: bool = False,
     reference: np.ndarray | None = None,
     max_iterations: int = 60,
     tolerance: float = 1e-7,
     hold_turn: float | None = None,
-    collision=None,
+    collision: SelfCollision | None = None,
 ) -> PlacementMap:
     """The best achievable objective at every platform position (x, y) of a grid.
 

@@ -17,7 +17,7 @@ each robot, the elasticity of the team's reach along a direction d with respect 
 limits: d log r(d) / d log s_i when all of robot i's limits (speed limits for velocity measures,
 effort limits for acceleration measures) are scaled by s_i. The reach is, by default
 (``along="ray"``), how far the set extends from its centre exactly in the direction d
-(:func:`ray_radius`: the largest t with c + t d / |d| in the set); ``along="support"`` takes the
+(:func:`ray_radius`: the largest t with ``c + t d / |d|`` in the set); ``along="support"`` takes the
 set's :meth:`~mobmanip.measure.TaskSet.radius_along` instead (its extent along d, any motion
 across d allowed). A robot whose limits do not bound the team along d contributes 0. For the
 kinematic polytope along a ray, the team's set being the intersection of the robots' own sets,
@@ -27,7 +27,7 @@ to 1 (Euler's theorem); the acceleration sets under gravity are not.
 
 **Load sharing.** :meth:`TeamAnalysis.load_sharing` chooses the hands' wrenches h on the object
 (W h = M_o a_o + g_o: the object's equation of motion) so that the worst normalised torque over
-all robots, max_j |tau_j| / tau_max_j, is smallest: a linear program (scipy's HiGHS). Holding
+all robots, ``max_j |tau_j| / tau_max_j``, is smallest: a linear program (scipy's HiGHS). Holding
 still (a_o = 0), every robot stands still (qdd = 0) and tau_i = Q_i^-1 (J_i^T h_i - xi_i); for
 an acceleration a_o, the robots' accelerations are free subject to J_i qdd_i = W_i^T a_o and
 tau_i = Q_i^-1 (P_i qdd_i - xi_i + J_i^T h_i). A worst normalised torque above 1 is an overload:
@@ -50,7 +50,7 @@ from .dynamics import _reduced_dynamics, decouple, frame_jacobians
 from .ellipsoids import Ellipsoid
 from .errors import ArgumentError, NumericalError, SetQueryError
 from .measure import TaskSet, check_direction
-from .measures import MeasureTerms, get_measure, resolve_measures
+from .measures import MeasureTerms, Quantity, get_measure, resolve_measures
 from .polytope import Polytope
 from .tasks import get_task
 from .team import Member, Team
@@ -108,7 +108,13 @@ def member_terms(team: Team) -> tuple[MemberTerms, ...]:
     return tuple(out)
 
 
-def stack_terms(team: Team, parts: Iterable[MemberTerms], scales: Mapping[int, float] | None = None, *, quantity=None):
+def stack_terms(
+    team: Team,
+    parts: Iterable[MemberTerms],
+    scales: Mapping[int, float] | None = None,
+    *,
+    quantity: Quantity | None = None,
+) -> MeasureTerms:
     """The team's :class:`MeasureTerms` from its robots' terms (limits of robot i scaled by
     ``scales[i]`` for the quantity's limits, when given)."""
     parts = tuple(parts)
@@ -145,7 +151,7 @@ class LoadSharing:
         wrenches: each hand's wrench on the object (N, N m; task rows), (n_hands, m).
         torques: each robot's torques (N m, N), one array (nx_i,) per robot.
         accelerations: each robot's reduced accelerations, one array (nx_i,) per robot.
-        worst: the smallest worst normalised torque max_j |tau_j| / tau_max_j achievable.
+        worst: the smallest worst normalised torque ``max_j |tau_j| / tau_max_j`` achievable.
         worst_by_robot: each robot's own worst normalised torque in that choice, (k,).
         empty: an overload: ``worst`` > 1, no internal forces hold the object within the limits.
         limiting: ``"robot/joint"`` of the most loaded joint (``""`` when no torque is needed).
@@ -346,7 +352,7 @@ class TeamAnalysis:
 
 def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
     """How far a set extends from its centre c exactly along a direction d: the largest t >= 0
-    with c + t d / |d| in the set (0 when the set is empty or flat across d).
+    with ``c + t d / |d|`` in the set (0 when the set is empty or flat across d).
 
     Ellipsoids: 1 / sqrt(u^T A u) for the unit u, u in the span of the positive semi-axes.
     Polytopes: :meth:`mobmanip.polytope.Polytope.ray_radius` (one linear program).

@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +31,9 @@ from .motion import motion_terms
 from .polytopes import kinematic_polytope
 from .tasks import get_task
 from .trajectory import Trajectory, trajectory_table
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)
@@ -139,7 +144,7 @@ class TrajectoryAnalysis:
             max d . v over the set (the largest component along d of a velocity the wheels and
             joints can give; the speed straight along d can be less), or ``None`` when not asked
             for. At least ``velocity_capacity``: the ellipsoid lies inside the polytope.
-        velocity_use, effort_use: |x| / xdot_max and |tau| / tau_max per sample, (N, nx). The
+        velocity_use, effort_use: ``|x| / xdot_max`` and ``|tau| / tau_max`` per sample, (N, nx). The
             Euclidean norm of an effort_use row (the CSV's ``effort_norm``) is the dynamic
             ellipsoid's measure of the demand: 1 on its boundary when the motion's
             accelerations are the paper's policy (no null-space acceleration).
@@ -304,7 +309,7 @@ def analyze_trajectory(
     )
 
 
-def trajectory_figure(result: TrajectoryAnalysis):
+def trajectory_figure(result: TrajectoryAnalysis) -> Figure:
     """Three panels over time: speed against velocity capacity, acceleration against
     acceleration capacity, and the largest velocity and effort use (fractions of the limits)."""
     import matplotlib
@@ -341,7 +346,7 @@ def trajectory_figure(result: TrajectoryAnalysis):
     return fig
 
 
-def write_outputs(robot: Robot, result: TrajectoryAnalysis, out_dir, prefix: str = "analysis") -> list[str]:
+def write_outputs(robot: Robot, result: TrajectoryAnalysis, out_dir: str | Path, prefix: str = "analysis") -> list[str]:
     """``{prefix}.csv``, ``{prefix}.json`` and ``{prefix}.png`` in ``out_dir``; returns the paths."""
     from pathlib import Path
 
@@ -369,7 +374,9 @@ def _write_csv(path, header: list[str], values: np.ndarray) -> None:
             handle.write(",".join(repr(float(v)) for v in row) + "\n")
 
 
-def write_trajectory_csv(robot: Robot, path, t: np.ndarray, qs: np.ndarray, extra: dict | None = None) -> None:
+def write_trajectory_csv(
+    robot: Robot, path: str | Path, t: np.ndarray, qs: np.ndarray, extra: dict | None = None
+) -> None:
     """A trajectory file (:mod:`mobmanip.trajectory`'s columns) plus ``extra`` columns by name."""
     header, values = trajectory_table(robot, t, qs)
     for name, column in (extra or {}).items():
