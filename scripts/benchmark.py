@@ -45,8 +45,8 @@ from pycapacity.robot import acceleration_ellipsoid, velocity_ellipsoid  # noqa:
 
 import mobmanip  # noqa: E402
 from mobmanip.batch import BatchSetup, Workspace, pinocchio_pass, warm_kernel  # noqa: E402
-from mobmanip.dynamics import reduced_dynamics, unified_jacobian  # noqa: E402
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep  # noqa: E402
+from mobmanip.terms.dynamics import reduced_dynamics, unified_jacobian  # noqa: E402
 
 ROBOTS = (("planar_dual_arm", "planar"), ("tiago_dual", "spatial"))
 TARGETS = {  # (b)/(a), (c)/(a) upper bounds per robot

@@ -13,8 +13,8 @@ import time
 import numpy as np
 
 import mobmanip
-from mobmanip.trajectory import trajectory_from_samples
-from mobmanip.trajectory_analysis import analyze_trajectory
+from mobmanip.motion.trajectory import trajectory_from_samples
+from mobmanip.motion.trajectory_analysis import analyze_trajectory
 
 
 def main() -> None:

@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 import mobmanip
-from mobmanip.polytope import Polytope
-from mobmanip.polytopes import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
+from mobmanip.sets.capacity import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
+from mobmanip.sets.polytope import Polytope
 
 TARGETS_MS = {("planar_dual_arm", "both"): 2.0, ("tiago_dual", "kinematic"): 20.0}
 SUPPORT_TARGET_MS = 1.0

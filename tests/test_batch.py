@@ -11,9 +11,9 @@ import mobmanip
 from conftest import random_configurations
 from mobmanip.analysis import analyze
 from mobmanip.batch import EllipsoidBatch, analyze_batch
-from mobmanip.ellipsoids import dynamic_ellipsoid
 from mobmanip.errors import ConfigurationError, TaskError
-from mobmanip.tasks import get_task
+from mobmanip.robot.tasks import get_task
+from mobmanip.sets.ellipsoid import dynamic_ellipsoid
 
 TOL = 1e-10  # relative to the ellipsoid's size: max(largest semi-axis, |centre|)
 _EPS = np.finfo(float).eps
@@ -79,7 +79,7 @@ def test_tiago_random_configurations(tiago, rng, task, platform):
 
 
 def test_svd_path_equals_single(robot, tiago, rng):
-    """The stacked mirror of mobmanip.ellipsoids, forced on every row."""
+    """The stacked mirror of mobmanip.sets.ellipsoid, forced on every row."""
     for r, task in (
         (robot, "planar"),
         (robot, "planar_rigid"),

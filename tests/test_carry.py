@@ -11,15 +11,15 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-import mobmanip.carry as carry_module
-from mobmanip.carry import ObjectPath, carry, carry_outputs, default_start, read_path
+import mobmanip.motion.carry as carry_module
 from mobmanip.cli import main
-from mobmanip.dynamics import end_effector_positions
 from mobmanip.errors import ArgumentError
 from mobmanip.motion import motion_terms
+from mobmanip.motion.carry import ObjectPath, carry, carry_outputs, default_start, read_path
+from mobmanip.motion.trajectory import read_trajectory, trajectory_from_samples
+from mobmanip.motion.trajectory_analysis import analyze_trajectory
 from mobmanip.placement import place
-from mobmanip.trajectory import read_trajectory, trajectory_from_samples
-from mobmanip.trajectory_analysis import analyze_trajectory
+from mobmanip.terms.dynamics import end_effector_positions
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

@@ -14,7 +14,7 @@ import pytest
 
 from conftest import PAPER_URDF, WHEEL_RADIUS, write_variant
 from mobmanip.cli import main
-from mobmanip.dynamics import unified_jacobian
+from mobmanip.terms.dynamics import unified_jacobian
 
 # A configuration with some joints named and the others left out (they must come back as 0).
 PLATFORM = [0.7, -1.2, 2.5]

@@ -9,9 +9,9 @@ import pytest
 
 import mobmanip
 from conftest import random_configuration
-from mobmanip.collision import SelfCollision
 from mobmanip.errors import ArgumentError
 from mobmanip.placement import place
+from mobmanip.robot.collision import SelfCollision
 
 STEP = 1e-4
 

@@ -72,7 +72,7 @@ def test_library_logs_nothing_unless_configured(caplog):
     """The library only emits records; whether they are shown is the application's choice."""
     with caplog.at_level(logging.INFO, logger="mobmanip"):
         mobmanip.load_robot("planar_dual_arm")
-    assert any(r.name == "mobmanip.model" and r.levelno == logging.INFO for r in caplog.records)
+    assert any(r.name == "mobmanip.robot.model" and r.levelno == logging.INFO for r in caplog.records)
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Inferring a spec from a URDF (mobmanip.detect), `init-spec`, `analyze --urdf`, and the errors
+"""Inferring a spec from a URDF (mobmanip.robot.detect), `init-spec`, `analyze --urdf`, and the errors
 that name what is wrong with a URDF.
 
 Broken URDFs are small edits of the paper's URDF written into tmp_path.
@@ -16,8 +16,8 @@ import pytest
 
 import mobmanip
 from mobmanip.cli import main
-from mobmanip.detect import detect_spec, spec_from_urdf, spec_to_toml, wheel_candidates
-from mobmanip.dynamics import end_effector_positions, unified_jacobian
+from mobmanip.descriptions.resources import example_robot_data_share
+from mobmanip.descriptions.urdf import read_urdf
 from mobmanip.errors import (
     FrameNotFoundError,
     JointNotFoundError,
@@ -27,9 +27,9 @@ from mobmanip.errors import (
     UrdfError,
     WheelError,
 )
-from mobmanip.resources import example_robot_data_share
-from mobmanip.spec import ArmSpec, RobotSpec, WheelSpec, find_spec, load_spec
-from mobmanip.urdf import read_urdf
+from mobmanip.robot.detect import detect_spec, spec_from_urdf, spec_to_toml, wheel_candidates
+from mobmanip.robot.spec import ArmSpec, RobotSpec, WheelSpec, find_spec, load_spec
+from mobmanip.terms.dynamics import end_effector_positions, unified_jacobian
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 PAPER_URDF = ROBOTS / "planar_dual_arm.urdf"

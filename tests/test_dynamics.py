@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 
 from conftest import HALF_TRACK, WHEEL_RADIUS, random_configuration, random_configurations
-from mobmanip.dynamics import decouple, reduced_dynamics, unified_jacobian
+from mobmanip.terms.dynamics import decouple, reduced_dynamics, unified_jacobian
 
 # Tables 1 and 2 of the paper.
 PLATFORM_MASS, PLATFORM_IZZ = 94.0, 6.609

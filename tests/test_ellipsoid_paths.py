@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import mobmanip
-from mobmanip import ellipsoids
 from mobmanip.analysis import analyze
-from mobmanip.ellipsoids import Ellipsoid
+from mobmanip.sets import ellipsoid as ellipsoids
+from mobmanip.sets.ellipsoid import Ellipsoid
 
 
 def _assert_same(fast, exact, rtol=1e-9):
@@ -40,7 +40,7 @@ def _random_q(robot, rng):
 @pytest.fixture
 def general_branch_calls(monkeypatch):
     """Count the calls of Ellipsoid.from_generator: for a non-empty ellipsoid only the general
-    (null-space) branches of mobmanip.ellipsoids call it; the full-rank branches build the
+    (null-space) branches of mobmanip.sets.ellipsoid call it; the full-rank branches build the
     Ellipsoid directly. So the count tells which branch ran."""
     calls = []
     original = Ellipsoid.from_generator.__func__

@@ -25,8 +25,8 @@ import scipy.linalg
 
 import mobmanip
 from mobmanip.analysis import analyze
-from mobmanip.ellipsoids import Ellipsoid
-from mobmanip.grasp import HeldObject
+from mobmanip.sets.ellipsoid import Ellipsoid
+from mobmanip.terms.grasp import HeldObject
 
 # ---------------------------------------------------------------------------------------------
 # Constants from the paper (Tables 1 and 2) and the design notes.
@@ -731,7 +731,7 @@ def test_dynamic_ellipsoid_function_with_a_general_input_matrix(rng):
     """dynamic_ellipsoid on arrays, Q not the identity: A = L^T L / (1 - |r|^2), c = -L^+ mu_bar with
     L = Z Q^-1 (P J^+ W^T + J^T W^+ M_o), mu_bar = Z Q^-1 (-xi + J^T W^+ g_o); empty exactly when the
     effort limits are scaled below |r| (r scales as 1 / limit)."""
-    from mobmanip.ellipsoids import dynamic_ellipsoid
+    from mobmanip.sets.ellipsoid import dynamic_ellipsoid
 
     J, W, P, Q, xi, M_o, g_o = _synthetic_problem(rng)
     effort = rng.uniform(20.0, 100.0, size=J.shape[1])
@@ -762,7 +762,7 @@ def test_dynamic_ellipsoid_function_with_a_general_input_matrix(rng):
 def test_kinematic_ellipsoid_function_on_arrays(rng):
     """kinematic_ellipsoid on arrays: full row rank gives (J_hat^+ W^T)^T (J_hat^+ W^T); a rank-deficient
     J_hat (one arm's rows repeated) gives the image of the consistent unit ball."""
-    from mobmanip.ellipsoids import kinematic_ellipsoid
+    from mobmanip.sets.ellipsoid import kinematic_ellipsoid
 
     J, W, *_ = _synthetic_problem(rng)
     limits = rng.uniform(0.5, 3.0, size=J.shape[1])

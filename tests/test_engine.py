@@ -23,12 +23,12 @@ import pytest
 
 import mobmanip
 from conftest import random_configurations
-from mobmanip import tolerances
 from mobmanip.analysis import analyze
 from mobmanip.batch import analyze_batch, evaluate_one, kernel_available
 from mobmanip.errors import ModelError, TaskError
-from mobmanip.grasp import HeldObject
-from mobmanip.tasks import get_task
+from mobmanip.robot.tasks import get_task
+from mobmanip.support import tolerances as tolerances
+from mobmanip.terms.grasp import HeldObject
 
 PROMISE = 1e-9  # analyze's docstring: "cannot certify to 1e-9 of its size"
 ROOT = Path(__file__).resolve().parents[1]
@@ -105,7 +105,7 @@ def conditioning_family(robot):
 @needs_kernel
 def test_kernel_module_holds_no_tolerance_of_its_own():
     """The kernel's only float global is machine epsilon, the tolerance module's own; every
-    threshold reaches it as an argument, read from mobmanip.tolerances at each call."""
+    threshold reaches it as an argument, read from mobmanip.support.tolerances at each call."""
     from mobmanip.engine import kernel
 
     floats = {name: value for name, value in vars(kernel).items() if isinstance(value, float)}

@@ -18,12 +18,13 @@ import pytest
 
 import mobmanip
 from conftest import random_configuration
-from mobmanip.derivatives import DerivativeWorkspace
 from mobmanip.errors import ModelError
-from mobmanip.gradient_adjoint import full_rank
-from mobmanip.gradients import INDICES, GradientEvaluator, Objective, _full_rank
-from mobmanip.tasks import get_task
-from mobmanip.tree_adjoint import TreeAdjoint
+from mobmanip.gradients import INDICES, GradientEvaluator, Objective
+from mobmanip.gradients.adjoint import full_rank
+from mobmanip.gradients.derivatives import DerivativeWorkspace
+from mobmanip.gradients.evaluator import _full_rank
+from mobmanip.gradients.tree_adjoint import TreeAdjoint
+from mobmanip.robot.tasks import get_task
 
 ROBOTS = ("planar_dual_arm", "tiago_dual", "tiago_dual_torso", "planar_dual_arm_omni", "ur5")
 

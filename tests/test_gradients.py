@@ -1,7 +1,7 @@
 """Analytic gradients of the ellipsoids' measures against central differences through pin.integrate.
 
 The differences are taken of the reference implementation's values (``analyze_batch`` on its SVD
-path, the stacked mirror of :mod:`mobmanip.ellipsoids`), not of the gradient module's own values,
+path, the stacked mirror of :mod:`mobmanip.sets.ellipsoid`), not of the gradient module's own values,
 so a test also checks that both compute the same measure.
 """
 
@@ -15,12 +15,12 @@ import pytest
 
 import mobmanip
 from conftest import random_configuration
-from mobmanip import derivatives
-from mobmanip.derivatives import DerivativeWorkspace, frame_jacobian_derivative, hessian_layout
-from mobmanip.dynamics import mass_matrix
 from mobmanip.errors import ArgumentError, MeasureError, ModelError
 from mobmanip.gradients import INDICES, GradientEvaluator, Objective, measure_gradient, platform_gradient
-from mobmanip.tasks import get_task
+from mobmanip.gradients import derivatives as derivatives
+from mobmanip.gradients.derivatives import DerivativeWorkspace, frame_jacobian_derivative, hessian_layout
+from mobmanip.robot.tasks import get_task
+from mobmanip.terms.dynamics import mass_matrix
 
 ROBOTS = ("planar_dual_arm", "tiago_dual", "tiago_dual_torso", "planar_dual_arm_omni", "ur5")
 STEP = 1e-4  # rad or m: fourth-order central differences, truncation ~ STEP^4 (scaled down near
@@ -221,7 +221,7 @@ def test_explicit_object_is_constant(robots):
     """With an explicit HeldObject (W, M_o, g_o fixed), the gradient equals differences of
     analyze(held_object=...) (the reference path)."""
     robot = robots["tiago_dual"]
-    obj = mobmanip.grasp.HeldObject(
+    obj = mobmanip.terms.grasp.HeldObject(
         2.0, np.diag([0.02, 0.03, 0.04]), np.zeros(3), np.array([[0.0, -0.15, 0.0], [0.0, 0.15, 0.0]])
     )
     q = random_configuration(robot, np.random.default_rng(34))

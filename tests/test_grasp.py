@@ -3,7 +3,7 @@
 Every expected value is computed here from first principles: the velocity of a point of a rigid
 body (v + w x r), the net wrench of forces applied at points (sum f, sum r x f + n), and the
 weight of a mass under Pinocchio's gravity. Each identity is then compared with what
-``mobmanip.grasp`` builds from the grasp offsets alone.
+``mobmanip.terms.grasp`` builds from the grasp offsets alone.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ import scipy.linalg
 import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.errors import TaskError
-from mobmanip.grasp import HeldObject, grasp_block, grasp_matrix
-from mobmanip.tasks import TASKS
+from mobmanip.robot.tasks import TASKS
+from mobmanip.terms.grasp import HeldObject, grasp_block, grasp_matrix
 
 # Rows of a 6-D twist/wrench [linear x, y, z, angular x, y, z] each task keeps, written out here
 # from the task definitions in DESIGN.md (not read from the code under test).

@@ -90,7 +90,7 @@ def _check_result(spec, q_path, document, out: str) -> None:
     """A result printed and written: finite, and what the reference path computes."""
     assert NON_FINITE.search(out) is None, out
     robot = mobmanip.load_robot(spec)
-    q = mobmanip.io.read_configuration(robot, q_path)
+    q = mobmanip.robot.configurations.read_configuration(robot, q_path)
     exact = mobmanip.analyze(robot, q, method="exact")
     for name, key in (("kinematic", "kinematic_ellipsoid"), ("dynamic", "dynamic_ellipsoid")):
         expected, got = exact.measures[name], document[key]

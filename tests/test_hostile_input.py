@@ -9,9 +9,9 @@ import pytest
 
 import mobmanip
 from hostile_util import assert_one_line_error, run_cli, write_robot
-from mobmanip._native_stderr import captured_native_stderr
 from mobmanip.errors import LimitError, RangeError, UrdfError, WheelError
-from mobmanip.ranges import EFFORT_LIMIT, LIMIT_RATIO, VELOCITY_LIMIT
+from mobmanip.support.native_stderr import captured_native_stderr
+from mobmanip.support.ranges import EFFORT_LIMIT, LIMIT_RATIO, VELOCITY_LIMIT
 
 WHEEL_MASS = '<mass value="5.0"/>'
 WHEEL_INERTIA = 'ixx="0.135" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.135"'

@@ -12,7 +12,7 @@ import pytest
 
 from hostile_util import PAPER_URDF_TEXT, assert_one_line_error, run_cli, write_robot
 from mobmanip.errors import OutputError
-from mobmanip.io import atomic_output, protect_inputs, publish_together, write_json, write_text
+from mobmanip.support.files import atomic_output, protect_inputs, publish_together, write_json, write_text
 
 
 def _snapshot(*paths):

@@ -14,7 +14,7 @@ import pytest
 import mobmanip
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.errors import ConfigurationError, RangeError
-from mobmanip.ranges import LIMIT_RATIO, PLATFORM_POSITION
+from mobmanip.support.ranges import LIMIT_RATIO, PLATFORM_POSITION
 
 FACTORS = (1e-6, 1e-4, 1e-2, 1.0, 1e2, 1e4, 1e6)
 RTOL = 1e-9  # of each ellipsoid's size
@@ -189,7 +189,7 @@ def test_unit_pairs_to_rounding_are_accepted(paper, q45):
 @pytest.mark.parametrize("mass", ["2", b"2", [2.0], None if False else {"kg": 2}, True, complex(2, 0), 1e300, -0.0 - 1])
 def test_non_numeric_or_out_of_range_masses_are_refused(paper, q45, mass):
     from mobmanip.errors import MobmanipError
-    from mobmanip.grasp import HeldObject
+    from mobmanip.terms.grasp import HeldObject
 
     with pytest.raises(MobmanipError, match="mass"):
         mobmanip.analyze(paper, q45, object_mass=mass)

@@ -17,11 +17,11 @@ import pytest
 
 import mobmanip
 from hostile_util import assert_one_line_error, run_cli
-from mobmanip.detect import detect_spec
 from mobmanip.errors import GridError, RangeError, SpecError
-from mobmanip.ranges import MAX_MODEL_DOF
+from mobmanip.robot.detect import detect_spec
+from mobmanip.support.ranges import MAX_MODEL_DOF
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
-from mobmanip.sweep_budget import BYTES_PER_POINT, MAX_GRID_POINTS, estimate
+from mobmanip.sweep.budget import BYTES_PER_POINT, MAX_GRID_POINTS, estimate
 
 SRC = Path(mobmanip.__file__).resolve().parents[1]
 

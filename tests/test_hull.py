@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial import HalfspaceIntersection
 
-from mobmanip.hull import enumerate_hull
+from mobmanip.sets.hull import enumerate_hull
 
 
 def _qhull_vertices(An, s):

@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from mobmanip.io import OutputError, atomic_output, save_figure  # noqa: E402
+from mobmanip.support.files import OutputError, atomic_output, save_figure  # noqa: E402
 
 
 def test_failure_midway_keeps_the_old_file_and_leaves_no_temporary(tmp_path):

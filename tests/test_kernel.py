@@ -20,7 +20,7 @@ from mobmanip.batch import (
     pinocchio_pass,
 )
 from mobmanip.engine.setup import mass_matrix_pattern
-from mobmanip.grasp import HeldObject
+from mobmanip.terms.grasp import HeldObject
 from test_batch import assert_same_ellipsoid
 
 pytestmark = pytest.mark.skipif(not kernel_available(), reason="Numba is not installed")

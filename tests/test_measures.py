@@ -26,10 +26,7 @@ from mobmanip import EllipsoidBatch, Measure, MeasureTerms, TaskSet, register_me
 from mobmanip.batch import BatchSetup, ellipsoids_from_terms, iter_terms
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.cli import main
-from mobmanip.dynamics import end_effector_positions, reduced_dynamics, unified_jacobian
-from mobmanip.ellipsoids import dynamic_ellipsoid, kinematic_ellipsoid
 from mobmanip.errors import MeasureError, MobmanipError, UnknownMeasureError
-from mobmanip.grasp import HeldObject
 from mobmanip.measures import (
     MEASURES,
     VELOCITY,
@@ -40,7 +37,11 @@ from mobmanip.measures import (
     measure_names,
     resolve_measures,
 )
-from mobmanip.sweep import SweepGrid, SweepSpec, index_names, run_sweep
+from mobmanip.sets.ellipsoid import dynamic_ellipsoid, kinematic_ellipsoid
+from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
+from mobmanip.sweep.runner import index_names
+from mobmanip.terms.dynamics import end_effector_positions, reduced_dynamics, unified_jacobian
+from mobmanip.terms.grasp import HeldObject
 
 # The keys of `mobmanip analyze --json` before measures became a family: they must all stay.
 DOCUMENT_KEYS = [

@@ -8,10 +8,10 @@ import pytest
 
 import mobmanip
 from mobmanip.analysis import analyze
-from mobmanip.dynamics import frame_jacobians
 from mobmanip.errors import ConfigurationError, MobmanipError
-from mobmanip.grasp import HeldObject
 from mobmanip.motion import analyze_motion, motion_terms
+from mobmanip.terms.dynamics import frame_jacobians
+from mobmanip.terms.grasp import HeldObject
 
 
 @pytest.fixture(scope="module")

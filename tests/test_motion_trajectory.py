@@ -14,14 +14,14 @@ import mobmanip
 from mobmanip.cli import main
 from mobmanip.errors import ArgumentError, JointNotFoundError
 from mobmanip.motion import motion_terms
-from mobmanip.trajectory import (
+from mobmanip.motion.trajectory import (
     planar_exp,
     planar_log,
     read_trajectory,
     tangent_difference,
     trajectory_from_samples,
 )
-from mobmanip.trajectory_analysis import analyze_trajectory, write_trajectory_csv
+from mobmanip.motion.trajectory_analysis import analyze_trajectory, write_trajectory_csv
 
 
 @pytest.fixture(scope="module")

@@ -12,10 +12,10 @@ import pytest
 
 import mobmanip
 from browser_util import VIEWPORT, chromium, missing_browser, world_matrix
-from mobmanip.carry import ObjectPath, carry
 from mobmanip.errors import ArgumentError
 from mobmanip.motion import analyze_motion
-from mobmanip.trajectory import trajectory_from_samples
+from mobmanip.motion.carry import ObjectPath, carry
+from mobmanip.motion.trajectory import trajectory_from_samples
 from mobmanip.viz.scene import ELLIPSOID_PATHS, OBJECT_PATH, PLANAR_THICKNESS, EllipsoidViewer
 from mobmanip.viz.trajectory_page import animate_trajectory, frame_samples, trajectory_frames
 

@@ -9,8 +9,9 @@ from scipy.optimize import minimize
 
 import mobmanip
 from mobmanip.gradients import GradientEvaluator
-from mobmanip.placement import Region, _Problem, _slsqp_constraints, object_gradient, place
-from mobmanip.placement_map import _newton_project
+from mobmanip.placement import Region, object_gradient, place
+from mobmanip.placement.maps import _newton_project
+from mobmanip.placement.optimize import _Problem, _slsqp_constraints
 
 STEP = 1e-4
 

@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from mobmanip.urdf import read_urdf
+from mobmanip.descriptions.urdf import read_urdf
 
 
 @pytest.fixture(scope="module", params=["tiago", "tiago_pro"])

@@ -13,9 +13,10 @@ import pytest
 import mobmanip
 from mobmanip.cli import main
 from mobmanip.errors import ArgumentError, MeasureError
-from mobmanip.placement import Region, UnreachableObjectError, place
-from mobmanip.placement_grid import objective_values, placement_grid
-from mobmanip.posture import hold_from
+from mobmanip.placement import Region, place
+from mobmanip.placement.grid import objective_values, placement_grid
+from mobmanip.placement.optimize import UnreachableObjectError
+from mobmanip.postures.inverse_kinematics import hold_from
 
 
 @pytest.fixture(scope="module")

@@ -12,8 +12,9 @@ import pytest
 import mobmanip
 from mobmanip.cli import main
 from mobmanip.errors import ArgumentError
-from mobmanip.placement import UnreachableObjectError, place
-from mobmanip.placement_map import placement_map, reach_bound
+from mobmanip.placement import place
+from mobmanip.placement.maps import placement_map, reach_bound
+from mobmanip.placement.optimize import UnreachableObjectError
 from test_placement import check_holds, reference_value
 
 TARGET = [1.0, 0.5, 0.35]

@@ -16,10 +16,10 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 import mobmanip
-from mobmanip import zonotope
 from mobmanip.errors import LimitError, MobmanipError, ModelError, TaskError
-from mobmanip.polytope import Polytope
-from mobmanip.polytopes import dynamic_polytope, kinematic_polytope, polytope_indices
+from mobmanip.sets import zonotope as zonotope
+from mobmanip.sets.capacity import dynamic_polytope, kinematic_polytope, polytope_indices
+from mobmanip.sets.polytope import Polytope
 
 
 def _unit(rng, count, dim):

@@ -21,8 +21,8 @@ import pytest
 import mobmanip
 from conftest import random_configuration
 from mobmanip.casestudy import configuration_at, optimal_posture
-from mobmanip.ellipsoids import dynamic_ellipsoid
-from mobmanip.polytopes import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
+from mobmanip.sets.capacity import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
+from mobmanip.sets.ellipsoid import dynamic_ellipsoid
 from polytope_util import (
     closed_chain_acceleration,
     dynamic_lp,

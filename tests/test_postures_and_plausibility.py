@@ -11,12 +11,12 @@ import pytest
 
 import mobmanip
 from conftest import PAPER_SPEC, write_variant
+from mobmanip.analysis.plausibility import block_indices, limit_warnings, weight_warnings
 from mobmanip.cli import main
 from mobmanip.errors import SpecError, UnknownPostureError
-from mobmanip.grasp import HeldObject
-from mobmanip.named_postures import named_configuration, posture_names
-from mobmanip.plausibility import block_indices, limit_warnings, weight_warnings
-from mobmanip.spec import load_spec
+from mobmanip.postures.named import named_configuration, posture_names
+from mobmanip.robot.spec import load_spec
+from mobmanip.terms.grasp import HeldObject
 
 
 def _run(argv, capsys):
@@ -182,7 +182,7 @@ def test_weight_warning_matches_the_generalized_gravity(tiago):
 def test_block_indices_are_the_shadows_of_each_block(tiago):
     q = named_configuration(tiago, "hold")
     an = mobmanip.analyze(tiago, q, "spatial", object_mass=2.0)
-    blocks = block_indices(mobmanip.tasks.get_task("spatial"), an.measures)
+    blocks = block_indices(mobmanip.robot.tasks.get_task("spatial"), an.measures)
     doc = an.to_dict()["block_indices"]
     for name, ellipsoid in an.measures.items():
         for block, rows in (("linear", (0, 1, 2)), ("angular", (3, 4, 5))):
@@ -201,7 +201,7 @@ def test_block_indices_are_the_shadows_of_each_block(tiago):
             a = np.array(entry["semi_axes"])
             assert abs(entry["volume"] - 4.0 / 3.0 * np.pi * np.prod(a)) < 1e-9 * entry["volume"]
             assert abs(entry["isotropy"] - a[-1] / a[0]) < 1e-12
-    assert block_indices(mobmanip.tasks.get_task("translational"), an.measures) is None
+    assert block_indices(mobmanip.robot.tasks.get_task("translational"), an.measures) is None
 
 
 def test_init_spec_records_postures_that_load_back(tmp_path, capsys, robot):
@@ -221,7 +221,7 @@ def test_init_spec_records_postures_that_load_back(tmp_path, capsys, robot):
     assert spec.postures["reach"]["arm_right_2_joint"] == 0.7 and spec.hold["arm_left_2_joint"] == -0.7
     loaded = mobmanip.load_robot(spec)
     q_named = named_configuration(loaded, "reach")
-    q_file_cfg = mobmanip.io.read_configuration(loaded, q_file)
+    q_file_cfg = mobmanip.robot.configurations.read_configuration(loaded, q_file)
     np.testing.assert_allclose(q_named, q_file_cfg, atol=0)
     code, _, err = _run(argv + ["--posture", "reach"], capsys)
     assert code == 2 and "NAME=Q.json" in err

@@ -33,7 +33,7 @@ PAPER_URDF = ROOT / "robots" / "planar_dual_arm.urdf"
 
 
 def _stretch_urdf() -> str:
-    from mobmanip.resources import stretch_urdf_dir
+    from mobmanip.descriptions.resources import stretch_urdf_dir
 
     return str(stretch_urdf_dir() / "SE3" / "stretch_description_SE3_eoa_wrist_dw3_tool_sg3.urdf")
 

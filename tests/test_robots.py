@@ -17,10 +17,10 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from mobmanip.dynamics import end_effector_positions, reduced_dynamics, unified_jacobian
+from mobmanip.descriptions.resources import example_robot_data_share
 from mobmanip.errors import JointNotFoundError, LimitError, MissingLimitError, SpecError
-from mobmanip.resources import example_robot_data_share
-from mobmanip.spec import load_spec
+from mobmanip.robot.spec import load_spec
+from mobmanip.terms.dynamics import end_effector_positions, reduced_dynamics, unified_jacobian
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 PAPER_URDF = ROBOTS / "planar_dual_arm.urdf"

@@ -22,9 +22,9 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from mobmanip.detect import detect_spec, spec_to_toml
-from mobmanip.ellipsoids import kinematic_ellipsoid
 from mobmanip.errors import MissingLimitError, WheelError
+from mobmanip.robot.detect import detect_spec, spec_to_toml
+from mobmanip.sets.ellipsoid import kinematic_ellipsoid
 
 pybullet_data = pytest.importorskip("pybullet_data", reason="the Husky and iiwa URDFs ship with pybullet")
 

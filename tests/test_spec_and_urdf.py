@@ -12,7 +12,6 @@ import yourdfpy
 
 import mobmanip
 import mobmanip.errors
-import mobmanip.io
 from conftest import HALF_TRACK, PAPER_SPEC, PAPER_URDF, ROOT, WHEEL_RADIUS, replace_joint_block, write_variant
 from mobmanip.errors import (
     JointNotFoundError,
@@ -152,7 +151,7 @@ def test_limit_overrides_replace_only_what_they_name(robot):
 
 def error_classes():
     """Every exception class defined in mobmanip's error and I/O modules."""
-    modules = (mobmanip.errors, mobmanip.io)
+    modules = (mobmanip.errors, mobmanip.support.files)
     return sorted(
         {
             obj

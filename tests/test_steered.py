@@ -18,8 +18,8 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from mobmanip.detect import detect_spec
 from mobmanip.errors import ModelError
+from mobmanip.robot.detect import detect_spec
 
 R_DRIVE, R_REAR, WHEELBASE, HALF_TRACK = 0.16, 0.12, 0.9, 0.35
 

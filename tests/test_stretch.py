@@ -8,13 +8,13 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from mobmanip.analysis.plausibility import limit_warnings
 from mobmanip.cli import main
-from mobmanip.detect import arm_joints, detect_spec
-from mobmanip.detect_report import candidate_frames
-from mobmanip.named_postures import named_configuration
-from mobmanip.plausibility import limit_warnings
-from mobmanip.resources import stretch_urdf_dir
-from mobmanip.urdf import read_urdf
+from mobmanip.descriptions.resources import stretch_urdf_dir
+from mobmanip.descriptions.urdf import read_urdf
+from mobmanip.postures.named import named_configuration
+from mobmanip.robot.detect import arm_joints, detect_spec
+from mobmanip.robot.detect_report import candidate_frames
 
 URDF = stretch_urdf_dir() / "SE3" / "stretch_description_SE3_eoa_wrist_dw3_tool_sg3.urdf"
 EE = "link_grasp_center"
@@ -54,7 +54,7 @@ def test_flags_fill_the_gaps_and_the_geometry_is_the_urdf(tmp_path, capsys):
     argv = ["init-spec", URDF, "--ee", EE, "--out", out, "--wheel-radius", "0.0508"]
     code, _, err = _run(argv + ["--wheel-velocity-limit", "5.9", "--wheel-effort-limit", "4.7"], capsys)
     assert code == 0 and "warning" not in err
-    robot = mobmanip.load_robot(mobmanip.spec.load_spec(out))
+    robot = mobmanip.load_robot(mobmanip.robot.spec.load_spec(out))
     assert robot.platform.radius == 0.0508
     urdf = read_urdf(URDF)
     y = [urdf.joint_map[name].origin[1, 3] for name in WHEELS]  # the wheels' lateral offsets
@@ -129,8 +129,8 @@ def test_stow_posture_is_the_sdk_stow(stretch):
 def test_extra_wheels_are_reported():
     """TIAGo++'s casters are wheel-shaped but on swivels: each is listed with its fate, and the
     spec's notes name every wheel-like joint that is not a platform wheel."""
+    from mobmanip.descriptions.resources import example_robot_data_share
     from mobmanip.platforms.wheels import wheel_candidates
-    from mobmanip.resources import example_robot_data_share
 
     urdf_path = example_robot_data_share() / "example-robot-data/robots/tiago_description/robots/tiago_dual.urdf"
     found = detect_spec(urdf_path, ["arm_right_tool_link", "arm_left_tool_link"])

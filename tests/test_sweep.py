@@ -14,15 +14,8 @@ from mobmanip.analysis import analyze
 from mobmanip.casestudy import ArmPosture, arm_measure, configuration_at, optimal_posture
 from mobmanip.cli import main
 from mobmanip.errors import SpecError
-from mobmanip.sweep import (
-    GridError,
-    SweepGrid,
-    SweepSpec,
-    parse_grid,
-    planar_arm,
-    posture_at_reach,
-    run_sweep,
-)
+from mobmanip.sweep import SweepGrid, SweepSpec, parse_grid, run_sweep
+from mobmanip.sweep.runner import GridError, planar_arm, posture_at_reach
 
 
 @pytest.fixture(scope="module")
@@ -286,14 +279,14 @@ def test_dask_cluster_equals_serial():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         with distributed.Client(cluster) as client:
             result = run_sweep(spec, SMALL, executor=client.get_executor(), chunk_size=8)
-            workers = client.run(lambda: __import__("mobmanip.sweep").sweep._WORKER_CACHE.__len__())
+            workers = client.run(lambda: __import__("mobmanip.sweep.runner").sweep.runner._WORKER_CACHE.__len__())
     assert_same_result(serial, result)
     assert len(workers) == 2
 
 
 def test_saving_to_a_missing_directory_is_an_output_error(tmp_path):
     """From Python as from the CLI: one MobmanipError naming the path, no partial file."""
-    from mobmanip.io import OutputError
+    from mobmanip.support.files import OutputError
 
     result = run_sweep(SweepSpec("planar_dual_arm"), SweepGrid(angle_deg=[0.0], distance=[1.0]), workers=1)
     for save, name in ((result.save_npz, "x.npz"), (result.save_csv, "x.csv")):
@@ -307,7 +300,7 @@ def test_posture_table_is_the_same_spread_over_workers():
     distance's posture is searched on its own, so the table is identical."""
     import concurrent.futures as cf
 
-    from mobmanip.sweep import posture_table
+    from mobmanip.sweep.runner import posture_table
 
     robot = mobmanip.load_robot("planar_dual_arm")
     distances = np.linspace(0.2, 1.6, 37)  # some out of reach

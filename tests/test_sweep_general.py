@@ -11,8 +11,9 @@ import pytest
 import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.cli import main
-from mobmanip.posture import POSITION_TOLERANCE, rotation_log, solve_postures
-from mobmanip.sweep import SweepGrid, SweepSpec, UnreachableGridError, run_sweep, sweep_configurations
+from mobmanip.postures.inverse_kinematics import POSITION_TOLERANCE, rotation_log, solve_postures
+from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep, sweep_configurations
+from mobmanip.sweep.runner import UnreachableGridError
 
 #: TIAGo++ holding a box of about 0.26 m between its hands, 0.44 m in front of the shoulders at
 #: 0.87 m height (the same joint values on both arms give mirrored postures).

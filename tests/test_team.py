@@ -15,9 +15,9 @@ import pytest
 
 import mobmanip
 from mobmanip.casestudy import configuration_at, optimal_posture
-from mobmanip.ellipsoids import dynamic_ellipsoid
+from mobmanip.sets.ellipsoid import dynamic_ellipsoid
 from mobmanip.team import Member, Team, team_from_dict
-from mobmanip.team_analysis import analyze_team, ray_radius
+from mobmanip.team.analysis import analyze_team, ray_radius
 from polytope_util import SupportLP
 
 ALL = ("kinematic", "dynamic", "kinematic_polytope", "dynamic_polytope")

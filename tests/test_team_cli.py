@@ -15,8 +15,8 @@ import pytest
 from mobmanip import load_robot
 from mobmanip.cli import main
 from mobmanip.team import load_team
-from mobmanip.team_analysis import analyze_team, ray_radius
-from mobmanip.team_sweep import sweep_heading
+from mobmanip.team.analysis import analyze_team, ray_radius
+from mobmanip.team.sweep import sweep_heading
 from polytope_util import kinematic_lp
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

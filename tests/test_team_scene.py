@@ -11,7 +11,7 @@ import pytest
 
 from browser_util import VIEWPORT, chromium, missing_browser, scene_objects, wait_for_scene, world_matrix
 from mobmanip.team import load_team
-from mobmanip.team_analysis import analyze_team
+from mobmanip.team.analysis import analyze_team
 from mobmanip.viz.scene import planar_thickness, visual_model
 from mobmanip.viz.shapes import ellipsoid_matrix
 from mobmanip.viz.team_scene import TEAM_PATH, TeamViewer

@@ -127,7 +127,7 @@ def test_the_shadow_of_each_robots_own_set_is_the_hull_of_its_vertices(example):
     facets through one vertex once failed in the 2-D hull enumeration."""
     from scipy.spatial import ConvexHull
 
-    from mobmanip.team_analysis import analyze_team
+    from mobmanip.team.analysis import analyze_team
 
     an = analyze_team(example, measures=("kinematic_polytope",))
     sets = [an.measure("kinematic_polytope")] + [an.member_set("kinematic_polytope", i) for i in range(2)]

@@ -35,7 +35,7 @@ from browser_util import (
 )
 from mobmanip.casestudy import PLATFORM_SPEEDS, WHEEL_TORQUES, configuration_at, optimal_posture
 from mobmanip.cli import main
-from mobmanip.ellipsoids import Ellipsoid
+from mobmanip.sets.ellipsoid import Ellipsoid
 from mobmanip.viz.scene import (
     ELLIPSOID_PATHS,
     MIN_SEMI_AXIS,

@@ -1,6 +1,6 @@
 """The compiled face enumeration of 2-D and 3-D zonotopes against its NumPy reference and Qhull.
 
-References: :func:`mobmanip.zonotope.low_dim_faces_numpy` (the NumPy construction the kernel
+References: :func:`mobmanip.sets.zonotope.low_dim_faces_numpy` (the NumPy construction the kernel
 replaces on the hot path), scipy's ``ConvexHull`` of all 2^n corners (independent of both), and
 the general route of :class:`Polytope` (facet normals of every generator subset, then Qhull).
 """
@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from mobmanip import zonotope, zonotope_kernel
-from mobmanip.polytope import Polytope
+from mobmanip.sets import zonotope as zonotope
+from mobmanip.sets import zonotope_kernel as zonotope_kernel
+from mobmanip.sets.polytope import Polytope
 
 pytest.importorskip("numba")
 

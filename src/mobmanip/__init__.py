@@ -11,13 +11,11 @@ and :mod:`mobmanip.viz` (the viewer and figures).
 
 import logging
 
-from .analysis import Analysis, analyze
+from . import _moved
+from .analysis.single import Analysis, analyze
 from .batch import BatchAnalysis, EllipsoidBatch, analyze_batch
-from .dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
-from .ellipsoids import Ellipsoid
 from .errors import MobmanipError
-from .measure import TaskSet, TaskSetBatch
-from .measures import (
+from .measures.registry import (
     ACCELERATION,
     VELOCITY,
     BatchRequest,
@@ -30,10 +28,13 @@ from .measures import (
     register_measure,
     unregister_measure,
 )
-from .model import Robot, load_robot
-from .polytope import Polytope
-from .spec import RobotSpec, load_spec
-from .sweep import SweepGrid, SweepResult, SweepSpec, run_sweep
+from .robot.model import Robot, load_robot
+from .robot.spec import RobotSpec, load_spec
+from .sets.ellipsoid import Ellipsoid
+from .sets.polytope import Polytope
+from .sets.taskset import TaskSet, TaskSetBatch
+from .sweep.runner import SweepGrid, SweepResult, SweepSpec, run_sweep
+from .terms.dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
 
 __all__ = [
     "ACCELERATION",
@@ -82,4 +83,5 @@ def _installed_version() -> str:
 
 
 __version__ = _installed_version()
+_moved.install()  # the module paths before the layers, for one more release
 logging.getLogger(__name__).addHandler(logging.NullHandler())  # quiet unless the application configures logging

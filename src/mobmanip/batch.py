@@ -32,7 +32,7 @@ from .engine import (
     pinocchio_pass,
     warm_kernel,
 )
-from .tolerances import FAST_PATH_TOLERANCE
+from .support.tolerances import FAST_PATH_TOLERANCE
 
 __all__ = [
     "DEFAULT_CHUNK",

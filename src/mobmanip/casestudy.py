@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .analysis import Analysis, analyze
+from .analysis.single import Analysis, analyze
 from .errors import SpecError
-from .measures import DYNAMIC, KINEMATIC, get_measure
-from .model import Arm, Robot
+from .measures.registry import DYNAMIC, KINEMATIC, get_measure
 from .platforms import DifferentialDrive
+from .robot.model import Arm, Robot
 
 ANGLES_DEG = (0.0, 45.0, 90.0)
 PLATFORM_SPEEDS = (0.001, 0.5, 1.0)  # m/s, maximum rim speed of the wheels (Fig. 3)

@@ -17,7 +17,7 @@ import numpy as np
 from . import __version__
 from .commands import COMMANDS
 from .errors import MobmanipError
-from .io import check_output, note_input, protect_inputs, publish_together
+from .support.files import check_output, note_input, protect_inputs, publish_together
 
 
 class _Parser(argparse.ArgumentParser):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..tasks import TASKS
+from ..robot.tasks import TASKS
 
 CARRY_HELP = """\
 PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
@@ -65,10 +65,11 @@ def register(sub) -> None:
 
 def run(args) -> int:
 
-    from ..carry import carry, carry_outputs, read_path
-    from ..io import note_input, output_directory, read_configuration
-    from ..model import load_robot
-    from ..spec import find_spec
+    from ..motion.carry import carry, carry_outputs, read_path
+    from ..robot.configurations import read_configuration
+    from ..robot.model import load_robot
+    from ..robot.spec import find_spec
+    from ..support.files import note_input, output_directory
 
     note_input(args.path)
     robot = load_robot(find_spec(args.robot))

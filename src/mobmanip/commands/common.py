@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from ..tasks import TASKS
+from ..robot.tasks import TASKS
 
 
 def add_urdf_options(parser: argparse.ArgumentParser, ee_required: bool = False) -> None:
@@ -55,9 +55,9 @@ def robot_spec_from_args(args):
         UsageError: neither or both of ROBOT and --urdf, --urdf without --ee, or --ee/--wheels
             without --urdf.
     """
-    from ..detect import parse_wheel_list, spec_from_urdf
     from ..errors import UsageError
-    from ..spec import find_spec
+    from ..robot.detect import parse_wheel_list, spec_from_urdf
+    from ..robot.spec import find_spec
 
     urdf, ee, wheels = getattr(args, "urdf", None), getattr(args, "ee", None), getattr(args, "wheels", None)
     if args.robot is not None and urdf is not None:
@@ -76,7 +76,7 @@ def robot_spec_from_args(args):
 def load_robot_and_configuration(args):
     """The robot named on the command line and its configuration (home pose without --q)."""
     from ..errors import MissingLimitError
-    from ..model import load_robot
+    from ..robot.model import load_robot
 
     spec = robot_spec_from_args(args)
     try:
@@ -97,8 +97,8 @@ def configuration_from_args(robot, args):
         UnknownPostureError: a posture the spec does not define (the message lists them).
     """
     from ..errors import UsageError
-    from ..io import read_configuration
-    from ..named_postures import named_configuration
+    from ..postures.named import named_configuration
+    from ..robot.configurations import read_configuration
 
     q_file, posture = getattr(args, "q", None), getattr(args, "posture", None)
     if q_file and posture:
@@ -133,7 +133,7 @@ def add_analysis_options(parser: argparse.ArgumentParser) -> None:
 
 def add_measure_option(parser: argparse.ArgumentParser) -> None:
     """--measure NAME (repeatable): the measures to compute instead of the default ones."""
-    from ..measures import default_measures, measure_names
+    from ..measures.registry import default_measures, measure_names
 
     parser.add_argument(
         "--measure",
@@ -153,14 +153,14 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
 
 def polytope_measures() -> tuple[str, ...]:
     """The registered measures whose sets are polytopes (what ``--polytope`` adds)."""
-    from ..measures import MEASURES
+    from ..measures.registry import MEASURES
 
     return tuple(name for name, measure in MEASURES.items() if measure.set_kind == "polytope")
 
 
 def requested_measures(args) -> tuple[str, ...] | None:
     """The measures ``--measure`` and ``--polytope`` ask for (``None``: the default ones)."""
-    from ..measures import default_measures
+    from ..measures.registry import default_measures
 
     measures = getattr(args, "measures", None)
     if getattr(args, "polytope", False):

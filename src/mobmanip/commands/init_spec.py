@@ -58,10 +58,10 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..detect import detect_spec, parse_wheel_list, spec_to_toml
-    from ..detect_report import missing_message
     from ..errors import UsageError
-    from ..io import write_text
+    from ..robot.detect import detect_spec, parse_wheel_list, spec_to_toml
+    from ..robot.detect_report import missing_message
+    from ..support.files import write_text
 
     if args.list_frames:
         return _list_frames(args.urdf)
@@ -133,9 +133,9 @@ def _pairs(items, option: str):
 
 def _list_frames(path) -> int:
     """Print the candidate end-effector frames of a URDF, the most likely first."""
-    from ..detect_report import candidate_frames
+    from ..descriptions.urdf import check_supported, read_urdf
     from ..platforms.wheels import wheel_candidates
-    from ..urdf import check_supported, read_urdf
+    from ..robot.detect_report import candidate_frames
 
     urdf = read_urdf(path)
     check_supported(urdf, path)
@@ -154,8 +154,8 @@ def _with_postures(spec, items):
         UsageError: an item not of the form NAME=PATH, or a name given twice or reserved.
     """
     from ..errors import UsageError
-    from ..io import read_configuration
-    from ..model import load_robot
+    from ..robot.configurations import read_configuration
+    from ..robot.model import load_robot
 
     robot = None
     hold, postures = dict(spec.hold), dict(spec.postures)

@@ -41,8 +41,8 @@ from ..viz.paper_figures import FIGURES, POLYTOPES  # noqa: E402  (names only; n
 
 def run(args) -> int:
     from ..casestudy import run_case_study
-    from ..io import output_directory, write_json
-    from ..model import load_robot
+    from ..robot.model import load_robot
+    from ..support.files import output_directory, write_json
 
     out = output_directory(args.out)
     robot = load_robot(args.robot)

@@ -90,12 +90,12 @@ def _parse_point(text: str):
 
 
 def run(args) -> int:
-    from ..analysis import analyze
-    from ..io import write_json
-    from ..model import load_robot
-    from ..named_postures import named_configuration
-    from ..placement import Region, place, placement_document
-    from ..spec import find_spec
+    from ..analysis.single import analyze
+    from ..placement.optimize import Region, place, placement_document
+    from ..postures.named import named_configuration
+    from ..robot.model import load_robot
+    from ..robot.spec import find_spec
+    from ..support.files import write_json
     from .common import print_warnings
 
     robot = load_robot(find_spec(args.robot))
@@ -107,7 +107,7 @@ def run(args) -> int:
     yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
     collision = None
     if args.avoid_collision is not None:
-        from ..collision import SelfCollision
+        from ..robot.collision import SelfCollision
 
         collision = SelfCollision(robot, margin=args.avoid_collision)
     result = place(
@@ -165,7 +165,7 @@ def _check_outputs(args) -> None:
     from pathlib import Path
 
     from ..errors import UsageError
-    from ..io import check_output
+    from ..support.files import check_output
 
     for option, path in (("--json", args.json), ("--save-q", args.save_q), ("--figure", args.figure),
                          ("--export", args.export)):  # fmt: skip
@@ -188,7 +188,7 @@ def _check_yaw(degrees: float) -> float:
 def _check_map_options(args):
     """The map's extent (or None for the default) after checking --map-extent and --map-cells."""
     from ..errors import UsageError
-    from ..placement_map import MAX_CELLS_PER_AXIS
+    from ..placement.maps import MAX_CELLS_PER_AXIS
 
     if not 2 <= args.map_cells <= MAX_CELLS_PER_AXIS:
         raise UsageError(f"--map-cells must be between 2 and {MAX_CELLS_PER_AXIS}, got {args.map_cells}")
@@ -214,7 +214,7 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference) -
 
     import numpy as np
 
-    from ..placement_map import default_extent, placement_map
+    from ..placement.maps import default_extent, placement_map
 
     x0, x1, y0, y1 = extent if extent is not None else default_extent(robot, target)
     xs, ys = np.linspace(x0, x1, args.map_cells), np.linspace(y0, y1, args.map_cells)

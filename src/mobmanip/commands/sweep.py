@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..sweep_budget import MAX_GRID_POINTS
+from ..sweep.budget import MAX_GRID_POINTS
 
 GRID_HELP = """\
 grid syntax (each axis): START:STOP:COUNT gives COUNT evenly spaced values from START to STOP,
@@ -132,12 +132,12 @@ def run_command(args) -> int:
     from pathlib import Path
 
     from ..errors import UsageError
-    from ..io import OutputError
-    from ..measures import resolve_measures
-    from ..spec import find_spec
-    from ..sweep import SweepGrid, SweepSpec, check_index_name, default_workers, plot_sweep, run_sweep
-    from ..sweep_budget import check_grid
-    from ..tasks import TASKS
+    from ..measures.registry import resolve_measures
+    from ..robot.spec import find_spec
+    from ..robot.tasks import TASKS
+    from ..support.files import OutputError
+    from ..sweep.budget import check_grid
+    from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, plot_sweep, run_sweep
     from .common import requested_measures
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
@@ -155,9 +155,9 @@ def run_command(args) -> int:
     if args.reference is not None and args.posture is not None:
         raise UsageError(f"give either --reference ({args.reference}) or --posture ({args.posture}), not both")
     if args.reference is not None or args.posture is not None:
-        from ..io import read_configuration
-        from ..model import load_robot
-        from ..named_postures import named_configuration
+        from ..postures.named import named_configuration
+        from ..robot.configurations import read_configuration
+        from ..robot.model import load_robot
 
         robot = load_robot(args.robot)
         if args.reference is not None:

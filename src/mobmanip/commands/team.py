@@ -36,12 +36,12 @@ def run(args) -> int:
     import tomllib
     from pathlib import Path
 
-    from ..io import check_output, require_finite, write_json
-    from ..measures import get_measure
-    from ..sweep import parse_grid
-    from ..tasks import get_task
-    from ..team import load_team
-    from ..team_analysis import analyze_team, ray_radius
+    from ..measures.registry import get_measure
+    from ..robot.tasks import get_task
+    from ..support.files import check_output, require_finite, write_json
+    from ..sweep.runner import parse_grid
+    from ..team.analysis import analyze_team, ray_radius
+    from ..team.members import load_team
 
     if args.plot:
         check_output(args.plot)
@@ -96,7 +96,7 @@ def run(args) -> int:
         print(f"  most loaded joint: {sharing.limiting}")
     sweep = None
     if offsets is not None:
-        from ..team_sweep import sweep_heading
+        from ..team.sweep import sweep_heading
 
         path = Path(args.description)
         data = tomllib.loads(path.read_text(encoding="utf-8"))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..tasks import TASKS
+from ..robot.tasks import TASKS
 
 TRAJECTORY_HELP = """\
 TRAJ.csv has a header: t (s), platform_x, platform_y (m), platform_yaw (rad), then one column
@@ -54,11 +54,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..io import note_input, output_directory
-    from ..model import load_robot
-    from ..spec import find_spec
-    from ..trajectory import read_trajectory
-    from ..trajectory_analysis import analyze_trajectory, write_outputs
+    from ..motion.trajectory import read_trajectory
+    from ..motion.trajectory_analysis import analyze_trajectory, write_outputs
+    from ..robot.model import load_robot
+    from ..robot.spec import find_spec
+    from ..support.files import note_input, output_directory
 
     note_input(args.trajectory)
     if args.out:

@@ -4,7 +4,7 @@
 of each ellipsoid's size) for every row of a configuration array, several times faster per
 configuration than the single path; :func:`evaluate_one` is the same engine on one
 configuration, the fast path ``analyze`` takes. The readable reference implementation
-(:mod:`mobmanip.dynamics`, :mod:`mobmanip.grasp`, :mod:`mobmanip.ellipsoids`) stays the oracle
+(:mod:`mobmanip.terms.dynamics`, :mod:`mobmanip.terms.grasp`, :mod:`mobmanip.sets.ellipsoid`) stays the oracle
 every path here is tested against.
 
 Pinocchio is called once per configuration, for one CRBA of the robot's model with massless
@@ -25,9 +25,9 @@ Two algorithms compute the ellipsoids:
   from the eigenvectors of L^T L with Rayleigh quotients ||L v||^2, the centre -L^+ mu_bar with
   one least-squares refinement step. Each row carries an a-priori error bound from the
   condition numbers involved; a row is certified where the bound is at most
-  :data:`mobmanip.tolerances.FAST_PATH_TOLERANCE` (all thresholds shared by the paths live in
-  :mod:`mobmanip.tolerances`).
-* the *SVD path* mirrors :mod:`mobmanip.ellipsoids` branch by branch with stacked SVDs and
+  :data:`mobmanip.support.tolerances.FAST_PATH_TOLERANCE` (all thresholds shared by the paths live in
+  :mod:`mobmanip.support.tolerances`).
+* the *SVD path* mirrors :mod:`mobmanip.sets.ellipsoid` branch by branch with stacked SVDs and
   pseudo-inverses. It takes every row the fast path cannot certify: rank-deficient or
   ill-conditioned Jacobians (degenerate ellipsoids), dynamic ellipsoids at the edge of
   emptiness, and rows whose error bound exceeds the threshold.

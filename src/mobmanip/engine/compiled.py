@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import tolerances
+from ..support import tolerances
 from .results import EllipsoidBatch
 from .setup import BatchSetup
 from .terms import ChunkTerms
@@ -122,7 +122,7 @@ class KernelOutcome(NamedTuple):
         bounds: the certificate's a-priori error bounds of every row's kinematic (column 0)
             and dynamic (column 1) ellipsoid, relative to its size, (n, 2); inf where the
             closed forms do not apply. A row is certified exactly where its bound is at most
-            :data:`mobmanip.tolerances.FAST_PATH_TOLERANCE`.
+            :data:`mobmanip.support.tolerances.FAST_PATH_TOLERANCE`.
     """
 
     refused_kinematic: np.ndarray | None

@@ -8,7 +8,7 @@ certificates, as loops compiled by Numba, row by row over a chunk:
 1. terms, from one CRBA of the probed model (:class:`mobmanip.engine.probed.ProbedModel`): the
    end-effector positions from the probe columns of the world joint Jacobian,
    LOCAL_WORLD_ALIGNED frame Jacobians, J_u = J S, P = S^T M S (upper triangle of M, as
-   :func:`mobmanip.dynamics.mass_matrix`), xi = -S^T g with g from the gravity probe's row of
+   :func:`mobmanip.terms.dynamics.mass_matrix`), xi = -S^T g with g from the gravity probe's row of
    M, through S stored column-compressed;
 2. grasp: the object at the centroid of the end effectors (or at explicit offsets), W, its
    pseudo-inverse T = (W W^T)^-1 W, a basis C of null(W) in closed form, and M_o;
@@ -19,7 +19,7 @@ certificates, as loops compiled by Numba, row by row over a chunk:
 A row the certificates do not accept is flagged and left to the exact SVD paths; the kernel
 never guesses. Compilation is cached on disk (first use in a fresh environment takes seconds).
 
-The thresholds of the certificates come from :mod:`mobmanip.tolerances` as an argument of
+The thresholds of the certificates come from :mod:`mobmanip.support.tolerances` as an argument of
 :func:`run_chunk` (``tolerances``), not as globals: Numba compiles globals in as constants and
 its disk cache does not notice when another module's values change. Machine epsilon, which
 cannot change, is the one constant read as a global.
@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..tolerances import EPS
+from ..support.tolerances import EPS
 
 _jit = njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "nsz"})
 
@@ -525,7 +525,7 @@ def run_chunk(
     for Q = I; limits; offsets_in (k, 3) or (0, 3) for the centroid; Mo_in (m, m) or (0, 0)
     for a uniform sphere of ``mass`` reaching the farthest grasp; g_o (m,); decouple_eta > 0
     zeroes P's platform-arm blocks in the dynamic ellipsoid; ``tolerances`` is
-    :func:`mobmanip.tolerances.kernel_tolerances`. Outputs: the ellipsoids of accepted rows and
+    :func:`mobmanip.support.tolerances.kernel_tolerances`. Outputs: the ellipsoids of accepted rows and
     the acceptance flags kin_ok / dyn_ok (rows with False are left untouched); the a-priori
     error bounds of every row, bounds (n, 2) (kinematic, dynamic), relative to the ellipsoid's size (inf
     where the closed forms do not apply at all: a row is accepted exactly where its bound is at

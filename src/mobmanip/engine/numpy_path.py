@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import tolerances as tol
-from ..tolerances import EPS
+from ..support import tolerances as tol
+from ..support.tolerances import EPS
 from .results import EllipsoidBatch
 from .setup import BatchSetup
 from .stacked_linalg import fro, safe_inv, sym_eigh

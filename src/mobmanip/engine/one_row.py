@@ -7,11 +7,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..ellipsoids import Ellipsoid
 from ..errors import ModelError, TaskError
-from ..grasp import HeldObject
-from ..model import Robot
-from ..tasks import TaskSpace, get_task
+from ..robot.model import Robot
+from ..robot.tasks import TaskSpace, get_task
+from ..sets.ellipsoid import Ellipsoid
+from ..terms.grasp import HeldObject
 from .compiled import kernel_available, run_kernel
 from .numpy_path import dynamic_fast, kinematic_fast
 from .probed import Workspace
@@ -39,7 +39,7 @@ class OneRow(NamedTuple):
         dynamic: the dynamic ellipsoid (decoupled P if asked), or ``None`` likewise.
         kinematic_bound: the certificate's a-priori error bound for the kinematic ellipsoid,
             relative to its size (inf where the closed forms do not apply; the ellipsoid is
-            given exactly where it is at most :data:`mobmanip.tolerances.FAST_PATH_TOLERANCE`);
+            given exactly where it is at most :data:`mobmanip.support.tolerances.FAST_PATH_TOLERANCE`);
             ``None`` on the NumPy route, which does not report it.
         dynamic_bound: the same for the dynamic ellipsoid.
         method: the route taken, ``"kernel"`` or ``"numpy"``.
@@ -72,7 +72,7 @@ def evaluate_one(
 
     One Pinocchio pass of the probed model, then the compiled kernel (``"kernel"``) or the
     stacked NumPy fast path on one row (``"numpy"``). An ellipsoid the certificate does not
-    accept to :data:`mobmanip.tolerances.FAST_PATH_TOLERANCE` of its size is ``None``:
+    accept to :data:`mobmanip.support.tolerances.FAST_PATH_TOLERANCE` of its size is ``None``:
     :func:`mobmanip.analysis.analyze` then computes it by the reference path. The set-up for
     (robot, task, mass) is built on first use and kept as long as the robot lives.
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConfigurationError, TaskError
-from ..model import Robot
+from ..robot.model import Robot
 from .compiled import kernel_available, kernel_ready, run_kernel
 from .numpy_path import dynamic_fast, kinematic_fast
 from .probed import Workspace
@@ -205,7 +205,7 @@ def analyze_batch(
         method: ``"auto"`` (the fast path compiled per configuration, see :mod:`mobmanip.engine.kernel`,
             falling back to ``"numpy"`` without Numba; SVD path for the rows it cannot certify),
             ``"numpy"`` (the same fast path stacked in NumPy, then the SVD path) or ``"svd"``
-            (SVD path for every row, the stacked mirror of :mod:`mobmanip.ellipsoids`).
+            (SVD path for every row, the stacked mirror of :mod:`mobmanip.sets.ellipsoid`).
 
     Raises:
         ConfigurationError: ``qs`` is not (N, nq) or has a NaN/infinite entry (named by row and

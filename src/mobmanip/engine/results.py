@@ -7,15 +7,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..ellipsoids import Ellipsoid
-from ..model import Robot
+from ..robot.model import Robot
+from ..sets.ellipsoid import Ellipsoid
 
 
 @dataclass(frozen=True)
 class EllipsoidBatch:
     """N ellipsoids in an m-dimensional task space, as stacked arrays.
 
-    Row n describes the same set as :class:`mobmanip.ellipsoids.Ellipsoid`:
+    Row n describes the same set as :class:`mobmanip.sets.ellipsoid.Ellipsoid`:
     ``{center[n] + sum_k semi_axes[n, k] z_k axes[n, k] : ||z|| <= 1}``.
 
     Attributes:
@@ -95,7 +95,7 @@ class EllipsoidBatch:
         )
 
     def __getitem__(self, index: int) -> Ellipsoid:
-        """Row ``index`` as a single :class:`~mobmanip.ellipsoids.Ellipsoid`."""
+        """Row ``index`` as a single :class:`~mobmanip.sets.ellipsoid.Ellipsoid`."""
         return Ellipsoid(
             center=self.center[index].copy(),
             semi_axes=self.semi_axes[index].copy(),

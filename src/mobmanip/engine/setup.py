@@ -12,10 +12,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError, TaskError
-from ..grasp import GRAVITY, _object_mass
-from ..model import Robot
-from ..tasks import TaskSpace, get_task
-from ..tolerances import RANK_RTOL
+from ..robot.model import Robot
+from ..robot.tasks import TaskSpace, get_task
+from ..support.tolerances import RANK_RTOL
+from ..terms.grasp import GRAVITY, _object_mass
 from .probed import ProbedModel
 
 
@@ -93,7 +93,7 @@ class BatchSetup:
     ):
         task = get_task(task or robot.spec.default_task)
         mass = robot.spec.object_mass if object_mass is None else object_mass
-        mass = _object_mass(mass)  # a number within mobmanip.ranges.OBJECT_MASS
+        mass = _object_mass(mass)  # a number within mobmanip.support.ranges.OBJECT_MASS
         self.robot = robot
         self.task = task
         self.mass = float(mass)

@@ -1,4 +1,4 @@
-"""The SVD path: :mod:`mobmanip.ellipsoids` stacked, for every row the fast paths do not certify.
+"""The SVD path: :mod:`mobmanip.sets.ellipsoid` stacked, for every row the fast paths do not certify.
 
 It mirrors the reference path branch by branch with stacked SVDs and pseudo-inverses (null
 spaces as masks over full SVD bases, so ranks may differ from row to row): rank-deficient or
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import tolerances as tol
 from ..errors import ModelError
+from ..support import tolerances as tol
 from .results import EllipsoidBatch
 from .setup import BatchSetup
 
@@ -51,7 +51,7 @@ def null_mask(A: np.ndarray, n_cols: int):
 
 
 def kinematic_svd(J_u: np.ndarray, W: np.ndarray, vlim: np.ndarray) -> EllipsoidBatch:
-    """Stacked :func:`mobmanip.ellipsoids.kinematic_ellipsoid` (both of its branches, row by row);
+    """Stacked :func:`mobmanip.sets.ellipsoid.kinematic_ellipsoid` (both of its branches, row by row);
     W is (m, mk) or (n, m, mk)."""
     n, km, nx = J_u.shape
     m = W.shape[-2]
@@ -94,7 +94,7 @@ def dynamic_svd(
     elim: np.ndarray,
     row_labels: np.ndarray,
 ) -> EllipsoidBatch:
-    """Stacked :func:`mobmanip.ellipsoids.dynamic_ellipsoid` (both of its branches, row by row);
+    """Stacked :func:`mobmanip.sets.ellipsoid.dynamic_ellipsoid` (both of its branches, row by row);
     W is (m, mk) or (n, m, mk), M_o given by its diagonal (m,) or (n, m)."""
     n, km, nx = J_u.shape
     m = W.shape[-2]

@@ -76,7 +76,7 @@ def numpy_terms(setup: BatchSetup, t: ChunkTerms) -> None:
     M = probed.robot_mass_matrices(t.Ma)
     J = J6[:, :, setup.row_slice, :] if setup.row_slice is not None else J6[:, :, setup.rows, :]
     t.J_u = proj.right(J.reshape(n, k * m, nv))
-    if not setup.crba_symmetric:  # M from the upper triangle, as mobmanip.dynamics.mass_matrix
+    if not setup.crba_symmetric:  # M from the upper triangle, as mobmanip.terms.dynamics.mass_matrix
         M = np.triu(M) + np.swapaxes(np.triu(M, 1), 1, 2)
     P = proj.left_transpose(proj.right(M))
     t.P = 0.5 * (P + np.swapaxes(P, 1, 2))
@@ -89,7 +89,7 @@ def moving_grasp(setup: BatchSetup, pos: np.ndarray):
     """W, (W^T)^+, a basis of null(W) and diag(M_o) per configuration, for grasps with offsets.
 
     The object is centred at the centroid of the end effectors (as
-    :meth:`mobmanip.grasp.HeldObject.between`), a uniform sphere reaching the farthest grasp.
+    :meth:`mobmanip.terms.grasp.HeldObject.between`), a uniform sphere reaching the farthest grasp.
     Task rows are ordered linear then angular, so each grasp block is W_i = [[I, 0], [K_i, I]]
     with K_i the angular-by-linear part of skew(r_i); W_k^-1 = [[I, 0], [-K_k, I]] gives the
     null-space basis in closed form, and W W^T = [[k I, S^T], [S, k I + sum K_i K_i^T]]

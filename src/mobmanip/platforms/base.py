@@ -33,10 +33,10 @@ DEFAULT_OUTLINE = ((-0.25, -0.2), (0.25, -0.2), (0.25, 0.2), (-0.25, 0.2))
 
 
 def positive_length(label: str, value: object) -> float:
-    """A wheel length (m) within :data:`mobmanip.ranges.WHEEL_LENGTH`, else a WheelError naming
+    """A wheel length (m) within :data:`mobmanip.support.ranges.WHEEL_LENGTH`, else a WheelError naming
     ``label`` and the value."""
     from ..errors import WheelError
-    from ..ranges import WHEEL_LENGTH
+    from ..support.ranges import WHEEL_LENGTH
 
     low, high = WHEEL_LENGTH
     message = f"{label} must be a length in [{low:g}, {high:g}] m, got {value!r}"
@@ -132,7 +132,7 @@ class Platform(ABC):
     def urdf_limits(self, urdf) -> Mapping[str, tuple[float | None, float | None]]:
         """(velocity, effort) of each reduced platform velocity read from the URDF, by name;
         ``None`` where the URDF gives none. By default each name is a joint of the URDF."""
-        from ..urdf import joint_limits
+        from ..descriptions.urdf import joint_limits
 
         return {name: joint_limits(urdf, name) for name in self.reduced_names}
 

@@ -14,16 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import (
-    BASE_V,
-    Detected,
-    Platform,
-    PlatformKind,
-    WheelsSpec,
-    positive_length,
-    toml_string,
-    unicycle_rows,
-)
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
 from .wheels import radius_of, side_by_side_message, wheel_geometry
 
 

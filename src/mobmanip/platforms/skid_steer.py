@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..descriptions.urdf import joint_limits
 from ..errors import SpecError, WheelError
-from ..urdf import joint_limits
 from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
 from .wheels import radius_of, wheel_geometry
 

@@ -12,8 +12,15 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..descriptions.urdf import (
+    joint_axis,
+    joint_limits,
+    joint_path,
+    wheel_radius,
+    wheel_shape,
+    zero_configuration_placements,
+)
 from ..errors import WheelError
-from ..urdf import joint_axis, joint_limits, joint_path, wheel_radius, wheel_shape, zero_configuration_placements
 from .base import positive_length
 
 #: |cos| between a wheel axis and the platform's lateral axis above which the wheel counts as

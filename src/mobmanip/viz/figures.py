@@ -27,11 +27,11 @@ import pinocchio as pin  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.patches import FancyArrow, Polygon  # noqa: E402
 
-from ..ellipsoids import Ellipsoid  # noqa: E402
-from ..io import save_figure  # noqa: E402
-from ..measure import TaskSet  # noqa: E402
-from ..model import Robot  # noqa: E402
-from ..polytope import Polytope  # noqa: E402
+from ..robot.model import Robot
+from ..sets.ellipsoid import Ellipsoid
+from ..sets.polytope import Polytope
+from ..sets.taskset import TaskSet
+from ..support.files import save_figure
 
 #: The Okabe-Ito palette (colour-blind safe), by name.
 OKABE_ITO = {

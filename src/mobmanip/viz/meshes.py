@@ -17,13 +17,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 from xml.etree import ElementTree
 
+from ..descriptions.urdf import urdf_text
 from ..errors import UrdfError
-from ..urdf import urdf_text
 
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from ..model import Robot
+    from ..robot.model import Robot
 
 
 @dataclass
@@ -135,9 +135,9 @@ def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Mode
     """
     import pinocchio as pin
 
-    from .._native_stderr import call_with_large_stack, captured_native_stderr
     from ..errors import ModelError
-    from ..model import locked_joints
+    from ..robot.model import locked_joints
+    from ..support.native_stderr import call_with_large_stack, captured_native_stderr
 
     spec = robot.spec
     notes = [] if notes is None else notes

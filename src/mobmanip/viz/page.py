@@ -36,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 if TYPE_CHECKING:
-    from ..measure import TaskSet
+    from ..sets.taskset import TaskSet
 
 PAGE_PROPERTY = "mobmanip_page"
 SCRIPT = Path(__file__).with_name("page.js")
@@ -179,7 +179,7 @@ def legend_rows(
         magnified: the factor of each magnified set, by key.
         object_color: colour of the held object's sphere.
     """
-    from ..measures import get_measure, measure_names
+    from ..measures.registry import get_measure, measure_names
 
     order = {name: i for i, name in enumerate(measure_names())}
     rows, notes = [], []

@@ -9,9 +9,9 @@ from typing import cast
 
 import numpy as np
 
-from ..analysis import analyze
-from ..ellipsoids import Ellipsoid
-from ..model import Robot
+from ..analysis.single import analyze
+from ..robot.model import Robot
+from ..sets.ellipsoid import Ellipsoid
 
 
 def placement_figure(
@@ -30,7 +30,7 @@ def placement_figure(
     (:func:`mobmanip.viz.figures.draw_robot`), the object (+) and the objective's ellipsoid at
     the object; the ellipses share one scale (the largest semi-axis drawn 0.6 m long).
     """
-    from ..io import save_figure
+    from ..support.files import save_figure
     from .figures import draw_ellipse, draw_robot, plt
 
     objective = placement.objective

@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-from ..analysis import Analysis
+from ..analysis.single import Analysis
 from ..errors import MobmanipError
-from ..measures import Quantity, get_measure, measure_names, resolve_measures
+from ..measures.registry import Quantity, get_measure, measure_names, resolve_measures
 from .server import ViewerError
 from .shapes import DRAWINGS
 

@@ -83,11 +83,11 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..analysis import Analysis, analyze
-from ..io import write_text
-from ..measure import TaskSet
-from ..measures import default_measures, get_measure, measure_names, resolve_measures
-from ..model import Robot
+from ..analysis.single import Analysis, analyze
+from ..measures.registry import default_measures, get_measure, measure_names, resolve_measures
+from ..robot.model import Robot
+from ..sets.taskset import TaskSet
+from ..support.files import write_text
 from . import page as _page
 from .meshes import visual_model as visual_model
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE

@@ -1,4 +1,4 @@
-"""How the viewer draws each kind of task-space set (:attr:`mobmanip.measure.TaskSet.kind`).
+"""How the viewer draws each kind of task-space set (:attr:`mobmanip.sets.taskset.TaskSet.kind`).
 
 A :class:`SetDrawing` knows one kind: the meshcat objects it loads at a scene path once, how
 far a set reaches when drawn (for the scale factors), how to place a set in the scene, and its
@@ -12,7 +12,7 @@ of a registered kind and lists the others in :attr:`mobmanip.viz.scene.Ellipsoid
   :func:`ellipsoid_frame` for the transform.
 - ``"polytope"`` (:class:`PolytopeDrawing`): a group at the scene path, translated to the task
   point, holding ``shape`` (3-D tasks: a translucent triangle mesh of the drawn part, from its
-  :attr:`~mobmanip.polytope.Polytope.triangles`; not for the locked platform) and ``edges`` (its
+  :attr:`~mobmanip.sets.polytope.Polytope.triangles`; not for the locked platform) and ``edges`` (its
   edges as line segments: the outline of a planar set, drawn ``thickness`` above the task point
   so that it lies on the ellipses' discs). Both are sent with ``set_object`` at each
   :meth:`SetDrawing.draw`, in metres relative to the task point (its shape changes with the
@@ -31,9 +31,9 @@ from typing import Protocol
 
 import numpy as np
 
-from ..ellipsoids import Ellipsoid
-from ..measure import TaskSet
-from ..tasks import get_task
+from ..robot.tasks import get_task
+from ..sets.ellipsoid import Ellipsoid
+from ..sets.taskset import TaskSet
 from .server import ViewerError
 
 MIN_SEMI_AXIS = 0.002  # m: how a zero (degenerate) semi-axis is drawn

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import save_figure
+from ..support.files import save_figure
 
 AXIS_LABELS = {
     "angle_deg": "object direction (\N{DEGREE SIGN})",
@@ -43,9 +43,9 @@ def index_unit(index: str, task: str) -> str:
     """The unit of a sweep index, mathtext: ``(m/s)$^{2}$`` for a planar kinematic volume,
     ``1`` for an isotropy, ``m/s`` for a planar semi-axis; ``mixed`` where the task mixes linear
     and angular axes and the index does not say which (a spatial semi-axis)."""
-    from ..measures import get_measure
-    from ..sweep_results import check_index_name
-    from ..tasks import get_task
+    from ..measures.registry import get_measure
+    from ..robot.tasks import get_task
+    from ..sweep.results import check_index_name
 
     space = get_task(task)
     kind, what, k = check_index_name(index, space.dim, [index.partition(".")[0]])
@@ -76,7 +76,7 @@ def plot_sweep(result, index: str, path: str | Path, max_panels: int = 6, format
     """Plot one index over the sweep's varying grid axes (see the module's docstring) and save it.
 
     Args:
-        result: a :class:`mobmanip.sweep_results.SweepResult`.
+        result: a :class:`mobmanip.sweep.results.SweepResult`.
         index: the index name (``kinematic.volume``, ...).
         path: the PNG to write; the other ``formats`` go beside it (same name, their suffix).
         max_panels: most panels along a third varying axis.
@@ -97,7 +97,7 @@ def sweep_plot_figure(result, index: str, max_panels: int = 6):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from ..sweep_results import AXES
+    from ..sweep.results import AXES
 
     values = result.index(index)
     grid = result.grid

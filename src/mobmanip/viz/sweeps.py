@@ -30,7 +30,7 @@ import numpy as np
 
 from ..casestudy import ANGLES_DEG, PLATFORM_SPEEDS, WHEEL_TORQUES, configuration_at, optimal_posture
 from ..errors import ArgumentError, SpecError
-from ..model import Robot
+from ..robot.model import Robot
 from .scene import Frame, analyze_pair
 
 SWEEPS = ("object-angle", "fig3", "fig4")

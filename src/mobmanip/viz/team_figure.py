@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import save_figure
-from ..measures import get_measure
-from ..tasks import get_task
-from ..team_analysis import TeamAnalysis
-from ..team_sweep import TeamSweep
+from ..measures.registry import get_measure
+from ..robot.tasks import get_task
+from ..support.files import save_figure
+from ..team.analysis import TeamAnalysis
+from ..team.sweep import TeamSweep
 from .figures import COLORS, _extent, draw_ellipse, draw_robot
 
 

@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import write_text
-from ..measures import get_measure
-from ..team_analysis import TeamAnalysis
+from ..measures.registry import get_measure
+from ..support.files import write_text
+from ..team.analysis import TeamAnalysis
 from .scene import DEFAULT_SIZE, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, _line_material, _translation

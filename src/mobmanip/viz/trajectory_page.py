@@ -14,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis import Analysis, analyze
+from ..analysis.single import Analysis, analyze
 from ..errors import ArgumentError
-from ..grasp import HeldObject
-from ..model import Robot
-from ..motion import motion_terms
-from ..trajectory import Trajectory
+from ..motion.in_motion import motion_terms
+from ..motion.trajectory import Trajectory
+from ..robot.model import Robot
+from ..terms.grasp import HeldObject
 from .scene import Frame
 
 #: Frames drawn at most: a longer trajectory is thinned to about this many.

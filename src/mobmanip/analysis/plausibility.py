@@ -1,0 +1,147 @@
+"""Plausibility of an analysis: limits that look like placeholders, torques that cannot hold the
+arms up, hands that do not hold the object, indices that mix units.
+
+A URDF's limits are often placeholders (every joint at 100 N, 1 rad/s): the ellipsoids computed
+from them are exact for those numbers and meaningless for the robot. Nothing here changes a
+result; :func:`analysis_warnings` returns the messages that ``Analysis.warnings`` carries (the
+commands print them on standard error and write them into the JSON under ``"warnings"``).
+
+A task that mixes linear and angular rows (``spatial``, ``planar_rigid``) has ellipsoids whose
+volume and isotropy multiply metres by radians; :func:`block_indices` gives the unit-consistent
+indices of each block instead: the volume and isotropy of the set's shadow on its linear rows
+(m/s or m/s^2) and on its angular rows (rad/s or rad/s^2).
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..errors import MobmanipError
+from ..postures.named import hand_spread_warnings
+from ..robot.model import Robot
+from ..robot.tasks import TaskSpace
+
+#: A group of joints sharing one limit value is suspicious from this many joints on.
+PLACEHOLDER_MIN_JOINTS = 3
+
+_LIMIT_WARNINGS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def is_round(value: float) -> bool:
+    """Whether a limit looks typed in rather than measured: a multiple of 0.5 (1, 2.5, 100)."""
+    return math.isfinite(value) and value > 0.0 and abs(value * 2.0 - round(value * 2.0)) < 1e-9
+
+
+def limit_warnings(robot: Robot) -> tuple[str, ...]:
+    """Limits that look like placeholders: within one arm (and the torso with it) of at least
+    :data:`PLACEHOLDER_MIN_JOINTS` joints, every joint with the same round velocity or effort
+    limit. Computed once per robot."""
+    cached = _LIMIT_WARNINGS.get(robot)
+    if cached is not None:
+        return cached
+    names = list(robot.reduced_velocity_names)
+    out = []
+    for arm in robot.arms:
+        joints = list(robot.spec.torso) + list(arm.joint_names)
+        cols = [names.index(j) for j in joints if j in names]
+        if len(cols) < PLACEHOLDER_MIN_JOINTS:
+            continue
+        for kind, limits, unit in (
+            ("velocity", robot.velocity_limits, "rad/s or m/s"),
+            ("effort", robot.effort_limits, "N m or N"),
+        ):
+            values = limits[cols]
+            if np.all(values == values[0]) and is_round(float(values[0])):
+                out.append(
+                    f"every joint of arm {arm.name!r} ({len(cols)} joints) has the same {kind} limit, "
+                    f"{values[0]:g} {unit}: a placeholder of the URDF? The {_quantity(kind)} ellipsoid is only as "
+                    f"good as these numbers (set real ones under [limits.{kind}] in the spec)"
+                )
+    result = tuple(out)
+    _LIMIT_WARNINGS[robot] = result
+    return result
+
+
+def _quantity(kind: str) -> str:
+    return "kinematic" if kind == "velocity" else "dynamic"
+
+
+def weight_warnings(robot: Robot, xi: np.ndarray) -> list[str]:
+    """Actuators whose effort limit is below the torque that holds the robot still against
+    gravity at this configuration (from xi = -S^T g at rest: the inputs tau = -Q^-1 xi)."""
+    try:
+        held = np.linalg.solve(robot.Q, -np.asarray(xi, dtype=float))
+    except np.linalg.LinAlgError:
+        return []
+    out = []
+    for name, need, limit in zip(robot.reduced_velocity_names, held, robot.effort_limits):
+        if abs(need) > limit:
+            out.append(
+                f"{name} needs {abs(need):.3g} (N m or N) to hold the robot's own weight here, more than its effort "
+                f"limit {limit:.3g}: the limit is wrong or this posture cannot be held (the dynamic ellipsoid is "
+                "empty or shifted far off)"
+            )
+    return out
+
+
+def analysis_warnings(robot: Robot, positions: np.ndarray, xi: np.ndarray, held_object=None) -> tuple[str, ...]:
+    """Every warning of one configuration: placeholder limits, weight, hands apart."""
+    return (
+        limit_warnings(robot)
+        + tuple(weight_warnings(robot, xi))
+        + tuple(hand_spread_warnings(robot, positions, held_object))
+    )
+
+
+def mixes_units(task: TaskSpace) -> bool:
+    """Whether the task has both linear and angular rows (its volume multiplies m by rad)."""
+    return bool(task.linear_rows) and bool(task.angular_rows)
+
+
+def block_indices(task: TaskSpace, sets: Mapping[str, object]) -> dict[str, dict] | None:
+    """Unit-consistent indices of each set of a mixed task, per block.
+
+    Args:
+        task: the task space.
+        sets: task-space sets by measure name (:class:`mobmanip.sets.taskset.TaskSet`).
+
+    Returns:
+        ``None`` for a task that does not mix units; else, per measure name, ``{"linear":
+        {...}, "angular": {...}}`` with each block's ``volume`` and ``isotropy`` (of the set's
+        shadow on those rows) and ``reach`` (its largest extent from the centre along them);
+        a value that cannot be computed is ``None``.
+    """
+    if not mixes_units(task):
+        return None
+    out = {}
+    for name, task_set in sets.items():
+        blocks = {}
+        for block, rows in (("linear", task.linear_rows), ("angular", task.angular_rows)):
+            blocks[block] = _block(task_set, rows)
+        out[name] = blocks
+    return out
+
+
+def _block(task_set, rows) -> dict:
+    entry: dict = {"rows": list(rows), "volume": None, "isotropy": None, "reach": None}
+    try:
+        shadow = task_set.project(tuple(rows))
+    except MobmanipError:
+        return entry
+    for key, get in (
+        ("volume", lambda: shadow.volume),
+        ("isotropy", lambda: shadow.isotropy),
+        ("reach", lambda: max(shadow.radius_along(e) for e in np.eye(len(rows))) if not shadow.empty else 0.0),
+    ):
+        try:
+            value = float(get())
+        except MobmanipError:
+            continue
+        entry[key] = value if math.isfinite(value) else None
+    if not task_set.empty and hasattr(shadow, "semi_axes"):
+        entry["semi_axes"] = [float(v) for v in shadow.semi_axes]
+    return entry

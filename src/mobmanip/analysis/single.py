@@ -1,0 +1,389 @@
+"""Analyse one configuration: reduced dynamics, unified Jacobian, grasp and the measures.
+
+:func:`analyze` is the single entry point behind ``mobmanip analyze`` and the Python API;
+:meth:`Analysis.to_dict` gives the JSON document the command writes. The measures computed
+(by default the paper's kinematic and dynamic ellipsoids) come from :mod:`mobmanip.measures`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import types
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import cast
+
+import numpy as np
+
+from ..engine import evaluate_one
+from ..engine.compiled import kernel_ready
+from ..errors import ArgumentError, MeasureError, MobmanipError, TaskError
+from ..measures.registry import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from ..sets.ellipsoid import Ellipsoid
+from ..sets.taskset import TaskSet
+from ..support.ranges import OBJECT_MASS, check_in_range
+from ..terms.dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
+from ..terms.grasp import HeldObject
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Everything computed at one configuration (robot and object at rest).
+
+    Attributes:
+        robot: the robot analysed (with its platform and limits).
+        q: configuration, (nq,).
+        task: task-space name.
+        decoupled: whether the dynamic ellipsoid used the decoupled P.
+        unified_jacobian: J_u, (m * n_arms, nx).
+        reduced_inertia: P (coupled), (nx, nx).
+        reduced_inertia_decoupled: P with platform-arm blocks zeroed, (nx, nx).
+        input_matrix: Q, (nx, nx).
+        bias: xi at rest (= -S^T g), (nx,).
+        end_effector_positions: world positions of the end effectors, (n_arms, 3).
+        held_object: the object (its centre is the task point), or the end effector itself.
+        grasp_matrix: W, (m, m * n_arms).
+        measures: the task-space sets computed, by measure name, in the registry's order
+            (read-only); see :mod:`mobmanip.measures`. By default ``kinematic`` and ``dynamic``.
+        object_given: whether the object was given (``held_object=``) rather than the default
+            one between the hands.
+
+    ``warnings`` (computed on first access) says what makes the numbers doubtful: placeholder
+    limits, torques that cannot hold the robot up, hands further apart than the object's grasp
+    points (see :mod:`mobmanip.analysis.plausibility`).
+    """
+
+    robot: Robot
+    q: np.ndarray
+    task: str
+    decoupled: bool
+    unified_jacobian: np.ndarray
+    reduced_inertia: np.ndarray
+    reduced_inertia_decoupled: np.ndarray
+    input_matrix: np.ndarray
+    bias: np.ndarray
+    end_effector_positions: np.ndarray
+    held_object: HeldObject
+    grasp_matrix: np.ndarray
+    measures: Mapping[str, TaskSet]
+    object_given: bool = False
+
+    def measure(self, name: str) -> TaskSet:
+        """The set of measure ``name``.
+
+        Raises:
+            UnknownMeasureError: no measure of that name is registered.
+            MeasureError: it is registered but was not computed for this analysis.
+        """
+        get_measure(name)
+        try:
+            return self.measures[name]
+        except KeyError:
+            raise MeasureError(
+                f"measure {name!r} was not computed in this analysis ({', '.join(self.measures)}); "
+                f"ask analyze(..., measures=(..., {name!r}))"
+            ) from None
+
+    @functools.cached_property
+    def warnings(self) -> tuple[str, ...]:
+        """Plausibility warnings of this configuration (:func:`mobmanip.analysis.plausibility.analysis_warnings`)."""
+        from .plausibility import analysis_warnings
+
+        explicit = self.held_object if self.object_given else None
+        return analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
+
+    @property
+    def kinematic(self) -> Ellipsoid:
+        """The unified kinematic ellipsoid (m/s, rad/s): ``measures["kinematic"]``."""
+        return cast(Ellipsoid, self.measure(KINEMATIC.name))
+
+    @property
+    def dynamic(self) -> Ellipsoid:
+        """The unified dynamic ellipsoid (m/s^2, rad/s^2): ``measures["dynamic"]``."""
+        return cast(Ellipsoid, self.measure(DYNAMIC.name))
+
+    def _set_summaries(self) -> list[tuple[str, str, str]]:
+        """(measure name, units, one-line summary) of each set, for the two representations below."""
+        rows = []
+        for name, task_set in self.measures.items():
+            units = get_measure(name).quantity.units
+            if task_set.empty:
+                rows.append((name, units, "empty"))
+                continue
+            semi_axes = getattr(task_set, "semi_axes", None)
+            shape = "" if semi_axes is None else "semi-axes " + ", ".join(f"{v:.4g}" for v in semi_axes) + "; "
+            flag = " (degenerate)" if task_set.degenerate else ""
+            rows.append(
+                (
+                    name,
+                    units,
+                    f"{shape}volume {_number(task_set, 'volume')}, isotropy {_number(task_set, 'isotropy')}{flag}",
+                )
+            )
+        return rows
+
+    def __repr__(self) -> str:
+        sets = "; ".join(f"{name}: {text} [{units}]" for name, units, text in self._set_summaries())
+        coupling = ", decoupled" if self.decoupled else ""
+        return f"Analysis(robot={self.robot.name!r}, task={self.task!r}{coupling}, {sets})"
+
+    def _repr_html_(self) -> str:
+        """A table of the measures, for Jupyter."""
+        from html import escape
+
+        rows = "".join(
+            f"<tr><td>{escape(name)}</td><td>{escape(units)}</td><td>{escape(text)}</td></tr>"
+            for name, units, text in self._set_summaries()
+        )
+        coupling = " (decoupled)" if self.decoupled else ""
+        return (
+            f"<p><b>Analysis</b> of {escape(self.robot.name)}, task {escape(self.task)}{coupling}</p>"
+            f"<table><tr><th>measure</th><th>units</th><th>set</th></tr>{rows}</table>"
+        )
+
+    def to_dict(self) -> dict:
+        """A JSON-ready dictionary (matrices as lists of rows); each measure under its JSON key
+        (``kinematic_ellipsoid``, ``dynamic_ellipsoid``, ...)."""
+        robot = self.robot
+        obj = self.held_object
+        return {
+            "robot": robot.name,
+            "platform": robot.platform.kind,
+            "task": self.task,
+            "task_axes": list(get_task(self.task).labels),
+            "decoupled": self.decoupled,
+            "q": robot.configuration_dict(self.q),
+            "reduced_velocity_names": list(robot.reduced_velocity_names),
+            "arms": [
+                {"name": arm.name, "end_effector": arm.end_effector, "position": pos.tolist()}
+                for arm, pos in zip(robot.arms, self.end_effector_positions)
+            ],
+            "object": {"center": obj.center.tolist(), "mass": obj.mass, "grasp_offsets": obj.offsets.tolist()},
+            "unified_jacobian": self.unified_jacobian.tolist(),
+            "reduced_inertia": self.reduced_inertia.tolist(),
+            "reduced_inertia_decoupled": self.reduced_inertia_decoupled.tolist(),
+            "input_matrix": self.input_matrix.tolist(),
+            "bias": self.bias.tolist(),
+            "velocity_limits": robot.velocity_limits.tolist(),
+            "effort_limits": robot.effort_limits.tolist(),
+            "grasp_matrix": self.grasp_matrix.tolist(),
+            "warnings": list(self.warnings),
+            **self._block_document(),
+            **{get_measure(name).json_key: s.to_dict() for name, s in self.measures.items()},
+        }
+
+    def block_indices(self) -> dict | None:
+        """Unit-consistent indices per block (linear, angular) of each set, for a task that mixes
+        m and rad (``None`` otherwise): see :func:`mobmanip.analysis.plausibility.block_indices`."""
+        from .plausibility import block_indices
+
+        return block_indices(get_task(self.task), self.measures)
+
+    def _block_document(self) -> dict:
+        blocks = self.block_indices()
+        if blocks is None:
+            return {}
+        return {"block_indices": {get_measure(name).json_key: value for name, value in blocks.items()}}
+
+
+def _number(task_set: TaskSet, index: str) -> str:
+    """An index of a set for printing, ``n/a`` where it cannot be computed (a 6-D polytope's volume)."""
+    try:
+        value = getattr(task_set, index)
+    except MobmanipError:
+        return "n/a"
+    return f"{value:.4g}" if value is not None and np.isfinite(value) else "n/a"
+
+
+def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> HeldObject:
+    """The object held by all end effectors, centred at their centroid.
+
+    With one arm the end effector itself is the task point (W = I).
+    """
+    mass = robot.spec.object_mass if mass is None else mass
+    _check_mass(mass)
+    return HeldObject.between(_end_effectors(robot, q), float(mass))
+
+
+def _check_mass(mass) -> None:
+    if isinstance(mass, bool) or not isinstance(mass, (int, float, np.floating, np.integer)):
+        raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
+    if not np.isfinite(mass) or mass < 0:
+        raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
+    check_in_range("object mass", float(mass), *OBJECT_MASS, unit="kg")
+
+
+def _end_effectors(robot: Robot, q: np.ndarray) -> np.ndarray:
+    import pinocchio as pin
+
+    pin.framesForwardKinematics(robot.model, robot.data, robot.check_configuration(q))
+    return placed_end_effectors(robot)
+
+
+def analyze(
+    robot: Robot,
+    q: np.ndarray,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    held_object: HeldObject | None = None,
+    decoupled: bool = False,
+    method: str = "auto",
+    measures: Iterable[str] | None = None,
+) -> Analysis:
+    """Analyse the robot at configuration q (robot and object at rest).
+
+    Args:
+        robot: the loaded robot (``robot.with_platform("fixed")`` locks the platform;
+            ``robot.with_wheel_limits(...)`` changes the wheel limits).
+        q: configuration, (nq,); see :meth:`Robot.configuration`.
+        task: task space name; defaults to the spec's ``default_task``.
+        object_mass: mass of the default object (kg); defaults to the spec's.
+        held_object: an explicit object (overrides ``object_mass``); its offsets must have one
+            row per arm.
+        decoupled: use the decoupled P (no platform-arm interaction) for the dynamic ellipsoid
+            (and every measure of accelerations).
+        measures: the measures to compute, by name (:func:`mobmanip.measures.measure_names`);
+            default: the default ones, ``("kinematic", "dynamic")``. They come out in the
+            registry's order.
+        method: ``"auto"``: the compiled kernel of :mod:`mobmanip.engine` (closed forms with an
+            a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
+            at a singularity, is computed by the exact path) where this process has already
+            compiled it for this robot's number of arms and task dimension (a batch or a sweep
+            did, or :func:`mobmanip.batch.warm_kernel`), else the exact path: one configuration
+            never waits tens of seconds for a compile to save a fraction of a millisecond.
+            ``"exact"``: always the SVD-based :mod:`mobmanip.sets.ellipsoid` (the reference; about
+            4x slower than the kernel, a fraction of a millisecond).
+
+    Raises:
+        UnknownMeasureError: a measure name that is not registered (the message lists them).
+    """
+    wanted = resolve_measures(measures)
+    if method not in ("auto", "exact"):
+        raise ArgumentError(f"method must be 'auto' or 'exact', got {method!r}")
+    q = robot.check_configuration(q)
+    task = get_task(task or robot.spec.default_task)
+    if held_object is None:
+        mass = robot.spec.object_mass if object_mass is None else object_mass
+        _check_mass(mass)
+    else:
+        mass = held_object.mass
+        if held_object.offsets.shape != (len(robot.arms), 3):
+            raise TaskError(
+                f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
+            )
+    fast = method == "auto" and robot.constant_null_space  # the fast paths freeze S
+    if fast and kernel_ready(len(robot.arms), task.dim):
+        analysis = _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
+    else:
+        analysis = _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
+    if measures is not None and tuple(analysis.measures) != tuple(m.name for m in wanted):
+        analysis = _with_measures(analysis, wanted)
+    return analysis
+
+
+def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
+    """The reference path: :mod:`mobmanip.terms.dynamics` and the SVD-based :mod:`mobmanip.sets.ellipsoid`."""
+    dyn = _reduced_dynamics(robot, q, None, False)
+    J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
+    positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
+    obj = held_object if held_object is not None else HeldObject.between(positions, mass)
+    return _assemble(
+        robot,
+        q,
+        task,
+        decoupled,
+        J_u,
+        dyn.P,
+        dyn.xi,
+        positions,
+        obj,
+        obj.grasp_matrix(task),
+        given_object=held_object is not None,
+    )
+
+
+def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
+    """The batch engine on one configuration (:func:`mobmanip.engine.evaluate_one`); an
+    ellipsoid its certificate does not accept is computed by the reference path instead."""
+    row = evaluate_one(robot, q, task, mass, held_object, decoupled, method="kernel", validate=False)
+    obj = held_object if held_object is not None else HeldObject.between(row.positions, mass)
+    return _assemble(
+        robot,
+        q,
+        task,
+        decoupled,
+        row.J_u,
+        row.P,
+        row.xi,
+        row.positions,
+        obj,
+        row.W,
+        row.kinematic,
+        row.dynamic,
+        given_object=held_object is not None,
+    )
+
+
+def _assemble(
+    robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None, measures=None, given_object=False
+) -> Analysis:
+    """The Analysis from the terms, with the measures ``measures`` (names; default: the default
+    ones). The kinematic and dynamic ellipsoids may be given (the compiled path computes them);
+    every measure not given is computed from the terms by its definition (the reference path)."""
+    P_decoupled = decouple(robot, P)
+    given = {KINEMATIC.name: kin, DYNAMIC.name: dynamic}
+    terms = None
+    sets = {}
+    for measure in resolve_measures(measures):
+        found = given.get(measure.name)
+        if found is None:
+            if terms is None:
+                terms = MeasureTerms(
+                    task=task.name,
+                    J_u=J_u,
+                    W=W,
+                    P=P_decoupled if decoupled else P,
+                    Q=robot.Q,
+                    xi=xi,
+                    M_o=obj.inertia_matrix(task),
+                    g_o=obj.gravity_vector(task),
+                    velocity_limits=robot.velocity_limits,
+                    effort_limits=robot.effort_limits,
+                    decoupled=decoupled,
+                )
+            found = measure.compute(terms)
+        sets[measure.name] = found
+    return Analysis(
+        robot=robot,
+        q=q,
+        task=task.name,
+        decoupled=decoupled,
+        unified_jacobian=J_u,
+        reduced_inertia=P,
+        reduced_inertia_decoupled=P_decoupled,
+        input_matrix=robot.Q,
+        bias=xi,
+        end_effector_positions=positions,
+        held_object=obj,
+        grasp_matrix=W,
+        measures=types.MappingProxyType(sets),
+        object_given=given_object,
+    )
+
+
+def _with_measures(analysis: Analysis, wanted: Iterable[Measure]) -> Analysis:
+    """The analysis holding exactly the measures ``wanted``: each taken from the analysis, else
+    computed from its terms."""
+    terms = None
+    out = {}
+    for measure in wanted:
+        found = analysis.measures.get(measure.name)
+        if found is None:
+            terms = MeasureTerms.of(analysis) if terms is None else terms
+            found = measure.compute(terms)
+        out[measure.name] = found
+    return dataclasses.replace(analysis, measures=types.MappingProxyType(out))

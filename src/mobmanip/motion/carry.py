@@ -1,0 +1,548 @@
+"""Move with capacity: a whole-body motion that carries the held object along a path.
+
+One quadratic program per time step over the reduced velocities x (wheel rates and joint
+rates, so the platform's nonholonomic constraints hold exactly: v = S x has no lateral slip)::
+
+    minimise    1/2 x^T D^-2 x - w (S^T grad f(q))^T x       (D = diag(xdot_max))
+    subject to  J_u(q) x = b                                   (the hands follow the object)
+                max(-xdot_max, (q_lo - q) / T) <= x <= min(xdot_max, (q_hi - q) / T)
+                |tau(q, x_prev, (x - x_prev) / dt)| <= 0.99 tau_max    (wheel and joint efforts)
+
+where T = max(dt, :data:`LIMIT_HORIZON`) (a joint slows down smoothly near a position limit)
+and tau is the efforts of the paper's policy (:meth:`mobmanip.motion.MotionTerms.torques`),
+affine in x with the velocity terms taken at the previous step's rates x_prev (the 1% margin
+covers that). Without the effort rows a switch of the climbed gradient (e.g. when two
+semi-axes cross) once asked 1.5 times a wheel's effort limit in a single step. q advances by
+``pin.integrate(q, S x dt)`` (the platform's pose by the exact SE(2) exponential,
+:func:`mobmanip.motion.trajectory.planar_exp`). The hands keep the grasp of the start posture: hand i's
+target pose at the next step is the object's path applied to its start pose (the
+object translates along the path and turns about the vertical by the path's change of heading,
+or by its ``yaw`` column), and b is the task velocity that reaches it in one step, so tracking
+errors do not accumulate. f is the chosen measure (:mod:`mobmanip.gradients`, at rest); w is
+fixed at the first step so that the capacity term alone would move at half the velocity limits
+(in the D-weighted norm). The baseline tracks the same targets with the weighted pseudo-inverse
+``x = D^2 J_u^T (J_u D^2 J_u^T)^-1 b`` (no capacity term, no limits).
+
+The start. Many postures hold the object at the path's start (the redundancy), and the minimum
+capacity along a path is often the start's. So the capacity-aware motion first moves to a
+better one: a *self-motion* before the path starts, the same QP with the object held still
+(the hands' targets are their start poses), run until the objective rises by less than
+:data:`PREPARE_TOLERANCE` (relative) over :data:`PREPARE_WINDOW` seconds or for at most
+``prepare`` seconds (:attr:`CarryResult.preparation`). The path's motion starts where it ends;
+the baseline starts from the given (or default) start posture, as a controller without a
+capacity term would.
+
+The path (CSV, :func:`read_path`) has ``t`` and the object's ``x``, ``y`` (m) and optionally ``z``
+(m) and ``yaw`` (rad); by default it is relative to where the start posture holds the object.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import ArgumentError, MeasureError, NumericalError
+from ..gradients.evaluator import GradientEvaluator, Objective
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from .trajectory import tangent_integrate
+
+PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
+#: Default time step of the synthesis (s).
+DEFAULT_STEP = 0.02
+#: The capacity term's share of the velocity limits at the first step.
+DEFAULT_GAIN = 0.5
+#: A joint approaches a position limit at most at (distance to the limit) / this (s): it slows
+#: down smoothly (exponentially) instead of stopping within one step.
+LIMIT_HORIZON = 0.2
+#: The QP keeps each step's efforts within this share of their limits (its model takes the
+#: velocity terms at the previous step's rates; the margin covers the difference).
+EFFORT_SHARE = 0.99
+#: Longest self-motion before the path (s); 0 starts the path from the start posture.
+DEFAULT_PREPARE = 30.0
+#: The self-motion stops when the objective rose by less than this fraction of its value ...
+PREPARE_TOLERANCE = 1e-4
+#: ... over this long (s).
+PREPARE_WINDOW = 1.0
+
+
+@dataclass(frozen=True)
+class ObjectPath:
+    """Where the object should be over time.
+
+    Attributes:
+        t: time stamps (s), strictly increasing, (N,).
+        xy: positions (m), (N, 2); z: heights (m), (N,) or ``None``; yaw: headings (rad), (N,)
+            or ``None`` (then the object turns with the path's direction of travel).
+    """
+
+    t: np.ndarray
+    xy: np.ndarray
+    z: np.ndarray | None = None
+    yaw: np.ndarray | None = None
+
+    def __post_init__(self):
+        t = np.asarray(self.t, dtype=float)
+        if t.ndim != 1 or t.shape[0] < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise ArgumentError("an object path needs at least 2 finite, strictly increasing time stamps")
+        xy = np.asarray(self.xy, dtype=float)
+        if xy.shape != (t.shape[0], 2) or not np.all(np.isfinite(xy)):
+            raise ArgumentError(f"object path positions must be finite, shape ({t.shape[0]}, 2), got {xy.shape}")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "xy", xy)
+        for name in ("z", "yaw"):
+            value = getattr(self, name)
+            if value is not None:
+                value = np.asarray(value, dtype=float)
+                if value.shape != t.shape or not np.all(np.isfinite(value)):
+                    raise ArgumentError(f"object path {name} must be {t.shape[0]} finite numbers")
+                object.__setattr__(self, name, value)
+
+    def length(self) -> float:
+        """Length of the path in the plane (m)."""
+        return float(np.sum(np.linalg.norm(np.diff(self.xy, axis=0), axis=1)))
+
+    def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Displacement from the start (N, 3) (m) and turn from the start (N,) (rad) at ``times``
+        (linear interpolation between the path's samples)."""
+        d = np.zeros((len(times), 3))
+        d[:, 0] = np.interp(times, self.t, self.xy[:, 0]) - self.xy[0, 0]
+        d[:, 1] = np.interp(times, self.t, self.xy[:, 1]) - self.xy[0, 1]
+        if self.z is not None:
+            d[:, 2] = np.interp(times, self.t, self.z) - self.z[0]
+        if self.yaw is not None:
+            turn = np.interp(times, self.t, np.unwrap(self.yaw)) - self.yaw[0]
+        else:
+            turn = self._heading_turn(times)
+        return d, turn
+
+    def _heading_turn(self, times: np.ndarray) -> np.ndarray:
+        steps = np.diff(self.xy, axis=0)
+        moving = np.linalg.norm(steps, axis=1) > 1e-12
+        if not moving.any():
+            return np.zeros(len(times))
+        heading = np.arctan2(steps[:, 1], steps[:, 0])
+        first = heading[moving][0]
+        heading = np.where(moving, heading, np.nan)
+        # hold the last heading through pauses, then unwrap
+        for k in range(len(heading)):
+            if np.isnan(heading[k]):
+                heading[k] = first if k == 0 else heading[k - 1]
+        heading = np.unwrap(heading)
+        mids = 0.5 * (self.t[1:] + self.t[:-1])
+        return np.interp(times, mids, heading) - heading[0]
+
+
+def read_path(path: str | Path) -> ObjectPath:
+    """An object path from CSV with a header ``t,x,y[,z][,yaw]``.
+
+    Raises:
+        ArgumentError: unreadable file, unknown or missing columns, a cell that is not a finite
+            number (naming line and column), too few rows or time stamps that do not increase.
+    """
+    path = Path(path)
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            rows = [r for r in csv.reader(handle) if r and any(c.strip() for c in r)]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ArgumentError(f"cannot read object path {path}: {exc}") from None
+    if not rows:
+        raise ArgumentError(f"object path {path} is empty")
+    header = [c.strip() for c in rows[0]]
+    unknown = [c for c in header if c not in PATH_COLUMNS]
+    if unknown or not {"t", "x", "y"} <= set(header) or len(set(header)) != len(header):
+        raise ArgumentError(f"object path {path}: header {header} must name t, x, y and optionally z, yaw (each once)")
+    values = np.zeros((len(rows) - 1, len(header)))
+    for i, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise ArgumentError(f"object path {path} line {i}: {len(row)} cells, the header has {len(header)}")
+        for j, cell in enumerate(row):
+            try:
+                value = float(cell)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise ArgumentError(f"object path {path} line {i}, column {header[j]!r}: not a finite number: {cell!r}")
+            values[i - 2, j] = value
+    col = {name: values[:, k] for k, name in enumerate(header)}
+    try:
+        return ObjectPath(col["t"], np.column_stack([col["x"], col["y"]]), col.get("z"), col.get("yaw"))
+    except ArgumentError as exc:
+        raise ArgumentError(f"object path {path}: {exc}") from None
+
+
+@dataclass(frozen=True)
+class CarryRun:
+    """One synthesised motion.
+
+    Attributes:
+        method: ``"qp"`` (capacity-maximising), ``"pinv"`` (the weighted pseudo-inverse baseline) or
+            ``"self-motion"`` (the QP with the object held still, before the path).
+        t: time stamps (s), (N,).
+        q: configurations, (N, nq).
+        x: reduced velocities held over each step [t_k, t_k+1], (N - 1, nx).
+        capacity: the objective's value at each configuration, (N,).
+        tracking_error: distance of the object's centre from its path (m), (N,).
+        hand_error: largest distance of a hand from its target position (m), (N,).
+    """
+
+    method: str
+    t: np.ndarray
+    q: np.ndarray
+    x: np.ndarray
+    capacity: np.ndarray
+    tracking_error: np.ndarray
+    hand_error: np.ndarray
+
+
+@dataclass(frozen=True)
+class CarryResult:
+    """The capacity-maximising motion and the baseline along the same path.
+
+    Attributes:
+        objective: the measure maximised (and reported as capacity).
+        task: task space name.
+        motion: the QP motion along the path; baseline: the pseudo-inverse one.
+        preparation: the self-motion that took the start posture to ``motion``'s first
+            configuration (time stamps ending at the path's start), or ``None`` when the motion
+            starts from the start posture (``prepare=0``).
+        start: which start posture both runs set out from, in words.
+    """
+
+    objective: Objective
+    task: str
+    motion: CarryRun
+    baseline: CarryRun
+    preparation: CarryRun | None = None
+    start: str = "the given start configuration"
+
+    def starts(self) -> dict:
+        """What each run started from, in words and numbers (JSON-ready)."""
+        base = {
+            "posture": self.start,
+            "capacity": float(self.baseline.capacity[0]),
+        }
+        prep = self.preparation
+        if prep is None:
+            qp = dict(base)
+        else:
+            qp = {
+                "posture": f"the end of a self-motion from {self.start} with the object held still",
+                "capacity": float(self.motion.capacity[0]),
+                "self_motion_seconds": float(prep.t[-1] - prep.t[0]),
+                "self_motion_start_capacity": float(prep.capacity[0]),
+                "self_motion_max_hand_error": float(prep.hand_error.max()),
+                "self_motion_max_tracking_error": float(prep.tracking_error.max()),
+            }
+        return {"qp": qp, "pinv": base}
+
+    def summary(self) -> dict:
+        """Minimum capacities, their ratio, tracking and limit figures (JSON-ready)."""
+        out: dict[str, Any] = {"objective": self.objective.name, "task": self.task}
+        for run in (self.motion, self.baseline):
+            out[run.method] = {
+                "min_capacity": float(run.capacity.min()),
+                "mean_capacity": float(run.capacity.mean()),
+                "max_tracking_error": float(run.tracking_error.max()),
+                "max_hand_error": float(run.hand_error.max()),
+            }
+        for method, start in self.starts().items():
+            out[method]["start"] = start
+        base = self.baseline.capacity.min()
+        out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
+        return out
+
+
+class _Targets:
+    """Hands' target poses along the path (see the module doc)."""
+
+    def __init__(self, robot: Robot, q0: np.ndarray, path: ObjectPath, times: np.ndarray):
+        model, data = robot.model, robot.data
+        pin.framesForwardKinematics(model, data, q0)
+        self.start = [data.oMf[arm.frame_id].copy() for arm in robot.arms]
+        self.center0 = np.mean([m.translation for m in self.start], axis=0)
+        self.shift, self.turn = path.sample(times)
+
+    def object_center(self, k: int) -> np.ndarray:
+        return self.center0 + self.shift[k]
+
+    def hand(self, k: int, i: int) -> pin.SE3:
+        R = pin.rpy.rpyToMatrix(0.0, 0.0, float(self.turn[k]))
+        start = self.start[i]
+        return pin.SE3(R @ start.rotation, self.object_center(k) + R @ (start.translation - self.center0))
+
+
+def _hand_rates(robot: Robot, q: np.ndarray, targets: _Targets, k: int, dt: float, rows: list[int]) -> np.ndarray:
+    """Stacked task velocities that bring each hand from its pose at q to its target at step k."""
+    data = robot.data
+    out = []
+    for i, arm in enumerate(robot.arms):
+        now = data.oMf[arm.frame_id]
+        goal = targets.hand(k, i)
+        twist = np.concatenate([goal.translation - now.translation, pin.log3(goal.rotation @ now.rotation.T)])
+        out.append(twist[rows] / dt)
+    return np.concatenate(out)
+
+
+def _errors(robot: Robot, targets: _Targets, k: int) -> tuple[float, float]:
+    """(object centre error, largest hand position error) from ``robot.data``'s placements (m)."""
+    data = robot.data
+    positions = np.array([data.oMf[arm.frame_id].translation for arm in robot.arms])
+    hand = max(float(np.linalg.norm(positions[i] - targets.hand(k, i).translation)) for i in range(len(robot.arms)))
+    return float(np.linalg.norm(positions.mean(axis=0) - targets.object_center(k))), hand
+
+
+def _bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity bounds from the velocity limits and from the joint position limits over one step."""
+    hi = np.array(robot.velocity_limits, dtype=float)
+    lo = -hi
+    model = robot.model
+    horizon = max(dt, LIMIT_HORIZON)
+    S = robot.null_space(q)
+    n_eta = robot.platform.n_reduced
+    for k in range(n_eta, robot.nx):
+        v = int(np.flatnonzero(S[:, k])[0])
+        joint = next(j for j in model.joints[1:] if j.idx_v <= v < j.idx_v + j.nv)
+        if joint.nq != 1:
+            continue
+        qk = q[joint.idx_q]
+        lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+        if np.isfinite(lower):
+            lo[k] = max(lo[k], min((lower - qk) / horizon, 0.0))
+        if np.isfinite(upper):
+            hi[k] = min(hi[k], max((upper - qk) / horizon, 0.0))
+    return lo, hi
+
+
+def default_start(robot: Robot) -> np.ndarray:
+    """The spec's hold posture; for the paper's robot without one, its case-study posture with
+    the object straight ahead (both arms at their own optimum, :mod:`mobmanip.casestudy`)."""
+    if robot.spec.hold:
+        return robot.hold_configuration()
+    from ..casestudy import configuration_at, optimal_posture
+    from ..errors import SpecError
+
+    try:
+        return configuration_at(robot, optimal_posture(robot), 0.0)
+    except SpecError:
+        return robot.neutral()
+
+
+def _default_start_label(robot: Robot, q0: np.ndarray) -> str:
+    if robot.spec.hold:
+        return "the spec's hold posture"
+    if np.array_equal(q0, robot.neutral()):
+        return "the home configuration"
+    return "the case-study posture (both arms at their optimum, object straight ahead)"
+
+
+def _solve_qp(H, c, A, b, lo, hi, G=None, h=None) -> np.ndarray | None:
+    from qpsolvers import solve_qp
+
+    return solve_qp(H, c, G=G, h=h, A=A, b=b, lb=lo, ub=hi, solver="daqp")
+
+
+def _effort_rows(robot, q, x_prev, dt, task, object_mass, limits) -> tuple[np.ndarray, np.ndarray]:
+    """Linear inequalities G x <= h that keep the wheel and joint efforts of the step within
+    their limits: with xdot = (x - x_prev) / dt the efforts are affine in x, tau = c + A xdot
+    (:meth:`mobmanip.motion.MotionTerms.torques`, the velocity terms at x_prev), and
+    -s tau_max <= tau <= s tau_max with s = :data:`EFFORT_SHARE`."""
+    from .in_motion import motion_terms
+
+    terms = motion_terms(robot, q, x_prev, task, object_mass=object_mass)
+    c = terms.torques(np.zeros(robot.nx))
+    # d tau / d xdot = Q^-1 (P + J_u^T W^+ M_o (W^T)^+ J_u)
+    inertia = terms.P + terms.J_u.T @ terms.W_pinv @ terms.M_o @ np.linalg.pinv(terms.W.T) @ terms.J_u
+    A = np.linalg.solve(terms.Q, inertia) / dt
+    shift = A @ x_prev
+    bound = EFFORT_SHARE * limits
+    return np.vstack([A, -A]), np.concatenate([bound - c + shift, bound + c - shift])
+
+
+def _run(
+    robot, q0, path, evaluator, task, dt, method, gain, weight=None, converge=False, object_mass=None, x_start=None
+) -> tuple[CarryRun, float]:
+    """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
+    ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
+    over :data:`PREPARE_WINDOW` (the self-motion). ``x_start``: the reduced velocity before the
+    first step (default rest), from which the first step's efforts are counted."""
+    model = robot.model
+    n = int(math.floor((path.t[-1] - path.t[0]) / dt + 1e-9)) + 1
+    times = path.t[0] + dt * np.arange(n)
+    if times[-1] < path.t[-1] - 1e-12:
+        times = np.append(times, path.t[-1])
+        n += 1
+    targets = _Targets(robot, q0, path, times)
+    rows = list(task.rows)
+    D2 = np.asarray(robot.velocity_limits, dtype=float) ** 2
+    H = np.diag(1.0 / D2)
+    qs = np.zeros((n, model.nq))
+    xs = np.zeros((n - 1, robot.nx))
+    capacity, track, hand = np.zeros(n), np.zeros(n), np.zeros(n)
+    q = q0.copy()
+    x_prev = np.zeros(robot.nx) if x_start is None else np.asarray(x_start, dtype=float)
+    effort_limits = np.asarray(robot.effort_limits, dtype=float)
+    window = max(1, int(round(PREPARE_WINDOW / dt)))
+    for k in range(n):
+        qs[k] = q
+        value, grad, ok = evaluator(q)
+        if not ok:
+            raise MeasureError(
+                f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the {method} motion"
+            )
+        capacity[k] = value
+        S = robot.null_space(q)
+        J_u = _jacobian(robot, q, rows) @ S  # also updates the frame placements
+        track[k], hand[k] = _errors(robot, targets, k)
+        if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
+            n = k + 1
+            break
+        if k == n - 1:
+            break
+        h = times[k + 1] - times[k]
+        b = _hand_rates(robot, q, targets, k + 1, h, rows)
+        if method == "pinv":
+            x = D2 * (J_u.T @ np.linalg.solve((J_u * D2) @ J_u.T, b))
+        else:
+            g = S.T @ grad
+            if weight is None:
+                norm = float(np.linalg.norm(np.sqrt(D2) * g))
+                weight = gain / norm if norm > 0 else 0.0
+            lo, hi = _bounds(robot, q, h)
+            G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
+            x = _solve_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+            if x is None:
+                raise NumericalError(
+                    f"the carry QP has no solution at step {k} (t = {times[k]:g} s): the path asks for more than "
+                    "the velocity, effort or joint limits allow; slow the path down"
+                )
+        xs[k] = x
+        x_prev = x
+        q = tangent_integrate(model, q, S @ x * h)
+    run = CarryRun(method, times[:n], qs[:n], xs[: n - 1], capacity[:n], track[:n], hand[:n])
+    return run, (0.0 if weight is None else weight)
+
+
+def _jacobian(robot: Robot, q: np.ndarray, rows: list[int]) -> np.ndarray:
+    model, data = robot.model, robot.data
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    return np.vstack(
+        [pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)[rows] for arm in robot.arms]
+    )
+
+
+def carry(
+    robot: Robot,
+    path: ObjectPath,
+    objective: Objective | str | None = None,
+    task: str | None = None,
+    *,
+    start: np.ndarray | None = None,
+    object_mass: float | None = None,
+    step: float = DEFAULT_STEP,
+    gain: float = DEFAULT_GAIN,
+    prepare: float = DEFAULT_PREPARE,
+) -> CarryResult:
+    """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
+
+    Args:
+        robot: the loaded robot; its platform's S must not depend on q (gradients).
+        path: the object's path, relative to where ``start`` holds it.
+        objective: the measure to maximise (``ELLIPSOID:INDEX[:DIRECTION]``, :class:`Objective`);
+            default ``kinematic:minor_axis``.
+        task: task space; default the spec's.
+        start: start configuration, (nq,); default :func:`default_start`.
+        object_mass: mass of the object held between the hands (kg); default the spec's.
+        step: time step (s).
+        gain: the capacity term's share of the velocity limits at the first step.
+        prepare: longest self-motion (s) before the path (module doc); 0: the QP motion
+            starts from ``start`` like the baseline.
+
+    Raises:
+        ArgumentError: a bad step, gain or prepare.
+        MeasureError: the objective is not defined along a motion (a singular posture).
+        NumericalError: the QP has no solution (the path is too fast for the limits).
+    """
+    if not (isinstance(step, (int, float)) and math.isfinite(step) and 0.0 < step <= 1.0):
+        raise ArgumentError(f"step must be a time in (0, 1] s, got {step!r}")
+    if not (isinstance(gain, (int, float)) and math.isfinite(gain) and gain >= 0.0):
+        raise ArgumentError(f"gain must be a finite non-negative number, got {gain!r}")
+    if not (isinstance(prepare, (int, float)) and math.isfinite(prepare) and prepare >= 0.0):
+        raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
+    if not isinstance(path, ObjectPath):
+        raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
+    task = get_task(task or robot.spec.default_task)
+    evaluator = GradientEvaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
+    q0 = default_start(robot) if start is None else robot.check_configuration(start)
+    label = "the given start configuration" if start is not None else _default_start_label(robot, q0)
+    step, gain = float(step), float(gain)
+    preparation, weight, q_path = None, None, q0
+    if prepare > 0.0 and gain > 0.0:
+        still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
+        preparation, weight = _run(
+            robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass
+        )
+        shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
+        preparation = CarryRun(
+            preparation.method,
+            preparation.t + shift,
+            *(getattr(preparation, f) for f in ("q", "x", "capacity", "tracking_error", "hand_error")),
+        )
+        q_path = preparation.q[-1]
+    x_start = None if preparation is None else preparation.x[-1]
+    motion, _ = _run(
+        robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass, x_start=x_start
+    )
+    baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
+    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
+
+
+def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> list[str]:
+    """trajectory.csv, baseline.csv, carry.json and capacity.png in ``out_dir``, and
+    preparation.csv (the self-motion before the path, when there is one); returns the paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..support.files import save_figure, write_json
+    from .trajectory_analysis import write_trajectory_csv
+
+    out = Path(out_dir)
+    motion, base = result.motion, result.baseline
+    paths = [out / "trajectory.csv", out / "baseline.csv", out / "carry.json", out / "capacity.png"]
+    write_trajectory_csv(
+        robot,
+        paths[0],
+        motion.t,
+        motion.q,
+        {"capacity": motion.capacity, "baseline_capacity": base.capacity, "tracking_error": motion.tracking_error},
+    )
+    write_trajectory_csv(
+        robot, paths[1], base.t, base.q, {"capacity": base.capacity, "tracking_error": base.tracking_error}
+    )
+    write_json(paths[2], {"robot": robot.name, **result.summary()})
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    prep = result.preparation
+    if prep is not None:
+        paths.append(out / "preparation.csv")
+        write_trajectory_csv(
+            robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
+        )
+        ax.plot(prep.t, prep.capacity, color="0.5", label="self-motion before the path (object held still)")
+    ax.plot(motion.t, motion.capacity, label="QP with capacity term")
+    ax.plot(base.t, base.capacity, label="weighted pseudo-inverse")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel(result.objective.name)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    save_figure(fig, paths[3], dpi=100)
+    plt.close(fig)
+    return [str(p) for p in paths]

@@ -1,0 +1,385 @@
+"""Analyse a whole-body trajectory: both measures per sample, demands against capacity, and
+the exact time-scaling margin.
+
+Per sample (:func:`analyze_trajectory`): the kinematic ellipsoid and the in-motion dynamic one
+(:mod:`mobmanip.motion`), the object's velocity v_o and acceleration a_o that the motion asks
+for, how far each set reaches along the demand's direction (the capacity there), the wheel and
+joint efforts the motion needs (the paper's policy, RNEA terms in motion) and each velocity and
+effort as a fraction of its limit.
+
+Time-scaling margin. Running the same path k times faster multiplies every reduced velocity by
+k and every acceleration term (xdot, Coriolis and centrifugal, Jdot v, Wdot^T v_o, w x I w) by
+k^2, while gravity stays: ``tau(k) = k^2 tau_dyn + tau_static``. With s = k^2 each limit
+``|s tau_dyn_i + tau_static_i| <= tau_max_i`` and ``s x_i^2 <= xdot_max_i^2`` is an interval of s,
+so the feasible speed-ups form one interval [k_min, k_max] found exactly; k_max is the margin
+(1.5: the motion could run 1.5 times faster; 0.8: it must slow down by 20 %).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from ..sets.capacity import kinematic_polytope
+from ..terms.grasp import HeldObject
+from .in_motion import motion_terms
+from .trajectory import Trajectory, trajectory_table
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class TimeScaling:
+    """The speed-ups k that keep every wheel and joint within its velocity and effort limits.
+
+    Attributes:
+        k_max: the largest speed-up (``None`` when no limit bounds it: a motion standing still).
+        k_min: the smallest (0 unless slowing down breaks an effort limit, e.g. a motion that
+            leans on centrifugal force).
+        feasible: whether some speed-up keeps every limit (False when gravity alone breaks one).
+        sample: the sample where k_max is decided, or -1.
+        limit: ``"velocity NAME"`` or ``"effort NAME"``: the limit reached at k_max, or ``""``.
+    """
+
+    k_max: float | None
+    k_min: float
+    feasible: bool
+    sample: int
+    limit: str
+
+    def to_dict(self) -> dict:
+        return {
+            "k_max": self.k_max,
+            "k_min": self.k_min,
+            "feasible": self.feasible,
+            "sample": self.sample,
+            "limit": self.limit,
+        }
+
+
+def time_scaling(
+    x: np.ndarray,
+    tau_dynamic: np.ndarray,
+    tau_static: np.ndarray,
+    velocity_limits: np.ndarray,
+    effort_limits: np.ndarray,
+    names: tuple[str, ...],
+) -> TimeScaling:
+    """The exact interval of speed-ups (module doc).
+
+    Args:
+        x: reduced velocities per sample, (N, nx).
+        tau_dynamic: efforts that scale with k^2 (N, nx); tau_static: those that do not, (N, nx).
+        velocity_limits, effort_limits: (nx,).
+        names: reduced velocity names, (nx,).
+    """
+    s_hi = np.full(x.shape, np.inf)
+    s_lo = np.zeros(x.shape)
+    moving = x != 0.0
+    s_hi[moving] = (np.broadcast_to(velocity_limits, x.shape)[moving] / np.abs(x[moving])) ** 2
+    vel_hi = s_hi.copy()
+    T, a, b = effort_limits[None, :], tau_dynamic, tau_static
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.where(a > 0, (T - b) / a, np.where(a < 0, (-T - b) / a, np.inf))
+        down = np.where(a > 0, (-T - b) / a, np.where(a < 0, (T - b) / a, -np.inf))
+    still_bad = (a == 0) & (np.abs(b) > T)
+    up[still_bad] = -np.inf
+    eff_hi = up
+    s_hi = np.minimum(s_hi, eff_hi)
+    s_lo = np.maximum(s_lo, down)
+    hi, lo = float(s_hi.min()), float(s_lo.max())
+    feasible = hi >= lo and hi >= 0.0
+    if not feasible:
+        return TimeScaling(0.0, 0.0, False, -1, "")
+    if math.isinf(hi):
+        return TimeScaling(None, math.sqrt(max(lo, 0.0)), True, -1, "")
+    i, j = np.unravel_index(int(np.argmin(s_hi)), s_hi.shape)
+    kind = "velocity" if vel_hi[i, j] <= eff_hi[i, j] else "effort"
+    return TimeScaling(math.sqrt(hi), math.sqrt(max(lo, 0.0)), True, int(i), f"{kind} {names[j]}")
+
+
+def _reach(center: np.ndarray, G: np.ndarray, d: np.ndarray, empty: bool) -> float:
+    """How far from the origin the set {c + G u : |u| <= 1} reaches along the unit direction d
+    (0 when the origin is outside, the set empty or the ray leaves at once)."""
+    if empty:
+        return 0.0
+    # |G^+ (s d - c)| = 1 in the range of G: s^2 |e|^2 - 2 s e.f + |f|^2 - 1 = 0
+    Gp = np.linalg.pinv(G)
+    e, f = Gp @ d, Gp @ center
+    aa, bb, cc = float(e @ e), float(e @ f), float(f @ f) - 1.0
+    if aa <= 0.0:
+        return 0.0
+    disc = bb * bb - aa * cc
+    if disc < 0.0:
+        return 0.0
+    return max(0.0, (bb + math.sqrt(disc)) / aa)
+
+
+@dataclass(frozen=True)
+class TrajectoryAnalysis:
+    """Per-sample measures and demands along a trajectory.
+
+    Attributes:
+        robot_name, task: what was analysed.
+        names: reduced velocity names, (nx,).
+        trajectory: the trajectory analysed.
+        kinematic_semi_axes: (N, m) descending (m/s, rad/s).
+        dynamic_semi_axes: (N, m) (m/s^2, rad/s^2); dynamic_center: (N, m); dynamic_empty: (N,).
+        object_velocity: v_o (N, m); object_acceleration: a_o (N, m).
+        velocity_capacity: how far the kinematic ellipsoid reaches along v_o's direction (N,)
+            (0 where v_o = 0: then along the first axis).
+        acceleration_capacity: how far the in-motion dynamic ellipsoid reaches from the origin
+            along a_o's direction (N,).
+        efforts: the wheel and joint efforts the motion needs (N m, N), (N, nx).
+        velocity_polytope_capacity: the kinematic polytope's ``radius_along`` v_o's direction d
+            (N,) (m/s, rad/s): like ``velocity_capacity`` for the ellipsoid, the support function
+            max d . v over the set (the largest component along d of a velocity the wheels and
+            joints can give; the speed straight along d can be less), or ``None`` when not asked
+            for. At least ``velocity_capacity``: the ellipsoid lies inside the polytope.
+        velocity_use, effort_use: ``|x| / xdot_max`` and ``|tau| / tau_max`` per sample, (N, nx). The
+            Euclidean norm of an effort_use row (the CSV's ``effort_norm``) is the dynamic
+            ellipsoid's measure of the demand: 1 on its boundary when the motion's
+            accelerations are the paper's policy (no null-space acceleration).
+        scaling: the time-scaling margin.
+    """
+
+    robot_name: str
+    task: str
+    names: tuple[str, ...]
+    trajectory: Trajectory
+    kinematic_semi_axes: np.ndarray
+    dynamic_semi_axes: np.ndarray
+    dynamic_center: np.ndarray
+    dynamic_empty: np.ndarray
+    object_velocity: np.ndarray
+    object_acceleration: np.ndarray
+    velocity_capacity: np.ndarray
+    acceleration_capacity: np.ndarray
+    efforts: np.ndarray
+    efforts_static: np.ndarray = field(repr=False)
+    velocity_use: np.ndarray = field(repr=False)
+    effort_use: np.ndarray = field(repr=False)
+    scaling: TimeScaling = field(repr=False)
+    velocity_polytope_capacity: np.ndarray | None = None
+
+    def table(self) -> tuple[list[str], np.ndarray]:
+        """Per-sample CSV columns: header and values."""
+        m = self.kinematic_semi_axes.shape[1]
+        labels = get_task(self.task).labels
+        header = ["t"]
+        header += [f"v_o_{a}" for a in labels] + [f"a_o_{a}" for a in labels]
+        header += ["speed", "velocity_capacity", "acceleration", "acceleration_capacity"]
+        header += [f"kinematic_semi_axis_{k + 1}" for k in range(m)] + [f"dynamic_semi_axis_{k + 1}" for k in range(m)]
+        header += ["dynamic_empty", "max_velocity_use", "max_effort_use", "effort_norm", "slip"]
+        header += [f"effort_{n}" for n in self.names]
+        polytope = [] if self.velocity_polytope_capacity is None else [self.velocity_polytope_capacity[:, None]]
+        if polytope:
+            header.append("velocity_polytope_capacity")
+        cols = [
+            self.trajectory.t[:, None],
+            self.object_velocity,
+            self.object_acceleration,
+            np.linalg.norm(self.object_velocity, axis=1)[:, None],
+            self.velocity_capacity[:, None],
+            np.linalg.norm(self.object_acceleration, axis=1)[:, None],
+            self.acceleration_capacity[:, None],
+            self.kinematic_semi_axes,
+            self.dynamic_semi_axes,
+            self.dynamic_empty[:, None].astype(float),
+            self.velocity_use.max(axis=1)[:, None],
+            self.effort_use.max(axis=1)[:, None],
+            np.linalg.norm(self.effort_use, axis=1)[:, None],
+            self.trajectory.slip[:, None],
+            self.efforts,
+            *polytope,
+        ]
+        return header, np.hstack(cols)
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary and the per-sample columns."""
+        header, values = self.table()
+        extra = {}
+        if self.velocity_polytope_capacity is not None:
+            extra["min_velocity_polytope_capacity"] = float(self.velocity_polytope_capacity.min())
+        return {
+            "robot": self.robot_name,
+            "task": self.task,
+            "samples": len(self.trajectory),
+            "duration": float(self.trajectory.t[-1] - self.trajectory.t[0]),
+            "reduced_velocity_names": list(self.names),
+            "time_scaling": self.scaling.to_dict(),
+            "max_velocity_use": float(self.velocity_use.max()),
+            "max_effort_use": float(self.effort_use.max()),
+            "max_slip": float(self.trajectory.slip.max()),
+            "min_velocity_capacity": float(self.velocity_capacity.min()),
+            "min_acceleration_capacity": float(self.acceleration_capacity.min()),
+            **extra,
+            "columns": {name: values[:, k].tolist() for k, name in enumerate(header)},
+        }
+
+
+def analyze_trajectory(
+    robot: Robot,
+    trajectory: Trajectory,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    held_object: HeldObject | None = None,
+    decoupled: bool = False,
+    polytope: bool = False,
+) -> TrajectoryAnalysis:
+    """Both measures, the demands and the time-scaling margin along a trajectory.
+
+    Args:
+        robot: the loaded robot.
+        trajectory: from :func:`mobmanip.motion.trajectory.read_trajectory` or
+            :func:`mobmanip.motion.trajectory.trajectory_from_samples`.
+        task, object_mass, held_object, decoupled: as :func:`mobmanip.analysis.analyze` (the
+            default object sits between the hands at every sample).
+        polytope: also the kinematic polytope's reach along v_o
+            (:attr:`TrajectoryAnalysis.velocity_polytope_capacity`; one LP-backed support query per
+            sample).
+    """
+    if not isinstance(trajectory, Trajectory):
+        raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
+    task = get_task(task or robot.spec.default_task)
+    n, m, nx = len(trajectory), task.dim, robot.nx
+    kin_axes, dyn_axes, dyn_center = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
+    dyn_empty = np.zeros(n, dtype=bool)
+    v_o, a_o = np.zeros((n, m)), np.zeros((n, m))
+    v_cap, a_cap = np.zeros(n), np.zeros(n)
+    tau, tau_static = np.zeros((n, nx)), np.zeros((n, nx))
+    v_poly = np.zeros(n) if polytope else None
+    for i in range(n):
+        terms = motion_terms(
+            robot,
+            trajectory.q[i],
+            trajectory.x[i],
+            task,
+            object_mass=object_mass,
+            held_object=held_object,
+            decoupled=decoupled,
+        )
+        kin, dyn = terms.kinematic(), terms.dynamic()
+        kin_axes[i], dyn_axes[i], dyn_center[i], dyn_empty[i] = kin.semi_axes, dyn.semi_axes, dyn.center, dyn.empty
+        xdot = trajectory.xdot[i]
+        v_o[i] = terms.v_o
+        a_o[i] = terms.object_acceleration(xdot)
+        tau[i] = terms.torques(xdot, a_o[i])
+        tau_static[i] = terms.static_torques()
+        speed = float(np.linalg.norm(v_o[i]))
+        d = v_o[i] / speed if speed > 0.0 else kin.axes[0]
+        v_cap[i] = kin.radius_along(d) if not kin.empty else 0.0
+        if v_poly is not None:
+            v_poly[i] = kinematic_polytope(terms.J_u, terms.W, terms.velocity_limits).radius_along(d)
+        acc = float(np.linalg.norm(a_o[i]))
+        d = a_o[i] / acc if acc > 0.0 else dyn.axes[0]
+        a_cap[i] = _reach(dyn.center, dyn.generator, d, dyn.empty)
+    vlim = np.asarray(robot.velocity_limits, dtype=float)
+    elim = np.asarray(robot.effort_limits, dtype=float)
+    names = robot.reduced_velocity_names
+    scaling = time_scaling(trajectory.x, tau - tau_static, tau_static, vlim, elim, names)
+    return TrajectoryAnalysis(
+        robot_name=robot.name,
+        task=task.name,
+        names=names,
+        trajectory=trajectory,
+        kinematic_semi_axes=kin_axes,
+        dynamic_semi_axes=dyn_axes,
+        dynamic_center=dyn_center,
+        dynamic_empty=dyn_empty,
+        object_velocity=v_o,
+        object_acceleration=a_o,
+        velocity_capacity=v_cap,
+        acceleration_capacity=a_cap,
+        efforts=tau,
+        efforts_static=tau_static,
+        velocity_use=np.abs(trajectory.x) / vlim,
+        effort_use=np.abs(tau) / elim,
+        scaling=scaling,
+        velocity_polytope_capacity=v_poly,
+    )
+
+
+def trajectory_figure(result: TrajectoryAnalysis) -> Figure:
+    """Three panels over time: speed against velocity capacity, acceleration against
+    acceleration capacity, and the largest velocity and effort use (fractions of the limits)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = result.trajectory.t
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
+    ax = axes[0]
+    ax.plot(t, np.linalg.norm(result.object_velocity, axis=1), label="object speed |v_o|")
+    ax.plot(t, result.velocity_capacity, label="kinematic capacity along v_o")
+    if result.velocity_polytope_capacity is not None:
+        ax.plot(t, result.velocity_polytope_capacity, label="kinematic polytope along v_o")
+    ax.plot(t, result.kinematic_semi_axes[:, -1], "--", label="kinematic minor semi-axis")
+    ax.set_ylabel("m/s (rad/s)")
+    ax.legend(loc="best", fontsize=8)
+    ax = axes[1]
+    ax.plot(t, np.linalg.norm(result.object_acceleration, axis=1), label="object acceleration |a_o|")
+    ax.plot(t, result.acceleration_capacity, label="dynamic capacity along a_o (in motion)")
+    ax.set_ylabel("m/s^2 (rad/s^2)")
+    ax.legend(loc="best", fontsize=8)
+    ax = axes[2]
+    ax.plot(t, result.velocity_use.max(axis=1), label="largest |x_i| / xdot_max_i")
+    ax.plot(t, result.effort_use.max(axis=1), label="largest |tau_i| / tau_max_i")
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_ylabel("fraction of limit")
+    ax.set_xlabel("t (s)")
+    ax.legend(loc="best", fontsize=8)
+    k = result.scaling.k_max
+    margin = "unbounded" if k is None else (f"{k:.3f}" if result.scaling.feasible else "none")
+    fig.suptitle(f"{result.robot_name}, task {result.task}: time-scaling margin {margin}")
+    fig.tight_layout()
+    return fig
+
+
+def write_outputs(robot: Robot, result: TrajectoryAnalysis, out_dir: str | Path, prefix: str = "analysis") -> list[str]:
+    """``{prefix}.csv``, ``{prefix}.json`` and ``{prefix}.png`` in ``out_dir``; returns the paths."""
+    from pathlib import Path
+
+    from ..support.files import save_figure, write_json
+
+    out = Path(out_dir)
+    header, values = result.table()
+    paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
+    _write_csv(paths[0], header, values)
+    write_json(paths[1], result.to_dict())
+    import matplotlib.pyplot as plt
+
+    fig = trajectory_figure(result)
+    save_figure(fig, paths[2], dpi=100)
+    plt.close(fig)
+    return [str(p) for p in paths]
+
+
+def _write_csv(path, header: list[str], values: np.ndarray) -> None:
+    from ..support.files import atomic_output
+
+    with atomic_output(path, "w", newline="", encoding="utf-8") as handle:
+        handle.write(",".join(header) + "\n")
+        for row in values:
+            handle.write(",".join(repr(float(v)) for v in row) + "\n")
+
+
+def write_trajectory_csv(
+    robot: Robot, path: str | Path, t: np.ndarray, qs: np.ndarray, extra: dict | None = None
+) -> None:
+    """A trajectory file (:mod:`mobmanip.motion.trajectory`'s columns) plus ``extra`` columns by name."""
+    header, values = trajectory_table(robot, t, qs)
+    for name, column in (extra or {}).items():
+        header.append(name)
+        values = np.hstack([values, np.asarray(column, dtype=float)[:, None]])
+    _write_csv(path, header, values)

@@ -1,0 +1,419 @@
+"""Placement maps: the best achievable measure at every platform position around a fixed object.
+
+For a fixed object centre X, :func:`placement_map` gives, at every point p of a grid of platform
+positions, the best value of an objective over the platform heading, the arm (and torso) joints
+and the hold's turn psi about the vertical, with the hands holding the object at X exactly as in
+:func:`mobmanip.placement.place` (same variables, constraints, joint limits). It is the inverse
+of a sweep: a sweep fixes the platform and moves the object; a map fixes the object and asks
+where the platform should stand. The map's best cell is :func:`place`'s answer to within the
+grid's spacing.
+
+Each cell is :func:`place`'s problem with the platform origin fixed at the cell (the region a
+single point): SLSQP with the analytic gradients, started from the solved neighbouring cell
+(continuation along a serpentine path through the grid), and from the reference hold facing the
+object where no neighbour is solved or its start fails. Cells farther from X than the arms can
+reach (a bound from the link lengths) are skipped. With ``headings`` the heading is fixed too,
+one layer per heading.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike
+from scipy.optimize import minimize
+
+from ..errors import ArgumentError, UnreachableObjectError
+from ..gradients.evaluator import GradientEvaluator, Objective
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from .optimize import CONSTRAINT_TOLERANCE, _check_target, _check_turn, _clip_to_bounds, _Problem, _slsqp_constraints
+
+if TYPE_CHECKING:
+    from ..robot.collision import SelfCollision
+
+#: Largest grid (cells per axis) a map accepts.
+MAX_CELLS_PER_AXIS = 400
+
+
+@dataclass(frozen=True)
+class PlacementMap:
+    """The best achievable objective over a grid of platform positions.
+
+    Attributes:
+        objective: the objective.
+        target: the object centre (m, world), (3,).
+        x, y: the grid's platform positions (m, world), (Nx,), (Ny,).
+        headings: the fixed headings of the layers (rad), (H,); ``None`` when the heading is free.
+        values: best value per cell, (Ny, Nx) (heading free) or (H, Ny, Nx); NaN where no pose
+            holds the object.
+        heading: the best heading per cell (rad), same shape; NaN where unreachable.
+        configurations: the configuration per cell, values' shape + (nq,); NaN where unreachable.
+        hold_turn: the hold's turn psi about the vertical per cell (rad), values' shape.
+        evaluations: objective evaluations (value and gradient) spent.
+        seconds: wall time (s).
+    """
+
+    objective: Objective
+    target: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    headings: np.ndarray | None
+    values: np.ndarray
+    heading: np.ndarray
+    configurations: np.ndarray
+    evaluations: int
+    seconds: float
+    hold_turn: np.ndarray | None = None
+
+    def best(self) -> tuple[float, np.ndarray, tuple[int, ...]]:
+        """(best value, its configuration, its index into ``values``).
+
+        Raises:
+            UnreachableObjectError: no cell holds the object.
+        """
+        if np.all(np.isnan(self.values)):
+            raise UnreachableObjectError(f"no cell of the map holds the object at {self.target.tolist()} m")
+        k = int(np.nanargmax(self.values))
+        index = np.unravel_index(k, self.values.shape)
+        return float(self.values[index]), self.configurations[index], tuple(int(i) for i in index)
+
+    def best_over_headings(self) -> tuple[np.ndarray, np.ndarray]:
+        """(values, headings) per position, (Ny, Nx): the best layer's where headings are fixed."""
+        if self.headings is None:
+            return self.values, self.heading
+        filled = np.where(np.isnan(self.values), -np.inf, self.values)
+        layer = np.argmax(filled, axis=0)
+        values = np.take_along_axis(self.values, layer[None], axis=0)[0]
+        return values, np.where(np.isnan(values), np.nan, self.headings[layer])
+
+    def write_npz(self, path: str | Path) -> None:
+        """Arrays ``x``, ``y``, ``values``, ``heading``, ``configurations``, ``target`` (and
+        ``headings`` for fixed-heading layers), the objective's name under ``objective``."""
+        extra = {} if self.headings is None else {"headings": self.headings}
+        np.savez_compressed(
+            path,
+            x=self.x,
+            y=self.y,
+            values=self.values,
+            heading=self.heading,
+            configurations=self.configurations,
+            hold_turn=np.asarray(self.hold_turn, dtype=float),  # NaN-filled where no cell holds
+            target=self.target,
+            objective=np.array(self.objective.name),
+            **extra,  # type: ignore[arg-type]  # numpy's stub types **kwds as its allow_pickle flag
+        )
+
+    def write_csv(self, path: str | Path) -> None:
+        """One row per cell (and layer): x_m, y_m, heading_deg, value; empty value and heading
+        where no pose holds the object."""
+        values = self.values if self.headings is None else self.values
+        layers = [None] if self.headings is None else list(range(len(self.headings)))
+        with open(path, "w", newline="") as stream:
+            writer = csv.writer(stream)
+            writer.writerow(["x_m", "y_m", "heading_deg", self.objective.name])
+            for layer in layers:
+                v = values if layer is None else values[layer]
+                h = self.heading if layer is None else self.heading[layer]
+                for iy, y in enumerate(self.y):
+                    for ix, x in enumerate(self.x):
+                        ok = not math.isnan(v[iy, ix])
+                        writer.writerow(
+                            [f"{x:.6g}", f"{y:.6g}", f"{math.degrees(h[iy, ix]):.4f}" if ok else "",
+                             f"{v[iy, ix]:.10g}" if ok else ""]
+                        )  # fmt: skip
+
+    def plot(self, path: str | Path, title: str | None = None) -> None:
+        """A heat map of the best value over headings, arrows for the best heading, the object
+        (star) and the best cell (circle); PNG or SVG by the file's suffix."""
+        from ..support.files import save_figure
+        from ..viz.figures import plt
+
+        values, heading = self.best_over_headings()
+        fig, ax = plt.subplots(figsize=(6.4, 5.4))
+        masked = np.ma.masked_invalid(values)
+        mesh = ax.pcolormesh(self.x, self.y, masked, shading="nearest", cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label=self.objective.name)
+        ok = ~np.isnan(values)
+        X, Y = np.meshgrid(self.x, self.y)
+        step = max(1, max(len(self.x), len(self.y)) // 15)
+        sel = np.zeros_like(ok)
+        sel[::step, ::step] = True
+        sel &= ok
+        ax.quiver(X[sel], Y[sel], np.cos(heading[sel]), np.sin(heading[sel]), color="white", scale=25, width=0.004)
+        ax.plot(*self.target[:2], marker="*", color="red", markersize=14, linestyle="none", label="object")
+        if ok.any():
+            _, q, _ = self.best()
+            ax.plot(q[0], q[1], marker="o", markerfacecolor="none", markeredgecolor="red", markersize=12,
+                    linestyle="none", label="best platform position")  # fmt: skip
+        ax.set_xlabel("platform x (m)")
+        ax.set_ylabel("platform y (m)")
+        ax.set_aspect("equal")
+        ax.set_title(title or f"best {self.objective.name} over heading and posture")
+        ax.legend(loc="upper right", fontsize=8)
+        fig.tight_layout()
+        try:
+            save_figure(fig, path, dpi=110)
+        finally:
+            plt.close(fig)
+
+
+def reach_bound(robot: Robot, reference: np.ndarray) -> float:
+    """An upper bound (m) on the distance from the platform origin to the object centre over every
+    posture: per arm, the distance to its first joint plus the distances between successive joint
+    origins down to the end effector (constant for revolute joints), prismatic travel, and the
+    grasp offset; the largest over the arms."""
+    from ..postures.inverse_kinematics import hold_from
+
+    model, data = robot.model, robot.model.createData()
+    q = np.array(reference, dtype=float)
+    q[:4] = (0.0, 0.0, 1.0, 0.0)
+    pin.framesForwardKinematics(model, data, q)
+    hold = hold_from(robot, reference)
+    bound = 0.0
+    root = 1  # the planar root joint
+    for i, arm in enumerate(robot.arms):
+        frame = model.frames[arm.frame_id]
+        chain = []
+        j = frame.parentJoint
+        while j > root:
+            chain.append(j)
+            j = model.parents[j]
+        chain.reverse()
+        points = [data.oMi[j].translation for j in chain] + [data.oMf[arm.frame_id].translation]
+        total = float(np.linalg.norm(points[0][:2]))  # horizontal: the platform turns about the vertical
+        total += sum(float(np.linalg.norm(b - a)) for a, b in zip(points[:-1], points[1:]))
+        for j in chain:
+            joint = model.joints[j]
+            if joint.shortname().removeprefix("JointModel").startswith("P") and joint.nq == 1:
+                lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+                total += float(hi - lo) if np.isfinite(hi - lo) else 10.0
+        bound = max(bound, total + float(np.linalg.norm(hold.offsets[i])))
+    return bound
+
+
+def default_extent(
+    robot: Robot, target: ArrayLike, reference: np.ndarray | None = None
+) -> tuple[float, float, float, float]:
+    """The square of platform positions around the target within the arms' reach bound (m)."""
+    target = _check_target(target)
+    reference = robot.hold_configuration() if reference is None else reference
+    r = reach_bound(robot, reference)
+    return target[0] - r, target[0] + r, target[1] - r, target[1] + r
+
+
+def placement_map(
+    robot: Robot,
+    target: ArrayLike,
+    objective: Objective | str,
+    x: ArrayLike,
+    y: ArrayLike,
+    task: str | None = None,
+    *,
+    headings: ArrayLike | None = None,
+    object_mass: float | None = None,
+    decoupled: bool = False,
+    reference: np.ndarray | None = None,
+    max_iterations: int = 60,
+    tolerance: float = 1e-7,
+    hold_turn: float | None = None,
+    collision: SelfCollision | None = None,
+) -> PlacementMap:
+    """The best achievable objective at every platform position (x, y) of a grid.
+
+    Args:
+        robot: the loaded robot (a moving platform).
+        target: the object centre (m, world), (3,).
+        objective: as :func:`mobmanip.placement.place`.
+        x, y: the grid's platform positions (m, world), increasing, at most
+            :data:`MAX_CELLS_PER_AXIS` each.
+        task, object_mass, decoupled, reference: as :func:`mobmanip.placement.place`.
+        headings: fixed platform headings (rad), one layer each; default the heading is free.
+        max_iterations, tolerance: SLSQP's per cell.
+        hold_turn, collision: a fixed object orientation and self-collision avoidance, as
+            :func:`mobmanip.placement.place`'s.
+
+    Raises:
+        ArgumentError: a malformed target or grid; a fixed platform.
+        MeasureError: an objective unknown for the measure.
+        UnreachableObjectError: no cell holds the object.
+    """
+    started = time.perf_counter()
+    target = _check_target(target)
+    xs, ys = _axis(x, "x"), _axis(y, "y")
+    layers = None if headings is None else _axis(headings, "headings", increasing=False)
+    if robot.platform_locked:
+        raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to map")
+    task = get_task(task or robot.spec.default_task)
+    evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
+    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
+    problem = _Problem(robot, evaluator, target, None, q_ref, collision)
+    fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
+    if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:  # e.g. the height of planar arms' hands
+        raise UnreachableObjectError(
+            f"no pose holds the object at {target.tolist()} m: {robot.name}'s hands cannot reach it there "
+            f"from any platform position (the hold misses by {np.abs(fixed).max():.4g} in what no joint changes)"
+        )
+    reach = reach_bound(robot, q_ref)
+    turn = None if hold_turn is None else _check_turn(hold_turn)
+    nq = robot.model.nq
+    shape = (len(ys), len(xs)) if layers is None else (len(layers), len(ys), len(xs))
+    values = np.full(shape, np.nan)
+    heading = np.full(shape, np.nan)
+    turns = np.full(shape, np.nan)
+    configurations = np.full(shape + (nq,), np.nan)
+    for layer in [None] if layers is None else range(len(layers)):
+        fixed_heading = None if layer is None or layers is None else float(layers[layer])
+        solved: dict[tuple[int, int], np.ndarray] = {}
+        previous = None
+        for iy, ix in _serpentine(len(ys), len(xs)):
+            p = np.array([xs[ix], ys[iy]])
+            if np.hypot(*(target[:2] - p)) > reach:
+                previous = None
+                continue
+            seeds = [previous] if previous is not None else []
+            seeds += [solved[n] for n in _neighbours(iy, ix) if n in solved and solved[n] is not previous][:1]
+            result = _solve_cell(problem, p, fixed_heading, turn, seeds, max_iterations, tolerance)
+            if result is None:
+                previous = None
+                continue
+            value, z = result
+            solved[(iy, ix)] = z
+            previous = z
+            index = (iy, ix) if layer is None else (layer, iy, ix)
+            values[index] = value
+            heading[index] = math.atan2(math.sin(z[2]), math.cos(z[2]))
+            turns[index] = z[-1]
+            configurations[index] = problem.configuration(z)
+    out = PlacementMap(
+        objective=evaluator.objective,
+        target=target,
+        x=xs,
+        y=ys,
+        headings=layers,
+        values=values,
+        heading=heading,
+        configurations=configurations,
+        evaluations=evaluator.evaluations,
+        seconds=time.perf_counter() - started,
+        hold_turn=turns,
+    )
+    if np.all(np.isnan(values)):
+        raise UnreachableObjectError(
+            f"no platform position of the map holds the object at {target.tolist()} m "
+            f"(x {xs[0]:g}..{xs[-1]:g} m, y {ys[0]:g}..{ys[-1]:g} m; the arms reach at most {reach:.3f} m)"
+        )
+    return out
+
+
+def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance):
+    """(value, z) of the best run at platform position p, or None where nothing holds the object."""
+    bounds = problem.bounds()
+    if turn is not None:
+        bounds[-1] = (turn, turn)
+    bounds[0] = (float(p[0]), float(p[0]))
+    bounds[1] = (float(p[1]), float(p[1]))
+    if fixed_heading is not None:
+        bounds[2] = (fixed_heading, fixed_heading)
+    toward = math.atan2(problem.target[1] - p[1], problem.target[0] - p[0])
+    hold = problem.hold
+    fresh: list = []
+    for turn in (0.0, math.pi / 2, -math.pi / 2, math.pi):
+        heading = toward - math.atan2(hold.center[1], hold.center[0]) + turn if fixed_heading is None else fixed_heading
+        z = problem.start(heading, np.random.default_rng(len(fresh)))
+        z[:2] = p
+        if turn is not None:
+            z[-1] = turn
+        fresh.append(z)
+        if fixed_heading is not None:
+            break
+    best = None
+    for z0 in [_seeded(s, p, fixed_heading) for s in seeds] + fresh:
+        z = _newton_project(problem, _clip_to_bounds(z0, bounds), bounds)
+        if z is None:
+            continue
+        res = minimize(
+            problem.objective,
+            z,
+            jac=True,
+            method="SLSQP",
+            bounds=bounds,
+            constraints=_slsqp_constraints(problem),
+            options={"maxiter": max_iterations, "ftol": tolerance},
+        )
+        z = res.x
+        if problem.residual(z) > CONSTRAINT_TOLERANCE:
+            z = _newton_project(problem, z, bounds)
+            if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding
+                continue
+        value, _, ok = problem.ev(problem.configuration(z))
+        if ok and (best is None or value > best[0]):
+            best = (float(value), z)
+        if best is not None:  # a seeded or first fresh start that succeeds is kept
+            break
+    return best
+
+
+def _newton_project(problem: _Problem, z: np.ndarray, bounds, iterations: int = 40) -> np.ndarray | None:
+    """A z near ``z`` that holds the object, by damped Gauss-Newton steps on the hold errors over
+    the variables not fixed by ``bounds``, clipped to the bounds; None when the errors stall
+    above :data:`CONSTRAINT_TOLERANCE` (then the cell is taken as unreachable from this start)."""
+    free = np.array([lo is None or hi is None or lo < hi for lo, hi in bounds])
+    damping = 1e-4
+    value, J = problem.constraints(z)
+    error = float(value @ value)
+    for _ in range(iterations):
+        if math.sqrt(error) <= 0.1 * CONSTRAINT_TOLERANCE:
+            break
+        A = J[:, free]
+        step = np.zeros_like(z)
+        step[free] = -A.T @ np.linalg.solve(A @ A.T + damping * np.eye(A.shape[0]), value)
+        trial = _clip_to_bounds(z + step, bounds)
+        v_trial, J_trial = problem.constraints(trial)
+        e_trial = float(v_trial @ v_trial)
+        if e_trial < error:
+            z, value, J, error = trial, v_trial, J_trial, e_trial
+            damping = max(damping * 0.1, 1e-12)
+        else:
+            damping *= 10.0
+            if damping > 1e6:
+                break
+    hold_error = float(np.abs(problem.constraints(z, jacobian=False)).max())
+    return z if hold_error <= CONSTRAINT_TOLERANCE else None
+
+
+def _seeded(z: np.ndarray, p: np.ndarray, fixed_heading) -> np.ndarray:
+    z = z.copy()
+    z[:2] = p
+    if fixed_heading is not None:
+        z[2] = fixed_heading
+    return z
+
+
+def _serpentine(ny: int, nx: int):
+    for iy in range(ny):
+        for ix in range(nx) if iy % 2 == 0 else range(nx - 1, -1, -1):
+            yield iy, ix
+
+
+def _neighbours(iy: int, ix: int):
+    return [(iy - 1, ix), (iy, ix - 1), (iy, ix + 1), (iy + 1, ix)]
+
+
+def _axis(values, name: str, increasing: bool = True) -> np.ndarray:
+    try:
+        a = np.asarray(values, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ArgumentError(f"map {name} must be numbers, got {values!r}") from None
+    if a.size == 0 or a.size > MAX_CELLS_PER_AXIS or not np.all(np.isfinite(a)):
+        raise ArgumentError(f"map {name} must be 1 to {MAX_CELLS_PER_AXIS} finite numbers, got {a.size} values")
+    if increasing and a.size > 1 and not np.all(np.diff(a) > 0):
+        raise ArgumentError(f"map {name} must increase, got {a.tolist()!r}")
+    return a

@@ -1,0 +1,573 @@
+"""Inferring a robot spec from a URDF alone: drive wheels, arms, torso and a TOML to edit.
+
+:func:`spec_from_urdf` looks at the URDF's structure and geometry (through yourdfpy) and
+returns a :class:`~mobmanip.robot.spec.RobotSpec` ready for :func:`mobmanip.robot.model.load_robot`;
+:func:`spec_to_toml` writes any spec as a commented TOML file for the user to check and edit.
+
+The rules:
+
+- A *wheel candidate* is a continuous joint whose child link carries a cylinder about the joint
+  axis or a sphere (:func:`mobmanip.descriptions.urdf.wheel_radius`) and that lies on no arm's path
+  (:func:`mobmanip.platforms.wheels.wheel_candidates`). Each wheeled platform kind of
+  :data:`mobmanip.platforms.KINDS` says whether the candidates fit it (its ``detect``): e.g. a
+  differential drive is two lateral wheels on no swivel, the right one with the smaller lateral
+  (y) position in the root link's frame (forward = +x). Without an explicit platform the kind
+  that fits is taken; none fitting means a fixed platform, and a kind that fits ambiguously
+  raises :class:`~mobmanip.errors.WheelError` listing the candidates and what to add.
+- An *arm* is the actuated (revolute, continuous, prismatic) joints on the path from the root
+  link to the end-effector frame, drive wheels excluded (and no joint on such a path is taken
+  for a drive wheel). Joints on the path of more than one arm (a
+  torso lift, say) belong to no arm: they become the spec's ``torso`` (``torso=True``) or are
+  locked (default), in both cases at mid-range (their home position when actuated).
+- Every other joint is locked at zero, or at mid-range when zero is outside its limits; an
+  arm or torso joint whose range excludes zero gets its mid-range as home position.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..descriptions.resources import (
+    EXAMPLE_ROBOT_DATA_PREFIX,
+    STRETCH_URDF_PREFIX,
+    example_robot_data_share,
+    stretch_urdf_dir,
+)
+from ..descriptions.urdf import (
+    MOVING_JOINT_TYPES,
+    check_supported,
+    joint_axis,
+    joint_limits,
+    joint_path,
+    mimic_joints,
+    read_urdf,
+    root_link,
+    zero_configuration_placements,
+)
+from ..errors import FrameNotFoundError, JointNotFoundError, SpecError, UrdfError, WheelError
+from ..platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
+from ..platforms.wheels import WheelCandidate, wheel_candidates
+from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
+from .spec import ArmSpec, RobotSpec
+
+__all__ = [
+    "Detection",
+    "WheelCandidate",
+    "arm_joints",
+    "detect_platform",
+    "detect_spec",
+    "parse_wheel_list",
+    "spec_from_urdf",
+    "spec_to_toml",
+    "wheel_candidates",
+]
+
+
+@dataclass(frozen=True)
+class Detection:
+    """What :func:`detect_spec` found.
+
+    Attributes:
+        spec: the inferred spec.
+        shared_joints: actuated joints on the path of more than one arm (torso or locked).
+        notes: one-line remarks for the user (written as comments by ``init-spec``).
+        urdf_limits: ``{joint: (velocity, effort)}`` from the URDF for every active joint.
+        considered: what detection looked at and why it chose the platform kind: every
+            wheel-like joint and what became of it, each wheeled kind's verdict, the choice.
+        missing: values the spec still needs (wheel radii, limits), with the flags that give
+            them; empty when the spec loads as it is.
+    """
+
+    spec: RobotSpec
+    shared_joints: tuple[str, ...]
+    notes: tuple[str, ...]
+    urdf_limits: Mapping[str, tuple[float | None, float | None]]
+    considered: tuple[str, ...] = ()
+    missing: tuple[Missing, ...] = ()
+
+
+def detect_platform(urdf: Any, candidates: Sequence, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
+    """The platform kind the wheel candidates fit, and what it found (``None``: fixed).
+
+    Every wheeled kind of :data:`mobmanip.platforms.KINDS` is asked; exactly one must fit.
+
+    Raises:
+        WheelError: no kind fits but one fits ambiguously (its message says what to add), or
+            several kinds fit (the message lists them; choose with ``--platform``).
+    """
+    found, errors = [], []
+    for kind in KINDS.values():
+        if not kind.takes_wheels:
+            continue
+        try:
+            detected = kind.detect(urdf, candidates, str(path))
+        except WheelError as exc:
+            errors.append(exc)
+            continue
+        if detected is not None:
+            found.append((kind, detected))
+    if len(found) == 1:
+        return found[0]
+    if len(found) > 1:
+        raise WheelError(
+            f"{path}: the wheels fit several platform kinds ({', '.join(k.name for k, _ in found)}); "
+            "choose one with --platform"
+        )
+    if errors:
+        raise errors[0]
+    return KINDS["fixed"], None
+
+
+def _frame_link(urdf, frame: str, path: str | Path) -> str:
+    """The link whose path from the root carries ``frame`` (a link, or a joint's child link)."""
+    if frame in urdf.link_map:
+        return frame
+    if frame in urdf.joint_map:
+        return urdf.joint_map[frame].child
+    raise FrameNotFoundError(frame, list(urdf.link_map) + list(urdf.joint_map), where=str(path))
+
+
+def arm_joints(urdf: Any, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF") -> list[str]:
+    """The actuated joints from the root link to ``end_effector``, root first.
+
+    Args:
+        urdf: the parsed URDF.
+        end_effector: a link (or joint) name.
+        exclude: joints to leave out (the wheels).
+        path: the URDF's path, for messages.
+
+    Raises:
+        FrameNotFoundError: unknown frame (the message lists existing frames, closest first).
+    """
+    link = _frame_link(urdf, end_effector, path)
+    exclude = set(exclude)
+    return [j.name for j in joint_path(urdf, link) if j.type in MOVING_JOINT_TYPES and j.name not in exclude]
+
+
+def _arm_name(end_effector: str, k: int, taken: set[str]) -> str:
+    tokens = set(re.split(r"[^a-z]+", end_effector.lower()))
+    sides = [s for s in ("right", "left") if s in tokens]
+    name = sides[0] if len(sides) == 1 else f"arm{k + 1}"
+    return name if name not in taken else f"arm{k + 1}"
+
+
+def _mid_range(urdf, name: str) -> float | None:
+    """Mid-range of a joint with finite position limits, else ``None``."""
+    joint = urdf.joint_map[name]
+    limit = joint.limit
+    if joint.type == "continuous" or limit is None or limit.lower is None or limit.upper is None:
+        return None
+    lower, upper = float(limit.lower), float(limit.upper)
+    if not (math.isfinite(lower) and math.isfinite(upper)) or upper < lower:
+        return None
+    return 0.5 * (lower + upper)
+
+
+def _excludes_zero(urdf, name: str) -> bool:
+    joint = urdf.joint_map[name]
+    limit = joint.limit
+    if joint.type not in ("revolute", "prismatic") or limit is None or limit.lower is None or limit.upper is None:
+        return False
+    return not (float(limit.lower) <= 0.0 <= float(limit.upper))
+
+
+def _planar(urdf, joints: Iterable[str]) -> bool:
+    """Whether every joint moves in the horizontal plane (revolute about z, prismatic along x-y)."""
+    placements = zero_configuration_placements(urdf)
+    for name in joints:
+        joint = urdf.joint_map[name]
+        axis = placements[name][:3, :3] @ joint_axis(joint)
+        vertical = abs(float(axis[2])) >= 1.0 - 1e-9
+        if joint.type == "prismatic" and abs(float(axis[2])) > 1e-9:
+            return False
+        if joint.type != "prismatic" and not vertical:
+            return False
+    return True
+
+
+def detect_spec(
+    path: str | Path,
+    end_effectors: Sequence[str],
+    wheels: tuple[str, ...] | None = None,
+    platform: str | None = None,
+    *,
+    torso: bool = False,
+    name: str | None = None,
+    default_task: str | None = None,
+    wheel_radius: float | None = None,
+    wheel_limits: tuple[float | None, float | None] = (None, None),
+    limits: Mapping[str, tuple[float | None, float | None]] | None = None,
+) -> Detection:
+    """Infer a spec from a URDF; see the module docstring for the rules.
+
+    Args:
+        path: the URDF file.
+        end_effectors: one end-effector frame per arm, arm 1 first (link or joint names).
+        wheels: the platform's wheel joints (for a differential drive ``(right, left)``), to
+            skip wheel detection.
+        platform: a kind of :data:`mobmanip.platforms.KINDS`; ``None`` means the wheeled kind
+            the URDF's wheels fit (a differential drive when wheels are given), else fixed.
+        torso: make the joints shared by several arms the spec's torso (else lock them).
+        name: robot name (default: the URDF's robot name).
+        default_task: task space (default: ``"planar"`` if every arm joint moves in the
+            horizontal plane, else ``"spatial"``).
+        wheel_radius: radius (m) of wheels known by their name only (mesh geometry); written
+            as the spec's ``[wheels] radius``.
+        wheel_limits: ``(velocity, effort)`` for each of the platform's wheel coordinates the
+            URDF gives no limit (``None``: leave it to the URDF).
+        limits: ``{joint: (velocity, effort)}`` overrides of any active joint's limits.
+
+    Raises:
+        UrdfError: unreadable URDF, unsupported construct, or a mimic joint on an arm.
+        FrameNotFoundError: unknown end-effector frame.
+        JointNotFoundError: an explicit wheel joint that does not exist.
+        WheelError: ambiguous or unusable drive wheels.
+        SpecError: no end effector, an end effector no joint moves, or an unknown platform.
+    """
+    path = Path(path)
+    urdf = read_urdf(path)
+    check_supported(urdf, path)
+    if platform is not None:
+        get_kind(platform)  # an unknown kind is a SpecError listing the known ones
+    end_effectors = list(end_effectors)
+    if not end_effectors:
+        raise SpecError(f"{path}: name at least one end-effector frame")
+    notes: list[str] = [f"platform frame: root link {root_link(urdf, path)!r} (forward = +x, left = +y)"]
+
+    on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(urdf, ee, (), path)}
+    candidates = wheel_candidates(urdf, exclude=on_arm_paths, radius=wheel_radius)
+    on_arms = {
+        c.name: on_arm_paths[c.name] for c in wheel_candidates(urdf, radius=wheel_radius) if c.name in on_arm_paths
+    }
+    how = "wheels" if wheels is not None else ("platform" if platform is not None else "detected")
+    wheel_spec: WheelsSpec | None = None
+    if wheels is not None:
+        for joint in wheels:
+            if joint not in urdf.joint_map:
+                raise JointNotFoundError(joint, urdf.joint_map, where=str(path))
+        kind = get_kind(platform or "differential_drive")
+        given = (kind if kind.takes_wheels else KINDS["differential_drive"]).wheels_from_joints(tuple(wheels))
+        if kind.takes_wheels:
+            wheel_spec = given
+            notes.append(f"{kind.name} wheels: {', '.join(given.joint_names)}")
+        else:
+            notes.append(f"platform {kind.name!r}: wheels {', '.join(given.joint_names)} are locked")
+    elif platform is None:
+        kind, detected = detect_platform(urdf, candidates, path)
+        if detected is not None:
+            wheel_spec = detected.wheels
+            notes.extend(detected.notes)
+    else:
+        kind = get_kind(platform)
+        if kind.takes_wheels:
+            detected = kind.detect(urdf, candidates, str(path))
+            if detected is None:
+                listed = ", ".join(c.describe() for c in candidates) or "none"
+                raise WheelError(
+                    f"{path}: no wheels of a {kind.name} platform found (wheel-shaped continuous joints: {listed}); "
+                    "name them with --wheels or choose another platform"
+                )
+            wheel_spec = detected.wheels
+            notes.extend(detected.notes)
+    platform = kind.name
+    drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
+    considered = explain_wheels(urdf, candidates, drive if kind.takes_wheels else (), on_arms)
+    if candidates and how == "detected":
+        considered += platform_reasons(urdf, candidates, str(path))
+    considered.append(choice_reason(kind.name, how, candidates))
+    unmeasured = [c.name for c in candidates if c.radius is None and c.name in drive]
+    if wheel_spec is not None and wheel_radius is not None and hasattr(wheel_spec, "radius"):
+        # kinds with a radius (checked just above); mypy sees only the base class
+        wheel_spec = dataclasses.replace(wheel_spec, radius=float(wheel_radius))  # type: ignore[call-arg]
+        unmeasured = []
+    extra = [c.name for c in candidates if c.name not in drive]
+    if extra and kind.takes_wheels:
+        notes.append(f"wheel-like joints that are not platform wheels are locked: {', '.join(extra)}")
+    paths = [arm_joints(urdf, ee, drive, path) for ee in end_effectors]
+    counts: dict[str, int] = {}
+    for joints in paths:
+        for joint in joints:
+            counts[joint] = counts.get(joint, 0) + 1
+    shared = tuple(j for j in dict.fromkeys(j for p in paths for j in p) if counts[j] > 1)
+    mimics = mimic_joints(urdf)
+    arms: list = []
+    taken: set[str] = set()
+    for k, (ee, joints) in enumerate(zip(end_effectors, paths)):
+        own = tuple(j for j in joints if j not in shared)
+        if not own:
+            raise SpecError(
+                f"{path}: end-effector frame {ee!r} is moved by no joint of its own"
+                + (f" (only by the shared joints {', '.join(shared)})" if shared else "")
+            )
+        for joint in own + shared:
+            if joint in mimics:
+                raise UrdfError(
+                    str(path),
+                    f"joint {joint!r} on the path to {ee!r} mimics {mimics[joint]!r}; "
+                    "mimic joints cannot be actuated here (pick an end-effector frame before it)",
+                )
+        arm_name = _arm_name(ee, k, taken)
+        taken.add(arm_name)
+        arms.append(ArmSpec(name=arm_name, joints=own, end_effector=ee))
+
+    torso_joints = shared if torso else ()
+    reference: dict[str, float] = {}
+    active = set(torso_joints) | {j for arm in arms for j in arm.joints}
+    if wheel_spec is not None:
+        active |= set(wheel_spec.joint_names)
+    for joint in urdf.robot.joints:
+        if joint.type not in MOVING_JOINT_TYPES:
+            continue
+        mid = _mid_range(urdf, joint.name)
+        if joint.name in shared and mid is not None:
+            reference[joint.name] = mid  # the torso, locked or home: mid-height
+        elif _excludes_zero(urdf, joint.name) and mid is not None:
+            reference[joint.name] = mid
+    if shared:
+        if torso:
+            notes.append(f"joints shared by several arms form the torso: {', '.join(shared)}")
+        else:
+            notes.append(f"joints shared by several arms are locked at mid-range: {', '.join(shared)}")
+    if default_task is None:
+        default_task = "planar" if _planar(urdf, active - drive) else "spatial"
+
+    urdf_limits = {j: joint_limits(urdf, j) for j in sorted(active)}
+    urdf_limits.update(kind.urdf_limits(wheel_spec, urdf))
+    wheel_names = set(kind.urdf_limits(wheel_spec, urdf)) | set(wheel_spec.joint_names if wheel_spec else ())
+    platform_limits = {n: pair for n, pair in urdf_limits.items() if n in wheel_names}
+    given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
+    spec = RobotSpec(
+        name=name or urdf.robot.name or path.stem,
+        urdf=path.resolve(),
+        platform=platform,
+        arms=tuple(arms),
+        wheels=wheel_spec,
+        default_task=default_task,
+        reference=reference,
+        torso=torso_joints,
+        velocity_limits=given_v,
+        effort_limits=given_e,
+        package_dirs=(path.resolve().parent,),
+    )
+    missing = _missing(spec, kind, urdf_limits, unmeasured)
+    needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
+    needed += [name for name, pair in kind.urdf_limits(wheel_spec, urdf).items() if None in pair]
+    if needed:
+        notes.append(
+            f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "
+            "[limits.effort] (the URDF gives none)"
+        )
+    return Detection(
+        spec=spec,
+        shared_joints=shared,
+        notes=tuple(notes),
+        urdf_limits=urdf_limits,
+        considered=tuple(considered),
+        missing=tuple(missing),
+    )
+
+
+def _given_limits(platform_limits, wheel_limits, limits) -> tuple[dict, dict]:
+    """Spec limit overrides from the command line: the wheel values for every platform
+    coordinate whose URDF limit is missing, then explicit ones by name."""
+    velocity, effort = {}, {}
+    for name, (vel, eff) in platform_limits.items():
+        if vel is None and wheel_limits[0] is not None:
+            velocity[name] = float(wheel_limits[0])
+        if eff is None and wheel_limits[1] is not None:
+            effort[name] = float(wheel_limits[1])
+    for name, (vel, eff) in limits.items():
+        if vel is not None:
+            velocity[name] = float(vel)
+        if eff is not None:
+            effort[name] = float(eff)
+    return velocity, effort
+
+
+def _missing(spec: RobotSpec, kind: PlatformKind, urdf_limits, unmeasured) -> list[Missing]:
+    """What the spec still lacks, grouped, with the flags that give it."""
+    out = []
+    if unmeasured:
+        out.append(Missing("wheel radius (mesh geometry)", tuple(unmeasured), "--wheel-radius M"))
+    platform_names = set(kind.limit_names(spec.wheels)) | set(spec.wheel_joint_names)
+    for what, table, index, wheel_flag, flag in (
+        ("velocity limit", spec.velocity_limits, 0, "--wheel-velocity-limit RAD_S", "--velocity-limit NAME=V"),
+        ("effort limit", spec.effort_limits, 1, "--wheel-effort-limit NM", "--effort-limit NAME=E"),
+    ):
+        hinted = [name for name, _ in kind.toml_limit_hints(spec.wheels) if name not in table]
+        lacking = [
+            name
+            for name, pair in urdf_limits.items()
+            if pair[index] is None and name not in table and name not in hinted
+        ]
+        wheels = [n for n in lacking if n in platform_names]
+        others = [n for n in lacking if n not in platform_names] + hinted
+        if wheels:
+            out.append(Missing(what, tuple(wheels), wheel_flag))
+        if others:
+            out.append(Missing(what, tuple(others), flag))
+    return out
+
+
+def spec_from_urdf(
+    path: str | Path,
+    end_effectors: Sequence[str],
+    wheels: tuple[str, ...] | None = None,
+    platform: str | None = None,
+    **options: Any,
+) -> RobotSpec:
+    """The spec :func:`detect_spec` infers (same arguments), without the notes."""
+    return detect_spec(path, end_effectors, wheels, platform, **options).spec
+
+
+def parse_wheel_list(text: str) -> tuple[str, ...]:
+    """``"RIGHT,LEFT"`` -> ``("RIGHT", "LEFT")``: comma-separated wheel joint names.
+
+    How many a platform takes, and in which order, is the platform kind's to say.
+
+    Raises:
+        WheelError: an empty name.
+    """
+    parts = tuple(p.strip() for p in str(text).split(","))
+    if not all(parts):
+        raise WheelError(f"wheels must be given as comma-separated joint names (e.g. RIGHT,LEFT), got {text!r}")
+    return parts
+
+
+# ----- writing a spec as TOML -----
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _key(name: str) -> str:
+    return name if _BARE_KEY.match(name) else json.dumps(name)
+
+
+def _string(value: str) -> str:
+    return json.dumps(value)  # a JSON string is a valid TOML basic string
+
+
+def _number(value: float) -> str:
+    return repr(float(value))
+
+
+def _urdf_reference(urdf: Path, base_dir: Path | None) -> str:
+    """How the spec file names its URDF: example-robot-data prefix, relative or absolute path."""
+    urdf = Path(urdf).resolve()
+    try:
+        robots = (example_robot_data_share() / "example-robot-data" / "robots").resolve()
+        return EXAMPLE_ROBOT_DATA_PREFIX + urdf.relative_to(robots).as_posix()
+    except (ValueError, SpecError):
+        pass
+    try:
+        return STRETCH_URDF_PREFIX + urdf.relative_to(stretch_urdf_dir().resolve()).as_posix()
+    except (ValueError, SpecError):
+        pass
+    if base_dir is not None:
+        try:
+            return Path(os.path.relpath(urdf, Path(base_dir).resolve())).as_posix()
+        except ValueError:  # another drive on Windows
+            pass
+    return urdf.as_posix()
+
+
+def spec_to_toml(
+    spec: RobotSpec,
+    base_dir: str | Path | None = None,
+    *,
+    notes: Sequence[str] = (),
+    urdf_limits: Mapping[str, tuple[float | None, float | None]] | None = None,
+    shared_joints: Sequence[str] = (),
+) -> str:
+    """A commented TOML text that :func:`mobmanip.robot.spec.load_spec` reads back to an equal spec.
+
+    Args:
+        spec: the spec to write.
+        base_dir: directory the file will live in; the URDF path is written relative to it
+            (absolute without it; ``example-robot-data:...`` for that package's robots).
+        notes: remarks written as comments at the top.
+        urdf_limits: ``{joint: (velocity, effort)}`` from the URDF, written as commented hints
+            under ``[limits.*]`` (a missing one is flagged as required).
+        shared_joints: joints shared by several arms; when they are not the torso, a commented
+            ``torso = [...]`` line shows how to actuate them.
+    """
+    out = [f"# mobmanip robot spec for {spec.name!r}, inferred from its URDF; check it and edit as needed."]
+    out += [f"# {note}" for note in notes]
+    out += [
+        f"name = {_string(spec.name)}",
+        f"urdf = {_string(_urdf_reference(spec.urdf, None if base_dir is None else Path(base_dir)))}",
+        f"platform = {_string(spec.platform)}  # {', '.join(json.dumps(k) for k in KINDS)}",
+        f"default_task = {_string(spec.default_task)}  # planar, planar_rigid, translational or spatial",
+    ]
+    if spec.torso:
+        out += ["", "# Actuated joints shared by all arms (after the platform in the reduced velocity).",
+                f"torso = {json.dumps(list(spec.torso))}"]  # fmt: skip
+    elif shared_joints:
+        out += ["", "# Joints shared by the arms are locked (see [reference]); to actuate them:",
+                f"# torso = {json.dumps(list(shared_joints))}"]  # fmt: skip
+    kind = get_kind(spec.platform)
+    if spec.wheels is not None:
+        out += ["", *kind.toml_lines(spec.wheels)]
+    out += ["", "# Arms in order (arm 1 first): actuated joints base to tip, then the end-effector frame."]
+    for arm in spec.arms:
+        out += [
+            "[[arms]]",
+            f"name = {_string(arm.name)}",
+            f"joints = {json.dumps(list(arm.joints))}",
+            f"end_effector = {_string(arm.end_effector)}",
+            "",
+        ]
+    out += ["# The default held object.", "[object]", f"mass = {_number(spec.object_mass)}  # kg"]
+    if spec.grasp_offsets:
+        rows = ", ".join("[" + ", ".join(_number(v) for v in row) + "]" for row in spec.grasp_offsets)
+        out.append(f"grasp_offsets = [{rows}]  # m, where each arm grasps it, from its centre")
+    out.append("")
+    hints = dict(kind.toml_limit_hints(spec.wheels))
+    joints = [j for j in spec.active_joint_names if kind.limits_by_joint or j not in spec.wheel_joint_names]
+    active = list(kind.limit_names(spec.wheels)) + joints
+    for kind, table, unit in (
+        ("velocity", spec.velocity_limits, "rad/s or m/s"),
+        ("effort", spec.effort_limits, "N m or N"),
+    ):
+        out += [f"# Limit overrides by joint name ({unit}); without one, the URDF's value is used.", f"[limits.{kind}]"]
+        for joint in active:
+            if joint in table:
+                out.append(f"{_key(joint)} = {_number(table[joint])}")
+            elif joint in hints:
+                out.append(f"# {_key(joint)} = ...  # {hints[joint]}")
+            elif urdf_limits is not None and joint in urdf_limits:
+                value = urdf_limits[joint][0 if kind == "velocity" else 1]
+                if value is None:
+                    out.append(f"# {_key(joint)} = ...  # REQUIRED: the URDF gives none")
+                else:
+                    out.append(f"# {_key(joint)} = {_number(value)}  # URDF value")
+        out.append("")
+    out += [
+        "# Positions (rad or m) of the locked joints (others are locked at 0), and home positions",
+        "# of moving joints whose range excludes 0.",
+        "[reference]",
+    ]
+    out += [f"{_key(joint)} = {_number(value)}" for joint, value in spec.reference.items()]
+    first = spec.arms[0].joints[0]
+    out += [
+        "",
+        "# Optional: arm (and torso) positions of a posture in which the end effectors hold an",
+        "# object together (`--posture hold`); `mobmanip sweep` starts its inverse kinematics from",
+        "# it (else from home).",
+    ]
+    if spec.hold:
+        out += ["[hold]", *(f"{_key(joint)} = {_number(value)}" for joint, value in spec.hold.items())]
+    else:
+        out += ["# [hold]", f"# {_key(first)} = 0.0"]
+    for posture, joints in spec.postures.items():
+        out += ["", f"# Posture {posture!r} (`--posture {posture}`).", f"[postures.{_key(posture)}]"]
+        out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
+    return "\n".join(out) + "\n"

@@ -1,0 +1,229 @@
+"""A sweep's results: the index arrays over the grid, their names, files and plots.
+
+:class:`SweepResult` holds, for every measure swept (:mod:`mobmanip.measures`), its indices over
+the grid of :class:`mobmanip.sweep.SweepGrid`; :func:`check_index_name` and :func:`index_names`
+define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, ...), and
+:func:`plot_sweep` draws one. :mod:`mobmanip.sweep` runs sweeps and re-exports these names.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..measures.registry import Measure, resolve_measures
+from ..postures.inverse_kinematics import IKPostureTable
+from ..postures.planar import PostureTable
+from ..support.files import atomic_output
+
+if TYPE_CHECKING:
+    from .runner import SweepGrid, SweepSpec
+
+#: Grid axes in order: the result arrays have this shape (one entry per value).
+AXES = ("angle_deg", "distance", "heading_deg", "wheel_velocity_scale", "wheel_effort_scale")
+#: Scalar indices recorded by a sweep for every measure.
+SCALAR_INDICES = ("volume", "isotropy", "capacity")
+#: Flags recorded by a sweep for every measure.
+FLAGS = ("degenerate", "empty")
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Indices over a sweep grid.
+
+    ``indices[name]`` has the grid's shape (angle, distance, heading, wheel velocity scale,
+    wheel effort scale), with a trailing task axis for per-axis arrays (``*_semi_axes``). Names:
+    ``<measure>_{volume,isotropy,capacity,degenerate,empty}`` for every measure swept, and its
+    per-axis arrays (``<measure>_semi_axes`` for the ellipsoids), e.g. ``kinematic_volume``.
+    Indices of velocities (kinematic) do not depend on the effort scale, nor those of
+    accelerations (dynamic) on the velocity scale; both are repeated along that axis.
+    Unreachable grid points hold NaN (and False flags).
+
+    Attributes:
+        spec: what was swept.
+        grid: the grid.
+        task: task-space name.
+        task_axes: labels of the task coordinates.
+        reachable: whether the arms reach each (angle, distance, heading), (A, D, H).
+        indices: the arrays described above.
+        postures: the arms' postures: a :class:`PostureTable` per distance (planar closed form)
+            or a :class:`mobmanip.postures.inverse_kinematics.IKPostureTable` per (angle, distance); see
+            :meth:`joint_positions` for both as one array.
+    """
+
+    spec: SweepSpec
+    grid: SweepGrid
+    task: str
+    task_axes: tuple[str, ...]
+    reachable: np.ndarray
+    indices: dict
+    postures: PostureTable | IKPostureTable
+
+    def __repr__(self) -> str:
+        shape = " x ".join(str(n) for n in self.grid.shape)
+        measures = ", ".join(m.name for m in self.measures)
+        reach = f"{int(np.count_nonzero(self.reachable))}/{self.reachable.size}"
+        return (
+            f"SweepResult(robot={str(self.spec.robot)!r}, task={self.task!r}, grid {shape} "
+            f"(angle x distance x heading x velocity scale x effort scale), measures {measures}, "
+            f"reachable {reach})"
+        )
+
+    def joint_positions(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """The arm joints' names and positions (rad or m) at every (angle, distance), (A, D, n);
+        NaN where unreachable. The platform heading turns the whole robot and does not change them."""
+        table = self.postures
+        if isinstance(table, IKPostureTable):
+            return table.joint_names, table.joints
+        a, d = self.grid.shape[:2]
+        ia, idist = (i.ravel() for i in np.meshgrid(np.arange(a), np.arange(d), indexing="ij"))
+        values, reachable = table.joint_values(np.radians(self.grid.angle_deg[ia]), idist)
+        values[~reachable] = np.nan
+        return table.joint_names, values.reshape(a, d, -1)
+
+    @property
+    def measures(self) -> tuple[Measure, ...]:
+        """The definitions of the measures swept, in order."""
+        return resolve_measures(self.spec.measures, sweep=True)
+
+    def index(self, name: str) -> np.ndarray:
+        """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
+
+        Raises:
+            ArgumentError: an unknown name (the message lists the valid ones).
+        """
+        kind, what, k = check_index_name(name, len(self.task_axes), self.spec.measures)
+        if k is None:
+            return self.indices[f"{kind}_{what}"]
+        return self.indices[f"{kind}_{what}"][..., k - 1]
+
+    def save_npz(self, path: str | Path) -> Path:
+        """Write the grid axes, the indices, the postures and the settings to a NumPy ``.npz`` file.
+
+        Keys: the grid axes (:data:`AXES`), every index array, ``reachable`` (A, D, H),
+        ``posture_joint_names`` and ``posture_joints`` (A, D, n) (:meth:`joint_positions`), and
+        ``meta_*`` texts (``meta_postures`` is ``planar`` or ``ik``). Planar postures add
+        ``posture_right`` / ``posture_left`` ((q2, q3, bearing) per distance); inverse-kinematics
+        ones add ``posture_position_error`` and ``posture_rotation_error`` (A, D),
+        ``posture_reference`` (the reference configuration) and the hold: ``hold_origin``,
+        ``hold_height``, ``hold_offsets``, ``hold_rotations`` (see :class:`mobmanip.postures.inverse_kinematics.Hold`).
+        """
+        path = Path(path)
+        arrays = {name: getattr(self.grid, name) for name in AXES}
+        arrays.update(self.indices)
+        arrays["reachable"] = self.reachable
+        table = self.postures
+        names, joints = self.joint_positions()
+        arrays["posture_joint_names"] = np.array(names, dtype=str)
+        arrays["posture_joints"] = joints
+        if isinstance(table, PostureTable):
+            arrays["posture_right"] = table.right
+            arrays["posture_left"] = table.left
+        else:
+            arrays["posture_position_error"] = table.position_error
+            arrays["posture_rotation_error"] = table.rotation_error
+            arrays["posture_reference"] = table.reference
+            arrays["hold_origin"] = table.hold.origin
+            arrays["hold_height"] = np.array(table.hold.height)
+            arrays["hold_offsets"] = table.hold.offsets
+            arrays["hold_rotations"] = table.hold.rotations
+        meta = {
+            "robot": str(self.spec.robot),
+            "task": self.task,
+            "task_axes": ",".join(self.task_axes),
+            "platform": self.spec.platform,
+            "decoupled": str(self.spec.decoupled),
+            "object_mass": str(self.spec.object_mass),
+            "direction": str(self.spec.direction),
+            "axes": ",".join(AXES),
+            "postures": table.method,
+        }
+        arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
+        with atomic_output(path, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        return path
+
+    def save_csv(self, path: str | Path) -> Path:
+        """Write one row per grid point: the axis values, reachability and every index."""
+        path = Path(path)
+        m = len(self.task_axes)
+        grids = np.meshgrid(*(getattr(self.grid, name) for name in AXES), indexing="ij")
+        reach = np.broadcast_to(self.reachable[..., None, None], self.grid.shape)
+        columns, header = [g.ravel() for g in grids], list(AXES)
+        columns.append(reach.ravel().astype(int))
+        header.append("reachable")
+        for measure in self.measures:
+            kind = measure.name
+            for name in SCALAR_INDICES:
+                columns.append(self.indices[f"{kind}_{name}"].ravel())
+                header.append(f"{kind}_{name}")
+            for attribute, stem in measure.axis_indices:
+                for k in range(m):
+                    columns.append(self.indices[f"{kind}_{attribute}"][..., k].ravel())
+                    header.append(f"{kind}_{stem}_{k + 1}")
+            for flag in FLAGS:
+                columns.append(self.indices[f"{kind}_{flag}"].ravel().astype(int))
+                header.append(f"{kind}_{flag}")
+        with atomic_output(path, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(header)
+            table = np.column_stack(columns)
+            step = 65536
+            for start in range(0, table.shape[0], step):
+                writer.writerows([f"{v:.12g}" for v in row] for row in table[start : start + step])
+        return path
+
+
+def check_index_name(name: str, m: int, measures: Iterable[str] | None = None) -> tuple[str, str, int | None]:
+    """Split an index name into (measure, index or per-axis array, axis number or None):
+    ``"kinematic.volume"`` gives ``("kinematic", "volume", None)``, ``"dynamic.semi_axis_2"``
+    gives ``("dynamic", "semi_axes", 2)``.
+
+    Args:
+        name: ``<measure>.<index>``.
+        m: task dimension.
+        measures: the measures swept (names; ``None``: the default ones).
+
+    Raises:
+        ArgumentError: an unknown name (the message lists the valid ones for an m-dimensional task).
+    """
+    kind, _, what = str(name).replace("-", "_").partition(".")
+    for measure in resolve_measures(measures, sweep=True):
+        if kind != measure.name:
+            continue
+        if what in SCALAR_INDICES:
+            return kind, what, None
+        for attribute, stem in measure.axis_indices:
+            number = what[len(stem) + 1 :] if what.startswith(f"{stem}_") else ""
+            if number.isdigit() and 1 <= int(number) <= m:
+                return kind, attribute, int(number)
+    raise ArgumentError(f"unknown index {name!r}; expected one of {', '.join(index_names(m, measures))}")
+
+
+def index_names(m: int, measures: Iterable[str] | None = None) -> list[str]:
+    """Names accepted by :meth:`SweepResult.index` for an m-dimensional task and the measures
+    swept (names; ``None``: the default ones)."""
+    out = []
+    for measure in resolve_measures(measures, sweep=True):
+        out += [f"{measure.name}.{name}" for name in SCALAR_INDICES]
+        for _, stem in measure.axis_indices:
+            out += [f"{measure.name}.{stem}_{k}" for k in range(1, m + 1)]
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# plot
+
+
+def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: int = 6) -> Path:
+    """Plot one index over the sweep's varying grid axes and save it (PNG and PDF beside it); see
+    :func:`mobmanip.viz.sweep_plot.plot_sweep`."""
+    from ..viz.sweep_plot import plot_sweep as plot
+
+    return plot(result, index, path, max_panels)
