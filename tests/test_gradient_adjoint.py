@@ -22,7 +22,7 @@ from mobmanip.errors import ModelError
 from mobmanip.gradients import INDICES, GradientEvaluator, Objective
 from mobmanip.gradients.adjoint import full_rank
 from mobmanip.gradients.derivatives import DerivativeWorkspace
-from mobmanip.gradients.evaluator import _full_rank
+from mobmanip.gradients.rank import svd_full_rank
 from mobmanip.gradients.tree_adjoint import TreeAdjoint
 from mobmanip.robot.tasks import get_task
 
@@ -151,8 +151,8 @@ def test_rank_certificate_agrees_with_svd():
         s[i, -1] = smallest * s[i, 0]
     A = (U * s[:, None, :]) @ Vt
     A[0, 2] = A[0, 1]  # exactly singular
-    np.testing.assert_array_equal(full_rank(A), _full_rank(A))
-    np.testing.assert_array_equal(full_rank(np.swapaxes(A, 1, 2)), _full_rank(np.swapaxes(A, 1, 2)))
+    np.testing.assert_array_equal(full_rank(A), svd_full_rank(A))
+    np.testing.assert_array_equal(full_rank(np.swapaxes(A, 1, 2)), svd_full_rank(np.swapaxes(A, 1, 2)))
 
 
 def test_unsupported_joint_takes_the_hessian_path():

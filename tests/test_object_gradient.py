@@ -10,8 +10,8 @@ from scipy.optimize import minimize
 import mobmanip
 from mobmanip.gradients import GradientEvaluator
 from mobmanip.placement import Region, object_gradient, place
-from mobmanip.placement.maps import _newton_project
-from mobmanip.placement.optimize import _Problem, _slsqp_constraints
+from mobmanip.placement.maps import newton_project
+from mobmanip.placement.optimize import PlacementProblem, slsqp_constraints
 
 STEP = 1e-4
 
@@ -19,11 +19,11 @@ STEP = 1e-4
 def local_optimum(robot, objective, target, z0, region=None, mass=None):
     """The value of a local SLSQP from z0 (moved onto the hold at ``target``), to ftol 1e-14."""
     ev = GradientEvaluator(robot, objective, object_mass=mass)
-    problem = _Problem(robot, ev, np.asarray(target, dtype=float), region, robot.hold_configuration())
+    problem = PlacementProblem(robot, ev, np.asarray(target, dtype=float), region, robot.hold_configuration())
     bounds = problem.bounds()
-    z = _newton_project(problem, z0, bounds)
+    z = newton_project(problem, z0, bounds)
     res = minimize(problem.objective, z, jac=True, method="SLSQP", bounds=bounds,
-                   constraints=_slsqp_constraints(problem), options={"maxiter": 300, "ftol": 1e-14})  # fmt: skip
+                   constraints=slsqp_constraints(problem), options={"maxiter": 300, "ftol": 1e-14})  # fmt: skip
     assert problem.residual(res.x) < 1e-8
     return -res.fun
 
@@ -45,7 +45,7 @@ def test_object_gradient_equals_differences_of_the_optimum(name, objective, targ
     robot = mobmanip.load_robot(name)
     result = place(robot, target, objective, starts=4, tolerance=1e-14, object_mass=mass, region=region)
     g = object_gradient(robot, result, object_mass=mass, region=region)
-    problem = _Problem(robot, GradientEvaluator(robot, objective, object_mass=mass), result.target, region,
+    problem = PlacementProblem(robot, GradientEvaluator(robot, objective, object_mass=mass), result.target, region,
                        robot.hold_configuration())  # fmt: skip
     z = problem.variables(result.q, result.hold_turn)
     fd = np.full(3, np.nan)

@@ -42,7 +42,7 @@ from mobmanip.viz.scene import (
     PLANAR_THICKNESS,
     EllipsoidViewer,
     ScaleFactors,
-    _aligned,
+    aligned,
     analyze_pair,
     ellipsoid_frame,
     ellipsoid_matrix,
@@ -143,7 +143,7 @@ def test_alignment_keeps_the_shape_and_follows_the_previous_axes(rng):
             R[:2, :2] = [[math.cos(0.3), -math.sin(0.3)], [math.sin(0.3), math.cos(0.3)]]
         semi = np.array([0.5, 0.2, 0.01 if planar else 0.1])
         swapped = R[:, [1, 0, 2]] * [-1.0, 1.0, 1.0]  # same ellipsoid axes, other order and sign
-        R2, s2 = _aligned(swapped, semi[[1, 0, 2]], R, planar)
+        R2, s2 = aligned(swapped, semi[[1, 0, 2]], R, planar)
         np.testing.assert_allclose(R2 @ np.diag(s2**2) @ R2.T, R @ np.diag(semi**2) @ R.T, atol=1e-12)
         np.testing.assert_allclose(R2, R, atol=1e-12)
         np.testing.assert_allclose(s2, semi)

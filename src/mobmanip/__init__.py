@@ -11,7 +11,7 @@ and :mod:`mobmanip.viz` (the viewer and figures).
 
 import logging
 
-from . import _moved
+from . import old_paths
 from .analysis.single import Analysis, analyze
 from .batch import BatchAnalysis, EllipsoidBatch, analyze_batch
 from .errors import MobmanipError
@@ -33,6 +33,7 @@ from .robot.spec import RobotSpec, load_spec
 from .sets.ellipsoid import Ellipsoid
 from .sets.polytope import Polytope
 from .sets.taskset import TaskSet, TaskSetBatch
+from .support.version import installed_version
 from .sweep.runner import SweepGrid, SweepResult, SweepSpec, run_sweep
 from .terms.dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
 
@@ -72,16 +73,6 @@ __all__ = [
 ]
 
 
-def _installed_version() -> str:
-    """The version of the installed distribution (pyproject.toml is its one source)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("mobmanip")
-    except PackageNotFoundError:  # imported from a source tree that was never installed
-        return "0+unknown"
-
-
-__version__ = _installed_version()
-_moved.install()  # the module paths before the layers, for one more release
+__version__ = installed_version()
+old_paths.install()  # the module paths before the layers, for one more release
 logging.getLogger(__name__).addHandler(logging.NullHandler())  # quiet unless the application configures logging

@@ -14,10 +14,10 @@ import warnings
 
 import numpy as np
 
-from . import __version__
 from .commands import COMMANDS
 from .errors import MobmanipError
 from .support.files import check_output, note_input, protect_inputs, publish_together
+from .support.version import installed_version
 
 
 class _Parser(argparse.ArgumentParser):
@@ -29,7 +29,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="mobmanip", description="What a wheeled mobile manipulator can do at the end effector.")
-    parser.add_argument("--version", action="version", version=f"mobmanip {__version__}")
+    parser.add_argument("--version", action="version", version=f"mobmanip {installed_version()}")
     parser.add_argument(
         "-v",
         "--verbose",

@@ -17,7 +17,7 @@ class MobmanipError(Exception):
     """Root of every error mobmanip raises on bad input or impossible requests."""
 
 
-def _closest_first(name: str, candidates: Iterable[str], limit: int = 8) -> list[str]:
+def closest_first(name: str, candidates: Iterable[str], limit: int = 8) -> list[str]:
     """Return candidates ordered by similarity to ``name`` (closest first), at most ``limit``."""
     candidates = list(candidates)
     ranked = difflib.get_close_matches(name, candidates, n=limit, cutoff=0.0)
@@ -64,7 +64,7 @@ class NameNotFoundError(MobmanipError):
 
     def __init__(self, name: str, available: Iterable[str], where: str = ""):
         self.name = name
-        self.available = _closest_first(name, available)
+        self.available = closest_first(name, available)
         suffix = f" in {where}" if where else ""
         hint = f"; closest: {', '.join(self.available)}" if self.available else ""
         super().__init__(f"unknown {self.kind} {name!r}{suffix}{hint}")

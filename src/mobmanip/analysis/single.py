@@ -24,9 +24,8 @@ from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..sets.ellipsoid import Ellipsoid
 from ..sets.taskset import TaskSet
-from ..support.ranges import OBJECT_MASS, check_in_range
-from ..terms.dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
-from ..terms.grasp import HeldObject
+from ..terms.dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
+from ..terms.grasp import HeldObject, checked_object_mass
 
 
 @dataclass(frozen=True)
@@ -204,16 +203,8 @@ def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> He
     With one arm the end effector itself is the task point (W = I).
     """
     mass = robot.spec.object_mass if mass is None else mass
-    _check_mass(mass)
+    checked_object_mass(mass)
     return HeldObject.between(_end_effectors(robot, q), float(mass))
-
-
-def _check_mass(mass) -> None:
-    if isinstance(mass, bool) or not isinstance(mass, (int, float, np.floating, np.integer)):
-        raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
-    if not np.isfinite(mass) or mass < 0:
-        raise TaskError(f"object mass must be a finite non-negative number of kg, got {mass!r}")
-    check_in_range("object mass", float(mass), *OBJECT_MASS, unit="kg")
 
 
 def _end_effectors(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -268,7 +259,7 @@ def analyze(
     task = get_task(task or robot.spec.default_task)
     if held_object is None:
         mass = robot.spec.object_mass if object_mass is None else object_mass
-        _check_mass(mass)
+        checked_object_mass(mass)
     else:
         mass = held_object.mass
         if held_object.offsets.shape != (len(robot.arms), 3):
@@ -287,7 +278,7 @@ def analyze(
 
 def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
     """The reference path: :mod:`mobmanip.terms.dynamics` and the SVD-based :mod:`mobmanip.sets.ellipsoid`."""
-    dyn = _reduced_dynamics(robot, q, None, False)
+    dyn = reduced_dynamics_unchecked(robot, q, None, False)
     J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
     positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
     obj = held_object if held_object is not None else HeldObject.between(positions, mass)

@@ -15,7 +15,7 @@ from ..errors import ModelError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..support.tolerances import RANK_RTOL
-from ..terms.grasp import GRAVITY, _object_mass
+from ..terms.grasp import GRAVITY, checked_object_mass
 from .probed import ProbedModel
 
 
@@ -93,7 +93,7 @@ class BatchSetup:
     ):
         task = get_task(task or robot.spec.default_task)
         mass = robot.spec.object_mass if object_mass is None else object_mass
-        mass = _object_mass(mass)  # a number within mobmanip.support.ranges.OBJECT_MASS
+        mass = checked_object_mass(mass)  # a number within mobmanip.support.ranges.OBJECT_MASS
         self.robot = robot
         self.task = task
         self.mass = float(mass)

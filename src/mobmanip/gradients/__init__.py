@@ -3,7 +3,6 @@
 from .evaluator import (
     ELLIPSOIDS,
     INDICES,
-    SINGULAR_RTOL,
     GradientBatch,
     GradientEvaluator,
     Objective,
@@ -12,6 +11,7 @@ from .evaluator import (
     objective_names,
     platform_gradient,
 )
+from .rank import SINGULAR_RTOL
 
 __all__ = [
     "ELLIPSOIDS",

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from .rank import guarded, svd_full_rank
 from .tree_adjoint import TreeAdjoint, TreePass
 
 
@@ -75,19 +76,17 @@ def full_rank(A: np.ndarray) -> np.ndarray:
     """Per stacked matrix, whether all min(rows, cols) singular values exceed
     :data:`mobmanip.gradients.SINGULAR_RTOL` times the largest: certified from the condition of
     the smaller Gram matrix where that is clear, by an SVD of the remaining rows otherwise."""
-    from .evaluator import _full_rank
-
     G = A @ _T(A) if A.shape[-2] <= A.shape[-1] else _T(A) @ A
     try:
         Gi = np.linalg.inv(G)
     except np.linalg.LinAlgError:
-        return _full_rank(A)
+        return svd_full_rank(A)
     with np.errstate(invalid="ignore", over="ignore"):
         bound = np.sqrt(np.sum(G * G, axis=(1, 2)) * np.sum(Gi * Gi, axis=(1, 2)))
     ok = bound < GRAM_CERTIFICATE
     if not ok.all():
         unsure = ~ok
-        ok[unsure] = _full_rank(A[unsure])
+        ok[unsure] = svd_full_rank(A[unsure])
     return ok
 
 
@@ -217,8 +216,6 @@ def grasp_position_adjoint(positions, W_bar, M_o_bar, mass, rows, linear_rows, a
 def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
     """(values, gradients (n, nv), defined) of a :class:`mobmanip.gradients.GradientEvaluator`'s
     objective at qs (n, nq), by the reverse chain."""
-    from .evaluator import _guarded
-
     t: TreePass = tree.run(qs, dynamics=ev.objective.ellipsoid == "dynamic")
     n, nv = qs.shape[0], tree.nv
     task, S = ev.task, ev.S
@@ -230,7 +227,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
     if ev.objective.ellipsoid == "kinematic":
         Jh = J_u * ev.velocity_limits
         ok = full_rank(Jh)
-        value, J_u_bar, W_bar = kinematic_adjoint(ev.objective, J_u, W, ev.velocity_limits, lambda A: _guarded(A, ok))
+        value, J_u_bar, W_bar = kinematic_adjoint(ev.objective, J_u, W, ev.velocity_limits, lambda A: guarded(A, ok))
         M_o_bar = None
         grad = np.zeros((n, nv))
     else:
@@ -242,7 +239,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
         assert t.g is not None  # a pass with dynamics computes gravity
         xi = -t.g @ S
         Qi = None if ev.Q_identity else np.linalg.inv(ev.Q)
-        value, ok, bars = dynamic_adjoint(ev.objective, J_u, P, xi, W, M_o, g_o, Qi, ev.Z, _guarded, full_rank)
+        value, ok, bars = dynamic_adjoint(ev.objective, J_u, P, xi, W, M_o, g_o, Qi, ev.Z, guarded, full_rank)
         J_u_bar, W_bar, M_o_bar = bars["J"], bars["W"], bars["M_o"]
         Lb, B = bars["Lam"], bars["B"]
         if ev.decoupled:  # P_bar = mask * (Lam_bar B^T): two pairs per column

@@ -43,23 +43,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.single import _check_mass
 from ..errors import ArgumentError, MeasureError, ModelError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
-from ..terms.grasp import HeldObject
+from ..terms.grasp import HeldObject, checked_object_mass
 from .adjoint import gradient_chunk
 from .derivatives import ConfigurationDerivatives, DerivativeWorkspace
+from .rank import guarded
+from .rank import svd_full_rank as full_rank
 from .tree_adjoint import TreeAdjoint
 
 #: The ellipsoids with gradients.
 ELLIPSOIDS = ("kinematic", "dynamic")
 #: The measures of an ellipsoid with gradients.
 INDICES = ("log_volume", "log_isotropy", "capacity", "minor_axis")
-
-#: A measure is not differentiable where the smallest singular value of J_hat (or L, or J_u) is
-#: below this fraction of the largest (a singular posture).
-SINGULAR_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -213,7 +210,7 @@ class GradientEvaluator:
             mass = held_object.mass
         else:
             mass = robot.spec.object_mass if object_mass is None else object_mass
-            _check_mass(mass)
+            checked_object_mass(mass)
         self.mass = float(mass)
         self.held_object = held_object
         self.S = robot.S
@@ -380,27 +377,11 @@ def _T(a: np.ndarray) -> np.ndarray:
     return np.swapaxes(a, -1, -2)
 
 
-def _full_rank(A: np.ndarray) -> np.ndarray:
-    """Per stacked matrix: min(rows, cols) singular values above SINGULAR_RTOL times the largest."""
-    s = np.linalg.svd(A, compute_uv=False)
-    return s[..., -1] > SINGULAR_RTOL * s[..., 0]
-
-
-def _guarded(A: np.ndarray, ok: np.ndarray) -> np.ndarray:
-    """A with the matrices where not ``ok`` replaced by a full-rank stand-in (results there are
-    discarded; this only keeps the stacked solves from failing)."""
-    if ok.all():
-        return A
-    A = A.copy()
-    A[~ok] = np.eye(A.shape[-2], A.shape[-1])
-    return A
-
-
 def _kinematic_shape(t: dict, velocity_limits: np.ndarray):
     """C = (W K^-1 W^T)^-1 with K = J_hat J_hat^T, c = 0, their derivatives and the mask."""
     Jh = t["J"] * velocity_limits
-    ok = _full_rank(Jh)
-    Jh = _guarded(Jh, ok)
+    ok = full_rank(Jh)
+    Jh = guarded(Jh, ok)
     dJh = t["dJ"] * velocity_limits
     W, dW = t["W"], t["dW"]
     K = Jh @ _T(Jh)
@@ -431,8 +412,8 @@ def _dynamic_shape(t: dict, Q: np.ndarray | None, Z: np.ndarray):
     """C = rho^2 F^-1, c = -F^-1 L^T mu_bar (F = L^T L), their derivatives and the mask
     (J_u and L of full rank, rho^2 > 0)."""
     J, dJ, W, dW = t["J"], t["dJ"], t["W"], t["dW"]
-    ok = _full_rank(J)
-    J = _guarded(J, ok)
+    ok = full_rank(J)
+    J = guarded(J, ok)
     Jp, dJp = _pinv_rows(J, dJ)
     Wp, dWp = _pinv_rows(W, dW)
     P, dP, M_o, dM_o, g_o = t["P"], t["dP"], t["M_o"], t["dM_o"], t["g_o"]
@@ -456,9 +437,9 @@ def _dynamic_shape(t: dict, Q: np.ndarray | None, Z: np.ndarray):
     dL = Z[:, None] * dLam
     mb = Z * mu
     dmb = Z * dmu
-    okL = _full_rank(L)
+    okL = full_rank(L)
     ok &= okL
-    L = _guarded(L, okL)
+    L = guarded(L, okL)
     F = _T(L) @ L
     dF = _T(dL) @ L[:, None]
     dF = dF + _T(dF)
@@ -473,7 +454,7 @@ def _dynamic_shape(t: dict, Q: np.ndarray | None, Z: np.ndarray):
     drho2 = -2.0 * np.einsum("nki,ni->nk", dmb, mb) - np.einsum("nki,ni->nk", db, c) - np.einsum("nki,ni->nk", dc, b)
     C = rho2[:, None, None] * Fi
     dC = drho2[:, :, None, None] * Fi[:, None] - rho2[:, None, None, None] * (Fi[:, None] @ dF @ Fi[:, None])
-    C = _guarded(C, ok)  # an empty set's C is not positive definite
+    C = guarded(C, ok)  # an empty set's C is not positive definite
     return C, dC, c, dc, ok
 
 

@@ -220,7 +220,7 @@ class TreeAdjoint:
             c = o + np.einsum("njab,jb->nja", R, self.lever)  # centres of mass
             Ic = R @ self.rot_inertia @ np.swapaxes(R, -1, -2)
             m = self.mass[None, :, None, None]
-            S = _skew(c)
+            S = skew(c)
             out = np.empty(R.shape[:2] + (6, 6))
             out[..., :3, :3] = m * np.eye(3)
             out[..., :3, 3:] = -m * S
@@ -337,7 +337,7 @@ def _gamma_sum(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.concatenate([axial(O[:, 3:, :3]), axial(O[:, :3, :3]) + axial(O[:, 3:, 3:])], axis=1)
 
 
-def _skew(r: np.ndarray) -> np.ndarray:
+def skew(r: np.ndarray) -> np.ndarray:
     out = np.zeros(r.shape + (3,))
     x, y, z = r[..., 0], r[..., 1], r[..., 2]
     out[..., 0, 1], out[..., 0, 2] = -z, y

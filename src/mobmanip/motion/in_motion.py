@@ -34,13 +34,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..analysis.single import _check_mass
 from ..errors import ConfigurationError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.ellipsoid import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
-from ..terms.dynamics import _reduced_dynamics, decouple, frame_jacobians, placed_end_effectors
-from ..terms.grasp import HeldObject, _skew
+from ..terms.dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
+from ..terms.grasp import HeldObject, checked_object_mass, skew
 
 
 @dataclass(frozen=True)
@@ -171,8 +170,8 @@ def motion_terms(
         )
     if held_object is None:
         mass = robot.spec.object_mass if object_mass is None else object_mass
-        _check_mass(mass)
-    dyn = _reduced_dynamics(robot, q, x, False)
+        checked_object_mass(mass)
+    dyn = reduced_dynamics_unchecked(robot, q, x, False)
     P = decouple(robot, dyn.P) if decoupled else dyn.P
     model, data = robot.model, robot.data
     g = pin.computeGeneralizedGravity(model, data, q)
@@ -239,7 +238,7 @@ def grasp_matrix_rate(task: str | TaskSpace, offset_rates: np.ndarray) -> np.nda
     blocks = []
     for rate in rates:
         full = np.zeros((6, 6))
-        full[3:, :3] = _skew(rate)
+        full[3:, :3] = skew(rate)
         blocks.append(full[np.ix_(rows, rows)])
     return np.hstack(blocks)
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -34,7 +35,14 @@ from ..errors import ArgumentError, UnreachableObjectError
 from ..gradients.evaluator import GradientEvaluator, Objective
 from ..robot.model import Robot
 from ..robot.tasks import get_task
-from .optimize import CONSTRAINT_TOLERANCE, _check_target, _check_turn, _clip_to_bounds, _Problem, _slsqp_constraints
+from .optimize import (
+    CONSTRAINT_TOLERANCE,
+    PlacementProblem,
+    check_target,
+    check_turn,
+    clip_to_bounds,
+    slsqp_constraints,
+)
 
 if TYPE_CHECKING:
     from ..robot.collision import SelfCollision
@@ -203,7 +211,7 @@ def default_extent(
     robot: Robot, target: ArrayLike, reference: np.ndarray | None = None
 ) -> tuple[float, float, float, float]:
     """The square of platform positions around the target within the arms' reach bound (m)."""
-    target = _check_target(target)
+    target = check_target(target)
     reference = robot.hold_configuration() if reference is None else reference
     r = reach_bound(robot, reference)
     return target[0] - r, target[0] + r, target[1] - r, target[1] + r
@@ -246,7 +254,7 @@ def placement_map(
         UnreachableObjectError: no cell holds the object.
     """
     started = time.perf_counter()
-    target = _check_target(target)
+    target = check_target(target)
     xs, ys = _axis(x, "x"), _axis(y, "y")
     layers = None if headings is None else _axis(headings, "headings", increasing=False)
     if robot.platform_locked:
@@ -254,7 +262,7 @@ def placement_map(
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = _Problem(robot, evaluator, target, None, q_ref, collision)
+    problem = PlacementProblem(robot, evaluator, target, None, q_ref, collision)
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:  # e.g. the height of planar arms' hands
         raise UnreachableObjectError(
@@ -262,7 +270,7 @@ def placement_map(
             f"from any platform position (the hold misses by {np.abs(fixed).max():.4g} in what no joint changes)"
         )
     reach = reach_bound(robot, q_ref)
-    turn = None if hold_turn is None else _check_turn(hold_turn)
+    turn = None if hold_turn is None else check_turn(hold_turn)
     nq = robot.model.nq
     shape = (len(ys), len(xs)) if layers is None else (len(layers), len(ys), len(xs))
     values = np.full(shape, np.nan)
@@ -313,7 +321,7 @@ def placement_map(
     return out
 
 
-def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance):
+def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance):
     """(value, z) of the best run at platform position p, or None where nothing holds the object."""
     bounds = problem.bounds()
     if turn is not None:
@@ -336,7 +344,7 @@ def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, ma
             break
     best = None
     for z0 in [_seeded(s, p, fixed_heading) for s in seeds] + fresh:
-        z = _newton_project(problem, _clip_to_bounds(z0, bounds), bounds)
+        z = newton_project(problem, clip_to_bounds(z0, bounds), bounds)
         if z is None:
             continue
         res = minimize(
@@ -345,12 +353,12 @@ def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, ma
             jac=True,
             method="SLSQP",
             bounds=bounds,
-            constraints=_slsqp_constraints(problem),
+            constraints=slsqp_constraints(problem),
             options={"maxiter": max_iterations, "ftol": tolerance},
         )
         z = res.x
         if problem.residual(z) > CONSTRAINT_TOLERANCE:
-            z = _newton_project(problem, z, bounds)
+            z = newton_project(problem, z, bounds)
             if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding
                 continue
         value, _, ok = problem.ev(problem.configuration(z))
@@ -361,7 +369,9 @@ def _solve_cell(problem: _Problem, p: np.ndarray, fixed_heading, turn, seeds, ma
     return best
 
 
-def _newton_project(problem: _Problem, z: np.ndarray, bounds, iterations: int = 40) -> np.ndarray | None:
+def newton_project(
+    problem: PlacementProblem, z: np.ndarray, bounds: Sequence[tuple[float | None, float | None]], iterations: int = 40
+) -> np.ndarray | None:
     """A z near ``z`` that holds the object, by damped Gauss-Newton steps on the hold errors over
     the variables not fixed by ``bounds``, clipped to the bounds; None when the errors stall
     above :data:`CONSTRAINT_TOLERANCE` (then the cell is taken as unreachable from this start)."""
@@ -375,7 +385,7 @@ def _newton_project(problem: _Problem, z: np.ndarray, bounds, iterations: int = 
         A = J[:, free]
         step = np.zeros_like(z)
         step[free] = -A.T @ np.linalg.solve(A @ A.T + damping * np.eye(A.shape[0]), value)
-        trial = _clip_to_bounds(z + step, bounds)
+        trial = clip_to_bounds(z + step, bounds)
         v_trial, J_trial = problem.constraints(trial)
         e_trial = float(v_trial @ v_trial)
         if e_trial < error:

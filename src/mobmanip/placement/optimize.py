@@ -133,7 +133,7 @@ class Placement:
         return float(self.q[0]), float(self.q[1]), math.atan2(self.q[3], self.q[2])
 
 
-class _Problem:
+class PlacementProblem:
     """Decision variables, objective and constraints of one placement."""
 
     def __init__(self, robot, evaluator, target, region, reference, collision=None):
@@ -322,7 +322,7 @@ def _grasp_spread(hold) -> float:
     return float(np.abs(hold.offsets).max()) if hold.offsets.size else 0.0
 
 
-def _slsqp_constraints(problem: _Problem) -> list[dict]:
+def slsqp_constraints(problem: PlacementProblem) -> list[dict]:
     out = [
         {
             "type": "eq",
@@ -337,7 +337,7 @@ def _slsqp_constraints(problem: _Problem) -> list[dict]:
     return out
 
 
-def _clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
+def clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
     z = z.copy()
     for k, (lo, hi) in enumerate(bounds):
         if lo is not None:
@@ -347,15 +347,15 @@ def _clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
     return z
 
 
-def _project(problem: _Problem, z0: np.ndarray, bounds) -> np.ndarray | None:
+def _project(problem: PlacementProblem, z0: np.ndarray, bounds) -> np.ndarray | None:
     """The nearest z (in the variables' own units) that holds the object; None if not found."""
     res = minimize(
         lambda z: (0.5 * float((z - z0) @ (z - z0)), z - z0),
-        _clip_to_bounds(z0, bounds),
+        clip_to_bounds(z0, bounds),
         jac=True,
         method="SLSQP",
         bounds=bounds,
-        constraints=_slsqp_constraints(problem),
+        constraints=slsqp_constraints(problem),
         options={"maxiter": 200, "ftol": 1e-12},
     )
     z = res.x
@@ -407,7 +407,7 @@ def place(
         UnreachableObjectError: no start holds the object at ``target`` (within the region).
     """
     started = time.perf_counter()
-    target = _check_target(target)
+    target = check_target(target)
     if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
         raise ArgumentError(f"starts must be a positive integer, got {starts!r}")
     if robot.platform_locked:
@@ -415,10 +415,10 @@ def place(
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
     q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = _Problem(robot, evaluator, target, region, q_ref, collision)
+    problem = PlacementProblem(robot, evaluator, target, region, q_ref, collision)
     bounds = problem.bounds()
     if hold_turn is not None:
-        hold_turn = _check_turn(hold_turn)
+        hold_turn = check_turn(hold_turn)
         bounds[-1] = (hold_turn, hold_turn)
     best = None
     runs: list[tuple[float | None, float | None]] = []
@@ -450,7 +450,7 @@ def place(
             jac=True,
             method="SLSQP",
             bounds=bounds,
-            constraints=_slsqp_constraints(problem),
+            constraints=slsqp_constraints(problem),
             options={"maxiter": max_iterations, "ftol": tolerance},
         )
         z = res.x
@@ -499,7 +499,7 @@ def place(
     )
 
 
-def _check_turn(value) -> float:
+def check_turn(value) -> float:
     if (
         isinstance(value, bool)
         or not isinstance(value, (int, float, np.integer, np.floating))
@@ -513,7 +513,7 @@ def _region_text(region: Region) -> str:
     return f"x {region.x_min:g}..{region.x_max:g} m, y {region.y_min:g}..{region.y_max:g} m"
 
 
-def _check_target(target) -> np.ndarray:
+def check_target(target) -> np.ndarray:
     try:
         t = np.asarray(target, dtype=float).reshape(-1)
     except (TypeError, ValueError):
@@ -575,7 +575,7 @@ def object_gradient(
 
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, placement.objective, task, object_mass=object_mass, decoupled=decoupled)
-    problem = _Problem(robot, evaluator, placement.target, region, robot.hold_configuration())
+    problem = PlacementProblem(robot, evaluator, placement.target, region, robot.hold_configuration())
     z = problem.variables(placement.q, placement.hold_turn)
     cost, grad = problem.objective(z)
     if cost >= 1e6:

@@ -42,7 +42,7 @@ from ..errors import (
     SpecError,
     UrdfError,
     WheelError,
-    _closest_first,
+    closest_first,
 )
 from ..platforms import LockedPlatform, Platform, get_kind
 from ..support.native_stderr import call_with_large_stack, captured_native_stderr
@@ -491,9 +491,9 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
     if missing_joints or missing_frames:
         parts = []
         for name in missing_joints:
-            parts.append(f"joint {name!r} (closest: {', '.join(_closest_first(name, joints, 3))})")
+            parts.append(f"joint {name!r} (closest: {', '.join(closest_first(name, joints, 3))})")
         for name in missing_frames:
-            parts.append(f"frame {name!r} (closest: {', '.join(_closest_first(name, links, 3))})")
+            parts.append(f"frame {name!r} (closest: {', '.join(closest_first(name, links, 3))})")
         raise SpecError(f"spec {spec.name!r} names what URDF {spec.urdf.name} lacks: {'; '.join(parts)}")
     for name in named_joints:
         if joints[name].type not in MOVING_JOINT_TYPES:

@@ -52,7 +52,7 @@ from ..robot.tasks import get_task
 from ..sets.ellipsoid import Ellipsoid
 from ..sets.polytope import Polytope
 from ..sets.taskset import TaskSet, check_direction
-from ..terms.dynamics import _reduced_dynamics, decouple, frame_jacobians
+from ..terms.dynamics import decouple, frame_jacobians, reduced_dynamics_unchecked
 from .members import Member, Team
 
 __all__ = ["LoadSharing", "MemberTerms", "TeamAnalysis", "analyze_team", "member_terms", "ray_radius", "stack_terms"]
@@ -89,7 +89,7 @@ def member_terms(team: Team) -> tuple[MemberTerms, ...]:
     out, hand = [], 0
     for member in team.members:
         robot, q = member.robot, member.robot.check_configuration(member.q)
-        dyn = _reduced_dynamics(robot, q, None, False)
+        dyn = reduced_dynamics_unchecked(robot, q, None, False)
         rows = frame_jacobians(robot, q, task).reshape(len(robot.arms), m, -1)
         J = rows[list(member.arms)].reshape(m * len(member.arms), -1)
         k = len(member.arms)

@@ -80,10 +80,10 @@ def reduced_dynamics(
         x: reduced velocity, (nx,); ``None`` means at rest (then xi = -S^T g).
         decoupled: zero the platform-arm blocks of P (see :func:`decouple`).
     """
-    return _reduced_dynamics(robot, robot.check_configuration(q), x, decoupled)
+    return reduced_dynamics_unchecked(robot, robot.check_configuration(q), x, decoupled)
 
 
-def _reduced_dynamics(robot: Robot, q: np.ndarray, x: np.ndarray | None, decoupled: bool) -> ReducedDynamics:
+def reduced_dynamics_unchecked(robot: Robot, q: np.ndarray, x: np.ndarray | None, decoupled: bool) -> ReducedDynamics:
     S = robot.null_space(q)
     M = mass_matrix(robot, q)
     if x is None:

@@ -19,7 +19,7 @@ from ..support.ranges import OBJECT_MASS, check_in_range
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame (z up), as Pinocchio's default
 
 
-def _skew(r: np.ndarray) -> np.ndarray:
+def skew(r: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
@@ -32,7 +32,7 @@ def grasp_block(task: str | TaskSpace, offset: np.ndarray) -> np.ndarray:
     """
     task = get_task(task)
     full = np.eye(6)
-    full[3:, :3] = _skew(np.asarray(offset, dtype=float))
+    full[3:, :3] = skew(np.asarray(offset, dtype=float))
     rows = list(task.rows)
     return full[np.ix_(rows, rows)]
 
@@ -63,7 +63,7 @@ class HeldObject:
     offsets: np.ndarray
 
     def __post_init__(self):
-        object.__setattr__(self, "mass", _object_mass(self.mass))
+        object.__setattr__(self, "mass", checked_object_mass(self.mass))
         inertia, center, offsets = self.inertia, self.center, self.offsets
         arrays = all(type(a) is np.ndarray and a.dtype == np.float64 for a in (inertia, center, offsets))
         if arrays and inertia.shape == (3, 3) and center.shape == (3,) and offsets.ndim == 2 and offsets.shape[1] == 3:
@@ -91,7 +91,7 @@ class HeldObject:
         radius reaches the farthest grasp point (I = 2/5 m R^2), a neutral default for a box held
         between the hands. Coincident grasp points give a point mass.
         """
-        mass = _object_mass(mass)
+        mass = checked_object_mass(mass)
         points = np.asarray(grasp_points, dtype=float).reshape(-1, 3)
         center = np.add.reduce(points, axis=0) / points.shape[0]
         offsets = points - center
@@ -128,7 +128,7 @@ class HeldObject:
         return grasp_matrix(task, self.offsets)
 
 
-def _object_mass(value: object) -> float:
+def checked_object_mass(value: object) -> float:
     """An object mass (kg): a real number in :data:`mobmanip.support.ranges.OBJECT_MASS`.
 
     Raises:

@@ -155,7 +155,7 @@ def draw_polygon(ax: Axes, polytope: Polytope, at: np.ndarray, scale: float, **s
     return points
 
 
-def _extent(task_set) -> float:
+def extent(task_set: Ellipsoid | Polytope) -> float:
     """How far a set is drawn from the task point (task units): the largest semi-axis of an
     ellipse (centred there in the paper's horizontal tasks), the farthest vertex of a polygon."""
     if task_set.empty:
@@ -191,8 +191,9 @@ def coincide(a: TaskSet, b: TaskSet, rtol: float = COINCIDE_RTOL) -> bool:
     return bool(np.max(np.abs(ha - hb)) <= rtol * reach)
 
 
-def _scale_of(panels) -> float:
-    largest = max(_extent(entry[1]) for *_, entries in panels for entry in entries)
+def scale_of(panels: Sequence) -> float:
+    """The drawing scale (figure units per task unit) at which the largest set of ``panels`` fills 0.9."""
+    largest = max(extent(entry[1]) for *_, entries in panels for entry in entries)
     return 0.9 / largest if largest > 0 else 1.0
 
 
@@ -272,7 +273,7 @@ def sweep_figure(
         The scale used (m per task unit).
     """
     if scale is None:
-        scale = _scale_of(panels)
+        scale = scale_of(panels)
     if limits is None:
         limits = panel_limits(panel_bounds(panels, scale))
     polygons = any(entry[1].kind != "ellipsoid" for *_, entries in panels for entry in entries)

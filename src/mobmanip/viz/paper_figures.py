@@ -54,7 +54,7 @@ def write_figures(study, out: Path, keep: dict | None = None) -> dict[str, list]
         :func:`mobmanip.viz.figures.sweep_figure` (``panel``, ``label``, ``kind``, ``point``,
         ``scale``, ``points``, ``coincides_with``).
     """
-    from .figures import SET_COLORS, _scale_of, panel_bounds, panel_limits, sweep_figure
+    from .figures import SET_COLORS, panel_bounds, panel_limits, scale_of, sweep_figure
 
     out = Path(out)
     robot = study.robot
@@ -94,7 +94,7 @@ def write_figures(study, out: Path, keep: dict | None = None) -> dict[str, list]
         twins[decoupled] = panels(
             cases, lambda c: [(torque_label(c.wheel_torque_max), c.analysis.dynamic, torque_look(c))]
         )
-    scale = min(_scale_of(twins[True]), _scale_of(twins[False]))  # the larger sets of the two fit
+    scale = min(scale_of(twins[True]), scale_of(twins[False]))  # the larger sets of the two fit
     limits = panel_limits(panel_bounds(twins[True], scale), panel_bounds(twins[False], scale))
     for decoupled, name, note in (
         (True, FIGURES[1], "decoupled dynamics (the paper's Section 4.3)"),

@@ -93,8 +93,8 @@ from .meshes import visual_model as visual_model
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE
 from .scales import ScaleFactors as ScaleFactors
 from .server import MeshcatServer, ViewerError
-from .shapes import DRAWINGS, MIN_SEMI_AXIS, _translation, drawn_ellipsoid, drawn_extent, ellipsoid_frame
-from .shapes import _aligned as _aligned  # noqa: F401 - re-exported: the animation tests use it
+from .shapes import DRAWINGS, MIN_SEMI_AXIS, drawn_ellipsoid, drawn_extent, ellipsoid_frame, translation
+from .shapes import aligned as aligned  # noqa: F401 - re-exported: the animation tests use it
 from .shapes import ellipsoid_matrix as ellipsoid_matrix
 
 ROOT = "mobmanip"
@@ -472,7 +472,7 @@ class EllipsoidViewer:
         sets = {**self._drawn(analysis, False), **self._drawn(locked, True)}
         with self._commands():
             self._pin.display(q)
-            self._vis[OBJECT_PATH].set_transform(_translation(analysis.held_object.center))
+            self._vis[OBJECT_PATH].set_transform(translation(analysis.held_object.center))
             for key, task_set in sets.items():
                 self._load(key, task_set.kind)
                 visible = not task_set.empty
@@ -581,7 +581,7 @@ class EllipsoidViewer:
             pin.updateGeometryPlacements(self.model, data, self.visual_model, geometry_data)
             poses: list[tuple[str, np.ndarray, np.ndarray | None]]
             poses = [(path, geometry_data.oMg[g].homogeneous, None) for g, path in enumerate(geometry_paths)]
-            poses.append((OBJECT_PATH, _translation(frame.analysis.held_object.center), None))
+            poses.append((OBJECT_PATH, translation(frame.analysis.held_object.center), None))
             for key in keys:
                 path, task_set = scene_path(key[1], key[0]), sets.get(key)
                 if task_set is None or task_set.empty:

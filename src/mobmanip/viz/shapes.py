@@ -163,7 +163,7 @@ def ellipsoid_matrix(
     return T
 
 
-def _aligned(R: np.ndarray, semi: np.ndarray, previous: np.ndarray | None, planar: bool):
+def aligned(R: np.ndarray, semi: np.ndarray, previous: np.ndarray | None, planar: bool):
     """R and semi with their columns permuted and signs flipped to follow ``previous`` (for
     smooth animations); the ellipsoid drawn is the same."""
     if previous is None:
@@ -196,14 +196,14 @@ class EllipsoidDrawing:
         import meshcat.geometry as mg
 
         if locked:  # rings only: they never hide the robot's own set, which usually contains them
-            vis[f"{path}/shape"].set_object(mg.LineSegments(mg.PointsGeometry(_unit_rings()), _line_material(color)))
+            vis[f"{path}/shape"].set_object(mg.LineSegments(mg.PointsGeometry(_unit_rings()), line_material(color)))
             vis[f"{path}/shape/<object>"].set_property("renderOrder", 1)
         else:
             material = mg.MeshLambertMaterial(color=color, opacity=OPACITY, transparent=True, depthWrite=False)
             vis[f"{path}/shape"].set_object(mg.Sphere(1.0), material)
         # Principal axes: +-1 along local x, y, z (the group transform scales them).
         segments = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], dtype=np.float32).T
-        vis[f"{path}/axes"].set_object(mg.LineSegments(mg.PointsGeometry(segments), _line_material(_darker(color))))
+        vis[f"{path}/axes"].set_object(mg.LineSegments(mg.PointsGeometry(segments), line_material(_darker(color))))
         vis[f"{path}/axes/<object>"].set_property("renderOrder", 1)
 
     def extent(self, task_set: Ellipsoid, task: str) -> float:
@@ -215,8 +215,8 @@ class EllipsoidDrawing:
     def keyframe(self, task_set, task, origin, scale, thickness, previous):
         p, R, semi = ellipsoid_frame(task_set, task, origin, scale, thickness)
         planar = drawn_ellipsoid(task_set, task)[0].dim == 2
-        R, semi = _aligned(R, semi, previous, planar)
-        pose = _translation(p)
+        R, semi = aligned(R, semi, previous, planar)
+        pose = translation(p)
         pose[:3, :3] = R
         return pose, semi
 
@@ -284,7 +284,7 @@ class PolytopeDrawing:
 
         color, locked = self._styles.get(path, (0x888888, False))
         points, triangles, segments = polytope_geometry(task_set, task, scale, thickness)
-        vis[path].set_transform(_translation(origin))
+        vis[path].set_transform(translation(origin))
         if len(triangles) and not locked:
             material = mg.MeshLambertMaterial(color=color, opacity=POLYTOPE_OPACITY, transparent=True, depthWrite=False)
             geometry = mg.TriangularMeshGeometry(points.astype(np.float32), triangles.astype(np.uint32))
@@ -293,7 +293,7 @@ class PolytopeDrawing:
             vis[f"{path}/shape"].delete()
         lines = points[segments.reshape(-1)].T.astype(np.float32) if len(segments) else np.zeros((3, 0), np.float32)
         edge_color = color if locked or len(triangles) == 0 else _darker(color, 0.7)
-        vis[f"{path}/edges"].set_object(mg.LineSegments(mg.PointsGeometry(lines), _line_material(edge_color)))
+        vis[f"{path}/edges"].set_object(mg.LineSegments(mg.PointsGeometry(lines), line_material(edge_color)))
         vis[f"{path}/edges/<object>"].set_property("renderOrder", 1)
 
     def keyframe(self, task_set, task, origin, scale, thickness, previous):
@@ -319,7 +319,7 @@ def _unit_rings(n: int = 96) -> np.ndarray:
     return np.hstack(points).astype(np.float32)
 
 
-def _line_material(color: int):
+def line_material(color: int):
     """Lines drawn after the semi-transparent shapes (transparent pass, renderOrder 1), so that
     rings and axes inside a shape keep their colour instead of being tinted by its surface."""
     import meshcat.geometry as mg
@@ -332,7 +332,7 @@ def _darker(color: int, factor: float = 0.45) -> int:
     return (int(r * factor) << 16) | (int(g * factor) << 8) | int(b * factor)
 
 
-def _translation(p) -> np.ndarray:
+def translation(p) -> np.ndarray:
     T = np.eye(4)
     T[:3, 3] = np.asarray(p, dtype=float)
     return T

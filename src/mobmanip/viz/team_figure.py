@@ -12,7 +12,7 @@ from ..robot.tasks import get_task
 from ..support.files import save_figure
 from ..team.analysis import TeamAnalysis
 from ..team.sweep import TeamSweep
-from .figures import COLORS, _extent, draw_ellipse, draw_robot
+from .figures import COLORS, draw_ellipse, draw_robot, extent
 
 
 def team_figure(analysis: TeamAnalysis, path: str | Path, sweep: TeamSweep | None = None, *, scale=None) -> Path:
@@ -89,7 +89,7 @@ def _reach(task_set) -> float:
     if task_set.empty:
         return 0.0
     if task_set.kind == "ellipsoid":
-        return _extent(task_set)
+        return extent(task_set)
     return float(np.max(np.linalg.norm(_shadow(task_set), axis=1), initial=0.0))
 
 

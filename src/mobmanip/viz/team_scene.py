@@ -31,7 +31,7 @@ from ..support.files import write_text
 from ..team.analysis import TeamAnalysis
 from .scene import DEFAULT_SIZE, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
 from .server import MeshcatServer, ViewerError
-from .shapes import DRAWINGS, _line_material, _translation
+from .shapes import DRAWINGS, line_material, translation
 
 __all__ = ["TEAM_PATH", "TeamViewer"]
 
@@ -117,9 +117,9 @@ class TeamViewer:
         segments = np.zeros((3, 2 * len(obj.offsets)), dtype=np.float32)
         segments[:, 1::2] = obj.offsets.T
         self._vis[f"{path}/grasps"].set_object(
-            mg.LineSegments(mg.PointsGeometry(segments), _line_material(OBJECT_LINK_COLOR))
+            mg.LineSegments(mg.PointsGeometry(segments), line_material(OBJECT_LINK_COLOR))
         )
-        self._vis[path].set_transform(_translation(obj.center))
+        self._vis[path].set_transform(translation(obj.center))
 
     def _draw_sets(self, size: float) -> dict[str, float]:
         task = self.analysis.team.task
