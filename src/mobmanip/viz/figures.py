@@ -160,7 +160,7 @@ def extent(task_set: Ellipsoid | Polytope) -> float:
     ellipse (centred there in the paper's horizontal tasks), the farthest vertex of a polygon."""
     if task_set.empty:
         return 0.0
-    if task_set.kind == "ellipsoid":
+    if isinstance(task_set, Ellipsoid):
         return float(task_set.semi_axes[0])
     flat = task_set if task_set.dim == 2 else task_set.project((0, 1))
     return float(np.max(np.linalg.norm(flat.vertices, axis=1), initial=0.0))
