@@ -1,0 +1,457 @@
+"""An independent reference for grounded capacity: the whole robot on the floor, from Pinocchio.
+
+The robot is rebuilt from its URDF with a free-flyer root; every joint that mobmanip's own model
+does not have is locked at the spec's ``[reference]`` value (zero when not listed). The base sits
+at mobmanip's planar pose with its root frame at z = 0 and no roll or pitch. Its 6-dof velocity
+(linear, angular; both in the base frame) is restricted to mobmanip's reduced velocities x by
+S_f, mobmanip's own null space S(q) with the vertical, roll and pitch rows held at zero.
+
+At rest, with gravity 9.81 m/s^2 along -z, the unknowns are the reduced accelerations xdot, the
+reduced efforts tau (one per entry of x: Q = I), the contact forces, the wrenches h the hands
+apply ON the object (task rows) and the object's acceleration a_o, related by::
+
+    M_f S_f xdot + g_f = B tau + sum_c J_c^T lambda_c - J_hands^T h     (whole robot)
+    J_hands S_f xdot = W^T a_o                                           (rigid grasp)
+    W h = M_o a_o + g_o                                                  (object, g_o = +m g up)
+
+A driven wheel's contact force is (f_x, f_y, f_z) in world axes; a caster's is a normal force
+only (frictionless). A planar task leaves out the object's vertical, roll and pitch rows, but the
+floor still carries the object: the hands' wrench components on those rows are extra unknowns,
+the object is held level (``sum f_z = m g``, no roll or pitch moment about its centre) and the
+robot feels their reaction. Nothing here uses mobmanip's reduced terms (P, Q, xi), grasp matrix
+or polytopes: only its model's joint names, reference values, null space S(q) and limits.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import xml.etree.ElementTree as ElementTree
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.optimize import linprog
+from scipy.spatial import ConvexHull
+
+GRAVITY = 9.81
+"""Magnitude of gravity (m/s^2), along world -z."""
+
+TASK_ROWS = {"planar": (0, 1), "planar_rigid": (0, 1, 5), "spatial": (0, 1, 2, 3, 4, 5)}
+"""Rows of a 6-d twist or wrench (linear then angular, world axes) that each task keeps. Not
+``translational``: its object would need roll and pitch moments that mobmanip's task leaves out."""
+
+LEVEL_ROWS = (2, 3, 4)
+"""The object's vertical force, roll and pitch moment rows: balanced even when the task omits them."""
+
+MODES = ("ideal", "no_tip", "friction")
+
+_HIGHS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
+
+
+@dataclass(frozen=True)
+class SupportPoint:
+    """A point where the robot touches the floor.
+
+    Attributes:
+        name: a label (the wheel's joint or the caster's link).
+        joint: the joint of the body the point belongs to: the wheel's joint for a driven wheel
+            (the rim's material point), the root joint for a caster (its swivel is not modelled).
+        point: the contact point in the platform's root frame (m), (3,).
+        driven: a driven wheel (3 force components) or a caster (normal force only).
+    """
+
+    name: str
+    joint: str
+    point: np.ndarray
+    driven: bool
+
+
+@dataclass(frozen=True)
+class FloorProblem:
+    """The equations of the robot on the floor at one configuration (SI units).
+
+    Shapes: m task rows, k hands, nv free-flyer tangent size, nx reduced velocities, nc contacts,
+    r = the rows of :data:`LEVEL_ROWS` that the task leaves out.
+
+    Attributes:
+        M: mass matrix of the free-flyer model, (nv, nv).
+        g: generalized gravity, (nv,).
+        S: the null space S_f, (nv, nx).
+        B: actuation, (nv, nx): reduced efforts -> joint torques, S^T B = I.
+        contacts: the support points: driven wheels, then casters.
+        points: their world positions (m), (nc, 3).
+        contact_jacobians: LOCAL_WORLD_ALIGNED translational Jacobians of the points, (nc, 3, nv).
+        hand_jacobian: the hands' LOCAL_WORLD_ALIGNED Jacobians on the task rows, stacked, (k m, nv).
+        W: grasp matrix from the hand positions and the object centre, (m, k m).
+        M_o: object inertia on the task rows, (m, m).
+        g_o: the wrench that holds the object still on the task rows (+m g along z), (m,).
+        level_jacobian: the hands' Jacobians on the omitted level rows, stacked, (k r, nv).
+        level_grasp: the object's level rows of the grasp map, of h and of the level wrenches,
+            ((r, k m), (r, k r)); they must sum to ``level_load``.
+        level_load: the object's weight on the omitted level rows, (r,).
+        tau_max: effort limits of x, (nx,).
+        total_mass: robot (free-flyer model) plus object (kg).
+    """
+
+    M: np.ndarray
+    g: np.ndarray
+    S: np.ndarray
+    B: np.ndarray
+    contacts: tuple[SupportPoint, ...]
+    points: np.ndarray
+    contact_jacobians: np.ndarray
+    hand_jacobian: np.ndarray
+    W: np.ndarray
+    M_o: np.ndarray
+    g_o: np.ndarray
+    level_jacobian: np.ndarray
+    level_grasp: tuple[np.ndarray, np.ndarray]
+    level_load: np.ndarray
+    tau_max: np.ndarray
+    total_mass: float
+
+
+@dataclass(frozen=True)
+class FloorSolution:
+    """A maximiser (or an equilibrium) of a floor LP.
+
+    Attributes:
+        value: the optimum: e.a_o (support, m/s^2 or rad/s^2) or s (straight-line reach).
+        a_o: object acceleration, (m,).
+        xdot: reduced accelerations, (nx,).
+        tau: reduced efforts (N m or N), (nx,).
+        h: the hands' wrenches on the object, task rows, (k m,).
+        h_level: the hands' wrenches on the object, omitted level rows, (k r,).
+        forces: contact forces in world axes (N), (nc, 3); a caster's has only z.
+        zmp: the zero-moment point on the floor plane (m), (3,).
+    """
+
+    value: float
+    a_o: np.ndarray
+    xdot: np.ndarray
+    tau: np.ndarray
+    h: np.ndarray
+    h_level: np.ndarray
+    forces: np.ndarray
+    zmp: np.ndarray
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+@functools.cache  # one URDF parse per robot object (a Robot hashes by identity)
+def free_flyer_model(robot) -> pin.Model:
+    """The robot's URDF with a free-flyer root, locked to exactly mobmanip's joints (shared: read only).
+
+    Joints absent from ``robot.model`` are locked at the spec's ``[reference]`` values (zero if
+    unlisted), as mobmanip locks them; the result has the same joints in the same order.
+    """
+    full = pin.buildModelFromUrdf(str(robot.spec.urdf), pin.JointModelFreeFlyer())
+    q_ref = pin.neutral(full)
+    for j in range(2, full.njoints):
+        joint, value = full.joints[j], robot.spec.reference.get(full.names[j], 0.0)
+        if joint.nq == 2:  # continuous joint: (cos, sin)
+            q_ref[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
+        else:
+            q_ref[joint.idx_q] = value
+    locked = [j for j in range(2, full.njoints) if full.names[j] not in set(robot.model.names[2:])]
+    return pin.buildReducedModel(full, locked, q_ref) if locked else full
+
+
+def free_flyer_configuration(robot, model: pin.Model, q: np.ndarray) -> np.ndarray:
+    """mobmanip's q (planar root: x, y, cos, sin) as the free-flyer model's, root frame at z = 0."""
+    q_f = pin.neutral(model)
+    yaw = math.atan2(q[3], q[2])
+    q_f[:7] = (q[0], q[1], 0.0, 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+    for j in range(2, robot.model.njoints):
+        src, dst = robot.model.joints[j], model.joints[model.getJointId(robot.model.names[j])]
+        q_f[dst.idx_q : dst.idx_q + dst.nq] = q[src.idx_q : src.idx_q + src.nq]
+    return q_f
+
+
+def free_flyer_null_space(robot, model: pin.Model, q: np.ndarray) -> np.ndarray:
+    """S_f, (nv_f, nx): mobmanip's S(q) in the free-flyer tangent space.
+
+    Planar rows (v_x, v_y, omega_z, platform frame) go to the free-flyer's v_x, v_y and omega_z
+    (base frame, the same frame at zero roll and pitch); v_z, omega_x, omega_y rows are zero.
+    """
+    S = robot.null_space(q)
+    S_f = np.zeros((model.nv, S.shape[1]))
+    S_f[[0, 1, 5]] = S[:3]
+    for j in range(2, robot.model.njoints):
+        src, dst = robot.model.joints[j], model.joints[model.getJointId(robot.model.names[j])]
+        S_f[dst.idx_v : dst.idx_v + dst.nv] = S[src.idx_v : src.idx_v + src.nv]
+    return S_f
+
+
+def _reference_frames(robot) -> tuple[pin.Model, pin.Data]:
+    """The free-flyer model with its frames placed at the neutral configuration (base at the origin)."""
+    model = free_flyer_model(robot)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    return model, data
+
+
+def urdf_casters(robot) -> tuple[SupportPoint, ...]:
+    """Casters found in the URDF: links named ``*caster*`` with a sphere or cylinder collision.
+
+    The contact lies below the link's origin (the caster wheel's centre) by the collision radius,
+    with the caster joints at their locked reference (zero).
+    """
+    model, data = _reference_frames(robot)
+    out = []
+    for link in ElementTree.parse(robot.spec.urdf).getroot().iter("link"):
+        name = link.get("name", "")
+        shape = link.find("collision/geometry/sphere")
+        shape = link.find("collision/geometry/cylinder") if shape is None else shape
+        if "caster" in name and shape is not None:
+            centre = data.oMf[model.getFrameId(name)].translation
+            point = centre - np.array([0.0, 0.0, float(shape.get("radius"))])
+            out.append(SupportPoint(name, model.names[1], point, driven=False))
+    return tuple(out)
+
+
+def corner_casters(half_length: float, half_width: float, floor_z: float) -> tuple[SupportPoint, ...]:
+    """Four casters at (+-half_length, +-half_width, floor_z) in the platform frame (m)."""
+    return tuple(
+        SupportPoint(f"caster_{fb}_{lr}", "root_joint", np.array([sx * half_length, sy * half_width, floor_z]), False)
+        for fb, sx in (("front", 1.0), ("back", -1.0))
+        for lr, sy in (("left", 1.0), ("right", -1.0))
+    )
+
+
+PAPER_CASTERS = corner_casters(0.25, 0.14, -0.075)
+"""The paper robot's passive supports: its base box's corners, on the floor 0.075 m below base_link."""
+
+
+def driven_wheels(robot) -> tuple[SupportPoint, ...]:
+    """One contact per driven wheel, below the wheel centre by the platform's wheel radius."""
+    model, data = _reference_frames(robot)
+    down = np.array([0.0, 0.0, robot.platform.radius])
+    return tuple(
+        SupportPoint(name, name, data.oMi[model.getJointId(name)].translation - down, driven=True)
+        for name in robot.platform.wheel_names
+    )
+
+
+def build_problem(robot, q, task: str, held_object, casters=None) -> FloorProblem:
+    """Assemble the floor equations at mobmanip's configuration ``q``, robot and object at rest.
+
+    Args:
+        robot: a loaded mobmanip robot with a differential-drive platform.
+        q: mobmanip configuration, (nq,).
+        task: a key of :data:`TASK_ROWS`.
+        held_object: the object; its ``mass`` (kg), ``inertia`` ((3, 3) kg m^2, about its centre,
+            world axes) and ``center`` ((3,) m) are read.
+        casters: passive supports; default :func:`urdf_casters`.
+    """
+    model = free_flyer_model(robot)
+    data = model.createData()
+    q_f = free_flyer_configuration(robot, model, q)
+    S = free_flyer_null_space(robot, model, q)
+    # Entry k of tau is the torque of joint reduced_velocity_names[k] with the sign of its row of S
+    # (a positive wheel effort drives forward, as a positive wheel rate does): S^T B = I.
+    B = S.copy()
+    B[:6] = 0.0
+    M = pin.crba(model, data, q_f)
+    M = np.triu(M) + np.triu(M, 1).T
+    g = pin.computeGeneralizedGravity(model, data, q_f).copy()
+    pin.computeJointJacobians(model, data, q_f)
+    pin.updateFramePlacements(model, data)
+
+    contacts = driven_wheels(robot) + (urdf_casters(robot) if casters is None else tuple(casters))
+    points, jacobians = [], []
+    for c in contacts:  # the point's velocity: v_joint + omega x (point - joint origin)
+        point, jid = data.oMi[1].act(np.asarray(c.point, dtype=float)), model.getJointId(c.joint)
+        J = pin.getJointJacobian(model, data, jid, pin.LOCAL_WORLD_ALIGNED)
+        jacobians.append(J[:3] - _skew(point - data.oMi[jid].translation) @ J[3:])
+        points.append(point)
+
+    rows = list(TASK_ROWS[task])
+    level = [r for r in LEVEL_ROWS if r not in rows]
+    center = np.asarray(held_object.center, dtype=float)
+    hands, grasps = [], []  # per hand: 6-row Jacobian and 6x6 grasp block (force; moment = r x f + n)
+    for arm in robot.arms:
+        fid = model.getFrameId(arm.end_effector)
+        hands.append(pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED))
+        grasps.append(np.block([[np.eye(3), np.zeros((3, 3))], [_skew(data.oMf[fid].translation - center), np.eye(3)]]))
+    M6 = np.zeros((6, 6))
+    M6[:3, :3] = held_object.mass * np.eye(3)
+    M6[3:, 3:] = held_object.inertia
+    g6 = np.array([0.0, 0.0, held_object.mass * GRAVITY, 0.0, 0.0, 0.0])
+    return FloorProblem(
+        M=M,
+        g=g,
+        S=S,
+        B=B,
+        contacts=contacts,
+        points=np.array(points),
+        contact_jacobians=np.array(jacobians),
+        hand_jacobian=np.vstack([J[rows] for J in hands]),
+        W=np.hstack([G[np.ix_(rows, rows)] for G in grasps]),
+        M_o=M6[np.ix_(rows, rows)],
+        g_o=g6[rows],
+        level_jacobian=np.vstack([J[level] for J in hands]),
+        level_grasp=(
+            np.hstack([G[np.ix_(level, rows)] for G in grasps]),
+            np.hstack([G[np.ix_(level, level)] for G in grasps]),
+        ),
+        level_load=g6[level],
+        tau_max=np.asarray(robot.effort_limits, dtype=float),
+        total_mass=pin.computeTotalMass(model) + held_object.mass,
+    )
+
+
+def contact_force_columns(problem: FloorProblem) -> tuple[np.ndarray, list[slice]]:
+    """The contact forces' generalized forces, (nv, n_lambda), and each contact's columns.
+
+    A driven wheel has 3 columns (world f_x, f_y, f_z), a caster 1 (its normal, world z).
+    """
+    columns, slices, start = [], [], 0
+    for contact, J in zip(problem.contacts, problem.contact_jacobians):
+        columns.append(J.T if contact.driven else J[2:3].T)
+        slices.append(slice(start, start + columns[-1].shape[1]))
+        start = slices[-1].stop
+    return np.hstack(columns), slices
+
+
+def zero_moment_point(points: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    """Where the contact forces' resultant has no horizontal moment, on the floor plane.
+
+    Args:
+        points: contact points (m), (nc, 3), all at one height z0.
+        forces: contact forces (N), (nc, 3).
+
+    Returns:
+        The ZMP (m), (3,), at height z0.
+    """
+    z0 = float(points[0, 2])
+    if np.ptp(points[:, 2]) > 1e-9:
+        raise ValueError(f"contact points are not on one floor plane: heights {points[:, 2]}")
+    F, Mo = forces.sum(axis=0), np.cross(points, forces).sum(axis=0)  # moment about the world origin
+    return np.array([(z0 * F[0] - Mo[1]) / F[2], (Mo[0] + z0 * F[1]) / F[2], z0])
+
+
+def support_polygon(points: np.ndarray) -> np.ndarray:
+    """The convex hull of the contact points on the floor, counter-clockwise vertices (m), (k, 2)."""
+    xy = np.asarray(points)[:, :2]
+    return xy[ConvexHull(xy).vertices]
+
+
+def polygon_margin(polygon: np.ndarray, p) -> float:
+    """Signed distance (m) from p (its x, y) to a CCW convex polygon's boundary: positive inside."""
+    p = np.asarray(p, dtype=float)[:2]
+    distance, inside = math.inf, True
+    for a, b in zip(polygon, np.roll(polygon, -1, axis=0)):
+        edge = b - a
+        t = np.clip(np.dot(p - a, edge) / np.dot(edge, edge), 0.0, 1.0)
+        distance = min(distance, float(np.linalg.norm(p - a - t * edge)))
+        inside &= bool(edge[0] * (p[1] - a[1]) - edge[1] * (p[0] - a[0]) >= 0.0)  # left of the edge
+    return distance if inside else -distance
+
+
+def support(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=False) -> FloorSolution:
+    """max e.a_o over the grounded set (other components free), with a maximiser.
+
+    Args:
+        problem: from :func:`build_problem`.
+        e: unit task direction, (m,).
+        mode: ``"ideal"`` (contact forces free), ``"no_tip"`` (normal forces >= 0) or
+            ``"friction"`` (normals >= 0 and each driven wheel's tangential force inside the
+            ``faces``-sided pyramid inscribed in the cone of coefficient ``mu``).
+        policy: the paper's minimum-norm policy (xdot = J_u^+ W^T a_o, h = W^+ (M_o a_o + g_o));
+            tau and the contact forces stay free within their constraints.
+    """
+    e = np.asarray(e, dtype=float)
+    return _solve(problem, mode, mu, faces, policy, objective=np.append(-e, 0.0))
+
+
+def straight_line(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=False) -> FloorSolution:
+    """max s such that a_o = s e is in the grounded set (arguments as :func:`support`)."""
+    e = np.asarray(e, dtype=float)
+    return _solve(problem, mode, mu, faces, policy, objective=np.append(np.zeros_like(e), -1.0), line=e)
+
+
+def equilibrium(problem: FloorProblem, mode="no_tip", mu=None, faces=8) -> FloorSolution:
+    """Robot and object held still (xdot = 0, a_o = 0): one feasible set of efforts and forces."""
+    return _solve(problem, mode, mu, faces, False, objective=np.zeros(problem.W.shape[0] + 1), still=True)
+
+
+def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still=False) -> FloorSolution:
+    """The LP over z = [xdot, tau, lambda, h, h_level, a_o, s]; ``objective``: the cost of (a_o, s)."""
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    if mode == "friction" and (mu is None or mu < 0):
+        raise ValueError(f"friction mode needs mu >= 0, got {mu!r}")
+    nx = P.S.shape[1]
+    C, slices = contact_force_columns(P)
+    m, km = P.W.shape
+    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1])
+    X, T, L, H, V, A, S_ = (slice(offsets[i], offsets[i + 1]) for i in range(7))
+    n = int(offsets[-1])
+    rows, rhs = [], []
+
+    def equation(blocks, value):
+        row = np.zeros((len(value), n))
+        for where, block in blocks:
+            row[:, where] = block
+        rows.append(row)
+        rhs.append(np.asarray(value, dtype=float))
+
+    equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
+    equation([(H, P.level_grasp[0]), (V, P.level_grasp[1])], P.level_load)  # the object held level
+    if policy:  # with J_u and W of full row rank, the grasp and object equations follow
+        J_u, W_pinv = P.hand_jacobian @ P.S, np.linalg.pinv(P.W)
+        if np.linalg.matrix_rank(J_u) < km or np.linalg.matrix_rank(P.W) < m:
+            raise ValueError("the minimum-norm policy needs J_u and W of full row rank (a singular posture)")
+        equation([(X, np.eye(nx)), (A, -np.linalg.pinv(J_u) @ P.W.T)], np.zeros(nx))
+        equation([(H, np.eye(km)), (A, -W_pinv @ P.M_o)], W_pinv @ P.g_o)
+    else:
+        equation([(X, P.hand_jacobian @ P.S), (A, -P.W.T)], np.zeros(km))
+        equation([(H, P.W), (A, -P.M_o)], P.g_o)
+    if line is not None:
+        equation([(A, np.eye(m)), (S_, -line[:, None])], np.zeros(m))
+    if still:
+        equation([(X, np.eye(nx))], np.zeros(nx))
+        equation([(A, np.eye(m))], np.zeros(m))
+
+    bounds, cone = [(None, None)] * n, (mu or 0.0) * math.cos(math.pi / faces)
+    bounds[T] = [(-limit, limit) for limit in P.tau_max]
+    A_ub = []
+    for contact, sl in zip(P.contacts, slices):
+        if mode != "ideal":
+            bounds[L.start + sl.stop - 1] = (0.0, None)  # the normal is the last (z) component
+        if contact.driven and mode == "friction":  # face k: (cos, sin) . f_t <= mu cos(pi / N) f_n
+            for angle in 2.0 * math.pi * np.arange(faces) / faces:
+                A_ub.append(np.zeros(n))
+                A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
+    cost = np.zeros(n)
+    cost[A], cost[S_] = objective[:m], objective[m]
+    result = linprog(
+        cost,
+        A_ub=np.array(A_ub) if A_ub else None,
+        b_ub=np.zeros(len(A_ub)) if A_ub else None,
+        A_eq=np.vstack(rows),
+        b_eq=np.concatenate(rhs),
+        bounds=bounds,
+        method="highs",
+        options=_HIGHS,
+    )
+    if result.status != 0:
+        raise RuntimeError(f"floor LP ({mode}) failed: {result.message}")
+    z = result.x
+    forces = np.zeros((len(P.contacts), 3))
+    for i, sl in enumerate(slices):
+        forces[i, 3 - (sl.stop - sl.start) :] = z[L][sl]
+    return FloorSolution(
+        value=float(-result.fun),
+        a_o=z[A].copy(),
+        xdot=z[X].copy(),
+        tau=z[T].copy(),
+        h=z[H].copy(),
+        h_level=z[V].copy(),
+        forces=forces,
+        zmp=zero_moment_point(P.points, forces),
+    )
