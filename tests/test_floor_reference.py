@@ -8,7 +8,6 @@ the numbers issue 24 measured with an LP of this kind, and tip exactly where tip
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -17,10 +16,7 @@ import pytest
 import floor_reference as fr
 import mobmanip
 from mobmanip.casestudy import configuration_at, optimal_posture
-
-with warnings.catch_warnings():  # the module may be moving during the package's reorganisation
-    warnings.simplefilter("ignore", DeprecationWarning)
-    from mobmanip.named_postures import named_configuration
+from mobmanip.postures.named import named_configuration
 
 MASS = 2.0  # kg, the object of issue 24's table
 EX = np.array([1.0, 0.0])

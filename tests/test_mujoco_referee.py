@@ -19,7 +19,7 @@ from scipy.linalg import null_space
 
 import mobmanip
 from mobmanip.casestudy import configuration_at, optimal_posture
-from mobmanip.named_postures import named_configuration
+from mobmanip.postures.named import named_configuration
 
 mujoco = pytest.importorskip("mujoco")
 from mujoco_referee import PAPER_CASTERS, build, urdf_casters  # noqa: E402
