@@ -35,6 +35,7 @@ PUBLIC_MODULES = [
     "mobmanip.gradients",
     "mobmanip.placement",
     "mobmanip.postures.inverse_kinematics",
+    "mobmanip.postures.planar",
     "mobmanip.descriptions.resources",
     "mobmanip.viz.scene",
     "mobmanip.viz.sweeps",

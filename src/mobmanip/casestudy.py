@@ -5,6 +5,9 @@ Each arm takes the posture that maximises its own kinematic manipulability sqrt(
 Jacobian; the arms mirror each other about the line from P_o to the object, and q1 of each arm
 points its end effector at the object. The object direction alpha is measured from the platform
 heading (0 deg in front, 90 deg to the left). Both end effectors grasp the object at its centre.
+The posture and its configurations (:func:`optimal_posture`, :func:`configuration_at`,
+:class:`ArmPosture`, :func:`arm_measure`) live with the other postures, in
+:mod:`mobmanip.postures.planar`, and are re-exported here.
 
 Sweeps: Fig. 3 varies the platform's maximum rim speed (wheel qdot_max = v / r) and adds the
 locked platform; Fig. 4 varies the wheels' maximum torque, with decoupled dynamics as in the
@@ -13,108 +16,31 @@ paper and coupled dynamics as the paper did not.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-import numpy as np
-import pinocchio as pin
-
 from .analysis.single import Analysis, analyze
-from .errors import SpecError
 from .measures.registry import DYNAMIC, KINEMATIC, get_measure
-from .platforms import DifferentialDrive
-from .robot.model import Arm, Robot
+from .postures.planar import ArmPosture, arm_measure, configuration_at, optimal_posture
+from .robot.model import Robot
+
+__all__ = [
+    "ANGLES_DEG",
+    "PLATFORM_SPEEDS",
+    "WHEEL_TORQUES",
+    "ArmPosture",
+    "CaseStudy",
+    "DynamicCase",
+    "KinematicCase",
+    "arm_measure",
+    "configuration_at",
+    "optimal_posture",
+    "run_case_study",
+]
 
 ANGLES_DEG = (0.0, 45.0, 90.0)
 PLATFORM_SPEEDS = (0.001, 0.5, 1.0)  # m/s, maximum rim speed of the wheels (Fig. 3)
 WHEEL_TORQUES = (200.0, 50.0, 10.0)  # N m (Fig. 4)
-
-
-@dataclass(frozen=True)
-class ArmPosture:
-    """The globally optimal posture of one arm.
-
-    Attributes:
-        q: joint angles (q1 = 0, q2, q3) (rad).
-        manipulability: sqrt(det(J J^T)) of the arm's horizontal translational Jacobian (m^2).
-        reach: horizontal distance from the arm's first joint to its end effector (m).
-        bearing: direction of the end effector seen from the first joint at q1 = 0 (rad).
-    """
-
-    q: tuple[float, ...]
-    manipulability: float
-    reach: float
-    bearing: float
-
-
-def _check_paper_like(robot: Robot) -> None:
-    if not isinstance(robot.platform, DifferentialDrive) or len(robot.arms) != 2:  # the paper's own platform
-        raise SpecError(f"the case study needs a differential drive with two arms; {robot.name!r} does not fit")
-    if any(len(arm.joint_names) != 3 for arm in robot.arms):
-        raise SpecError(f"the case study needs two 3-joint arms; {robot.name!r} has other arms")
-
-
-def arm_measure(robot: Robot, arm: Arm, q2: float, q3: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """An arm's own manipulability sqrt(det(J J^T)) of its planar 2 x 3 translational Jacobian,
-    its end-effector position and its first joint's position (m), at joints (0, q2, q3) (rad)."""
-    model, data = robot.model, robot.data
-    q = robot.configuration(joints=dict(zip(arm.joint_names, (0.0, q2, q3))))
-    pin.computeJointJacobians(model, data, q)
-    pin.updateFramePlacements(model, data)
-    J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)[:2, list(arm.v_indices)]
-    w = math.sqrt(max(np.linalg.det(J @ J.T), 0.0))
-    base = data.oMi[model.getJointId(arm.joint_names[0])].translation
-    return w, data.oMf[arm.frame_id].translation.copy(), base.copy()
-
-
-def optimal_posture(robot: Robot, arm_index: int = 0, grid: int = 73, refinements: int = 6) -> ArmPosture:
-    """Maximise an arm's own manipulability over (q2, q3) by grid search with zooming.
-
-    The search starts on a ``grid`` x ``grid`` lattice over [-pi, pi]^2 and zooms in around the
-    best point ``refinements`` times (each time to a cell of the previous lattice); the result is
-    accurate to about 2 pi / grid / (grid / 4)^refinements rad. Among the two mirror-image optima
-    (q2, q3) and (-q2, -q3), the one that bends to the right (positive bearing) is returned.
-    """
-    _check_paper_like(robot)
-    arm = robot.arms[arm_index]
-    center, half = np.zeros(2), math.pi
-    best = (-1.0, 0.0, 0.0)
-    for _ in range(refinements + 1):
-        values = np.linspace(-half, half, grid)
-        for dq2 in values:
-            for dq3 in values:
-                q2, q3 = center[0] + dq2, center[1] + dq3
-                w = arm_measure(robot, arm, q2, q3)[0]
-                if w > best[0]:
-                    best = (w, q2, q3)
-        center = np.array(best[1:])
-        half = 2.0 * half / (grid - 1)
-    w, q2, q3 = best
-    _, tip, base = arm_measure(robot, arm, q2, q3)
-    bearing = math.atan2(tip[1] - base[1], tip[0] - base[0])
-    if bearing < 0:  # take the mirror image so that the arm's elbow is on its right
-        q2, q3 = -q2, -q3
-        _, tip, base = arm_measure(robot, arm, q2, q3)
-        bearing = math.atan2(tip[1] - base[1], tip[0] - base[0])
-    reach = float(np.hypot(*(tip - base)[:2]))
-    return ArmPosture((0.0, float(q2), float(q3)), float(w), reach, float(bearing))
-
-
-def configuration_at(robot: Robot, posture: ArmPosture, angle_deg: float, heading: float = 0.0) -> np.ndarray:
-    """q with both arms in the mirrored optimal posture pointing at an object at ``angle_deg``.
-
-    Arm 1 (right) takes (q2, q3) and arm 2 (left) the mirror image (-q2, -q3); each q1 turns its
-    end effector onto the direction alpha from the platform heading. ``heading`` rotates the
-    whole robot (rad).
-    """
-    _check_paper_like(robot)
-    alpha = math.radians(angle_deg)
-    _, q2, q3 = posture.q
-    right, left = robot.arms
-    joints = dict(zip(right.joint_names, (alpha - posture.bearing, q2, q3)))
-    joints.update(zip(left.joint_names, (alpha + posture.bearing, -q2, -q3)))
-    return robot.configuration((0.0, 0.0, heading), joints)
 
 
 @dataclass(frozen=True)

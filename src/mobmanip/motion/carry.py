@@ -47,8 +47,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ArgumentError, MeasureError, NumericalError
+from ..errors import ArgumentError, MeasureError, NumericalError, SpecError
 from ..gradients.evaluator import GradientEvaluator, Objective
+from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from .trajectory import tangent_integrate
@@ -322,14 +323,12 @@ def _bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndar
 
 def default_start(robot: Robot) -> np.ndarray:
     """The spec's hold posture; for the paper's robot without one, its case-study posture with
-    the object straight ahead (both arms at their own optimum, :mod:`mobmanip.casestudy`)."""
+    the object straight ahead (both arms at their own optimum,
+    :func:`mobmanip.postures.planar.optimal_configuration`); else the home configuration."""
     if robot.spec.hold:
         return robot.hold_configuration()
-    from ..casestudy import configuration_at, optimal_posture
-    from ..errors import SpecError
-
     try:
-        return configuration_at(robot, optimal_posture(robot), 0.0)
+        return optimal_configuration(robot, 0.0)
     except SpecError:
         return robot.neutral()
 

@@ -1,28 +1,141 @@
-"""The paper's closed-form arm postures at a given reach, for sweeps of planar dual-arm robots.
+"""The paper's arm postures for planar dual-arm robots: the globally most manipulable one (the
+case study's) and the closed form at a given reach (sweeps).
 
-For robots with two 3-joint planar arms with vertical axes sharing their first joint (like
-``planar_dual_arm``; the reference point is that joint, P_o): at a given reach, each arm's
-posture family is one-dimensional (q3 free, q2 from the reach, two elbow branches); the posture
-taken maximises the arm's own manipulability sqrt(det(J J^T)) of its 2 x 3 horizontal Jacobian
+Both are for robots with two 3-joint planar arms with vertical axes (like ``planar_dual_arm``).
+
+The case study's posture (:func:`optimal_posture`): each arm's (q2, q3) maximise its own
+kinematic manipulability sqrt(det(J J^T)) of its 2 x 3 horizontal translational Jacobian, found
+numerically on the model's own Jacobian; the arms mirror each other about the line from P_o to
+the object, and q1 of each arm points its end effector at the object
+(:func:`configuration_at`; :func:`optimal_configuration` with the object straight ahead is
+``mobmanip carry``'s start for such a robot without a hold posture).
+
+The closed form at a reach (the arms' first joints sharing their position; the reference point
+is that joint, P_o): at a given reach, each arm's posture family is one-dimensional (q3 free, q2
+from the reach, two elbow branches); the posture taken maximises the arm's own manipulability
 along that family (dense sampling of q3 with zooming refinement, see
 :func:`postures_at_reaches`). At the reach of the globally optimal posture this is the paper's
-posture (:func:`mobmanip.casestudy.optimal_posture`). Arm 1 (right) bends to the right and arm 2
-takes the mirror image about the line from the base to the object; q1 of each arm points its end
-effector at the object. :mod:`mobmanip.sweep` uses these as its ``planar`` postures.
+posture (:func:`optimal_posture`). Arm 1 (right) bends to the right and arm 2 takes the mirror
+image about the line from the base to the object; q1 of each arm points its end effector at the
+object. :mod:`mobmanip.sweep` uses these as its ``planar`` postures.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import SpecError
-from ..robot.model import Robot
+from ..platforms import DifferentialDrive
+from ..robot.model import Arm, Robot
+
+
+@dataclass(frozen=True)
+class ArmPosture:
+    """The globally optimal posture of one arm.
+
+    Attributes:
+        q: joint angles (q1 = 0, q2, q3) (rad).
+        manipulability: sqrt(det(J J^T)) of the arm's horizontal translational Jacobian (m^2).
+        reach: horizontal distance from the arm's first joint to its end effector (m).
+        bearing: direction of the end effector seen from the first joint at q1 = 0 (rad).
+    """
+
+    q: tuple[float, ...]
+    manipulability: float
+    reach: float
+    bearing: float
+
+
+def _check_paper_like(robot: Robot) -> None:
+    if not isinstance(robot.platform, DifferentialDrive) or len(robot.arms) != 2:  # the paper's own platform
+        raise SpecError(f"the case study needs a differential drive with two arms; {robot.name!r} does not fit")
+    if any(len(arm.joint_names) != 3 for arm in robot.arms):
+        raise SpecError(f"the case study needs two 3-joint arms; {robot.name!r} has other arms")
+
+
+def arm_measure(robot: Robot, arm: Arm, q2: float, q3: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """An arm's own manipulability sqrt(det(J J^T)) of its planar 2 x 3 translational Jacobian,
+    its end-effector position and its first joint's position (m), at joints (0, q2, q3) (rad)."""
+    model, data = robot.model, robot.data
+    q = robot.configuration(joints=dict(zip(arm.joint_names, (0.0, q2, q3))))
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)[:2, list(arm.v_indices)]
+    w = math.sqrt(max(np.linalg.det(J @ J.T), 0.0))
+    base = data.oMi[model.getJointId(arm.joint_names[0])].translation
+    return w, data.oMf[arm.frame_id].translation.copy(), base.copy()
+
+
+def optimal_posture(robot: Robot, arm_index: int = 0, grid: int = 73, refinements: int = 6) -> ArmPosture:
+    """Maximise an arm's own manipulability over (q2, q3) by grid search with zooming.
+
+    The search starts on a ``grid`` x ``grid`` lattice over [-pi, pi]^2 and zooms in around the
+    best point ``refinements`` times (each time to a cell of the previous lattice); the result is
+    accurate to about 2 pi / grid / (grid / 4)^refinements rad. Among the two mirror-image optima
+    (q2, q3) and (-q2, -q3), the one that bends to the right (positive bearing) is returned.
+
+    Raises:
+        SpecError: not a differential drive with two 3-joint arms (the paper's robot).
+    """
+    _check_paper_like(robot)
+    arm = robot.arms[arm_index]
+    center, half = np.zeros(2), math.pi
+    best = (-1.0, 0.0, 0.0)
+    for _ in range(refinements + 1):
+        values = np.linspace(-half, half, grid)
+        for dq2 in values:
+            for dq3 in values:
+                q2, q3 = center[0] + dq2, center[1] + dq3
+                w = arm_measure(robot, arm, q2, q3)[0]
+                if w > best[0]:
+                    best = (w, q2, q3)
+        center = np.array(best[1:])
+        half = 2.0 * half / (grid - 1)
+    w, q2, q3 = best
+    _, tip, base = arm_measure(robot, arm, q2, q3)
+    bearing = math.atan2(tip[1] - base[1], tip[0] - base[0])
+    if bearing < 0:  # take the mirror image so that the arm's elbow is on its right
+        q2, q3 = -q2, -q3
+        _, tip, base = arm_measure(robot, arm, q2, q3)
+        bearing = math.atan2(tip[1] - base[1], tip[0] - base[0])
+    reach = float(np.hypot(*(tip - base)[:2]))
+    return ArmPosture((0.0, float(q2), float(q3)), float(w), reach, float(bearing))
+
+
+def configuration_at(robot: Robot, posture: ArmPosture, angle_deg: float, heading: float = 0.0) -> np.ndarray:
+    """q with both arms in the mirrored optimal posture pointing at an object at ``angle_deg``.
+
+    Arm 1 (right) takes (q2, q3) and arm 2 (left) the mirror image (-q2, -q3); each q1 turns its
+    end effector onto the direction alpha from the platform heading. ``heading`` rotates the
+    whole robot (rad).
+
+    Raises:
+        SpecError: not a differential drive with two 3-joint arms (the paper's robot).
+    """
+    _check_paper_like(robot)
+    alpha = math.radians(angle_deg)
+    _, q2, q3 = posture.q
+    right, left = robot.arms
+    joints = dict(zip(right.joint_names, (alpha - posture.bearing, q2, q3)))
+    joints.update(zip(left.joint_names, (alpha + posture.bearing, -q2, -q3)))
+    return robot.configuration((0.0, 0.0, heading), joints)
+
+
+def optimal_configuration(robot: Robot, angle_deg: float = 0.0, heading: float = 0.0) -> np.ndarray:
+    """The paper's posture as a configuration: both arms at their own optimum
+    (:func:`optimal_posture`), mirrored, pointed at an object at ``angle_deg`` from the platform
+    heading (default straight ahead); ``heading`` rotates the whole robot (rad).
+
+    Raises:
+        SpecError: not a differential drive with two 3-joint arms (the paper's robot).
+    """
+    return configuration_at(robot, optimal_posture(robot), angle_deg, heading)
 
 
 @dataclass(frozen=True)
@@ -163,7 +276,7 @@ def postures_at_reaches(
         reaches: distances from the first joint to the end effector (m), (D,).
         bend: +1 for the posture with positive bearing (the end effector counterclockwise from
             the first link at q1 = 0: the elbow to the right of the line from base to end
-            effector, as :func:`mobmanip.casestudy.optimal_posture`), -1 for its mirror image
+            effector, as :func:`optimal_posture`), -1 for its mirror image
             (-q2, -q3) (exact when the links are collinear at zero angles, as in the paper's arm).
 
     Returns:
@@ -205,7 +318,7 @@ def postures_at_reaches(
     return out
 
 
-def posture_at_reach(arm: PlanarArm, reach: float, bend: int = 1, **search) -> ReachPosture | None:
+def posture_at_reach(arm: PlanarArm, reach: float, bend: int = 1, **search: int) -> ReachPosture | None:
     """The most manipulable posture at one reach (see :func:`postures_at_reaches`), or ``None``."""
     q2, q3, value, bearing = postures_at_reaches(arm, [reach], bend, **search)[0]
     if math.isnan(value):
@@ -248,7 +361,9 @@ class PostureTable:
         return np.stack(columns, axis=1), reachable
 
 
-def posture_table(robot: Robot, distances: Sequence[float] | np.ndarray, map_fn=map) -> PostureTable:
+def posture_table(
+    robot: Robot, distances: Sequence[float] | np.ndarray, map_fn: Callable[..., Iterable[np.ndarray]] = map
+) -> PostureTable:
     """Postures of both arms (arm 1 bending right, arm 2 its mirror image) at each distance.
 
     ``map_fn`` (e.g. an executor's ``map``) runs the search on slices of the distances; each

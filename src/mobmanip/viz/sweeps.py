@@ -2,7 +2,7 @@
 
 ``object-angle``
     The paper's robot (a differential drive with two 3-joint arms): both arms in their globally
-    optimal, mirrored posture (:func:`mobmanip.casestudy.optimal_posture`) aim at an object whose
+    optimal, mirrored posture (:func:`mobmanip.postures.planar.optimal_posture`) aim at an object whose
     direction from the platform heading goes from 0 to 90 deg in 3 deg steps (pausing at the
     paper's 0, 45 and 90 deg). Any other robot keeps its configuration and turns its platform
     heading through the same 0 .. 90 deg: the object's direction in the world turns with it and
