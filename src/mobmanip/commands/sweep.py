@@ -137,7 +137,8 @@ def run_command(args) -> int:
     from ..robot.tasks import TASKS
     from ..support.files import OutputError
     from ..sweep.budget import check_grid
-    from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, plot_sweep, run_sweep
+    from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
+    from ..viz.sweep_plot import plot_sweep
     from .common import requested_measures
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)

@@ -1,9 +1,10 @@
-"""A sweep's results: the index arrays over the grid, their names, files and plots.
+"""A sweep's results: the index arrays over the grid, their names and files.
 
 :class:`SweepResult` holds, for every measure swept (:mod:`mobmanip.measures`), its indices over
 the grid of :class:`mobmanip.sweep.SweepGrid`; :func:`check_index_name` and :func:`index_names`
-define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, ...), and
-:func:`plot_sweep` draws one. :mod:`mobmanip.sweep` runs sweeps and re-exports these names.
+define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, ...).
+:func:`mobmanip.viz.sweep_plot.plot_sweep` draws one. :mod:`mobmanip.sweep` runs sweeps and
+re-exports these names.
 """
 
 from __future__ import annotations
@@ -215,15 +216,3 @@ def index_names(m: int, measures: Iterable[str] | None = None) -> list[str]:
         for _, stem in measure.axis_indices:
             out += [f"{measure.name}.{stem}_{k}" for k in range(1, m + 1)]
     return out
-
-
-# ----------------------------------------------------------------------------------------------
-# plot
-
-
-def plot_sweep(result: SweepResult, index: str, path: str | Path, max_panels: int = 6) -> Path:
-    """Plot one index over the sweep's varying grid axes and save it (PNG and PDF beside it); see
-    :func:`mobmanip.viz.sweep_plot.plot_sweep`."""
-    from ..viz.sweep_plot import plot_sweep as plot
-
-    return plot(result, index, path, max_panels)

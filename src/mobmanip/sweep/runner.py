@@ -67,7 +67,7 @@ from ..robot.model import Robot, load_robot
 from ..robot.tasks import get_task
 from ..sets.taskset import TaskSetBatch
 from .budget import MAX_GRID_POINTS, check_axis_count, check_grid, check_scaled_limits, check_values, exit_with_parent
-from .results import AXES, FLAGS, SCALAR_INDICES, SweepResult, check_index_name, index_names, plot_sweep
+from .results import AXES, FLAGS, SCALAR_INDICES, SweepResult, check_index_name, index_names
 
 _log = logging.getLogger(__name__)
 
@@ -89,7 +89,6 @@ __all__ = [
     "index_names",
     "parse_grid",
     "planar_arm",
-    "plot_sweep",
     "posture_at_reach",
     "posture_table",
     "postures_at_reaches",
