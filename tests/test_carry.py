@@ -13,9 +13,10 @@ import pytest
 import mobmanip
 import mobmanip.motion.carry as carry_module
 from mobmanip.cli import main
+from mobmanip.commands.outputs import carry_outputs
 from mobmanip.errors import ArgumentError
 from mobmanip.motion import motion_terms
-from mobmanip.motion.carry import ObjectPath, carry, carry_outputs, default_start, read_path
+from mobmanip.motion.carry import ObjectPath, carry, default_start, read_path
 from mobmanip.motion.trajectory import read_trajectory, trajectory_from_samples
 from mobmanip.motion.trajectory_analysis import analyze_trajectory
 from mobmanip.placement import place

@@ -26,6 +26,7 @@ from mobmanip import EllipsoidBatch, Measure, MeasureTerms, TaskSet, register_me
 from mobmanip.batch import BatchSetup, ellipsoids_from_terms, iter_terms
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.cli import main
+from mobmanip.commands.outputs import write_sweep_csv, write_sweep_npz
 from mobmanip.errors import MeasureError, MobmanipError, UnknownMeasureError
 from mobmanip.measures import (
     MEASURES,
@@ -400,7 +401,7 @@ def test_a_registered_measure_is_swept_beside_the_ellipsoids(tmp_path, toys):
     # velocity quantity: it changes along the velocity scale, not along the effort scale
     assert not np.allclose(doubled[..., 0, 0][reachable[..., 0, 0]], doubled[..., 1, 0][reachable[..., 1, 0]])
     assert "doubled.semi_axis_2" in index_names(2, ("kinematic", "doubled"))
-    path = result.save_csv(tmp_path / "s.csv")
+    path = write_sweep_csv(result, tmp_path / "s.csv")
     with open(path) as f:
         header = next(csv.reader(f))
     assert header[6:] == [
@@ -408,7 +409,7 @@ def test_a_registered_measure_is_swept_beside_the_ellipsoids(tmp_path, toys):
         for kind in ("kinematic", "doubled")
         for name in ("volume", "isotropy", "capacity", "semi_axis_1", "semi_axis_2", "degenerate", "empty")
     ]
-    data = np.load(result.save_npz(tmp_path / "s.npz"))
+    data = np.load(write_sweep_npz(result, tmp_path / "s.npz"))
     np.testing.assert_array_equal(data["doubled_semi_axes"], result.indices["doubled_semi_axes"])
 
 

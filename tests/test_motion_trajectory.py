@@ -12,6 +12,7 @@ import pytest
 
 import mobmanip
 from mobmanip.cli import main
+from mobmanip.commands.outputs import write_trajectory_csv
 from mobmanip.errors import ArgumentError, JointNotFoundError
 from mobmanip.motion import motion_terms
 from mobmanip.motion.trajectory import (
@@ -21,7 +22,7 @@ from mobmanip.motion.trajectory import (
     tangent_difference,
     trajectory_from_samples,
 )
-from mobmanip.motion.trajectory_analysis import analyze_trajectory, write_trajectory_csv
+from mobmanip.motion.trajectory_analysis import analyze_trajectory
 
 
 @pytest.fixture(scope="module")

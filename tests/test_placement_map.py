@@ -11,10 +11,12 @@ import pytest
 
 import mobmanip
 from mobmanip.cli import main
+from mobmanip.commands.outputs import write_placement_map_csv, write_placement_map_npz
 from mobmanip.errors import ArgumentError
 from mobmanip.placement import place
 from mobmanip.placement.maps import placement_map, reach_bound
 from mobmanip.placement.optimize import UnreachableObjectError
+from mobmanip.viz.placement import plot_placement_map
 from test_placement import check_holds, reference_value
 
 TARGET = [1.0, 0.5, 0.35]
@@ -79,13 +81,13 @@ def test_cells_beyond_the_reach_bound_are_empty_and_the_bound_holds(paper, paper
 def test_map_files(paper_map, tmp_path):
     """NPZ arrays equal the map's; the CSV has one row per cell with the same values (empty where
     unreachable); the heat map is a PNG image."""
-    paper_map.write_npz(tmp_path / "map.npz")
+    write_placement_map_npz(paper_map, tmp_path / "map.npz")
     with np.load(tmp_path / "map.npz") as saved:
         np.testing.assert_array_equal(saved["values"], paper_map.values)
         np.testing.assert_array_equal(saved["x"], paper_map.x)
         np.testing.assert_array_equal(saved["configurations"], paper_map.configurations)
         assert str(saved["objective"]) == OBJECTIVE
-    paper_map.write_csv(tmp_path / "map.csv")
+    write_placement_map_csv(paper_map, tmp_path / "map.csv")
     with open(tmp_path / "map.csv") as stream:
         rows = list(csv.reader(stream))
     assert rows[0] == ["x_m", "y_m", "heading_deg", OBJECTIVE]
@@ -98,7 +100,7 @@ def test_map_files(paper_map, tmp_path):
             assert row[3] == ""
         else:
             assert float(row[3]) == pytest.approx(want, rel=1e-9)
-    paper_map.plot(tmp_path / "map.png")
+    plot_placement_map(paper_map, tmp_path / "map.png")
     assert (tmp_path / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -286,12 +286,13 @@ def test_dask_cluster_equals_serial():
 
 def test_saving_to_a_missing_directory_is_an_output_error(tmp_path):
     """From Python as from the CLI: one MobmanipError naming the path, no partial file."""
+    from mobmanip.commands.outputs import write_sweep_csv, write_sweep_npz
     from mobmanip.support.files import OutputError
 
     result = run_sweep(SweepSpec("planar_dual_arm"), SweepGrid(angle_deg=[0.0], distance=[1.0]), workers=1)
-    for save, name in ((result.save_npz, "x.npz"), (result.save_csv, "x.csv")):
+    for save, name in ((write_sweep_npz, "x.npz"), (write_sweep_csv, "x.csv")):
         with pytest.raises(OutputError, match=name):
-            save(tmp_path / "missing" / name)
+            save(result, tmp_path / "missing" / name)
     assert not (tmp_path / "missing").exists()
 
 

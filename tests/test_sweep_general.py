@@ -11,6 +11,7 @@ import pytest
 import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.cli import main
+from mobmanip.commands.outputs import write_sweep_npz
 from mobmanip.postures.inverse_kinematics import POSITION_TOLERANCE, rotation_log, solve_postures
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep, sweep_configurations
 from mobmanip.sweep.runner import UnreachableGridError
@@ -319,7 +320,7 @@ def test_cli_ik_sweep_writes_postures(tmp_path, capsys):
 def test_planar_npz_keeps_its_keys_and_adds_the_joint_positions(robot, tmp_path):
     grid = SweepGrid(angle_deg=[0.0, 120.0], distance=[0.9, 1.7])
     result = run_sweep(SweepSpec("planar_dual_arm"), grid, workers=1)
-    data = np.load(result.save_npz(tmp_path / "p.npz"))
+    data = np.load(write_sweep_npz(result, tmp_path / "p.npz"))
     assert str(data["meta_postures"]) == "planar"
     np.testing.assert_array_equal(data["posture_right"], result.postures.right)
     np.testing.assert_array_equal(data["posture_left"], result.postures.left)

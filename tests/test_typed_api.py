@@ -49,6 +49,9 @@ PUBLIC_MODULES = [
     "mobmanip.motion.carry",
     "mobmanip.placement.maps",
     "mobmanip.robot.collision",
+    "mobmanip.viz.placement",
+    "mobmanip.viz.motion_figures",
+    "mobmanip.commands.outputs",
 ]
 
 

@@ -65,18 +65,21 @@ def register(sub) -> None:
 
 def run(args) -> int:
 
-    from ..motion.carry import carry, carry_outputs, read_path
+    from ..motion.carry import carry, read_path
     from ..robot.configurations import read_configuration
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
-    from ..support.files import note_input, output_directory
+    from ..support.files import check_output, note_input, output_directory
+    from .outputs import CARRY_FILES, carry_outputs
 
     note_input(args.path)
     robot = load_robot(find_spec(args.robot))
     path = read_path(args.path)
     start = read_configuration(robot, args.start) if args.start else None
-    if args.out:
-        output_directory(args.out)
+    if args.out:  # refuse an unwritable output before the motion is computed
+        out = output_directory(args.out)
+        for name in CARRY_FILES:
+            check_output(out / name)
     result = carry(
         robot,
         path,

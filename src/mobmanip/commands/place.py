@@ -175,6 +175,11 @@ def _check_outputs(args) -> None:
                 raise UsageError(f"{option} {path}: its directory does not exist")
     if args.map and Path(args.map).exists() and not Path(args.map).is_dir():
         raise UsageError(f"--map {args.map}: not a directory")
+    if args.map:
+        from .outputs import PLACEMENT_MAP_FILES
+
+        for name in PLACEMENT_MAP_FILES:
+            check_output(Path(args.map) / name)
 
 
 def _check_yaw(degrees: float) -> float:
@@ -210,21 +215,17 @@ def _check_map_options(args):
 
 
 def _write_map(args, robot, target, result, extent, yaw, collision, reference) -> None:
-    from pathlib import Path
-
     import numpy as np
 
     from ..placement.maps import default_extent, placement_map
+    from ..support.files import output_directory
+    from .outputs import placement_map_outputs
 
     x0, x1, y0, y1 = extent if extent is not None else default_extent(robot, target)
     xs, ys = np.linspace(x0, x1, args.map_cells), np.linspace(y0, y1, args.map_cells)
     grid = placement_map(robot, target, args.objective, xs, ys, args.task, object_mass=args.mass,
                          decoupled=args.decoupled, hold_turn=yaw, collision=collision, reference=reference)  # fmt: skip
-    out = Path(args.map)
-    out.mkdir(parents=True, exist_ok=True)
-    grid.write_npz(out / "map.npz")
-    grid.write_csv(out / "map.csv")
-    grid.plot(out / "map.png")
+    written = placement_map_outputs(grid, output_directory(args.map, "--map"))
     value, q, _ = grid.best()
     reachable = int(np.sum(~np.isnan(grid.values)))
     print(
@@ -232,7 +233,7 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference) -
         f"x {q[0]:.4f} m, y {q[1]:.4f} m, heading {math.degrees(math.atan2(q[3], q[2])):.2f} deg "
         f"(place: {result.value:.6g}); {grid.evaluations} evaluations, {grid.seconds:.2f} s"
     )
-    print(f"wrote {out / 'map.npz'}, {out / 'map.csv'}, {out / 'map.png'}")
+    print(f"wrote {', '.join(str(path) for path in written)}")
 
 
 def _show(args, robot, result) -> None:

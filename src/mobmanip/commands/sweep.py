@@ -140,6 +140,7 @@ def run_command(args) -> int:
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
     from ..viz.sweep_plot import plot_sweep
     from .common import requested_measures
+    from .outputs import write_sweep_csv, write_sweep_npz
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
     if args.task is not None and args.task not in TASKS:
@@ -224,9 +225,9 @@ def run_command(args) -> int:
             if mixed:  # m^k rad^(m-k): only comparable within this task and quantity
                 label += f" ({task.dim}-D, mixing {measure.quantity.units}: compare only within this sweep)"
             print(f"{label}: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
-    written = [result.save_npz(out.with_name(out.name + ".npz"))]
+    written = [write_sweep_npz(result, out.with_name(out.name + ".npz"))]
     if not args.no_csv:
-        written.append(result.save_csv(out.with_name(out.name + ".csv")))
+        written.append(write_sweep_csv(result, out.with_name(out.name + ".csv")))
     if args.plot:
         written.append(plot_sweep(result, index, out.with_name(out.name + ".png")))
     for path in written:

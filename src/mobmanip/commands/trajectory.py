@@ -55,14 +55,17 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..motion.trajectory import read_trajectory
-    from ..motion.trajectory_analysis import analyze_trajectory, write_outputs
+    from ..motion.trajectory_analysis import analyze_trajectory
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
-    from ..support.files import note_input, output_directory
+    from ..support.files import check_output, note_input, output_directory
+    from .outputs import trajectory_outputs
 
     note_input(args.trajectory)
-    if args.out:
-        output_directory(args.out)
+    if args.out:  # refuse an unwritable output before the analysis runs
+        out = output_directory(args.out)
+        for suffix in (".csv", ".json", ".png"):
+            check_output(out / f"analysis{suffix}")
     robot = load_robot(find_spec(args.robot))
     trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(
@@ -88,7 +91,7 @@ def run(args) -> int:
         if s.k_min > 0.0:
             print(f"slowest feasible speed-up {s.k_min:.6g}")
     if args.out:
-        for path in write_outputs(robot, result, args.out):
+        for path in trajectory_outputs(robot, result, args.out):
             print(f"wrote {path}")
     if args.export:
         from ..viz.trajectory_page import export_trajectory_page

@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,10 +28,7 @@ from ..robot.tasks import get_task
 from ..sets.capacity import kinematic_polytope
 from ..terms.grasp import HeldObject
 from .in_motion import motion_terms
-from .trajectory import Trajectory, trajectory_table
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+from .trajectory import Trajectory
 
 
 @dataclass(frozen=True)
@@ -307,79 +302,3 @@ def analyze_trajectory(
         scaling=scaling,
         velocity_polytope_capacity=v_poly,
     )
-
-
-def trajectory_figure(result: TrajectoryAnalysis) -> Figure:
-    """Three panels over time: speed against velocity capacity, acceleration against
-    acceleration capacity, and the largest velocity and effort use (fractions of the limits)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    t = result.trajectory.t
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
-    ax = axes[0]
-    ax.plot(t, np.linalg.norm(result.object_velocity, axis=1), label="object speed |v_o|")
-    ax.plot(t, result.velocity_capacity, label="kinematic capacity along v_o")
-    if result.velocity_polytope_capacity is not None:
-        ax.plot(t, result.velocity_polytope_capacity, label="kinematic polytope along v_o")
-    ax.plot(t, result.kinematic_semi_axes[:, -1], "--", label="kinematic minor semi-axis")
-    ax.set_ylabel("m/s (rad/s)")
-    ax.legend(loc="best", fontsize=8)
-    ax = axes[1]
-    ax.plot(t, np.linalg.norm(result.object_acceleration, axis=1), label="object acceleration |a_o|")
-    ax.plot(t, result.acceleration_capacity, label="dynamic capacity along a_o (in motion)")
-    ax.set_ylabel("m/s^2 (rad/s^2)")
-    ax.legend(loc="best", fontsize=8)
-    ax = axes[2]
-    ax.plot(t, result.velocity_use.max(axis=1), label="largest |x_i| / xdot_max_i")
-    ax.plot(t, result.effort_use.max(axis=1), label="largest |tau_i| / tau_max_i")
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_ylabel("fraction of limit")
-    ax.set_xlabel("t (s)")
-    ax.legend(loc="best", fontsize=8)
-    k = result.scaling.k_max
-    margin = "unbounded" if k is None else (f"{k:.3f}" if result.scaling.feasible else "none")
-    fig.suptitle(f"{result.robot_name}, task {result.task}: time-scaling margin {margin}")
-    fig.tight_layout()
-    return fig
-
-
-def write_outputs(robot: Robot, result: TrajectoryAnalysis, out_dir: str | Path, prefix: str = "analysis") -> list[str]:
-    """``{prefix}.csv``, ``{prefix}.json`` and ``{prefix}.png`` in ``out_dir``; returns the paths."""
-    from pathlib import Path
-
-    from ..support.files import save_figure, write_json
-
-    out = Path(out_dir)
-    header, values = result.table()
-    paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
-    _write_csv(paths[0], header, values)
-    write_json(paths[1], result.to_dict())
-    import matplotlib.pyplot as plt
-
-    fig = trajectory_figure(result)
-    save_figure(fig, paths[2], dpi=100)
-    plt.close(fig)
-    return [str(p) for p in paths]
-
-
-def _write_csv(path, header: list[str], values: np.ndarray) -> None:
-    from ..support.files import atomic_output
-
-    with atomic_output(path, "w", newline="", encoding="utf-8") as handle:
-        handle.write(",".join(header) + "\n")
-        for row in values:
-            handle.write(",".join(repr(float(v)) for v in row) + "\n")
-
-
-def write_trajectory_csv(
-    robot: Robot, path: str | Path, t: np.ndarray, qs: np.ndarray, extra: dict | None = None
-) -> None:
-    """A trajectory file (:mod:`mobmanip.motion.trajectory`'s columns) plus ``extra`` columns by name."""
-    header, values = trajectory_table(robot, t, qs)
-    for name, column in (extra or {}).items():
-        header.append(name)
-        values = np.hstack([values, np.asarray(column, dtype=float)[:, None]])
-    _write_csv(path, header, values)

@@ -18,12 +18,10 @@ one layer per heading.
 
 from __future__ import annotations
 
-import csv
 import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -101,76 +99,6 @@ class PlacementMap:
         layer = np.argmax(filled, axis=0)
         values = np.take_along_axis(self.values, layer[None], axis=0)[0]
         return values, np.where(np.isnan(values), np.nan, self.headings[layer])
-
-    def write_npz(self, path: str | Path) -> None:
-        """Arrays ``x``, ``y``, ``values``, ``heading``, ``configurations``, ``target`` (and
-        ``headings`` for fixed-heading layers), the objective's name under ``objective``."""
-        extra = {} if self.headings is None else {"headings": self.headings}
-        np.savez_compressed(
-            path,
-            x=self.x,
-            y=self.y,
-            values=self.values,
-            heading=self.heading,
-            configurations=self.configurations,
-            hold_turn=np.asarray(self.hold_turn, dtype=float),  # NaN-filled where no cell holds
-            target=self.target,
-            objective=np.array(self.objective.name),
-            **extra,  # type: ignore[arg-type]  # numpy's stub types **kwds as its allow_pickle flag
-        )
-
-    def write_csv(self, path: str | Path) -> None:
-        """One row per cell (and layer): x_m, y_m, heading_deg, value; empty value and heading
-        where no pose holds the object."""
-        values = self.values if self.headings is None else self.values
-        layers = [None] if self.headings is None else list(range(len(self.headings)))
-        with open(path, "w", newline="") as stream:
-            writer = csv.writer(stream)
-            writer.writerow(["x_m", "y_m", "heading_deg", self.objective.name])
-            for layer in layers:
-                v = values if layer is None else values[layer]
-                h = self.heading if layer is None else self.heading[layer]
-                for iy, y in enumerate(self.y):
-                    for ix, x in enumerate(self.x):
-                        ok = not math.isnan(v[iy, ix])
-                        writer.writerow(
-                            [f"{x:.6g}", f"{y:.6g}", f"{math.degrees(h[iy, ix]):.4f}" if ok else "",
-                             f"{v[iy, ix]:.10g}" if ok else ""]
-                        )  # fmt: skip
-
-    def plot(self, path: str | Path, title: str | None = None) -> None:
-        """A heat map of the best value over headings, arrows for the best heading, the object
-        (star) and the best cell (circle); PNG or SVG by the file's suffix."""
-        from ..support.files import save_figure
-        from ..viz.figures import plt
-
-        values, heading = self.best_over_headings()
-        fig, ax = plt.subplots(figsize=(6.4, 5.4))
-        masked = np.ma.masked_invalid(values)
-        mesh = ax.pcolormesh(self.x, self.y, masked, shading="nearest", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label=self.objective.name)
-        ok = ~np.isnan(values)
-        X, Y = np.meshgrid(self.x, self.y)
-        step = max(1, max(len(self.x), len(self.y)) // 15)
-        sel = np.zeros_like(ok)
-        sel[::step, ::step] = True
-        sel &= ok
-        ax.quiver(X[sel], Y[sel], np.cos(heading[sel]), np.sin(heading[sel]), color="white", scale=25, width=0.004)
-        ax.plot(*self.target[:2], marker="*", color="red", markersize=14, linestyle="none", label="object")
-        if ok.any():
-            _, q, _ = self.best()
-            ax.plot(q[0], q[1], marker="o", markerfacecolor="none", markeredgecolor="red", markersize=12,
-                    linestyle="none", label="best platform position")  # fmt: skip
-        ax.set_xlabel("platform x (m)")
-        ax.set_ylabel("platform y (m)")
-        ax.set_aspect("equal")
-        ax.set_title(title or f"best {self.objective.name} over heading and posture")
-        ax.legend(loc="upper right", fontsize=8)
-        fig.tight_layout()
-        try:
-            save_figure(fig, path, dpi=110)
-        finally:
-            plt.close(fig)
 
 
 def reach_bound(robot: Robot, reference: np.ndarray) -> float:

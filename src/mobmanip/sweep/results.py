@@ -1,18 +1,16 @@
-"""A sweep's results: the index arrays over the grid, their names and files.
+"""A sweep's results: the index arrays over the grid and their names.
 
 :class:`SweepResult` holds, for every measure swept (:mod:`mobmanip.measures`), its indices over
 the grid of :class:`mobmanip.sweep.SweepGrid`; :func:`check_index_name` and :func:`index_names`
 define the names users ask for (``kinematic.volume``, ``dynamic.semi_axis_1``, ...).
-:func:`mobmanip.viz.sweep_plot.plot_sweep` draws one. :mod:`mobmanip.sweep` runs sweeps and
-re-exports these names.
+:func:`mobmanip.viz.sweep_plot.plot_sweep` draws one and :mod:`mobmanip.commands.outputs`
+writes a result's files. :mod:`mobmanip.sweep` runs sweeps and re-exports these names.
 """
 
 from __future__ import annotations
 
-import csv
 from collections.abc import Iterable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -21,7 +19,6 @@ from ..errors import ArgumentError
 from ..measures.registry import Measure, resolve_measures
 from ..postures.inverse_kinematics import IKPostureTable
 from ..postures.planar import PostureTable
-from ..support.files import atomic_output
 
 if TYPE_CHECKING:
     from .runner import SweepGrid, SweepSpec
@@ -104,8 +101,9 @@ class SweepResult:
             return self.indices[f"{kind}_{what}"]
         return self.indices[f"{kind}_{what}"][..., k - 1]
 
-    def save_npz(self, path: str | Path) -> Path:
-        """Write the grid axes, the indices, the postures and the settings to a NumPy ``.npz`` file.
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The grid axes, the indices, the postures and the settings as named arrays: what
+        :func:`mobmanip.commands.outputs.write_sweep_npz` writes to a ``.npz`` file.
 
         Keys: the grid axes (:data:`AXES`), every index array, ``reachable`` (A, D, H),
         ``posture_joint_names`` and ``posture_joints`` (A, D, n) (:meth:`joint_positions`), and
@@ -115,7 +113,6 @@ class SweepResult:
         ``posture_reference`` (the reference configuration) and the hold: ``hold_origin``,
         ``hold_height``, ``hold_offsets``, ``hold_rotations`` (see :class:`mobmanip.postures.inverse_kinematics.Hold`).
         """
-        path = Path(path)
         arrays = {name: getattr(self.grid, name) for name in AXES}
         arrays.update(self.indices)
         arrays["reachable"] = self.reachable
@@ -146,13 +143,12 @@ class SweepResult:
             "postures": table.method,
         }
         arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
-        with atomic_output(path, "wb") as f:
-            np.savez_compressed(f, **arrays)
-        return path
+        return arrays
 
-    def save_csv(self, path: str | Path) -> Path:
-        """Write one row per grid point: the axis values, reachability and every index."""
-        path = Path(path)
+    def table(self) -> tuple[list[str], np.ndarray]:
+        """(header, rows): one row per grid point with the axis values, reachability (0 or 1) and
+        every index (flags as 0 or 1); what :func:`mobmanip.commands.outputs.write_sweep_csv`
+        writes."""
         m = len(self.task_axes)
         grids = np.meshgrid(*(getattr(self.grid, name) for name in AXES), indexing="ij")
         reach = np.broadcast_to(self.reachable[..., None, None], self.grid.shape)
@@ -171,14 +167,7 @@ class SweepResult:
             for flag in FLAGS:
                 columns.append(self.indices[f"{kind}_{flag}"].ravel().astype(int))
                 header.append(f"{kind}_{flag}")
-        with atomic_output(path, "w", newline="") as f:
-            writer = csv.writer(f)
-            writer.writerow(header)
-            table = np.column_stack(columns)
-            step = 65536
-            for start in range(0, table.shape[0], step):
-                writer.writerows([f"{v:.12g}" for v in row] for row in table[start : start + step])
-        return path
+        return header, np.column_stack(columns)
 
 
 def check_index_name(name: str, m: int, measures: Iterable[str] | None = None) -> tuple[str, str, int | None]:

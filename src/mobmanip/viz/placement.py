@@ -1,11 +1,13 @@
-"""The figure of a base placement: the best start and the optimum from above, each with the
-objective's ellipsoid (its horizontal shadow) drawn at the object, on one scale."""
+"""Figures of base placement: a placement's best start and optimum from above, each with the
+objective's ellipsoid (its horizontal shadow) drawn at the object, on one scale
+(:func:`placement_figure`); and a placement map as a heat map over platform positions
+(:func:`plot_placement_map`)."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -13,10 +15,16 @@ from ..analysis.single import analyze
 from ..robot.model import Robot
 from ..sets.ellipsoid import Ellipsoid
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..placement.maps import PlacementMap
+    from ..placement.optimize import Placement
+
 
 def placement_figure(
     robot: Robot,
-    placement,
+    placement: Placement,
     path: str | Path,
     task: str | None = None,
     *,
@@ -73,6 +81,51 @@ def placement_figure(
         f"optimum: platform x {x:.3f} m, y {y:.3f} m, heading {math.degrees(heading):.1f} deg"
     )
     fig.tight_layout()
+    try:
+        save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
+    return Path(path)
+
+
+def placement_map_figure(placement_map: PlacementMap, title: str | None = None) -> Figure:
+    """A heat map of a :class:`mobmanip.placement.maps.PlacementMap`'s best value over headings,
+    arrows for the best heading, the object (star) and the best cell (circle)."""
+    from .figures import plt
+
+    grid = placement_map
+    values, heading = grid.best_over_headings()
+    fig, ax = plt.subplots(figsize=(6.4, 5.4))
+    masked = np.ma.masked_invalid(values)
+    mesh = ax.pcolormesh(grid.x, grid.y, masked, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=grid.objective.name)
+    ok = ~np.isnan(values)
+    X, Y = np.meshgrid(grid.x, grid.y)
+    step = max(1, max(len(grid.x), len(grid.y)) // 15)
+    sel = np.zeros_like(ok)
+    sel[::step, ::step] = True
+    sel &= ok
+    ax.quiver(X[sel], Y[sel], np.cos(heading[sel]), np.sin(heading[sel]), color="white", scale=25, width=0.004)
+    ax.plot(*grid.target[:2], marker="*", color="red", markersize=14, linestyle="none", label="object")
+    if ok.any():
+        _, q, _ = grid.best()
+        ax.plot(q[0], q[1], marker="o", markerfacecolor="none", markeredgecolor="red", markersize=12,
+                linestyle="none", label="best platform position")  # fmt: skip
+    ax.set_xlabel("platform x (m)")
+    ax.set_ylabel("platform y (m)")
+    ax.set_aspect("equal")
+    ax.set_title(title or f"best {grid.objective.name} over heading and posture")
+    ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_placement_map(placement_map: PlacementMap, path: str | Path, title: str | None = None) -> Path:
+    """Write :func:`placement_map_figure` (PNG or SVG by the file's suffix) atomically; returns the path."""
+    from ..support.files import save_figure
+    from .figures import plt
+
+    fig = placement_map_figure(placement_map, title)
     try:
         save_figure(fig, path, dpi=110)
     finally:

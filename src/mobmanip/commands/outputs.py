@@ -1,0 +1,225 @@
+"""What the commands write: every table, array file and figure of a result, through the atomic
+output path.
+
+The domain layers compute (a sweep, a placement map, a trajectory's analysis, a carried path);
+the files they are written to are made here, and their figures are drawn in :mod:`mobmanip.viz`.
+Every file goes through :func:`mobmanip.support.files.atomic_output` (figures through
+:func:`mobmanip.support.files.save_figure`), so a failure midway never leaves a truncated file,
+and inside a command, which runs within :func:`mobmanip.support.files.publish_together`, the
+command's files are published all together or not at all. From Python the same functions write
+the same files, each one atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..support.files import atomic_output, save_figure, write_json
+
+if TYPE_CHECKING:
+    from ..motion.carry import CarryResult
+    from ..motion.trajectory_analysis import TrajectoryAnalysis
+    from ..placement.maps import PlacementMap
+    from ..robot.model import Robot
+    from ..sweep.results import SweepResult
+
+#: The files ``place --map DIR`` writes in DIR.
+PLACEMENT_MAP_FILES = ("map.npz", "map.csv", "map.png")
+#: The files ``carry --out DIR`` writes in DIR (and ``preparation.csv`` after a self-motion).
+CARRY_FILES = ("trajectory.csv", "baseline.csv", "carry.json", "capacity.png", "preparation.csv")
+
+
+def _close(figure) -> None:
+    import matplotlib.pyplot as plt
+
+    plt.close(figure)
+
+
+# ------------------------------------------------------------------------------------------------
+# sweeps
+
+
+def write_sweep_npz(result: SweepResult, path: str | Path) -> Path:
+    """Write :meth:`mobmanip.sweep.SweepResult.arrays` to a NumPy ``.npz`` file (compressed).
+
+    Raises:
+        OutputError: the directory does not exist or the path cannot be written.
+    """
+    path = Path(path)
+    with atomic_output(path, "wb") as handle:
+        np.savez_compressed(handle, **result.arrays())  # type: ignore[arg-type]  # numpy's stub: **kwds as allow_pickle
+    return path
+
+
+def write_sweep_csv(result: SweepResult, path: str | Path) -> Path:
+    """Write :meth:`mobmanip.sweep.SweepResult.table` as CSV, one row per grid point (12
+    significant digits).
+
+    Raises:
+        OutputError: the directory does not exist or the path cannot be written.
+    """
+    path = Path(path)
+    header, table = result.table()
+    with atomic_output(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        step = 65536
+        for start in range(0, table.shape[0], step):
+            writer.writerows([f"{v:.12g}" for v in row] for row in table[start : start + step])
+    return path
+
+
+# ------------------------------------------------------------------------------------------------
+# placement maps
+
+
+def write_placement_map_npz(placement_map: PlacementMap, path: str | Path) -> Path:
+    """Arrays ``x``, ``y``, ``values``, ``heading``, ``configurations``, ``hold_turn``, ``target``
+    (and ``headings`` for fixed-heading layers), the objective's name under ``objective``."""
+    grid = placement_map
+    extra = {} if grid.headings is None else {"headings": grid.headings}
+    path = Path(path)
+    with atomic_output(path, "wb") as handle:
+        np.savez_compressed(
+            handle,
+            x=grid.x,
+            y=grid.y,
+            values=grid.values,
+            heading=grid.heading,
+            configurations=grid.configurations,
+            hold_turn=np.asarray(grid.hold_turn, dtype=float),  # NaN-filled where no cell holds
+            target=grid.target,
+            objective=np.array(grid.objective.name),
+            **extra,  # type: ignore[arg-type]  # numpy's stub types **kwds as its allow_pickle flag
+        )
+    return path
+
+
+def write_placement_map_csv(placement_map: PlacementMap, path: str | Path) -> Path:
+    """One row per cell (and layer): x_m, y_m, heading_deg, value; empty value and heading where
+    no pose holds the object."""
+    grid = placement_map
+    layers = [None] if grid.headings is None else list(range(len(grid.headings)))
+    path = Path(path)
+    with atomic_output(path, "w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["x_m", "y_m", "heading_deg", grid.objective.name])
+        for layer in layers:
+            v = grid.values if layer is None else grid.values[layer]
+            h = grid.heading if layer is None else grid.heading[layer]
+            for iy, y in enumerate(grid.y):
+                for ix, x in enumerate(grid.x):
+                    ok = not math.isnan(v[iy, ix])
+                    writer.writerow(
+                        [f"{x:.6g}", f"{y:.6g}", f"{math.degrees(h[iy, ix]):.4f}" if ok else "",
+                         f"{v[iy, ix]:.10g}" if ok else ""]
+                    )  # fmt: skip
+    return path
+
+
+def placement_map_outputs(placement_map: PlacementMap, out_dir: str | Path) -> list[Path]:
+    """:data:`PLACEMENT_MAP_FILES` in ``out_dir`` (which must exist): the arrays, the table and
+    the heat map (:func:`mobmanip.viz.placement.plot_placement_map`); returns the paths."""
+    from ..viz.placement import plot_placement_map
+
+    out = Path(out_dir)
+    npz, table, figure = (out / name for name in PLACEMENT_MAP_FILES)
+    return [
+        write_placement_map_npz(placement_map, npz),
+        write_placement_map_csv(placement_map, table),
+        plot_placement_map(placement_map, figure),
+    ]
+
+
+# ------------------------------------------------------------------------------------------------
+# trajectories and carried paths
+
+
+def write_table_csv(path: str | Path, header: list[str], values: ArrayLike) -> Path:
+    """A CSV of numbers: the header, then one row per row of ``values`` (each number as Python's
+    shortest exact ``repr``)."""
+    path = Path(path)
+    with atomic_output(path, "w", newline="", encoding="utf-8") as handle:
+        handle.write(",".join(header) + "\n")
+        for row in np.asarray(values, dtype=float):
+            handle.write(",".join(repr(float(v)) for v in row) + "\n")
+    return path
+
+
+def write_trajectory_csv(
+    robot: Robot, path: str | Path, t: ArrayLike, qs: ArrayLike, extra: Mapping[str, ArrayLike] | None = None
+) -> Path:
+    """A trajectory file (:func:`mobmanip.motion.trajectory.trajectory_table`'s columns, readable
+    by :func:`mobmanip.motion.trajectory.read_trajectory`) plus ``extra`` columns by name."""
+    from ..motion.trajectory import trajectory_table
+
+    header, values = trajectory_table(robot, np.asarray(t, dtype=float), np.asarray(qs, dtype=float))
+    for name, column in (extra or {}).items():
+        header.append(name)
+        values = np.hstack([values, np.asarray(column, dtype=float)[:, None]])
+    return write_table_csv(path, header, values)
+
+
+def trajectory_outputs(
+    robot: Robot, result: TrajectoryAnalysis, out_dir: str | Path, prefix: str = "analysis"
+) -> list[str]:
+    """``{prefix}.csv`` (:meth:`TrajectoryAnalysis.table`), ``{prefix}.json`` and ``{prefix}.png``
+    (:func:`mobmanip.viz.motion_figures.trajectory_figure`) in ``out_dir``; returns the paths."""
+    from ..viz.motion_figures import trajectory_figure
+
+    out = Path(out_dir)
+    header, values = result.table()
+    paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
+    write_table_csv(paths[0], header, values)
+    write_json(paths[1], result.to_dict())
+    fig = trajectory_figure(result)
+    try:
+        save_figure(fig, paths[2], dpi=100)
+    finally:
+        _close(fig)
+    return [str(p) for p in paths]
+
+
+def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> list[str]:
+    """trajectory.csv, baseline.csv, carry.json and capacity.png in ``out_dir``, and
+    preparation.csv (the self-motion before the path, when there is one); returns the paths.
+
+    trajectory.csv is the QP motion (a valid input of ``mobmanip trajectory``) with its capacity,
+    the baseline's and its tracking error; capacity.png is
+    :func:`mobmanip.viz.motion_figures.carry_figure`.
+    """
+    from ..viz.motion_figures import carry_figure
+
+    out = Path(out_dir)
+    motion, base = result.motion, result.baseline
+    paths = [out / name for name in CARRY_FILES[:4]]
+    write_trajectory_csv(
+        robot,
+        paths[0],
+        motion.t,
+        motion.q,
+        {"capacity": motion.capacity, "baseline_capacity": base.capacity, "tracking_error": motion.tracking_error},
+    )
+    write_trajectory_csv(
+        robot, paths[1], base.t, base.q, {"capacity": base.capacity, "tracking_error": base.tracking_error}
+    )
+    write_json(paths[2], {"robot": robot.name, **result.summary()})
+    prep = result.preparation
+    if prep is not None:
+        paths.append(out / CARRY_FILES[4])
+        write_trajectory_csv(
+            robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
+        )
+    fig = carry_figure(result)
+    try:
+        save_figure(fig, paths[3], dpi=100)
+    finally:
+        _close(fig)
+    return [str(p) for p in paths]
