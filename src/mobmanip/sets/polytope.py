@@ -16,7 +16,8 @@ Queries and how they are answered:
 - halfspaces ``A a <= b``: the zonotope's facets (:mod:`mobmanip.sets.zonotope`) pulled back by F,
   plus the equalities of the directions in which the zonotope is flat; irredundant for m <= 3;
 - vertices and faces (m <= 3): one Qhull call on the polar set (:mod:`mobmanip.sets.hull`);
-  a zonotope's vertices are then recomputed exactly as c + G sign(G^T d) from their normals;
+  a zonotope's vertices are then recomputed exactly as c + G sign(G^T d) from their normals
+  (:mod:`mobmanip.sets.polytope_vertices`, which also enumerates vertices above 3 dimensions);
 - support: sum_j ``|g_j . d|`` for a zonotope, the vertices for m <= 3, otherwise a linear program
   on HiGHS kept warm between directions;
 - membership: the halfspaces; ``inputs`` gives joint values (within their limits) reaching
@@ -38,16 +39,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import TaskError
+from ..support.tolerances import RANK_RTOL
 from . import zonotope
 from .hull import enumerate_hull
 from .linear_programs import LinearProgram
+from .polytope_vertices import exact_vertices, halfspace_vertices, volume_from_vertices
 from .taskset import TaskSet
 
-_RANK_RTOL = 1e-10
+_RANK_RTOL = RANK_RTOL
 _EMPTY_TOL = 1e-9  # least effort above 1 + this: empty; above 1 - this: no interior
-#: Above 3 dimensions, vertices (for volume and isotropy) are enumerated only up to this many
-#: halfspaces: beyond, Qhull's output explodes (a 6-D kinematic section of TIAGo++ has ~5,000).
-_MAX_HIGH_DIM_ROWS = 400
 
 
 class Polytope(TaskSet):
@@ -546,59 +546,10 @@ class Polytope(TaskSet):
         return True
 
     def _exact_vertices(self, rep, hull):
-        """Recompute each vertex with its joint values from the zonotope face it lies on.
-
-        A vertex v has F v on the face of Z maximising d = the sum of its facets' zonotope
-        normals: y_j = sign(g_j . d) where g_j . d != 0, free otherwise. Solving
-        F v - G_free y_free = c + G_fixed y_fixed (square for a vertex in general position; one
-        batched solve) gives v and its joint values to round-off; Qhull's vertex, accurate to
-        the conditioning of its facets, is kept where this does not confirm it.
-        """
-        F, c, G = self._F, self._c, self._G
-        (p, m), n = F.shape, G.shape[1]
-        V = rep["vertices"]
+        """Each vertex and its joint values recomputed from the zonotope face it lies on
+        (:func:`mobmanip.sets.polytope_vertices.exact_vertices`)."""
         d = hull.normal_sums(self._cache["z_normals"][hull.facet_rows])
-        proj = d @ G
-        fixed = np.abs(proj) > 1e-9 * np.linalg.norm(d, axis=1, keepdims=True) * np.linalg.norm(G, axis=0)
-        Y = np.where(fixed, np.sign(proj), 0.0)
-        target = c + Y @ G.T
-        free_count = n - fixed.sum(axis=1)
-        exact, ok = V.copy(), np.zeros(len(V), dtype=bool)
-        generic = np.flatnonzero(free_count == p - m)
-        if len(generic):
-            free = np.argsort(fixed[generic], axis=1, kind="stable")[:, : p - m]  # free columns first
-            M = np.concatenate([np.broadcast_to(F, (len(generic), p, m)), -G.T[free].transpose(0, 2, 1)], axis=2)
-            with np.errstate(all="ignore"):
-                try:
-                    x = np.linalg.solve(M, target[generic][:, :, None])[:, :, 0]
-                except np.linalg.LinAlgError:
-                    x = np.full((len(generic), p), np.nan)
-            good = np.all(np.isfinite(x), axis=1) & np.all(np.abs(x[:, m:]) <= 1.0 + 1e-9, axis=1)
-            good &= np.max(np.abs(x[:, :m] - V[generic]), axis=1) <= 1e-6 * self._size
-            rows = generic[good]
-            exact[rows] = x[good, :m]
-            Y[rows[:, None], free[good]] = x[good, m:]
-            ok[rows] = True
-        rest = np.flatnonzero(~ok)  # more free generators than p - m (e.g. parallel generators)
-        if len(rest):
-            width = int(free_count[rest].max())
-            free = np.argsort(fixed[rest], axis=1, kind="stable")[:, :width]
-            valid = np.arange(width)[None, :] < free_count[rest][:, None]
-            cols = np.where(valid[:, None, :], -G.T[free].transpose(0, 2, 1), 0.0)  # zero padding
-            M = np.concatenate([np.broadcast_to(F, (len(rest), p, m)), cols], axis=2)
-            M_pinv = np.linalg.pinv(M, rcond=_RANK_RTOL)
-            x = (M_pinv @ target[rest][:, :, None])[:, :, 0]
-            # v is pinned down when no null vector of M moves it: (I - M^+ M) has a zero v-block
-            moves = np.eye(M.shape[2])[None, :m] - (M_pinv @ M)[:, :m]
-            pinned = np.max(np.abs(moves), axis=(1, 2)) <= 1e-9
-            pinned &= np.max(np.abs(x[:, :m] - V[rest]), axis=1) <= 1e-6 * self._size
-            exact[rest[pinned]] = x[pinned, :m]
-            inside = pinned & np.all(np.abs(x[:, m:]) <= 1.0 + 1e-9, axis=1)
-            for j in np.flatnonzero(inside):
-                Y[rest[j], free[j, valid[j]]] = x[j, m:][valid[j]]
-            ok[rest[inside]] = True
-        rep["vertices"] = exact
-        rep["Y"] = np.where(ok[:, None], np.clip(Y, -1.0, 1.0), np.nan)
+        rep["vertices"], rep["Y"] = exact_vertices(self._F, self._c, self._G, rep["vertices"], d, self._size)
 
     def _vertex_y(self, v) -> np.ndarray:
         """Box coordinates reaching the point v (a linear program, polished)."""
@@ -678,31 +629,12 @@ class Polytope(TaskSet):
         if self.dim <= 3:
             return self.vertices
         if "all_vertices" not in self._cache:
-            from scipy.spatial import HalfspaceIntersection, QhullError
-
-            from .hull import _groups
-
             A, b0, h = self._inequalities()
-            k = self._affine_dim
-            if k <= 0:
+            if self._affine_dim <= 0:
                 V = self.center[None, :]
             else:
                 p0 = self._interior_point()
-                An, s = A @ self._N, b0 + h - A @ p0
-                if k == 1 or k <= 3:
-                    U = enumerate_hull(An, s).vertices
-                else:
-                    if len(An) > _MAX_HIGH_DIM_ROWS:
-                        raise TaskError(
-                            f"this {self.dim}-D polytope has {len(An)} halfspaces: enumerating its vertices (for its "
-                            "volume or isotropy) is impractical; use support, contains, project or slice"
-                        )
-                    halfspaces = np.hstack([An, -s[:, None]])
-                    try:
-                        U = HalfspaceIntersection(halfspaces, np.zeros(k)).intersections
-                    except QhullError:  # nearly degenerate input: Qhull's joggle, accurate to ~1e-10
-                        U = HalfspaceIntersection(halfspaces, np.zeros(k), qhull_options="QJ").intersections
-                    U = U[_groups(U)[1]]
+                U = halfspace_vertices(A @ self._N, b0 + h - A @ p0, self.dim)
                 V = p0 + U @ self._N.T
             self._cache["all_vertices"] = V
         return self._cache["all_vertices"]
@@ -712,17 +644,5 @@ class Polytope(TaskSet):
         if self.is_zonotope and zonotope.subset_count(self._G.shape[1], m) <= zonotope.MAX_SUBSETS:
             return zonotope.volume(self._G)
         if m <= 3:
-            V = self.vertices
-            if m == 1:
-                return float(abs(V[1, 0] - V[0, 0]))
-            if m == 2:
-                x, y = V[:, 0], V[:, 1]
-                return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-            T = V[self.triangles] - self.center
-            return float(abs(np.einsum("ti,ti->t", T[:, 0], np.cross(T[:, 1], T[:, 2])).sum()) / 6.0)
-        from scipy.spatial import ConvexHull, QhullError
-
-        try:
-            return float(ConvexHull(self._all_vertices()).volume)
-        except QhullError:  # nearly degenerate vertex set: Qhull's joggle (accurate to ~1e-7)
-            return float(ConvexHull(self._all_vertices(), qhull_options="QJ").volume)
+            return volume_from_vertices(self.vertices, self.triangles, self.center)
+        return volume_from_vertices(self._all_vertices(), np.zeros((0, 3), dtype=int), self.center)
