@@ -52,6 +52,19 @@ PUBLIC_MODULES = [
     "mobmanip.viz.placement",
     "mobmanip.viz.motion_figures",
     "mobmanip.commands.outputs",
+    "mobmanip.cli",
+    "mobmanip.old_paths",
+    "mobmanip.placement.grid",
+    "mobmanip.platforms",
+    "mobmanip.postures.named",
+    "mobmanip.robot.configurations",
+    "mobmanip.sets.polytope_vertices",
+    "mobmanip.sets.zonotope",
+    "mobmanip.support.files",
+    "mobmanip.support.ranges",
+    "mobmanip.support.tolerances",
+    "mobmanip.viz.sweep_plot",
+    "mobmanip.viz.team_figure",
 ]
 
 

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..batch import analyze_batch
 from ..engine import EllipsoidBatch
@@ -79,11 +80,11 @@ class PlacementGrid:
 
 def placement_grid(
     robot: Robot,
-    target,
+    target: ArrayLike,
     objective: Objective | str,
-    angle_deg,
-    distance,
-    heading_deg,
+    angle_deg: ArrayLike,
+    distance: ArrayLike,
+    heading_deg: ArrayLike,
     task: str | None = None,
     *,
     object_mass: float | None = None,

@@ -17,6 +17,7 @@ apart the object's declared grasp points are (an explicit object's offsets, else
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Protocol
 
 import numpy as np
 
@@ -29,6 +30,16 @@ HOME, HOLD = "home", "hold"
 #: Slack on the declared distance between two grasp points before a wider spread of the hands
 #: is warned about: a tenth of that distance, and at least this many metres (a hand's width).
 SPREAD_SLACK = 0.05
+
+
+class GraspPoints(Protocol):
+    """An object with grasp points, such as :class:`mobmanip.terms.grasp.HeldObject` (declared
+    here by what is read from it: the terms layer sits above the postures)."""
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """The grasp points from the object's centre, (k, 3) (m)."""
+        ...
 
 
 def posture_names(spec: RobotSpec) -> tuple[str, ...]:
@@ -62,7 +73,7 @@ def named_configuration(robot: Robot, name: str, platform: tuple[float, float, f
     return robot.configuration(platform, dict(posture_joints(robot.spec, name)))
 
 
-def declared_grasp_offsets(robot: Robot, held_object=None) -> np.ndarray | None:
+def declared_grasp_offsets(robot: Robot, held_object: GraspPoints | None = None) -> np.ndarray | None:
     """The grasp offsets (k, 3) an object declares: an explicit object's, else the spec's
     ``[object] grasp_offsets``; ``None`` when neither declares any (or with one arm)."""
     if len(robot.arms) < 2:
@@ -74,7 +85,7 @@ def declared_grasp_offsets(robot: Robot, held_object=None) -> np.ndarray | None:
     return None
 
 
-def hand_spread_warnings(robot: Robot, positions: np.ndarray, held_object=None) -> list[str]:
+def hand_spread_warnings(robot: Robot, positions: np.ndarray, held_object: GraspPoints | None = None) -> list[str]:
     """Warnings for pairs of hands further apart than the object's grasp points allow.
 
     Args:

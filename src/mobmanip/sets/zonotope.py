@@ -2,7 +2,7 @@
 
 A full-dimensional zonotope in R^r is bounded by the hyperplanes orthogonal to r - 1 linearly
 independent generators: every facet normal is the generalised cross product of such a subset,
-and the support value along a unit normal nu is sum_j |nu . g_j|. Conversely every subset of
+and the support value along a unit normal nu is ``sum_j |nu . g_j|``. Conversely every subset of
 r - 1 independent generators gives a supporting halfspace (a facet when the generators are in
 general position, a lower face otherwise), so the halfspaces from all subsets describe the
 zonotope exactly, possibly with redundant rows.
@@ -138,7 +138,7 @@ def facet_normals(G: np.ndarray) -> np.ndarray:
 
     Returns:
         Unit normals ``nu`` (s, r), each with its sign chosen so that its largest entry is
-        positive; the zonotope is {z : |nu . z| <= sum_j |nu . g_j| for every row}.
+        positive; the zonotope is ``{z : |nu . z| <= sum_j |nu . g_j|}`` for every row.
     """
     global _compiled
     r, n = G.shape
@@ -173,7 +173,7 @@ def facet_normals(G: np.ndarray) -> np.ndarray:
 
 
 def volume(G: np.ndarray) -> float:
-    """Volume of the zonotope {G y : |y_i| <= 1} in R^m: 2^m sum over m-subsets |det G_S|."""
+    """Volume of the zonotope ``{G y : |y_i| <= 1}`` in R^m: ``2^m`` times the sum over m-subsets of ``|det G_S|``."""
     m, n = G.shape
     if n < m:
         return 0.0
@@ -228,7 +228,7 @@ def low_dim_faces_numpy(center: np.ndarray, G: np.ndarray) -> dict | None:
     Returns:
         None, or a dict with ``vertices`` (v, m), ``Y`` (v, n) in {-1, 0, 1} (0 for zero
         generators), ``normals`` (f, m) unit outward, ``offsets`` (f,) = normal . c,
-        ``widths`` (f,) = sum_j |normal . g_j|, ``faces`` (list of index arrays, counter-clockwise
+        ``widths`` (f,) = ``sum_j |normal . g_j|``, ``faces`` (list of index arrays, counter-clockwise
         seen from outside for m = 3, edges in boundary order for m = 2).
     """
     m, n = G.shape

@@ -11,7 +11,7 @@ import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from ..errors import NumericalError, OutputError
 
@@ -158,7 +158,7 @@ _KINDS = (
 
 
 @contextlib.contextmanager
-def atomic_output(path: str | Path, mode: str = "w", **open_options) -> Iterator[IO]:
+def atomic_output(path: str | Path, mode: str = "w", **open_options: Any) -> Iterator[IO]:
     """Open a temporary file beside ``path`` that replaces it only once written completely.
 
     Every file mobmanip writes goes through here, so an error or an interruption midway never
@@ -247,7 +247,7 @@ def require_finite(document: object, what: str = "the result") -> None:
         raise NumericalError(f"{found} is not finite; the inputs lie outside the range where results are certified")
 
 
-def save_figure(figure, path: str | Path, **options) -> Path:
+def save_figure(figure: Any, path: str | Path, **options: Any) -> Path:
     """Save a matplotlib figure atomically, in the format named by the file's suffix (PNG by default)."""
     path = Path(path)
     with atomic_output(path, "wb") as handle:

@@ -13,10 +13,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..support.files import save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..sweep.results import SweepResult
 
 AXIS_LABELS = {
     "angle_deg": "object direction (\N{DEGREE SIGN})",
@@ -72,7 +78,9 @@ def index_label(index: str, task: str) -> str:
     return f"{index} ({index_unit(index, task)})"
 
 
-def plot_sweep(result, index: str, path: str | Path, max_panels: int = 6, formats: Sequence[str] = FORMATS) -> Path:
+def plot_sweep(
+    result: SweepResult, index: str, path: str | Path, max_panels: int = 6, formats: Sequence[str] = FORMATS
+) -> Path:
     """Plot one index over the sweep's varying grid axes (see the module's docstring) and save it.
 
     Args:
@@ -92,7 +100,7 @@ def plot_sweep(result, index: str, path: str | Path, max_panels: int = 6, format
     return path
 
 
-def sweep_plot_figure(result, index: str, max_panels: int = 6):
+def sweep_plot_figure(result: SweepResult, index: str, max_panels: int = 6) -> Figure:
     """The matplotlib ``Figure`` :func:`plot_sweep` saves."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -15,7 +15,9 @@ from ..team.sweep import TeamSweep
 from .figures import COLORS, draw_ellipse, draw_robot, extent
 
 
-def team_figure(analysis: TeamAnalysis, path: str | Path, sweep: TeamSweep | None = None, *, scale=None) -> Path:
+def team_figure(
+    analysis: TeamAnalysis, path: str | Path, sweep: TeamSweep | None = None, *, scale: float | None = None
+) -> Path:
     """Write the team's figure: a top view (robots, the object through its grasp points, the
     velocity sets of the team at the object's centre, and each robot's own kinematic set through
     its grasps dashed) and, with a sweep, the reach along each task axis against the heading.
