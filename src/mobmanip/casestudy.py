@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from .analysis.single import Analysis, analyze
 from .errors import SpecError
-from .measures.registry import DYNAMIC, KINEMATIC, get_measure
+from .measures import DYNAMIC, KINEMATIC, get_measure
 from .platforms import DifferentialDrive
 from .robot.model import Arm, Robot
 

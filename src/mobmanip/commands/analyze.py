@@ -133,7 +133,7 @@ def _describe(name: str, task_set, unit: str, ellipsoid=None) -> str:
 
 def _ellipsoid_of(result, quantity):
     """The first ellipsoid of ``quantity`` the analysis holds (the polytopes are compared with it)."""
-    from ..measures.registry import get_measure
+    from ..measures import get_measure
 
     for name, task_set in result.measures.items():
         if task_set.kind == "ellipsoid" and get_measure(name).quantity == quantity:
@@ -143,7 +143,7 @@ def _ellipsoid_of(result, quantity):
 
 def run(args) -> int:
     from ..analysis.single import analyze
-    from ..measures.registry import get_measure
+    from ..measures import get_measure
     from ..support.files import require_finite, write_json
 
     robot, q = load_robot_and_configuration(args)

@@ -133,7 +133,7 @@ def add_analysis_options(parser: argparse.ArgumentParser) -> None:
 
 def add_measure_option(parser: argparse.ArgumentParser) -> None:
     """--measure NAME (repeatable): the measures to compute instead of the default ones."""
-    from ..measures.registry import default_measures, measure_names
+    from ..measures import default_measures, measure_names
 
     parser.add_argument(
         "--measure",
@@ -153,14 +153,14 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
 
 def polytope_measures() -> tuple[str, ...]:
     """The registered measures whose sets are polytopes (what ``--polytope`` adds)."""
-    from ..measures.registry import MEASURES
+    from ..measures import MEASURES
 
     return tuple(name for name, measure in MEASURES.items() if measure.set_kind == "polytope")
 
 
 def requested_measures(args) -> tuple[str, ...] | None:
     """The measures ``--measure`` and ``--polytope`` ask for (``None``: the default ones)."""
-    from ..measures.registry import default_measures
+    from ..measures import default_measures
 
     measures = getattr(args, "measures", None)
     if getattr(args, "polytope", False):
