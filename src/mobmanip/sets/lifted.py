@@ -11,9 +11,10 @@ answers with linear programs on HiGHS (:class:`~mobmanip.sets.linear_programs.Li
 kept warm between directions):
 
 - ``support(d)``: max d . a over the set (the other task components free);
-- ``ray_radius(d)``: the *straight-line reach*, the largest s with s d / |d| in the set;
-- ``witness(d)`` / ``ray_witness(d)``: the whole maximiser z, split by variable name (which
-  torques, contact forces ... achieve the maximum);
+- ``straight_line_reach(d)``: the largest s with s d / |d| in the set (from rest, exactly
+  along d); ``ray_radius(d)`` the same from :attr:`center`;
+- ``witness(d)`` / ``straight_line_witness(d)``: the whole maximiser z, split by variable name
+  (which torques, contact forces ... achieve the maximum) with the rows that bind there;
 - vertices and halfspaces for m <= 3, by refining an inner polytope along the outer normals of
   its facets until every facet is a facet of K (Bretl and Lall's projection algorithm): each
   vertex found is an LP optimum, so the result is exact to the LP's tolerance; volume and
@@ -157,39 +158,44 @@ class LiftedPolytope(TaskSet):
         value, z = self._maximise(d)
         return self._witness(value, z)
 
-    def ray_radius(self, direction: ArrayLike) -> float:
-        """The straight-line reach: the largest s >= 0 with s d/|d| in the set (0 when the origin
-        is outside it or the set is empty)."""
-        found = self._ray(direction)
+    def straight_line_reach(self, direction: ArrayLike) -> float:
+        """The largest s >= 0 with s d/|d| in the set: how far along d from rest, exactly along d
+        (0 when the origin is outside the set or the set is empty)."""
+        found = self._ray(direction, np.zeros(self.dim))
         return 0.0 if found is None else found[0]
 
-    def ray_witness(self, direction: ArrayLike) -> Witness:
+    def ray_radius(self, direction: ArrayLike) -> float:
+        """The largest t >= 0 with center + t d/|d| in the set (0 when empty)."""
+        found = self._ray(direction, self.center)
+        return 0.0 if found is None else found[0]
+
+    def straight_line_witness(self, direction: ArrayLike) -> Witness:
         """What achieves the straight-line reach along d (see :meth:`witness`).
 
         Raises:
             TaskError: the origin (no motion at all) is outside the set.
         """
-        found = self._ray(direction)
+        found = self._ray(direction, np.zeros(self.dim))
         if found is None:
             raise TaskError("the origin is outside the set: no straight line from rest exists")
         return self._witness(found[0], found[1][:-1])
 
-    def _ray(self, direction: ArrayLike) -> tuple[float, np.ndarray] | None:
+    def _ray(self, direction: ArrayLike, origin: np.ndarray) -> tuple[float, np.ndarray] | None:
         d = check_direction(direction, self.dim)
         d = d / np.linalg.norm(d)
         if self.empty:
             return None
-        key = ("ray", tuple(d))
+        key = ("ray", tuple(d), tuple(origin))
         if key not in self._cache:
             n = len(self._lower)
             tie = np.zeros((self.dim, n + 1))
             tie[np.arange(self.dim), self._task] = 1.0
-            tie[:, n] = -d  # a = s d
+            tie[:, n] = -d  # a = origin + s d
             A = np.vstack(
                 [np.c_[self._A_eq, np.zeros(len(self._A_eq))], tie, np.c_[self._A_ub, np.zeros(len(self._A_ub))]]
             )
-            lo = np.r_[self._b_eq, np.zeros(self.dim), np.full(len(self._b_ub), -np.inf)]
-            hi = np.r_[self._b_eq, np.zeros(self.dim), self._b_ub]
+            lo = np.r_[self._b_eq, origin, np.full(len(self._b_ub), -np.inf)]
+            hi = np.r_[self._b_eq, origin, self._b_ub]
             program = LinearProgram(A, lo, hi, np.r_[self._lower, 0.0], np.r_[self._upper, np.inf])
             cost = np.zeros(n + 1)
             cost[n] = 1.0
