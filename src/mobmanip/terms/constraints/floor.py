@@ -86,8 +86,8 @@ class Floor(Constraint):
         return support, (None if mu is None else float(mu)), faces
 
     def describe(self) -> dict:
-        out = {"name": self.name, "model": "whole robot on the floor, at rest"}
-        out["mu"] = self.mu if self.mu != "spec" else "spec"
+        out: dict = {"name": self.name, "model": "whole robot on the floor, at rest"}
+        out["mu"] = self.mu
         out["tip_over"] = "allowed (contacts may pull)" if self.lift else "not allowed"
         if self.faces is not None:
             out["faces"] = self.faces
@@ -115,7 +115,9 @@ class Floor(Constraint):
         points = support.world_points(pose)
 
         # contact forces: 3 columns per driven wheel, 1 (the normal) per passive support
-        columns, normal_col, slices = [], [], []
+        columns: list[np.ndarray] = []
+        normal_col: list[int] = []
+        slices: list[tuple[int, int]] = []
         for contact, p in zip(support.contacts, points):
             start = sum(col.shape[1] for col in columns)
             wrench = np.vstack([np.eye(3), _skew(p - c)])
