@@ -180,6 +180,29 @@ class LiftedPolytope(TaskSet):
             raise TaskError("the origin is outside the set: no straight line from rest exists")
         return self._witness(found[0], found[1][:-1])
 
+    def witness_at(self, point: ArrayLike) -> Witness:
+        """A solution that reaches ``point``, as far inside every inequality row as it can be
+        (max t with each row's slack >= t |row|): no limit is tight unless ``point`` needs it.
+
+        Raises:
+            TaskError: the point is not in the set.
+        """
+        p = check_points(point, self.dim)[0]
+        n = len(self._lower)
+        fix = np.zeros((self.dim, n + 1))
+        fix[np.arange(self.dim), self._task] = 1.0
+        norms = np.linalg.norm(self._A_ub, axis=1)
+        A = np.vstack([np.c_[self._A_eq, np.zeros(len(self._A_eq))], fix, np.c_[self._A_ub, norms]])
+        lo = np.r_[self._b_eq, p, np.full(len(self._b_ub), -np.inf)]
+        hi = np.r_[self._b_eq, p, self._b_ub]
+        program = LinearProgram(A, lo, hi, np.r_[self._lower, -np.inf], np.r_[self._upper, np.inf])
+        cost = np.zeros(n + 1)
+        cost[n] = 1.0
+        result = program.solve(cost)
+        if result is None or result[0] < -1e-9 * max(self._size, 1.0):
+            raise TaskError(f"the point {p.tolist()} is not in the set")
+        return self._witness(float(result[0]), result[1][:-1])
+
     def _ray(self, direction: ArrayLike, origin: np.ndarray) -> tuple[float, np.ndarray] | None:
         d = check_direction(direction, self.dim)
         d = d / np.linalg.norm(d)
