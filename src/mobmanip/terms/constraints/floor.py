@@ -227,7 +227,8 @@ def ground_reaction(info: dict, forces: np.ndarray) -> dict:
         forces: the contact force variable at the solution (``witness.variables["contact_forces"]``).
 
     Returns:
-        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (|f_t| / (mu f_n))}),
+        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (|f_t| / (mu f_n);
+        ``None`` for an unloaded wheel)}),
         ``zmp`` (x, y; m, world: the centre of pressure, where the floor's resultant moment has no
         horizontal component), ``margin`` (m: signed distance of the ZMP to the support polygon's
         nearest edge, positive inside).
@@ -241,7 +242,8 @@ def ground_reaction(info: dict, forces: np.ndarray) -> dict:
         normal, tangential = float(f[2]), float(np.hypot(f[0], f[1]))
         entry = {"normal": normal, "tangential": tangential}
         if contact["driven"] and info["mu"]:
-            entry["traction_use"] = tangential / (info["mu"] * normal) if normal > 1e-9 else math.inf
+            # |f_t| / (mu f_n); None for an unloaded wheel (it can push nothing along the floor)
+            entry["traction_use"] = tangential / (info["mu"] * normal) if normal > 1e-9 else None
         out["contacts"][contact["name"]] = entry
         total += normal
         moment += normal * np.asarray(contact["point"][:2])
