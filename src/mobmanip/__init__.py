@@ -15,7 +15,7 @@ from . import old_paths
 from .analysis.single import Analysis, analyze
 from .batch import BatchAnalysis, EllipsoidBatch, analyze_batch
 from .errors import MobmanipError
-from .measures.registry import (
+from .measures import (
     ACCELERATION,
     VELOCITY,
     BatchRequest,

@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from .analysis.single import Analysis, analyze
-from .measures.registry import DYNAMIC, KINEMATIC, get_measure
+from .measures import DYNAMIC, KINEMATIC, get_measure
 from .postures.planar import ArmPosture, arm_measure, configuration_at, optimal_posture
 from .robot.model import Robot
 

@@ -7,7 +7,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import types
 from collections.abc import Iterable, Mapping
@@ -19,12 +18,14 @@ import numpy as np
 from ..engine import evaluate_one
 from ..engine.compiled import kernel_ready
 from ..errors import ArgumentError, MeasureError, MobmanipError, TaskError
-from ..measures.registry import DYNAMIC, KINEMATIC, Measure, MeasureTerms, get_measure, resolve_measures
+from ..measures import DYNAMIC, KINEMATIC, Measure, get_measure, resolve_measures
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..sets.ellipsoid import Ellipsoid
 from ..sets.taskset import TaskSet
-from ..terms.dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
+from ..terms.builder import MeasureTerms, assemble_terms, terms_at
+from ..terms.constraints.base import Constraint
+from ..terms.dynamics import decouple, placed_end_effectors
 from ..terms.grasp import HeldObject, checked_object_mass
 
 
@@ -49,6 +50,8 @@ class Analysis:
             (read-only); see :mod:`mobmanip.measures`. By default ``kinematic`` and ``dynamic``.
         object_given: whether the object was given (``held_object=``) rather than the default
             one between the hands.
+        terms: what the measures were computed from (:class:`mobmanip.terms.builder.MeasureTerms`),
+            with the constraints beyond the joint boxes they must honour.
 
     ``warnings`` (computed on first access) says what makes the numbers doubtful: placeholder
     limits, torques that cannot hold the robot up, hands further apart than the object's grasp
@@ -69,6 +72,21 @@ class Analysis:
     grasp_matrix: np.ndarray
     measures: Mapping[str, TaskSet]
     object_given: bool = False
+    terms: MeasureTerms | None = None
+
+    @property
+    def constraints(self) -> tuple[Constraint, ...]:
+        """The constraints beyond the joint boxes that the sets were asked to honour."""
+        return () if self.terms is None else self.terms.constraints
+
+    def ignored_constraints(self, name: str) -> tuple[str, ...]:
+        """The names of the constraints measure ``name`` ignored: those on its quantity's problem
+        when it cannot honour constraints (an ellipsoid); empty for a polytope."""
+        measure = get_measure(name)
+        if measure.honours_constraints:
+            return ()
+        problem = "velocity" if measure.quantity.limits == "velocity" else "acceleration"
+        return tuple(c.name for c in self.constraints if c.problem == problem)
 
     def measure(self, name: str) -> TaskSet:
         """The set of measure ``name``.
@@ -89,10 +107,11 @@ class Analysis:
     @functools.cached_property
     def warnings(self) -> tuple[str, ...]:
         """Plausibility warnings of this configuration (:func:`mobmanip.analysis.plausibility.analysis_warnings`)."""
-        from .plausibility import analysis_warnings
+        from .plausibility import analysis_warnings, rest_warnings
 
         explicit = self.held_object if self.object_given else None
-        return analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
+        found = analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
+        return found + tuple(rest_warnings(self))
 
     @property
     def kinematic(self) -> Ellipsoid:
@@ -171,8 +190,20 @@ class Analysis:
             "grasp_matrix": self.grasp_matrix.tolist(),
             "warnings": list(self.warnings),
             **self._block_document(),
-            **{get_measure(name).json_key: s.to_dict() for name, s in self.measures.items()},
+            **({"constraints": [c.describe() for c in self.constraints]} if self.constraints else {}),
+            **{get_measure(name).json_key: self._set_document(name, s) for name, s in self.measures.items()},
         }
+
+    def _set_document(self, name: str, task_set: TaskSet) -> dict:
+        from .reaches import axis_reaches
+
+        out = task_set.to_dict()
+        if self.constraints:
+            out["ignored_constraints"] = list(self.ignored_constraints(name))
+        reaches = axis_reaches(task_set, self.task)
+        if reaches is not None:
+            out["reaches"] = reaches
+        return out
 
     def block_indices(self) -> dict | None:
         """Unit-consistent indices per block (linear, angular) of each set, for a task that mixes
@@ -224,6 +255,7 @@ def analyze(
     decoupled: bool = False,
     method: str = "auto",
     measures: Iterable[str] | None = None,
+    constraints: Iterable[Constraint] = (),
 ) -> Analysis:
     """Analyse the robot at configuration q (robot and object at rest).
 
@@ -240,6 +272,10 @@ def analyze(
         measures: the measures to compute, by name (:func:`mobmanip.measures.measure_names`);
             default: the default ones, ``("kinematic", "dynamic")``. They come out in the
             registry's order.
+        constraints: constraints beyond the joint boxes (:mod:`mobmanip.terms.constraints`, e.g.
+            the floor's contacts): every polytope honours them; an ellipsoid cannot, and the
+            analysis says so (:meth:`Analysis.ignored_constraints`, ``"ignored_constraints"`` in
+            its JSON).
         method: ``"auto"``: the compiled kernel of :mod:`mobmanip.engine` (closed forms with an
             a-priori error certificate; an ellipsoid it cannot certify to 1e-9 of its size, e.g.
             at a singularity, is computed by the exact path) where this process has already
@@ -253,6 +289,7 @@ def analyze(
         UnknownMeasureError: a measure name that is not registered (the message lists them).
     """
     wanted = resolve_measures(measures)
+    constraints = tuple(constraints)
     if method not in ("auto", "exact"):
         raise ArgumentError(f"method must be 'auto' or 'exact', got {method!r}")
     q = robot.check_configuration(q)
@@ -267,114 +304,59 @@ def analyze(
                 f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
             )
     fast = method == "auto" and robot.constant_null_space  # the fast paths freeze S
-    if fast and kernel_ready(len(robot.arms), task.dim):
-        analysis = _analyze_compiled(robot, q, task, float(mass), held_object, decoupled)
-    else:
-        analysis = _analyze_exact(robot, q, task, float(mass), held_object, decoupled)
-    if measures is not None and tuple(analysis.measures) != tuple(m.name for m in wanted):
-        analysis = _with_measures(analysis, wanted)
-    return analysis
+    ellipsoids = any(m.name in (KINEMATIC.name, DYNAMIC.name) for m in wanted)
+    if fast and ellipsoids and kernel_ready(len(robot.arms), task.dim):
+        return _analyze_compiled(robot, q, task, float(mass), held_object, decoupled, wanted, constraints)
+    return _analyze_exact(robot, q, task, float(mass), held_object, decoupled, wanted, constraints)
 
 
-def _analyze_exact(robot, q, task, mass, held_object, decoupled) -> Analysis:
-    """The reference path: :mod:`mobmanip.terms.dynamics` and the SVD-based :mod:`mobmanip.sets.ellipsoid`."""
-    dyn = reduced_dynamics_unchecked(robot, q, None, False)
-    J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
-    positions = placed_end_effectors(robot)  # frame placements were updated with the Jacobians
-    obj = held_object if held_object is not None else HeldObject.between(positions, mass)
-    return _assemble(
-        robot,
-        q,
-        task,
-        decoupled,
-        J_u,
-        dyn.P,
-        dyn.xi,
-        positions,
-        obj,
-        obj.grasp_matrix(task),
-        given_object=held_object is not None,
-    )
+def _analyze_exact(robot, q, task, mass, held_object, decoupled, wanted, constraints) -> Analysis:
+    """The reference path: the terms from :func:`mobmanip.terms.builder.terms_at`, every measure
+    from them by its definition."""
+    terms = terms_at(
+        robot, q, task.name, object_mass=mass, held_object=held_object, decoupled=decoupled,
+        constraints=constraints, check=False,
+    )  # fmt: skip
+    return _assemble(terms, wanted, {}, given_object=held_object is not None)
 
 
-def _analyze_compiled(robot, q, task, mass, held_object, decoupled) -> Analysis:
-    """The batch engine on one configuration (:func:`mobmanip.engine.evaluate_one`); an
-    ellipsoid its certificate does not accept is computed by the reference path instead."""
+def _analyze_compiled(robot, q, task, mass, held_object, decoupled, wanted, constraints) -> Analysis:
+    """The batch engine on one configuration (:func:`mobmanip.engine.evaluate_one`) for the two
+    ellipsoids; an ellipsoid its certificate does not accept is computed by the reference path
+    instead, and any other measure from the terms by its definition."""
     row = evaluate_one(robot, q, task, mass, held_object, decoupled, method="kernel", validate=False)
     obj = held_object if held_object is not None else HeldObject.between(row.positions, mass)
-    return _assemble(
-        robot,
-        q,
-        task,
-        decoupled,
-        row.J_u,
-        row.P,
-        row.xi,
-        row.positions,
-        obj,
-        row.W,
-        row.kinematic,
-        row.dynamic,
-        given_object=held_object is not None,
+    terms = assemble_terms(
+        robot, q, task.name, decoupled, row.J_u, row.P, row.xi, row.positions, obj, row.W, constraints
     )
+    given = {KINEMATIC.name: row.kinematic, DYNAMIC.name: row.dynamic}
+    return _assemble(terms, wanted, given, given_object=held_object is not None)
 
 
-def _assemble(
-    robot, q, task, decoupled, J_u, P, xi, positions, obj, W, kin=None, dynamic=None, measures=None, given_object=False
-) -> Analysis:
-    """The Analysis from the terms, with the measures ``measures`` (names; default: the default
-    ones). The kinematic and dynamic ellipsoids may be given (the compiled path computes them);
-    every measure not given is computed from the terms by its definition (the reference path)."""
-    P_decoupled = decouple(robot, P)
-    given = {KINEMATIC.name: kin, DYNAMIC.name: dynamic}
-    terms = None
+def _assemble(terms: MeasureTerms, wanted: Iterable[Measure], given: Mapping[str, TaskSet | None], given_object: bool):
+    """The Analysis holding the measures ``wanted``: each taken from ``given`` (the compiled
+    ellipsoids) where there, else computed from the terms by its definition."""
     sets = {}
-    for measure in resolve_measures(measures):
+    for measure in wanted:
         found = given.get(measure.name)
-        if found is None:
-            if terms is None:
-                terms = MeasureTerms(
-                    task=task.name,
-                    J_u=J_u,
-                    W=W,
-                    P=P_decoupled if decoupled else P,
-                    Q=robot.Q,
-                    xi=xi,
-                    M_o=obj.inertia_matrix(task),
-                    g_o=obj.gravity_vector(task),
-                    velocity_limits=robot.velocity_limits,
-                    effort_limits=robot.effort_limits,
-                    decoupled=decoupled,
-                )
-            found = measure.compute(terms)
-        sets[measure.name] = found
+        sets[measure.name] = measure.compute(terms) if found is None else found
+    robot = terms.robot
+    assert terms.q is not None and terms.positions is not None and terms.held_object is not None  # terms_at's
+    P = terms.P if terms.P_coupled is None else terms.P_coupled
     return Analysis(
         robot=robot,
-        q=q,
-        task=task.name,
-        decoupled=decoupled,
-        unified_jacobian=J_u,
+        q=terms.q,
+        task=terms.task,
+        decoupled=terms.decoupled,
+        unified_jacobian=terms.J_u,
         reduced_inertia=P,
-        reduced_inertia_decoupled=P_decoupled,
+        reduced_inertia_decoupled=decouple(robot, P),
         input_matrix=robot.Q,
-        bias=xi,
-        end_effector_positions=positions,
-        held_object=obj,
-        grasp_matrix=W,
+        bias=terms.xi,
+        end_effector_positions=terms.positions,
+        held_object=terms.held_object,
+        grasp_matrix=terms.W,
         measures=types.MappingProxyType(sets),
         object_given=given_object,
+        terms=terms,
     )
-
-
-def _with_measures(analysis: Analysis, wanted: Iterable[Measure]) -> Analysis:
-    """The analysis holding exactly the measures ``wanted``: each taken from the analysis, else
-    computed from its terms."""
-    terms = None
-    out = {}
-    for measure in wanted:
-        found = analysis.measures.get(measure.name)
-        if found is None:
-            terms = MeasureTerms.of(analysis) if terms is None else terms
-            found = measure.compute(terms)
-        out[measure.name] = found
-    return dataclasses.replace(analysis, measures=types.MappingProxyType(out))

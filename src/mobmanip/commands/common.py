@@ -133,7 +133,7 @@ def add_analysis_options(parser: argparse.ArgumentParser) -> None:
 
 def add_measure_option(parser: argparse.ArgumentParser) -> None:
     """--measure NAME (repeatable): the measures to compute instead of the default ones."""
-    from ..measures.registry import default_measures, measure_names
+    from ..measures import default_measures, measure_names
 
     parser.add_argument(
         "--measure",
@@ -151,21 +151,58 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_floor_options(parser: argparse.ArgumentParser) -> None:
+    """--ground, --mu, --no-traction: the capacity that holds on the floor."""
+    parser.add_argument(
+        "--ground",
+        action="store_true",
+        help="capacity that holds on the floor: no support lifts (no tip-over) and the driven wheels stay "
+        "within friction (the polytopes honour it; adds dynamic_polytope when no polytope is asked for)",
+    )
+    parser.add_argument(
+        "--mu",
+        type=float,
+        metavar="MU",
+        help="friction coefficient of the driven wheels on the floor (implies --ground; default: the spec's "
+        "[support] mu, else 0.5)",
+    )
+    parser.add_argument(
+        "--no-traction",
+        action="store_true",
+        help="on the floor, only no tip-over: the wheels' traction is not limited (implies --ground)",
+    )
+
+
+def floor_constraints(args) -> tuple:
+    """The constraints --ground, --mu and --no-traction ask for (empty: the ideal robot)."""
+    from ..errors import ArgumentError
+    from ..terms.constraints.floor import Floor
+
+    mu, no_traction = getattr(args, "mu", None), getattr(args, "no_traction", False)
+    if not (getattr(args, "ground", False) or mu is not None or no_traction):
+        return ()
+    if mu is not None and no_traction:
+        raise ArgumentError("--mu and --no-traction contradict each other: choose one")
+    return (Floor(mu=None if no_traction else ("spec" if mu is None else mu)),)
+
+
 def polytope_measures() -> tuple[str, ...]:
     """The registered measures whose sets are polytopes (what ``--polytope`` adds)."""
-    from ..measures.registry import MEASURES
+    from ..measures import MEASURES
 
     return tuple(name for name, measure in MEASURES.items() if measure.set_kind == "polytope")
 
 
 def requested_measures(args) -> tuple[str, ...] | None:
     """The measures ``--measure`` and ``--polytope`` ask for (``None``: the default ones)."""
-    from ..measures.registry import default_measures
+    from ..measures import default_measures
 
     measures = getattr(args, "measures", None)
     if getattr(args, "polytope", False):
         wanted = tuple(measures or default_measures())
         measures = wanted + tuple(name for name in polytope_measures() if name not in wanted)
+    if floor_constraints(args) and not set(measures or default_measures()) & set(polytope_measures()):
+        measures = tuple(measures or default_measures()) + ("dynamic_polytope",)
     return measures
 
 

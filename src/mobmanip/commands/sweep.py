@@ -132,7 +132,7 @@ def run_command(args) -> int:
     from pathlib import Path
 
     from ..errors import UsageError
-    from ..measures.registry import resolve_measures
+    from ..measures import resolve_measures
     from ..robot.spec import find_spec
     from ..robot.tasks import TASKS
     from ..support.files import OutputError

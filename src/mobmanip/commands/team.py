@@ -36,7 +36,7 @@ def run(args) -> int:
     import tomllib
     from pathlib import Path
 
-    from ..measures.registry import get_measure
+    from ..measures import get_measure
     from ..robot.tasks import get_task
     from ..support.files import check_output, require_finite, write_json
     from ..sweep.runner import parse_grid

@@ -82,7 +82,7 @@ def _stop_on_sigterm():
 
 
 def _describe_empty(name: str, analysis) -> list[str]:
-    from ..measures.registry import get_measure
+    from ..measures import get_measure
 
     if analysis is None:
         return []

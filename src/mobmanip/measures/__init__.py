@@ -1,15 +1,14 @@
 """The registry of measures (what task-space sets mobmanip computes, and how), and one module per
-family of measures."""
+family of measures: :mod:`.ellipsoids` (the paper's two, computed by default) and :mod:`.polytopes`
+(the exact capacity polytopes). A new measure is one module with one :class:`Measure` definition
+and one :func:`register_measure` call."""
 
+from . import ellipsoids, polytopes  # noqa: F401  (registers the built-in measures, in this order)
+from .ellipsoids import DYNAMIC, KINEMATIC
+from .polytopes import DYNAMIC_POLYTOPE, DYNAMIC_POLYTOPE_MIN_NORM, KINEMATIC_POLYTOPE, POLYTOPE_KINDS
 from .registry import (
     ACCELERATION,
-    DYNAMIC,
-    DYNAMIC_POLYTOPE,
-    DYNAMIC_POLYTOPE_MIN_NORM,
-    KINEMATIC,
-    KINEMATIC_POLYTOPE,
     MEASURES,
-    POLYTOPE_KINDS,
     VELOCITY,
     BatchForm,
     BatchRequest,
@@ -29,20 +28,20 @@ from .registry import (
 
 __all__ = [
     "ACCELERATION",
-    "BatchForm",
-    "BatchRequest",
-    "Compute",
     "DYNAMIC",
     "DYNAMIC_POLYTOPE",
     "DYNAMIC_POLYTOPE_MIN_NORM",
     "KINEMATIC",
     "KINEMATIC_POLYTOPE",
     "MEASURES",
+    "POLYTOPE_KINDS",
+    "VELOCITY",
+    "BatchForm",
+    "BatchRequest",
+    "Compute",
     "Measure",
     "MeasureTerms",
-    "POLYTOPE_KINDS",
     "Quantity",
-    "VELOCITY",
     "default_measures",
     "evaluate_batch",
     "get_measure",

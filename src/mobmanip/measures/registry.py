@@ -39,20 +39,19 @@ needs it registered at import of a module the workers import.
 
 from __future__ import annotations
 
+import dataclasses
 import types
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from ..batch import BatchSetup, EllipsoidBatch, ellipsoids_from_terms
+from ..batch import BatchSetup
 from ..errors import MeasureError, UnknownMeasureError
-from ..sets.ellipsoid import dynamic_ellipsoid, kinematic_ellipsoid
 from ..sets.taskset import TaskSet, TaskSetBatch
-
-if TYPE_CHECKING:  # analysis imports this module
-    from ..analysis.single import Analysis
+from ..terms.builder import MeasureTerms
+from ..terms.constraints.base import Constraint
 
 
 @dataclass(frozen=True)
@@ -87,57 +86,6 @@ ACCELERATION = Quantity("acceleration", "dynamic", "m/s^2", "m/s^2, rad/s^2", li
 
 
 @dataclass(frozen=True)
-class MeasureTerms:
-    """What a measure is computed from at one configuration (robot and object at rest).
-
-    The names are the paper's; :mod:`mobmanip.sets.ellipsoid` takes the same arrays.
-
-    Attributes:
-        task: task-space name.
-        J_u: unified Jacobian J S, (m k, nx).
-        W: grasp matrix, (m, m k).
-        P: reduced inertia, coupled or decoupled as ``decoupled`` says, (nx, nx).
-        Q: reduced input matrix, (nx, nx).
-        xi: reduced bias at rest (-S^T g), (nx,).
-        M_o: object inertia in the task space, (m, m).
-        g_o: object gravity wrench (Eq. 22), (m,).
-        velocity_limits: qdot_max per reduced velocity (rad/s or m/s), (nx,).
-        effort_limits: tau_max per reduced velocity (N m or N), (nx,).
-        decoupled: whether P is the decoupled one.
-    """
-
-    task: str
-    J_u: np.ndarray
-    W: np.ndarray
-    P: np.ndarray
-    Q: np.ndarray
-    xi: np.ndarray
-    M_o: np.ndarray
-    g_o: np.ndarray
-    velocity_limits: np.ndarray
-    effort_limits: np.ndarray
-    decoupled: bool
-
-    @classmethod
-    def of(cls, analysis: Analysis) -> MeasureTerms:
-        """The terms of an :class:`mobmanip.analysis.Analysis` (its P as its ``decoupled`` says)."""
-        obj, robot = analysis.held_object, analysis.robot
-        return cls(
-            task=analysis.task,
-            J_u=analysis.unified_jacobian,
-            W=analysis.grasp_matrix,
-            P=analysis.reduced_inertia_decoupled if analysis.decoupled else analysis.reduced_inertia,
-            Q=analysis.input_matrix,
-            xi=analysis.bias,
-            M_o=obj.inertia_matrix(analysis.task),
-            g_o=obj.gravity_vector(analysis.task),
-            velocity_limits=robot.velocity_limits,
-            effort_limits=robot.effort_limits,
-            decoupled=analysis.decoupled,
-        )
-
-
-@dataclass(frozen=True)
 class BatchRequest:
     """One chunk of a sweep, and the measures to compute on it at one setting of the limits.
 
@@ -149,12 +97,19 @@ class BatchRequest:
         limits: the measures to compute, by name, each with its limits (the velocity or effort
             limits its quantity names), (nx,).
         decoupled: use the decoupled P for the measures whose quantity is inertial.
+        configurations: the chunk's configurations, (len(terms), nq) (constraints beyond the
+            joint boxes are evaluated at each).
+        constraints: constraints beyond the joint boxes (:mod:`mobmanip.terms.constraints`);
+            a measure that honours constraints computes its sets under them, the others ignore
+            them (and the sweep says so).
     """
 
     setup: BatchSetup
     terms: Any
     limits: Mapping[str, np.ndarray]
     decoupled: bool
+    configurations: np.ndarray | None = None
+    constraints: tuple[Constraint, ...] = ()
 
 
 #: Computes a measure from one configuration's terms (the reference path).
@@ -187,6 +142,9 @@ class Measure:
         scene_path: where the viewer draws it, under ``mobmanip/``; default
             ``"<set_kind>s/<name>"``. Its locked-platform counterpart is ``locked/<name>``.
         description: one line for help texts.
+        honours_constraints: whether its sets honour every constraint of the terms beyond the
+            joint boxes (:mod:`mobmanip.terms.constraints`); a measure that does not is reported
+            as ignoring them (``Analysis.ignored_constraints``, ``"ignored_constraints"`` in JSON).
     """
 
     name: str
@@ -202,6 +160,7 @@ class Measure:
     axis_indices: tuple[tuple[str, str], ...] = ()
     scene_path: str = ""
     description: str = ""
+    honours_constraints: bool = False
 
     def __post_init__(self):
         if not (isinstance(self.name, str) and self.name.isidentifier() and self.name.isascii()):
@@ -341,197 +300,12 @@ def evaluate_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
         groups.setdefault(id(measure.batch), (measure.batch, {}))[1][name] = limits
     out: dict[str, TaskSetBatch] = {}
     for form, limits in groups.values():
-        results = form(BatchRequest(request.setup, request.terms, limits, request.decoupled))
+        results = form(dataclasses.replace(request, limits=limits))
         for name in limits:
             if name not in results:
                 raise MeasureError(f"the batch form of measure {name!r} did not compute it")
             out[name] = results[name]
     return out
-
-
-# ----------------------------------------------------------------------------------------------
-# the paper's two ellipsoids
-
-
-def _kinematic(terms: MeasureTerms) -> TaskSet:
-    return kinematic_ellipsoid(terms.J_u, terms.W, terms.velocity_limits)
-
-
-def _dynamic(terms: MeasureTerms) -> TaskSet:
-    return dynamic_ellipsoid(terms.J_u, terms.W, terms.P, terms.Q, terms.xi, terms.M_o, terms.g_o, terms.effort_limits)
-
-
-def _ellipsoids_batch(request: BatchRequest) -> Mapping[str, TaskSetBatch]:
-    """Both ellipsoids of a chunk in one pass of :func:`mobmanip.batch.ellipsoids_from_terms`
-    (one compiled-kernel call for the two)."""
-    n, m = len(request.terms), request.setup.m
-    velocity = request.limits.get(KINEMATIC.name)
-    effort = request.limits.get(DYNAMIC.name)
-    kin = EllipsoidBatch.allocate(n, m) if velocity is not None else None
-    dyn = EllipsoidBatch.allocate(n, m) if effort is not None else None
-    ellipsoids_from_terms(
-        request.setup,
-        request.terms,
-        velocity_limits=velocity,
-        effort_limits=effort,
-        decoupled=request.decoupled,
-        kinematic=kin,
-        dynamic=dyn,
-    )
-    out: dict[str, TaskSetBatch] = {}
-    if kin is not None:
-        out[KINEMATIC.name] = kin
-    if dyn is not None:
-        out[DYNAMIC.name] = dyn
-    return out
-
-
-_ELLIPSOID_AXES = (("semi_axes", "semi_axis"),)
-
-KINEMATIC = register_measure(
-    Measure(
-        name="kinematic",
-        json_key="kinematic_ellipsoid",
-        quantity=VELOCITY,
-        label="kinematic ellipsoid",
-        set_kind="ellipsoid",
-        color=0x1FBF3F,  # green
-        locked_color=0xF2D21B,  # yellow
-        compute=_kinematic,
-        default=True,
-        batch=_ellipsoids_batch,
-        axis_indices=_ELLIPSOID_AXES,
-        description="unified kinematic ellipsoid of object velocities (Eq. 23-26, consistent form)",
-    )
-)
-DYNAMIC = register_measure(
-    Measure(
-        name="dynamic",
-        json_key="dynamic_ellipsoid",
-        quantity=ACCELERATION,
-        label="dynamic ellipsoid",
-        set_kind="ellipsoid",
-        color=0xD81BD8,  # magenta
-        locked_color=0xE0301E,  # red
-        compute=_dynamic,
-        default=True,
-        batch=_ellipsoids_batch,
-        axis_indices=_ELLIPSOID_AXES,
-        description="unified dynamic ellipsoid of object accelerations at rest (Eq. 27-38)",
-    )
-)
-
-
-# ----------------------------------------------------------------------------------------------
-# the exact capacity polytopes (mobmanip.sets.capacity): box limits instead of the unit sphere
-
-#: Polytope measures by name -> the kind :func:`mobmanip.sets.capacity.polytopes` builds.
-POLYTOPE_KINDS = {
-    "kinematic_polytope": "kinematic",
-    "dynamic_polytope": "dynamic",
-    "dynamic_polytope_min_norm": "dynamic_min_norm",
-}
-
-
-def _polytope_compute(kind: str) -> Compute:
-    def compute(terms: MeasureTerms) -> TaskSet:
-        from ..sets.capacity import polytopes
-
-        if kind == "kinematic":
-            return polytopes(kind, J_u=terms.J_u, W=terms.W, velocity_limits=terms.velocity_limits)
-        return polytopes(
-            kind,
-            J_u=terms.J_u,
-            W=terms.W,
-            P=terms.P,
-            Q=terms.Q,
-            xi=terms.xi,
-            M_o=terms.M_o,
-            g_o=terms.g_o,
-            effort_limits=terms.effort_limits,
-        )
-
-    return compute
-
-
-def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
-    """The polytopes of a chunk, one configuration at a time from the chunk's terms (the
-    engine's J_u, P, xi and grasp; the same arrays :class:`MeasureTerms` holds)."""
-    from ..engine.terms import ChunkTerms, numpy_terms
-    from ..sets.capacity import polytope_batch
-
-    setup, t = request.setup, request.terms
-    # The compiled kernel fills the terms only of the rows it does not certify: compute them all
-    # here, from the chunk's Pinocchio outputs, on a fresh copy.
-    t = ChunkTerms(t.n, t.Ja, t.Ma, t.positions.copy())
-    numpy_terms(setup, t)
-    W = setup.W if t.W is None else t.W
-    M_o = np.diag(setup.Mo) if t.Mo is None else np.einsum("ni,ij->nij", t.Mo, np.eye(setup.m))  # type: ignore[arg-type]
-    P = t.P
-    if request.decoupled:
-        e = setup.n_eta
-        P = P.copy()
-        P[:, :e, e:] = 0.0
-        P[:, e:, :e] = 0.0
-    out: dict[str, TaskSetBatch] = {}
-    for name, limits in request.limits.items():
-        kind = POLYTOPE_KINDS[name]
-        if kind == "kinematic":
-            out[name] = polytope_batch(kind, J_u=t.J_u, W=W, velocity_limits=limits)
-        else:
-            out[name] = polytope_batch(
-                kind, J_u=t.J_u, W=W, P=P, Q=setup.robot.Q, xi=t.xi, M_o=M_o, g_o=setup.g_o, effort_limits=limits
-            )
-    return out
-
-
-_POLYTOPE_AXES = (("widths", "width"),)
-
-KINEMATIC_POLYTOPE = register_measure(
-    Measure(
-        name="kinematic_polytope",
-        json_key="kinematic_polytope",
-        quantity=VELOCITY,
-        label="kinematic polytope",
-        set_kind="polytope",
-        color=0x0B7A75,  # teal
-        locked_color=0xB8860B,  # dark gold
-        compute=_polytope_compute("kinematic"),
-        batch=_polytopes_batch,
-        axis_indices=_POLYTOPE_AXES,
-        description="exact set of object velocities, every wheel and joint within its own speed limit",
-    )
-)
-DYNAMIC_POLYTOPE = register_measure(
-    Measure(
-        name="dynamic_polytope",
-        json_key="dynamic_polytope",
-        quantity=ACCELERATION,
-        label="dynamic polytope",
-        set_kind="polytope",
-        color=0x6A3FB5,  # violet
-        locked_color=0xA0522D,  # sienna
-        compute=_polytope_compute("dynamic"),
-        batch=_polytopes_batch,
-        axis_indices=_POLYTOPE_AXES,
-        description="exact set of object accelerations at rest, every torque within its own limit",
-    )
-)
-DYNAMIC_POLYTOPE_MIN_NORM = register_measure(
-    Measure(
-        name="dynamic_polytope_min_norm",
-        json_key="dynamic_polytope_min_norm",
-        quantity=ACCELERATION,
-        label="dynamic polytope, minimum-norm policy",
-        set_kind="polytope",
-        color=0xE0559F,  # pink
-        locked_color=0xFF8C1A,  # orange
-        compute=_polytope_compute("dynamic_min_norm"),
-        batch=_polytopes_batch,
-        axis_indices=_POLYTOPE_AXES,
-        description="object accelerations at rest of the paper's minimum-norm policy under box torque limits",
-    )
-)
 
 
 def measure_help() -> str:
@@ -545,13 +319,7 @@ def measure_help() -> str:
 
 __all__ = [
     "ACCELERATION",
-    "DYNAMIC",
-    "DYNAMIC_POLYTOPE",
-    "DYNAMIC_POLYTOPE_MIN_NORM",
-    "KINEMATIC",
-    "KINEMATIC_POLYTOPE",
     "MEASURES",
-    "POLYTOPE_KINDS",
     "VELOCITY",
     "BatchForm",
     "BatchRequest",

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 from ..errors import LimitError, ModelError, TaskError
 from .ellipsoid import _RANK_RTOL, _is_identity, _null_space, _torque_offset
 from .polytope import Polytope
+from .taskset import TaskSet
 
 KINDS = ("kinematic", "dynamic", "dynamic_min_norm")
 
@@ -220,7 +221,7 @@ class PolytopeBatch:
         TaskError: no sets, or sets of different dimensions.
     """
 
-    def __init__(self, polytopes: Iterable[Polytope]) -> None:
+    def __init__(self, polytopes: Iterable[TaskSet]) -> None:
         self.polytopes = tuple(polytopes)
         dims = {p.dim for p in self.polytopes}
         if len(dims) > 1:
@@ -233,7 +234,7 @@ class PolytopeBatch:
     def __len__(self) -> int:
         return len(self.polytopes)
 
-    def __getitem__(self, index: int) -> Polytope:
+    def __getitem__(self, index: int) -> TaskSet:
         return self.polytopes[index]
 
     @property

@@ -81,6 +81,10 @@ class TaskSet(ABC):
     def support(self, direction: np.ndarray) -> float:
         """max over the set of d . p for a direction d, (m,) (not necessarily unit); 0 when empty."""
 
+    def supports(self, directions: ArrayLike) -> np.ndarray:
+        """:meth:`support` for each row of ``directions`` (k, m), (k,)."""
+        return np.array([self.support(d) for d in np.atleast_2d(np.asarray(directions, dtype=float))])
+
     @abstractmethod
     def radius_along(self, direction: np.ndarray) -> float:
         """How far the set reaches from :attr:`center` along the unit direction of d; 0 when empty."""

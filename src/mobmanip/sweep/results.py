@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ArgumentError
-from ..measures.registry import Measure, resolve_measures
+from ..measures import Measure, resolve_measures
 from ..postures.inverse_kinematics import IKPostureTable
 from ..postures.planar import PostureTable
 
@@ -90,6 +90,17 @@ class SweepResult:
         """The definitions of the measures swept, in order."""
         return resolve_measures(self.spec.measures, sweep=True)
 
+    def ignored_constraints(self, name: str) -> tuple[str, ...]:
+        """The constraints beyond the joint boxes (``SweepSpec.constraints``) that measure
+        ``name`` ignored: those on its quantity's problem when it cannot honour them (an ellipsoid)."""
+        measure = next((m for m in self.measures if m.name == name), None)
+        if measure is None:
+            raise ArgumentError(f"measure {name!r} was not swept ({', '.join(m.name for m in self.measures)})")
+        if measure.honours_constraints:
+            return ()
+        problem = "velocity" if measure.quantity.limits == "velocity" else "acceleration"
+        return tuple(c.name for c in self.spec.constraints if c.problem == problem)
+
     def index(self, name: str) -> np.ndarray:
         """One index by name: ``kinematic.volume``, ``dynamic.semi_axis_1`` (largest), ...
 
@@ -141,6 +152,7 @@ class SweepResult:
             "direction": str(self.spec.direction),
             "axes": ",".join(AXES),
             "postures": table.method,
+            "constraints": ",".join(c.name for c in self.spec.constraints),
         }
         arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
         return arrays

@@ -52,7 +52,7 @@ import pinocchio as pin
 
 from ..batch import BatchSetup, check_configurations, default_chunk, iter_terms, warm_kernel
 from ..errors import ArgumentError, GridError, MobmanipError, SpecError, UnreachableGridError
-from ..measures.registry import BatchRequest, Measure, evaluate_batch, get_measure, resolve_measures
+from ..measures import BatchRequest, Measure, evaluate_batch, get_measure, resolve_measures
 from ..postures.inverse_kinematics import POSITION_TOLERANCE, IKPostureTable, reference_configuration, solve_postures
 from ..postures.planar import (
     PlanarArm,
@@ -66,6 +66,7 @@ from ..postures.planar import (
 from ..robot.model import Robot, load_robot
 from ..robot.tasks import get_task
 from ..sets.taskset import TaskSetBatch
+from ..terms.constraints.base import Constraint
 from .budget import MAX_GRID_POINTS, check_axis_count, check_grid, check_scaled_limits, check_values, exit_with_parent
 from .results import AXES, FLAGS, SCALAR_INDICES, SweepResult, check_index_name, index_names
 
@@ -326,6 +327,9 @@ class SweepSpec:
         measures: the measures to sweep, by name (each needs a batch form, see
             :mod:`mobmanip.measures`); ``None``: the default ones (``kinematic``, ``dynamic``).
             :func:`run_sweep` stores them resolved, in the registry's order.
+        constraints: constraints beyond the joint boxes (:mod:`mobmanip.terms.constraints`):
+            the polytope measures honour them (computed one configuration at a time); the
+            ellipsoids ignore them, and the result says so (:meth:`SweepResult.ignored_constraints`).
     """
 
     robot: str
@@ -339,8 +343,13 @@ class SweepSpec:
     postures: str = "auto"
     reference: tuple[tuple[str, float], ...] | None = None
     measures: tuple[str, ...] | None = None
+    constraints: tuple[Constraint, ...] = ()
 
     def __post_init__(self):
+        object.__setattr__(self, "constraints", tuple(self.constraints))
+        for c in self.constraints:
+            if not isinstance(c, Constraint):
+                raise ArgumentError(f"constraints must be mobmanip Constraints, got {c!r}")
         if self.measures is not None:
             names = (self.measures,) if isinstance(self.measures, str) else self.measures
             try:
@@ -471,7 +480,10 @@ def _run_job(job: _Job) -> tuple[int, dict]:
                 by_scale = vlims if measure.quantity.limits == "velocity" else elims
                 if col < len(by_scale):
                     limits[measure.name] = by_scale[col]
-            results = evaluate_batch(BatchRequest(setup, t, limits, job.spec.decoupled))
+            request = BatchRequest(
+                setup, t, limits, job.spec.decoupled, qs[start : start + n], job.spec.constraints
+            )  # fmt: skip
+            results = evaluate_batch(request)
             for measure in measures:
                 if measure.name in limits:
                     _record(results[measure.name], measure, dirs, sub, out, col)

@@ -47,11 +47,12 @@ import scipy.linalg
 from scipy.optimize import linprog
 
 from ..errors import ArgumentError, NumericalError, SetQueryError
-from ..measures.registry import MeasureTerms, Quantity, get_measure, resolve_measures
+from ..measures import MeasureTerms, Quantity, get_measure, resolve_measures
 from ..robot.tasks import get_task
 from ..sets.ellipsoid import Ellipsoid
 from ..sets.polytope import Polytope
 from ..sets.taskset import TaskSet, check_direction
+from ..terms.constraints.base import Constraint, ConstraintRows, Terms
 from ..terms.dynamics import decouple, frame_jacobians, reduced_dynamics_unchecked
 from .members import Member, Team
 
@@ -376,9 +377,17 @@ def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
     raise ArgumentError(f"ray_radius knows ellipsoids and polytopes, not {task_set.kind!r} sets")
 
 
-def analyze_team(team: Team, measures: Iterable[str] | str | None = None) -> TeamAnalysis:
+def analyze_team(
+    team: Team, measures: Iterable[str] | str | None = None, *, constraints: Iterable[Constraint] = ()
+) -> TeamAnalysis:
     """Analyse a team at rest: every measure asked for (default: the default ones) of the
     object held by all the team's hands.
+
+    Args:
+        team: the team.
+        measures: measure names (default: the default ones).
+        constraints: constraints beyond the joint boxes (:mod:`mobmanip.terms.constraints`),
+            each applied to every robot on its own terms; the polytopes honour them.
 
     Raises:
         UnknownMeasureError: a measure name that is not registered.
@@ -386,6 +395,9 @@ def analyze_team(team: Team, measures: Iterable[str] | str | None = None) -> Tea
     wanted = resolve_measures(measures)
     parts = member_terms(team)
     terms = stack_terms(team, parts)
+    constraints = tuple(constraints)
+    if constraints:
+        terms = terms.with_constraints(_stacked_constraints(team, parts, constraints))
     sets = {measure.name: measure.compute(terms) for measure in wanted}
     return TeamAnalysis(team, parts, terms, types.MappingProxyType(sets))
 
@@ -450,3 +462,121 @@ def _polish(W: np.ndarray, h: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """h moved (least-norm) onto W h = rhs to round-off (the LP meets it to its own tolerance)."""
     residual = rhs - W @ h
     return h + np.linalg.lstsq(W, residual, rcond=None)[0]
+
+
+# ----------------------------------------------------------------------------------------------
+# constraints of the robots, in the team's variables
+
+
+@dataclass(frozen=True)
+class _StackedConstraint(Constraint):
+    """One constraint applied to every robot of a team: its rows, evaluated on each robot's own
+    terms, placed at the robot's columns of the team's variables (its extra variables named
+    ``"<robot>.<variable>"``)."""
+
+    stacked: ConstraintRows
+    original: Constraint
+    name: str = ""
+    problem: str = "acceleration"
+
+    def rows(self, terms: Terms) -> ConstraintRows:
+        return self.stacked
+
+    def describe(self) -> dict:
+        return self.original.describe()
+
+
+def _stacked_constraints(
+    team: Team, parts: tuple[MemberTerms, ...], constraints: tuple[Constraint, ...]
+) -> tuple[Constraint, ...]:
+    task = get_task(team.task)
+    nx = [p.J_u.shape[1] for p in parts]
+    nh = [p.W.shape[1] for p in parts]
+    x_at, h_at = np.cumsum([0] + nx), np.cumsum([0] + nh)
+    sizes = {"x": x_at[-1], "xdot": x_at[-1], "tau": x_at[-1], "h": h_at[-1], "v": task.dim, "a": task.dim}
+    out = []
+    for constraint in constraints:
+        member_rows = []
+        for member, part in zip(team.members, parts):
+            own = MeasureTerms(
+                task=task.name, J_u=part.J_u, W=part.W, P=part.P, Q=part.Q, xi=part.xi,
+                M_o=team.held_object.inertia_matrix(task), g_o=team.held_object.gravity_vector(task),
+                velocity_limits=part.velocity_limits, effort_limits=part.effort_limits, decoupled=team.decoupled,
+                reduced_names=tuple(member.robot.reduced_velocity_names), robot=member.robot,
+                q=member.robot.check_configuration(member.q), held_object=team.held_object,
+            )  # fmt: skip
+            member_rows.append(constraint.rows(own))
+        out.append(
+            _StackedConstraint(
+                _stack_rows(team, member_rows, sizes, x_at, h_at), constraint, constraint.name, constraint.problem
+            )
+        )
+    return tuple(out)
+
+
+def _stack_rows(
+    team: Team, rows: list[ConstraintRows], sizes: dict, x_at: np.ndarray, h_at: np.ndarray
+) -> ConstraintRows:
+    """The members' rows in the team's columns: x, xdot, tau and h at each robot's offsets, v
+    and a shared, each robot's own variables under its name; the robots' couplings to the
+    dynamics (and grasp) equations at its rows of them."""
+
+    def place(name: str, i: int, block: np.ndarray) -> tuple[str, np.ndarray]:
+        block = np.asarray(block, dtype=float)
+        if name in ("x", "xdot", "tau", "h"):
+            at = h_at if name == "h" else x_at
+            full = np.zeros((block.shape[0], sizes[name]))
+            full[:, at[i] : at[i + 1]] = block
+            return name, full
+        if name in ("v", "a"):
+            return name, block
+        return f"{team.members[i].name}.{name}", block
+
+    def stack(blocks_per_member: list[tuple[Mapping[str, np.ndarray], int]]) -> dict[str, np.ndarray]:
+        total = sum(n for _, n in blocks_per_member)
+        out: dict[str, np.ndarray] = {}
+        start = 0
+        for i, (blocks, n) in enumerate(blocks_per_member):
+            for name, block in blocks.items():
+                key, full = place(name, i, block)
+                if key not in out:
+                    out[key] = np.zeros((total, full.shape[1]))
+                out[key][start : start + n] += full
+            start += n
+        return out
+
+    first = rows[0]
+    variables = {f"{team.members[i].name}.{k}": v for i, r in enumerate(rows) for k, v in r.variables.items()}
+    couplings: dict[str, dict[str, np.ndarray]] = {}
+    eq_rows = {"dynamics": x_at, "grasp": h_at}
+    for equation in {e for r in rows for e in r.couplings}:
+        if equation not in eq_rows:  # the object's equation is the team's one: its rows add up
+            parts = [place(k, i, b) for i, r in enumerate(rows) for k, b in r.couplings.get(equation, {}).items()]
+            couplings[equation] = {}
+            for key, block in parts:
+                couplings[equation][key] = couplings[equation].get(key, 0) + block
+            continue
+        at = eq_rows[equation]
+        blocks: dict[str, np.ndarray] = {}
+        for i, r in enumerate(rows):
+            for name, block in r.couplings.get(equation, {}).items():
+                key, full = place(name, i, block)
+                if key not in blocks:
+                    blocks[key] = np.zeros((at[-1], full.shape[1]))
+                blocks[key][at[i] : at[i + 1]] += full
+        couplings[equation] = blocks
+    labels = tuple(
+        f"{team.members[i].name}: {label}" for i, r in enumerate(rows) for label in (r.labels or (r.name,) * len(r.h))
+    )
+    return ConstraintRows(
+        name=first.name,
+        problem=first.problem,
+        variables=variables,
+        G=stack([(r.G, len(r.h)) for r in rows]),
+        h=np.concatenate([r.h for r in rows]),
+        E=stack([(r.E, len(r.e)) for r in rows]),
+        e=np.concatenate([r.e for r in rows]),
+        couplings=couplings,
+        labels=labels,
+        info={f"{team.members[i].name}": dict(r.info) for i, r in enumerate(rows) if r.info},
+    )

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, MobmanipError, TeamError
-from ..measures.registry import resolve_measures
+from ..measures import resolve_measures
 from ..robot.tasks import get_task
 from .analysis import analyze_team, ray_radius
 from .members import team_from_dict

@@ -179,7 +179,7 @@ def legend_rows(
         magnified: the factor of each magnified set, by key.
         object_color: colour of the held object's sphere.
     """
-    from ..measures.registry import get_measure, measure_names
+    from ..measures import get_measure, measure_names
 
     order = {name: i for i, name in enumerate(measure_names())}
     rows, notes = [], []

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from ..analysis.single import Analysis
 from ..errors import MobmanipError
-from ..measures.registry import Quantity, get_measure, measure_names, resolve_measures
+from ..measures import Quantity, get_measure, measure_names, resolve_measures
 from .server import ViewerError
 from .shapes import DRAWINGS
 

@@ -84,7 +84,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..analysis.single import Analysis, analyze
-from ..measures.registry import default_measures, get_measure, measure_names, resolve_measures
+from ..measures import default_measures, get_measure, measure_names, resolve_measures
 from ..robot.model import Robot
 from ..sets.taskset import TaskSet
 from ..support.files import write_text

@@ -49,7 +49,7 @@ def index_unit(index: str, task: str) -> str:
     """The unit of a sweep index, mathtext: ``(m/s)$^{2}$`` for a planar kinematic volume,
     ``1`` for an isotropy, ``m/s`` for a planar semi-axis; ``mixed`` where the task mixes linear
     and angular axes and the index does not say which (a spatial semi-axis)."""
-    from ..measures.registry import get_measure
+    from ..measures import get_measure
     from ..robot.tasks import get_task
     from ..sweep.results import check_index_name
 

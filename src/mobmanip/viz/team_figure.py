@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..measures.registry import get_measure
+from ..measures import get_measure
 from ..robot.tasks import get_task
 from ..support.files import save_figure
 from ..team.analysis import TeamAnalysis

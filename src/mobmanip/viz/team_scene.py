@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..measures.registry import get_measure
+from ..measures import get_measure
 from ..support.files import write_text
 from ..team.analysis import TeamAnalysis
 from .scene import DEFAULT_SIZE, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model

@@ -1,0 +1,522 @@
+"""A polytope given as the shadow of a larger one: task-space sets of linear programs.
+
+When the limits are more than a box on the joints (contact forces that must push, wheels that
+must not slip, constraints a user adds), the capacity set is no longer a zonotope section. It is
+the projection onto the task coordinates a of a polytope in a larger space z = (a, rest):
+
+    K = {a : exists z with z[task] = a, A_eq z = b_eq, A_ub z <= b_ub, lower <= z <= upper}
+
+:class:`LiftedPolytope` answers the questions every :class:`~mobmanip.sets.taskset.TaskSet`
+answers with linear programs on HiGHS (:class:`~mobmanip.sets.linear_programs.LinearProgram`,
+kept warm between directions):
+
+- ``support(d)``: max d . a over the set (the other task components free);
+- ``straight_line_reach(d)``: the largest s with s d / |d| in the set (from rest, exactly
+  along d); ``ray_radius(d)`` the same from :attr:`center`;
+- ``witness(d)`` / ``straight_line_witness(d)``: the whole maximiser z, split by variable name
+  (which torques, contact forces ... achieve the maximum) with the rows that bind there;
+- vertices and halfspaces for m <= 3, by refining an inner polytope along the outer normals of
+  its facets until every facet is a facet of K (Bretl and Lall's projection algorithm): each
+  vertex found is an LP optimum, so the result is exact to the LP's tolerance; volume and
+  isotropy from them. Above three dimensions only LP queries are answered (volume ``n/a``).
+
+Its :attr:`center` is the centre of its bounding box along the task axes (the midpoint of the
+supports along +-e_i), a point of the set for every convex K.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import TaskError
+from .linear_programs import LinearProgram
+from .taskset import TaskSet, check_dims, check_direction, check_points
+
+_TOL = 1e-9  # relative to the set's size: a support beyond a facet by less than this adds no vertex
+_MAX_ROUNDS = 400
+
+
+class LiftedPolytope(TaskSet):
+    """The projection onto task coordinates of ``{z : A_eq z = b_eq, A_ub z <= b_ub, lower <= z <= upper}``.
+
+    Args:
+        task: column indices of z holding the task coordinates a, in task order, (m,).
+        A_eq, b_eq: equalities, (p, n) and (p,).
+        A_ub, b_ub: inequalities, (r, n) and (r,).
+        lower, upper: bounds of z, (n,) each (+-inf where free).
+        variables: named slices of z (e.g. ``{"tau": slice(8, 16)}``), for :meth:`witness`.
+        model: what produced the set, for its JSON form (e.g. ``{"constraints": [...]}``).
+        labels: what each inequality row stands for (e.g. ``"wheel_right_joint effort limit
+            (+)"``), (r,): a maximiser's tight rows are reported by these.
+    """
+
+    kind = "polytope"
+
+    def __init__(
+        self,
+        task: ArrayLike,
+        A_eq: ArrayLike,
+        b_eq: ArrayLike,
+        A_ub: ArrayLike,
+        b_ub: ArrayLike,
+        lower: ArrayLike,
+        upper: ArrayLike,
+        variables: Mapping[str, slice] | None = None,
+        model: Mapping | None = None,
+        labels: Sequence[str] | None = None,
+    ):
+        self._task = np.asarray(task, dtype=int)
+        self._A_eq = np.asarray(A_eq, dtype=float).reshape(-1, np.shape(lower)[0])
+        self._b_eq = np.asarray(b_eq, dtype=float).reshape(-1)
+        self._A_ub = np.asarray(A_ub, dtype=float).reshape(-1, np.shape(lower)[0])
+        self._b_ub = np.asarray(b_ub, dtype=float).reshape(-1)
+        self._lower = np.asarray(lower, dtype=float).copy()
+        self._upper = np.asarray(upper, dtype=float).copy()
+        self.variables = dict(variables or {})
+        self.model = dict(model or {})
+        self.labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(len(self._b_ub)))
+        n = len(self._lower)
+        for name, rows in (("A_eq", self._A_eq), ("A_ub", self._A_ub)):
+            if rows.shape[1] != n or not np.all(np.isfinite(rows)):
+                raise TaskError(f"{name} must be finite with {n} columns, got shape {rows.shape}")
+        if len(self._b_eq) != len(self._A_eq) or len(self._b_ub) != len(self._A_ub):
+            raise TaskError("each row of A_eq and A_ub needs one right-hand side")
+        if not (np.all(np.isfinite(self._b_eq)) and np.all(np.isfinite(self._b_ub))):
+            raise TaskError("the right-hand sides of a lifted polytope must be finite")
+        self._cache: dict = {}
+        self.empty = self._feasible_point() is None
+        if self.empty:
+            self.center = np.zeros(self.dim)
+            self.degenerate = True
+            return
+        lo = -self._axis_supports(-1.0)
+        hi = self._axis_supports(1.0)
+        self.center = 0.5 * (lo + hi)
+        self._size = float(max(np.max(hi - lo), 1e-300))
+        self.degenerate = self._flat()
+
+    # ------------------------------------------------------------------------------------------
+    # linear programs
+
+    @property
+    def dim(self) -> int:
+        return len(self._task)
+
+    def _program(self) -> LinearProgram:
+        if "program" not in self._cache:
+            A = np.vstack([self._A_eq, self._A_ub])
+            lo = np.r_[self._b_eq, np.full(len(self._b_ub), -np.inf)]
+            hi = np.r_[self._b_eq, self._b_ub]
+            self._cache["program"] = LinearProgram(A, lo, hi, self._lower, self._upper)
+        return self._cache["program"]
+
+    def _cost(self, d: np.ndarray) -> np.ndarray:
+        cost = np.zeros(len(self._lower))
+        cost[self._task] = d
+        return cost
+
+    def _feasible_point(self) -> np.ndarray | None:
+        result = self._program().solve(np.zeros(len(self._lower)))
+        return None if result is None else result[1]
+
+    def _maximise(self, d: np.ndarray) -> tuple[float, np.ndarray]:
+        result = self._program().solve(self._cost(d))
+        if result is None:  # only when empty (checked at construction)
+            raise TaskError("the set is empty: it has no maximiser")
+        return result
+
+    def _ub_duals(self, program: LinearProgram, first_ub: int) -> np.ndarray:
+        return program.row_duals[first_ub : first_ub + len(self._b_ub)].copy()
+
+    def _axis_supports(self, sign: float) -> np.ndarray:
+        return np.array([self._maximise(sign * row)[0] for row in np.eye(self.dim)])
+
+    def _flat(self) -> bool:
+        """Whether the set has no interior: some direction's width is (relatively) zero."""
+        if self.dim <= 3:
+            V = self.vertices
+            if len(V) <= self.dim:
+                return True
+            return bool(np.linalg.matrix_rank(V - V.mean(axis=0), tol=_TOL * self._size) < self.dim)
+        widths = [self._maximise(e)[0] + self._maximise(-e)[0] for e in np.eye(self.dim)]
+        return bool(min(widths) <= _TOL * self._size)
+
+    # ------------------------------------------------------------------------------------------
+    # TaskSet queries
+
+    def support(self, direction: ArrayLike) -> float:
+        d = check_direction(direction, self.dim)
+        return 0.0 if self.empty else float(self._maximise(d)[0])
+
+    def witness(self, direction: ArrayLike) -> Witness:
+        """What achieves the support along d: the maximiser, split by :attr:`variables`, and the
+        rows that bind there."""
+        d = check_direction(direction, self.dim)
+        if self.empty:
+            raise TaskError("the set is empty: nothing reaches along any direction")
+        value, z = self._maximise(d)
+        return self._witness(value, z, self._ub_duals(self._program(), len(self._b_eq)))
+
+    def straight_line_reach(self, direction: ArrayLike) -> float:
+        """The largest s >= 0 with s d/|d| in the set: how far along d from rest, exactly along d
+        (0 when the origin is outside the set or the set is empty)."""
+        found = self._ray(direction, np.zeros(self.dim))
+        return 0.0 if found is None else found[0]
+
+    def ray_radius(self, direction: ArrayLike) -> float:
+        """The largest t >= 0 with center + t d/|d| in the set (0 when empty)."""
+        found = self._ray(direction, self.center)
+        return 0.0 if found is None else found[0]
+
+    def straight_line_witness(self, direction: ArrayLike) -> Witness:
+        """What achieves the straight-line reach along d (see :meth:`witness`).
+
+        Raises:
+            TaskError: the origin (no motion at all) is outside the set.
+        """
+        found = self._ray(direction, np.zeros(self.dim))
+        if found is None:
+            raise TaskError("the origin is outside the set: no straight line from rest exists")
+        return self._witness(found[0], found[1][:-1], found[2])
+
+    def witness_at(self, point: ArrayLike) -> Witness:
+        """A solution that reaches ``point``, as far inside every inequality row as it can be
+        (max t with each row's slack >= t |row|): no limit is tight unless ``point`` needs it.
+
+        Raises:
+            TaskError: the point is not in the set.
+        """
+        p = check_points(point, self.dim)[0]
+        n = len(self._lower)
+        fix = np.zeros((self.dim, n + 1))
+        fix[np.arange(self.dim), self._task] = 1.0
+        norms = np.linalg.norm(self._A_ub, axis=1)
+        A = np.vstack([np.c_[self._A_eq, np.zeros(len(self._A_eq))], fix, np.c_[self._A_ub, norms]])
+        lo = np.r_[self._b_eq, p, np.full(len(self._b_ub), -np.inf)]
+        hi = np.r_[self._b_eq, p, self._b_ub]
+        program = LinearProgram(A, lo, hi, np.r_[self._lower, -np.inf], np.r_[self._upper, np.inf])
+        cost = np.zeros(n + 1)
+        cost[n] = 1.0
+        result = program.solve(cost)
+        if result is None or result[0] < -1e-9 * max(self._size, 1.0):
+            raise TaskError(f"the point {p.tolist()} is not in the set")
+        return self._witness(float(result[0]), result[1][:-1], None)
+
+    def _ray(self, direction: ArrayLike, origin: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
+        d = check_direction(direction, self.dim)
+        d = d / np.linalg.norm(d)
+        if self.empty:
+            return None
+        key = ("ray", tuple(d), tuple(origin))
+        if key not in self._cache:
+            n = len(self._lower)
+            tie = np.zeros((self.dim, n + 1))
+            tie[np.arange(self.dim), self._task] = 1.0
+            tie[:, n] = -d  # a = origin + s d
+            A = np.vstack(
+                [np.c_[self._A_eq, np.zeros(len(self._A_eq))], tie, np.c_[self._A_ub, np.zeros(len(self._A_ub))]]
+            )
+            lo = np.r_[self._b_eq, origin, np.full(len(self._b_ub), -np.inf)]
+            hi = np.r_[self._b_eq, origin, self._b_ub]
+            program = LinearProgram(A, lo, hi, np.r_[self._lower, 0.0], np.r_[self._upper, np.inf])
+            cost = np.zeros(n + 1)
+            cost[n] = 1.0
+            result = program.solve(cost)
+            duals = self._ub_duals(program, len(self._b_eq) + self.dim)
+            self._cache[key] = None if result is None else (float(result[0]), result[1], duals)
+        return self._cache[key]
+
+    def radius_along(self, direction: ArrayLike) -> float:
+        d = check_direction(direction, self.dim)
+        d = d / np.linalg.norm(d)
+        return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
+
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
+        P = check_points(points, self.dim)
+        if self.empty:
+            return np.zeros(len(P), dtype=bool)
+        out = np.zeros(len(P), dtype=bool)
+        slack = tol * self._size
+        lower, upper = self._lower.copy(), self._upper.copy()
+        for i, p in enumerate(P):
+            lower[self._task], upper[self._task] = p - slack, p + slack
+            out[i] = self._program().solve(np.zeros(len(lower)), True, lower, upper) is not None
+        self._program().solve(np.zeros(len(lower)), True, self._lower, self._upper)  # restore the bounds
+        return out
+
+    def project(self, dims: Sequence[int] = (0, 1)) -> LiftedPolytope:
+        keep = check_dims(dims, self.dim)
+        return self._derived(self._task[keep], self._A_eq, self._b_eq)
+
+    def slice(self, dims: Sequence[int] = (0, 1)) -> LiftedPolytope:
+        keep = check_dims(dims, self.dim)
+        fixed = [i for i in range(self.dim) if i not in keep]
+        rows = np.zeros((len(fixed), len(self._lower)))
+        rows[np.arange(len(fixed)), self._task[fixed]] = 1.0
+        A_eq = np.vstack([self._A_eq, rows])
+        b_eq = np.r_[self._b_eq, self.center[fixed]]
+        return self._derived(self._task[keep], A_eq, b_eq)
+
+    def _derived(self, task, A_eq, b_eq) -> LiftedPolytope:
+        return LiftedPolytope(
+            task, A_eq, b_eq, self._A_ub, self._b_ub, self._lower, self._upper, self.variables, self.model, self.labels
+        )
+
+    def _witness(self, value: float, z: np.ndarray, duals: np.ndarray | None) -> Witness:
+        """The maximiser's parts; binding: the rows whose multiplier is not zero (the maximum moves
+        with their bounds), or without multipliers the rows that are tight."""
+        variables = {name: z[where].copy() for name, where in self.variables.items()}
+        if duals is not None:
+            scale = float(np.abs(duals).max(initial=0.0))
+            chosen = np.abs(duals) > 1e-9 * max(scale, 1e-300)
+        else:
+            slack = self._b_ub - self._A_ub @ z
+            chosen = slack <= 1e-7 * (np.maximum(np.abs(self._b_ub), np.abs(self._A_ub) @ np.abs(z)) + 1e-12)
+        binding = tuple(label for label, c in zip(self.labels, chosen) if c)
+        return Witness(float(value), z[self._task].copy(), variables, binding)
+
+    # ------------------------------------------------------------------------------------------
+    # vertices, halfspaces and indices (m <= 3)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """The vertices, (v, m), m <= 3: counter-clockwise for m = 2.
+
+        Raises:
+            TaskError: m > 3 (only LP queries are answered there).
+        """
+        if self.dim > 3:
+            raise TaskError(f"vertices are enumerated up to 3 task dimensions, this set has {self.dim}")
+        if self.empty:
+            return np.zeros((0, self.dim))
+        if "vertices" not in self._cache:
+            self._cache["vertices"] = self._refine()
+        return self._cache["vertices"]
+
+    def _refine(self) -> np.ndarray:
+        """Bretl and Lall's projection: grow an inner polytope by supports along its facets' normals."""
+        m = self.dim
+        found = [self._maximise(s * e)[1][self._task] for e in np.eye(m) for s in (1.0, -1.0)]
+        if m == 1:
+            return np.unique(np.round(np.array(found), 15), axis=0)
+        tol = _TOL * self._size
+        checked: set[tuple] = set()
+        for _ in range(_MAX_ROUNDS):
+            V = _unique_rows(np.array(found), tol)
+            normals, offsets = _facets(V, tol)
+            if normals is None:  # flat so far: try the directions across its span
+                extra = _across(V, m, tol)
+                added = False
+                for d in extra:
+                    p = self._maximise(d)[1][self._task]
+                    if np.min(np.linalg.norm(V - p, axis=1)) > tol:
+                        found.append(p)
+                        added = True
+                if not added:
+                    return _ordered(V)
+                continue
+            added = False
+            assert offsets is not None  # given with the normals
+            for n, b in zip(normals, offsets):
+                key = tuple(np.round(n, 12)) + (round(float(b) / self._size, 12),)
+                if key in checked:
+                    continue
+                value, z = self._maximise(n)
+                if value > b + tol:
+                    found.append(z[self._task])
+                    added = True
+                else:
+                    checked.add(key)
+            if not added:
+                return _ordered(V)
+        raise TaskError("the projection did not converge (a set with very many vertices)")
+
+    @property
+    def halfspaces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(A, b) with the set = {a : A a <= b}, rows of unit norm (m <= 3, full-dimensional)."""
+        V = self.vertices
+        normals, offsets = _facets(V, _TOL * getattr(self, "_size", 1.0)) if len(V) else (None, None)
+        if normals is None or offsets is None:
+            raise TaskError("the set has no interior: it has no halfspace description of its own dimension")
+        return normals, offsets
+
+    @property
+    def faces(self) -> list[np.ndarray]:
+        """Vertex indices of each facet (m <= 3)."""
+        V = self.vertices
+        if self.dim == 2 and len(V) > 2:
+            return [np.array([i, (i + 1) % len(V)]) for i in range(len(V))]
+        if self.dim == 3 and len(V) > 3 and not self.degenerate:
+            from scipy.spatial import ConvexHull
+
+            return [np.asarray(s) for s in ConvexHull(V).simplices]
+        return []
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """Boundary triangles as vertex indices, (t, 3), for m = 3 (the viewer's mesh)."""
+        faces = self.faces if self.dim == 3 else []
+        return np.array(faces, dtype=int).reshape(-1, 3)
+
+    @property
+    def volume(self) -> float:
+        if self.empty or self.degenerate:
+            return 0.0
+        V = self.vertices
+        if self.dim == 1:
+            return float(np.ptp(V))
+        from scipy.spatial import ConvexHull
+
+        return float(ConvexHull(V).volume)
+
+    @property
+    def inradius(self) -> float:
+        """Distance from :attr:`center` to the nearest facet (0 when empty or degenerate)."""
+        if self.empty or self.degenerate:
+            return 0.0
+        A, b = self.halfspaces
+        return float(max(np.min(b - A @ self.center), 0.0))
+
+    @property
+    def circumradius(self) -> float:
+        """Largest distance from :attr:`center` to a vertex (0 when empty)."""
+        if self.empty:
+            return 0.0
+        return float(np.max(np.linalg.norm(self.vertices - self.center, axis=1), initial=0.0))
+
+    @property
+    def isotropy(self) -> float:
+        """Nearest facet over farthest vertex, seen from :attr:`center` (0 when empty or degenerate)."""
+        if self.empty or self.degenerate:
+            return 0.0
+        far = self.circumradius
+        return self.inradius / far if far > 0.0 else 0.0
+
+    def to_dict(self) -> dict:
+        out: dict = {
+            "kind": self.kind,
+            "dim": self.dim,
+            "empty": self.empty,
+            "degenerate": self.degenerate,
+            "center": self.center.tolist(),
+            "model": self.model,
+        }
+        if self.dim <= 3 and not self.empty:
+            out["vertices"] = self.vertices.tolist()
+            out["faces"] = [f.tolist() for f in self.faces]
+            try:
+                A, b = self.halfspaces
+                out["halfspaces"] = {"A": A.tolist(), "b": b.tolist()}
+            except TaskError as error:
+                out["halfspaces"] = None
+                out["halfspaces_omitted"] = str(error)
+            out["volume"], out["isotropy"] = self.volume, self.isotropy
+        else:
+            out["halfspaces"] = None
+            out["halfspaces_omitted"] = (
+                "the set is empty" if self.empty else f"only linear-program queries above 3 dimensions ({self.dim})"
+            )
+            out["volume"] = out["isotropy"] = None
+        return out
+
+    def indices(self) -> dict[str, float]:
+        if self.dim > 3:
+            return {"volume": float("nan"), "isotropy": float("nan")}
+        return super().indices()
+
+    def __repr__(self) -> str:
+        state = "empty" if self.empty else ("degenerate" if self.degenerate else "full")
+        return f"LiftedPolytope(dim={self.dim}, variables={len(self._lower)}, {state})"
+
+
+@dataclass(frozen=True)
+class Witness:
+    """What achieves a maximum of a :class:`LiftedPolytope`.
+
+    Attributes:
+        value: the maximum (the support, or the straight-line reach).
+        point: the task-space point reached, (m,).
+        variables: every variable of the lifted problem at the maximiser, by name.
+        binding: the labels of the inequality rows that limit the maximum (a non-zero multiplier:
+            what stops it); for :meth:`LiftedPolytope.witness_at`, the rows that are tight.
+    """
+
+    value: float
+    point: np.ndarray
+    variables: Mapping[str, np.ndarray]
+    binding: tuple[str, ...]
+
+
+# ----------------------------------------------------------------------------------------------
+# small geometry of the inner polytope
+
+
+def _unique_rows(V: np.ndarray, tol: float) -> np.ndarray:
+    keep: list[np.ndarray] = []
+    for v in V:
+        if not keep or np.min(np.linalg.norm(np.array(keep) - v, axis=1)) > tol:
+            keep.append(v)
+    return np.array(keep)
+
+
+def _facets(V: np.ndarray, tol: float) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Outer unit normals and offsets of the hull of V, or (None, None) when V has no interior."""
+    m = V.shape[1]
+    if len(V) <= m or np.linalg.matrix_rank(V - V.mean(axis=0), tol=max(tol, 1e-300)) < m:
+        return None, None
+    if m == 2:
+        P = _ordered(V)
+        edges = np.roll(P, -1, axis=0) - P
+        normals = np.c_[edges[:, 1], -edges[:, 0]]
+        length = np.linalg.norm(normals, axis=1)
+        keep = length > tol
+        normals = normals[keep] / length[keep, None]
+        return normals, np.einsum("ij,ij->i", normals, P[keep])
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(V)
+    normals, offsets = hull.equations[:, :-1], -hull.equations[:, -1]
+    scale = np.linalg.norm(normals, axis=1)
+    return normals / scale[:, None], offsets / scale
+
+
+def _ordered(V: np.ndarray) -> np.ndarray:
+    """Planar points in counter-clockwise order around their hull (interior points dropped);
+    other dimensions: the hull's vertices."""
+    if V.shape[1] != 2 or len(V) < 3:
+        if V.shape[1] == 3 and len(V) > 3:
+            from scipy.spatial import ConvexHull
+
+            try:
+                return V[ConvexHull(V).vertices]
+            except Exception:  # a flat set: every point is kept  # noqa: BLE001
+                return V
+        return V
+    pts = sorted(map(tuple, V))
+    lower: list = []
+    upper: list = []
+    for p in pts:
+        while len(lower) >= 2 and _cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and _cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def _cross(o, a, b) -> float:
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def _across(V: np.ndarray, m: int, tol: float) -> list[np.ndarray]:
+    """Directions orthogonal to the affine span of V (both senses)."""
+    centered = V - V.mean(axis=0)
+    _, s, Vt = np.linalg.svd(centered, full_matrices=True)
+    rank = int(np.sum(s > tol))
+    return [sign * row for row in Vt[rank:] for sign in (1.0, -1.0)]

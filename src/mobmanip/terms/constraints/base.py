@@ -1,0 +1,192 @@
+"""What a constraint is: linear rows over the named variables of one configuration's problem.
+
+mobmanip's capacity sets are the task-space shadows of linear problems at one configuration,
+robot and object at rest. Two problems, with their variables (SI units):
+
+- **velocity**: ``x`` (reduced velocities, nx) and ``v`` (the object's velocity, m), tied by the
+  rigid grasp J_u x = W^T v;
+- **acceleration**: ``xdot`` (reduced accelerations, nx), ``tau`` (reduced efforts, nx), ``h``
+  (the wrench each hand applies ON the object, m k) and ``a`` (the object's acceleration, m),
+  tied by the paper's equations: ``dynamics`` P xdot - Q tau + J_u^T h = xi, ``grasp``
+  J_u xdot - W^T a = 0 and ``object`` W h - M_o a = g_o.
+
+A :class:`Constraint` adds rows ``G z <= h`` and ``E z = e`` over those variables and over
+variables it declares itself (a contact force, say), as :class:`ConstraintRows`. The joint
+boxes are the first two constraints (:mod:`.joint_limits`). Every polytope measure honours every
+constraint; a set that cannot (an ellipsoid, the compiled engine) says which ones it ignored. A
+new constraint is one file: a subclass with one method, :meth:`Constraint.rows` (mink's limits
+and pink's tasks are the pattern).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from ...errors import ArgumentError
+
+#: The problems and their own variables, in column order.
+PROBLEMS: dict[str, tuple[str, ...]] = {
+    "velocity": ("x", "v"),
+    "acceleration": ("xdot", "tau", "h", "a"),
+}
+#: The equations of each problem, which a constraint may add terms of its own variables to
+#: (:attr:`ConstraintRows.couplings`; e.g. the floor's hand loads outside a planar task enter the
+#: reduced dynamics).
+EQUATIONS: dict[str, tuple[str, ...]] = {
+    "velocity": ("grasp",),
+    "acceleration": ("dynamics", "grasp", "object"),
+}
+
+
+class Terms(Protocol):
+    """What a constraint reads of the terms at a configuration
+    (:class:`mobmanip.terms.builder.MeasureTerms` is one; see its attributes)."""
+
+    @property
+    def task(self) -> str: ...
+
+    @property
+    def J_u(self) -> np.ndarray: ...
+
+    @property
+    def W(self) -> np.ndarray: ...
+
+    @property
+    def P(self) -> np.ndarray: ...
+
+    @property
+    def Q(self) -> np.ndarray: ...
+
+    @property
+    def xi(self) -> np.ndarray: ...
+
+    @property
+    def M_o(self) -> np.ndarray: ...
+
+    @property
+    def g_o(self) -> np.ndarray: ...
+
+    @property
+    def velocity_limits(self) -> np.ndarray: ...
+
+    @property
+    def effort_limits(self) -> np.ndarray: ...
+
+    @property
+    def decoupled(self) -> bool: ...
+
+    @property
+    def reduced_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def robot(self) -> Any: ...
+
+    @property
+    def q(self) -> np.ndarray | None: ...
+
+    @property
+    def held_object(self) -> Any: ...
+
+    @property
+    def positions(self) -> np.ndarray | None: ...
+
+
+@dataclass(frozen=True)
+class ConstraintRows:
+    """A constraint's rows at one configuration.
+
+    Attributes:
+        name: the constraint's name (messages, JSON).
+        problem: ``"velocity"`` or ``"acceleration"`` (see :data:`PROBLEMS`).
+        variables: the extra variables it declares, name -> (size, lower bound, upper bound);
+            bounds are scalars or arrays of that size (+-inf where free).
+        G: inequality blocks by variable name, each (r, size of the variable).
+        h: inequality right-hand side, (r,).
+        E: equality blocks by variable name, each (p, size of the variable).
+        e: equality right-hand side, (p,).
+        couplings: terms it adds to the problem's own equations, equation name -> variable name ->
+            block with as many rows as the equation (``"dynamics"``: nx rows, ``"grasp"``: m k,
+            ``"object"``: m; see :data:`EQUATIONS`).
+        labels: one label per inequality row (what binds when the row is tight), (r,).
+        info: what the constraint wants reported with the set (JSON-ready).
+    """
+
+    name: str
+    problem: str
+    variables: Mapping[str, tuple[int, Any, Any]] = field(default_factory=dict)
+    G: Mapping[str, np.ndarray] = field(default_factory=dict)
+    h: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    E: Mapping[str, np.ndarray] = field(default_factory=dict)
+    e: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    couplings: Mapping[str, Mapping[str, np.ndarray]] = field(default_factory=dict)
+    labels: tuple[str, ...] = ()
+    info: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.problem not in PROBLEMS:
+            raise ArgumentError(
+                f"constraint {self.name!r}: problem must be one of {sorted(PROBLEMS)}, got {self.problem!r}"
+            )
+        unknown = set(self.couplings) - set(EQUATIONS[self.problem])
+        if unknown:
+            raise ArgumentError(
+                f"constraint {self.name!r} adds to unknown equations {sorted(unknown)}; "
+                f"the {self.problem} problem has {list(EQUATIONS[self.problem])}"
+            )
+        clash = set(self.variables) & set(PROBLEMS[self.problem])
+        if clash:
+            raise ArgumentError(f"constraint {self.name!r} declares variables the problem already has: {sorted(clash)}")
+        for rows, rhs, what in ((self.G, self.h, "G"), (self.E, self.e, "E")):
+            for name, block in rows.items():
+                block = np.asarray(block)
+                if block.ndim != 2 or block.shape[0] != len(rhs):
+                    raise ArgumentError(
+                        f"constraint {self.name!r}: {what}[{name!r}] has shape {block.shape}, expected {len(rhs)} rows"
+                    )
+                if not np.all(np.isfinite(block)):
+                    raise ArgumentError(f"constraint {self.name!r}: {what}[{name!r}] is not finite")
+            if not np.all(np.isfinite(rhs)):
+                raise ArgumentError(f"constraint {self.name!r}: its right-hand side is not finite")
+        if self.labels and len(self.labels) != len(self.h):
+            raise ArgumentError(f"constraint {self.name!r}: {len(self.labels)} labels for {len(self.h)} rows")
+
+
+class Constraint(ABC):
+    """A linear constraint of the capacity problems (see the module's docstring).
+
+    Subclasses set :attr:`name` and :attr:`problem` and implement :meth:`rows`; they are
+    immutable value objects (frozen dataclasses are a good fit) whose parameters say what they
+    model (a friction coefficient, a limit).
+    """
+
+    #: How it is named in results and messages.
+    name: str = ""
+    #: ``"velocity"`` or ``"acceleration"``: the problem it constrains.
+    problem: str = "acceleration"
+    #: Whether it is one of the joint boxes every set already honours (ellipsoids included, in
+    #: their Euclidean way); only other constraints are reported as ignored.
+    joint_box: bool = False
+
+    @abstractmethod
+    def rows(self, terms: Terms) -> ConstraintRows:
+        """Its rows at the configuration of ``terms`` (which also carries the robot and q)."""
+
+    def describe(self) -> dict:
+        """JSON-ready description (its name and parameters)."""
+        params = {k: v for k, v in vars(self).items() if not k.startswith("_")}
+        return {"name": self.name, **{k: _jsonable(v) for k, v in params.items()}}
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (tuple, list)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    return repr(value)

@@ -1,0 +1,112 @@
+"""The capacity problems as linear programs: the terms' equations and every constraint's rows.
+
+:func:`capacity_polytope` stacks, for the velocity or the acceleration problem (see
+:mod:`mobmanip.terms.constraints.base`), the problem's own equations (with the terms that
+constraints add to them) and every constraint's rows, and returns the task-space shadow as a
+:class:`~mobmanip.sets.lifted.LiftedPolytope`. With only the joint boxes it equals the exact
+polytopes of :mod:`mobmanip.sets.capacity` (the tests compare them); those closed forms stay the
+fast path when nothing else constrains the set.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ArgumentError, TaskError
+from ..sets.lifted import LiftedPolytope
+from .builder import MeasureTerms
+from .constraints.base import PROBLEMS
+
+_RANK_RTOL = 1e-10
+
+
+def capacity_polytope(terms: MeasureTerms, problem: str, *, policy: bool = False) -> LiftedPolytope:
+    """The set of object velocities (``"velocity"``) or accelerations (``"acceleration"``) that
+    satisfy the problem's equations and every constraint of ``terms``.
+
+    Args:
+        terms: the terms at one configuration, with their constraints.
+        problem: ``"velocity"`` or ``"acceleration"``.
+        policy: the paper's minimum-norm policy (acceleration only): xdot = J_u^+ W^T a and
+            h = W^+ (M_o a + g_o) instead of the grasp and object equations.
+
+    Raises:
+        TaskError: the policy at a posture where J_u or W loses row rank.
+    """
+    if problem not in PROBLEMS:
+        raise ArgumentError(f"problem must be one of {sorted(PROBLEMS)}, got {problem!r}")
+    rows = terms.rows(problem)
+    nx, (mk, m) = terms.J_u.shape[1], (terms.W.shape[1], terms.W.shape[0])
+    sizes = {"x": nx, "v": m} if problem == "velocity" else {"xdot": nx, "tau": nx, "h": mk, "a": m}
+    lower: dict[str, np.ndarray] = {}
+    upper: dict[str, np.ndarray] = {}
+    for r in rows:
+        for name, (size, lo, hi) in r.variables.items():
+            if name in sizes:
+                raise ArgumentError(f"constraint {r.name!r} declares variable {name!r}, which another one declared")
+            sizes[name] = int(size)
+            lower[name] = np.broadcast_to(np.asarray(lo, dtype=float), (size,))
+            upper[name] = np.broadcast_to(np.asarray(hi, dtype=float), (size,))
+    columns, start = {}, 0
+    for name, size in sizes.items():
+        columns[name] = slice(start, start + size)
+        start += size
+    n = start
+
+    T = terms
+    own: dict[str, tuple[dict[str, np.ndarray], np.ndarray]] = {}  # the problem's equations by name
+    if problem == "velocity":
+        own["grasp"] = ({"x": T.J_u, "v": -T.W.T}, np.zeros(mk))
+    else:
+        own["dynamics"] = ({"xdot": T.P, "tau": -T.Q, "h": T.J_u.T}, T.xi)
+        if policy:
+            J_pinv, W_pinv = _policy_inverses(T.J_u, T.W)
+            own["grasp"] = ({"xdot": np.eye(nx), "a": -J_pinv @ T.W.T}, np.zeros(nx))
+            own["object"] = ({"h": np.eye(mk), "a": -W_pinv @ T.M_o}, W_pinv @ T.g_o)
+        else:
+            own["grasp"] = ({"xdot": T.J_u, "a": -T.W.T}, np.zeros(mk))
+            own["object"] = ({"h": T.W, "a": -T.M_o}, T.g_o)
+    for r in rows:
+        for equation, blocks in r.couplings.items():
+            if policy and equation in ("grasp", "object"):
+                raise ArgumentError(f"constraint {r.name!r} adds to the {equation} equation, which the policy fixes")
+            parts = own[equation][0]
+            for name, block in blocks.items():
+                parts[name] = parts[name] + block if name in parts else np.asarray(block, dtype=float)
+    equalities = list(own.values())
+    equalities += [(dict(r.E), np.asarray(r.e, dtype=float)) for r in rows if len(r.e)]
+    inequalities = [(dict(r.G), np.asarray(r.h, dtype=float)) for r in rows if len(r.h)]
+    labels = [label for r in rows if len(r.h) for label in (r.labels or (r.name,) * len(r.h))]
+
+    def stack(blocks: list[tuple[dict[str, np.ndarray], np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+        A = np.zeros((sum(len(b) for _, b in blocks), n))
+        at = 0
+        for parts, rhs in blocks:
+            for name, block in parts.items():
+                if name not in columns:
+                    raise ArgumentError(f"a constraint's rows name the unknown variable {name!r}")
+                A[at : at + len(rhs), columns[name]] = block
+            at += len(rhs)
+        return A, np.concatenate([b for _, b in blocks]) if blocks else np.zeros(0)
+
+    A_eq, b_eq = stack(equalities)
+    A_ub, b_ub = stack(inequalities)
+    lo, hi = np.full(n, -np.inf), np.full(n, np.inf)
+    for name in lower:
+        lo[columns[name]], hi[columns[name]] = lower[name], upper[name]
+    task_columns = np.arange(n)[columns["v" if problem == "velocity" else "a"]]
+    model = {
+        "problem": problem,
+        "policy": "minimum_norm" if policy else "any",
+        "constraints": [c.describe() for c in (T.all_constraints) if c.problem == problem],
+        **{key: value for r in rows for key, value in r.info.items()},
+    }
+    return LiftedPolytope(task_columns, A_eq, b_eq, A_ub, b_ub, lo, hi, columns, model, labels=labels)
+
+
+def _policy_inverses(J_u: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    for what, A in (("the unified Jacobian J_u", J_u), ("the grasp matrix W", W)):
+        s = np.linalg.svd(A, compute_uv=False)
+        if not len(s) or s[-1] <= _RANK_RTOL * s[0] or A.shape[0] > A.shape[1]:
+            raise TaskError(f"the minimum-norm policy needs {what} of full row rank (a singular posture)")
+    return np.linalg.pinv(J_u), np.linalg.pinv(W)
