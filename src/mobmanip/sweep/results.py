@@ -19,12 +19,11 @@ from ..errors import ArgumentError
 from ..measures import Measure, resolve_measures
 from ..postures.inverse_kinematics import IKPostureTable
 from ..postures.planar import PostureTable
+from .spec import AXES
 
 if TYPE_CHECKING:
-    from .runner import SweepGrid, SweepSpec
+    from .spec import SweepGrid, SweepSpec
 
-#: Grid axes in order: the result arrays have this shape (one entry per value).
-AXES = ("angle_deg", "distance", "heading_deg", "wheel_velocity_scale", "wheel_effort_scale")
 #: Scalar indices recorded by a sweep for every measure.
 SCALAR_INDICES = ("volume", "isotropy", "capacity")
 #: Flags recorded by a sweep for every measure.
