@@ -35,7 +35,6 @@ PUBLIC_MODULES = [
     "mobmanip.gradients",
     "mobmanip.placement",
     "mobmanip.postures.inverse_kinematics",
-    "mobmanip.postures.planar",
     "mobmanip.descriptions.resources",
     "mobmanip.viz.scene",
     "mobmanip.viz.sweeps",
@@ -65,6 +64,16 @@ PUBLIC_MODULES = [
     "mobmanip.support.tolerances",
     "mobmanip.viz.sweep_plot",
     "mobmanip.viz.team_figure",
+    "mobmanip.robot.support",
+    "mobmanip.terms.constraints.base",
+    "mobmanip.terms.constraints.joint_limits",
+    "mobmanip.terms.problems",
+    "mobmanip.terms.builder",
+    "mobmanip.measures.ellipsoids",
+    "mobmanip.measures.polytopes",
+    "mobmanip.analysis.reaches",
+    "mobmanip.sweep.spec",
+    "mobmanip.postures.planar",
 ]
 
 

@@ -240,7 +240,7 @@ class Polytope(TaskSet):
         return float(result.x[0]) if result.status == 0 else 0.0
 
     def straight_line_reach(self, direction: ArrayLike) -> float:
-        """The largest s >= 0 with s d/|d| in the set: how far along d from rest (the origin),
+        """The largest s >= 0 with ``s d / |d|`` in the set: how far along d from rest (the origin),
         exactly along d (one linear program; 0 when the origin is outside the set or it is empty)."""
         from scipy.optimize import linprog
 
