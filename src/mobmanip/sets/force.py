@@ -7,7 +7,7 @@ dynamics at rest give the efforts: ``-Q tau + J_u^T h = xi``, i.e. ``tau = Q^-1 
 (xi = -S^T g at rest, so ``-xi`` are the efforts that hold the robot up against its own weight).
 
 Exact set (box limits, any internal force): with h = W^+ (f + g_o) + N n (N a basis of null(W),
-n the internal forces),
+n the internal forces)::
 
     K_f = {f : exists n with |A f + B n + mu| <= tau_max},
     A = Q^-1 J_u^T W^+,  B = Q^-1 J_u^T N,  mu = Q^-1 (J_u^T W^+ g_o - xi),
