@@ -84,7 +84,7 @@ def test_a_new_constraint_reaches_analyze_and_the_json(paper):
     assert doc["dynamic_polytope"]["ignored_constraints"] == []
     assert [c["name"] for c in doc["dynamic_polytope"]["model"]["constraints"]] == ["effort_limits", "effort_share"]
     # what binds at the straight-line maximum along +x: efforts at the toy's share of their limits
-    witness = result.measures["dynamic_polytope"].ray_witness([1.0, 0.0])
+    witness = result.measures["dynamic_polytope"].straight_line_witness([1.0, 0.0])
     tau = witness.variables["tau"]
     assert np.max(np.abs(tau) / (share * robot.effort_limits)) == pytest.approx(1.0, abs=1e-9)
     assert witness.binding and all(f"at {share:g} of its effort limit" in label for label in witness.binding)

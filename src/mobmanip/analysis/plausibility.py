@@ -97,6 +97,33 @@ def analysis_warnings(robot: Robot, positions: np.ndarray, xi: np.ndarray, held_
     )
 
 
+def rest_warnings(analysis) -> list[str]:
+    """The dynamic ellipsoid excludes rest while every effort that holds the load is within its
+    own limit: the ellipsoid's Euclidean norm adds the efforts up, so read literally it says the
+    robot cannot hold the object still, which the polytopes (each effort on its own) contradict."""
+    from ..sets.ellipsoid import Ellipsoid
+
+    out = []
+    for name, task_set in analysis.measures.items():
+        if not isinstance(task_set, Ellipsoid) or task_set.empty or name != "dynamic":
+            continue
+        if task_set.contains(np.zeros(task_set.dim))[0]:
+            continue
+        terms = analysis.terms
+        hold = -terms.xi + terms.J_u.T @ (np.linalg.pinv(terms.W) @ terms.g_o)  # the policy's efforts at rest
+        hold = np.linalg.solve(terms.Q, hold)
+        share = np.abs(hold) / terms.effort_limits
+        if share.max() <= 1.0:
+            k = int(np.argmax(share))
+            out.append(
+                "the dynamic ellipsoid does not contain zero acceleration, yet every effort that holds the object "
+                f"still is within its own limit (the largest, {terms.reduced_names[k]}, at {share[k]:.0%}): the "
+                "ellipsoid adds all efforts up in one Euclidean norm (||Z tau|| <= 1), so it reads 'cannot hold the "
+                "load' where each joint can; the dynamic polytopes (--polytope) bound each effort on its own"
+            )
+    return out
+
+
 def mixes_units(task: TaskSpace) -> bool:
     """Whether the task has both linear and angular rows (its volume multiplies m by rad)."""
     return bool(task.linear_rows) and bool(task.angular_rows)

@@ -107,10 +107,11 @@ class Analysis:
     @functools.cached_property
     def warnings(self) -> tuple[str, ...]:
         """Plausibility warnings of this configuration (:func:`mobmanip.analysis.plausibility.analysis_warnings`)."""
-        from .plausibility import analysis_warnings
+        from .plausibility import analysis_warnings, rest_warnings
 
         explicit = self.held_object if self.object_given else None
-        return analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
+        found = analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
+        return found + tuple(rest_warnings(self))
 
     @property
     def kinematic(self) -> Ellipsoid:
@@ -194,9 +195,14 @@ class Analysis:
         }
 
     def _set_document(self, name: str, task_set: TaskSet) -> dict:
+        from .reaches import axis_reaches
+
         out = task_set.to_dict()
         if self.constraints:
             out["ignored_constraints"] = list(self.ignored_constraints(name))
+        reaches = axis_reaches(task_set, self.task)
+        if reaches is not None:
+            out["reaches"] = reaches
         return out
 
     def block_indices(self) -> dict | None:

@@ -2,7 +2,11 @@
 
 ``--polytope`` adds the exact capacity polytopes to the measures; the summary gives each
 polytope's reach along its ellipsoid's principal axes (the ellipsoid of the same quantity, from
-its centre, both ways) beside the ellipsoid's semi-axes, and their ratio.
+its centre, both ways) beside the ellipsoid's semi-axes, and their ratio, and along each task
+axis its straight-line reach (from rest, exactly along the axis) and its support (the other
+components free). ``--ground`` (``--mu``, ``--no-traction``) computes the polytopes on the floor
+and names, for each axis, what stops it: a joint's effort, a wheel's traction or a support
+lifting off, with the zero-moment point and its margin to the support polygon.
 """
 
 from __future__ import annotations
@@ -13,8 +17,10 @@ import numpy as np
 
 from .common import (
     add_analysis_options,
+    add_floor_options,
     add_robot_options,
     apply_analysis_options,
+    floor_constraints,
     format_matrix,
     load_robot_and_configuration,
     print_warnings,
@@ -26,6 +32,7 @@ def register(sub) -> None:
     parser = sub.add_parser("analyze", help="analyse one configuration")
     add_robot_options(parser)
     add_analysis_options(parser)
+    add_floor_options(parser)
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.set_defaults(func=run)
 
@@ -108,6 +115,38 @@ def _describe_blocks(blocks: dict, units: str) -> str:
     return "  per block: " + "; ".join(parts)
 
 
+_KIND = (("lifts off", "support lifting off (tip-over)"), ("slips", "wheel traction"), ("limit", "joint effort"))
+
+
+def _binding_summary(binding: list[str]) -> str:
+    """What stops a maximum, grouped: joint efforts, wheel traction, supports lifting off."""
+    groups: dict[str, list[str]] = {}
+    for label in binding:
+        kind = next((what for key, what in _KIND if key in label), "other")
+        groups.setdefault(kind, []).append(label.split(" ", 1)[0])
+    return "; ".join(f"{kind}: {', '.join(sorted(set(names)))}" for kind, names in groups.items())
+
+
+def _describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
+    """Per task axis: straight-line reach and support, with what binds and where the ZMP is."""
+    head = "  along the task axes, straight-line reach (from rest, exactly along it) and support (others free)"
+    lines = [f"{head} ({unit}):"]
+    for r in reaches:
+        text = f"    {r['axis']:>4}: straight line {r['straight_line']:.4g}, support {r['support']:.4g}"
+        if r.get("binding"):
+            text += f"; stops it: {_binding_summary(r['binding'])}"
+        ground = r.get("floor")
+        if ground and ground.get("zmp") is not None:
+            zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
+            text += f"; ZMP ({zmp}) m, margin {round(ground['margin'], 3) + 0.0:.3f} m"
+        lines.append(text)
+    if floor is not None:
+        mu = "no traction limit" if floor.get("mu") is None else f"mu = {floor['mu']:g}"
+        names = ", ".join(c["name"] for c in floor["contacts"])
+        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid): contacts {names}")
+    return "\n".join(lines)
+
+
 def _available(get) -> bool:
     from ..errors import MobmanipError
 
@@ -159,6 +198,7 @@ def run(args) -> int:
         decoupled=args.decoupled,
         measures=measures,
         method="exact",
+        constraints=floor_constraints(args),
     )
     document = result.to_dict()
     require_finite(document)  # never a NaN or an infinity printed as a result
@@ -177,9 +217,16 @@ def run(args) -> int:
     for name, task_set in result.measures.items():
         measure = get_measure(name)
         label = f"{measure.label} ({coupling})" if measure.quantity.inertial else measure.label
+        ignored = result.ignored_constraints(name)
+        if ignored:
+            label += f" [ignores {', '.join(ignored)}: an ellipsoid cannot honour it]"
         print(_describe(label, task_set, measure.quantity.units, _ellipsoid_of(result, measure.quantity)))
         if blocks is not None and not task_set.empty:
             print(_describe_blocks(blocks[name], measure.quantity.units))
+        reaches = document[measure.json_key].get("reaches")
+        if reaches:
+            floor = document[measure.json_key].get("model", {}).get("floor")
+            print(_describe_reaches(reaches, measure.quantity.units, floor))
     if blocks is not None:
         print(
             f"(task {result.task} mixes linear and angular rows: its volumes and isotropies multiply metres by "

@@ -152,6 +152,41 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_floor_options(parser: argparse.ArgumentParser) -> None:
+    """--ground, --mu, --no-traction: the capacity that holds on the floor."""
+    parser.add_argument(
+        "--ground",
+        action="store_true",
+        help="capacity that holds on the floor: no support lifts (no tip-over) and the driven wheels stay "
+        "within friction (the polytopes honour it; adds dynamic_polytope when no polytope is asked for)",
+    )
+    parser.add_argument(
+        "--mu",
+        type=float,
+        metavar="MU",
+        help="friction coefficient of the driven wheels on the floor (implies --ground; default: the spec's "
+        "[support] mu, else 0.5)",
+    )
+    parser.add_argument(
+        "--no-traction",
+        action="store_true",
+        help="on the floor, only no tip-over: the wheels' traction is not limited (implies --ground)",
+    )
+
+
+def floor_constraints(args) -> tuple:
+    """The constraints --ground, --mu and --no-traction ask for (empty: the ideal robot)."""
+    from ..errors import ArgumentError
+    from ..terms.constraints.floor import Floor
+
+    mu, no_traction = getattr(args, "mu", None), getattr(args, "no_traction", False)
+    if not (getattr(args, "ground", False) or mu is not None or no_traction):
+        return ()
+    if mu is not None and no_traction:
+        raise ArgumentError("--mu and --no-traction contradict each other: choose one")
+    return (Floor(mu=None if no_traction else ("spec" if mu is None else mu)),)
+
+
 def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:
     """What ``--polytope`` adds: the registered polytopes of the default measures' quantities (the
     capacity polytopes of motion) and of the quantities of the measures ``wanted``."""
@@ -171,6 +206,9 @@ def requested_measures(args) -> tuple[str, ...] | None:
     if getattr(args, "polytope", False):
         wanted = tuple(measures or default_measures())
         measures = wanted + tuple(name for name in polytope_measures(wanted) if name not in wanted)
+    asked = tuple(measures or default_measures())
+    if floor_constraints(args) and not set(asked) & set(polytope_measures(asked)):
+        measures = asked + ("dynamic_polytope",)
     return measures
 
 

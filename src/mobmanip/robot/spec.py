@@ -53,6 +53,7 @@ from types import MappingProxyType
 from ..descriptions.resources import builtin_robot_names, builtin_robots_dir, resolve_urdf_reference
 from ..errors import LimitError, SpecError, UnknownRobotError
 from ..platforms import KINDS, WheelSpec, WheelsSpec, get_kind
+from .support import SupportSpec, support_spec_from_table
 from .tasks import TASKS
 
 __all__ = ["ArmSpec", "RobotSpec", "WheelSpec", "find_spec", "load_spec", "spec_from_dict"]
@@ -121,6 +122,7 @@ class RobotSpec:
             them are how far apart holding hands may be (a larger spread is warned about).
         package_dirs: directories where ``package://`` mesh URIs are resolved.
         source: the spec file this came from, if any.
+        support: the ``[support]`` table: passive supports, friction (see :mod:`mobmanip.robot.support`).
     """
 
     name: str
@@ -139,6 +141,7 @@ class RobotSpec:
     grasp_offsets: tuple[tuple[float, float, float], ...] = ()
     package_dirs: tuple[Path, ...] = ()
     source: Path | None = None
+    support: SupportSpec | None = None
 
     def __post_init__(self):
         kind = get_kind(self.platform)
@@ -288,7 +291,9 @@ def _optional(table: Mapping, key: str, kind: type, where: str, default):
 def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) -> RobotSpec:
     """Build a :class:`RobotSpec` from parsed TOML; ``base_dir`` anchors a relative URDF path."""
     where = str(source) if source else "spec"
-    known = set("name urdf platform default_task wheels torso arms object limits reference hold postures".split())
+    known = set(
+        "name urdf platform default_task wheels torso arms object limits reference hold postures support".split()
+    )
     unknown = sorted(set(data) - known)
     if unknown:
         raise SpecError(f"{where}: unknown keys {unknown}; expected some of {sorted(known)}")
@@ -349,6 +354,7 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
         hold=_optional(data, "hold", dict, where, {}),
         postures=_optional(data, "postures", dict, where, {}),
         grasp_offsets=tuple(grasp_offsets),
+        support=support_spec_from_table(data["support"], where) if "support" in data else None,
         package_dirs=package_dirs,
         source=source,
     )

@@ -11,9 +11,10 @@ answers with linear programs on HiGHS (:class:`~mobmanip.sets.linear_programs.Li
 kept warm between directions):
 
 - ``support(d)``: max d . a over the set (the other task components free);
-- ``ray_radius(d)``: the *straight-line reach*, the largest s with s d / |d| in the set;
-- ``witness(d)`` / ``ray_witness(d)``: the whole maximiser z, split by variable name (which
-  torques, contact forces ... achieve the maximum);
+- ``straight_line_reach(d)``: the largest s with s d / |d| in the set (from rest, exactly
+  along d); ``ray_radius(d)`` the same from :attr:`center`;
+- ``witness(d)`` / ``straight_line_witness(d)``: the whole maximiser z, split by variable name
+  (which torques, contact forces ... achieve the maximum) with the rows that bind there;
 - vertices and halfspaces for m <= 3, by refining an inner polytope along the outer normals of
   its facets until every facet is a facet of K (Bretl and Lall's projection algorithm): each
   vertex found is an LP optimum, so the result is exact to the LP's tolerance; volume and
@@ -128,6 +129,9 @@ class LiftedPolytope(TaskSet):
             raise TaskError("the set is empty: it has no maximiser")
         return result
 
+    def _ub_duals(self, program: LinearProgram, first_ub: int) -> np.ndarray:
+        return program.row_duals[first_ub : first_ub + len(self._b_ub)].copy()
+
     def _axis_supports(self, sign: float) -> np.ndarray:
         return np.array([self._maximise(sign * row)[0] for row in np.eye(self.dim)])
 
@@ -155,46 +159,75 @@ class LiftedPolytope(TaskSet):
         if self.empty:
             raise TaskError("the set is empty: nothing reaches along any direction")
         value, z = self._maximise(d)
-        return self._witness(value, z)
+        return self._witness(value, z, self._ub_duals(self._program(), len(self._b_eq)))
 
-    def ray_radius(self, direction: ArrayLike) -> float:
-        """The straight-line reach: the largest s >= 0 with s d/|d| in the set (0 when the origin
-        is outside it or the set is empty)."""
-        found = self._ray(direction)
+    def straight_line_reach(self, direction: ArrayLike) -> float:
+        """The largest s >= 0 with s d/|d| in the set: how far along d from rest, exactly along d
+        (0 when the origin is outside the set or the set is empty)."""
+        found = self._ray(direction, np.zeros(self.dim))
         return 0.0 if found is None else found[0]
 
-    def ray_witness(self, direction: ArrayLike) -> Witness:
+    def ray_radius(self, direction: ArrayLike) -> float:
+        """The largest t >= 0 with center + t d/|d| in the set (0 when empty)."""
+        found = self._ray(direction, self.center)
+        return 0.0 if found is None else found[0]
+
+    def straight_line_witness(self, direction: ArrayLike) -> Witness:
         """What achieves the straight-line reach along d (see :meth:`witness`).
 
         Raises:
             TaskError: the origin (no motion at all) is outside the set.
         """
-        found = self._ray(direction)
+        found = self._ray(direction, np.zeros(self.dim))
         if found is None:
             raise TaskError("the origin is outside the set: no straight line from rest exists")
-        return self._witness(found[0], found[1][:-1])
+        return self._witness(found[0], found[1][:-1], found[2])
 
-    def _ray(self, direction: ArrayLike) -> tuple[float, np.ndarray] | None:
+    def witness_at(self, point: ArrayLike) -> Witness:
+        """A solution that reaches ``point``, as far inside every inequality row as it can be
+        (max t with each row's slack >= t |row|): no limit is tight unless ``point`` needs it.
+
+        Raises:
+            TaskError: the point is not in the set.
+        """
+        p = check_points(point, self.dim)[0]
+        n = len(self._lower)
+        fix = np.zeros((self.dim, n + 1))
+        fix[np.arange(self.dim), self._task] = 1.0
+        norms = np.linalg.norm(self._A_ub, axis=1)
+        A = np.vstack([np.c_[self._A_eq, np.zeros(len(self._A_eq))], fix, np.c_[self._A_ub, norms]])
+        lo = np.r_[self._b_eq, p, np.full(len(self._b_ub), -np.inf)]
+        hi = np.r_[self._b_eq, p, self._b_ub]
+        program = LinearProgram(A, lo, hi, np.r_[self._lower, -np.inf], np.r_[self._upper, np.inf])
+        cost = np.zeros(n + 1)
+        cost[n] = 1.0
+        result = program.solve(cost)
+        if result is None or result[0] < -1e-9 * max(self._size, 1.0):
+            raise TaskError(f"the point {p.tolist()} is not in the set")
+        return self._witness(float(result[0]), result[1][:-1], None)
+
+    def _ray(self, direction: ArrayLike, origin: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
         d = check_direction(direction, self.dim)
         d = d / np.linalg.norm(d)
         if self.empty:
             return None
-        key = ("ray", tuple(d))
+        key = ("ray", tuple(d), tuple(origin))
         if key not in self._cache:
             n = len(self._lower)
             tie = np.zeros((self.dim, n + 1))
             tie[np.arange(self.dim), self._task] = 1.0
-            tie[:, n] = -d  # a = s d
+            tie[:, n] = -d  # a = origin + s d
             A = np.vstack(
                 [np.c_[self._A_eq, np.zeros(len(self._A_eq))], tie, np.c_[self._A_ub, np.zeros(len(self._A_ub))]]
             )
-            lo = np.r_[self._b_eq, np.zeros(self.dim), np.full(len(self._b_ub), -np.inf)]
-            hi = np.r_[self._b_eq, np.zeros(self.dim), self._b_ub]
+            lo = np.r_[self._b_eq, origin, np.full(len(self._b_ub), -np.inf)]
+            hi = np.r_[self._b_eq, origin, self._b_ub]
             program = LinearProgram(A, lo, hi, np.r_[self._lower, 0.0], np.r_[self._upper, np.inf])
             cost = np.zeros(n + 1)
             cost[n] = 1.0
             result = program.solve(cost)
-            self._cache[key] = None if result is None else (float(result[0]), result[1])
+            duals = self._ub_duals(program, len(self._b_eq) + self.dim)
+            self._cache[key] = None if result is None else (float(result[0]), result[1], duals)
         return self._cache[key]
 
     def radius_along(self, direction: ArrayLike) -> float:
@@ -233,12 +266,18 @@ class LiftedPolytope(TaskSet):
             task, A_eq, b_eq, self._A_ub, self._b_ub, self._lower, self._upper, self.variables, self.model, self.labels
         )
 
-    def _witness(self, value: float, z: np.ndarray) -> Witness:
+    def _witness(self, value: float, z: np.ndarray, duals: np.ndarray | None) -> Witness:
+        """The maximiser's parts; binding: the rows whose multiplier is not zero (the maximum moves
+        with their bounds), or without multipliers the rows that are tight."""
         variables = {name: z[where].copy() for name, where in self.variables.items()}
-        slack = self._b_ub - self._A_ub @ z
-        scale = np.maximum(np.abs(self._b_ub), np.abs(self._A_ub) @ np.abs(z)) + 1e-12
-        tight = tuple(label for label, s, c in zip(self.labels, slack, scale) if s <= 1e-7 * c)
-        return Witness(float(value), z[self._task].copy(), variables, tight)
+        if duals is not None:
+            scale = float(np.abs(duals).max(initial=0.0))
+            chosen = np.abs(duals) > 1e-9 * max(scale, 1e-300)
+        else:
+            slack = self._b_ub - self._A_ub @ z
+            chosen = slack <= 1e-7 * (np.maximum(np.abs(self._b_ub), np.abs(self._A_ub) @ np.abs(z)) + 1e-12)
+        binding = tuple(label for label, c in zip(self.labels, chosen) if c)
+        return Witness(float(value), z[self._task].copy(), variables, binding)
 
     # ------------------------------------------------------------------------------------------
     # vertices, halfspaces and indices (m <= 3)
@@ -402,7 +441,8 @@ class Witness:
         value: the maximum (the support, or the straight-line reach).
         point: the task-space point reached, (m,).
         variables: every variable of the lifted problem at the maximiser, by name.
-        binding: the labels of the inequality rows that are tight there (what stops it).
+        binding: the labels of the inequality rows that limit the maximum (a non-zero multiplier:
+            what stops it); for :meth:`LiftedPolytope.witness_at`, the rows that are tight.
     """
 
     value: float

@@ -62,6 +62,9 @@ class LinearProgram:
         h.passModel(lp)
         self._h = h
         self._all = np.arange(self.n_cols, dtype=np.int32)
+        #: The rows' dual values (multipliers) at the last optimum: a row whose multiplier is not
+        #: zero limits the optimum (its sensitivity to that row's bound).
+        self.row_duals = np.zeros(self.n_rows)
 
     def solve(self, cost, maximize: bool = True, col_lo=None, col_hi=None) -> tuple[float, np.ndarray] | None:
         """The optimum (value, x), or None when infeasible.
@@ -81,7 +84,9 @@ class LinearProgram:
             h.run()
             status = h.getModelStatus()
             if status == highspy.HighsModelStatus.kOptimal:
-                x = np.array(h.getSolution().col_value)
+                solution = h.getSolution()
+                x = np.array(solution.col_value)
+                self.row_duals = np.array(solution.row_dual)
                 return float(h.getInfo().objective_function_value), x
             if status == highspy.HighsModelStatus.kInfeasible:
                 return None

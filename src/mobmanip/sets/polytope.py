@@ -239,6 +239,24 @@ class Polytope(TaskSet):
         result = linprog(cost, A_eq=A, b_eq=b, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs")
         return float(result.x[0]) if result.status == 0 else 0.0
 
+    def straight_line_reach(self, direction: ArrayLike) -> float:
+        """The largest s >= 0 with s d/|d| in the set: how far along d from rest (the origin),
+        exactly along d (one linear program; 0 when the origin is outside the set or it is empty)."""
+        from scipy.optimize import linprog
+
+        d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
+        norm = float(np.linalg.norm(d))
+        if norm == 0.0:
+            raise TaskError("straight_line_reach needs a non-zero direction")
+        if self.empty:
+            return 0.0
+        n = self._G.shape[1]
+        A = np.hstack([(self._F @ (d / norm))[:, None], -self._G])  # F (s u) - G y = c
+        result = linprog(
+            np.r_[-1.0, np.zeros(n)], A_eq=A, b_eq=self._c, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs"
+        )
+        return float(result.x[0]) if result.status == 0 else 0.0
+
     def radius_along(self, direction: ArrayLike) -> float:
         d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
         norm = float(np.linalg.norm(d))

@@ -1,0 +1,60 @@
+"""How far a set reaches along each task axis, read two ways, and what stops it there.
+
+"How far along x" has two readings, and they differ (by 42 % for TIAGo++ holding a box along +y):
+
+- the **straight-line reach**: the largest s such that s e (exactly along e, nothing else moving
+  the object) is in the set: what a motion straight along x can reach from rest;
+- the **support**: max e . a over the set, the other components free (the object may pitch or
+  drift sideways to get there).
+
+For a set computed by linear programs (a polytope with constraints beyond the joint boxes, e.g.
+on the floor) each reading also names what binds at its maximum (a joint's effort, a wheel's
+traction, a support lifting off), and, on the floor, where the zero-moment point is and its
+distance to the support polygon's edge.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import MobmanipError
+from ..robot.tasks import get_task
+from ..sets.taskset import TaskSet
+from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
+
+
+def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
+    """Both readings along +-each task axis, with what binds where the set can tell.
+
+    Returns:
+        One dict per axis and sense (``axis``, ``straight_line``, ``support`` and, for a set of
+        linear programs, ``binding`` at the straight-line maximum, plus ``floor`` (ZMP, margin,
+        contact forces) on the floor); ``None`` for a set without straight-line reach (an
+        ellipsoid) or an empty set.
+    """
+    if task_set.empty or not hasattr(task_set, "straight_line_reach"):
+        return None
+    labels = get_task(task).labels
+    out = []
+    for k, label in enumerate(labels):
+        for sign in (1.0, -1.0):
+            e = np.zeros(task_set.dim)
+            e[k] = sign
+            entry: dict = {
+                "axis": f"{'+' if sign > 0 else '-'}{label}",
+                "straight_line": float(task_set.straight_line_reach(e)),
+                "support": float(task_set.support(e)),
+            }
+            witness = getattr(task_set, "straight_line_witness", None)
+            if witness is not None and entry["straight_line"] > 0.0:
+                try:
+                    w = witness(e)
+                except MobmanipError:
+                    w = None
+                if w is not None:
+                    entry["binding"] = sorted(set(w.binding))
+                    floor = getattr(task_set, "model", {}).get("floor")
+                    if floor is not None and CONTACT_FORCES in w.variables:
+                        entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
+            out.append(entry)
+    return out

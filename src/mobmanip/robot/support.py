@@ -1,0 +1,269 @@
+"""Where the robot touches the floor: its driven wheels and its passive supports (casters).
+
+A *support* is a set of contact points in the platform's root frame, all on the floor plane:
+
+- one per driven wheel, below the wheel's centre by its radius (from the platform's wheels);
+- one per passive support: the URDF's caster wheels (links named ``*caster*`` with a sphere or
+  cylinder collision shape: the contact is below the shape's centre, on the floor) and the
+  points the spec's ``[support]`` table gives.
+
+The spec's table (all keys optional)::
+
+    [support]
+    mu = 0.5                      # friction coefficient of the driven wheels on the floor
+    faces = 8                     # faces of the pyramid inscribed in each wheel's friction cone
+    casters = [[0.25, 0.14], ...] # passive supports, [x, y] (on the floor) or [x, y, z] (m, root frame)
+    urdf_casters = true           # also take the URDF's caster wheels
+
+:data:`DEFAULT_MU` = 0.5 is a conservative value for rubber wheels on a dry indoor floor
+(rubber on concrete is usually quoted at 0.6 to 0.8; a polished or dusty floor is lower).
+A support needs at least three contacts that are not on one line, ``mu >= 0`` and ``faces >= 3``;
+a point above (or below) the floor is an error that names it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import SpecError
+
+if TYPE_CHECKING:
+    from .model import Robot
+
+#: Friction coefficient of driven wheels when the spec gives none.
+DEFAULT_MU = 0.5
+#: Faces of the pyramid inscribed in each friction cone (conservative by 1 - cos(pi / faces): 7.6 %).
+DEFAULT_FACES = 8
+_FLOOR_TOL = 1e-6  # m: a contact further than this from the floor plane is an error
+
+
+@dataclass(frozen=True)
+class SupportSpec:
+    """The spec's ``[support]`` table (see the module's docstring).
+
+    Attributes:
+        casters: passive supports in the root frame, (x, y) or (x, y, z) rows (m).
+        mu: friction coefficient of the driven wheels; ``None``: :data:`DEFAULT_MU`.
+        faces: faces of the inscribed friction pyramid.
+        urdf_casters: also take the URDF's caster wheels.
+    """
+
+    casters: tuple[tuple[float, ...], ...] = ()
+    mu: float | None = None
+    faces: int = DEFAULT_FACES
+    urdf_casters: bool = True
+
+    def __post_init__(self):
+        rows = []
+        for k, row in enumerate(self.casters):
+            if not isinstance(row, (list, tuple)) or len(row) not in (2, 3):
+                raise SpecError(f"[support] casters row {k} must be [x, y] or [x, y, z] in metres, got {row!r}")
+            values = []
+            for value in row:
+                if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                    raise SpecError(f"[support] casters row {k} must hold finite metres, got {row!r}")
+                values.append(float(value))
+            rows.append(tuple(values))
+        object.__setattr__(self, "casters", tuple(rows))
+        check_mu(self.mu, "[support] mu")
+        check_faces(self.faces, "[support] faces")
+        if not isinstance(self.urdf_casters, bool):
+            raise SpecError(f"[support] urdf_casters must be true or false, got {self.urdf_casters!r}")
+
+
+def support_spec_from_table(table: object, where: str) -> SupportSpec:
+    """A :class:`SupportSpec` from the spec's ``[support]`` TOML table."""
+    if not isinstance(table, Mapping):
+        raise SpecError(f"{where}: [support] must be a table, got {table!r}")
+    known = {"casters", "mu", "faces", "urdf_casters"}
+    extra = sorted(set(table) - known)
+    if extra:
+        raise SpecError(f"{where}: unknown keys in [support]: {extra}; expected some of {sorted(known)}")
+    casters = table.get("casters", [])
+    if not isinstance(casters, list):
+        raise SpecError(f"{where}: [support] casters must be a list of [x, y] rows, got {casters!r}")
+    return SupportSpec(
+        casters=tuple(casters),
+        mu=table.get("mu"),
+        faces=table.get("faces", DEFAULT_FACES),
+        urdf_casters=table.get("urdf_casters", True),
+    )
+
+
+def check_mu(mu: object, what: str = "mu") -> None:
+    """A friction coefficient: a finite number >= 0 (or ``None``)."""
+    if mu is None:
+        return
+    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not math.isfinite(mu) or mu < 0:
+        raise SpecError(f"{what} must be a finite friction coefficient >= 0, got {mu!r}")
+
+
+def check_faces(faces: object, what: str = "faces") -> None:
+    """Faces of a friction pyramid: an integer from 3 to 64."""
+    if isinstance(faces, bool) or not isinstance(faces, int) or not 3 <= faces <= 64:
+        raise SpecError(f"{what} must be an integer from 3 to 64, got {faces!r}")
+
+
+@dataclass(frozen=True)
+class ContactPoint:
+    """One contact with the floor.
+
+    Attributes:
+        name: the wheel's joint, the caster's link, or ``caster_<k>`` for a spec row.
+        point: where it touches the floor, in the platform's root frame (m), (3,).
+        driven: a driven wheel (normal and tangential force) or a passive support (normal only).
+        source: where it came from: ``"wheel"``, ``"urdf"`` or ``"spec"``.
+    """
+
+    name: str
+    point: np.ndarray
+    driven: bool
+    source: str
+
+
+@dataclass(frozen=True)
+class Support:
+    """The robot's contacts with the floor (see the module's docstring).
+
+    Attributes:
+        contacts: the contact points, driven wheels first.
+        floor_z: the floor's height in the root frame (m).
+        mu: friction coefficient of the driven wheels.
+        faces: faces of the inscribed friction pyramid.
+    """
+
+    contacts: tuple[ContactPoint, ...]
+    floor_z: float
+    mu: float = DEFAULT_MU
+    faces: int = DEFAULT_FACES
+
+    def __post_init__(self):
+        check_mu(self.mu, "the support's mu")
+        check_faces(self.faces, "the support's faces")
+        for c in self.contacts:
+            gap = float(c.point[2] - self.floor_z)
+            if abs(gap) > _FLOOR_TOL:
+                where = "above" if gap > 0 else "below"
+                raise SpecError(
+                    f"support point {c.name!r} at z = {c.point[2]:.6g} m lies {abs(gap):.3g} m {where} the floor "
+                    f"(z = {self.floor_z:.6g} m in the root frame, through the driven wheels' contacts)"
+                )
+        xy = np.array([c.point[:2] for c in self.contacts]).reshape(-1, 2)
+        if len(xy) < 3 or np.linalg.matrix_rank(xy - xy.mean(axis=0), tol=1e-6) < 2:
+            names = ", ".join(c.name for c in self.contacts) or "none"
+            raise SpecError(
+                f"a support needs at least three contacts not on one line; got {len(xy)} ({names}): "
+                "give the casters in the spec's [support] casters = [[x, y], ...]"
+            )
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.contacts)
+
+    def root_points(self) -> np.ndarray:
+        """The contact points in the root frame, (n, 3)."""
+        return np.array([c.point for c in self.contacts])
+
+    def world_points(self, pose: tuple[float, float, float]) -> np.ndarray:
+        """The contact points in the world for the platform at (x, y, yaw), (n, 3)."""
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        return self.root_points() @ R.T + np.array([x, y, 0.0])
+
+    def polygon(self, pose: tuple[float, float, float]) -> np.ndarray:
+        """The support polygon in the world's floor plane, counter-clockwise vertices (k, 2)."""
+        from scipy.spatial import ConvexHull
+
+        xy = self.world_points(pose)[:, :2]
+        return xy[ConvexHull(xy).vertices]
+
+    def to_dict(self) -> dict:
+        return {
+            "mu": self.mu,
+            "faces": self.faces,
+            "floor_z": self.floor_z,
+            "contacts": [
+                {"name": c.name, "point": c.point.tolist(), "driven": c.driven, "source": c.source}
+                for c in self.contacts
+            ],
+        }
+
+
+def polygon_margin(polygon: np.ndarray, point: np.ndarray) -> float:
+    """Signed distance (m) from a point to a convex polygon's boundary, positive inside."""
+    P = np.asarray(polygon, dtype=float)
+    edges = np.roll(P, -1, axis=0) - P
+    normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]  # outward (ccw)
+    return float(np.min(np.einsum("ij,ij->i", normals, P) - normals @ np.asarray(point, dtype=float)[:2]))
+
+
+def robot_support(robot: Robot, mu: float | None = None, faces: int | None = None) -> Support:
+    """The robot's support: its driven wheels, its URDF casters and its spec's ``[support]``.
+
+    Args:
+        robot: a robot with a wheeled platform.
+        mu: friction coefficient (default: the spec's, else :data:`DEFAULT_MU`).
+        faces: pyramid faces (default: the spec's, else :data:`DEFAULT_FACES`).
+
+    Raises:
+        SpecError: no wheels, fewer than three contacts not on one line, a bad mu.
+    """
+    spec: SupportSpec = getattr(robot.spec, "support", None) or SupportSpec()
+    wheels = robot.platform.wheels() if robot.wheel_platform is not None else ()
+    if not wheels:
+        raise SpecError(
+            f"robot {robot.name!r} has no wheels on the floor ({robot.platform.kind} platform): "
+            "the floor model needs a wheeled platform"
+        )
+    model = robot.model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, robot.neutral())
+    contacts = []
+    for joint, radius in wheels:
+        center = data.oMi[model.getJointId(joint)].translation
+        contacts.append(ContactPoint(joint, center - np.array([0.0, 0.0, radius]), True, "wheel"))
+    floor_z = float(np.mean([c.point[2] for c in contacts]))
+    if spec.urdf_casters:
+        for name, xy in _urdf_casters(robot, data):
+            contacts.append(ContactPoint(name, np.array([xy[0], xy[1], floor_z]), False, "urdf"))
+    for k, row in enumerate(spec.casters):
+        z = row[2] if len(row) == 3 else floor_z
+        contacts.append(ContactPoint(f"caster_{k}", np.array([row[0], row[1], z], dtype=float), False, "spec"))
+    check_mu(mu)
+    if faces is not None:
+        check_faces(faces)
+    chosen = mu if mu is not None else spec.mu
+    return Support(
+        tuple(contacts),
+        floor_z,
+        mu=DEFAULT_MU if chosen is None else float(chosen),
+        faces=spec.faces if faces is None else faces,
+    )
+
+
+def _urdf_casters(robot: Robot, data: pin.Data) -> list[tuple[str, np.ndarray]]:
+    """(link name, (x, y) in the root frame) of each caster wheel of the URDF: a link named
+    ``*caster*`` with a sphere or cylinder collision shape, at that shape's centre."""
+    from ..descriptions.urdf import read_urdf
+
+    urdf = read_urdf(robot.spec.urdf)
+    model = robot.model
+    found = []
+    for name, link in urdf.link_map.items():
+        if "caster" not in name.lower() or not model.existFrame(name):
+            continue
+        shapes = [c for c in link.collisions if c.geometry.sphere is not None or c.geometry.cylinder is not None]
+        if not shapes:
+            continue
+        origin = np.eye(4) if shapes[0].origin is None else np.asarray(shapes[0].origin, dtype=float)
+        frame = data.oMf[model.getFrameId(name)]
+        center = frame.rotation @ origin[:3, 3] + frame.translation
+        found.append((name, center[:2].copy()))
+    return found

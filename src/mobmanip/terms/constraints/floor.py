@@ -1,0 +1,256 @@
+"""The floor: the robot stands on its wheels and casters, must not tip over, and its driven wheels
+must not slip.
+
+At rest, the whole robot with a floating base restricted to the platform's S (no vertical, roll
+or pitch motion) obeys the paper's reduced dynamics (the rows along S, where the contact forces
+do no work: the wheels roll, the casters do not sink) and, across S, the Newton-Euler equations
+of the whole robot, about its centre of mass c::
+
+    A_G S xdot = m g + sum_c [lambda_c; (p_c - c) x lambda_c] - sum_i [f_i; (p_i - c) x f_i + n_i]
+
+A_G is the centroidal momentum matrix (Pinocchio's ``computeCentroidalMap``; at rest the rate of
+the momentum is A_G qdd), lambda_c the floor's force at contact c, (f_i, n_i) the wrench hand i
+applies to the object. For a differential drive (one reduced velocity per wheel and joint) these
+six rows and the reduced ones together are the whole floating-base dynamics. The unknowns the
+floor adds: each driven wheel's contact force (world x, y, z), each passive support's normal force
+and, when the task leaves out the object's vertical force or its roll or pitch moment (a planar
+task), the hands' wrench components on those rows: the object is held level, so those
+components balance its weight, and the robot feels their reaction.
+
+Inequalities: every normal force >= 0 (no contact pulls: the robot does not tip over); with a
+friction coefficient mu, each driven wheel's tangential force lies in the pyramid with
+``faces`` faces inscribed in its cone |f_t| <= mu f_n (conservative by 1 - cos(pi / faces)).
+Passive supports are frictionless. With every contact force free, the set is the ideal one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ...errors import ArgumentError, SpecError
+from ...robot.support import Support, check_faces, check_mu, polygon_margin, robot_support
+from ...robot.tasks import get_task
+from ..grasp import GRAVITY
+from .base import Constraint, ConstraintRows, Terms
+
+_G = float(-GRAVITY[2])  # m/s^2, the magnitude of gravity (along world -z)
+
+#: Rows of a 6-D wrench (force, then moment; world axes) the object is balanced in even when the
+#: task leaves them out: its vertical force and its roll and pitch moments (it is held level).
+LEVEL_ROWS = (2, 3, 4)
+#: The name of the contact force variable (world x, y, z per driven wheel; z per passive support).
+CONTACT_FORCES = "contact_forces"
+#: The name of the hands' wrench components on the level rows a task leaves out.
+LEVEL_WRENCHES = "level_wrenches"
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+
+
+@dataclass(frozen=True)
+class Floor(Constraint):
+    """The robot on the floor (see the module's docstring).
+
+    Args:
+        mu: friction coefficient of the driven wheels; ``None``: no traction limit (only no
+            tip-over); ``"spec"``: the support's own (the spec's ``[support] mu``, default 0.5).
+        faces: faces of the inscribed friction pyramid (default: the support's).
+        support: the contacts; default: :func:`mobmanip.robot.support.robot_support`.
+        lift: allow contacts to pull (normal forces of any sign): the ideal set, with the floor's
+            forces reported (where its zero-moment point would be). Off by default.
+    """
+
+    mu: float | str | None = "spec"
+    faces: int | None = None
+    support: Support | None = None
+    lift: bool = False
+    name: str = "floor"
+    problem: str = "acceleration"
+
+    def __post_init__(self):
+        if self.mu != "spec":
+            check_mu(self.mu, "the floor's mu")
+        if self.faces is not None:
+            check_faces(self.faces, "the floor's faces")
+
+    def resolve(self, robot) -> tuple[Support, float | None, int]:
+        """The support, friction coefficient and faces this floor uses for ``robot``."""
+        support = self.support if self.support is not None else robot_support(robot)
+        mu = support.mu if self.mu == "spec" else self.mu
+        faces = support.faces if self.faces is None else self.faces
+        return support, (None if mu is None else float(mu)), faces
+
+    def describe(self) -> dict:
+        out: dict = {"name": self.name, "model": "whole robot on the floor, at rest"}
+        out["mu"] = self.mu
+        out["tip_over"] = "allowed (contacts may pull)" if self.lift else "not allowed"
+        if self.faces is not None:
+            out["faces"] = self.faces
+        return out
+
+    def rows(self, terms: Terms) -> ConstraintRows:
+        robot, q = terms.robot, terms.q
+        if robot is None or q is None or terms.held_object is None:
+            raise ArgumentError("the floor needs the robot, its configuration and the object (terms from terms_at)")
+        if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
+            raise SpecError(
+                f"the floor model covers differential-drive platforms (wheels that roll without slipping); "
+                f"{robot.name!r} has a {robot.platform.kind} platform"
+            )
+        support, mu, faces = self.resolve(robot)
+        model, data = robot.model, robot.data
+        task = get_task(terms.task)
+        S = robot.null_space(q)
+        c = pin.centerOfMass(model, data, q).copy()
+        mass = float(pin.computeTotalMass(model))
+        A_G = pin.computeCentroidalMap(model, data, q).copy()  # momentum about c, world axes
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        pose = _pose(q)
+        points = support.world_points(pose)
+
+        # contact forces: 3 columns per driven wheel, 1 (the normal) per passive support
+        columns: list[np.ndarray] = []
+        normal_col: list[int] = []
+        slices: list[tuple[int, int]] = []
+        for contact, p in zip(support.contacts, points):
+            start = sum(col.shape[1] for col in columns)
+            wrench = np.vstack([np.eye(3), _skew(p - c)])
+            block = wrench if contact.driven else wrench[:, 2:3]
+            columns.append(block)
+            slices.append((start, start + block.shape[1]))
+            normal_col.append(start + block.shape[1] - 1)
+        C = np.hstack(columns)
+        n_forces = C.shape[1]
+
+        rows = list(task.rows)
+        level = [r for r in LEVEL_ROWS if r not in rows]
+        center = np.asarray(terms.held_object.center, dtype=float)
+        H_task, H_level, couple, level_kin, grasp_task, grasp_level = [], [], [], [], [], []
+        for arm in robot.arms:
+            p = data.oMf[arm.frame_id].translation
+            about_c = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - c), np.eye(3)]])  # wrench at c
+            H_task.append(about_c[:, rows])
+            H_level.append(about_c[:, level])
+            J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)
+            couple.append((J[level] @ S).T)
+            level_kin.append(J[level] @ S)
+            G6 = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - center), np.eye(3)]])
+            grasp_task.append(G6[np.ix_(level, rows)])
+            grasp_level.append(G6[np.ix_(level, level)])
+        k, nl = len(robot.arms), len(level)
+
+        nx = S.shape[1]
+        # the whole robot's Newton-Euler rows (6)
+        equations = [({"xdot": A_G @ S, CONTACT_FORCES: -C, "h": np.hstack(H_task)}, _weight(mass))]
+        variables = {CONTACT_FORCES: (n_forces, -np.inf, np.inf)}
+        couplings = {}
+        if nl:
+            variables[LEVEL_WRENCHES] = (k * nl, -np.inf, np.inf)
+            equations[0][0][LEVEL_WRENCHES] = np.hstack(H_level)
+            # the object held level: its level rows balance its weight (g_o's convention: +m g up) ...
+            load = np.array([terms.held_object.mass * _G if r == 2 else 0.0 for r in level])
+            equations.append(({"h": np.hstack(grasp_task), LEVEL_WRENCHES: np.hstack(grasp_level)}, load))
+            # ... and the hands do not move it out of level (rows that are not zero)
+            kin = np.vstack(level_kin)
+            moving = np.abs(kin).max(axis=1) > 1e-12 * max(float(np.abs(kin).max()), 1.0)
+            if moving.any():
+                equations.append(({"xdot": kin[moving]}, np.zeros(int(moving.sum()))))
+            couplings["dynamics"] = {LEVEL_WRENCHES: np.hstack(couple)}
+        E, e = _stack(equations, {"xdot": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl})
+
+        G_rows, labels = [], []
+        for contact, col in zip(support.contacts if not self.lift else (), normal_col):
+            row = np.zeros(n_forces)
+            row[col] = -1.0
+            G_rows.append(row)
+            labels.append(f"{contact.name} lifts off the floor (normal force 0)")
+        if mu is not None and not self.lift:
+            tilt = mu * math.cos(math.pi / faces)
+            for contact, (a, b) in zip(support.contacts, slices):
+                if not contact.driven:
+                    continue
+                for angle in 2.0 * math.pi * np.arange(faces) / faces:
+                    row = np.zeros(n_forces)
+                    row[a:b] = (math.cos(angle), math.sin(angle), -tilt)
+                    G_rows.append(row)
+                    labels.append(f"{contact.name} slips (traction at its friction limit, mu = {mu:g})")
+        info = {
+            "floor": {
+                "mu": None if self.lift else mu,
+                "lift": self.lift,
+                "faces": faces,
+                "pose": list(pose),
+                "contacts": [
+                    {"name": ct.name, "point": p.tolist(), "driven": ct.driven, "columns": list(s)}
+                    for ct, p, s in zip(support.contacts, points, slices)
+                ],
+                "polygon": support.polygon(pose).tolist(),
+            }
+        }
+        return ConstraintRows(
+            self.name, self.problem, variables=variables, G={CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)},
+            h=np.zeros(len(G_rows)), E=E, e=e, couplings=couplings, labels=tuple(labels), info=info,
+        )  # fmt: skip
+
+
+def _pose(q: np.ndarray) -> tuple[float, float, float]:
+    return float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))
+
+
+def _weight(mass: float) -> np.ndarray:
+    """The robot's weight as a wrench about its centre of mass, (6,)."""
+    return np.r_[0.0, 0.0, -mass * _G, 0.0, 0.0, 0.0]
+
+
+def _stack(equations: list[tuple[dict[str, np.ndarray], np.ndarray]], sizes: dict[str, int]):
+    """Row blocks over named variables -> one block per variable (zeros where a block has none)."""
+    names = sorted({name for blocks, _ in equations for name in blocks})
+    E = {
+        name: np.vstack([blocks.get(name, np.zeros((len(rhs), sizes[name]))) for blocks, rhs in equations])
+        for name in names
+    }
+    return E, np.concatenate([rhs for _, rhs in equations])
+
+
+def ground_reaction(info: dict, forces: np.ndarray) -> dict:
+    """What the floor does at a solution: each contact's force, the zero-moment point and the
+    stability margin.
+
+    Args:
+        info: the floor's entry of a set's model (``set.model["floor"]``).
+        forces: the contact force variable at the solution (``witness.variables["contact_forces"]``).
+
+    Returns:
+        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (|f_t| / (mu f_n);
+        ``None`` for an unloaded wheel)}),
+        ``zmp`` (x, y; m, world: the centre of pressure, where the floor's resultant moment has no
+        horizontal component), ``margin`` (m: signed distance of the ZMP to the support polygon's
+        nearest edge, positive inside).
+    """
+    out: dict = {"contacts": {}}
+    total, moment = 0.0, np.zeros(2)
+    for contact in info["contacts"]:
+        a, b = contact["columns"]
+        f = np.zeros(3)
+        f[3 - (b - a) :] = forces[a:b]
+        normal, tangential = float(f[2]), float(np.hypot(f[0], f[1]))
+        entry = {"normal": normal, "tangential": tangential}
+        if contact["driven"] and info["mu"]:
+            # |f_t| / (mu f_n); None for an unloaded wheel (it can push nothing along the floor)
+            entry["traction_use"] = tangential / (info["mu"] * normal) if normal > 1e-9 else None
+        out["contacts"][contact["name"]] = entry
+        total += normal
+        moment += normal * np.asarray(contact["point"][:2])
+    if total > 1e-9:
+        zmp = moment / total
+        out["zmp"] = zmp.tolist()
+        out["margin"] = polygon_margin(np.asarray(info["polygon"]), zmp)
+    else:
+        out["zmp"], out["margin"] = None, None
+    return out

@@ -1,0 +1,169 @@
+"""Grounded capacity (issue 24): mobmanip's floor constraint against an independent reference.
+
+mobmanip writes the robot on the floor as its reduced dynamics plus the whole robot's
+Newton-Euler rows from Pinocchio's centroidal map of its own (planar-root) model
+(:mod:`mobmanip.terms.constraints.floor`). The reference (tests/floor_reference.py) rebuilds
+the robot from its URDF with a free-flyer root and writes the full floating-base dynamics with
+contact Jacobians, solved by scipy's linprog: two different formulations of one physics. They
+must agree to 1e-6 relative on TIAGo++ (hold, 2 kg, spatial) and on the paper robot (0 and 90
+deg, planar), for every model of the floor, both readings (support and straight-line reach) and
+both policies (any internal force, the paper's minimum-norm one).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mobmanip
+from floor_reference import PAPER_CASTERS, build_problem, straight_line, support
+from mobmanip.casestudy import configuration_at, optimal_posture
+from mobmanip.errors import MobmanipError, SpecError
+from mobmanip.postures.named import named_configuration
+from mobmanip.robot.support import ContactPoint, Support, robot_support
+from mobmanip.terms.constraints.floor import CONTACT_FORCES, Floor, ground_reaction
+
+MASS = 2.0
+FLOORS = {"no_tip": (None, "no_tip"), "mu=0.5": (0.5, "friction"), "mu=1.0": (1.0, "friction")}
+MEASURES = {"dynamic_polytope": False, "dynamic_polytope_min_norm": True}
+
+
+def _cases():
+    tiago = mobmanip.load_robot("tiago_dual")
+    yield "tiago_dual hold", tiago, named_configuration(tiago, "hold"), "spatial", None
+    paper = mobmanip.load_robot("planar_dual_arm")
+    posture = optimal_posture(paper)
+    for angle in (0.0, 90.0):
+        yield f"paper {angle:g} deg", paper, configuration_at(paper, posture, angle), "planar", PAPER_CASTERS
+
+
+CASES = {name: case for name, *case in _cases()}
+
+
+def _directions(m: int) -> np.ndarray:
+    if m == 2:
+        return np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [0.6, 0.8], [-0.8, 0.6]])
+    axes = np.eye(m)[:3]  # the linear axes of a spatial task, both senses, and a mixed direction
+    mixed = np.ones(m) / np.sqrt(m)
+    return np.vstack([axes, -axes, mixed])
+
+
+@pytest.mark.parametrize("floor", list(FLOORS))
+@pytest.mark.parametrize("case", list(CASES))
+def test_grounded_reaches_equal_the_independent_lp(case, floor):
+    robot, q, task, casters = CASES[case]
+    mu, mode = FLOORS[floor]
+    analysis = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=tuple(MEASURES), constraints=(Floor(mu=mu),)
+    )  # fmt: skip
+    problem = build_problem(robot, q, task, analysis.held_object, casters=casters)
+    for name, policy in MEASURES.items():
+        grounded = analysis.measures[name]
+        for e in _directions(grounded.dim):
+            e = e / np.linalg.norm(e)
+            ref_line = straight_line(problem, e, mode=mode, mu=mu, policy=policy).value
+            ref_support = support(problem, e, mode=mode, mu=mu, policy=policy).value
+            assert grounded.straight_line_reach(e) == pytest.approx(ref_line, rel=1e-6, abs=1e-9), (name, e)
+            assert grounded.support(e) == pytest.approx(ref_support, rel=1e-6, abs=1e-9), (name, e)
+
+
+def test_the_issue_table_in_numbers():
+    """Issue 24's table (measured with an LP of this kind), at its printed rounding."""
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    reach = {}
+    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5),))):
+        P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=floor)
+        e = np.eye(6)[0]
+        reach[label] = (
+            P.measures["dynamic_polytope"].straight_line_reach(e),
+            P.measures["dynamic_polytope"].straight_line_reach(-e),
+        )
+    assert [round(v, 2) for v in reach["ideal"]] == [48.65, 47.51]
+    assert [round(v, 2) for v in reach["no_tip"]] == [38.89, 32.25]
+    assert [round(v, 2) for v in reach["mu=0.5"]] == [37.08, 27.87]
+    paper, q0, _, _ = CASES["paper 0 deg"]
+    policy = {}
+    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5),))):
+        P = mobmanip.analyze(
+            paper, q0, "planar", object_mass=MASS, measures=("dynamic_polytope_min_norm",), constraints=floor
+        )
+        policy[label] = [P.measures["dynamic_polytope_min_norm"].straight_line_reach(e) for e in ([0, 1.0], [0, -1.0])]
+    assert [round(v, 2) for v in policy["ideal"]] == [30.25, 30.25]
+    assert [round(v, 2) for v in policy["no_tip"]] == [30.25, 30.25]
+    assert all(round(v, 1) in (4.3, 4.4) for v in policy["mu=0.5"])  # "4.3 (7x lower)"
+
+
+def test_what_stops_it_no_tip_maximum_lifts_a_contact_with_the_zmp_on_the_edge():
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    grounded = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=None),)
+    )
+    P = grounded.measures["dynamic_polytope"]
+    for e in (np.eye(6)[0], -np.eye(6)[0]):
+        w = P.straight_line_witness(e)
+        report = ground_reaction(P.model["floor"], w.variables[CONTACT_FORCES])
+        assert any("lifts off the floor" in b for b in w.binding)
+        assert report["margin"] == pytest.approx(0.0, abs=1e-7)
+        normals = [c["normal"] for c in report["contacts"].values()]
+        assert min(normals) == pytest.approx(0.0, abs=1e-6) and min(normals) >= -1e-6
+    # the ideal maximiser along +x puts the ZMP behind the support (issue: x = -0.60 m, support
+    # -0.19 .. 0.15 m): the floor would have to pull on the front casters
+    free = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(lift=True),)
+    )
+    ideal = free.measures["dynamic_polytope"]
+    w = ideal.straight_line_witness(np.eye(6)[0])
+    assert w.value == pytest.approx(48.65, abs=0.005)
+    report = ground_reaction(ideal.model["floor"], w.variables[CONTACT_FORCES])
+    assert report["zmp"][0] == pytest.approx(-0.60, abs=0.005)
+    assert report["margin"] < -0.4
+
+
+def test_newton_holds_at_a_grounded_maximum():
+    """At the mu = 0.5 maximum along +x, the floor's total force equals the robot's momentum rate
+    (from Pinocchio's centre-of-mass Jacobian, not the centroidal map the constraint uses) minus
+    its weight plus what the hands push on the object; every wheel within its cone."""
+    import pinocchio as pin
+
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    analysis = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+    )
+    P = analysis.measures["dynamic_polytope"]
+    w = P.straight_line_witness(np.eye(6)[0])
+    xdot, h, forces = w.variables["xdot"], w.variables["h"].reshape(-1, 6), w.variables[CONTACT_FORCES]
+    data = robot.model.createData()
+    J_com = pin.jacobianCenterOfMass(robot.model, data, q)
+    mass = pin.computeTotalMass(robot.model)
+    com_acc = J_com @ robot.null_space(q) @ xdot
+    total = np.zeros(3)
+    for contact in P.model["floor"]["contacts"]:
+        a, b = contact["columns"]
+        f = np.zeros(3)
+        f[3 - (b - a) :] = forces[a:b]
+        total += f
+        if contact["driven"]:
+            assert np.hypot(f[0], f[1]) <= 0.5 * f[2] + 1e-6
+    expected = mass * com_acc + mass * np.array([0.0, 0.0, 9.81]) + h[:, :3].sum(axis=0)
+    np.testing.assert_allclose(total, expected, atol=1e-6 * np.abs(expected).max())
+    # and the object: the hands' forces give its acceleration against its weight
+    np.testing.assert_allclose(h[:, :3].sum(axis=0), MASS * (w.point[:3] + np.array([0.0, 0.0, 9.81])), atol=1e-6)
+
+
+def test_support_errors_name_the_contact_and_the_value():
+    robot = mobmanip.load_robot("planar_dual_arm")
+    s = robot_support(robot)
+    assert [c.name for c in s.contacts][:2] == ["wheel_right_joint", "wheel_left_joint"]
+    wheels = s.contacts[:2]
+    with pytest.raises(SpecError, match="at least three contacts not on one line.*wheel_right_joint, wheel_left_joint"):
+        Support(wheels, s.floor_z)
+    above = ContactPoint("caster_x", np.array([0.2, 0.0, s.floor_z + 0.01]), False, "spec")
+    with pytest.raises(SpecError, match=r"'caster_x' at z = -0.065 m lies 0.01 m above the floor"):
+        Support((*wheels, above), s.floor_z)
+    with pytest.raises(SpecError, match=r"mu must be a finite friction coefficient >= 0, got -0.2"):
+        Floor(mu=-0.2)
+    with pytest.raises(SpecError, match="faces must be an integer from 3 to 64, got 2"):
+        Floor(mu=0.5, faces=2)
+    fixed = mobmanip.load_robot("ur5")
+    with pytest.raises(MobmanipError, match="differential-drive"):
+        mobmanip.analyze(fixed, fixed.neutral(), measures=("dynamic_polytope",), constraints=(Floor(),))

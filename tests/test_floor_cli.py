@@ -1,0 +1,64 @@
+"""``mobmanip analyze --ground``: the grounded polytope from the command line, its readings per
+axis and what stops each, in the summary and the JSON; bad floor options in one line, exit 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import mobmanip
+from mobmanip.postures.named import named_configuration
+from mobmanip.terms.constraints.floor import Floor
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "mobmanip", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_ground_from_the_command_line_equals_the_python_api(tmp_path):
+    out = tmp_path / "g.json"
+    run = _cli("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
+               "--json", str(out))  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(out.read_text())
+    robot = mobmanip.load_robot("tiago_dual")
+    api = mobmanip.analyze(
+        robot, named_configuration(robot, "hold"), "spatial", object_mass=2.0,
+        measures=("kinematic", "dynamic", "dynamic_polytope"), constraints=(Floor(mu=0.5),),
+    )  # fmt: skip
+    reaches = {r["axis"]: r for r in doc["dynamic_polytope"]["reaches"]}
+    P = api.measures["dynamic_polytope"]
+    assert reaches["+x"]["straight_line"] == pytest.approx(P.straight_line_reach([1, 0, 0, 0, 0, 0]), rel=1e-9)
+    assert reaches["+y"]["support"] == pytest.approx(P.support([0, 1, 0, 0, 0, 0]), rel=1e-9)
+    assert round(reaches["+x"]["straight_line"], 2) == 37.08  # issue 24's table
+    assert doc["dynamic_ellipsoid"]["ignored_constraints"] == ["floor"]
+    assert doc["constraints"][0]["name"] == "floor" and doc["constraints"][0]["mu"] == 0.5
+    assert doc["dynamic_polytope"]["model"]["floor"]["mu"] == 0.5
+    assert any("lifts off the floor" in b for b in reaches["+x"]["binding"])
+    assert 0.0 <= reaches["+x"]["floor"]["margin"] < 1e-3  # the ZMP inside, near the front edge
+    # the summary names the readings and what stops them
+    assert "straight line 37.08, support 42.94" in run.stdout
+    assert "support lifting off (tip-over): caster_front_left_2_link, caster_front_right_2_link" in run.stdout
+    assert "dynamic ellipsoid (coupled) [ignores floor" in run.stdout
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--mu", "-0.5"], "mu must be a finite friction coefficient >= 0, got -0.5"),
+        (["--mu", "0.5", "--no-traction"], "--mu and --no-traction contradict each other"),
+    ],
+)
+def test_bad_floor_options_are_one_line(args, message):
+    run = _cli("analyze", "planar_dual_arm", *args)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [f"mobmanip: error: {run.stderr.strip().split('error: ', 1)[1]}"]
+    assert message in run.stderr
+
+
+def test_a_fixed_base_has_no_floor():
+    run = _cli("analyze", "ur5", "--ground")
+    assert run.returncode == 2 and "'ur5' has a fixed platform" in run.stderr
