@@ -34,6 +34,7 @@ from mobmanip.sets.force import force_ellipsoid, force_polytope, unbounded_force
 from mobmanip.sets.polytope import Polytope
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
 from mobmanip.terms.builder import terms_at
+from mobmanip.terms.constraints.floor import Floor
 from mobmanip.terms.force import force_problem
 from polytope_util import random_joint_configuration
 from toy_constraint import EffortShare
@@ -163,6 +164,12 @@ def paper0():
     return robot, configuration_at(robot, optimal_posture(robot), angle_deg=0.0)
 
 
+@pytest.fixture(scope="module")
+def paper90():
+    robot = mobmanip.load_robot("planar_dual_arm")
+    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=90.0)
+
+
 def _assert_ellipsoid_inside(ellipsoid, polytope, rng, count=200):
     m = ellipsoid.dim
     assert not ellipsoid.empty and not polytope.empty
@@ -229,8 +236,54 @@ def test_mobile_force_polytope_equals_the_whole_robot_lp(which, request, rng):
             errors.append(abs(ours - ref) / abs(ref))
     for e in np.vstack([np.eye(m), -np.eye(m)]):
         ref = fr.force_straight_line(problem, e).value
-        errors.append(abs(lifted.ray_radius(e) - ref) / abs(ref))
+        for ours in (closed.straight_line_reach(e), lifted.straight_line_reach(e)):
+            errors.append(abs(ours - ref) / abs(ref))
     assert max(errors) <= LP_RTOL, max(errors)
+
+
+FLOORS = {"no_tip": (None, "no_tip"), "mu=0.5": (0.5, "friction"), "mu=1.0": (1.0, "friction")}
+
+
+@pytest.mark.parametrize("floor", list(FLOORS))
+@pytest.mark.parametrize("which", ["tiago", "paper0", "paper90"])
+def test_grounded_force_polytope_equals_the_whole_robot_lp(which, floor, request, rng):
+    """With the floor constraint (no tip-over; and traction within mu = 0.5 or 1.0) the force
+    polytope is the reference's force LP in the same floor model: support along 16 directions
+    and straight-line reach along every task axis, 1e-6 relative. The floor comes through the
+    constraint seam; nothing in the force problem knows about it."""
+    robot, q = request.getfixturevalue(which)
+    task, casters = ("spatial", None) if which == "tiago" else ("planar", fr.PAPER_CASTERS)
+    mu, mode = FLOORS[floor]
+    analysis, _, grounded = _force_sets(robot, q, task, mass=MASS, constraints=(Floor(mu=mu),))
+    assert grounded.model["problem"] == "force" and "floor" in grounded.model
+    problem = fr.build_problem(robot, q, task, analysis.held_object, casters=casters)
+    m = problem.W.shape[0]
+    errors = []
+    for d in np.vstack([np.eye(m), _unit(rng, 16 - m, m)]):
+        ref = fr.force_support(problem, d, mode=mode, mu=mu).value
+        errors.append(abs(grounded.support(d) - ref) / max(abs(ref), 1e-9))
+    for e in np.vstack([np.eye(m), -np.eye(m)]):
+        ref = fr.force_straight_line(problem, e, mode=mode, mu=mu).value
+        errors.append(abs(grounded.straight_line_reach(e) - ref) / max(abs(ref), 1e-9))
+    assert max(errors) <= LP_RTOL, max(errors)
+
+
+def test_what_stops_a_grounded_push(tiago):
+    """TIAGo++ in its hold posture with 2 kg, on the floor with mu = 0.5: the floor never makes the
+    robot stronger (each grounded reach <= the ideal one), and where it binds the witness says
+    which contact lifts or slips."""
+    robot, q = tiago
+    ideal = _force_sets(robot, q, "spatial", mass=MASS)[2]
+    grounded = _force_sets(robot, q, "spatial", mass=MASS, constraints=(Floor(mu=0.5),))[2]
+    stopped_by_floor = 0
+    for e in np.vstack([np.eye(6)[:3], -np.eye(6)[:3]]):
+        reach = grounded.straight_line_reach(e)
+        assert reach <= ideal.straight_line_reach(e) * (1.0 + 1e-9)
+        binding = grounded.straight_line_witness(e).binding
+        assert binding
+        if any("lifts off" in b or "slips" in b for b in binding):
+            stopped_by_floor += 1
+    assert stopped_by_floor >= 1
 
 
 def test_the_force_problem_is_the_reference_lp_at_its_maximiser(tiago):
@@ -239,7 +292,7 @@ def test_the_force_problem_is_the_reference_lp_at_its_maximiser(tiago):
     contact forces) while the object pushes f on the environment."""
     robot, q = tiago
     analysis, _, _ = _force_sets(robot, q, "spatial", mass=MASS)
-    witness = force_problem(analysis.terms).ray_witness(np.eye(6)[0])
+    witness = force_problem(analysis.terms).straight_line_witness(np.eye(6)[0])
     f, tau, h = witness.point, witness.variables["tau"], witness.variables["h"]
     np.testing.assert_allclose(witness.variables["xdot"], 0.0, atol=1e-12)
     np.testing.assert_allclose(witness.variables["a"], 0.0, atol=1e-12)
@@ -269,7 +322,7 @@ def test_every_constraint_of_the_acceleration_problem_applies(paper0):
     assert analysis.ignored_constraints("force_polytope") == ()
     plain = force_ellipsoid(T.J_u, T.W, T.Q, T.xi, T.g_o, T.effort_limits)
     np.testing.assert_allclose(ellipsoid.semi_axes, plain.semi_axes, rtol=1e-12)
-    binding = polytope.ray_witness([1.0, 0.0]).binding
+    binding = polytope.straight_line_witness([1.0, 0.0]).binding
     assert binding and all(f"at {share:g} of its effort limit" in label for label in binding)
 
 
@@ -288,8 +341,8 @@ def test_a_held_load_moves_the_set_down_by_its_weight(tiago, rng):
         loaded = force_problem(terms_at(robot, q, task, object_mass=MASS))
         m = empty.dim
         down = -np.eye(m)[2]
-        assert loaded.ray_radius(down) == pytest.approx(empty.ray_radius(down) + weight, rel=1e-9)
-        assert loaded.ray_radius(-down) == pytest.approx(empty.ray_radius(-down) - weight, rel=1e-9)
+        assert loaded.straight_line_reach(down) == pytest.approx(empty.straight_line_reach(down) + weight, rel=1e-9)
+        assert loaded.straight_line_reach(-down) == pytest.approx(empty.straight_line_reach(-down) - weight, rel=1e-9)
         for d in _unit(rng, 20, m):
             assert loaded.support(d) == pytest.approx(empty.support(d) - weight * d[2], rel=1e-9, abs=1e-9)
     # the closed form shifts its vertices the same way (one fixed arm, 3-D)
