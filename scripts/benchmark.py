@@ -199,6 +199,7 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--polytopes", action="store_true", help="only the capacity polytopes (scripts/benchmark_polytopes.py)"
     )
+    parser.add_argument("--floor", action="store_true", help="only the grounded capacity (scripts/benchmark_floor.py)")
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
@@ -207,6 +208,10 @@ def main(argv=None) -> int:
         from benchmark_polytopes import run
 
         return run(quick=args.quick)
+    if args.floor:
+        from benchmark_floor import run as run_floor
+
+        return run_floor(quick=args.quick)
     quick = args.quick
     rounds = args.rounds or (2 if quick else 7)
     n_single, n_batch = (200, 2000) if quick else (1000, 10000)

@@ -158,3 +158,15 @@ def test_bad_constraints_are_refused_with_their_name(paper):
         ConstraintRows("toy", "acceleration", G={"tau": np.zeros((3, 8))}, h=np.zeros(2))
     with pytest.raises(ArgumentError, match="unknown equations"):
         ConstraintRows("toy", "velocity", couplings={"dynamics": {}})
+
+
+def test_the_policy_at_a_singular_posture_keeps_only_what_the_hands_can_follow():
+    """Arms stretched (the paper robot's home): J_u loses rank; the lifted policy set blocks the
+    directions the hands cannot follow, as the closed form does."""
+    robot = mobmanip.load_robot("planar_dual_arm")
+    T = terms_at(robot, robot.neutral(), "planar", object_mass=2.0)
+    assert np.linalg.matrix_rank(T.J_u) < T.J_u.shape[0]
+    lifted = capacity_polytope(T, "acceleration", policy=True)
+    closed = min_norm_dynamic_polytope(T.J_u, T.W, T.P, T.Q, T.xi, T.M_o, T.g_o, T.effort_limits)
+    scale = np.abs(closed.supports(DIRECTIONS)).max()
+    np.testing.assert_allclose(lifted.supports(DIRECTIONS), closed.supports(DIRECTIONS), atol=1e-9 * scale)

@@ -52,7 +52,7 @@ examples:
 
 
 def register(sub) -> None:
-    from .common import add_measure_option
+    from .common import add_floor_options, add_measure_option
 
     parser = sub.add_parser(
         "sweep",
@@ -85,6 +85,7 @@ def register(sub) -> None:
         "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
     )
     add_measure_option(analysis)
+    add_floor_options(analysis)
     postures = parser.add_argument_group("arm postures")
     postures.add_argument(
         "--postures", choices=["auto", "planar", "ik"], default="auto", help="how the arms hold the object (see below)"
@@ -138,7 +139,7 @@ def run_command(args) -> int:
     from ..support.files import OutputError
     from ..sweep.budget import check_grid
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, plot_sweep, run_sweep
-    from .common import requested_measures
+    from .common import floor_constraints, requested_measures
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
     if args.task is not None and args.task not in TASKS:
@@ -177,6 +178,7 @@ def run_command(args) -> int:
         postures=args.postures,
         reference=reference,
         measures=measures,
+        constraints=floor_constraints(args),
     )
     out = Path(args.output)
     if out.parent and not out.parent.exists():
@@ -222,6 +224,9 @@ def run_command(args) -> int:
             label = f"{kind} volume"
             if mixed:  # m^k rad^(m-k): only comparable within this task and quantity
                 label += f" ({task.dim}-D, mixing {measure.quantity.units}: compare only within this sweep)"
+            ignored = result.ignored_constraints(kind)
+            if ignored:
+                label += f" [ignores {', '.join(ignored)}]"
             print(f"{label}: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
     written = [result.save_npz(out.with_name(out.name + ".npz"))]
     if not args.no_csv:

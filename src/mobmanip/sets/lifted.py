@@ -93,8 +93,12 @@ class LiftedPolytope(TaskSet):
             self.center = np.zeros(self.dim)
             self.degenerate = True
             return
-        lo = -self._axis_supports(-1.0)
-        hi = self._axis_supports(1.0)
+        if self.dim <= 3:  # the vertices give the bounding box (and are wanted anyway)
+            self._size = 1.0  # the refinement's tolerance scale until the box is known
+            V = self._cache["vertices"] = self._refine(first=True)
+            lo, hi = V.min(axis=0), V.max(axis=0)
+        else:
+            lo, hi = -self._axis_supports(-1.0), self._axis_supports(1.0)
         self.center = 0.5 * (lo + hi)
         self._size = float(max(np.max(hi - lo), 1e-300))
         self.degenerate = self._flat()
@@ -297,10 +301,16 @@ class LiftedPolytope(TaskSet):
             self._cache["vertices"] = self._refine()
         return self._cache["vertices"]
 
-    def _refine(self) -> np.ndarray:
-        """Bretl and Lall's projection: grow an inner polytope by supports along its facets' normals."""
+    def _refine(self, first: bool = False) -> np.ndarray:
+        """Bretl and Lall's projection: grow an inner polytope by supports along its facets' normals.
+
+        With ``first`` (called before the set's size is known), the extreme points along the task
+        axes size the tolerance before the refinement starts."""
         m = self.dim
         found = [self._maximise(s * e)[1][self._task] for e in np.eye(m) for s in (1.0, -1.0)]
+        if first:
+            box = np.ptp(np.array(found), axis=0)
+            self._size = float(max(np.max(box), 1e-300))
         if m == 1:
             return np.unique(np.round(np.array(found), 15), axis=0)
         tol = _TOL * self._size

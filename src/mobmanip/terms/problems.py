@@ -74,9 +74,11 @@ def capacity_polytope(
     else:
         own["dynamics"] = ({"xdot": T.P, "tau": -T.Q, "h": T.J_u.T}, T.xi)
         if policy:
-            J_pinv, W_pinv = _policy_inverses(T.J_u, T.W)
+            J_pinv, blocked, W_pinv = _policy_inverses(T.J_u, T.W)
             own["grasp"] = ({"xdot": np.eye(nx), "a": -J_pinv @ T.W.T}, np.zeros(nx))
             own["object"] = ({"h": np.eye(mk), "a": -W_pinv @ T.M_o}, W_pinv @ T.g_o)
+            if len(blocked):  # at a singular posture the hands cannot follow these directions
+                own["blocked"] = ({"a": blocked @ T.W.T}, np.zeros(len(blocked)))
         else:
             own["grasp"] = ({"xdot": T.J_u, "a": -T.W.T}, np.zeros(mk))
             own["object"] = ({"h": T.W, "a": -T.M_o}, T.g_o)
@@ -121,9 +123,16 @@ def capacity_polytope(
     return LiftedPolytope(task_columns, A_eq, b_eq, A_ub, b_ub, lo, hi, columns, model, labels=labels)
 
 
-def _policy_inverses(J_u: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    for what, A in (("the unified Jacobian J_u", J_u), ("the grasp matrix W", W)):
-        s = np.linalg.svd(A, compute_uv=False)
-        if not len(s) or s[-1] <= _RANK_RTOL * s[0] or A.shape[0] > A.shape[1]:
-            raise TaskError(f"the minimum-norm policy needs {what} of full row rank (a singular posture)")
-    return np.linalg.pinv(J_u), np.linalg.pinv(W)
+def _policy_inverses(J_u: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """J_u^+ (rank-revealing), the directions of the hands' space J_u cannot reach (rows), W^+.
+
+    Raises:
+        TaskError: W without full row rank (the hands do not hold the object rigidly).
+    """
+    s_w = np.linalg.svd(W, compute_uv=False)
+    if not len(s_w) or W.shape[0] > W.shape[1] or s_w[-1] <= _RANK_RTOL * s_w[0]:
+        raise TaskError("the minimum-norm policy needs a grasp matrix W of full row rank")
+    U, s, Vt = np.linalg.svd(J_u, full_matrices=True)
+    rank = int(np.sum(s > _RANK_RTOL * max(s[0] if s.size else 0.0, 1e-300)))
+    J_pinv = (Vt[:rank].T / s[:rank]) @ U[:, :rank].T
+    return J_pinv, U[:, rank:].T, np.linalg.pinv(W)

@@ -80,7 +80,7 @@ class Floor(Constraint):
 
     def resolve(self, robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces this floor uses for ``robot``."""
-        support = self.support if self.support is not None else robot_support(robot)
+        support = self.support if self.support is not None else _robot_support(robot)
         mu = support.mu if self.mu == "spec" else self.mu
         faces = support.faces if self.faces is None else self.faces
         return support, (None if mu is None else float(mu)), faces
@@ -197,6 +197,15 @@ class Floor(Constraint):
             self.name, self.problem, variables=variables, G={CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)},
             h=np.zeros(len(G_rows)), E=E, e=e, couplings=couplings, labels=tuple(labels), info=info,
         )  # fmt: skip
+
+
+def _robot_support(robot) -> Support:
+    """The robot's own support, found once per robot (it reads the URDF for casters)."""
+    cached = robot.__dict__.get("_floor_support")
+    if cached is None:
+        cached = robot_support(robot)
+        robot.__dict__["_floor_support"] = cached
+    return cached
 
 
 def _pose(q: np.ndarray) -> tuple[float, float, float]:
