@@ -20,6 +20,7 @@ question, :func:`check_supported`, asked by the robot layer.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
@@ -33,6 +34,8 @@ from .description import JointDescription, LinkDescription, ModelBuilder, NameMa
 #: Vendor URDFs carry such rounding on parts of a few grams (TIAGo++'s antennas: 9e-8 kg m^2);
 #: it is negligible next to the links that move and the analysis accepts it.
 INERTIA_SLACK = 1e-5
+
+_IDENTITY = Origin()
 
 #: Joint types mobmanip cannot model inside a robot (it adds the planar root joint itself).
 UNSUPPORTED_JOINT_TYPES = ("floating", "planar")
@@ -129,8 +132,11 @@ def _finite_array(value: object, what: str, fail) -> np.ndarray:
 
 def _check_placement(origin: Origin, what: str, fail) -> None:
     """An origin: finite, its translation within :data:`mobmanip.support.ranges.LINK_OFFSET`."""
-    placement = _finite_array(origin.matrix, f"{what} <origin>", fail)
-    offset = float(np.linalg.norm(placement[:3, 3]))
+    if origin == _IDENTITY:
+        return
+    if not all(math.isfinite(v) for v in origin.xyz + origin.rpy):
+        _finite_array(origin.matrix, f"{what} <origin>", fail)  # raises, showing the placement
+    offset = math.hypot(*origin.xyz)
     if offset > LINK_OFFSET:
         raise fail(f"{what} <origin> lies {offset:g} m from its parent frame (at most {LINK_OFFSET:g} m)")
 

@@ -108,17 +108,20 @@ class Origin:
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
-    @property
+    @functools.cached_property
     def rotation(self) -> np.ndarray:
-        """The rotation matrix (3, 3)."""
-        return rpy_matrix(self.rpy)
+        """The rotation matrix (3, 3), read-only."""
+        out = rpy_matrix(self.rpy)
+        out.setflags(write=False)
+        return out
 
-    @property
+    @functools.cached_property
     def matrix(self) -> np.ndarray:
-        """The homogeneous transform (4, 4): a new array on each call."""
+        """The homogeneous transform (4, 4), read-only."""
         out = np.eye(4)
         out[:3, :3] = self.rotation
         out[:3, 3] = self.xyz
+        out.setflags(write=False)
         return out
 
 

@@ -111,7 +111,7 @@ def read_urdf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
         data = path.read_bytes()
     except OSError as exc:
         raise UrdfError(str(path), f"cannot read: {exc.strerror or exc}") from exc
-    return urdf_description(data.decode("utf-8", errors="replace"), path, package_dirs=package_dirs)
+    return _describe(data.decode("utf-8", errors="replace"), data, path, "urdf", package_dirs)
 
 
 def urdf_description(
@@ -132,11 +132,19 @@ def urdf_description(
     Raises:
         UrdfError: as :func:`read_urdf`.
     """
+    return _describe(text, None, source, format, package_dirs)
+
+
+def _describe(
+    text: str, raw: bytes | None, source: str | Path, format: str, package_dirs: Iterable[str | Path] | None
+) -> RobotDescription:
+    """:func:`urdf_description`; ``raw``, the file's bytes when at hand, parses faster than text
+    (and under the encoding the file declares)."""
     path = str(source)
     if "$(" in text:
-        text = _expand_substitutions(text, path)
+        text, raw = _expand_substitutions(text, path), None
     try:
-        root = ElementTree.fromstring(text)
+        root = ElementTree.fromstring(raw if raw is not None else text)
     except ElementTree.ParseError as exc:
         raise UrdfError(path, f"not well-formed XML: {exc}") from exc
     if root.tag != "robot":
