@@ -111,7 +111,7 @@ def read_urdf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
         data = path.read_bytes()
     except OSError as exc:
         raise UrdfError(str(path), f"cannot read: {exc.strerror or exc}") from exc
-    return _describe(data.decode("utf-8", errors="replace"), data, path, "urdf", package_dirs)
+    return _describe(data.decode("utf-8-sig", errors="replace"), data, path, "urdf", package_dirs)
 
 
 def urdf_description(
@@ -147,6 +147,8 @@ def _describe(
         root = ElementTree.fromstring(raw if raw is not None else text)
     except ElementTree.ParseError as exc:
         raise UrdfError(path, f"not well-formed XML: {exc}") from exc
+    except (LookupError, ValueError) as exc:  # e.g. an encoding the XML declaration names that Python lacks
+        raise UrdfError(path, f"cannot read its XML: {exc}") from exc
     if root.tag != "robot":
         raise UrdfError(path, f"root element is <{root.tag}>, expected <robot>")
     reader = _Reader(path)
