@@ -292,3 +292,12 @@ def test_the_description_matches_pinocchios_reading_of_the_same_text(name):
         assert math.isclose(model.inertias[k].mass, mass, rel_tol=1e-12, abs_tol=1e-15), joint.name
     total = sum(link.inertial.mass for link in description.links.values() if link.inertial is not None)
     assert math.isclose(sum(inertia.mass for inertia in model.inertias), total, rel_tol=1e-12)
+
+
+def test_geometry_comes_in_two_kinds():
+    description = read_description(PAPER_URDF)
+    model = description.build_model()
+    assert description.build_geometry(model, "collision").ngeoms > 0
+    assert description.build_geometry(model, "visual").ngeoms > 0
+    with pytest.raises(ArgumentError, match="collision, visual"):
+        description.build_geometry(model, "inertial")

@@ -477,10 +477,13 @@ class RobotDescription:
                 it, meshes load as the file names them.
 
         Raises:
+            ArgumentError: a ``kind`` other than ``"collision"`` or ``"visual"``.
             DescriptionError: Pinocchio cannot load the shapes (its reason in one line).
         """
         if kind not in GEOMETRY_KINDS:
-            raise ValueError(f"geometry kind must be one of {GEOMETRY_KINDS}, got {kind!r}")
+            from ..errors import ArgumentError
+
+            raise ArgumentError(f"geometry kind must be one of {', '.join(GEOMETRY_KINDS)}, got {kind!r}")
         return self.builder.build_geometry(str(self.source), model, kind, self.package_dirs, meshes)
 
     def error(self, reason: str) -> DescriptionError:
