@@ -14,6 +14,10 @@ apply ON the object (task rows) and the object's acceleration a_o, related by::
     J_hands S_f xdot = W^T a_o                                           (rigid grasp)
     W h = M_o a_o + g_o                                                  (object, g_o = +m g up)
 
+The force problems (:func:`force_support`, :func:`force_straight_line`) hold robot and object
+still (xdot = 0, a_o = 0) and ask for the wrench f the object exerts ON the environment, which
+pushes back with -f: the object's equation becomes ``W h = g_o + f`` (f in the a_o columns).
+
 A driven wheel's contact force is (f_x, f_y, f_z) in world axes; a caster's is a normal force
 only (frictionless). A planar task leaves out the object's vertical, roll and pitch rows, but the
 floor still carries the object: the hands' wrench components on those rows are extra unknowns,
@@ -117,8 +121,9 @@ class FloorSolution:
     """A maximiser (or an equilibrium) of a floor LP.
 
     Attributes:
-        value: the optimum: e.a_o (support, m/s^2 or rad/s^2) or s (straight-line reach).
-        a_o: object acceleration, (m,).
+        value: the optimum: e.a_o (support, m/s^2 or rad/s^2) or s (straight-line reach); in the
+            force problems e.f or s (N, N m).
+        a_o: object acceleration, (m,); in the force problems the wrench f on the environment.
         xdot: reduced accelerations, (nx,).
         tau: reduced efforts (N m or N), (nx,).
         h: the hands' wrenches on the object, task rows, (k m,).
@@ -374,13 +379,27 @@ def straight_line(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, poli
     return _solve(problem, mode, mu, faces, policy, objective=np.append(np.zeros_like(e), -1.0), line=e)
 
 
+def force_support(problem: FloorProblem, e, mode="ideal", mu=None, faces=8) -> FloorSolution:
+    """max e.f over the wrenches f the object exerts on the environment, robot and object at rest
+    (modes as :func:`support`; the solution's ``a_o`` holds f)."""
+    e = np.asarray(e, dtype=float)
+    return _solve(problem, mode, mu, faces, False, objective=np.append(-e, 0.0), force=True)
+
+
+def force_straight_line(problem: FloorProblem, e, mode="ideal", mu=None, faces=8) -> FloorSolution:
+    """max s such that the object exerts f = s e on the environment at rest (as :func:`force_support`)."""
+    e = np.asarray(e, dtype=float)
+    return _solve(problem, mode, mu, faces, False, objective=np.append(np.zeros_like(e), -1.0), line=e, force=True)
+
+
 def equilibrium(problem: FloorProblem, mode="no_tip", mu=None, faces=8) -> FloorSolution:
     """Robot and object held still (xdot = 0, a_o = 0): one feasible set of efforts and forces."""
     return _solve(problem, mode, mu, faces, False, objective=np.zeros(problem.W.shape[0] + 1), still=True)
 
 
-def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still=False) -> FloorSolution:
-    """The LP over z = [xdot, tau, lambda, h, h_level, a_o, s]; ``objective``: the cost of (a_o, s)."""
+def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still=False, force=False) -> FloorSolution:
+    """The LP over z = [xdot, tau, lambda, h, h_level, a_o, s]; ``objective``: the cost of (a_o, s).
+    ``force``: at rest, the a_o columns hold the wrench f on the environment (W h = g_o + f)."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if mode == "friction" and (mu is None or mu < 0):
@@ -402,7 +421,10 @@ def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still
 
     equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
     equation([(H, P.level_grasp[0]), (V, P.level_grasp[1])], P.level_load)  # the object held level
-    if policy:  # with J_u and W of full row rank, the grasp and object equations follow
+    if force:  # at rest; the environment pushes back with -f
+        equation([(X, np.eye(nx))], np.zeros(nx))
+        equation([(H, P.W), (A, -np.eye(m))], P.g_o)
+    elif policy:  # with J_u and W of full row rank, the grasp and object equations follow
         J_u, W_pinv = P.hand_jacobian @ P.S, np.linalg.pinv(P.W)
         if np.linalg.matrix_rank(J_u) < km or np.linalg.matrix_rank(P.W) < m:
             raise ValueError("the minimum-norm policy needs J_u and W of full row rank (a singular posture)")

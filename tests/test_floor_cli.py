@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import mobmanip
@@ -62,3 +63,33 @@ def test_bad_floor_options_are_one_line(args, message):
 def test_a_fixed_base_has_no_floor():
     run = _cli("analyze", "ur5", "--ground")
     assert run.returncode == 2 and "'ur5' has a fixed platform" in run.stderr
+
+
+def test_the_viewer_draws_the_support_and_the_zmp_at_rest(tmp_path):
+    from mobmanip.analysis.reaches import floor_at_rest
+    from mobmanip.robot.support import polygon_margin, robot_support
+
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    grounded = mobmanip.analyze(
+        robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+    ).measures["dynamic_polytope"]
+    found = floor_at_rest(grounded)
+    polygon = robot_support(robot).polygon((0.0, 0.0, 0.0))
+    assert sorted(map(tuple, np.round(found["polygon"], 12))) == sorted(map(tuple, np.round(polygon, 12)))
+    assert found["margin"] == pytest.approx(polygon_margin(polygon, found["zmp"]), abs=1e-12) and found["margin"] > 0
+    page = tmp_path / "floor.html"
+    run = _cli("view", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
+               "--no-locked", "--export", str(page))  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    from browser_util import chromium, missing_browser, scene_objects, wait_for_scene
+
+    if missing_browser():
+        pytest.skip(f"the page's scene needs a browser: {missing_browser()}")
+    with chromium() as browser:
+        view = browser.new_page(viewport={"width": 800, "height": 600})
+        view.goto(page.as_uri())
+        wait_for_scene(view, timeout=90)
+        drawn = scene_objects(view)
+        assert {"meshcat/mobmanip/floor/polygon", "meshcat/mobmanip/floor/zmp"} <= set(drawn)
+        assert f"margin {found['margin']:.3f} m" in view.inner_text("body")

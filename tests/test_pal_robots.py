@@ -34,7 +34,7 @@ def test_tiago_pro_sides_follow_the_urdf_wheels():
     platform = robot.platform
     assert platform.kind == "skid_steer"
     wheels = ["wheel_front_right_joint", "wheel_rear_right_joint", "wheel_front_left_joint", "wheel_rear_left_joint"]
-    limits = [(urdf.joint_map[w].limit.velocity, urdf.joint_map[w].limit.effort) for w in wheels]
+    limits = [(urdf.joints[w].limits.velocity, urdf.joints[w].limits.effort) for w in wheels]
     np.testing.assert_allclose(
         robot.velocity_limits[:2], [min(v for v, _ in limits[:2]), min(v for v, _ in limits[2:])]
     )

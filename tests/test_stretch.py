@@ -57,7 +57,7 @@ def test_flags_fill_the_gaps_and_the_geometry_is_the_urdf(tmp_path, capsys):
     robot = mobmanip.load_robot(mobmanip.robot.spec.load_spec(out))
     assert robot.platform.radius == 0.0508
     urdf = read_urdf(URDF)
-    y = [urdf.joint_map[name].origin[1, 3] for name in WHEELS]  # the wheels' lateral offsets
+    y = [urdf.joints[name].origin.xyz[1] for name in WHEELS]  # the wheels' lateral offsets
     assert abs(robot.platform.half_track - 0.5 * (y[1] - y[0])) < 1e-12
     np.testing.assert_array_equal(robot.velocity_limits[:2], [5.9, 5.9])
     np.testing.assert_array_equal(robot.effort_limits[:2], [4.7, 4.7])

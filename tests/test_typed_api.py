@@ -35,6 +35,11 @@ PUBLIC_MODULES = [
     "mobmanip.gradients",
     "mobmanip.placement",
     "mobmanip.postures.inverse_kinematics",
+    "mobmanip.descriptions",
+    "mobmanip.descriptions.description",
+    "mobmanip.descriptions.checks",
+    "mobmanip.descriptions.formats",
+    "mobmanip.descriptions.urdf",
     "mobmanip.descriptions.resources",
     "mobmanip.viz.scene",
     "mobmanip.viz.sweeps",
@@ -74,6 +79,9 @@ PUBLIC_MODULES = [
     "mobmanip.analysis.reaches",
     "mobmanip.sweep.spec",
     "mobmanip.postures.planar",
+    "mobmanip.sets.force",
+    "mobmanip.terms.force",
+    "mobmanip.measures.force",
 ]
 
 

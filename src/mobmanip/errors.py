@@ -48,13 +48,36 @@ class UnknownPostureError(SpecError):
         super().__init__(f"robot {robot!r} has no posture {name!r}; its postures: {', '.join(self.available)}")
 
 
-class UrdfError(MobmanipError):
-    """A URDF file is missing, unreadable, malformed or uses a construct mobmanip cannot model."""
+class DescriptionError(MobmanipError):
+    """A robot description file is missing, unreadable, malformed, of no known format, or
+    describes no physical robot. Carries the file's ``path`` and the ``reason``; each format's
+    own error (:class:`UrdfError`) names the file's language in the message."""
+
+    #: How the message names the file.
+    label = "robot description"
 
     def __init__(self, path: str, reason: str):
         self.path = path
         self.reason = reason
-        super().__init__(f"URDF {path}: {reason}")
+        super().__init__(f"{self.label} {path}: {reason}")
+
+
+class UrdfError(DescriptionError):
+    """A URDF file is missing, unreadable, malformed or uses a construct mobmanip cannot model."""
+
+    label = "URDF"
+
+
+class UnknownFormatError(DescriptionError):
+    """A robot file whose suffix no registered description format reads; lists the known suffixes."""
+
+    def __init__(self, path: str, suffix: str, known: Iterable[str]):
+        self.suffix = suffix
+        self.known = tuple(known)
+        what = f"suffix {suffix!r}" if suffix else "no suffix"
+        super().__init__(
+            path, f"{what}: no robot-description format reads it (known suffixes: {', '.join(self.known)})"
+        )
 
 
 class NameNotFoundError(MobmanipError):

@@ -58,3 +58,27 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                         entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
             out.append(entry)
     return out
+
+
+def floor_at_rest(task_set: TaskSet) -> dict | None:
+    """The floor under a grounded set with the object held still: the support polygon, the
+    zero-moment point of a solution with the most slack in every limit, and its margin.
+
+    Returns:
+        ``{"polygon": (k, 2) world x, y (m), "floor_z": m, "zmp": (x, y) m, "margin": m}``;
+        ``None`` when the set is not on the floor or rest is outside it.
+    """
+    floor = getattr(task_set, "model", {}).get("floor") if not task_set.empty else None
+    if floor is None or not hasattr(task_set, "witness_at"):
+        return None
+    try:
+        w = task_set.witness_at(np.zeros(task_set.dim))
+    except MobmanipError:
+        return None
+    reaction = ground_reaction(floor, w.variables[CONTACT_FORCES])
+    return {
+        "polygon": floor["polygon"],
+        "floor_z": float(np.mean([c["point"][2] for c in floor["contacts"]])),
+        "zmp": reaction["zmp"],
+        "margin": reaction["margin"],
+    }

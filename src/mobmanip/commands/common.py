@@ -147,7 +147,8 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
         "--polytope",
         action="store_true",
         help="also the exact capacity polytopes (" + ", ".join(polytope_measures()) + "): the measures asked "
-        "for (default: the default ones) and these",
+        "for (default: the default ones) and these, and the polytopes of the other quantities asked for "
+        "(--measure force_ellipsoid --polytope adds force_polytope)",
     )
 
 
@@ -186,11 +187,15 @@ def floor_constraints(args) -> tuple:
     return (Floor(mu=None if no_traction else ("spec" if mu is None else mu)),)
 
 
-def polytope_measures() -> tuple[str, ...]:
-    """The registered measures whose sets are polytopes (what ``--polytope`` adds)."""
-    from ..measures import MEASURES
+def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """What ``--polytope`` adds: the registered polytopes of the default measures' quantities (the
+    capacity polytopes of motion) and of the quantities of the measures ``wanted``."""
+    from ..measures import MEASURES, default_measures, get_measure
 
-    return tuple(name for name, measure in MEASURES.items() if measure.set_kind == "polytope")
+    quantities = {get_measure(name).quantity for name in (*default_measures(), *wanted)}
+    return tuple(
+        name for name, measure in MEASURES.items() if measure.set_kind == "polytope" and measure.quantity in quantities
+    )
 
 
 def requested_measures(args) -> tuple[str, ...] | None:
@@ -200,9 +205,10 @@ def requested_measures(args) -> tuple[str, ...] | None:
     measures = getattr(args, "measures", None)
     if getattr(args, "polytope", False):
         wanted = tuple(measures or default_measures())
-        measures = wanted + tuple(name for name in polytope_measures() if name not in wanted)
-    if floor_constraints(args) and not set(measures or default_measures()) & set(polytope_measures()):
-        measures = tuple(measures or default_measures()) + ("dynamic_polytope",)
+        measures = wanted + tuple(name for name in polytope_measures(wanted) if name not in wanted)
+    asked = tuple(measures or default_measures())
+    if floor_constraints(args) and not set(asked) & set(polytope_measures(asked)):
+        measures = asked + ("dynamic_polytope",)
     return measures
 
 

@@ -133,13 +133,13 @@ def _pairs(items, option: str):
 
 def _list_frames(path) -> int:
     """Print the candidate end-effector frames of a URDF, the most likely first."""
-    from ..descriptions.urdf import check_supported, read_urdf
+    from ..descriptions import check_supported, read_description
     from ..platforms.wheels import wheel_candidates
     from ..robot.detect_report import candidate_frames
 
-    urdf = read_urdf(path)
-    check_supported(urdf, path)
-    rows = candidate_frames(urdf, exclude=[c.name for c in wheel_candidates(urdf)])
+    description = read_description(path)
+    check_supported(description)
+    rows = candidate_frames(description, exclude=[c.name for c in wheel_candidates(description)])
     print(f"{len(rows)} candidate end-effector frames of {path} (for --ee), the most likely first:")
     for link, count, leaf, tool in rows:
         kind = ", ".join(t for t, flag in (("leaf", leaf), ("named like a tool", tool)) if flag)

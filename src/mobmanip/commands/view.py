@@ -17,8 +17,10 @@ import time
 
 from .common import (
     add_analysis_options,
+    add_floor_options,
     add_robot_options,
     apply_analysis_options,
+    floor_constraints,
     load_robot_and_configuration,
     print_warnings,
     requested_measures,
@@ -31,6 +33,7 @@ def register(sub) -> None:
     parser = sub.add_parser("view", help="show the robot and its ellipsoids in the meshcat web viewer")
     add_robot_options(parser)
     add_analysis_options(parser)
+    add_floor_options(parser)
     parser.add_argument(
         "--sweep",
         choices=SWEEPS,
@@ -101,7 +104,12 @@ def run(args) -> int:
     _check(args)
     robot, q = load_robot_and_configuration(args)
     robot = apply_analysis_options(robot, args)
-    options = {"object_mass": args.object_mass, "decoupled": args.decoupled, "measures": requested_measures(args)}
+    options = {
+        "object_mass": args.object_mass,
+        "decoupled": args.decoupled,
+        "measures": requested_measures(args),
+        "constraints": floor_constraints(args),
+    }
     frames = None
     if args.sweep:
         given = args.q or args.posture

@@ -1,1 +1,62 @@
-"""Robot files at the edge: where they live and how a URDF is read and checked."""
+"""Robot files at the edge: where they live, which format reads them, and the one neutral
+description every layer above works from.
+
+:func:`read_description` reads a robot file (URDF now; a format is one module and one
+:func:`register_format` line) into a :class:`RobotDescription`: links, joints, shapes and the
+text for Pinocchio's builders, checked once. :mod:`mobmanip.descriptions.resources` says where
+the built-in and packaged robots live.
+"""
+
+from . import urdf  # noqa: F401  (registers the URDF format)
+from .checks import INERTIA_SLACK, UNSUPPORTED_JOINT_TYPES, assemble, check_supported
+from .description import (
+    JOINT_TYPES,
+    MOVING_JOINT_TYPES,
+    Inertial,
+    JointDescription,
+    JointLimits,
+    LinkDescription,
+    Mimic,
+    ModelBuilder,
+    Origin,
+    RobotDescription,
+    Shape,
+)
+from .formats import (
+    DescriptionFormat,
+    format_for,
+    formats,
+    known_suffixes,
+    read_description,
+    register_format,
+    unregister_format,
+)
+from .urdf import UrdfBuilder, read_urdf, urdf_description
+
+__all__ = [
+    "INERTIA_SLACK",
+    "JOINT_TYPES",
+    "MOVING_JOINT_TYPES",
+    "UNSUPPORTED_JOINT_TYPES",
+    "DescriptionFormat",
+    "Inertial",
+    "JointDescription",
+    "JointLimits",
+    "LinkDescription",
+    "Mimic",
+    "ModelBuilder",
+    "Origin",
+    "RobotDescription",
+    "Shape",
+    "UrdfBuilder",
+    "assemble",
+    "check_supported",
+    "format_for",
+    "formats",
+    "known_suffixes",
+    "read_description",
+    "read_urdf",
+    "register_format",
+    "unregister_format",
+    "urdf_description",
+]

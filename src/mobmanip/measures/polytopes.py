@@ -54,9 +54,16 @@ def _polytope_compute(kind: str) -> Compute:
 def _constrained_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
     """Polytopes under constraints beyond the joint boxes, one configuration at a time: the terms
     are built again at each (a constraint may need the whole model, e.g. the floor's contacts)."""
+    from ..sets.capacity import PolytopeBatch
+
+    return {name: PolytopeBatch(found) for name, found in sets_one_at_a_time(request).items()}
+
+
+def sets_one_at_a_time(request: BatchRequest) -> dict[str, list[TaskSet]]:
+    """The sets of ``request``'s measures at each of its configurations, from terms built again at
+    each (with the request's constraints), each measure under its own quantity's scaled limits."""
     import dataclasses
 
-    from ..sets.capacity import PolytopeBatch
     from ..terms.builder import terms_at
 
     setup = request.setup
@@ -76,12 +83,12 @@ def _constrained_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
             check=False,
         )
         for name, limits in request.limits.items():
-            if POLYTOPE_KINDS[name] == "kinematic":
+            if get_measure(name).quantity.limits == "velocity":
                 scaled = dataclasses.replace(terms, velocity_limits=limits)
             else:
                 scaled = dataclasses.replace(terms, effort_limits=limits)
             sets[name].append(get_measure(name).compute(scaled))
-    return {name: PolytopeBatch(found) for name, found in sets.items()}
+    return sets
 
 
 def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:

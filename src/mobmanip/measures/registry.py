@@ -30,7 +30,9 @@ JSON ``kinematic_ellipsoid``) and ``dynamic`` (the unified dynamic ellipsoid, Eq
 :mod:`mobmanip.sets.capacity`, computed when asked for: ``kinematic_polytope`` (object velocities,
 every wheel and joint within its own speed limit), ``dynamic_polytope`` (object accelerations
 at rest, every torque within its own limit, any internal force) and ``dynamic_polytope_min_norm``
-(the same under the paper's minimum-norm policy), each under the JSON key of its name. All five
+(the same under the paper's minimum-norm policy), each under the JSON key of its name; then the
+force measures of :mod:`mobmanip.measures.force` (quantity ``force``, in N and N m): ``force_ellipsoid``
+and ``force_polytope``, the wrenches the object exerts on the environment at rest. All seven
 are sweepable; a polytope's sweep indices add ``width_1`` .. ``width_m``, its extent along each
 task axis. A measure registered at run
 time exists in the processes that register it: a sweep on a process pool that does not fork

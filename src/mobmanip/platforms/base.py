@@ -3,9 +3,10 @@
 Two objects per kind:
 
 - a :class:`PlatformKind` (one instance per kind, in the registry of :mod:`mobmanip.platforms`)
-  knows the kind's spec: it reads and writes its ``[wheels]`` table, says which URDF joints the
-  platform keeps moving and which limit names it accepts, recognises the kind in a URDF, and
-  builds the platform of a loaded model;
+  knows the kind's spec: it reads and writes its ``[wheels]`` table, says which joints the
+  platform keeps moving and which limit names it accepts, recognises the kind in a robot's
+  description (:class:`mobmanip.descriptions.RobotDescription`, whatever file it was read from),
+  and builds the platform of a loaded model;
 - a :class:`Platform` (one per loaded robot) is the constraint layer itself: the reduced
   platform velocities ``eta`` and the rows of S(q) and Sdot(q, x) that map them to Pinocchio's
   tangent space, the actuation block of Q, the limits of ``eta`` and how figures draw it.
@@ -21,9 +22,14 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from ..descriptions import RobotDescription
 
 #: Tangent indices of the planar root joint (v_x, v_y, omega_z in the platform frame).
 BASE_V = (0, 1, 2)
@@ -129,12 +135,10 @@ class Platform(ABC):
     def actuation_block(self) -> tuple[np.ndarray, np.ndarray]:
         """Where the platform's efforts enter the generalized forces: ``(v_indices, block)`` of B."""
 
-    def urdf_limits(self, urdf) -> Mapping[str, tuple[float | None, float | None]]:
-        """(velocity, effort) of each reduced platform velocity read from the URDF, by name;
-        ``None`` where the URDF gives none. By default each name is a joint of the URDF."""
-        from ..descriptions.urdf import joint_limits
-
-        return {name: joint_limits(urdf, name) for name in self.reduced_names}
+    def description_limits(self, description: RobotDescription) -> Mapping[str, tuple[float | None, float | None]]:
+        """(velocity, effort) of each reduced platform velocity read from the robot's
+        description, by name; ``None`` where it gives none. By default each name is a joint."""
+        return {name: description.limits(name) for name in self.reduced_names}
 
     def missing_limit_source(self, name: str, kind: str) -> tuple[str, str]:
         """Why the ``kind`` (velocity/effort) limit of ``name`` is missing, and its unit, for
@@ -218,20 +222,20 @@ class PlatformKind(ABC):
         return ()
 
     @abstractmethod
-    def build(self, wheels: WheelsSpec | None, urdf, model) -> Platform:
-        """The platform of a loaded model (geometry from the URDF and the Pinocchio model).
+    def build(self, wheels: WheelsSpec | None, description: RobotDescription, model: pin.Model) -> Platform:
+        """The platform of a loaded model (geometry from the description and the Pinocchio model).
 
         Args:
             wheels: the spec's ``[wheels]`` (``None`` when the kind takes none).
-            urdf: the parsed URDF (yourdfpy).
+            description: the robot file as read (its shapes give wheel radii).
             model: the Pinocchio model with its planar root joint (locked joints removed).
 
         Raises:
             WheelError: geometry that does not fit the kind (naming the joint and value).
         """
 
-    def detect(self, urdf, candidates: Sequence, path: str) -> Detected | None:
-        """Recognise this kind among a URDF's wheel candidates (see
+    def detect(self, description: RobotDescription, candidates: Sequence, path: str) -> Detected | None:
+        """Recognise this kind among a robot's wheel candidates (see
         :func:`mobmanip.platforms.wheels.wheel_candidates`); ``None`` if it does not fit.
 
         Raises:
@@ -246,8 +250,11 @@ class PlatformKind(ABC):
     #: Whether the wheel joints themselves take limits (False: the kind's own names do).
     limits_by_joint: ClassVar[bool] = True
 
-    def urdf_limits(self, wheels: WheelsSpec | None, urdf) -> Mapping[str, tuple[float | None, float | None]]:
-        """(velocity, effort) that the URDF implies for the kind's own :meth:`limit_names`."""
+    def description_limits(
+        self, wheels: WheelsSpec | None, description: RobotDescription
+    ) -> Mapping[str, tuple[float | None, float | None]]:
+        """(velocity, effort) that the robot's description implies for the kind's own
+        :meth:`limit_names`."""
         return {}
 
     def toml_limit_hints(self, wheels: WheelsSpec | None) -> list[tuple[str, str]]:

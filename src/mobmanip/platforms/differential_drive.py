@@ -10,12 +10,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import SpecError, WheelError
 from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
 from .wheels import radius_of, side_by_side_message, wheel_geometry
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from ..descriptions import RobotDescription
 
 
 @dataclass(frozen=True)
@@ -157,7 +163,7 @@ class DifferentialDriveKind(PlatformKind):
             raise WheelError(f"a differential drive takes two wheels, RIGHT,LEFT; got {list(joints)}")
         return WheelSpec(right=joints[0], left=joints[1])
 
-    def build(self, wheels: WheelSpec, urdf, model) -> DifferentialDrive:  # type: ignore[override]
+    def build(self, wheels: WheelSpec, description: RobotDescription, model: pin.Model) -> DifferentialDrive:  # type: ignore[override]
         """Wheel radius, half-track, axis signs and axle centre from the URDF geometry."""
         right, left = wheel_geometry(model, (wheels.right, wheels.left), role="wheel")
         for side, geometry in (("right", right), ("left", left)):
@@ -165,7 +171,7 @@ class DifferentialDriveKind(PlatformKind):
                 raise WheelError(f"{side} wheel {geometry.name!r} does not turn about the lateral axis")
         radius = wheels.radius
         if radius is None:
-            radii = [radius_of(urdf, g.name, None) for g in (right, left)]
+            radii = [radius_of(description, g.name, None) for g in (right, left)]
             if abs(radii[0] - radii[1]) > 1e-9:
                 raise WheelError(f"wheel radii differ ({radii[0]} and {radii[1]} m); set [wheels] radius in the spec")
             radius = radii[0]
@@ -184,7 +190,7 @@ class DifferentialDriveKind(PlatformKind):
             wheel_names=(wheels.right, wheels.left),
         )
 
-    def detect(self, urdf, candidates: Sequence, path: str) -> Detected | None:
+    def detect(self, description: RobotDescription, candidates: Sequence, path: str) -> Detected | None:
         """Two lateral wheels on no swivel (preferring driven ones when there are more)."""
         drive = [c for c in candidates if c.lateral and not c.carried_by_rotating_joint]
         if len(drive) > 2 and sum(c.driven for c in drive) >= 2:

@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .base import Platform, PlatformKind
+from .base import Platform, PlatformKind, WheelsSpec
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from ..descriptions import RobotDescription
 
 
 @dataclass(frozen=True)
@@ -30,7 +36,7 @@ class FixedKind(PlatformKind):
     name = "fixed"
     summary = "the platform does not move (a fixed-base robot; any wheels are locked)"
 
-    def build(self, wheels, urdf, model) -> LockedPlatform:
+    def build(self, wheels: WheelsSpec | None, description: RobotDescription, model: pin.Model) -> LockedPlatform:
         return LockedPlatform()
 
 

@@ -7,11 +7,18 @@ the spec only (a URDF has no joint for them).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .base import BASE_V, Platform, PlatformKind
+from .base import BASE_V, Platform, PlatformKind, WheelsSpec
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from ..descriptions import RobotDescription
 
 #: The reduced velocities of an omnidirectional base, which are not URDF joints.
 OMNI_COORDINATES = ("base_x", "base_y", "base_yaw")
@@ -38,7 +45,7 @@ class Omnidirectional(Platform):
     def actuation_block(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(BASE_V), np.eye(3)
 
-    def urdf_limits(self, urdf):
+    def description_limits(self, description: RobotDescription) -> Mapping[str, tuple[float | None, float | None]]:
         return dict.fromkeys(OMNI_COORDINATES, (None, None))
 
     def missing_limit_source(self, name: str, kind: str) -> tuple[str, str]:
@@ -52,7 +59,7 @@ class OmnidirectionalKind(PlatformKind):
     def limit_names(self, wheels) -> tuple[str, ...]:
         return OMNI_COORDINATES
 
-    def build(self, wheels, urdf, model) -> Omnidirectional:
+    def build(self, wheels: WheelsSpec | None, description: RobotDescription, model: pin.Model) -> Omnidirectional:
         return Omnidirectional()
 
     def toml_limit_hints(self, wheels) -> list[tuple[str, str]]:

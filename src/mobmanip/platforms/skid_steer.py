@@ -18,13 +18,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..descriptions.urdf import joint_limits
 from ..errors import SpecError, WheelError
 from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
 from .wheels import radius_of, wheel_geometry
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from ..descriptions import RobotDescription
 
 SIDES = ("right_side", "left_side")
 
@@ -118,8 +123,8 @@ class SkidSteer(Platform):
     def side_wheels(self, side: str) -> tuple[str, ...]:
         return self.wheel_names[: self.n_right] if side == SIDES[0] else self.wheel_names[self.n_right :]
 
-    def urdf_limits(self, urdf) -> Mapping[str, tuple[float | None, float | None]]:
-        return side_limits(urdf, self.side_wheels(SIDES[0]), self.side_wheels(SIDES[1]))
+    def description_limits(self, description: RobotDescription) -> Mapping[str, tuple[float | None, float | None]]:
+        return side_limits(description, self.side_wheels(SIDES[0]), self.side_wheels(SIDES[1]))
 
     def missing_limit_source(self, name: str, kind: str) -> tuple[str, str]:
         wheels = ", ".join(self.side_wheels(name))
@@ -138,12 +143,14 @@ class SkidSteer(Platform):
         return tuple((name, self.radius) for name in self.wheel_names)
 
 
-def side_limits(urdf, right: Sequence[str], left: Sequence[str]) -> dict[str, tuple[float | None, float | None]]:
-    """A side turns no faster than its slowest wheel and pushes with all its wheels' torque;
-    ``None`` where some wheel of the side has no such URDF limit."""
+def side_limits(
+    description: RobotDescription, right: Sequence[str], left: Sequence[str]
+) -> dict[str, tuple[float | None, float | None]]:
+    """A side turns no faster than its slowest wheel (rad/s) and pushes with all its wheels'
+    torque (N m); ``None`` where some wheel of the side has no such limit in the description."""
     out = {}
     for side, wheels in zip(SIDES, (right, left)):
-        limits = [joint_limits(urdf, name) for name in wheels]
+        limits = [description.limits(name) for name in wheels]
         velocities, efforts = [v for v, _ in limits], [e for _, e in limits]
         out[side] = (
             None if None in velocities else min(velocities),  # type: ignore[type-var]
@@ -177,7 +184,7 @@ class SkidSteerKind(PlatformKind):
     def limit_names(self, wheels) -> tuple[str, ...]:
         return SIDES
 
-    def build(self, wheels: SkidSteerWheels, urdf, model) -> SkidSteer:  # type: ignore[override]
+    def build(self, wheels: SkidSteerWheels, description: RobotDescription, model: pin.Model) -> SkidSteer:  # type: ignore[override]
         geometry = wheel_geometry(model, wheels.joint_names, role="skid-steer wheel")
         right, left = geometry[: len(wheels.right)], geometry[len(wheels.right) :]
         if max(g.center[1] for g in right) >= min(g.center[1] for g in left):
@@ -187,7 +194,7 @@ class SkidSteerKind(PlatformKind):
             )
         radius = wheels.radius
         if radius is None:
-            radii = {g.name: radius_of(urdf, g.name, None) for g in geometry}
+            radii = {g.name: radius_of(description, g.name, None) for g in geometry}
             if max(radii.values()) - min(radii.values()) > 1e-9:
                 raise WheelError(f"skid-steer wheel radii differ ({radii}); set [wheels] radius in the spec")
             radius = next(iter(radii.values()))
@@ -207,7 +214,7 @@ class SkidSteerKind(PlatformKind):
             extent=(float(centres[:, 0].min()), float(centres[:, 0].max())),
         )
 
-    def detect(self, urdf, candidates: Sequence, path: str) -> Detected | None:
+    def detect(self, description: RobotDescription, candidates: Sequence, path: str) -> Detected | None:
         """Four or more lateral wheels on no swivel, at least two on each side of their centroid,
         each side's on one line along x (lateral positions within 5 % of the track).
 
@@ -255,8 +262,10 @@ class SkidSteerKind(PlatformKind):
 
     limits_by_joint = False
 
-    def urdf_limits(self, wheels: SkidSteerWheels, urdf) -> Mapping[str, tuple[float | None, float | None]]:  # type: ignore[override]
-        return side_limits(urdf, wheels.right, wheels.left)
+    def description_limits(  # type: ignore[override]
+        self, wheels: SkidSteerWheels, description: RobotDescription
+    ) -> Mapping[str, tuple[float | None, float | None]]:
+        return side_limits(description, wheels.right, wheels.left)
 
 
 KIND = SkidSteerKind()

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -27,6 +28,9 @@ import pinocchio as pin
 from ..errors import SpecError, WheelError
 from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string
 from .wheels import LATERAL, radius_of, wheel_geometry
+
+if TYPE_CHECKING:
+    from ..descriptions import RobotDescription
 
 
 @dataclass(frozen=True)
@@ -194,7 +198,7 @@ class SteeredKind(PlatformKind):
             rear_radius=table.get("rear_radius"),
         )
 
-    def build(self, wheels: SteeredWheels, urdf, model) -> Steered:  # type: ignore[override]
+    def build(self, wheels: SteeredWheels, description: RobotDescription, model: pin.Model) -> Steered:  # type: ignore[override]
         drive, *rear = wheel_geometry(model, (wheels.drive, *wheels.rear), role="steered-base wheel")
         steer_id = model.getJointId(wheels.steer)
         steer_joint = model.joints[steer_id]
@@ -216,11 +220,11 @@ class SteeredKind(PlatformKind):
             raise WheelError(f"rear wheels {', '.join(wheels.rear)} are not on one axle (x differs: {xs})")
         if abs(drive.center[0] - xs[0]) < 1e-6:
             raise WheelError(f"drive wheel {wheels.drive!r} is on the rear axle; a steered base needs a wheelbase")
-        rear_radii = {g.name: radius_of(urdf, g.name, wheels.rear_radius) for g in rear}
+        rear_radii = {g.name: radius_of(description, g.name, wheels.rear_radius) for g in rear}
         if max(rear_radii.values()) - min(rear_radii.values()) > 1e-9:
             raise WheelError(f"rear wheel radii differ ({rear_radii}); set [wheels] rear_radius in the spec")
         return Steered(
-            radius=radius_of(urdf, wheels.drive, wheels.radius),
+            radius=radius_of(description, wheels.drive, wheels.radius),
             rear_radius=next(iter(rear_radii.values())),
             steer_point=(float(drive.center[0]), float(drive.center[1])),
             rear_x=float(xs[0]),
@@ -238,7 +242,7 @@ class SteeredKind(PlatformKind):
             rear_signs=tuple(g.sign for g in rear),
         )
 
-    def detect(self, urdf, candidates: Sequence, path: str) -> Detected | None:
+    def detect(self, description: RobotDescription, candidates: Sequence, path: str) -> Detected | None:
         """One driven wheel on a vertical steering joint, and free lateral wheels on one axle."""
         steered = [c for c in candidates if c.steering_joint is not None and c.driven]
         rear = [c for c in candidates if c.lateral and not c.carried_by_rotating_joint and not c.driven]

@@ -1,25 +1,21 @@
-"""Wheels as the platform kinds see them: candidates in a URDF, geometry in a loaded model.
+"""Wheels as the platform kinds see them: candidates in a robot's description, geometry in a
+loaded model.
 
-Shared by the wheeled kinds for detection (:func:`wheel_candidates`) and for reading their
-geometry once the Pinocchio model exists (:func:`wheel_geometry`).
+Shared by the wheeled kinds for detection (:func:`wheel_candidates`, from the shapes and tree of
+a :class:`~mobmanip.descriptions.RobotDescription`) and for reading their geometry once the
+Pinocchio model exists (:func:`wheel_geometry`).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from ..descriptions.urdf import (
-    joint_axis,
-    joint_limits,
-    joint_path,
-    wheel_radius,
-    wheel_shape,
-    zero_configuration_placements,
-)
+from ..descriptions import RobotDescription
 from ..errors import WheelError
 from .base import positive_length
 
@@ -31,10 +27,35 @@ LATERAL = 0.99
 WHEEL_NAME = re.compile(r"wheel", re.IGNORECASE)
 
 
-def named_like_wheel(urdf, joint_name: str) -> bool:
+def named_like_wheel(description: RobotDescription, joint_name: str) -> bool:
     """Whether a joint or its child link is named like a wheel (contains "wheel")."""
-    joint = urdf.joint_map[joint_name]
+    joint = description.joints[joint_name]
     return bool(WHEEL_NAME.search(joint.name) or WHEEL_NAME.search(joint.child))
+
+
+def wheel_shape(description: RobotDescription, joint_name: str) -> tuple[str, float] | None:
+    """The wheel shape of a joint's child link: ``("cylinder", r)`` for a cylinder about the
+    joint axis, ``("sphere", r)``, from its collision (preferred) or visual shapes; ``None``
+    when it carries neither (e.g. only meshes). ``r`` in m."""
+    joint = description.joints[joint_name]
+    link = description.links[joint.child]
+    axis = joint.unit_axis
+    for shapes in (link.collisions, link.visuals):
+        for shape in shapes:
+            if shape.kind == "cylinder" and shape.radius is not None:
+                cylinder_axis = shape.origin.rotation[:, 2]
+                if abs(abs(float(cylinder_axis @ axis)) - 1.0) < 1e-6:
+                    return "cylinder", float(shape.radius)
+            elif shape.kind == "sphere" and shape.radius is not None:
+                return "sphere", float(shape.radius)
+    return None
+
+
+def wheel_radius(description: RobotDescription, joint_name: str) -> float | None:
+    """Radius (m) of a wheel from its link's collision (preferred) or visual shapes: a cylinder
+    whose axis is parallel to the joint axis, or a sphere; ``None`` when it carries no such shape."""
+    shape = wheel_shape(description, joint_name)
+    return None if shape is None else shape[1]
 
 
 @dataclass(frozen=True)
@@ -86,26 +107,28 @@ class WheelCandidate:
         return f"{self.describe()}: {size}, {axis}, {driven}{extra}"
 
 
-def wheel_candidates(urdf, exclude=(), radius: float | None = None) -> list[WheelCandidate]:
+def wheel_candidates(
+    description: RobotDescription, exclude: Iterable[str] = (), radius: float | None = None
+) -> list[WheelCandidate]:
     """Every continuous joint with a wheel-shaped child link, or named like a wheel (a mesh
-    wheel: radius ``radius``, unknown without it), in URDF order (``exclude`` left out)."""
-    placements = zero_configuration_placements(urdf)
+    wheel: radius ``radius`` in m, unknown without it), in file order (``exclude`` left out)."""
+    placements = description.zero_configuration_placements()
     exclude = set(exclude)
     out = []
-    for joint in urdf.robot.joints:
+    for joint in description.joints.values():
         if joint.type != "continuous" or joint.name in exclude:
             continue
-        found = wheel_shape(urdf, joint.name)
-        if found is None and not named_like_wheel(urdf, joint.name):
+        found = wheel_shape(description, joint.name)
+        if found is None and not named_like_wheel(description, joint.name):
             continue
         shape, size = found if found is not None else ("mesh", radius)
         pose = placements[joint.name]
-        ancestors = joint_path(urdf, joint.parent)
-        _, effort = joint_limits(urdf, joint.name)
+        ancestors = description.chain(joint.parent)
+        effort = joint.effort_limit
         steering = None
         for above in reversed(ancestors):
             if above.type in ("revolute", "continuous"):
-                axis = placements[above.name][:3, :3] @ joint_axis(above)
+                axis = description.axis_in_root(above.name)
                 if abs(float(axis[2])) >= LATERAL:
                     steering = above.name
                 break
@@ -114,7 +137,7 @@ def wheel_candidates(urdf, exclude=(), radius: float | None = None) -> list[Whee
                 name=joint.name,
                 radius=size,
                 position=pose[:3, 3].copy(),
-                axis=pose[:3, :3] @ joint_axis(joint),
+                axis=pose[:3, :3] @ joint.unit_axis,
                 carried_by_rotating_joint=any(j.type in ("revolute", "continuous") for j in ancestors),
                 driven=effort is not None and effort > 0.0,
                 steering_joint=steering,
@@ -185,15 +208,15 @@ def wheel_geometry(model: pin.Model, names, role: str = "wheel", q: np.ndarray |
     return out
 
 
-def radius_of(urdf, name: str, override: float | None) -> float:
-    """A wheel's radius: the spec's override, else the URDF geometry.
+def radius_of(description: RobotDescription, name: str, override: float | None) -> float:
+    """A wheel's radius (m): the spec's override, else the description's shapes.
 
     Raises:
         WheelError: no override and no cylinder about the axis or sphere in the URDF.
     """
     if override is not None:
         return positive_length(f"[wheels] radius of {name!r}", override)
-    radius = wheel_radius(urdf, name)
+    radius = wheel_radius(description, name)
     if radius is None:
         raise WheelError(
             f"wheel {name!r} has no cylinder about its axis or sphere to read a radius from; "

@@ -1,7 +1,7 @@
 """Self-collision distances of a robot and their configuration gradients (Pinocchio + hpp-fcl).
 
-:class:`SelfCollision` reads the robot's geometry from its URDF (``collision`` elements, or the
-``visual`` ones where a URDF draws links it gives no collision shape, as the paper's robot) on a
+:class:`SelfCollision` reads the robot's geometry from its description (collision shapes, or the
+visual ones where a file draws links it gives no collision shape, as the paper's robot) on a
 model that matches ``robot.model`` joint for joint, and keeps the pairs that can meet:
 
 - geometries on different joints that are not parent and child (adjacent links always touch);
@@ -25,9 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..descriptions.urdf import urdf_text
-from ..errors import ArgumentError, ModelError
-from .model import Robot, locked_joints
+from ..errors import ArgumentError, DescriptionError, ModelError
+from .model import Robot, description_of, locked_joints
 
 #: Default clearance kept between shapes that may meet (m).
 DEFAULT_MARGIN = 0.02
@@ -174,22 +173,16 @@ class SelfCollision:
 
 def _geometry(robot: Robot, source: str) -> pin.GeometryModel:
     """The robot's shapes on a model built like ``robot.model`` (planar root, locked joints)."""
-    spec = robot.spec
-    text = urdf_text(spec.urdf)
-    if text is None:
-        text = spec.urdf.read_text(encoding="utf-8", errors="replace")
-    package_dirs = [str(p) for p in spec.package_dirs]
-    model = pin.buildModelFromXML(text, pin.JointModelPlanar())
-    kinds = {"collision": [pin.GeometryType.COLLISION], "visual": [pin.GeometryType.VISUAL]}.get(
-        source, [pin.GeometryType.COLLISION, pin.GeometryType.VISUAL]
-    )
+    description = description_of(robot)
+    model = description.build_model(pin.JointModelPlanar())
+    kinds = {"collision": ["collision"], "visual": ["visual"]}.get(source, ["collision", "visual"])
     merged = pin.GeometryModel()
     covered: set[str] = set()
     for kind in kinds:
         try:
-            geometry = pin.buildGeomFromUrdfString(model, text, kind, None, package_dirs)
-        except Exception as exc:
-            raise ModelError(f"the {kind.name.lower()} geometry of {robot.name!r} cannot be loaded: {exc}") from None
+            geometry = description.build_geometry(model, kind)
+        except DescriptionError as exc:
+            raise ModelError(f"robot {robot.name!r}: {exc}") from None  # names the file and Pinocchio's reason
         bodies = set()
         for obj in geometry.geometryObjects:
             body = model.frames[obj.parentFrame].name if obj.parentFrame < model.nframes else obj.name
@@ -203,7 +196,7 @@ def _geometry(robot: Robot, source: str) -> pin.GeometryModel:
         if hasattr(shape, "buildConvexRepresentation"):
             shape.buildConvexRepresentation(False)
             obj.geometry = shape.convex
-    locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
+    locked, q_ref = locked_joints(model, robot.spec.reference, keep=set(robot.model.names))
     if locked:
         model, (merged,) = pin.buildReducedModel(model, [merged], locked, q_ref)
     if list(model.names) != list(robot.model.names):

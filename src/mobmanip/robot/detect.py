@@ -1,13 +1,14 @@
-"""Inferring a robot spec from a URDF alone: drive wheels, arms, torso and a TOML to edit.
+"""Inferring a robot spec from a robot file alone: drive wheels, arms, torso and a TOML to edit.
 
-:func:`spec_from_urdf` looks at the URDF's structure and geometry (through yourdfpy) and
+:func:`spec_from_urdf` reads the file once (any registered format, see
+:func:`mobmanip.descriptions.read_description`), looks at its structure and geometry and
 returns a :class:`~mobmanip.robot.spec.RobotSpec` ready for :func:`mobmanip.robot.model.load_robot`;
 :func:`spec_to_toml` writes any spec as a commented TOML file for the user to check and edit.
 
 The rules:
 
 - A *wheel candidate* is a continuous joint whose child link carries a cylinder about the joint
-  axis or a sphere (:func:`mobmanip.descriptions.urdf.wheel_radius`) and that lies on no arm's path
+  axis or a sphere (:func:`mobmanip.platforms.wheels.wheel_radius`) and that lies on no arm's path
   (:func:`mobmanip.platforms.wheels.wheel_candidates`). Each wheeled platform kind of
   :data:`mobmanip.platforms.KINDS` says whether the candidates fit it (its ``detect``): e.g. a
   differential drive is two lateral wheels on no swivel, the right one with the smaller lateral
@@ -35,24 +36,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..descriptions import RobotDescription, check_supported, read_description
 from ..descriptions.resources import (
     EXAMPLE_ROBOT_DATA_PREFIX,
     STRETCH_URDF_PREFIX,
     example_robot_data_share,
     stretch_urdf_dir,
 )
-from ..descriptions.urdf import (
-    MOVING_JOINT_TYPES,
-    check_supported,
-    joint_axis,
-    joint_limits,
-    joint_path,
-    mimic_joints,
-    read_urdf,
-    root_link,
-    zero_configuration_placements,
-)
-from ..errors import FrameNotFoundError, JointNotFoundError, SpecError, UrdfError, WheelError
+from ..errors import FrameNotFoundError, JointNotFoundError, SpecError, WheelError
 from ..platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
 from ..platforms.wheels import WheelCandidate, wheel_candidates
 from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
@@ -94,7 +85,9 @@ class Detection:
     missing: tuple[Missing, ...] = ()
 
 
-def detect_platform(urdf: Any, candidates: Sequence, path: str | Path = "URDF") -> tuple[PlatformKind, Detected | None]:
+def detect_platform(
+    description: RobotDescription, candidates: Sequence, path: str | Path = "URDF"
+) -> tuple[PlatformKind, Detected | None]:
     """The platform kind the wheel candidates fit, and what it found (``None``: fixed).
 
     Every wheeled kind of :data:`mobmanip.platforms.KINDS` is asked; exactly one must fit.
@@ -108,7 +101,7 @@ def detect_platform(urdf: Any, candidates: Sequence, path: str | Path = "URDF") 
         if not kind.takes_wheels:
             continue
         try:
-            detected = kind.detect(urdf, candidates, str(path))
+            detected = kind.detect(description, candidates, str(path))
         except WheelError as exc:
             errors.append(exc)
             continue
@@ -126,20 +119,21 @@ def detect_platform(urdf: Any, candidates: Sequence, path: str | Path = "URDF") 
     return KINDS["fixed"], None
 
 
-def _frame_link(urdf, frame: str, path: str | Path) -> str:
+def _frame_link(description: RobotDescription, frame: str, path: str | Path) -> str:
     """The link whose path from the root carries ``frame`` (a link, or a joint's child link)."""
-    if frame in urdf.link_map:
-        return frame
-    if frame in urdf.joint_map:
-        return urdf.joint_map[frame].child
-    raise FrameNotFoundError(frame, list(urdf.link_map) + list(urdf.joint_map), where=str(path))
+    link = description.frame_link(frame)
+    if link is None:
+        raise FrameNotFoundError(frame, description.frame_names, where=str(path))
+    return link
 
 
-def arm_joints(urdf: Any, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF") -> list[str]:
+def arm_joints(
+    description: RobotDescription, end_effector: str, exclude: Iterable[str] = (), path: str | Path = "URDF"
+) -> list[str]:
     """The actuated joints from the root link to ``end_effector``, root first.
 
     Args:
-        urdf: the parsed URDF.
+        description: the robot file as read.
         end_effector: a link (or joint) name.
         exclude: joints to leave out (the wheels).
         path: the URDF's path, for messages.
@@ -147,9 +141,9 @@ def arm_joints(urdf: Any, end_effector: str, exclude: Iterable[str] = (), path: 
     Raises:
         FrameNotFoundError: unknown frame (the message lists existing frames, closest first).
     """
-    link = _frame_link(urdf, end_effector, path)
+    link = _frame_link(description, end_effector, path)
     exclude = set(exclude)
-    return [j.name for j in joint_path(urdf, link) if j.type in MOVING_JOINT_TYPES and j.name not in exclude]
+    return [j.name for j in description.chain(link) if j.moves and j.name not in exclude]
 
 
 def _arm_name(end_effector: str, k: int, taken: set[str]) -> str:
@@ -159,10 +153,10 @@ def _arm_name(end_effector: str, k: int, taken: set[str]) -> str:
     return name if name not in taken else f"arm{k + 1}"
 
 
-def _mid_range(urdf, name: str) -> float | None:
+def _mid_range(description: RobotDescription, name: str) -> float | None:
     """Mid-range of a joint with finite position limits, else ``None``."""
-    joint = urdf.joint_map[name]
-    limit = joint.limit
+    joint = description.joints[name]
+    limit = joint.limits
     if joint.type == "continuous" or limit is None or limit.lower is None or limit.upper is None:
         return None
     lower, upper = float(limit.lower), float(limit.upper)
@@ -171,20 +165,19 @@ def _mid_range(urdf, name: str) -> float | None:
     return 0.5 * (lower + upper)
 
 
-def _excludes_zero(urdf, name: str) -> bool:
-    joint = urdf.joint_map[name]
-    limit = joint.limit
+def _excludes_zero(description: RobotDescription, name: str) -> bool:
+    joint = description.joints[name]
+    limit = joint.limits
     if joint.type not in ("revolute", "prismatic") or limit is None or limit.lower is None or limit.upper is None:
         return False
     return not (float(limit.lower) <= 0.0 <= float(limit.upper))
 
 
-def _planar(urdf, joints: Iterable[str]) -> bool:
+def _planar(description: RobotDescription, joints: Iterable[str]) -> bool:
     """Whether every joint moves in the horizontal plane (revolute about z, prismatic along x-y)."""
-    placements = zero_configuration_placements(urdf)
     for name in joints:
-        joint = urdf.joint_map[name]
-        axis = placements[name][:3, :3] @ joint_axis(joint)
+        joint = description.joints[name]
+        axis = description.axis_in_root(name)
         vertical = abs(float(axis[2])) >= 1.0 - 1e-9
         if joint.type == "prismatic" and abs(float(axis[2])) > 1e-9:
             return False
@@ -206,10 +199,10 @@ def detect_spec(
     wheel_limits: tuple[float | None, float | None] = (None, None),
     limits: Mapping[str, tuple[float | None, float | None]] | None = None,
 ) -> Detection:
-    """Infer a spec from a URDF; see the module docstring for the rules.
+    """Infer a spec from a robot file; see the module docstring for the rules.
 
     Args:
-        path: the URDF file.
+        path: the robot file (a URDF, or any format :func:`mobmanip.descriptions.read_description` reads).
         end_effectors: one end-effector frame per arm, arm 1 first (link or joint names).
         wheels: the platform's wheel joints (for a differential drive ``(right, left)``), to
             skip wheel detection.
@@ -226,33 +219,36 @@ def detect_spec(
         limits: ``{joint: (velocity, effort)}`` overrides of any active joint's limits.
 
     Raises:
-        UrdfError: unreadable URDF, unsupported construct, or a mimic joint on an arm.
+        UrdfError: unreadable URDF, unsupported construct, or a mimic joint on an arm (for
+            another format, its :class:`~mobmanip.errors.DescriptionError`).
         FrameNotFoundError: unknown end-effector frame.
         JointNotFoundError: an explicit wheel joint that does not exist.
         WheelError: ambiguous or unusable drive wheels.
         SpecError: no end effector, an end effector no joint moves, or an unknown platform.
     """
     path = Path(path)
-    urdf = read_urdf(path)
-    check_supported(urdf, path)
+    description = read_description(path)
+    check_supported(description)
     if platform is not None:
         get_kind(platform)  # an unknown kind is a SpecError listing the known ones
     end_effectors = list(end_effectors)
     if not end_effectors:
         raise SpecError(f"{path}: name at least one end-effector frame")
-    notes: list[str] = [f"platform frame: root link {root_link(urdf, path)!r} (forward = +x, left = +y)"]
+    notes: list[str] = [f"platform frame: root link {description.root_link!r} (forward = +x, left = +y)"]
 
-    on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(urdf, ee, (), path)}
-    candidates = wheel_candidates(urdf, exclude=on_arm_paths, radius=wheel_radius)
+    on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(description, ee, (), path)}
+    candidates = wheel_candidates(description, exclude=on_arm_paths, radius=wheel_radius)
     on_arms = {
-        c.name: on_arm_paths[c.name] for c in wheel_candidates(urdf, radius=wheel_radius) if c.name in on_arm_paths
+        c.name: on_arm_paths[c.name]
+        for c in wheel_candidates(description, radius=wheel_radius)
+        if c.name in on_arm_paths
     }
     how = "wheels" if wheels is not None else ("platform" if platform is not None else "detected")
     wheel_spec: WheelsSpec | None = None
     if wheels is not None:
         for joint in wheels:
-            if joint not in urdf.joint_map:
-                raise JointNotFoundError(joint, urdf.joint_map, where=str(path))
+            if joint not in description.joints:
+                raise JointNotFoundError(joint, description.joints, where=str(path))
         kind = get_kind(platform or "differential_drive")
         given = (kind if kind.takes_wheels else KINDS["differential_drive"]).wheels_from_joints(tuple(wheels))
         if kind.takes_wheels:
@@ -261,14 +257,14 @@ def detect_spec(
         else:
             notes.append(f"platform {kind.name!r}: wheels {', '.join(given.joint_names)} are locked")
     elif platform is None:
-        kind, detected = detect_platform(urdf, candidates, path)
+        kind, detected = detect_platform(description, candidates, path)
         if detected is not None:
             wheel_spec = detected.wheels
             notes.extend(detected.notes)
     else:
         kind = get_kind(platform)
         if kind.takes_wheels:
-            detected = kind.detect(urdf, candidates, str(path))
+            detected = kind.detect(description, candidates, str(path))
             if detected is None:
                 listed = ", ".join(c.describe() for c in candidates) or "none"
                 raise WheelError(
@@ -279,9 +275,9 @@ def detect_spec(
             notes.extend(detected.notes)
     platform = kind.name
     drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
-    considered = explain_wheels(urdf, candidates, drive if kind.takes_wheels else (), on_arms)
+    considered = explain_wheels(description, candidates, drive if kind.takes_wheels else (), on_arms)
     if candidates and how == "detected":
-        considered += platform_reasons(urdf, candidates, str(path))
+        considered += platform_reasons(description, candidates, str(path))
     considered.append(choice_reason(kind.name, how, candidates))
     unmeasured = [c.name for c in candidates if c.radius is None and c.name in drive]
     if wheel_spec is not None and wheel_radius is not None and hasattr(wheel_spec, "radius"):
@@ -291,13 +287,13 @@ def detect_spec(
     extra = [c.name for c in candidates if c.name not in drive]
     if extra and kind.takes_wheels:
         notes.append(f"wheel-like joints that are not platform wheels are locked: {', '.join(extra)}")
-    paths = [arm_joints(urdf, ee, drive, path) for ee in end_effectors]
+    paths = [arm_joints(description, ee, drive, path) for ee in end_effectors]
     counts: dict[str, int] = {}
     for joints in paths:
         for joint in joints:
             counts[joint] = counts.get(joint, 0) + 1
     shared = tuple(j for j in dict.fromkeys(j for p in paths for j in p) if counts[j] > 1)
-    mimics = mimic_joints(urdf)
+    mimics = description.mimics
     arms: list = []
     taken: set[str] = set()
     for k, (ee, joints) in enumerate(zip(end_effectors, paths)):
@@ -309,10 +305,9 @@ def detect_spec(
             )
         for joint in own + shared:
             if joint in mimics:
-                raise UrdfError(
-                    str(path),
+                raise description.error(
                     f"joint {joint!r} on the path to {ee!r} mimics {mimics[joint]!r}; "
-                    "mimic joints cannot be actuated here (pick an end-effector frame before it)",
+                    "mimic joints cannot be actuated here (pick an end-effector frame before it)"
                 )
         arm_name = _arm_name(ee, k, taken)
         taken.add(arm_name)
@@ -323,13 +318,11 @@ def detect_spec(
     active = set(torso_joints) | {j for arm in arms for j in arm.joints}
     if wheel_spec is not None:
         active |= set(wheel_spec.joint_names)
-    for joint in urdf.robot.joints:
-        if joint.type not in MOVING_JOINT_TYPES:
-            continue
-        mid = _mid_range(urdf, joint.name)
+    for joint in description.moving_joints():
+        mid = _mid_range(description, joint.name)
         if joint.name in shared and mid is not None:
             reference[joint.name] = mid  # the torso, locked or home: mid-height
-        elif _excludes_zero(urdf, joint.name) and mid is not None:
+        elif _excludes_zero(description, joint.name) and mid is not None:
             reference[joint.name] = mid
     if shared:
         if torso:
@@ -337,15 +330,17 @@ def detect_spec(
         else:
             notes.append(f"joints shared by several arms are locked at mid-range: {', '.join(shared)}")
     if default_task is None:
-        default_task = "planar" if _planar(urdf, active - drive) else "spatial"
+        default_task = "planar" if _planar(description, active - drive) else "spatial"
 
-    urdf_limits = {j: joint_limits(urdf, j) for j in sorted(active)}
-    urdf_limits.update(kind.urdf_limits(wheel_spec, urdf))
-    wheel_names = set(kind.urdf_limits(wheel_spec, urdf)) | set(wheel_spec.joint_names if wheel_spec else ())
+    urdf_limits = {j: description.limits(j) for j in sorted(active)}
+    urdf_limits.update(kind.description_limits(wheel_spec, description))
+    wheel_names = set(kind.description_limits(wheel_spec, description)) | set(
+        wheel_spec.joint_names if wheel_spec else ()
+    )
     platform_limits = {n: pair for n, pair in urdf_limits.items() if n in wheel_names}
     given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
     spec = RobotSpec(
-        name=name or urdf.robot.name or path.stem,
+        name=name or description.name or path.stem,
         urdf=path.resolve(),
         platform=platform,
         arms=tuple(arms),
@@ -359,7 +354,7 @@ def detect_spec(
     )
     missing = _missing(spec, kind, urdf_limits, unmeasured)
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
-    needed += [name for name, pair in kind.urdf_limits(wheel_spec, urdf).items() if None in pair]
+    needed += [name for name, pair in kind.description_limits(wheel_spec, description).items() if None in pair]
     if needed:
         notes.append(
             f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "

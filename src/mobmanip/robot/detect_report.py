@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-from ..descriptions.urdf import MOVING_JOINT_TYPES, joint_path, root_link
+from ..descriptions import RobotDescription
 from ..errors import WheelError
 from ..platforms import KINDS
 
@@ -31,11 +31,13 @@ def _tool_score(link: str) -> int:
     return 1 if any(w in text for w in HAND_WORDS) else 0
 
 
-def explain_wheels(urdf, candidates: Sequence, drive: Iterable[str], on_arms: Mapping[str, str]) -> list[str]:
+def explain_wheels(
+    description: RobotDescription, candidates: Sequence, drive: Iterable[str], on_arms: Mapping[str, str]
+) -> list[str]:
     """One line per wheel-like joint: what it is and what became of it.
 
     Args:
-        urdf: the parsed URDF.
+        description: the robot file as read.
         candidates: the wheel candidates (off the arms' paths).
         drive: the joints the platform drives.
         on_arms: wheel-like joints on an arm's path -> that arm's end effector.
@@ -55,14 +57,14 @@ def explain_wheels(urdf, candidates: Sequence, drive: Iterable[str], on_arms: Ma
     return lines
 
 
-def platform_reasons(urdf, candidates: Sequence, path: str) -> list[str]:
+def platform_reasons(description: RobotDescription, candidates: Sequence, path: str) -> list[str]:
     """How each wheeled platform kind judges the candidates: fits, does not fit, or ambiguous."""
     lines = []
     for kind in KINDS.values():
         if not kind.takes_wheels:
             continue
         try:
-            found = kind.detect(urdf, candidates, path)
+            found = kind.detect(description, candidates, path)
         except WheelError as exc:
             lines.append(f"{kind.name}: fits ambiguously ({exc})")
             continue
@@ -115,7 +117,7 @@ def missing_message(missing: Sequence[Missing], path: str) -> str:
     )
 
 
-def candidate_frames(urdf, exclude: Iterable[str] = ()) -> list[tuple[str, int, bool, bool]]:
+def candidate_frames(description: RobotDescription, exclude: Iterable[str] = ()) -> list[tuple[str, int, bool, bool]]:
     """Links that could be end effectors: moved by at least one actuated joint (``exclude``,
     the wheels, left out), and a leaf of the tree or named like a tool.
 
@@ -125,19 +127,17 @@ def candidate_frames(urdf, exclude: Iterable[str] = ()) -> list[tuple[str, int, 
         finger, tip...), then other leaves, then inner links so named; deeper chains first.
     """
     exclude = set(exclude)
-    parents = {j.parent for j in urdf.robot.joints}
     rows = []
-    root = root_link(urdf, "URDF")
-    for link in urdf.link_map:
-        if link == root:
+    for link in description.links:
+        if link == description.root_link:
             continue
-        chain = [j for j in joint_path(urdf, link) if j.type in MOVING_JOINT_TYPES]
+        chain = [j for j in description.chain(link) if j.moves]
         if any(j.name in exclude for j in chain):
             continue  # a wheel's own link, or under one
         count = len(chain)
         if count == 0:
             continue
-        leaf = link not in parents
+        leaf = description.is_leaf(link)
         score = _tool_score(link)
         if leaf or score:
             rows.append((link, count, leaf, score))

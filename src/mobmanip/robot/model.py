@@ -23,16 +23,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..descriptions.urdf import (
-    MOVING_JOINT_TYPES,
-    check_supported,
-    joint_limits,
-    link_has_inertia,
-    mimic_joints,
-    read_urdf,
-    subtree_links,
-    urdf_text,
-)
+from ..descriptions import MOVING_JOINT_TYPES, RobotDescription, check_supported, read_description
 from ..errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -40,12 +31,10 @@ from ..errors import (
     LimitError,
     MissingLimitError,
     SpecError,
-    UrdfError,
     WheelError,
     closest_first,
 )
 from ..platforms import LockedPlatform, Platform, get_kind
-from ..support.native_stderr import call_with_large_stack, captured_native_stderr
 from ..support.ranges import (
     JOINT_POSITION,
     MAX_MODEL_DOF,
@@ -96,6 +85,9 @@ class Robot:
         joint_effort_limits: per-joint effort limits by name.
         torso_joint_names: actuated joints shared by all arms, base to tip (may be empty).
         torso_v_indices: their tangent indices in the Pinocchio model.
+        description: the robot file as read (see :mod:`mobmanip.descriptions`), the whole tree
+            before any joint was locked; ``None`` only for a Robot built by hand (then
+            :func:`description_of` reads it from the spec).
     """
 
     spec: RobotSpec
@@ -108,6 +100,7 @@ class Robot:
     wheel_platform: Platform | None = None
     torso_joint_names: tuple[str, ...] = ()
     torso_v_indices: tuple[int, ...] = ()
+    description: RobotDescription | None = field(default=None, repr=False)
     S: np.ndarray = field(init=False, repr=False)
     B: np.ndarray = field(init=False, repr=False)
     Q: np.ndarray = field(init=False, repr=False)
@@ -480,11 +473,11 @@ def _positive_limit(name: str, kind: str, value) -> float:
     return check_limit(name, kind, value)
 
 
-def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
-    """The URDF must be a supported tree, and every joint and frame the spec names must exist
-    in it with a usable type."""
-    check_supported(urdf, spec.urdf)
-    joints, links = urdf.joint_map, urdf.link_map
+def _check_spec_against_description(spec: RobotSpec, description: RobotDescription) -> None:
+    """The robot file must be a supported tree, and every joint and frame the spec names must
+    exist in it with a usable type."""
+    check_supported(description)
+    joints, links = description.joints, description.links
     named_joints = list(spec.active_joint_names)
     missing_joints = [j for j in named_joints if j not in joints]
     missing_frames = [a.end_effector for a in spec.arms if a.end_effector not in links and a.end_effector not in joints]
@@ -502,12 +495,10 @@ def _check_spec_against_urdf(spec: RobotSpec, urdf) -> None:
         for name in spec.wheels.joint_names:
             if joints[name].type == "prismatic":
                 raise WheelError(f"wheel joint {name!r} is prismatic; a wheel must be revolute or continuous")
-    mimics = mimic_joints(urdf)
+    mimics = description.mimics
     for name in named_joints:
         if name in mimics:
-            raise UrdfError(
-                str(spec.urdf), f"joint {name!r} mimics {mimics[name]!r}; mimic joints cannot be actuated here"
-            )
+            raise description.error(f"joint {name!r} mimics {mimics[name]!r}; mimic joints cannot be actuated here")
     active = set(named_joints)
     own = spec.platform_limit_names
     for table, kind in ((spec.velocity_limits, "velocity"), (spec.effort_limits, "effort")):
@@ -542,21 +533,10 @@ def locked_joints(model: pin.Model, reference: Mapping[str, float], keep: set[st
     return locked, q_ref
 
 
-def _build_model(spec: RobotSpec) -> pin.Model:
-    text = urdf_text(spec.urdf)
-    failure: Exception | None = None
-    with captured_native_stderr() as native:
-        try:
-            if text is None:
-                model = call_with_large_stack(pin.buildModelFromUrdf, str(spec.urdf), pin.JointModelPlanar())
-            else:
-                model = call_with_large_stack(pin.buildModelFromXML, text, pin.JointModelPlanar())
-        except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on URDFs it cannot build
-            model, failure = None, exc
-    if model is None or "Error:" in native.text:
-        # urdfdom's own message names the element; Pinocchio's only says the model is invalid.
-        reason = native.first_error() or (str(failure).splitlines() or [type(failure).__name__])[0]
-        raise UrdfError(str(spec.urdf), f"Pinocchio cannot build a model: {reason}")
+def _build_model(spec: RobotSpec, description: RobotDescription) -> pin.Model:
+    """The description's model with a planar root joint, every joint the spec does not keep
+    moving locked at its reference."""
+    model = description.build_model(pin.JointModelPlanar())
     moving = sum(1 for name in spec.active_joint_names if model.existJointName(name))
     if moving > MAX_MODEL_DOF:
         raise SpecError(
@@ -592,9 +572,9 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         MobmanipError: any subclass, naming what is wrong with the spec or URDF.
     """
     spec = spec_or_name if isinstance(spec_or_name, RobotSpec) else find_spec(spec_or_name)
-    urdf = read_urdf(spec.urdf)
-    _check_spec_against_urdf(spec, urdf)
-    model = _build_model(spec)
+    description = read_description(spec.urdf, package_dirs=spec.package_dirs)
+    _check_spec_against_description(spec, description)
+    model = _build_model(spec, description)
     _check_hold(spec, model)
 
     def v_index(name: str, role: str) -> int:
@@ -611,12 +591,12 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
             raise FrameNotFoundError(arm.end_effector, [f.name for f in model.frames], where=spec.name)
         arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, model.getFrameId(arm.end_effector)))
 
-    platform = get_kind(spec.platform).build(spec.wheels, urdf, model)
-    from_urdf = dict(platform.urdf_limits(urdf))
+    platform = get_kind(spec.platform).build(spec.wheels, description, model)
+    from_urdf = dict(platform.description_limits(description))
     velocity: dict[str, float] = {}
     effort: dict[str, float] = {}
     for name in platform.reduced_names + spec.torso + spec.arm_joint_names:
-        vel, eff = from_urdf[name] if name in from_urdf else joint_limits(urdf, name)
+        vel, eff = from_urdf[name] if name in from_urdf else description.limits(name)
         for table, kind, value in ((velocity, "velocity", vel), (effort, "effort", eff)):
             value = (spec.velocity_limits if kind == "velocity" else spec.effort_limits).get(name, value)
             if value is None:
@@ -637,41 +617,53 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         wheel_platform=None if isinstance(platform, LockedPlatform) else platform,
         torso_joint_names=spec.torso,
         torso_v_indices=torso_v,
+        description=description,
     )
-    _check_inertia(robot, urdf)
+    _check_inertia(robot, description)
     _log.info(
         "loaded %s from %s: %s platform, %d arm(s), nx = %d", spec.name, spec.urdf, spec.platform, len(arms), robot.nx
     )
     return robot
 
 
-def _check_inertia(robot: Robot, urdf) -> None:
+def description_of(robot: Robot) -> RobotDescription:
+    """The robot's description: the one it was loaded with, else its spec's file read again.
+
+    Raises:
+        DescriptionError: the file cannot be read (as in :func:`load_robot`).
+    """
+    if robot.description is not None:
+        return robot.description
+    return read_description(robot.spec.urdf, package_dirs=robot.spec.package_dirs)
+
+
+def _check_inertia(robot: Robot, description: RobotDescription) -> None:
     """Every torso and arm joint must move some inertia, or P = S^T M S is singular.
 
     The test is the joint's diagonal entry of M at the home configuration: the mass (prismatic)
     or the moment of inertia about the axis (revolute) of everything the joint carries.
 
     Raises:
-        UrdfError: naming the joint and the links it moves that have no mass or inertia.
+        UrdfError: naming the joint and the links it moves that have no mass or inertia (the
+            error of the description's format: a :class:`~mobmanip.errors.DescriptionError`).
     """
     M = pin.crba(robot.model, robot.data, robot.neutral())
     for name, v in zip(robot.torso_joint_names, robot.torso_v_indices):
-        _require_inertia(robot, urdf, name, M[v, v])
+        _require_inertia(robot, description, name, M[v, v])
     for arm in robot.arms:
         for name, v in zip(arm.joint_names, arm.v_indices):
-            _require_inertia(robot, urdf, name, M[v, v])
+            _require_inertia(robot, description, name, M[v, v])
 
 
-def _require_inertia(robot: Robot, urdf, joint: str, diagonal: float) -> None:
+def _require_inertia(robot: Robot, description: RobotDescription, joint: str, diagonal: float) -> None:
     # Below ~1e-12 (kg or kg m^2) the reduced inertia is numerically singular in double precision
     # next to real links of 1e-3 .. 1e2; real robots' smallest links are far above it.
     if diagonal > 1e-12:
         return
-    links = subtree_links(urdf, joint)
-    empty = [link for link in links if not link_has_inertia(urdf, link)]
+    links = description.subtree_links(joint)
+    empty = [link for link in links if not description.link_has_inertia(link)]
     what = f"links with no mass or inertia: {', '.join(empty)}" if empty else "its links' mass lies on the joint axis"
-    raise UrdfError(
-        str(robot.spec.urdf),
+    raise description.error(
         f"joint {joint!r} moves link {links[0]!r} and what it carries, which have no mass or inertia "
         f"about the joint axis ({what}); give link {links[0]!r} an <inertial> with mass",
     )

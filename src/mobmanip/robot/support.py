@@ -249,21 +249,20 @@ def robot_support(robot: Robot, mu: float | None = None, faces: int | None = Non
 
 
 def _urdf_casters(robot: Robot, data: pin.Data) -> list[tuple[str, np.ndarray]]:
-    """(link name, (x, y) in the root frame) of each caster wheel of the URDF: a link named
-    ``*caster*`` with a sphere or cylinder collision shape, at that shape's centre."""
-    from ..descriptions.urdf import read_urdf
+    """(link name, (x, y) in the root frame) of each caster wheel of the robot's description: a
+    link named ``*caster*`` with a sphere or cylinder collision shape, at that shape's centre."""
+    from .model import description_of
 
-    urdf = read_urdf(robot.spec.urdf)
+    description = description_of(robot)
     model = robot.model
     found = []
-    for name, link in urdf.link_map.items():
+    for name, link in description.links.items():
         if "caster" not in name.lower() or not model.existFrame(name):
             continue
-        shapes = [c for c in link.collisions if c.geometry.sphere is not None or c.geometry.cylinder is not None]
+        shapes = [s for s in link.collisions if s.kind in ("sphere", "cylinder")]
         if not shapes:
             continue
-        origin = np.eye(4) if shapes[0].origin is None else np.asarray(shapes[0].origin, dtype=float)
         frame = data.oMf[model.getFrameId(name)]
-        center = frame.rotation @ origin[:3, 3] + frame.translation
+        center = frame.rotation @ np.asarray(shapes[0].origin.xyz, dtype=float) + frame.translation
         found.append((name, center[:2].copy()))
     return found

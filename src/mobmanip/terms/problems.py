@@ -10,17 +10,26 @@ fast path when nothing else constrains the set.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..errors import ArgumentError, TaskError
 from ..sets.lifted import LiftedPolytope
 from .builder import MeasureTerms
-from .constraints.base import PROBLEMS
+from .constraints.base import PROBLEMS, ConstraintRows
 
 _RANK_RTOL = 1e-10
 
 
-def capacity_polytope(terms: MeasureTerms, problem: str, *, policy: bool = False) -> LiftedPolytope:
+def capacity_polytope(
+    terms: MeasureTerms,
+    problem: str,
+    *,
+    policy: bool = False,
+    task: str | None = None,
+    extra: Sequence[ConstraintRows] = (),
+) -> LiftedPolytope:
     """The set of object velocities (``"velocity"``) or accelerations (``"acceleration"``) that
     satisfy the problem's equations and every constraint of ``terms``.
 
@@ -29,13 +38,18 @@ def capacity_polytope(terms: MeasureTerms, problem: str, *, policy: bool = False
         problem: ``"velocity"`` or ``"acceleration"``.
         policy: the paper's minimum-norm policy (acceleration only): xdot = J_u^+ W^T a and
             h = W^+ (M_o a + g_o) instead of the grasp and object equations.
+        task: the variable whose shadow the set is (default the problem's own: ``v`` or ``a``);
+            e.g. a variable that ``extra`` declares.
+        extra: rows stacked like a constraint's but belonging to the problem's statement, not
+            to its limits (they are not listed among the constraints; :mod:`mobmanip.terms.force`
+            states the force problem with them).
 
     Raises:
         TaskError: the policy at a posture where J_u or W loses row rank.
     """
     if problem not in PROBLEMS:
         raise ArgumentError(f"problem must be one of {sorted(PROBLEMS)}, got {problem!r}")
-    rows = terms.rows(problem)
+    rows = terms.rows(problem) + tuple(extra)
     nx, (mk, m) = terms.J_u.shape[1], (terms.W.shape[1], terms.W.shape[0])
     sizes = {"x": nx, "v": m} if problem == "velocity" else {"xdot": nx, "tau": nx, "h": mk, "a": m}
     lower: dict[str, np.ndarray] = {}
@@ -96,7 +110,10 @@ def capacity_polytope(terms: MeasureTerms, problem: str, *, policy: bool = False
     lo, hi = np.full(n, -np.inf), np.full(n, np.inf)
     for name in lower:
         lo[columns[name]], hi[columns[name]] = lower[name], upper[name]
-    task_columns = np.arange(n)[columns["v" if problem == "velocity" else "a"]]
+    task = task or ("v" if problem == "velocity" else "a")
+    if task not in columns:
+        raise ArgumentError(f"the set's variable {task!r} is not one of the problem's: {sorted(columns)}")
+    task_columns = np.arange(n)[columns[task]]
     model = {
         "problem": problem,
         "policy": "minimum_norm" if policy else "any",

@@ -15,30 +15,34 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
-from xml.etree import ElementTree
-
-from ..descriptions.urdf import urdf_text
-from ..errors import UrdfError
 
 if TYPE_CHECKING:
     import pinocchio as pin
 
+    from ..descriptions import RobotDescription
     from ..robot.model import Robot
 
 
 @dataclass
-class VisualUrdf:
-    """A URDF's text with every drawable mesh given by its resolved absolute path.
+class VisualMeshes:
+    """Which visual meshes of a description the viewer may read.
 
     Attributes:
-        text: the URDF, visuals with disallowed or missing meshes removed.
-        skipped: one note per mesh left out (``mesh 'x.stl' of link 'l': reason``).
+        files: ``(link, mesh file name as written) -> resolved absolute path`` of each mesh
+            inside the package roots.
+        skipped: one note per mesh left out (``mesh 'x.stl' of link 'l' not drawn: reason``).
         meshes: the files the viewer may read, by link.
     """
 
-    text: str
+    files: dict[tuple[str, str], Path] = field(default_factory=dict)
     skipped: list[str] = field(default_factory=list)
     meshes: dict[str, list[Path]] = field(default_factory=dict)
+
+    def resolve(self, link: str, filename: str) -> str | None:
+        """The file to load for a mesh (see :meth:`mobmanip.descriptions.RobotDescription.build_geometry`),
+        or ``None`` to leave it out."""
+        path = self.files.get((link, filename))
+        return None if path is None else str(path)
 
 
 def _inside(path: str, roots: Sequence[str]) -> bool:
@@ -74,90 +78,55 @@ def resolve_mesh(filename: str, urdf_dir: Path, roots: Sequence[Path]) -> tuple[
     return None, f"no such file in the robot's package directories ({roots_text})"
 
 
-def visual_urdf(urdf_path: Path, package_dirs: Sequence[Path]) -> VisualUrdf:
-    """The URDF with each ``<visual>`` mesh resolved by :func:`resolve_mesh` and the visuals whose
-    mesh may not be read removed (noted in ``skipped``). Texture files are dropped the same way.
-
-    Raises:
-        UrdfError: the URDF cannot be read or parsed.
-    """
-    urdf_path = Path(urdf_path)
-    text = urdf_text(urdf_path)
-    try:
-        root = ElementTree.fromstring(text) if text is not None else ElementTree.parse(urdf_path).getroot()
-    except (ElementTree.ParseError, OSError) as exc:
-        raise UrdfError(str(urdf_path), f"cannot read its visuals: {exc}") from exc
-    out = VisualUrdf(text="")
-    urdf_dir = urdf_path.resolve().parent
-    for link in root.iter("link"):
-        name = link.get("name", "?")
-        for visual in list(link.findall("visual")):
-            mesh = visual.find("geometry/mesh")
-            if mesh is None:
+def visual_meshes(description: RobotDescription) -> VisualMeshes:
+    """Each visual mesh of ``description`` resolved by :func:`resolve_mesh` against its package
+    directories (relative paths from the file's folder); those that may not be read are noted
+    in ``skipped``, link by link in file order."""
+    out = VisualMeshes()
+    folder = description.source.resolve().parent
+    for link in description.links.values():
+        for shape in link.visuals:
+            if shape.kind != "mesh":
                 continue
-            filename = mesh.get("filename", "")
-            path, reason = resolve_mesh(filename, urdf_dir, package_dirs)
+            filename = shape.filename or ""
+            path, reason = resolve_mesh(filename, folder, description.package_dirs)
             if path is None:
-                link.remove(visual)
-                out.skipped.append(f"mesh {filename!r} of link {name!r} not drawn: {reason}")
+                out.skipped.append(f"mesh {filename!r} of link {link.name!r} not drawn: {reason}")
             else:
-                mesh.set("filename", str(path))
-                out.meshes.setdefault(name, []).append(path)
-        for collision in list(link.findall("collision")):  # the viewer draws visuals only
-            link.remove(collision)
-    for texture in list(root.iter("texture")):
-        texture.attrib.pop("filename", None)
-    out.text = ElementTree.tostring(root, encoding="unicode")
+                out.files[(link.name, filename)] = path
+                out.meshes.setdefault(link.name, []).append(path)
     return out
-
-
-def strip_meshes(text: str) -> str:
-    """The URDF text without any mesh visual (primitive shapes stay)."""
-    root = ElementTree.fromstring(text)
-    for link in root.iter("link"):
-        for visual in list(link.findall("visual")):
-            if visual.find("geometry/mesh") is not None:
-                link.remove(visual)
-    return ElementTree.tostring(root, encoding="unicode")
 
 
 def visual_model(robot: Robot, notes: list[str] | None = None) -> tuple[pin.Model, pin.GeometryModel]:
     """The visual geometry of ``robot`` on a model that matches ``robot.model`` joint for joint.
 
-    The URDF is built again with the planar root joint and its visual geometry, and both are
-    reduced with the joints the robot locks (those not in ``robot.model.names``) at the spec's
-    reference positions, as :func:`mobmanip.load_robot` does. Meshes are read only from inside
-    the spec's package directories (:mod:`mobmanip.viz.meshes`); those outside, missing or
-    unreadable are left out, with a line appended to ``notes`` for each.
+    The robot's description builds the model again with the planar root joint and its visual
+    geometry, and both are reduced with the joints the robot locks (those not in
+    ``robot.model.names``) at the spec's reference positions, as :func:`mobmanip.load_robot` does.
+    Meshes are read only from inside the spec's package directories (:mod:`mobmanip.viz.meshes`);
+    those outside, missing or unreadable are left out, with a line appended to ``notes`` for each.
 
     Raises:
         ModelError: the reduced model does not match ``robot.model`` (names or sizes differ).
     """
     import pinocchio as pin
 
-    from ..errors import ModelError
-    from ..robot.model import locked_joints
-    from ..support.native_stderr import call_with_large_stack, captured_native_stderr
+    from ..errors import DescriptionError, ModelError
+    from ..robot.model import description_of, locked_joints
 
     spec = robot.spec
     notes = [] if notes is None else notes
-    visual = visual_urdf(spec.urdf, spec.package_dirs)
+    description = description_of(robot)
+    visual = visual_meshes(description)
     notes.extend(visual.skipped)
-    package_dirs = [str(p) for p in spec.package_dirs]
-    model = call_with_large_stack(pin.buildModelFromXML, visual.text, pin.JointModelPlanar())
-    with captured_native_stderr() as native:
-        try:
-            geometry = call_with_large_stack(
-                pin.buildGeomFromUrdfString, model, visual.text, pin.GeometryType.VISUAL, None, package_dirs
-            )
-        except Exception as exc:  # a mesh file Pinocchio cannot load: draw without meshes
-            reason = native.first_error() or (str(exc).splitlines() or [type(exc).__name__])[0]
-            notes.append(f"the meshes of {robot.name!r} could not be loaded ({reason}); drawn without them")
-            geometry = None
-    if geometry is None:
-        geometry = call_with_large_stack(
-            pin.buildGeomFromUrdfString, model, strip_meshes(visual.text), pin.GeometryType.VISUAL
-        )
+    model = description.build_model(pin.JointModelPlanar())
+    try:
+        geometry = description.build_geometry(model, "visual", visual.resolve)
+    except DescriptionError as exc:  # a mesh file Pinocchio cannot load: draw without meshes
+        reason = exc.reason.split(": ", 1)[-1]
+        notes.append(f"the meshes of {robot.name!r} could not be loaded ({reason}); drawn without them")
+        geometry = description.build_geometry(model, "visual", lambda link, filename: None)
     locked, q_ref = locked_joints(model, spec.reference, keep=set(robot.model.names))
     if locked:
         model, (geometry,) = pin.buildReducedModel(model, [geometry], locked, q_ref)

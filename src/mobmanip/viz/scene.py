@@ -93,7 +93,7 @@ from .meshes import visual_model as visual_model
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE
 from .scales import ScaleFactors as ScaleFactors
 from .server import MeshcatServer, ViewerError
-from .shapes import DRAWINGS, MIN_SEMI_AXIS, drawn_ellipsoid, drawn_extent, ellipsoid_frame, translation
+from .shapes import DRAWINGS, MIN_SEMI_AXIS, drawn_ellipsoid, drawn_extent, ellipsoid_frame, line_material, translation
 from .shapes import aligned as aligned  # noqa: F401 - re-exported: the animation tests use it
 from .shapes import ellipsoid_matrix as ellipsoid_matrix
 
@@ -123,6 +123,11 @@ __all__ = [
     "scene_path",
     "visual_model",
 ]
+
+
+#: Where the floor's support polygon and zero-moment point are drawn, and their colour.
+FLOOR_PATH = "mobmanip/floor"
+FLOOR_COLOR = 0x333333
 
 
 def scene_path(name: str, locked: bool = False) -> str:
@@ -190,6 +195,7 @@ def analyze_pair(
     analysis = analyze(robot, q, task, **options)
     if not locked or robot.platform_locked or robot.wheel_platform is None:
         return analysis, None
+    options = {**options, "constraints": ()}  # a locked platform has no floor of its own to honour
     return analysis, analyze(robot.with_platform("fixed"), q, analysis.task, **options)
 
 
@@ -493,10 +499,34 @@ class EllipsoidViewer:
                     self._set_visible(key, False)
             if self._locked_visible != (locked is not None):
                 self.set_locked_visible(locked is not None)
-        self._legend(sets, self._title(analysis))
+            notes = self._draw_floor(sets)
+        self._legend(sets, self._title(analysis), notes)
         if self._camera_serial == 0:
             self.frame_camera(frame)
         self.last = frame
+
+    def _draw_floor(self, sets: Mapping[tuple[bool, str], TaskSet]) -> list[str]:
+        """On the floor: the support polygon (a dark line loop) and the zero-moment point with the
+        object held still (a dot), from the first grounded set drawn; hidden otherwise."""
+        import meshcat.geometry as mg
+
+        from ..analysis.reaches import floor_at_rest
+
+        found = next((f for f in (floor_at_rest(s) for k, s in sets.items() if not k[0]) if f is not None), None)
+        self._vis[FLOOR_PATH].set_property("visible", found is not None)
+        if found is None:
+            return []
+        z = found["floor_z"] + 0.002  # just above the floor grid
+        ring = np.array([[x, y, z] for x, y in found["polygon"]] + [[*found["polygon"][0], z]])
+        self._vis[f"{FLOOR_PATH}/polygon"].set_object(mg.Line(mg.PointsGeometry(ring.T), line_material(FLOOR_COLOR)))
+        zmp = found["zmp"]
+        if zmp is not None:
+            self._vis[f"{FLOOR_PATH}/zmp"].set_object(
+                mg.Sphere(0.015), mg.MeshLambertMaterial(color=FLOOR_COLOR, opacity=1.0)
+            )
+            self._vis[f"{FLOOR_PATH}/zmp"].set_transform(translation([zmp[0], zmp[1], z]))
+            return [f"support polygon (dark line) and zero-moment point at rest (dot): margin {found['margin']:.3f} m"]
+        return ["support polygon (dark line)"]
 
     def _set_visible(self, key: tuple[bool, str], visible: bool) -> None:
         if self._visible[key] != visible:

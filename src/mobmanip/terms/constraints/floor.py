@@ -249,7 +249,7 @@ def ground_reaction(info: dict, forces: np.ndarray) -> dict:
         f = np.zeros(3)
         f[3 - (b - a) :] = forces[a:b]
         normal, tangential = float(f[2]), float(np.hypot(f[0], f[1]))
-        entry = {"normal": normal, "tangential": tangential}
+        entry: dict[str, float | None] = {"normal": normal, "tangential": tangential}
         if contact["driven"] and info["mu"]:
             # |f_t| / (mu f_n); None for an unloaded wheel (it can push nothing along the floor)
             entry["traction_use"] = tangential / (info["mu"] * normal) if normal > 1e-9 else None
