@@ -70,6 +70,7 @@ PUBLIC_MODULES = [
     "mobmanip.viz.sweep_plot",
     "mobmanip.viz.team_figure",
     "mobmanip.robot.support",
+    "mobmanip.robot.support_spec",
     "mobmanip.terms.constraints.base",
     "mobmanip.terms.constraints.joint_limits",
     "mobmanip.terms.problems",

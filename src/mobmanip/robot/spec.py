@@ -53,7 +53,7 @@ from types import MappingProxyType
 from ..descriptions.resources import builtin_robot_names, builtin_robots_dir, resolve_urdf_reference
 from ..errors import LimitError, SpecError, UnknownRobotError
 from ..platforms import KINDS, WheelSpec, WheelsSpec, get_kind
-from .support import SupportSpec, support_spec_from_table
+from .support_spec import SupportSpec, support_spec_from_table
 from .tasks import TASKS
 
 __all__ = ["ArmSpec", "RobotSpec", "WheelSpec", "find_spec", "load_spec", "spec_from_dict"]

@@ -15,16 +15,17 @@ The spec's table (all keys optional)::
     casters = [[0.25, 0.14], ...] # passive supports, [x, y] (on the floor) or [x, y, z] (m, root frame)
     urdf_casters = true           # also take the URDF's caster wheels
 
-:data:`DEFAULT_MU` = 0.5 is a conservative value for rubber wheels on a dry indoor floor
+:data:`~mobmanip.robot.support_spec.DEFAULT_MU` = 0.5 is a conservative value for rubber wheels on a dry indoor floor
 (rubber on concrete is usually quoted at 0.6 to 0.8; a polished or dusty floor is lower).
 A support needs at least three contacts that are not on one line, ``mu >= 0`` and ``faces >= 3``;
-a point above (or below) the floor is an error that names it.
+a point above (or below) the floor is an error that names it. The table itself is read by
+:mod:`mobmanip.robot.support_spec` (the spec reads it before any robot is loaded); its names are
+re-exported here.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -32,82 +33,19 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SpecError
+from .support_spec import (  # noqa: F401  # the spec's [support] table (read before any robot), re-exported
+    DEFAULT_FACES,
+    DEFAULT_MU,
+    SupportSpec,
+    check_faces,
+    check_mu,
+    support_spec_from_table,
+)
 
 if TYPE_CHECKING:
     from .model import Robot
 
-#: Friction coefficient of driven wheels when the spec gives none.
-DEFAULT_MU = 0.5
-#: Faces of the pyramid inscribed in each friction cone (conservative by 1 - cos(pi / faces): 7.6 %).
-DEFAULT_FACES = 8
 _FLOOR_TOL = 1e-6  # m: a contact further than this from the floor plane is an error
-
-
-@dataclass(frozen=True)
-class SupportSpec:
-    """The spec's ``[support]`` table (see the module's docstring).
-
-    Attributes:
-        casters: passive supports in the root frame, (x, y) or (x, y, z) rows (m).
-        mu: friction coefficient of the driven wheels; ``None``: :data:`DEFAULT_MU`.
-        faces: faces of the inscribed friction pyramid.
-        urdf_casters: also take the URDF's caster wheels.
-    """
-
-    casters: tuple[tuple[float, ...], ...] = ()
-    mu: float | None = None
-    faces: int = DEFAULT_FACES
-    urdf_casters: bool = True
-
-    def __post_init__(self):
-        rows = []
-        for k, row in enumerate(self.casters):
-            if not isinstance(row, (list, tuple)) or len(row) not in (2, 3):
-                raise SpecError(f"[support] casters row {k} must be [x, y] or [x, y, z] in metres, got {row!r}")
-            values = []
-            for value in row:
-                if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                    raise SpecError(f"[support] casters row {k} must hold finite metres, got {row!r}")
-                values.append(float(value))
-            rows.append(tuple(values))
-        object.__setattr__(self, "casters", tuple(rows))
-        check_mu(self.mu, "[support] mu")
-        check_faces(self.faces, "[support] faces")
-        if not isinstance(self.urdf_casters, bool):
-            raise SpecError(f"[support] urdf_casters must be true or false, got {self.urdf_casters!r}")
-
-
-def support_spec_from_table(table: object, where: str) -> SupportSpec:
-    """A :class:`SupportSpec` from the spec's ``[support]`` TOML table."""
-    if not isinstance(table, Mapping):
-        raise SpecError(f"{where}: [support] must be a table, got {table!r}")
-    known = {"casters", "mu", "faces", "urdf_casters"}
-    extra = sorted(set(table) - known)
-    if extra:
-        raise SpecError(f"{where}: unknown keys in [support]: {extra}; expected some of {sorted(known)}")
-    casters = table.get("casters", [])
-    if not isinstance(casters, list):
-        raise SpecError(f"{where}: [support] casters must be a list of [x, y] rows, got {casters!r}")
-    return SupportSpec(
-        casters=tuple(casters),
-        mu=table.get("mu"),
-        faces=table.get("faces", DEFAULT_FACES),
-        urdf_casters=table.get("urdf_casters", True),
-    )
-
-
-def check_mu(mu: object, what: str = "mu") -> None:
-    """A friction coefficient: a finite number >= 0 (or ``None``)."""
-    if mu is None:
-        return
-    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not math.isfinite(mu) or mu < 0:
-        raise SpecError(f"{what} must be a finite friction coefficient >= 0, got {mu!r}")
-
-
-def check_faces(faces: object, what: str = "faces") -> None:
-    """Faces of a friction pyramid: an integer from 3 to 64."""
-    if isinstance(faces, bool) or not isinstance(faces, int) or not 3 <= faces <= 64:
-        raise SpecError(f"{what} must be an integer from 3 to 64, got {faces!r}")
 
 
 @dataclass(frozen=True)
@@ -209,8 +147,8 @@ def robot_support(robot: Robot, mu: float | None = None, faces: int | None = Non
 
     Args:
         robot: a robot with a wheeled platform.
-        mu: friction coefficient (default: the spec's, else :data:`DEFAULT_MU`).
-        faces: pyramid faces (default: the spec's, else :data:`DEFAULT_FACES`).
+        mu: friction coefficient (default: the spec's, else :data:`~mobmanip.robot.support_spec.DEFAULT_MU`).
+        faces: pyramid faces (default: the spec's, else :data:`~mobmanip.robot.support_spec.DEFAULT_FACES`).
 
     Raises:
         SpecError: no wheels, fewer than three contacts not on one line, a bad mu.
