@@ -93,3 +93,37 @@ def test_the_viewer_draws_the_support_and_the_zmp_at_rest(tmp_path):
         drawn = scene_objects(view)
         assert {"meshcat/mobmanip/floor/polygon", "meshcat/mobmanip/floor/zmp"} <= set(drawn)
         assert f"margin {found['margin']:.3f} m" in view.inner_text("body")
+
+
+def test_trajectory_ground_reports_the_margin_per_sample(tmp_path):
+    """A robot standing still for a second: every sample's zero-moment point is below the robot's
+    and the object's centre of mass (Pinocchio's centerOfMass), inside the support."""
+    import csv
+
+    import pinocchio as pin
+
+    from mobmanip.motion.trajectory import trajectory_table
+    from mobmanip.robot.support import polygon_margin, robot_support
+
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    t = np.linspace(0.0, 1.0, 11)
+    header, values = trajectory_table(robot, t, np.repeat(q[None], len(t), axis=0))
+    path = tmp_path / "still.csv"
+    with path.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(header)
+        writer.writerows(values.tolist())
+    out = tmp_path / "out"
+    run = _cli("trajectory", "tiago_dual", str(path), "--object-mass", "2", "--ground", "--out", str(out))
+    assert run.returncode == 0, run.stderr
+    doc = json.loads((out / "analysis.json").read_text())
+    data = robot.model.createData()
+    mass = pin.computeTotalMass(robot.model)
+    center = mobmanip.analyze(robot, q, object_mass=2.0).held_object.center
+    both = (mass * pin.centerOfMass(robot.model, data, q) + 2.0 * center) / (mass + 2.0)
+    np.testing.assert_allclose(doc["columns"]["zmp_x"], both[0], atol=1e-9)
+    np.testing.assert_allclose(doc["columns"]["zmp_y"], both[1], atol=1e-9)
+    margin = polygon_margin(robot_support(robot).polygon((0.0, 0.0, 0.0)), both)
+    assert doc["min_stability_margin"] == pytest.approx(margin, abs=1e-9) and margin > 0
+    assert f"smallest stability margin {margin:.4f} m" in run.stdout

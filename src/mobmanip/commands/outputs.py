@@ -25,6 +25,7 @@ from ..support.files import atomic_output, save_figure, write_json
 
 if TYPE_CHECKING:
     from ..motion.carry import CarryResult
+    from ..motion.ground import GroundAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
     from ..robot.model import Robot
@@ -168,17 +169,34 @@ def write_trajectory_csv(
 
 
 def trajectory_outputs(
-    robot: Robot, result: TrajectoryAnalysis, out_dir: str | Path, prefix: str = "analysis"
+    robot: Robot,
+    result: TrajectoryAnalysis,
+    out_dir: str | Path,
+    prefix: str = "analysis",
+    ground: GroundAlong | None = None,
 ) -> list[str]:
     """``{prefix}.csv`` (:meth:`TrajectoryAnalysis.table`), ``{prefix}.json`` and ``{prefix}.png``
-    (:func:`mobmanip.viz.motion_figures.trajectory_figure`) in ``out_dir``; returns the paths."""
+    (:func:`mobmanip.viz.motion_figures.trajectory_figure`) in ``out_dir``; returns the paths.
+    With ``ground`` (:func:`mobmanip.motion.ground.ground_along`), the CSV and JSON also hold the
+    zero-moment point and the stability margin per sample."""
     from ..viz.motion_figures import trajectory_figure
 
     out = Path(out_dir)
     header, values = result.table()
+    document = result.to_dict()
+    if ground is not None:
+        header = [*header, "zmp_x", "zmp_y", "stability_margin"]
+        values = np.hstack([values, ground.zmp, ground.margin[:, None]])
+        document["min_stability_margin"] = float(ground.margin.min())
+        for name, column in (
+            ("zmp_x", ground.zmp[:, 0]),
+            ("zmp_y", ground.zmp[:, 1]),
+            ("stability_margin", ground.margin),
+        ):
+            document["columns"][name] = column.tolist()
     paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
     write_table_csv(paths[0], header, values)
-    write_json(paths[1], result.to_dict())
+    write_json(paths[1], document)
     fig = trajectory_figure(result)
     try:
         save_figure(fig, paths[2], dpi=100)

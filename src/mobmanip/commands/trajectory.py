@@ -41,6 +41,12 @@ def register(sub) -> None:
         action="store_true",
         help="also the exact kinematic polytope's reach along the object's velocity (slower)",
     )
+    parser.add_argument(
+        "--ground",
+        action="store_true",
+        help="also the floor under the motion: the zero-moment point and its margin to the support polygon per "
+        "sample (columns zmp_x, zmp_y, stability_margin; the smallest margin printed)",
+    )
     parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
     parser.add_argument(
         "--export",
@@ -90,8 +96,19 @@ def run(args) -> int:
         print(f"time-scaling margin {s.k_max:.6g} (decided by the {s.limit} limit at sample {s.sample})")
         if s.k_min > 0.0:
             print(f"slowest feasible speed-up {s.k_min:.6g}")
+    ground = None
+    if args.ground:
+        from ..motion.ground import ground_along
+
+        ground = ground_along(robot, trajectory, result.object_acceleration, result.task, object_mass=args.object_mass)
+        k = ground.worst()
+        tipping = " (outside the support: the robot tips)" if ground.margin[k] < 0 else ""
+        print(
+            f"smallest stability margin {ground.margin[k]:.4f} m{tipping} at sample {k} (t = {trajectory.t[k]:g} s), "
+            f"zero-moment point ({ground.zmp[k, 0]:.3f}, {ground.zmp[k, 1]:.3f}) m"
+        )
     if args.out:
-        for path in trajectory_outputs(robot, result, args.out):
+        for path in trajectory_outputs(robot, result, args.out, ground=ground):
             print(f"wrote {path}")
     if args.export:
         from ..viz.trajectory_page import export_trajectory_page

@@ -1,0 +1,114 @@
+"""The floor under a moving robot: where the zero-moment point is at every sample of a motion.
+
+The floor's resultant wrench on the robot and the object it carries is fixed by their momenta,
+whatever share each contact takes: with the robot's centroidal momentum from Pinocchio
+(``d/dt h_G = A_G qdd + dA_G v``, qdd = S xdot + Sdot x) and the object's (m a_o, its rotational
+inertia times its angular acceleration), the floor pushes with
+
+    F = p_dot_robot + p_dot_object - (M + m) g,
+    M_O = k_dot_O,robot + k_dot_O,object - c x M g - c_o x m g          (about the world origin)
+
+and the zero-moment point is where the horizontal part of that moment vanishes, on the floor.
+The robot does not tip while it stays inside the support polygon; its signed distance to the
+polygon's nearest edge (positive inside) is the stability margin. Unlike the contacts' shares,
+these do not depend on how a statically indeterminate support divides the load.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import NumericalError
+from ..robot.model import Robot
+from ..robot.support import Support, polygon_margin, robot_support
+from ..robot.tasks import get_task
+from ..terms.dynamics import placed_end_effectors
+from ..terms.grasp import GRAVITY, HeldObject
+from .trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class GroundAlong:
+    """The floor along a motion.
+
+    Attributes:
+        zmp: the zero-moment point per sample, world x, y (m), (N, 2).
+        margin: its signed distance to the support polygon's nearest edge (m), (N,).
+        normal: the floor's total normal force (N), (N,) (0 or less: the robot leaves the floor).
+        support: the contacts used.
+    """
+
+    zmp: np.ndarray
+    margin: np.ndarray
+    normal: np.ndarray
+    support: Support
+
+    def worst(self) -> int:
+        """The sample with the smallest margin."""
+        return int(np.argmin(self.margin))
+
+
+def ground_along(
+    robot: Robot,
+    trajectory: Trajectory,
+    object_acceleration: np.ndarray,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    support: Support | None = None,
+) -> GroundAlong:
+    """The zero-moment point and stability margin at every sample (see the module's docstring).
+
+    Args:
+        robot: a robot with a wheeled platform.
+        trajectory: the motion.
+        object_acceleration: the object's acceleration in the task's rows per sample, (N, m)
+            (:attr:`mobmanip.motion.trajectory_analysis.TrajectoryAnalysis.object_acceleration`); its
+            rows outside the task are taken as zero (a planar task's object stays level).
+        task: task-space name (default: the spec's).
+        object_mass: the object held between the hands (kg; default: the spec's).
+        support: the contacts (default: the robot's own, :func:`mobmanip.robot.support.robot_support`).
+    """
+    task = get_task(task or robot.spec.default_task)
+    support = robot_support(robot) if support is None else support
+    mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
+    g = np.asarray(GRAVITY, dtype=float)
+    model, data = robot.model, robot.data
+    mass = float(pin.computeTotalMass(model))
+    n = len(trajectory)
+    zmp, margin, normal = np.zeros((n, 2)), np.zeros(n), np.zeros(n)
+    full = np.zeros((n, 6))
+    full[:, list(task.rows)] = np.asarray(object_acceleration, dtype=float)
+    z_floor = support.floor_z
+    for i in range(n):
+        q, x, xdot = trajectory.q[i], trajectory.x[i], trajectory.xdot[i]
+        S = robot.null_space(q)
+        v = S @ x
+        qdd = S @ xdot + robot.null_space_rate(q, x) @ x
+        A_G = pin.computeCentroidalMap(model, data, q)
+        dA_G = pin.computeCentroidalMapTimeVariation(model, data, q, v)
+        c = data.com[0].copy()
+        rate = A_G @ qdd + dA_G @ v  # d/dt of the momentum about the centre of mass
+        pin.framesForwardKinematics(model, data, q)
+        c_o = placed_end_effectors(robot).mean(axis=0)
+        p_o = mass_o * full[i, :3]
+        force = rate[:3] + p_o - (mass + mass_o) * g
+        moment = rate[3:] + np.cross(c, rate[:3]) + np.cross(c_o, p_o)
+        moment -= np.cross(c, mass * g) + np.cross(c_o, mass_o * g)
+        if mass_o > 0.0:
+            moment += HeldObject.between(placed_end_effectors(robot), mass_o).inertia @ full[i, 3:]
+        normal[i] = force[2]
+        if force[2] <= 1e-9:
+            raise NumericalError(
+                f"at sample {i} (t = {trajectory.t[i]:.6g} s) the floor's normal force is {force[2]:.6g} N: "
+                "the motion lifts the whole robot off the floor"
+            )
+        zmp[i] = ((z_floor * force[0] - moment[1]) / force[2], (moment[0] + z_floor * force[1]) / force[2])
+        x0, y0, c0, s0 = q[0], q[1], q[2], q[3]
+        pose = (float(x0), float(y0), math.atan2(float(s0), float(c0)))
+        margin[i] = polygon_margin(support.polygon(pose), zmp[i])
+    return GroundAlong(zmp, margin, normal, support)
