@@ -52,8 +52,8 @@ from ..robot.tasks import get_task
 from ..sets.ellipsoid import Ellipsoid
 from ..sets.polytope import Polytope
 from ..sets.taskset import TaskSet, check_direction
+from ..terms.builder import terms_at
 from ..terms.constraints.base import Constraint, ConstraintRows, Terms
-from ..terms.dynamics import decouple, frame_jacobians, reduced_dynamics_unchecked
 from .members import Member, Team
 
 __all__ = ["LoadSharing", "MemberTerms", "TeamAnalysis", "analyze_team", "member_terms", "ray_radius", "stack_terms"]
@@ -83,24 +83,24 @@ class MemberTerms:
 
 
 def member_terms(team: Team) -> tuple[MemberTerms, ...]:
-    """Each robot's terms, from Pinocchio (the reference path of :mod:`mobmanip.terms.dynamics`)."""
+    """Each robot's terms: its own from :func:`mobmanip.terms.builder.terms_at` (the one builder),
+    its grasping hands' rows of J_u and its blocks of the team's grasp matrix."""
     task = get_task(team.task)
     W = team.held_object.grasp_matrix(task)
     m = task.dim
     out, hand = [], 0
     for member in team.members:
-        robot, q = member.robot, member.robot.check_configuration(member.q)
-        dyn = reduced_dynamics_unchecked(robot, q, None, False)
-        rows = frame_jacobians(robot, q, task).reshape(len(robot.arms), m, -1)
-        J = rows[list(member.arms)].reshape(m * len(member.arms), -1)
+        robot = member.robot
+        own = terms_at(robot, member.q, task.name, object_mass=0.0, decoupled=team.decoupled)
+        rows = own.J_u.reshape(len(robot.arms), m, -1)
         k = len(member.arms)
         out.append(
             MemberTerms(
-                J_u=J @ robot.null_space(q),
+                J_u=rows[list(member.arms)].reshape(m * k, -1),
                 W=W[:, m * hand : m * (hand + k)],
-                P=decouple(robot, dyn.P) if team.decoupled else dyn.P,
-                Q=robot.Q,
-                xi=dyn.xi,
+                P=own.P,
+                Q=own.Q,
+                xi=own.xi,
                 velocity_limits=robot.velocity_limits,
                 effort_limits=robot.effort_limits,
             )
