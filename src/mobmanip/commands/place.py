@@ -27,8 +27,10 @@ a grid around the object (--map-extent, --map-cells) and writes OUT_DIR/map.npz,
 map.png. The map is solved in bands of 3 rows (continuation from neighbouring cells inside a
 band), in this process or, with --dask ADDRESS (tcp://HOST:PORT, or local:N for a local
 cluster), as tasks on Dask's distributed scheduler: the same bands give the same map either way,
-and a band whose worker is lost is run again by Dask. --figure writes the result from above (PNG or SVG); --view serves it in the meshcat
-viewer, --export writes the viewer's scene as a self-contained HTML page.
+and a band whose worker is lost is run again by Dask.
+
+--figure writes the result from above (PNG or SVG); --view serves it in the meshcat viewer,
+--export writes the viewer's scene as a self-contained HTML page.
 
 examples:
   mobmanip place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x

@@ -100,6 +100,7 @@ def dask_executor(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator[cf
                 reason = " ".join(str(exc).split()) or type(exc).__name__
                 if len(reason) > 160:
                     reason = reason[:157] + "..."
-                raise ClusterError(address, f"cannot reach the Dask scheduler within {timeout:g} s ({reason})") from None
+                reason = f"cannot reach the Dask scheduler within {timeout:g} s ({reason})"
+                raise ClusterError(address, reason) from None
         _log.info("dask: %s, %d worker(s)", client.scheduler.address, len(client.scheduler_info()["workers"]))
         yield client.get_executor()
