@@ -121,6 +121,26 @@ def test_sweep_and_map_on_a_cluster_survive_a_killed_worker(cluster, tmp_path):
         assert (tmp_path / "dask_map" / name).read_bytes() == (tmp_path / "serial_map" / name).read_bytes(), name
 
 
+SITE = """robot = "planar_dual_arm"
+objective = "kinematic:capacity:+x"
+starts = 2
+[grid]
+x = [0.0, 2.0, 3]
+y = [0.0, 1.0, 2]
+z = 0.35
+"""
+
+
+def test_site_on_a_cluster_equals_the_serial_run(cluster, tmp_path):
+    address, _ = cluster
+    (tmp_path / "shelf.toml").write_text(SITE)
+    finish(cli(["site", str(tmp_path / "shelf.toml"), "-o", str(tmp_path / "serial"), "--no-progress"]))
+    out = finish(cli(["site", str(tmp_path / "shelf.toml"), "-o", str(tmp_path / "dask"), "--dask", address]))
+    assert "6 of 6 positions placed" in out
+    assert (tmp_path / "dask" / "site.csv").read_bytes() == (tmp_path / "serial" / "site.csv").read_bytes()
+    assert (tmp_path / "dask" / "site.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 @pytest.mark.parametrize("command", [SWEEP, [*PLACE, "--map", "MAP"]])
 def test_an_unreachable_scheduler_is_refused_in_one_line_within_10_s(command, tmp_path):
     started = time.monotonic()

@@ -7,7 +7,10 @@ distributed scheduler: a worker that dies loses no result, because the scheduler
 again on the workers left (up to ``distributed.scheduler.allowed-failures`` times per task).
 
 The workers must be able to import mobmanip (the same version as the client) and, for a robot
-given by spec path, read that path; the commands pass spec paths as absolute paths.
+given by spec path, read that path; the commands pass spec paths as absolute paths. Results equal
+a serial run's bit for bit when the workers run the same NumPy and BLAS with the same thread
+settings (an optimiser amplifies rounding differences): a ``local:N`` cluster's workers keep this
+process's BLAS thread settings (Dask's nanny would otherwise set them to one thread).
 """
 
 from __future__ import annotations
@@ -25,6 +28,10 @@ _log = logging.getLogger(__name__)
 CONNECT_TIMEOUT = 5.0
 #: Most worker processes ``local:N`` starts.
 MAX_LOCAL_WORKERS = 256
+
+
+#: Environment variables that set BLAS's threads.
+_BLAS_THREADS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
 
 
 class ClusterError(MobmanipError):
@@ -89,6 +96,14 @@ def dask_executor(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator[cf
     n = parse_local(address)
     with contextlib.ExitStack() as stack:
         if n is not None:
+            import os
+
+            import dask
+
+            keep = {k: os.environ[k] for k in _BLAS_THREADS if k in os.environ}
+            environ = {k: v for k, v in dask.config.get("distributed.nanny.pre-spawn-environ", {}).items()
+                       if k not in _BLAS_THREADS}  # fmt: skip
+            stack.enter_context(dask.config.set({"distributed.nanny.pre-spawn-environ": {**environ, **keep}}))
             cluster = stack.enter_context(
                 LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
             )
