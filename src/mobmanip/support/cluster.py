@@ -20,7 +20,7 @@ import contextlib
 import logging
 from collections.abc import Iterator
 
-from ..errors import MobmanipError
+from ..errors import ClusterError
 
 _log = logging.getLogger(__name__)
 
@@ -32,18 +32,6 @@ MAX_LOCAL_WORKERS = 256
 
 #: Environment variables that set BLAS's threads.
 _BLAS_THREADS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
-
-
-class ClusterError(MobmanipError):
-    """The Dask scheduler cannot be reached, ``--dask`` is malformed, or Dask is missing.
-
-    Attributes:
-        address: the ``--dask`` value.
-    """
-
-    def __init__(self, address: str, reason: str):
-        self.address = address
-        super().__init__(f"--dask {address}: {reason}")
 
 
 def parse_local(address: str) -> int | None:
