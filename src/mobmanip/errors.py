@@ -228,3 +228,15 @@ class NumericalError(MobmanipError):
 class TeamError(SpecError):
     """A team description (several robots holding one object) is malformed or inconsistent: an
     unknown robot or arm, a duplicate name, a hand too far from its grasp point, ..."""
+
+
+class ClusterError(MobmanipError):
+    """``--dask`` is malformed, its scheduler cannot be reached, or Dask is missing.
+
+    Attributes:
+        address: the ``--dask`` value.
+    """
+
+    def __init__(self, address: str, reason: str):
+        self.address = address
+        super().__init__(f"--dask {address}: {reason}")

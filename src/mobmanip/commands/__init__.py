@@ -1,5 +1,5 @@
 """Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
 
-from . import analyze, carry, init_spec, paper, place, sweep, team, trajectory, view
+from . import analyze, carry, init_spec, paper, place, site, sweep, team, trajectory, view
 
-COMMANDS = (analyze, paper, init_spec, view, sweep, place, trajectory, carry, team)
+COMMANDS = (analyze, paper, init_spec, view, sweep, place, site, trajectory, carry, team)

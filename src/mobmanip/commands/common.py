@@ -219,3 +219,37 @@ def apply_analysis_options(robot, args):
     if args.platform == "fixed":
         robot = robot.with_platform("fixed")
     return robot
+
+
+def add_dask_option(parser) -> None:
+    """--dask ADDRESS: run the command's work on a Dask cluster (or ``local:N``)."""
+    parser.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="run on Dask's distributed scheduler: a scheduler address (tcp://HOST:PORT; its workers must "
+        "import mobmanip) or local:N (a local cluster of N worker processes)",
+    )
+
+
+def robot_for_workers(name: str) -> str:
+    """A robot argument workers on other machines or directories can load: a built-in name as it
+    is, a spec path made absolute."""
+    from pathlib import Path
+
+    path = Path(name)
+    return str(path.resolve()) if path.suffix == ".toml" and path.is_file() else name
+
+
+def cluster_executor(args):
+    """A context giving the Dask executor of ``--dask`` (connected before any work), or None.
+
+    Raises:
+        ClusterError: an unreachable scheduler or a malformed address (one line, exit 2).
+    """
+    import contextlib
+
+    if getattr(args, "dask", None) is None:
+        return contextlib.nullcontext(None)
+    from ..support.cluster import dask_executor
+
+    return dask_executor(args.dask)

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from ..motion.ground import GroundAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
+    from ..placement.site import SiteResult
     from ..robot.model import Robot
     from ..sweep.results import SweepResult
 
@@ -241,3 +242,32 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
     finally:
         _close(fig)
     return [str(p) for p in paths]
+
+
+# ------------------------------------------------------------------------------------------------
+# sites
+
+#: The files ``mobmanip site`` writes in its output directory.
+SITE_FILES = ("site.csv", "site.png")
+
+
+def write_site_csv(result: SiteResult, path: str | Path) -> Path:
+    """One row per object position, in the site's order: the result's columns (numbers as
+    Python's shortest exact ``repr``, empty where there is no placement) and ``reason``, why a
+    position has no placement or no grounded capacity."""
+    path = Path(path)
+    with atomic_output(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow([*result.columns, "reason"])
+        for row, reason in zip(result.table, result.reasons):
+            writer.writerow([*("" if not math.isfinite(v) else repr(float(v)) for v in row), reason])
+    return path
+
+
+def site_outputs(result: SiteResult, out_dir: str | Path) -> list[Path]:
+    """:data:`SITE_FILES` in ``out_dir`` (which must exist): the table and the map figure."""
+    from ..viz.site_figure import plot_site
+
+    out = Path(out_dir)
+    table, figure = (out / name for name in SITE_FILES)
+    return [write_site_csv(result, table), plot_site(result, figure)]

@@ -24,8 +24,13 @@ from its reference posture's (default: free).
 
 --map OUT_DIR also maps the best value over heading and posture at every platform position of
 a grid around the object (--map-extent, --map-cells) and writes OUT_DIR/map.npz, map.csv and
-map.png. --figure writes the result from above (PNG or SVG); --view serves it in the meshcat
-viewer, --export writes the viewer's scene as a self-contained HTML page.
+map.png. The map is solved in bands of 3 rows (continuation from neighbouring cells inside a
+band), in this process or, with --dask ADDRESS (tcp://HOST:PORT, or local:N for a local
+cluster), as tasks on Dask's distributed scheduler: the same bands give the same map either way,
+and a band whose worker is lost is run again by Dask.
+
+--figure writes the result from above (PNG or SVG); --view serves it in the meshcat viewer,
+--export writes the viewer's scene as a self-contained HTML page.
 
 examples:
   mobmanip place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x
@@ -74,6 +79,10 @@ def register(sub) -> None:
         "--map-extent", metavar="XMIN,XMAX,YMIN,YMAX", help="the map's platform positions (default: the arms' reach)"
     )
     parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar for --map")
+    from .common import add_dask_option
+
+    add_dask_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -90,6 +99,18 @@ def _parse_point(text: str):
 
 
 def run(args) -> int:
+    from .common import cluster_executor
+
+    if args.dask is not None:
+        from ..errors import UsageError
+
+        if not args.map:
+            raise UsageError("--dask runs a placement map on a cluster: give --map OUT_DIR too")
+    with cluster_executor(args) as executor:  # connected (or refused) before any work
+        return _run(args, executor)
+
+
+def _run(args, executor) -> int:
     from ..analysis.single import analyze
     from ..placement.optimize import Region, place, placement_document
     from ..postures.named import named_configuration
@@ -154,7 +175,7 @@ def run(args) -> int:
         path = placement_figure(robot, result, args.figure, args.task, object_mass=args.mass, decoupled=args.decoupled)
         print(f"wrote {path}")
     if args.map:
-        _write_map(args, robot, target, result, extent, yaw, collision, reference)
+        _write_map(args, robot, target, result, extent, yaw, collision, reference, executor)
     if args.view or args.export:
         _show(args, robot, result)
     return 0
@@ -214,17 +235,31 @@ def _check_map_options(args):
     return values
 
 
-def _write_map(args, robot, target, result, extent, yaw, collision, reference) -> None:
+def _write_map(args, robot, target, result, extent, yaw, collision, reference, executor) -> None:
     import numpy as np
 
-    from ..placement.maps import default_extent, placement_map
+    from ..placement.map_jobs import MapJob, run_map
+    from ..placement.maps import default_extent
     from ..support.files import output_directory
+    from .common import robot_for_workers
     from .outputs import placement_map_outputs
 
     x0, x1, y0, y1 = extent if extent is not None else default_extent(robot, target)
     xs, ys = np.linspace(x0, x1, args.map_cells), np.linspace(y0, y1, args.map_cells)
-    grid = placement_map(robot, target, args.objective, xs, ys, args.task, object_mass=args.mass,
-                         decoupled=args.decoupled, hold_turn=yaw, collision=collision, reference=reference)  # fmt: skip
+    job = MapJob(
+        robot=robot_for_workers(args.robot),
+        target=(float(target[0]), float(target[1]), float(target[2])),
+        objective=args.objective,
+        x=tuple(float(v) for v in xs),
+        y=tuple(float(v) for v in ys),
+        task=args.task,
+        object_mass=args.mass,
+        decoupled=args.decoupled,
+        reference=None if reference is None else tuple(float(v) for v in reference),
+        hold_turn=yaw,
+        avoid_collision=None if collision is None else collision.margin,
+    )
+    grid = run_map(job, executor, progress=not args.no_progress)
     written = placement_map_outputs(grid, output_directory(args.map, "--map"))
     value, q, _ = grid.best()
     reachable = int(np.sum(~np.isnan(grid.values)))

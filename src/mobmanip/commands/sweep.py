@@ -40,8 +40,11 @@ effort scale [x task axis], the arm joints' positions per angle x distance, sett
 (polar when they are angle and distance; one panel per value of a third varying axis, up to 6;
 further axes at their first value).
 
-From Python, mobmanip.sweep.run_sweep(spec, grid, executor=client.get_executor()) runs the
-same sweep on a dask.distributed cluster (workers load the robot from its name or spec path).
+--dask tcp://HOST:8786 runs the chunks on a running Dask scheduler's workers (they load the robot
+from its name or spec path, and must import mobmanip); --dask local:N starts a local Dask cluster of
+N processes. A worker lost mid-run has its chunks run again elsewhere: the result does not depend
+on where (or how many times) a chunk ran. From Python: mobmanip.sweep.run_sweep(spec, grid,
+executor=client.get_executor()).
 
 examples:
   mobmanip sweep planar_dual_arm --angle 0:360:37 --distance 0.6:1.4:9 \\
@@ -52,7 +55,7 @@ examples:
 
 
 def register(sub) -> None:
-    from .common import add_floor_options, add_measure_option
+    from .common import add_dask_option, add_floor_options, add_measure_option
 
     parser = sub.add_parser(
         "sweep",
@@ -102,6 +105,7 @@ def register(sub) -> None:
     )
     run = parser.add_argument_group("execution and output")
     run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
+    add_dask_option(run)
     run.add_argument("--chunk-size", type=int, default=4096, metavar="N", help="configurations per task")
     run.add_argument("--output", "-o", default="sweep", metavar="OUT", help="output prefix (default: %(default)s)")
     run.add_argument("--no-csv", action="store_true", help="write only OUT.npz")
@@ -140,7 +144,7 @@ def run_command(args) -> int:
     from ..sweep.budget import check_grid
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
     from ..viz.sweep_plot import plot_sweep
-    from .common import floor_constraints, requested_measures
+    from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers
     from .outputs import write_sweep_csv, write_sweep_npz
 
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
@@ -168,8 +172,14 @@ def run_command(args) -> int:
         else:
             q_ref = named_configuration(robot, args.posture)
         reference = robot.configuration_dict(q_ref)["joints"]
+    if args.dask is not None and args.workers is not None:
+        raise UsageError("give either --workers (local processes) or --dask (a Dask cluster), not both")
+    if args.dask is not None:
+        from ..support.cluster import check_address
+
+        check_address(args.dask)
     spec = SweepSpec(
-        robot=args.robot,
+        robot=robot_for_workers(args.robot) if args.dask is not None else args.robot,
         task=args.task,
         platform=args.platform,
         object_mass=args.object_mass,
@@ -197,14 +207,16 @@ def run_command(args) -> int:
         f"sweep {args.robot}: {a} angles x {d} distances x {h} headings = {grid.n_configurations} configurations, "
         f"x {v} velocity x {e} effort scales"
     )
-    result = run_sweep(
-        spec,
-        grid,
-        workers=args.workers,
-        chunk_size=args.chunk_size,
-        progress=not args.no_progress,
-        max_points=args.max_points,
-    )
+    with cluster_executor(args) as executor:  # connected (or refused) before the sweep's work
+        result = run_sweep(
+            spec,
+            grid,
+            executor=executor,
+            workers=args.workers,
+            chunk_size=args.chunk_size,
+            progress=not args.no_progress,
+            max_points=args.max_points,
+        )
     table = result.postures
     if table.method == "ik":
         hold = table.hold  # type: ignore[union-attr]

@@ -1,0 +1,88 @@
+"""``mobmanip site SITE.toml``: the best placement for every object position of a site."""
+
+from __future__ import annotations
+
+import argparse
+
+SITE_HELP = """\
+SITE.toml names the robot, the objective (as mobmanip place) and the object positions, a list
+or a grid:
+
+  robot = "planar_dual_arm"            # built-in name or spec path (relative to SITE.toml)
+  objective = "kinematic:capacity:+x"
+  mass = 1.0                           # optional (kg); also task = "...", starts = 8
+  positions = [[1.0, 0.5, 0.35], [1.5, 0.5, 0.35]]
+  # or instead of positions: [grid] with x, y, z each a value or [start, stop, count]
+  [grounded]                           # optional: capacity on the floor at each optimum
+  mu = 0.5                             # the driven wheels' friction coefficient, or "spec"
+  direction = "+x"                     # straight-line reach (m/s^2) of the dynamic polytope
+
+Each position is solved as `mobmanip place` solves it (same starts: the result does not depend on
+where it runs). OUT_DIR/site.csv has one row per position (object x, y, z, value, platform x, y,
+heading, hold turn, grounded reach, evaluations, the configuration q_0.. and, where a
+position has no placement, the reason); OUT_DIR/site.png shows the positions coloured by value,
+each with its platform position and heading. --dask ADDRESS (tcp://HOST:PORT, or local:N for a
+local cluster) runs the positions on Dask's distributed scheduler; a progress bar counts the
+positions finished across the cluster; a lost worker's positions are run again by Dask.
+
+examples:
+  mobmanip site shelf.toml -o shelf/
+  mobmanip site warehouse.toml -o warehouse/ --dask local:2
+  mobmanip site warehouse.toml -o warehouse/ --dask tcp://scheduler:8786
+"""
+
+
+def register(sub) -> None:
+    from .common import add_dask_option
+
+    parser = sub.add_parser(
+        "site",
+        help="best placement and its value for every object position of a site (list or grid; Dask)",
+        description="Place the robot for every object position of a site and write one table and a map.",
+        epilog=SITE_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("site", metavar="SITE.toml", help="the site file (see below)")
+    parser.add_argument("--output", "-o", default="site", metavar="OUT_DIR", help="output directory (default: site)")
+    parser.add_argument("--positions-per-task", type=int, default=1, metavar="N", help="positions per task (default 1)")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_dask_option(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..errors import UsageError
+    from ..placement.site import Site, run_site
+    from ..support.files import check_output, output_directory
+    from .common import cluster_executor
+    from .outputs import SITE_FILES, site_outputs
+
+    site = Site.read(args.site)
+    if args.positions_per_task < 1:
+        raise UsageError(f"--positions-per-task must be at least 1, got {args.positions_per_task}")
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--output {args.output}: not a directory")
+    for name in SITE_FILES:
+        check_output(out / name)
+    if args.dask is not None:
+        from ..support.cluster import check_address
+
+        check_address(args.dask)
+    print(f"site {args.site}: {len(site.positions)} object positions, robot {Path(site.robot).name}, {site.objective}")
+    with cluster_executor(args) as executor:  # connected (or refused) before any work
+        result = run_site(site, executor, args.positions_per_task, progress=not args.no_progress)
+    values = result.values
+    placed = int(np.isfinite(values).sum())
+    line = f"{placed} of {len(values)} positions placed in {result.seconds:.2f} s"
+    if placed:
+        k = int(np.nanargmax(values))
+        line += f"; best {values[k]:.6g} for the object at ({', '.join(f'{v:g}' for v in site.positions[k])}) m"
+    print(line)
+    written = site_outputs(result, output_directory(args.output, "--output"))
+    print(f"wrote {', '.join(str(path) for path in written)}")
+    return 0

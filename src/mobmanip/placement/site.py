@@ -1,0 +1,307 @@
+"""Sites: the best placement for every object position of a list or grid, on one machine or a cluster.
+
+A site file (TOML) names the robot, the objective and the object positions::
+
+    robot = "planar_dual_arm"            # built-in name or spec path (relative to the site file)
+    objective = "kinematic:capacity:+x"  # as mobmanip place
+    mass = 1.0                           # optional, kg (default: the spec's)
+    task = "planar"                      # optional (default: the spec's)
+    starts = 8                           # optional, starts per position (default 8)
+    positions = [[1.0, 0.5, 0.35], [1.5, 0.5, 0.35]]   # a list of X,Y,Z (m) ...
+
+    [grid]                               # ... or a grid: [start, stop, count] per axis, or a value
+    x = [0.0, 3.0, 4]
+    y = [0.0, 1.0, 2]
+    z = 0.35
+
+    [grounded]                           # optional: the capacity on the floor at each optimum
+    mu = 0.5                             # friction coefficient, or "spec"
+    direction = "+x"                     # signed task axis of the straight-line reach
+
+Each position is :func:`mobmanip.placement.place`'s problem on its own (the same starts, so
+the result does not depend on the order, the worker or a retry); with ``[grounded]`` the
+optimum is analysed with :class:`mobmanip.terms.constraints.floor.Floor` and the
+``dynamic_polytope`` measure, and the straight-line reach (m/s^2) along ``direction`` is recorded.
+Positions run in tasks of ``positions_per_task`` through any :class:`concurrent.futures.Executor`
+(a Dask client's for a cluster) or in this process.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import math
+import time
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ArgumentError, MobmanipError, SpecError
+from ..robot.model import Robot, load_robot
+from .optimize import DEFAULT_STARTS, place
+
+#: Most object positions one site may hold.
+MAX_POSITIONS = 1_000_000
+
+#: Per-position result columns (besides the joints).
+COLUMNS = ("x", "y", "z", "value", "platform_x", "platform_y", "heading_deg", "hold_turn_deg", "grounded_reach",
+           "evaluations")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Site:
+    """A site: the robot, the objective and the object positions.
+
+    Attributes:
+        robot: built-in robot name or spec path (absolute).
+        objective: the objective's text (see :func:`mobmanip.placement.place`).
+        positions: object centres (m, world), (n, 3).
+        mass, task, starts: as :func:`place`'s ``object_mass``, ``task``, ``starts``.
+        mu: the floor's friction coefficient (a number or ``"spec"``) for the grounded capacity;
+            None: not computed.
+        direction: signed task axis of the grounded straight-line reach (e.g. ``"+x"``).
+        grid_shape: (Nx, Ny, Nz) when the positions are a grid (x fastest), else None.
+    """
+
+    robot: str
+    objective: str
+    positions: np.ndarray = field(compare=False)
+    mass: float | None = None
+    task: str | None = None
+    starts: int = DEFAULT_STARTS
+    mu: float | str | None = None
+    direction: str = "+x"
+    grid_shape: tuple[int, int, int] | None = None
+
+    @classmethod
+    def read(cls, path: str | Path) -> Site:
+        """Read and check a site file.
+
+        Raises:
+            SpecError: unreadable, malformed, or with no or too many positions.
+        """
+        path = Path(path)
+        try:
+            document = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+            raise SpecError(f"site file {path}: {exc}") from None
+        return cls.from_document(document, path.parent, str(path))
+
+    @classmethod
+    def from_document(cls, document: Mapping, base: Path = Path("."), where: str = "site") -> Site:
+        """A site from its TOML document (paths relative to ``base``)."""
+        known = {"robot", "objective", "mass", "task", "starts", "positions", "grid", "grounded"}
+        unknown = sorted(set(document) - known)
+        if unknown:
+            raise SpecError(f"{where}: unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+        robot, objective = document.get("robot"), document.get("objective")
+        if not isinstance(robot, str) or not robot:
+            raise SpecError(f"{where}: 'robot' must name a built-in robot or a spec file")
+        if not isinstance(objective, str) or not objective:
+            raise SpecError(f"{where}: 'objective' must be text like \"kinematic:capacity:+x\"")
+        spec_path = base / robot
+        if robot.endswith(".toml") and spec_path.is_file():
+            robot = str(spec_path.resolve())
+        mass = document.get("mass")
+        if mass is not None and (isinstance(mass, bool) or not isinstance(mass, (int, float)) or not mass >= 0):
+            raise SpecError(f"{where}: 'mass' must be a non-negative number of kg, got {mass!r}")
+        starts = document.get("starts", DEFAULT_STARTS)
+        if isinstance(starts, bool) or not isinstance(starts, int) or not 1 <= starts <= 64:
+            raise SpecError(f"{where}: 'starts' must be an integer from 1 to 64, got {starts!r}")
+        task = document.get("task")
+        if task is not None and not isinstance(task, str):
+            raise SpecError(f"{where}: 'task' must be a task space's name, got {task!r}")
+        positions, shape = _positions(document, where)
+        grounded = document.get("grounded")
+        mu, direction = None, "+x"
+        if grounded is not None:
+            if not isinstance(grounded, Mapping) or set(grounded) - {"mu", "direction"}:
+                raise SpecError(f"{where}: [grounded] takes mu and direction")
+            mu = grounded.get("mu", "spec")
+            if mu != "spec" and (isinstance(mu, bool) or not isinstance(mu, (int, float)) or not mu > 0):
+                raise SpecError(f'{where}: [grounded] mu must be a positive number or "spec", got {mu!r}')
+            direction = grounded.get("direction", "+x")
+            if not isinstance(direction, str) or direction[:1] not in "+-" or len(direction) < 2:
+                raise SpecError(f'{where}: [grounded] direction must be a signed task axis like "+x"')
+        return cls(robot, objective, positions, None if mass is None else float(mass), task, starts, mu, direction,
+                   shape)  # fmt: skip
+
+
+def _axis(value, name: str, where: str) -> np.ndarray:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        values = np.array([float(value)])
+    elif isinstance(value, list) and len(value) == 3 and all(isinstance(v, (int, float)) for v in value):
+        start, stop, count = value
+        if isinstance(count, bool) or not isinstance(count, int) or count < 1 or (count == 1 and start != stop):
+            raise SpecError(f"{where}: [grid] {name} = [start, stop, count] needs a whole count >= 1")
+        values = np.linspace(float(start), float(stop), count)
+    else:
+        raise SpecError(f"{where}: [grid] {name} must be a number or [start, stop, count]")
+    if not np.all(np.isfinite(values)):
+        raise SpecError(f"{where}: [grid] {name} must be finite")
+    return values
+
+
+def _positions(document: Mapping, where: str) -> tuple[np.ndarray, tuple[int, int, int] | None]:
+    has_list, has_grid = "positions" in document, "grid" in document
+    if has_list == has_grid:
+        which = "both" if has_list else "neither"
+        raise SpecError(f"{where}: give either 'positions' (a list of [x, y, z]) or a [grid], not {which}")
+    if has_list:
+        raw = document["positions"]
+        try:
+            positions = np.array(raw, dtype=float)
+        except (TypeError, ValueError):
+            positions = np.zeros((0, 0))
+        if positions.ndim != 2 or positions.shape[1] != 3 or positions.shape[0] == 0:
+            raise SpecError(f"{where}: 'positions' must be a non-empty list of [x, y, z] in metres")
+        if not np.all(np.isfinite(positions)):
+            raise SpecError(f"{where}: 'positions' must be finite")
+        shape = None
+    else:
+        grid = document["grid"]
+        if not isinstance(grid, Mapping) or set(grid) != {"x", "y", "z"}:
+            raise SpecError(f"{where}: [grid] needs exactly x, y and z")
+        xs, ys, zs = (_axis(grid[k], k, where) for k in "xyz")
+        if xs.size * ys.size * zs.size > MAX_POSITIONS:
+            raise SpecError(f"{where}: the grid has {xs.size * ys.size * zs.size} positions, more than {MAX_POSITIONS}")
+        Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
+        positions = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+        shape = (xs.size, ys.size, zs.size)
+    if len(positions) > MAX_POSITIONS:
+        raise SpecError(f"{where}: {len(positions)} positions, more than {MAX_POSITIONS}")
+    return positions, shape
+
+
+@dataclass(frozen=True)
+class SiteResult:
+    """The site's per-position results (rows in the site's order; NaN where nothing holds the object).
+
+    Attributes:
+        site: the site.
+        table: :data:`COLUMNS` then one column per configuration entry, (n, len(columns)).
+        columns: the column names.
+        reasons: per position, why it has no placement ("" where it has one).
+        seconds: wall time of the run (s).
+    """
+
+    site: Site
+    table: np.ndarray
+    columns: tuple[str, ...]
+    reasons: tuple[str, ...]
+    seconds: float
+
+    @property
+    def values(self) -> np.ndarray:
+        return self.table[:, self.columns.index("value")]
+
+
+_ROBOTS: dict[str, Robot] = {}
+
+
+def _robot(name: str) -> Robot:
+    if name not in _ROBOTS:
+        _ROBOTS.clear()
+        _ROBOTS[name] = load_robot(name)
+    return _ROBOTS[name]
+
+
+def _grounded_reach(robot: Robot, q: np.ndarray, site: Site) -> float:
+    from ..analysis.single import analyze
+    from ..robot.tasks import get_task
+    from ..terms.constraints.floor import Floor
+
+    task = get_task(site.task or robot.spec.default_task)
+    label = site.direction[1:]
+    if label not in task.labels:
+        raise ArgumentError(
+            f"[grounded] direction {site.direction!r}: task {task.name} has axes {', '.join(task.labels)}"
+        )
+    e = np.zeros(task.dim)
+    e[task.labels.index(label)] = 1.0 if site.direction[0] == "+" else -1.0
+    analysis = analyze(robot, q, task.name, object_mass=site.mass, constraints=(Floor(mu=site.mu),),
+                       measures=("dynamic_polytope",))  # fmt: skip
+    polytope = analysis.measure("dynamic_polytope")
+    reach = getattr(polytope, "straight_line_reach", None)
+    if reach is None:
+        raise ArgumentError("the dynamic polytope of this robot has no straight-line reach")
+    return 0.0 if polytope.empty else float(reach(e))
+
+
+def solve_positions(site: Site, start: int, stop: int) -> tuple[int, np.ndarray, list[str]]:
+    """Rows [start, stop) of the site (a worker task): (start, rows, reasons)."""
+    robot = _robot(site.robot)
+    nq = robot.model.nq
+    rows = np.full((stop - start, len(COLUMNS) + nq), np.nan)
+    reasons = []
+    for k, position in enumerate(site.positions[start:stop]):
+        rows[k, :3] = position
+        try:
+            result = place(robot, position, site.objective, site.task, object_mass=site.mass, starts=site.starts)
+        except MobmanipError as exc:
+            reasons.append(" ".join(str(exc).split()))
+            continue
+        x, y, heading = result.platform
+        grounded = math.nan
+        if site.mu is not None:
+            try:
+                grounded = _grounded_reach(robot, result.q, site)
+            except MobmanipError as exc:
+                reasons.append(f"grounded capacity: {' '.join(str(exc).split())}")
+            else:
+                reasons.append("")
+        else:
+            reasons.append("")
+        values = (result.value, x, y, math.degrees(heading), math.degrees(result.hold_turn), grounded,
+                  result.evaluations)  # fmt: skip
+        rows[k, 3 : len(COLUMNS)] = values
+        rows[k, len(COLUMNS) :] = result.q
+    return start, rows, reasons
+
+
+def run_site(
+    site: Site, executor: cf.Executor | None = None, positions_per_task: int = 1, progress: bool = False
+) -> SiteResult:
+    """Every position's placement, in this process or on ``executor``; the same result either way.
+
+    Raises:
+        ArgumentError: ``positions_per_task`` below 1.
+        MobmanipError: the robot cannot be loaded or the objective is malformed (checked here first).
+    """
+    if isinstance(positions_per_task, bool) or not isinstance(positions_per_task, int) or positions_per_task < 1:
+        raise ArgumentError(f"positions per task must be a positive integer, got {positions_per_task!r}")
+    started = time.perf_counter()
+    robot = load_robot(site.robot)  # fail here, once, on a bad robot
+    from ..gradients.evaluator import Objective
+    from ..robot.tasks import get_task
+
+    # a malformed objective or task fails here, once, not in every task
+    Objective.parse(site.objective, get_task(site.task or robot.spec.default_task))
+    n = len(site.positions)
+    names = tuple(f"q_{k}" for k in range(robot.model.nq))
+    table = np.full((n, len(COLUMNS) + len(names)), np.nan)
+    reasons = [""] * n
+    bounds = [(s, min(s + positions_per_task, n)) for s in range(0, n, positions_per_task)]
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=n, unit="position", disable=not progress, desc=f"site {robot.name}", leave=False)
+
+    def store(start: int, rows: np.ndarray, why: list[str]) -> None:
+        table[start : start + len(rows)] = rows
+        reasons[start : start + len(rows)] = why
+        bar.update(len(rows))
+
+    try:
+        if executor is None:
+            for s, e in bounds:
+                store(*solve_positions(site, s, e))
+        else:
+            futures = [executor.submit(solve_positions, site, s, e) for s, e in bounds]
+            for future in cf.as_completed(futures):
+                store(*future.result())
+    finally:
+        bar.close()
+    return SiteResult(site, table, COLUMNS + names, tuple(reasons), time.perf_counter() - started)

@@ -1,0 +1,59 @@
+"""The site figure: every object position from above, coloured by its best placement's value,
+with a line to the platform position chosen for it and a tick along that platform's heading."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..placement.site import SiteResult
+
+
+def site_figure(result: SiteResult, title: str | None = None) -> Figure:
+    """The figure (see the module's docstring); positions without a placement are grey crosses."""
+    from .figures import plt
+
+    columns = result.columns
+    table = result.table
+    x, y = table[:, columns.index("x")], table[:, columns.index("y")]
+    value = table[:, columns.index("value")]
+    px, py = table[:, columns.index("platform_x")], table[:, columns.index("platform_y")]
+    heading = np.radians(table[:, columns.index("heading_deg")])
+    ok = np.isfinite(value)
+    fig, ax = plt.subplots(figsize=(7.0, 6.0))
+    for k in np.flatnonzero(ok):
+        ax.plot([x[k], px[k]], [y[k], py[k]], color="0.7", lw=0.6, zorder=1)
+    tick = 0.15
+    ax.quiver(px[ok], py[ok], tick * np.cos(heading[ok]), tick * np.sin(heading[ok]), angles="xy", scale_units="xy",
+              scale=1.0, width=0.003, color="0.3", zorder=2)  # fmt: skip
+    points = ax.scatter(x[ok], y[ok], c=value[ok], cmap="viridis", s=36, zorder=3, edgecolors="k", linewidths=0.3)
+    if (~ok).any():
+        ax.scatter(x[~ok], y[~ok], marker="x", color="0.5", s=30, zorder=3, label="no placement")
+        ax.legend(loc="best", fontsize=8)
+    if ok.any():
+        fig.colorbar(points, ax=ax, label=result.site.objective)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    reached = int(ok.sum())
+    ax.set_title(title or f"{Path(result.site.robot).stem}: {reached} of {len(ok)} positions placed "
+                          f"({result.site.objective})", fontsize=10)  # fmt: skip
+    return fig
+
+
+def plot_site(result: SiteResult, path: str | Path, title: str | None = None) -> Path:
+    """Write :func:`site_figure` (PNG or SVG by the file's suffix) atomically; returns the path."""
+    from ..support.files import save_figure
+    from .figures import plt
+
+    fig = site_figure(result, title)
+    try:
+        save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
+    return Path(path)
