@@ -167,3 +167,27 @@ def test_support_errors_name_the_contact_and_the_value():
     fixed = mobmanip.load_robot("ur5")
     with pytest.raises(MobmanipError, match="differential-drive"):
         mobmanip.analyze(fixed, fixed.neutral(), measures=("dynamic_polytope",), constraints=(Floor(),))
+
+
+def test_a_badly_scaled_posture_still_solves():
+    """The paper robot with both arms stretched sideways (where `site` placed it): the warm-started
+    program stalled there ("Not Set") until a cold restart; the reach equals the reference's."""
+    robot = mobmanip.load_robot("planar_dual_arm")
+    q = robot.configuration(
+        (1.0, 2.0, 0.0),
+        {
+            "arm_right_1_joint": -1.5707,
+            "arm_right_3_joint": 2.7e-5,
+            "arm_left_1_joint": -1.5707,
+            "arm_left_3_joint": 2.7e-5,
+        },
+    )
+    analysis = mobmanip.analyze(
+        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+    )
+    problem = build_problem(robot, q, "planar", analysis.held_object, casters=PAPER_CASTERS)
+    P = analysis.measures["dynamic_polytope"]
+    for e in _directions(2):
+        e = e / np.linalg.norm(e)
+        ref = straight_line(problem, e, mode="friction", mu=0.5).value
+        assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6, abs=1e-9)

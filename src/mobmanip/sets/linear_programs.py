@@ -83,6 +83,14 @@ class LinearProgram:
                 )
             h.run()
             status = h.getModelStatus()
+            if status not in (highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible):
+                # a warm start from the last basis can stall on a badly scaled program (the floor's
+                # weights beside radians): once more from scratch, with HiGHS's presolve
+                h.clearSolver()
+                h.setOptionValue("presolve", "on")
+                h.run()
+                h.setOptionValue("presolve", "off")
+                status = h.getModelStatus()
             if status == highspy.HighsModelStatus.kOptimal:
                 solution = h.getSolution()
                 x = np.array(solution.col_value)
