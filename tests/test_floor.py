@@ -173,15 +173,24 @@ def test_a_badly_scaled_posture_still_solves():
     """The paper robot with both arms stretched sideways (where `site` placed it): the warm-started
     program stalled there ("Not Set") until a cold restart; the reach equals the reference's."""
     robot = mobmanip.load_robot("planar_dual_arm")
-    q = robot.configuration(
-        (1.0, 2.0, 0.0),
-        {
-            "arm_right_1_joint": -1.5707,
-            "arm_right_3_joint": 2.7e-5,
-            "arm_left_1_joint": -1.5707,
-            "arm_left_3_joint": 2.7e-5,
-        },
-    )
+    q = np.array(
+        [
+            0.9999963453751275,
+            1.9999999999167972,
+            0.9999999975922588,
+            -6.939367724042154e-05,
+            -1.5707320681565353,
+            -2.0474306146860132e-06,
+            2.6809227779099436e-05,
+            -1.5707320637879132,
+            -2.0656362182882284e-06,
+            2.6832533120518905e-05,
+            1.0,
+            0.0,
+            1.0,
+            0.0,
+        ]
+    )  # place's optimum for an object at (1, 0.5, 0.35), +x
     analysis = mobmanip.analyze(
         robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
     )
