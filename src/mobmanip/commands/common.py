@@ -37,6 +37,17 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
     )
     add_posture_option(parser, "the configuration: a named posture of the spec, platform at the origin")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    add_strict_option(parser)
+
+
+def add_strict_option(parser: argparse.ArgumentParser) -> None:
+    """--strict: refuse the robot file's flaws instead of repairing them."""
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a robot file's flaws (e.g. an inertia no rigid body can have) instead of repairing them "
+        "with a warning (a spec may say strict = true)",
+    )
 
 
 def add_posture_option(parser: argparse.ArgumentParser, what: str) -> None:
@@ -67,10 +78,19 @@ def robot_spec_from_args(args):
     if urdf is None:
         if ee or wheels:
             raise UsageError("--ee and --wheels go with --urdf; a ROBOT spec names its own end effectors and wheels")
-        return find_spec(args.robot)
+        return strict_if_asked(find_spec(args.robot), args)
     if not ee:
         raise UsageError(f"--urdf {urdf} needs at least one --ee FRAME (the end effector of each arm)")
-    return spec_from_urdf(urdf, ee, wheels=None if wheels is None else parse_wheel_list(wheels))
+    return strict_if_asked(spec_from_urdf(urdf, ee, wheels=None if wheels is None else parse_wheel_list(wheels)), args)
+
+
+def strict_if_asked(spec, args):
+    """The spec, made strict when the command line says --strict."""
+    import dataclasses
+
+    if not getattr(args, "strict", False):
+        return spec
+    return dataclasses.replace(spec, strict=True, accepted_repairs=())
 
 
 def load_robot_and_configuration(args):
@@ -109,11 +129,14 @@ def configuration_from_args(robot, args):
 
 
 def print_warnings(analysis, stream=None) -> None:
-    """The analysis's plausibility warnings, one line each, on standard error."""
+    """The analysis's warnings, one line each, on standard error (each once per command: a
+    repair already reported when the robot was loaded is not repeated)."""
     import sys
 
+    from ..support.notices import notice
+
     for text in analysis.warnings:
-        print(f"warning: {text}", file=stream or sys.stderr)
+        notice(text, stream=stream or sys.stderr)
 
 
 def format_matrix(matrix: np.ndarray, indent: str = "  ") -> str:

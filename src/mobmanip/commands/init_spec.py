@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..platforms import KINDS
-from .common import add_urdf_options
+from .common import add_strict_option, add_urdf_options
 
 
 def register(sub) -> None:
@@ -40,6 +40,7 @@ def register(sub) -> None:
         "(NAME hold: the [hold] posture); repeat for several",
     )
     parser.add_argument("--out", metavar="SPEC.toml", help="write here (default: standard output)")
+    add_strict_option(parser)
     given = parser.add_argument_group("values the URDF may lack")
     given.add_argument("--wheel-radius", type=float, metavar="M", help="radius of wheels with mesh geometry (m)")
     given.add_argument(
@@ -88,6 +89,7 @@ def run(args) -> int:
         wheel_radius=args.wheel_radius,
         wheel_limits=(args.wheel_velocity_limit, args.wheel_effort_limit),
         limits=limits,
+        strict=args.strict,
     )
 
     if args.posture:

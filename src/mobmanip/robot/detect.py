@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from ..descriptions import RobotDescription, check_supported, read_description
+from ..descriptions.flaws import refuse
 from ..descriptions.resources import (
     EXAMPLE_ROBOT_DATA_PREFIX,
     STRETCH_URDF_PREFIX,
@@ -198,6 +199,8 @@ def detect_spec(
     wheel_radius: float | None = None,
     wheel_limits: tuple[float | None, float | None] = (None, None),
     limits: Mapping[str, tuple[float | None, float | None]] | None = None,
+    strict: bool = False,
+    read_options: Mapping[str, Any] | None = None,
 ) -> Detection:
     """Infer a spec from a robot file; see the module docstring for the rules.
 
@@ -217,6 +220,11 @@ def detect_spec(
         wheel_limits: ``(velocity, effort)`` for each of the platform's wheel coordinates the
             URDF gives no limit (``None``: leave it to the URDF).
         limits: ``{joint: (velocity, effort)}`` overrides of any active joint's limits.
+        strict: refuse the file's flaws (see :mod:`mobmanip.descriptions.flaws`) and write
+            ``strict = true``; else each is noted (it is repaired, with a warning, at load).
+        read_options: handed to :func:`mobmanip.descriptions.read_description` (e.g. a xacro
+            file's ``xacro_args`` and ``package_dirs``); written into the spec where a spec key
+            holds them.
 
     Raises:
         UrdfError: unreadable URDF, unsupported construct, or a mimic joint on an arm (for
@@ -227,7 +235,9 @@ def detect_spec(
         SpecError: no end effector, an end effector no joint moves, or an unknown platform.
     """
     path = Path(path)
-    description = read_description(path)
+    description = read_description(path, **dict(read_options or {}))
+    if strict:
+        refuse(description.flaws, description.error)
     check_supported(description)
     if platform is not None:
         get_kind(platform)  # an unknown kind is a SpecError listing the known ones
@@ -235,6 +245,11 @@ def detect_spec(
     if not end_effectors:
         raise SpecError(f"{path}: name at least one end-effector frame")
     notes: list[str] = [f"platform frame: root link {description.root_link!r} (forward = +x, left = +y)"]
+    for flaw in description.flaws:
+        notes.append(
+            f"{flaw.subject}: {flaw.problem}; repaired at load by {flaw.repair}, with a warning (list the link in "
+            "accepted_repairs once reviewed, or set strict = true to refuse it)"
+        )
 
     on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(description, ee, (), path)}
     candidates = wheel_candidates(description, exclude=on_arm_paths, radius=wheel_radius)
@@ -351,6 +366,7 @@ def detect_spec(
         velocity_limits=given_v,
         effort_limits=given_e,
         package_dirs=(path.resolve().parent,),
+        strict=strict,
     )
     missing = _missing(spec, kind, urdf_limits, unmeasured)
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
@@ -502,6 +518,10 @@ def spec_to_toml(
         f"platform = {_string(spec.platform)}  # {', '.join(json.dumps(k) for k in KINDS)}",
         f"default_task = {_string(spec.default_task)}  # planar, planar_rigid, translational or spatial",
     ]
+    if spec.strict:
+        out.append("strict = true  # refuse the robot file's flaws instead of repairing them")
+    if spec.accepted_repairs:
+        out.append(f"accepted_repairs = {json.dumps(list(spec.accepted_repairs))}  # repaired without a warning")
     if spec.torso:
         out += ["", "# Actuated joints shared by all arms (after the platform in the reduced velocity).",
                 f"torso = {json.dumps(list(spec.torso))}"]  # fmt: skip

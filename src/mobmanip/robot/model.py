@@ -24,6 +24,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..descriptions import MOVING_JOINT_TYPES, RobotDescription, check_supported, read_description
+from ..descriptions.flaws import refuse
 from ..errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -35,6 +36,7 @@ from ..errors import (
     closest_first,
 )
 from ..platforms import LockedPlatform, Platform, get_kind
+from ..support.notices import notice
 from ..support.ranges import (
     JOINT_POSITION,
     MAX_MODEL_DOF,
@@ -88,6 +90,9 @@ class Robot:
         description: the robot file as read (see :mod:`mobmanip.descriptions`), the whole tree
             before any joint was locked; ``None`` only for a Robot built by hand (then
             :func:`description_of` reads it from the spec).
+        warnings: what was repaired when the robot was loaded, one line per flaw of its file
+            (see :mod:`mobmanip.descriptions.flaws`) that the spec does not list in
+            ``accepted_repairs``; every analysis of the robot carries them.
     """
 
     spec: RobotSpec
@@ -101,6 +106,7 @@ class Robot:
     torso_joint_names: tuple[str, ...] = ()
     torso_v_indices: tuple[int, ...] = ()
     description: RobotDescription | None = field(default=None, repr=False)
+    warnings: tuple[str, ...] = field(default=(), repr=False)
     S: np.ndarray = field(init=False, repr=False)
     B: np.ndarray = field(init=False, repr=False)
     Q: np.ndarray = field(init=False, repr=False)
@@ -565,14 +571,31 @@ def _check_hold(spec: RobotSpec, model: pin.Model) -> None:
             )
 
 
-def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
+def load_robot(spec_or_name: RobotSpec | str | Path, *, strict: bool | None = None) -> Robot:
     """Load a robot from a spec, a built-in name (``"planar_dual_arm"``) or a spec path.
 
+    The robot file's flaws (non-physical inertias) are repaired by the rule of
+    :mod:`mobmanip.descriptions.flaws`, each with one warning (in :attr:`Robot.warnings`, and
+    said to the user through :func:`mobmanip.support.notices.notice`), unless the load is strict.
+
+    Args:
+        spec_or_name: the spec, or a built-in robot's name, or a spec file.
+        strict: refuse the file's flaws instead of repairing them (default: the spec's ``strict``).
+
     Raises:
-        MobmanipError: any subclass, naming what is wrong with the spec or URDF.
+        MobmanipError: any subclass, naming what is wrong with the spec or URDF (under
+            ``strict``, the first flaw, with the way forward).
     """
     spec = spec_or_name if isinstance(spec_or_name, RobotSpec) else find_spec(spec_or_name)
     description = read_description(spec.urdf, package_dirs=spec.package_dirs)
+    if spec.strict if strict is None else strict:
+        refuse(description.flaws, description.error)
+    unknown = [link for link in spec.accepted_repairs if link not in description.links]
+    if unknown:
+        raise SpecError(
+            f"accepted_repairs of {spec.name!r} names link {unknown[0]!r}, which {spec.urdf.name} lacks "
+            f"(closest: {', '.join(closest_first(unknown[0], description.links, 3))})"
+        )
     _check_spec_against_description(spec, description)
     model = _build_model(spec, description)
     _check_hold(spec, model)
@@ -618,8 +641,13 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         torso_joint_names=spec.torso,
         torso_v_indices=torso_v,
         description=description,
+        warnings=tuple(
+            flaw.warning for flaw in description.flaws if getattr(flaw, "link", None) not in spec.accepted_repairs
+        ),
     )
     _check_inertia(robot, description)
+    for text in robot.warnings:
+        notice(text)
     _log.info(
         "loaded %s from %s: %s platform, %d arm(s), nx = %d", spec.name, spec.urdf, spec.platform, len(arms), robot.nx
     )

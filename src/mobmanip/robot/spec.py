@@ -6,6 +6,8 @@ A spec is a small TOML file next to its URDF::
     urdf = "planar_dual_arm.urdf"          # relative to this file, or "example-robot-data:..."
     platform = "differential_drive"        # a kind of mobmanip.platforms.KINDS, e.g. "fixed"
     default_task = "planar"
+    strict = false                          # true: refuse the file's flaws instead of repairing them
+    accepted_repairs = ["antenna_link"]     # links whose repair was reviewed: no warning for them
 
     torso = ["torso_lift_joint"]            # optional: actuated joints shared by all arms
 
@@ -123,6 +125,11 @@ class RobotSpec:
         package_dirs: directories where ``package://`` mesh URIs are resolved.
         source: the spec file this came from, if any.
         support: the ``[support]`` table: passive supports, friction (see :mod:`mobmanip.robot.support`).
+        strict: refuse the robot file's flaws (non-physical inertias, see
+            :mod:`mobmanip.descriptions.flaws`) instead of repairing them with a warning.
+        accepted_repairs: links whose flaws the spec's author has reviewed: they are repaired
+            without a warning (MuJoCo's ``balanceinertia="true"`` in a model says the same).
+            A strict spec accepts none.
     """
 
     name: str
@@ -142,6 +149,8 @@ class RobotSpec:
     package_dirs: tuple[Path, ...] = ()
     source: Path | None = None
     support: SupportSpec | None = None
+    strict: bool = False
+    accepted_repairs: tuple[str, ...] = ()
 
     def __post_init__(self):
         kind = get_kind(self.platform)
@@ -151,6 +160,17 @@ class RobotSpec:
             raise _wheels_not_taken(self.name, self.platform)
         if not self.arms:
             raise SpecError(f"robot {self.name!r} has no arms")
+        if not isinstance(self.strict, bool):
+            raise SpecError(f"robot {self.name!r}: strict must be true or false, got {self.strict!r}")
+        accepted = tuple(self.accepted_repairs)
+        if not all(isinstance(link, str) for link in accepted):
+            raise SpecError(f"robot {self.name!r}: accepted_repairs must be link names, got {list(accepted)!r}")
+        if accepted and self.strict:
+            raise SpecError(
+                f"robot {self.name!r}: strict = true refuses every repair, so accepted_repairs "
+                f"({', '.join(accepted)}) contradicts it; remove one"
+            )
+        object.__setattr__(self, "accepted_repairs", accepted)
         if self.default_task not in TASKS:
             raise SpecError(f"unknown default_task {self.default_task!r}; expected one of {', '.join(TASKS)}")
         names = [a.name for a in self.arms]
@@ -292,7 +312,8 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
     """Build a :class:`RobotSpec` from parsed TOML; ``base_dir`` anchors a relative URDF path."""
     where = str(source) if source else "spec"
     known = set(
-        "name urdf platform default_task wheels torso arms object limits reference hold postures support".split()
+        "name urdf platform default_task strict accepted_repairs wheels torso arms object limits reference hold "
+        "postures support".split()
     )
     unknown = sorted(set(data) - known)
     if unknown:
@@ -355,6 +376,8 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
         postures=_optional(data, "postures", dict, where, {}),
         grasp_offsets=tuple(grasp_offsets),
         support=support_spec_from_table(data["support"], where) if "support" in data else None,
+        strict=_optional(data, "strict", bool, where, False),
+        accepted_repairs=tuple(_optional(data, "accepted_repairs", list, where, [])),
         package_dirs=package_dirs,
         source=source,
     )
