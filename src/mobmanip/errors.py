@@ -68,6 +68,13 @@ class UrdfError(DescriptionError):
     label = "URDF"
 
 
+class XacroError(DescriptionError):
+    """A xacro file that cannot be expanded: missing, malformed, an argument without a value or a
+    ``$(find PKG)`` package found nowhere (the message names it and the option that supplies it)."""
+
+    label = "xacro"
+
+
 class UnknownFormatError(DescriptionError):
     """A robot file whose suffix no registered description format reads; lists the known suffixes."""
 

@@ -235,7 +235,8 @@ def detect_spec(
         SpecError: no end effector, an end effector no joint moves, or an unknown platform.
     """
     path = Path(path)
-    description = read_description(path, **dict(read_options or {}))
+    read_options = dict(read_options or {})
+    description = read_description(path, **read_options)
     if strict:
         refuse(description.flaws, description.error)
     check_supported(description)
@@ -367,6 +368,8 @@ def detect_spec(
         effort_limits=given_e,
         package_dirs=(path.resolve().parent,),
         strict=strict,
+        xacro_args=read_options.get("xacro_args") or {},
+        package_paths=tuple(Path(p).resolve() for p in read_options.get("package_paths") or ()),
     )
     missing = _missing(spec, kind, urdf_limits, unmeasured)
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
@@ -490,6 +493,17 @@ def _urdf_reference(urdf: Path, base_dir: Path | None) -> str:
     return urdf.as_posix()
 
 
+def _folder_reference(folder: Path, base_dir: Path | None) -> str:
+    """A folder as the spec names it: relative to ``base_dir`` when given, else absolute."""
+    folder = Path(folder).resolve()
+    if base_dir is not None:
+        try:
+            return Path(os.path.relpath(folder, Path(base_dir).resolve())).as_posix()
+        except ValueError:  # another drive on Windows
+            pass
+    return folder.as_posix()
+
+
 def spec_to_toml(
     spec: RobotSpec,
     base_dir: str | Path | None = None,
@@ -522,6 +536,10 @@ def spec_to_toml(
         out.append("strict = true  # refuse the robot file's flaws instead of repairing them")
     if spec.accepted_repairs:
         out.append(f"accepted_repairs = {json.dumps(list(spec.accepted_repairs))}  # repaired without a warning")
+    if spec.package_paths:
+        folders = [_folder_reference(p, None if base_dir is None else Path(base_dir)) for p in spec.package_paths]
+        out.append(f"package_paths = {json.dumps(folders)}  # where $(find PKG) and package:// look first")
+
     if spec.torso:
         out += ["", "# Actuated joints shared by all arms (after the platform in the reduced velocity).",
                 f"torso = {json.dumps(list(spec.torso))}"]  # fmt: skip
@@ -585,4 +603,7 @@ def spec_to_toml(
     for posture, joints in spec.postures.items():
         out += ["", f"# Posture {posture!r} (`--posture {posture}`).", f"[postures.{_key(posture)}]"]
         out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
+    if spec.xacro_args:
+        out += ["", "# The xacro file's $(arg NAME) values.", "[xacro_args]"]
+        out += [f"{_key(name)} = {_string(value)}" for name, value in spec.xacro_args.items()]
     return "\n".join(out) + "\n"

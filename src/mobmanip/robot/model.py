@@ -587,7 +587,7 @@ def load_robot(spec_or_name: RobotSpec | str | Path, *, strict: bool | None = No
             ``strict``, the first flaw, with the way forward).
     """
     spec = spec_or_name if isinstance(spec_or_name, RobotSpec) else find_spec(spec_or_name)
-    description = read_description(spec.urdf, package_dirs=spec.package_dirs)
+    description = read_description(spec.urdf, **spec.read_options)
     if spec.strict if strict is None else strict:
         refuse(description.flaws, description.error)
     unknown = [link for link in spec.accepted_repairs if link not in description.links]
@@ -662,7 +662,7 @@ def description_of(robot: Robot) -> RobotDescription:
     """
     if robot.description is not None:
         return robot.description
-    return read_description(robot.spec.urdf, package_dirs=robot.spec.package_dirs)
+    return read_description(robot.spec.urdf, **robot.spec.read_options)
 
 
 def _check_inertia(robot: Robot, description: RobotDescription) -> None:
