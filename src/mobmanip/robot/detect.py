@@ -47,6 +47,7 @@ from ..descriptions.resources import (
 from ..errors import FrameNotFoundError, JointNotFoundError, SpecError, WheelError
 from ..platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
 from ..platforms.wheels import WheelCandidate, wheel_candidates
+from ..support.toml import toml_array, toml_comment, toml_key, toml_string
 from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
 from .spec import ArmSpec, RobotSpec
 
@@ -458,15 +459,13 @@ def parse_wheel_list(text: str) -> tuple[str, ...]:
 
 # ----- writing a spec as TOML -----
 
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
 
 def _key(name: str) -> str:
-    return name if _BARE_KEY.match(name) else json.dumps(name)
+    return toml_key(name)
 
 
 def _string(value: str) -> str:
-    return json.dumps(value)  # a JSON string is a valid TOML basic string
+    return toml_string(value)
 
 
 def _number(value: float) -> str:
@@ -524,8 +523,9 @@ def spec_to_toml(
         shared_joints: joints shared by several arms; when they are not the torso, a commented
             ``torso = [...]`` line shows how to actuate them.
     """
-    out = [f"# mobmanip robot spec for {spec.name!r}, inferred from its URDF; check it and edit as needed."]
-    out += [f"# {note}" for note in notes]
+    head = f"# mobmanip robot spec for {spec.name!r}, inferred from its robot file; check it and edit as needed."
+    out = [toml_comment(head)]
+    out += [toml_comment(f"# {note}") for note in notes]
     out += [
         f"name = {_string(spec.name)}",
         f"urdf = {_string(_urdf_reference(spec.urdf, None if base_dir is None else Path(base_dir)))}",
@@ -535,17 +535,17 @@ def spec_to_toml(
     if spec.strict:
         out.append("strict = true  # refuse the robot file's flaws instead of repairing them")
     if spec.accepted_repairs:
-        out.append(f"accepted_repairs = {json.dumps(list(spec.accepted_repairs))}  # repaired without a warning")
+        out.append(f"accepted_repairs = {toml_array(spec.accepted_repairs)}  # repaired without a warning")
     if spec.package_paths:
         folders = [_folder_reference(p, None if base_dir is None else Path(base_dir)) for p in spec.package_paths]
-        out.append(f"package_paths = {json.dumps(folders)}  # where $(find PKG) and package:// look first")
+        out.append(f"package_paths = {toml_array(folders)}  # where $(find PKG) and package:// look first")
 
     if spec.torso:
         out += ["", "# Actuated joints shared by all arms (after the platform in the reduced velocity).",
-                f"torso = {json.dumps(list(spec.torso))}"]  # fmt: skip
+                f"torso = {toml_array(spec.torso)}"]  # fmt: skip
     elif shared_joints:
         out += ["", "# Joints shared by the arms are locked (see [reference]); to actuate them:",
-                f"# torso = {json.dumps(list(shared_joints))}"]  # fmt: skip
+                f"# torso = {toml_array(shared_joints)}"]  # fmt: skip
     kind = get_kind(spec.platform)
     if spec.wheels is not None:
         out += ["", *kind.toml_lines(spec.wheels)]
@@ -554,7 +554,7 @@ def spec_to_toml(
         out += [
             "[[arms]]",
             f"name = {_string(arm.name)}",
-            f"joints = {json.dumps(list(arm.joints))}",
+            f"joints = {toml_array(arm.joints)}",
             f"end_effector = {_string(arm.end_effector)}",
             "",
         ]
@@ -601,7 +601,7 @@ def spec_to_toml(
     else:
         out += ["# [hold]", f"# {_key(first)} = 0.0"]
     for posture, joints in spec.postures.items():
-        out += ["", f"# Posture {posture!r} (`--posture {posture}`).", f"[postures.{_key(posture)}]"]
+        out += ["", toml_comment(f"# Posture {posture!r} (`--posture {posture}`)."), f"[postures.{_key(posture)}]"]
         out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
     if spec.xacro_args:
         out += ["", "# The xacro file's $(arg NAME) values.", "[xacro_args]"]
