@@ -87,6 +87,16 @@ class UnknownFormatError(DescriptionError):
         )
 
 
+class RecordingError(MobmanipError):
+    """A recording (a ROS bag) that cannot be read as a trajectory: missing, unreadable, a topic
+    missing or of another message type, too little data. Carries the ``path`` and the ``reason``."""
+
+    def __init__(self, path: str, reason: str):
+        self.path = path
+        self.reason = reason
+        super().__init__(f"recording {path}: {reason}")
+
+
 class NameNotFoundError(MobmanipError):
     """A joint or frame name does not exist; lists the names that do (closest first)."""
 
