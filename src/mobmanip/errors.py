@@ -75,6 +75,13 @@ class XacroError(DescriptionError):
     label = "xacro"
 
 
+class MjcfError(DescriptionError):
+    """An MJCF (MuJoCo) file that cannot be read, or that uses what mobmanip cannot model (a ball
+    joint, several robots under ``<worldbody>``), naming it."""
+
+    label = "MJCF"
+
+
 class UnknownFormatError(DescriptionError):
     """A robot file whose suffix no registered description format reads; lists the known suffixes."""
 

@@ -1,13 +1,14 @@
 """Robot files at the edge: where they live, which format reads them, and the one neutral
 description every layer above works from.
 
-:func:`read_description` reads a robot file (URDF, xacro; a format is one module and one
+:func:`read_description` reads a robot file (URDF, xacro, MJCF; a format is one module and one
 :func:`register_format` line) into a :class:`RobotDescription`: links, joints, shapes and the
 text for Pinocchio's builders, checked once. :mod:`mobmanip.descriptions.resources` says where
 the built-in and packaged robots live.
 """
 
 from . import (
+    mjcf,  # noqa: F401  (registers the MJCF format)
     urdf,  # noqa: F401  (registers the URDF format)
     xacro,  # noqa: F401  (registers the xacro format)
 )
@@ -35,6 +36,7 @@ from .formats import (
     register_format,
     unregister_format,
 )
+from .mjcf import MjcfBuilder, read_mjcf
 from .urdf import UrdfBuilder, read_urdf, urdf_description
 from .xacro import expand_xacro, find_package, read_xacro
 
@@ -52,6 +54,7 @@ __all__ = [
     "JointLimits",
     "LinkDescription",
     "Mimic",
+    "MjcfBuilder",
     "ModelBuilder",
     "Origin",
     "RobotDescription",
@@ -65,6 +68,7 @@ __all__ = [
     "formats",
     "known_suffixes",
     "read_description",
+    "read_mjcf",
     "read_urdf",
     "read_xacro",
     "register_format",

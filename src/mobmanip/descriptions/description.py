@@ -339,6 +339,12 @@ class RobotDescription:
         flaws: what the file gets wrong that a stated rule repairs (non-physical inertias, see
             :mod:`mobmanip.descriptions.flaws`), in file order; :meth:`build_model` applies the
             repairs, a strict load refuses them.
+        notes: what the format's reader skipped or approximated (e.g. an MJCF file's tendons),
+            one line each; ``init-spec`` writes them into the spec's comments.
+        planar_base: the joints with which the file itself moves its root link in the plane
+            (along x, along y, about z, in that order; e.g. an MJCF mobile base), taken out of
+            the tree: the platform's own coordinates replace them (an ``omnidirectional``
+            platform, with these joints' limits); empty when the file has none.
     """
 
     name: str
@@ -350,6 +356,8 @@ class RobotDescription:
     package_dirs: tuple[Path, ...]
     builder: ModelBuilder = field(compare=False, repr=False)
     flaws: tuple[Flaw, ...] = field(default=(), compare=False, repr=False)
+    notes: tuple[str, ...] = field(default=(), compare=False, repr=False)
+    planar_base: tuple[JointDescription, ...] = field(default=(), compare=False, repr=False)
 
     # ----- the tree -----
 

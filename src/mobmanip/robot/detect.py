@@ -46,6 +46,7 @@ from ..descriptions.resources import (
 )
 from ..errors import FrameNotFoundError, JointNotFoundError, SpecError, WheelError
 from ..platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
+from ..platforms.omnidirectional import OMNI_COORDINATES
 from ..platforms.wheels import WheelCandidate, wheel_candidates
 from ..support.toml import toml_array, toml_comment, toml_key, toml_string
 from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
@@ -273,6 +274,10 @@ def detect_spec(
             notes.append(f"{kind.name} wheels: {', '.join(given.joint_names)}")
         else:
             notes.append(f"platform {kind.name!r}: wheels {', '.join(given.joint_names)} are locked")
+    elif platform is None and description.planar_base:
+        kind, detected = KINDS["omnidirectional"], None
+        names = ", ".join(j.name for j in description.planar_base)
+        notes.append(f"platform omnidirectional: the file moves its root link on planar joints ({names})")
     elif platform is None:
         kind, detected = detect_platform(description, candidates, path)
         if detected is not None:
@@ -355,6 +360,10 @@ def detect_spec(
         wheel_spec.joint_names if wheel_spec else ()
     )
     platform_limits = {n: pair for n, pair in urdf_limits.items() if n in wheel_names}
+    if kind.name == "omnidirectional" and len(description.planar_base) == 3:
+        # the file's own base joints give the base's limits, unless the command line does
+        base = {name: (j.velocity_limit, j.effort_limit) for name, j in zip(OMNI_COORDINATES, description.planar_base)}
+        limits = {**base, **(limits or {})}
     given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
     spec = RobotSpec(
         name=name or description.name or path.stem,
