@@ -248,6 +248,7 @@ def detect_spec(
     if not end_effectors:
         raise SpecError(f"{path}: name at least one end-effector frame")
     notes: list[str] = [f"platform frame: root link {description.root_link!r} (forward = +x, left = +y)"]
+    notes += [f"{description.format}: {note}" for note in description.notes]
     for flaw in description.flaws:
         notes.append(
             f"{flaw.subject}: {flaw.problem}; repaired at load by {flaw.repair}, with a warning (list the link in "

@@ -451,7 +451,16 @@ class Robot:
         """
         if not self.model.existFrame(name):
             raise FrameNotFoundError(name, [f.name for f in self.model.frames], where=f"robot {self.name}")
-        return self.model.getFrameId(name)
+        return frame_index(self.model, name)
+
+
+def frame_index(model: pin.Model, name: str) -> int:
+    """The index of frame ``name`` (it must exist): its link's frame when a joint (or a site) has the
+    same name (Fetch's and Unitree's files name a link like its joint), else the one of that name."""
+    for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME, pin.FrameType.FIXED_JOINT, pin.FrameType.JOINT):
+        if model.existFrame(name, kind):
+            return model.getFrameId(name, kind)
+    return model.getFrameId(name)
 
 
 def _finite_number(value, what: str) -> float:
@@ -554,8 +563,25 @@ def _build_model(spec: RobotSpec, description: RobotDescription) -> pin.Model:
     if unknown_ref:
         raise JointNotFoundError(unknown_ref[0], list(model.names[2:]), where=f"[reference] of {spec.name}")
     if locked:
+        _rename_clashing(model, locked)
         model = pin.buildReducedModel(model, locked, q_ref)
     return model
+
+
+def _rename_clashing(model: pin.Model, locked: list[int]) -> None:
+    """Rename each locked joint that shares its name with another frame (SO-100's ``gripper`` is a
+    link and a joint) to ``NAME (joint)``: Pinocchio's reduction looks frames up by name and cannot
+    tell the two apart. A locked joint is no longer a joint of the model, so nothing refers to it."""
+    names = [frame.name for frame in model.frames]
+    for j in locked:
+        name = model.names[j]
+        if names.count(name) < 2:
+            continue
+        model.names[j] = f"{name} (joint)"
+        for k, frame in enumerate(model.frames):
+            if frame.name == name and frame.type == pin.FrameType.JOINT:
+                frame.name = f"{name} (joint)"
+                model.frames[k] = frame
 
 
 def _check_hold(spec: RobotSpec, model: pin.Model) -> None:
@@ -612,7 +638,8 @@ def load_robot(spec_or_name: RobotSpec | str | Path, *, strict: bool | None = No
         v_indices = tuple(v_index(name, "arm") for name in arm.joints)
         if not model.existFrame(arm.end_effector):
             raise FrameNotFoundError(arm.end_effector, [f.name for f in model.frames], where=spec.name)
-        arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, model.getFrameId(arm.end_effector)))
+        frame = frame_index(model, arm.end_effector)
+        arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, frame))
 
     platform = get_kind(spec.platform).build(spec.wheels, description, model)
     from_urdf = dict(platform.description_limits(description))
