@@ -17,8 +17,10 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   adds the platform's planar joint); a ``ball`` joint or a ``free`` joint elsewhere is refused;
 - inertias: ``<inertial>`` (``diaginertia`` in its ``quat`` frame, or ``fullinertia``); a body
   without one gets its geoms' (``mass``, or ``density`` times volume, for spheres, boxes,
-  cylinders, capsules and ellipsoids) as Pinocchio computes them; a mesh geom's mass is taken as
-  a point at the geom (its shape is not integrated: said in :attr:`RobotDescription.notes`);
+  cylinders, capsules and ellipsoids) as Pinocchio computes them. A mesh geom is not integrated,
+  by mobmanip (its mass counts as a point at the geom) nor by Pinocchio 4.1 (which gives such a
+  body 1 kg and a unit tensor): the notes say so, and such a body needs an ``<inertial>`` before
+  the dynamic measures mean anything (Menagerie's Stretch is built this way);
 - limits: position from a joint's ``range``; effort from its ``actuatorfrcrange``, else from the
   actuators on it: ``gear`` times the largest ``forcerange`` bound, or for a ``motor`` without
   one, ``gear`` times the largest ``ctrlrange`` bound; velocity from a ``velocity`` actuator's
@@ -633,8 +635,9 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
         raise reader.fail(str(exc)) from None
     if tree.mesh_notes:
         reader.notes.append(
-            f"{tree.mesh_notes} mesh geom(s) in bodies without <inertial>: their mass is taken as a point at the geom "
-            "(the mesh is not integrated); give those bodies an <inertial> for their full inertia"
+            f"{tree.mesh_notes} mesh geom(s) in bodies without <inertial>: neither mobmanip nor Pinocchio integrates "
+            "a mesh (Pinocchio gives such a body 1 kg and a unit tensor), so the dynamic measures are not the robot's; "
+            "give those bodies an <inertial>"
         )
     for element in reader.root.iter("compiler"):  # Pinocchio reads the copy from a temporary folder
         for key in ("meshdir", "assetdir", "texturedir"):
