@@ -17,6 +17,7 @@ import numpy as np
 from .commands import COMMANDS
 from .errors import MobmanipError
 from .support.files import check_output, note_input, protect_inputs, publish_together
+from .support.notices import notice_session
 from .support.version import installed_version
 
 
@@ -60,7 +61,13 @@ def main(argv: list[str] | None = None) -> int:
     _configure_logging(args.verbose)
     try:
         # A command's output files are published together when it succeeds, all or none.
-        with warnings.catch_warnings(), np.errstate(all="ignore"), protect_inputs(), publish_together():
+        with (
+            warnings.catch_warnings(),
+            np.errstate(all="ignore"),
+            protect_inputs(),
+            publish_together(),
+            notice_session(),
+        ):
             warnings.simplefilter("ignore", RuntimeWarning)
             _check_outputs_first(args)
             return args.func(args)

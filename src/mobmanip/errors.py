@@ -68,6 +68,20 @@ class UrdfError(DescriptionError):
     label = "URDF"
 
 
+class XacroError(DescriptionError):
+    """A xacro file that cannot be expanded: missing, malformed, an argument without a value or a
+    ``$(find PKG)`` package found nowhere (the message names it and the option that supplies it)."""
+
+    label = "xacro"
+
+
+class MjcfError(DescriptionError):
+    """An MJCF (MuJoCo) file that cannot be read, or that uses what mobmanip cannot model (a ball
+    joint, several robots under ``<worldbody>``), naming it."""
+
+    label = "MJCF"
+
+
 class UnknownFormatError(DescriptionError):
     """A robot file whose suffix no registered description format reads; lists the known suffixes."""
 
@@ -78,6 +92,16 @@ class UnknownFormatError(DescriptionError):
         super().__init__(
             path, f"{what}: no robot-description format reads it (known suffixes: {', '.join(self.known)})"
         )
+
+
+class RecordingError(MobmanipError):
+    """A recording (a ROS bag) that cannot be read as a trajectory: missing, unreadable, a topic
+    missing or of another message type, too little data. Carries the ``path`` and the ``reason``."""
+
+    def __init__(self, path: str, reason: str):
+        self.path = path
+        self.reason = reason
+        super().__init__(f"recording {path}: {reason}")
 
 
 class NameNotFoundError(MobmanipError):

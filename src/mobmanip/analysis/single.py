@@ -53,9 +53,10 @@ class Analysis:
         terms: what the measures were computed from (:class:`mobmanip.terms.builder.MeasureTerms`),
             with the constraints beyond the joint boxes they must honour.
 
-    ``warnings`` (computed on first access) says what makes the numbers doubtful: placeholder
-    limits, torques that cannot hold the robot up, hands further apart than the object's grasp
-    points (see :mod:`mobmanip.analysis.plausibility`).
+    ``warnings`` (computed on first access) says what makes the numbers doubtful: the robot file's
+    flaws repaired at load (:attr:`mobmanip.robot.model.Robot.warnings`), placeholder limits,
+    torques that cannot hold the robot up, hands further apart than the object's grasp points
+    (see :mod:`mobmanip.analysis.plausibility`).
     """
 
     robot: Robot
@@ -111,7 +112,7 @@ class Analysis:
 
         explicit = self.held_object if self.object_given else None
         found = analysis_warnings(self.robot, self.end_effector_positions, self.bias, explicit)
-        return found + tuple(rest_warnings(self))
+        return tuple(self.robot.warnings) + found + tuple(rest_warnings(self))
 
     @property
     def kinematic(self) -> Ellipsoid:

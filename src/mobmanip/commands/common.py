@@ -37,6 +37,57 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
     )
     add_posture_option(parser, "the configuration: a named posture of the spec, platform at the origin")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    add_strict_option(parser)
+    add_description_options(parser)
+
+
+def add_description_options(parser: argparse.ArgumentParser) -> None:
+    """--xacro-arg NAME=VALUE and --package-path DIR (both repeatable): how a robot file is read."""
+    parser.add_argument(
+        "--xacro-arg",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a xacro file's $(arg NAME) value (repeat for several; a spec may hold them in [xacro_args])",
+    )
+    parser.add_argument(
+        "--package-path",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="a folder where $(find PKG) and package://PKG look for packages, before ROS_PACKAGE_PATH "
+        "(repeat for several; a spec may list them in package_paths)",
+    )
+
+
+def read_options_from_args(args) -> dict:
+    """The ``xacro_args`` and ``package_paths`` the command line gives (empty when none).
+
+    Raises:
+        UsageError: a --xacro-arg that is not NAME=VALUE.
+    """
+    from pathlib import Path
+
+    from ..errors import UsageError
+
+    arguments = {}
+    for item in getattr(args, "xacro_arg", None) or ():
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise UsageError(f"--xacro-arg takes NAME=VALUE, got {item!r}")
+        arguments[name.strip()] = value
+    paths = tuple(Path(p).expanduser().resolve() for p in getattr(args, "package_path", None) or ())
+    return {"xacro_args": arguments, "package_paths": paths}
+
+
+def add_strict_option(parser: argparse.ArgumentParser) -> None:
+    """--strict: refuse the robot file's flaws instead of repairing them."""
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help="refuse a robot file's flaws (e.g. an inertia no rigid body can have) instead of repairing them "
+        "with a warning (a spec may say strict = true)",
+    )
 
 
 def add_posture_option(parser: argparse.ArgumentParser, what: str) -> None:
@@ -55,6 +106,8 @@ def robot_spec_from_args(args):
         UsageError: neither or both of ROBOT and --urdf, --urdf without --ee, or --ee/--wheels
             without --urdf.
     """
+    import dataclasses
+
     from ..errors import UsageError
     from ..robot.detect import parse_wheel_list, spec_from_urdf
     from ..robot.spec import find_spec
@@ -64,13 +117,31 @@ def robot_spec_from_args(args):
         raise UsageError(f"give either ROBOT ({args.robot}) or --urdf ({urdf}), not both")
     if args.robot is None and urdf is None:
         raise UsageError("give a ROBOT (built-in name or spec .toml) or --urdf PATH --ee FRAME")
+    options = read_options_from_args(args)
     if urdf is None:
         if ee or wheels:
             raise UsageError("--ee and --wheels go with --urdf; a ROBOT spec names its own end effectors and wheels")
-        return find_spec(args.robot)
+        spec = find_spec(args.robot)
+        if options["xacro_args"] or options["package_paths"]:
+            spec = dataclasses.replace(
+                spec,
+                xacro_args={**spec.xacro_args, **options["xacro_args"]},
+                package_paths=spec.package_paths + options["package_paths"],
+            )
+        return strict_if_asked(spec, args)
     if not ee:
         raise UsageError(f"--urdf {urdf} needs at least one --ee FRAME (the end effector of each arm)")
-    return spec_from_urdf(urdf, ee, wheels=None if wheels is None else parse_wheel_list(wheels))
+    wheel_list = None if wheels is None else parse_wheel_list(wheels)
+    return strict_if_asked(spec_from_urdf(urdf, ee, wheels=wheel_list, read_options=options), args)
+
+
+def strict_if_asked(spec, args):
+    """The spec, made strict when the command line says --strict."""
+    import dataclasses
+
+    if not getattr(args, "strict", False):
+        return spec
+    return dataclasses.replace(spec, strict=True, accepted_repairs=())
 
 
 def load_robot_and_configuration(args):
@@ -109,11 +180,14 @@ def configuration_from_args(robot, args):
 
 
 def print_warnings(analysis, stream=None) -> None:
-    """The analysis's plausibility warnings, one line each, on standard error."""
+    """The analysis's warnings, one line each, on standard error (each once per command: a
+    repair already reported when the robot was loaded is not repeated)."""
     import sys
 
+    from ..support.notices import notice
+
     for text in analysis.warnings:
-        print(f"warning: {text}", file=stream or sys.stderr)
+        notice(text, stream=stream or sys.stderr)
 
 
 def format_matrix(matrix: np.ndarray, indent: str = "  ") -> str:

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..platforms import KINDS
-from .common import add_urdf_options
+from .common import add_description_options, add_strict_option, add_urdf_options, read_options_from_args
 
 
 def register(sub) -> None:
@@ -17,7 +17,7 @@ def register(sub) -> None:
         help="write a robot spec (TOML) inferred from a URDF",
         description="Detect the drive wheels and the arms of a URDF and write a commented spec to edit.",
     )
-    parser.add_argument("urdf", metavar="PATH", help="the URDF file")
+    parser.add_argument("urdf", metavar="PATH", help="the robot file (URDF, xacro, MJCF)")
     add_urdf_options(parser)
     parser.add_argument(
         "--list-frames", action="store_true", help="list the links that could be end effectors (for --ee) and exit"
@@ -40,6 +40,8 @@ def register(sub) -> None:
         "(NAME hold: the [hold] posture); repeat for several",
     )
     parser.add_argument("--out", metavar="SPEC.toml", help="write here (default: standard output)")
+    add_strict_option(parser)
+    add_description_options(parser)
     given = parser.add_argument_group("values the URDF may lack")
     given.add_argument("--wheel-radius", type=float, metavar="M", help="radius of wheels with mesh geometry (m)")
     given.add_argument(
@@ -63,8 +65,9 @@ def run(args) -> int:
     from ..robot.detect_report import missing_message
     from ..support.files import write_text
 
+    read_options = read_options_from_args(args)
     if args.list_frames:
-        return _list_frames(args.urdf)
+        return _list_frames(args.urdf, read_options)
     if not args.ee:
         raise UsageError(f"init-spec needs at least one --ee FRAME (`mobmanip init-spec {args.urdf} --list-frames`)")
     for name in ("wheel_radius", "wheel_velocity_limit", "wheel_effort_limit"):
@@ -88,6 +91,8 @@ def run(args) -> int:
         wheel_radius=args.wheel_radius,
         wheel_limits=(args.wheel_velocity_limit, args.wheel_effort_limit),
         limits=limits,
+        strict=args.strict,
+        read_options=read_options,
     )
 
     if args.posture:
@@ -131,13 +136,13 @@ def _pairs(items, option: str):
         yield name.strip(), value
 
 
-def _list_frames(path) -> int:
-    """Print the candidate end-effector frames of a URDF, the most likely first."""
+def _list_frames(path, read_options) -> int:
+    """Print the candidate end-effector frames of a robot file, the most likely first."""
     from ..descriptions import check_supported, read_description
     from ..platforms.wheels import wheel_candidates
     from ..robot.detect_report import candidate_frames
 
-    description = read_description(path)
+    description = read_description(path, **read_options)
     check_supported(description)
     rows = candidate_frames(description, exclude=[c.name for c in wheel_candidates(description)])
     print(f"{len(rows)} candidate end-effector frames of {path} (for --ee), the most likely first:")

@@ -147,6 +147,7 @@ def run_command(args) -> int:
     from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers
     from .outputs import write_sweep_csv, write_sweep_npz
 
+    _check_outputs(args)  # before anything is loaded, compiled or computed
     grid = SweepGrid.parse(args.angle, args.distance, args.heading, args.wheel_velocity_scale, args.wheel_effort_scale)
     if args.task is not None and args.task not in TASKS:
         raise UsageError(f"unknown task {args.task!r}; expected one of {', '.join(TASKS)}")
@@ -250,6 +251,30 @@ def run_command(args) -> int:
     for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def _check_outputs(args) -> None:
+    """Refuse an output prefix that names a directory, or whose files (OUT.npz, OUT.csv, OUT.png)
+    could not be written, before any work.
+
+    Raises:
+        OutputError: naming the path and what to give instead.
+    """
+    import os
+    from pathlib import Path
+
+    from ..support.files import OutputError, check_output
+
+    text = str(args.output)
+    out = Path(text)
+    if text.endswith(("/", os.sep)) or out.is_dir():
+        raise OutputError(
+            f"-o {text} is a directory; -o takes an output prefix (it writes PREFIX.npz, PREFIX.csv and, with "
+            f"--plot, PREFIX.png): e.g. -o {out / 'sweep'}"
+        )
+    suffixes = [".npz"] + ([] if args.no_csv else [".csv"]) + ([".png"] if args.plot else [])
+    for suffix in suffixes:
+        check_output(out.with_name(out.name + suffix))
 
 
 def _nanfmt(values, how: str) -> str:

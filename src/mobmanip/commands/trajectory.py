@@ -5,12 +5,19 @@ from __future__ import annotations
 import argparse
 
 from ..robot.tasks import TASKS
+from .common import add_strict_option
 
 TRAJECTORY_HELP = """\
 TRAJ.csv has a header: t (s), platform_x, platform_y (m), platform_yaw (rad), then one column
 per moving joint named as in q.json; joints without a column stay at home (wheels without a
 column turn as the platform's motion needs). Rates and accelerations are estimated from the
 samples; `slip` reports motion the platform cannot make (lateral sliding).
+
+--bag RUN reads a ROS recording instead (ROS 1 .bag, ROS 2 .mcap / .db3 or a ROS 2 bag folder;
+no ROS install needed): the joint states (sensor_msgs/JointState) and the odometry
+(nav_msgs/Odometry, the pose of the robot's root link) are resampled onto the joint states'
+stamps, the odometry interpolated; --start / --end (s from the recording's start) cut it. Gaps and
+clock jumps are reported as warnings.
 
 time-scaling margin: the largest factor k by which the whole motion can be sped up with every
 wheel and joint within its velocity and effort limits (efforts: RNEA in motion, the object
@@ -32,7 +39,20 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
-    parser.add_argument("trajectory", metavar="TRAJ.csv", help="the trajectory (see below)")
+    parser.add_argument("trajectory", metavar="TRAJ.csv", nargs="?", help="the trajectory (see below), or --bag")
+    recording = parser.add_argument_group("a ROS recording instead of TRAJ.csv")
+    recording.add_argument("--bag", metavar="RUN", help="a ROS 1 .bag, a ROS 2 .mcap / .db3 file or bag folder")
+    recording.add_argument(
+        "--joint-states", default="/joint_states", metavar="TOPIC", help="sensor_msgs/JointState topic (%(default)s)"
+    )
+    recording.add_argument(
+        "--odom",
+        default="/odom",
+        metavar="TOPIC",
+        help="nav_msgs/Odometry topic (%(default)s); 'none' keeps the platform at the origin",
+    )
+    recording.add_argument("--start", type=float, metavar="S", help="read from S seconds after the recording's start")
+    recording.add_argument("--end", type=float, metavar="S", help="read up to S seconds after the recording's start")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
@@ -48,6 +68,7 @@ def register(sub) -> None:
         "sample (columns zmp_x, zmp_y, stability_margin; the smallest margin printed)",
     )
     parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
+    add_strict_option(parser)
     parser.add_argument(
         "--export",
         metavar="PAGE.html",
@@ -59,7 +80,22 @@ def register(sub) -> None:
     parser.set_defaults(func=run)
 
 
+def _read_bag(robot, args):
+    """The trajectory of --bag, its report printed and its gaps and clock jumps warned about."""
+    from ..motion.recordings import read_recording
+    from ..support.notices import notice
+
+    odometry = None if args.odom.lower() == "none" else args.odom
+    recording = read_recording(robot, args.bag, args.joint_states, odometry, start=args.start, end=args.end)
+    for line in recording.report.lines():
+        print(line)
+    for text in recording.report.warnings:
+        notice(text)
+    return recording.trajectory
+
+
 def run(args) -> int:
+    from ..errors import UsageError
     from ..motion.trajectory import read_trajectory
     from ..motion.trajectory_analysis import analyze_trajectory
     from ..robot.model import load_robot
@@ -67,13 +103,20 @@ def run(args) -> int:
     from ..support.files import check_output, note_input, output_directory
     from .outputs import trajectory_outputs
 
-    note_input(args.trajectory)
+    if (args.trajectory is None) == (args.bag is None):
+        raise UsageError("give a trajectory: either TRAJ.csv or --bag RUN, not both")
+    if args.bag is None and (args.start is not None or args.end is not None):
+        raise UsageError("--start and --end cut a --bag recording")
+    note_input(args.trajectory or args.bag)
     if args.out:  # refuse an unwritable output before the analysis runs
         out = output_directory(args.out)
         for suffix in (".csv", ".json", ".png"):
             check_output(out / f"analysis{suffix}")
-    robot = load_robot(find_spec(args.robot))
-    trajectory = read_trajectory(robot, args.trajectory)
+    robot = load_robot(find_spec(args.robot), strict=True if args.strict else None)
+    if args.bag is not None:
+        trajectory = _read_bag(robot, args)
+    else:
+        trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(
         robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled, polytope=args.polytope
     )

@@ -6,13 +6,17 @@ A format's reader builds :class:`~mobmanip.descriptions.description.JointDescrip
 
 - more links or joints than :data:`mobmanip.support.ranges.MAX_URDF_LINKS`, a name used twice;
 - a mass that is not finite or outside :data:`mobmanip.support.ranges.LINK_MASS`, an inertia
-  tensor larger than :data:`mobmanip.support.ranges.LINK_INERTIA`, not positive semi-definite
-  or whose principal moments break the triangle inequality (both within :data:`INERTIA_SLACK`);
+  tensor that is not finite or larger than :data:`mobmanip.support.ranges.LINK_INERTIA`;
 - an origin that is not finite or lies farther than :data:`mobmanip.support.ranges.LINK_OFFSET`
   from its parent frame; a moving joint's zero or non-finite axis; a limit that is not finite,
   a negative velocity or effort, ``lower > upper``; non-finite dynamics or mimic coefficients;
 - joints that name missing links, a link carried by two joints, no root or several, links not
   connected to the root.
+
+An inertia tensor that is finite but no rigid body can have (not positive semi-definite, or its
+principal moments break the triangle inequality, beyond :data:`INERTIA_SLACK`) is a vendor flaw,
+not a refusal: it is recorded in the description's ``flaws`` with its repair (see
+:mod:`mobmanip.descriptions.flaws`), and refused only when the robot is loaded strictly.
 
 Whether mobmanip can *model* the tree (no floating or planar joint inside it) is a separate
 question, :func:`check_supported`, asked by the robot layer.
@@ -29,11 +33,10 @@ import numpy as np
 from ..errors import DescriptionError
 from ..support.ranges import LINK_INERTIA, LINK_MASS, LINK_OFFSET, MAX_URDF_LINKS
 from .description import JointDescription, LinkDescription, ModelBuilder, NameMap, Origin, RobotDescription
+from .flaws import INERTIA_SLACK, Flaw, inertia_flaw
 
-#: How far (kg m^2) a link's principal moments may miss positivity and the triangle inequality.
-#: Vendor URDFs carry such rounding on parts of a few grams (TIAGo++'s antennas: 9e-8 kg m^2);
-#: it is negligible next to the links that move and the analysis accepts it.
-INERTIA_SLACK = 1e-5
+__all__ = ["INERTIA_SLACK", "UNSUPPORTED_JOINT_TYPES", "assemble", "check_supported"]
+
 
 _IDENTITY = Origin()
 
@@ -80,8 +83,11 @@ def assemble(
         repeated = _duplicates(names)
         if repeated:
             raise fail(f"{kind} name {repeated[0]!r} is defined more than once")
+    flaws: list[Flaw] = []  # repaired when the model is built, refused by a strict load
     for link in links:
-        _check_inertial(link, fail)
+        flaw = _check_inertial(link, fail)
+        if flaw is not None:
+            flaws.append(flaw)
     for joint in joints:
         _check_joint(joint, fail)
     root = _check_tree(links, joints, fail)
@@ -94,6 +100,7 @@ def assemble(
         links=NameMap((link.name, link) for link in links),
         package_dirs=tuple(Path(p) for p in package_dirs) if package_dirs is not None else (source.parent,),
         builder=builder,
+        flaws=tuple(flaws),
     )
 
 
@@ -141,37 +148,25 @@ def _check_placement(origin: Origin, what: str, fail) -> None:
         raise fail(f"{what} <origin> lies {offset:g} m from its parent frame (at most {LINK_OFFSET:g} m)")
 
 
-def _check_inertial(link: LinkDescription, fail) -> None:
-    """Mass finite, non-negative and at most :data:`LINK_MASS`; the inertia tensor symmetric
-    positive semi-definite with principal moments that satisfy the triangle inequality."""
+def _check_inertial(link: LinkDescription, fail) -> Flaw | None:
+    """Mass finite, non-negative and at most :data:`LINK_MASS`; the inertia tensor finite and
+    at most :data:`LINK_INERTIA`. Returns the tensor's flaw (not positive semi-definite, or the
+    triangle inequality broken, beyond :data:`INERTIA_SLACK`), ``None`` when it is physical."""
     inertial = link.inertial
     if inertial is None:
-        return
+        return None
     where = f"link {link.name!r}"
     _check_placement(inertial.origin, f"{where} <inertial>", fail)
     mass = float(_finite_array(inertial.mass, f"{where} mass", fail))
     if not LINK_MASS[0] <= mass <= LINK_MASS[1]:
         raise fail(f"{where} has mass {mass:g} kg; a mass must lie in [0, {LINK_MASS[1]:g}] kg")
     if inertial.inertia is None:
-        return
+        return None
     inertia = _finite_array(inertial.inertia, f"{where} inertia", fail)
     scale = float(np.max(np.abs(inertia)))
     if scale > LINK_INERTIA:
         raise fail(f"{where} has a moment of inertia of {scale:g} kg m^2 (at most {LINK_INERTIA:g})")
-    if scale == 0.0:
-        return
-    moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
-    tolerance = max(1e-9 * scale, INERTIA_SLACK)
-    names = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
-    values = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2])
-    entries = " ".join(f"{n}={v:g}" for n, v in zip(names, values))
-    if moments[0] < -tolerance:
-        raise fail(f"{where} inertia ({entries}) is not positive semi-definite: principal moment {moments[0]:g}")
-    if moments[2] > moments[0] + moments[1] + tolerance:
-        raise fail(
-            f"{where} inertia ({entries}) is not physical: principal moments {moments[0]:g}, {moments[1]:g}, "
-            f"{moments[2]:g} violate the triangle inequality (the largest exceeds the sum of the others)"
-        )
+    return inertia_flaw(link.name, inertia)
 
 
 def _check_joint(joint: JointDescription, fail) -> None:

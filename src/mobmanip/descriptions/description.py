@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     import pinocchio as pin
 
     from ..errors import DescriptionError
+    from .flaws import Flaw
 
 #: Joint types that move (one degree of freedom each).
 MOVING_JOINT_TYPES = ("revolute", "continuous", "prismatic")
@@ -335,6 +336,15 @@ class RobotDescription:
         links: every link by name, in file order.
         package_dirs: directories where ``package://`` mesh URIs resolve.
         builder: hands the source to Pinocchio (see :class:`ModelBuilder`).
+        flaws: what the file gets wrong that a stated rule repairs (non-physical inertias, see
+            :mod:`mobmanip.descriptions.flaws`), in file order; :meth:`build_model` applies the
+            repairs, a strict load refuses them.
+        notes: what the format's reader skipped or approximated (e.g. an MJCF file's tendons),
+            one line each; ``init-spec`` writes them into the spec's comments.
+        planar_base: the joints with which the file itself moves its root link in the plane
+            (along x, along y, about z, in that order; e.g. an MJCF mobile base), taken out of
+            the tree: the platform's own coordinates replace them (an ``omnidirectional``
+            platform, with these joints' limits); empty when the file has none.
     """
 
     name: str
@@ -345,6 +355,9 @@ class RobotDescription:
     links: Mapping[str, LinkDescription]
     package_dirs: tuple[Path, ...]
     builder: ModelBuilder = field(compare=False, repr=False)
+    flaws: tuple[Flaw, ...] = field(default=(), compare=False, repr=False)
+    notes: tuple[str, ...] = field(default=(), compare=False, repr=False)
+    planar_base: tuple[JointDescription, ...] = field(default=(), compare=False, repr=False)
 
     # ----- the tree -----
 
@@ -456,14 +469,25 @@ class RobotDescription:
         """The text handed to Pinocchio's model and geometry builders."""
         return self.builder.text
 
-    def build_model(self, root_joint: pin.JointModel | None = None) -> pin.Model:
+    def build_model(self, root_joint: pin.JointModel | None = None, *, repaired: bool = True) -> pin.Model:
         """Pinocchio's model of the whole description (nothing locked) under ``root_joint``
         (e.g. ``pin.JointModelPlanar()``; ``None``: a fixed base).
+
+        Args:
+            root_joint: the joint the root link hangs on (``None``: fixed).
+            repaired: apply the repairs of :attr:`flaws` (default); ``False`` gives the model
+                exactly as the file says (for comparisons).
 
         Raises:
             DescriptionError: Pinocchio cannot build it (its reason in one line).
         """
-        return self.builder.build_model(str(self.source), root_joint)
+        model = self.builder.build_model(str(self.source), root_joint)
+        if repaired and self.flaws:
+            from .flaws import repair_inertias
+
+            inertials = {name: link.inertial for name, link in self.links.items() if link.inertial is not None}
+            repair_inertias(model, self.flaws, inertials)
+        return model
 
     def build_geometry(self, model: pin.Model, kind: str, meshes: MeshFilter | None = None) -> pin.GeometryModel:
         """The ``kind`` (``"collision"`` or ``"visual"``) shapes on ``model`` (a model built by

@@ -39,11 +39,14 @@ class DescriptionFormat:
         read: ``read(path, **options) -> RobotDescription``; ``options`` are those given to
             :func:`read_description` (``package_dirs``: where ``package://`` URIs resolve).
             It raises a :class:`~mobmanip.errors.DescriptionError` for a file it cannot read.
+        options: the options ``read`` takes (every reader takes ``package_dirs``); e.g. xacro
+            also takes ``xacro_args`` and ``package_paths``.
     """
 
     name: str
     suffixes: tuple[str, ...]
     read: DescriptionReader
+    options: tuple[str, ...] = ("package_dirs",)
 
     def __post_init__(self) -> None:
         suffixes = tuple(self.suffixes)
@@ -124,9 +127,12 @@ def read_description(path: str | Path, **options: Any) -> RobotDescription:
     Args:
         path: the file.
         **options: handed to the format's reader; every reader takes ``package_dirs``, the
-            directories where ``package://`` URIs resolve (default: the file's folder).
+            directories where ``package://`` URIs resolve (default: the file's folder). An
+            option the format does not take (:attr:`DescriptionFormat.options`) is dropped when
+            empty (``None``, ``{}``, ``()``) and refused otherwise.
 
     Raises:
+        ArgumentError: a non-empty option the format does not take (``xacro_args`` for a URDF).
         UnknownFormatError: no registered format reads the suffix.
         DescriptionError: the file is missing, unreadable, malformed or describes no physical
             robot (the format's own subclass, e.g. :class:`~mobmanip.errors.UrdfError`).
@@ -135,5 +141,18 @@ def read_description(path: str | Path, **options: Any) -> RobotDescription:
 
     path = Path(path)
     reader = format_for(path)
+    taken = {}
+    for key, value in options.items():
+        if key in reader.options:
+            taken[key] = value
+        elif value is not None and (not hasattr(value, "__len__") or len(value)):
+            raise ArgumentError(
+                f"{path.name}: {key} applies to {_formats_taking(key)} files, not to a {reader.name} file"
+            )
     note_input(path)
-    return reader.read(path, **options)
+    return reader.read(path, **taken)
+
+
+def _formats_taking(option: str) -> str:
+    names = [f.name for f in _FORMATS.values() if option in f.options]
+    return " or ".join(names) or "no registered"

@@ -6,7 +6,8 @@ xacro's ``$(optenv NAME DEFAULT)`` leftovers with their defaults, parses it stri
 or malformed file is reported as such, never as a partial robot) and builds the
 :class:`~mobmanip.descriptions.description.RobotDescription`, checked by
 :func:`~mobmanip.descriptions.checks.assemble`. Defaults follow the URDF specification: no
-``<origin>`` is the identity, no ``<axis>`` is x, a ``<mass>`` without value is 0. Another
+``<origin>`` is the identity, no ``<axis>`` is x, a ``<mass>`` without value is 0. A file with a
+DOCTYPE is refused: its entities would be read one way here and another by Pinocchio. Another
 format that wraps a URDF (a compressed one, say) reads its text and calls
 :func:`urdf_description`. :class:`UrdfBuilder` keeps the text: Pinocchio builds the model and
 geometry from it (``buildModelFromXML``, ``buildGeomFromUrdfString``), with urdfdom's messages
@@ -51,6 +52,10 @@ LIMIT_KEYS = ("lower", "upper", "velocity", "effort")
 
 #: The attributes of a link's ``<inertia>``.
 INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+
+#: A document type declaration, and XML comments (a DOCTYPE inside one is not one).
+_DOCTYPE = re.compile(r"<!DOCTYPE\b")
+_COMMENT = re.compile(r"<!--.*?-->", re.S)
 
 #: Parts of a URDF no model is built from: comments and simulator/controller sections.
 _UNREAD = re.compile(r"<!--.*?-->|<(gazebo|transmission|ros2_control)\b.*?</\1\s*>", re.S)
@@ -141,6 +146,13 @@ def _describe(
     """:func:`urdf_description`; ``raw``, the file's bytes when at hand, parses faster than text
     (and under the encoding the file declares)."""
     path = str(source)
+    if "<!DOCTYPE" in text and _DOCTYPE.search(_COMMENT.sub("", text)):
+        raise UrdfError(
+            path,
+            "it declares a DOCTYPE (a DTD): Python's XML parser would expand its entities and Pinocchio's "
+            "(urdfdom) would not, so the two would read different robots; mobmanip refuses DTDs: expand the "
+            "entities and drop the DOCTYPE first (e.g. xmllint --noent --dropdtd FILE)",
+        )
     if "$(" in text:
         text, raw = _expand_substitutions(text, path), None
     try:

@@ -17,7 +17,6 @@ Pinocchio's planar root joint has velocity (v_x, v_y, omega_z) in the platform's
 
 from __future__ import annotations
 
-import json
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
@@ -55,8 +54,10 @@ def positive_length(label: str, value: object) -> float:
 
 
 def toml_string(value: str) -> str:
-    """A TOML basic string (a JSON string is one)."""
-    return json.dumps(value)
+    """A TOML basic string that reads back to ``value`` (see :func:`mobmanip.support.toml.toml_string`)."""
+    from ..support.toml import toml_string as string
+
+    return string(value)
 
 
 def unicycle_rows(radius: float, half_track: float, center) -> np.ndarray:

@@ -46,6 +46,11 @@ class Omnidirectional(Platform):
         return np.array(BASE_V), np.eye(3)
 
     def description_limits(self, description: RobotDescription) -> Mapping[str, tuple[float | None, float | None]]:
+        """No limits, or those of the file's own planar base joints (x, y, yaw) when it has them
+        (:attr:`mobmanip.descriptions.description.RobotDescription.planar_base`)."""
+        base = getattr(description, "planar_base", ())
+        if len(base) == 3:
+            return {name: (j.velocity_limit, j.effort_limit) for name, j in zip(OMNI_COORDINATES, base)}
         return dict.fromkeys(OMNI_COORDINATES, (None, None))
 
     def missing_limit_source(self, name: str, kind: str) -> tuple[str, str]:

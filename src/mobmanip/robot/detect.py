@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from ..descriptions import RobotDescription, check_supported, read_description
+from ..descriptions.flaws import refuse
 from ..descriptions.resources import (
     EXAMPLE_ROBOT_DATA_PREFIX,
     STRETCH_URDF_PREFIX,
@@ -45,7 +46,9 @@ from ..descriptions.resources import (
 )
 from ..errors import FrameNotFoundError, JointNotFoundError, SpecError, WheelError
 from ..platforms import KINDS, Detected, PlatformKind, WheelsSpec, get_kind
+from ..platforms.omnidirectional import OMNI_COORDINATES
 from ..platforms.wheels import WheelCandidate, wheel_candidates
+from ..support.toml import toml_array, toml_comment, toml_key, toml_string
 from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
 from .spec import ArmSpec, RobotSpec
 
@@ -198,6 +201,8 @@ def detect_spec(
     wheel_radius: float | None = None,
     wheel_limits: tuple[float | None, float | None] = (None, None),
     limits: Mapping[str, tuple[float | None, float | None]] | None = None,
+    strict: bool = False,
+    read_options: Mapping[str, Any] | None = None,
 ) -> Detection:
     """Infer a spec from a robot file; see the module docstring for the rules.
 
@@ -217,6 +222,11 @@ def detect_spec(
         wheel_limits: ``(velocity, effort)`` for each of the platform's wheel coordinates the
             URDF gives no limit (``None``: leave it to the URDF).
         limits: ``{joint: (velocity, effort)}`` overrides of any active joint's limits.
+        strict: refuse the file's flaws (see :mod:`mobmanip.descriptions.flaws`) and write
+            ``strict = true``; else each is noted (it is repaired, with a warning, at load).
+        read_options: handed to :func:`mobmanip.descriptions.read_description` (e.g. a xacro
+            file's ``xacro_args`` and ``package_dirs``); written into the spec where a spec key
+            holds them.
 
     Raises:
         UrdfError: unreadable URDF, unsupported construct, or a mimic joint on an arm (for
@@ -227,7 +237,10 @@ def detect_spec(
         SpecError: no end effector, an end effector no joint moves, or an unknown platform.
     """
     path = Path(path)
-    description = read_description(path)
+    read_options = dict(read_options or {})
+    description = read_description(path, **read_options)
+    if strict:
+        refuse(description.flaws, description.error)
     check_supported(description)
     if platform is not None:
         get_kind(platform)  # an unknown kind is a SpecError listing the known ones
@@ -235,6 +248,12 @@ def detect_spec(
     if not end_effectors:
         raise SpecError(f"{path}: name at least one end-effector frame")
     notes: list[str] = [f"platform frame: root link {description.root_link!r} (forward = +x, left = +y)"]
+    notes += [f"{description.format}: {note}" for note in description.notes]
+    for flaw in description.flaws:
+        notes.append(
+            f"{flaw.subject}: {flaw.problem}; repaired at load by {flaw.repair}, with a warning (list the link in "
+            "accepted_repairs once reviewed, or set strict = true to refuse it)"
+        )
 
     on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(description, ee, (), path)}
     candidates = wheel_candidates(description, exclude=on_arm_paths, radius=wheel_radius)
@@ -256,6 +275,10 @@ def detect_spec(
             notes.append(f"{kind.name} wheels: {', '.join(given.joint_names)}")
         else:
             notes.append(f"platform {kind.name!r}: wheels {', '.join(given.joint_names)} are locked")
+    elif platform is None and description.planar_base:
+        kind, detected = KINDS["omnidirectional"], None
+        names = ", ".join(j.name for j in description.planar_base)
+        notes.append(f"platform omnidirectional: the file moves its root link on planar joints ({names})")
     elif platform is None:
         kind, detected = detect_platform(description, candidates, path)
         if detected is not None:
@@ -338,6 +361,10 @@ def detect_spec(
         wheel_spec.joint_names if wheel_spec else ()
     )
     platform_limits = {n: pair for n, pair in urdf_limits.items() if n in wheel_names}
+    if kind.name == "omnidirectional" and len(description.planar_base) == 3:
+        # the file's own base joints give the base's limits, unless the command line does
+        base = {name: (j.velocity_limit, j.effort_limit) for name, j in zip(OMNI_COORDINATES, description.planar_base)}
+        limits = {**base, **(limits or {})}
     given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
     spec = RobotSpec(
         name=name or description.name or path.stem,
@@ -351,6 +378,9 @@ def detect_spec(
         velocity_limits=given_v,
         effort_limits=given_e,
         package_dirs=(path.resolve().parent,),
+        strict=strict,
+        xacro_args=read_options.get("xacro_args") or {},
+        package_paths=tuple(Path(p).resolve() for p in read_options.get("package_paths") or ()),
     )
     missing = _missing(spec, kind, urdf_limits, unmeasured)
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
@@ -439,15 +469,13 @@ def parse_wheel_list(text: str) -> tuple[str, ...]:
 
 # ----- writing a spec as TOML -----
 
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
 
 def _key(name: str) -> str:
-    return name if _BARE_KEY.match(name) else json.dumps(name)
+    return toml_key(name)
 
 
 def _string(value: str) -> str:
-    return json.dumps(value)  # a JSON string is a valid TOML basic string
+    return toml_string(value)
 
 
 def _number(value: float) -> str:
@@ -474,6 +502,17 @@ def _urdf_reference(urdf: Path, base_dir: Path | None) -> str:
     return urdf.as_posix()
 
 
+def _folder_reference(folder: Path, base_dir: Path | None) -> str:
+    """A folder as the spec names it: relative to ``base_dir`` when given, else absolute."""
+    folder = Path(folder).resolve()
+    if base_dir is not None:
+        try:
+            return Path(os.path.relpath(folder, Path(base_dir).resolve())).as_posix()
+        except ValueError:  # another drive on Windows
+            pass
+    return folder.as_posix()
+
+
 def spec_to_toml(
     spec: RobotSpec,
     base_dir: str | Path | None = None,
@@ -494,20 +533,29 @@ def spec_to_toml(
         shared_joints: joints shared by several arms; when they are not the torso, a commented
             ``torso = [...]`` line shows how to actuate them.
     """
-    out = [f"# mobmanip robot spec for {spec.name!r}, inferred from its URDF; check it and edit as needed."]
-    out += [f"# {note}" for note in notes]
+    head = f"# mobmanip robot spec for {spec.name!r}, inferred from its robot file; check it and edit as needed."
+    out = [toml_comment(head)]
+    out += [toml_comment(f"# {note}") for note in notes]
     out += [
         f"name = {_string(spec.name)}",
         f"urdf = {_string(_urdf_reference(spec.urdf, None if base_dir is None else Path(base_dir)))}",
         f"platform = {_string(spec.platform)}  # {', '.join(json.dumps(k) for k in KINDS)}",
         f"default_task = {_string(spec.default_task)}  # planar, planar_rigid, translational or spatial",
     ]
+    if spec.strict:
+        out.append("strict = true  # refuse the robot file's flaws instead of repairing them")
+    if spec.accepted_repairs:
+        out.append(f"accepted_repairs = {toml_array(spec.accepted_repairs)}  # repaired without a warning")
+    if spec.package_paths:
+        folders = [_folder_reference(p, None if base_dir is None else Path(base_dir)) for p in spec.package_paths]
+        out.append(f"package_paths = {toml_array(folders)}  # where $(find PKG) and package:// look first")
+
     if spec.torso:
         out += ["", "# Actuated joints shared by all arms (after the platform in the reduced velocity).",
-                f"torso = {json.dumps(list(spec.torso))}"]  # fmt: skip
+                f"torso = {toml_array(spec.torso)}"]  # fmt: skip
     elif shared_joints:
         out += ["", "# Joints shared by the arms are locked (see [reference]); to actuate them:",
-                f"# torso = {json.dumps(list(shared_joints))}"]  # fmt: skip
+                f"# torso = {toml_array(shared_joints)}"]  # fmt: skip
     kind = get_kind(spec.platform)
     if spec.wheels is not None:
         out += ["", *kind.toml_lines(spec.wheels)]
@@ -516,7 +564,7 @@ def spec_to_toml(
         out += [
             "[[arms]]",
             f"name = {_string(arm.name)}",
-            f"joints = {json.dumps(list(arm.joints))}",
+            f"joints = {toml_array(arm.joints)}",
             f"end_effector = {_string(arm.end_effector)}",
             "",
         ]
@@ -563,6 +611,9 @@ def spec_to_toml(
     else:
         out += ["# [hold]", f"# {_key(first)} = 0.0"]
     for posture, joints in spec.postures.items():
-        out += ["", f"# Posture {posture!r} (`--posture {posture}`).", f"[postures.{_key(posture)}]"]
+        out += ["", toml_comment(f"# Posture {posture!r} (`--posture {posture}`)."), f"[postures.{_key(posture)}]"]
         out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
+    if spec.xacro_args:
+        out += ["", "# The xacro file's $(arg NAME) values.", "[xacro_args]"]
+        out += [f"{_key(name)} = {_string(value)}" for name, value in spec.xacro_args.items()]
     return "\n".join(out) + "\n"

@@ -24,6 +24,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..descriptions import MOVING_JOINT_TYPES, RobotDescription, check_supported, read_description
+from ..descriptions.flaws import refuse
 from ..errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -35,6 +36,7 @@ from ..errors import (
     closest_first,
 )
 from ..platforms import LockedPlatform, Platform, get_kind
+from ..support.notices import notice
 from ..support.ranges import (
     JOINT_POSITION,
     MAX_MODEL_DOF,
@@ -88,6 +90,9 @@ class Robot:
         description: the robot file as read (see :mod:`mobmanip.descriptions`), the whole tree
             before any joint was locked; ``None`` only for a Robot built by hand (then
             :func:`description_of` reads it from the spec).
+        warnings: what was repaired when the robot was loaded, one line per flaw of its file
+            (see :mod:`mobmanip.descriptions.flaws`) that the spec does not list in
+            ``accepted_repairs``; every analysis of the robot carries them.
     """
 
     spec: RobotSpec
@@ -101,6 +106,7 @@ class Robot:
     torso_joint_names: tuple[str, ...] = ()
     torso_v_indices: tuple[int, ...] = ()
     description: RobotDescription | None = field(default=None, repr=False)
+    warnings: tuple[str, ...] = field(default=(), repr=False)
     S: np.ndarray = field(init=False, repr=False)
     B: np.ndarray = field(init=False, repr=False)
     Q: np.ndarray = field(init=False, repr=False)
@@ -445,7 +451,16 @@ class Robot:
         """
         if not self.model.existFrame(name):
             raise FrameNotFoundError(name, [f.name for f in self.model.frames], where=f"robot {self.name}")
-        return self.model.getFrameId(name)
+        return frame_index(self.model, name)
+
+
+def frame_index(model: pin.Model, name: str) -> int:
+    """The index of frame ``name`` (it must exist): its link's frame when a joint (or a site) has the
+    same name (Fetch's and Unitree's files name a link like its joint), else the one of that name."""
+    for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME, pin.FrameType.FIXED_JOINT, pin.FrameType.JOINT):
+        if model.existFrame(name, kind):
+            return model.getFrameId(name, kind)
+    return model.getFrameId(name)
 
 
 def _finite_number(value, what: str) -> float:
@@ -548,8 +563,25 @@ def _build_model(spec: RobotSpec, description: RobotDescription) -> pin.Model:
     if unknown_ref:
         raise JointNotFoundError(unknown_ref[0], list(model.names[2:]), where=f"[reference] of {spec.name}")
     if locked:
+        _rename_clashing(model, locked)
         model = pin.buildReducedModel(model, locked, q_ref)
     return model
+
+
+def _rename_clashing(model: pin.Model, locked: list[int]) -> None:
+    """Rename each locked joint that shares its name with another frame (SO-100's ``gripper`` is a
+    link and a joint) to ``NAME (joint)``: Pinocchio's reduction looks frames up by name and cannot
+    tell the two apart. A locked joint is no longer a joint of the model, so nothing refers to it."""
+    names = [frame.name for frame in model.frames]
+    for j in locked:
+        name = model.names[j]
+        if names.count(name) < 2:
+            continue
+        model.names[j] = f"{name} (joint)"
+        for k, frame in enumerate(model.frames):
+            if frame.name == name and frame.type == pin.FrameType.JOINT:
+                frame.name = f"{name} (joint)"
+                model.frames[k] = frame
 
 
 def _check_hold(spec: RobotSpec, model: pin.Model) -> None:
@@ -565,14 +597,31 @@ def _check_hold(spec: RobotSpec, model: pin.Model) -> None:
             )
 
 
-def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
+def load_robot(spec_or_name: RobotSpec | str | Path, *, strict: bool | None = None) -> Robot:
     """Load a robot from a spec, a built-in name (``"planar_dual_arm"``) or a spec path.
 
+    The robot file's flaws (non-physical inertias) are repaired by the rule of
+    :mod:`mobmanip.descriptions.flaws`, each with one warning (in :attr:`Robot.warnings`, and
+    said to the user through :func:`mobmanip.support.notices.notice`), unless the load is strict.
+
+    Args:
+        spec_or_name: the spec, or a built-in robot's name, or a spec file.
+        strict: refuse the file's flaws instead of repairing them (default: the spec's ``strict``).
+
     Raises:
-        MobmanipError: any subclass, naming what is wrong with the spec or URDF.
+        MobmanipError: any subclass, naming what is wrong with the spec or URDF (under
+            ``strict``, the first flaw, with the way forward).
     """
     spec = spec_or_name if isinstance(spec_or_name, RobotSpec) else find_spec(spec_or_name)
-    description = read_description(spec.urdf, package_dirs=spec.package_dirs)
+    description = read_description(spec.urdf, **spec.read_options)
+    if spec.strict if strict is None else strict:
+        refuse(description.flaws, description.error)
+    unknown = [link for link in spec.accepted_repairs if link not in description.links]
+    if unknown:
+        raise SpecError(
+            f"accepted_repairs of {spec.name!r} names link {unknown[0]!r}, which {spec.urdf.name} lacks "
+            f"(closest: {', '.join(closest_first(unknown[0], description.links, 3))})"
+        )
     _check_spec_against_description(spec, description)
     model = _build_model(spec, description)
     _check_hold(spec, model)
@@ -589,7 +638,8 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         v_indices = tuple(v_index(name, "arm") for name in arm.joints)
         if not model.existFrame(arm.end_effector):
             raise FrameNotFoundError(arm.end_effector, [f.name for f in model.frames], where=spec.name)
-        arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, model.getFrameId(arm.end_effector)))
+        frame = frame_index(model, arm.end_effector)
+        arms.append(Arm(arm.name, tuple(arm.joints), v_indices, arm.end_effector, frame))
 
     platform = get_kind(spec.platform).build(spec.wheels, description, model)
     from_urdf = dict(platform.description_limits(description))
@@ -618,8 +668,13 @@ def load_robot(spec_or_name: RobotSpec | str | Path) -> Robot:
         torso_joint_names=spec.torso,
         torso_v_indices=torso_v,
         description=description,
+        warnings=tuple(
+            flaw.warning for flaw in description.flaws if getattr(flaw, "link", None) not in spec.accepted_repairs
+        ),
     )
     _check_inertia(robot, description)
+    for text in robot.warnings:
+        notice(text)
     _log.info(
         "loaded %s from %s: %s platform, %d arm(s), nx = %d", spec.name, spec.urdf, spec.platform, len(arms), robot.nx
     )
@@ -634,7 +689,7 @@ def description_of(robot: Robot) -> RobotDescription:
     """
     if robot.description is not None:
         return robot.description
-    return read_description(robot.spec.urdf, package_dirs=robot.spec.package_dirs)
+    return read_description(robot.spec.urdf, **robot.spec.read_options)
 
 
 def _check_inertia(robot: Robot, description: RobotDescription) -> None:

@@ -6,6 +6,12 @@ A spec is a small TOML file next to its URDF::
     urdf = "planar_dual_arm.urdf"          # relative to this file, or "example-robot-data:..."
     platform = "differential_drive"        # a kind of mobmanip.platforms.KINDS, e.g. "fixed"
     default_task = "planar"
+    strict = false                          # true: refuse the file's flaws instead of repairing them
+    accepted_repairs = ["antenna_link"]     # links whose repair was reviewed: no warning for them
+    package_paths = ["../ws/src"]           # where $(find PKG) and package:// look (xacro, meshes)
+
+    [xacro_args]                            # a xacro file's $(arg NAME) values
+    arm_type = "right"
 
     torso = ["torso_lift_joint"]            # optional: actuated joints shared by all arms
 
@@ -123,6 +129,14 @@ class RobotSpec:
         package_dirs: directories where ``package://`` mesh URIs are resolved.
         source: the spec file this came from, if any.
         support: the ``[support]`` table: passive supports, friction (see :mod:`mobmanip.robot.support`).
+        strict: refuse the robot file's flaws (non-physical inertias, see
+            :mod:`mobmanip.descriptions.flaws`) instead of repairing them with a warning.
+        accepted_repairs: links whose flaws the spec's author has reviewed: they are repaired
+            without a warning (MuJoCo's ``balanceinertia="true"`` in a model says the same).
+            A strict spec accepts none.
+        xacro_args: values of a xacro file's ``$(arg NAME)`` (see :mod:`mobmanip.descriptions.xacro`).
+        package_paths: folders where ``$(find PKG)`` and ``package://PKG`` look first (before
+            ``ROS_PACKAGE_PATH``); also added to :attr:`package_dirs`.
     """
 
     name: str
@@ -142,6 +156,10 @@ class RobotSpec:
     package_dirs: tuple[Path, ...] = ()
     source: Path | None = None
     support: SupportSpec | None = None
+    strict: bool = False
+    accepted_repairs: tuple[str, ...] = ()
+    xacro_args: Mapping[str, str] = field(default_factory=dict)
+    package_paths: tuple[Path, ...] = ()
 
     def __post_init__(self):
         kind = get_kind(self.platform)
@@ -151,6 +169,26 @@ class RobotSpec:
             raise _wheels_not_taken(self.name, self.platform)
         if not self.arms:
             raise SpecError(f"robot {self.name!r} has no arms")
+        if not isinstance(self.strict, bool):
+            raise SpecError(f"robot {self.name!r}: strict must be true or false, got {self.strict!r}")
+        accepted = tuple(self.accepted_repairs)
+        if not all(isinstance(link, str) for link in accepted):
+            raise SpecError(f"robot {self.name!r}: accepted_repairs must be link names, got {list(accepted)!r}")
+        if accepted and self.strict:
+            raise SpecError(
+                f"robot {self.name!r}: strict = true refuses every repair, so accepted_repairs "
+                f"({', '.join(accepted)}) contradicts it; remove one"
+            )
+        object.__setattr__(self, "accepted_repairs", accepted)
+        arguments = {}
+        for key, value in dict(self.xacro_args).items():
+            if isinstance(value, bool):
+                value = "true" if value else "false"
+            if not isinstance(value, (str, int, float)):
+                raise SpecError(f"robot {self.name!r}: [xacro_args] {key} must be a string or a number, got {value!r}")
+            arguments[str(key)] = str(value)
+        object.__setattr__(self, "xacro_args", MappingProxyType(arguments))
+        object.__setattr__(self, "package_paths", tuple(Path(p) for p in self.package_paths))
         if self.default_task not in TASKS:
             raise SpecError(f"unknown default_task {self.default_task!r}; expected one of {', '.join(TASKS)}")
         names = [a.name for a in self.arms]
@@ -202,6 +240,14 @@ class RobotSpec:
         object.__setattr__(self, "grasp_offsets", _grasp_offsets(self.name, self.grasp_offsets, len(self.arms)))
         object.__setattr__(self, "arms", tuple(self.arms))
         object.__setattr__(self, "package_dirs", tuple(Path(p) for p in self.package_dirs))
+
+    @property
+    def read_options(self) -> dict:
+        """The options :func:`mobmanip.descriptions.read_description` reads the robot file with:
+        ``package_dirs`` (mesh folders, :attr:`package_paths` included), and for a format that
+        takes them ``xacro_args`` and ``package_paths``."""
+        dirs = tuple(dict.fromkeys(self.package_dirs + self.package_paths))
+        return {"package_dirs": dirs, "xacro_args": dict(self.xacro_args), "package_paths": self.package_paths}
 
     @property
     def arm_joint_names(self) -> tuple[str, ...]:
@@ -288,11 +334,20 @@ def _optional(table: Mapping, key: str, kind: type, where: str, default):
     return value
 
 
+def _folder(entry: object, base_dir: Path, where: str) -> Path:
+    """A folder of ``package_paths``: relative to the spec's folder unless absolute."""
+    if not isinstance(entry, str) or not entry:
+        raise SpecError(f"{where}: package_paths must be a list of folders, got {entry!r}")
+    path = Path(entry).expanduser()
+    return path if path.is_absolute() else base_dir / path
+
+
 def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) -> RobotSpec:
     """Build a :class:`RobotSpec` from parsed TOML; ``base_dir`` anchors a relative URDF path."""
     where = str(source) if source else "spec"
     known = set(
-        "name urdf platform default_task wheels torso arms object limits reference hold postures support".split()
+        "name urdf platform default_task strict accepted_repairs package_paths xacro_args wheels torso arms object "
+        "limits reference hold postures support".split()
     )
     unknown = sorted(set(data) - known)
     if unknown:
@@ -355,6 +410,10 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
         postures=_optional(data, "postures", dict, where, {}),
         grasp_offsets=tuple(grasp_offsets),
         support=support_spec_from_table(data["support"], where) if "support" in data else None,
+        strict=_optional(data, "strict", bool, where, False),
+        accepted_repairs=tuple(_optional(data, "accepted_repairs", list, where, [])),
+        xacro_args=_optional(data, "xacro_args", dict, where, {}),
+        package_paths=tuple(_folder(p, base_dir, where) for p in _optional(data, "package_paths", list, where, [])),
         package_dirs=package_dirs,
         source=source,
     )

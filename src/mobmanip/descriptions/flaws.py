@@ -1,0 +1,204 @@
+"""Vendor flaws in a robot file, and the stated rule that repairs each.
+
+Robot files as vendors publish them carry mistakes that do not stop a model from being built:
+a link whose inertia tensor no rigid body can have (a principal moment below zero, or the
+largest one above the sum of the other two: Fetch's gripper fingers ``ixx=0.002, iyy=izz=0``,
+PR2's sensor mount, TIAGo++'s antennas with a moment of -3.5e-8 kg m^2). A kinematic analysis
+never depends on inertias, so such a flaw never blocks one; for the dynamic measures mobmanip
+repairs it by one stated rule and says so, once per link (:attr:`Flaw.warning`), or refuses it
+when asked to be strict (:attr:`Flaw.refusal`, the message of the check plus the way forward).
+
+**The rule for inertias is MuJoCo's** ``balanceinertia``: a tensor whose principal moments break
+the triangle inequality (every non-physical tensor does: a negative moment implies it) has its
+three principal moments set to their mean, ``trace / 3``, about the same centre of mass; the mass
+and the centre of mass are kept. A tensor whose mean is not positive becomes zero (the link a
+point mass). Why this rule rather than Drake's (which keeps the mass and zeroes the rotational
+inertia):
+
+- it keeps the trace, so the link's moment about an axis of random direction (``trace / 3`` on
+  average) is what the file says; zeroing drops it, and a joint that turns such a link (Fetch's
+  wrist roll turns both fingers) would lose all of the fingers' rotational inertia;
+- MuJoCo, the physics referee of this project, compiles the same vendor file to the same
+  repaired tensor, so mobmanip and the referee simulate one robot;
+- its effect is bounded by the link's own tensor: each principal moment moves by
+  ``|lambda_i - trace / 3|``, at most ``(2/3) (lambda_max - lambda_min)`` (:attr:`InertiaFlaw.change`).
+
+The effect on the results: the kinematic measures (Jacobians, velocity limits) are unchanged;
+gravity (mass and centre of mass) is unchanged; the reduced inertia ``P = S^T M S`` changes by
+each repaired link's rotational share ``J_w^T R (I_new - I_old) R^T J_w`` and nothing else, so
+the dynamic measures move by no more than the repaired links' share of ``P``.
+
+A tensor within rounding of the physical set (:data:`INERTIA_SLACK`, relative to its largest
+entry: values printed to six digits) is read as written and is no flaw.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+#: How far, relative to a tensor's largest entry, its principal moments may miss positivity and
+#: the triangle inequality and still be read as written: rounding of values printed to about six
+#: significant digits (a thin plate's moments satisfy the inequality with equality). Beyond it
+#: the tensor is a flaw, repaired with a warning or refused under ``strict``.
+INERTIA_SLACK = 1e-5
+
+#: What the inertia repair is called in messages.
+INERTIA_RULE = "MuJoCo's balanceinertia rule"
+
+#: How a user refuses repairs, or accepts them, for the messages.
+STRICT_HINT = "--strict"
+
+_NAMES = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+
+
+def _entries(inertia: np.ndarray) -> str:
+    values = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2])
+    return " ".join(f"{n}={v:g}" for n, v in zip(_NAMES, values))
+
+
+@dataclass(frozen=True)
+class Flaw:
+    """A flaw of a robot file that mobmanip repairs by a stated rule (or refuses when strict).
+
+    Attributes:
+        subject: what it is in, e.g. ``"link 'r_gripper_finger_link'"``.
+        problem: what is wrong, with the values as written (the check's own message).
+        repair: what the rule does about it, with the values it gives.
+    """
+
+    subject: str
+    problem: str
+    repair: str
+
+    @property
+    def warning(self) -> str:
+        """One line naming the subject, the values and the repair (stderr and the JSON's ``"warnings"``)."""
+        return (
+            f"{self.subject}: {self.problem}; repaired by {self.repair}; kinematic results unaffected "
+            f"({STRICT_HINT} refuses instead)"
+        )
+
+    @property
+    def refusal(self) -> str:
+        """The message under ``strict``: the problem, then the way forward."""
+        return (
+            f"{self.subject} {self.problem}; correct it in the file, or drop --strict (strict = false in the spec) "
+            f"to have mobmanip repair it by {self.repair} with a warning"
+        )
+
+
+@dataclass(frozen=True)
+class InertiaFlaw(Flaw):
+    """A link's inertia tensor no rigid body can have, and its repair (see the module docstring).
+
+    Attributes:
+        link: the link's name.
+        inertia: the tensor as written (kg m^2), about the centre of mass in the ``<inertial>``
+            frame, rows of (3, 3).
+        moments: its principal moments, ascending (kg m^2).
+        repaired: the tensor the rule gives, in the same frame, rows of (3, 3).
+    """
+
+    link: str = ""
+    inertia: tuple[tuple[float, ...], ...] = ()
+    moments: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    repaired: tuple[tuple[float, ...], ...] = ()
+
+    @property
+    def change(self) -> float:
+        """The largest change of a principal moment (kg m^2): the repair's effect on this link."""
+        return float(np.max(np.abs(np.diag(np.array(self.repaired)) - np.array(self.moments))))
+
+    @property
+    def delta(self) -> np.ndarray:
+        """``repaired - inertia`` (3, 3), in the ``<inertial>`` frame (kg m^2)."""
+        return np.array(self.repaired) - np.array(self.inertia)
+
+
+def inertia_flaw(link: str, inertia: np.ndarray) -> InertiaFlaw | None:
+    """The flaw of a link's finite, symmetric inertia tensor (kg m^2), or ``None`` when it is
+    physical within :data:`INERTIA_SLACK` (relative to its largest entry)."""
+    scale = float(np.max(np.abs(inertia)))
+    if scale == 0.0:
+        return None
+    moments = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
+    tolerance = INERTIA_SLACK * scale
+    a, b, c = (float(m) for m in moments)
+    entries = _entries(inertia)
+    if a < -tolerance:
+        problem = f"inertia ({entries}) is not positive semi-definite: principal moment {a:g}"
+    elif c > a + b + tolerance:
+        problem = (
+            f"inertia ({entries}) is not physical: principal moments {a:g}, {b:g}, {c:g} violate the triangle "
+            "inequality (the largest exceeds the sum of the others)"
+        )
+    else:
+        return None
+    mean = max((a + b + c) / 3.0, 0.0)
+    repaired = mean * np.eye(3)
+    change = float(np.max(np.abs(mean - moments)))
+    if mean > 0.0:
+        repair = (
+            f"{INERTIA_RULE}: principal moments set to their mean, {mean:g} kg m^2 (each moved by at most {change:g})"
+        )
+    else:
+        repair = f"{INERTIA_RULE}: principal moments set to zero (their mean is not positive), a point mass"
+    return InertiaFlaw(
+        subject=f"link {link!r}",
+        problem=problem,
+        repair=repair,
+        link=link,
+        inertia=tuple(tuple(float(v) for v in row) for row in inertia),
+        moments=(a, b, c),
+        repaired=tuple(tuple(float(v) for v in row) for row in repaired),
+    )
+
+
+def repair_inertias(model: pin.Model, flaws: Iterable[Flaw], inertials: Mapping[str, Any]) -> list[str]:
+    """Apply the repairs of ``flaws`` to a Pinocchio model built from the file, in place.
+
+    Pinocchio adds each link's inertia into the body of the joint that moves it (links on fixed
+    joints merged in), so each repair adds its change ``R (I_new - I_old) R^T`` (the link's
+    ``<inertial>`` frame expressed in that joint's frame) to that body's rotational inertia about
+    the joint origin; the mass and the first moment of mass are not touched.
+
+    Args:
+        model: the model as built (before any joint is locked).
+        flaws: the description's flaws (those that are not inertia flaws are skipped).
+        inertials: each link's :class:`~mobmanip.descriptions.description.Inertial` by link name
+            (for its frame).
+
+    Returns:
+        The links repaired (a link Pinocchio did not keep as a body frame is skipped).
+    """
+    import pinocchio as pin
+
+    done = []
+    for flaw in flaws:
+        if not isinstance(flaw, InertiaFlaw) or not model.existFrame(flaw.link, pin.FrameType.BODY):
+            continue
+        frame = model.frames[model.getFrameId(flaw.link, pin.FrameType.BODY)]
+        inertial = inertials[flaw.link]
+        rotation = frame.placement.rotation @ inertial.origin.rotation
+        change = rotation @ flaw.delta @ rotation.T
+        joint = frame.parentJoint
+        parameters = np.array(model.inertias[joint].toDynamicParameters(), dtype=float)
+        # [m, m c, Ixx, Ixy, Iyy, Ixz, Iyz, Izz] about the joint origin: linear in the inertia
+        parameters[4:] += (change[0, 0], change[0, 1], change[1, 1], change[0, 2], change[1, 2], change[2, 2])
+        model.inertias[joint] = pin.Inertia.FromDynamicParameters(parameters)
+        done.append(flaw.link)
+    return done
+
+
+def refuse(flaws: Sequence[Flaw], error) -> None:
+    """Raise ``error(reason)`` for the first flaw (the strict policy); nothing when there is none."""
+    if flaws:
+        more = f" ({len(flaws) - 1} more flaw{'s' if len(flaws) > 2 else ''} after it)" if len(flaws) > 1 else ""
+        raise error(flaws[0].refusal + more)

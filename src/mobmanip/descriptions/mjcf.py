@@ -1,0 +1,754 @@
+"""MJCF: MuJoCo's robot files (MuJoCo Menagerie's mobile manipulators, say), read into the same
+neutral description as a URDF, with Pinocchio's MJCF builders (``buildModelFromMJCF``,
+``buildGeomFromMJCF``) for the model and its geometry.
+
+:func:`read_mjcf` (the ``mjcf`` format, suffixes ``.xml`` and ``.mjcf``; an ``.xml`` file whose
+root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what it skips:
+
+- ``<include>`` files, the ``<compiler>`` (``angle``: degrees unless ``radian``; ``eulerseq``;
+  ``meshdir`` / ``assetdir``; ``autolimits``) and ``<default>`` classes (nested, ``childclass``);
+- bodies (links) and their placements (``pos`` and ``quat``, ``axisangle``, ``euler``, ``xyaxes``
+  or ``zaxis``); ``hinge`` joints (revolute with a ``range``, continuous without) and ``slide``
+  joints (prismatic), their axes, and their anchors (``pos``: the link frame is put on the joint
+  as in Pinocchio's model); a body with several joints becomes a chain of links, one joint each
+  (``BODY__JOINT`` for all but the last), as MuJoCo applies them in order; sites become frames
+  (a link ``SITE`` on a fixed joint ``SITE_site``): an end effector may be a site;
+- the one body under ``<worldbody>`` is the root link; its ``free`` joint is dropped (mobmanip
+  adds the platform's planar joint); a ``ball`` joint or a ``free`` joint elsewhere is refused;
+- inertias: ``<inertial>`` (``diaginertia`` in its ``quat`` frame, or ``fullinertia``); a body
+  without one gets its geoms' (``mass``, or ``density`` times volume, for spheres, boxes,
+  cylinders, capsules and ellipsoids) as Pinocchio computes them. A mesh geom is not integrated,
+  by mobmanip (its mass counts as a point at the geom) nor by Pinocchio 4.1 (which gives such a
+  body 1 kg and a unit tensor): the notes say so, and such a body needs an ``<inertial>`` before
+  the dynamic measures mean anything (Menagerie's Stretch is built this way);
+- limits: position from a joint's ``range``; effort from its ``actuatorfrcrange``, else from the
+  actuators on it: ``gear`` times the largest ``forcerange`` bound, or for a ``motor`` without
+  one, ``gear`` times the largest ``ctrlrange`` bound; velocity from a ``velocity`` actuator's
+  ``ctrlrange`` (divided by its ``gear``). MJCF has no velocity limit of its own: a joint without
+  such an actuator has none (``init-spec`` asks for it);
+- geometry: geoms are the link's shapes (visual: all of them; collision: those with ``contype``
+  or ``conaffinity``); the viewer loads STL and OBJ meshes (Pinocchio's ``buildGeomFromMJCF``).
+
+Skipped, and listed in the description's ``notes`` when the file has them: tendons and the
+actuators that act through them or through sites, equality constraints (coupled joints move
+independently here), contact settings, sensors, cameras, lights, textures and materials.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import tempfile
+import warnings
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from xml.etree import ElementTree
+
+import numpy as np
+
+from ..errors import MjcfError
+from ..support.native_stderr import call_with_large_stack, captured_native_stderr
+from .checks import assemble
+from .description import (
+    Inertial,
+    JointDescription,
+    JointLimits,
+    LinkDescription,
+    MeshFilter,
+    ModelBuilder,
+    Origin,
+    RobotDescription,
+    Shape,
+)
+from .formats import DescriptionFormat, register_format
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+#: Actuator elements: all set the attributes of MuJoCo's ``general`` actuator.
+ACTUATORS = ("general", "motor", "position", "velocity", "intvelocity", "damper", "cylinder", "muscle", "adhesion")
+
+#: Sections of a MuJoCo file that mobmanip does not read, and what they are, for the notes.
+SKIPPED = {
+    "tendon": "tendons",
+    "equality": "equality constraints (coupled joints move independently here)",
+    "contact": "contact pairs and exclusions",
+    "sensor": "sensors",
+    "keyframe": "keyframes",
+}
+
+_DENSITY = 1000.0  # kg/m^3, MuJoCo's default
+
+
+def _floats(text: str | None, what: str, count: int | None = None) -> list[float] | None:
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.split()]
+    except ValueError:
+        raise MjcfError("", f"{what} is not numeric: {text!r}") from None  # the caller names the file
+    if count is not None and len(values) != count:
+        raise MjcfError("", f"{what} must be {count} numbers, got {text!r}")
+    return values
+
+
+def _quat_matrix(q: Iterable[float]) -> np.ndarray:
+    w, x, y, z = np.asarray(list(q), dtype=float) / np.linalg.norm(list(q))
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    axis = axis / np.linalg.norm(axis)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """Roll, pitch, yaw of R = Rz(yaw) Ry(pitch) Rx(roll) (URDF's convention)."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if abs(math.cos(pitch)) < 1e-12:  # gimbal lock: put all of the rotation about z into yaw
+        return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+class _Reader:
+    """One MJCF file: includes expanded, defaults resolved, the tree walked into description parts."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.notes: list[str] = []
+        try:
+            self.root = ElementTree.parse(path).getroot()
+        except ElementTree.ParseError as exc:
+            raise self.fail(f"not well-formed XML: {exc}") from None
+        except OSError as exc:
+            raise self.fail(f"cannot read: {exc.strerror or exc}") from None
+        if self.root.tag != "mujoco":
+            raise self.fail(f"root element is <{self.root.tag}>, expected <mujoco>")
+        self._expand_includes(self.root, path.parent, depth=0)
+        compiler: dict[str, str] = {}
+        for element in self.root.iter("compiler"):
+            compiler.update(element.attrib)
+        self.degrees = compiler.get("angle", "degree") != "radian"
+        self.eulerseq = compiler.get("eulerseq", "xyz")
+        self.autolimits = compiler.get("autolimits", "true") == "true"
+        asset_dir = compiler.get("assetdir")
+        self.meshdir = path.parent / compiler.get("meshdir", asset_dir or "")
+        self.texturedir = path.parent / compiler.get("texturedir", asset_dir or "")
+        self.defaults: dict[str, dict[str, dict[str, str]]] = {}
+        for top in self.root.findall("default"):
+            self._read_defaults(top, {}, top.get("class", "main"))
+        self.meshes: dict[str, tuple[Path, tuple[float, float, float] | None]] = {}
+        for asset in self.root.iter("asset"):
+            for mesh in asset.findall("mesh"):
+                file = mesh.get("file")
+                if file is None:
+                    continue
+                name = mesh.get("name") or Path(file).stem
+                scale = _floats(mesh.get("scale"), f"mesh {name!r} scale", 3)
+                factors = None if scale is None else (scale[0], scale[1], scale[2])
+                self.meshes[name] = (self.meshdir / file, factors)
+        for tag, what in SKIPPED.items():
+            if any(len(element) for element in self.root.iter(tag)):
+                self.notes.append(f"not read: {what}")
+
+    def fail(self, reason: str) -> MjcfError:
+        return MjcfError(str(self.path), reason)
+
+    # ----- the file
+
+    def _expand_includes(self, element: ElementTree.Element, folder: Path, depth: int) -> None:
+        if depth > 20:
+            raise self.fail("<include> nested more than 20 deep")
+        for k, child in enumerate(list(element)):
+            if child.tag == "include":
+                file = folder / child.get("file", "")
+                try:
+                    included = ElementTree.parse(file).getroot()
+                except (OSError, ElementTree.ParseError) as exc:
+                    raise self.fail(f"<include file={child.get('file')!r}>: {exc}") from None
+                self._expand_includes(included, file.parent, depth + 1)
+                element.remove(child)
+                for offset, item in enumerate(list(included)):
+                    element.insert(k + offset, item)
+            else:
+                self._expand_includes(child, folder, depth)
+
+    def _read_defaults(self, element: ElementTree.Element, inherited: dict, name: str) -> None:
+        own = {tag: dict(attrs) for tag, attrs in inherited.items()}
+        for child in element:
+            if child.tag == "default":
+                continue
+            tag = "actuator" if child.tag in ACTUATORS else child.tag
+            own.setdefault(tag, {}).update(child.attrib)
+        self.defaults[name] = own
+        for child in element.findall("default"):
+            self._read_defaults(child, own, child.get("class", name))
+
+    def attributes(self, element: ElementTree.Element, tag: str, childclass: str) -> dict[str, str]:
+        """The element's attributes over its class's defaults."""
+        cls = element.get("class", childclass)
+        if cls not in self.defaults and cls != "main":
+            raise self.fail(f"<{element.tag}> names class {cls!r}, which no <default> defines")
+        out = dict(self.defaults.get(cls, {}).get(tag, {}))
+        out.update(element.attrib)
+        return out
+
+    def angle(self, value: float) -> float:
+        return math.radians(value) if self.degrees else value
+
+    def rotation(self, attrs: dict[str, str], what: str) -> np.ndarray:
+        """The rotation of an element's orientation attributes (identity without one)."""
+        try:
+            if "quat" in attrs:
+                return _quat_matrix(_floats(attrs["quat"], f"{what} quat", 4))  # type: ignore[arg-type]
+            if "axisangle" in attrs:
+                x, y, z, a = _floats(attrs["axisangle"], f"{what} axisangle", 4)  # type: ignore[misc]
+                return _axis_angle(np.array([x, y, z]), self.angle(a))
+            if "euler" in attrs:
+                angles = [self.angle(v) for v in _floats(attrs["euler"], f"{what} euler", 3)]  # type: ignore[union-attr]
+                R = np.eye(3)
+                for axis, angle in zip(self.eulerseq, angles):
+                    unit = np.eye(3)["xyz".index(axis.lower())]
+                    turn = _axis_angle(unit, angle)
+                    R = R @ turn if axis.islower() else turn @ R  # lower case: moving axes
+                return R
+            if "xyaxes" in attrs:
+                v = np.array(_floats(attrs["xyaxes"], f"{what} xyaxes", 6))
+                x = v[:3] / np.linalg.norm(v[:3])
+                y = v[3:] - (v[3:] @ x) * x
+                y /= np.linalg.norm(y)
+                return np.column_stack([x, y, np.cross(x, y)])
+            if "zaxis" in attrs:
+                z = np.array(_floats(attrs["zaxis"], f"{what} zaxis", 3))
+                z /= np.linalg.norm(z)
+                axis = np.cross([0.0, 0.0, 1.0], z)
+                if np.linalg.norm(axis) < 1e-12:
+                    return np.eye(3) if z[2] > 0 else np.diag([1.0, -1.0, -1.0])
+                return _axis_angle(axis, math.acos(max(-1.0, min(1.0, float(z[2])))))
+        except MjcfError as exc:
+            raise self.fail(exc.reason) from None
+        except (ValueError, ZeroDivisionError) as exc:
+            raise self.fail(f"{what}: {exc}") from None
+        return np.eye(3)
+
+    def origin(self, attrs: dict[str, str], what: str, shift: np.ndarray | None = None) -> Origin:
+        """An element's placement in its body's frame (moved by ``shift``, the link frame's offset)."""
+        try:
+            pos = np.array(_floats(attrs.get("pos"), f"{what} pos", 3) or (0.0, 0.0, 0.0))
+        except MjcfError as exc:
+            raise self.fail(exc.reason) from None
+        if shift is not None:
+            pos = pos - shift
+        return Origin(xyz=tuple(float(v) for v in pos), rpy=_rpy(self.rotation(attrs, what)))  # type: ignore[arg-type]
+
+
+def _geom_mass_properties(kind: str, size: list[float], attrs: dict[str, str]) -> tuple[float, np.ndarray] | None:
+    """Mass and rotational inertia (3, 3) about the geom's centre in its frame, for primitives."""
+    volume: float
+    if kind == "sphere":
+        r = size[0]
+        volume, shape = 4 / 3 * math.pi * r**3, np.full(3, 2 / 5 * r * r)
+    elif kind == "box":
+        a, b, c = (2 * s for s in size[:3])
+        volume, shape = a * b * c, np.array([b * b + c * c, a * a + c * c, a * a + b * b]) / 12
+    elif kind == "cylinder":
+        r, h = size[0], 2 * size[1]
+        volume, shape = math.pi * r * r * h, np.array([(3 * r * r + h * h) / 12, (3 * r * r + h * h) / 12, r * r / 2])
+    elif kind == "capsule":
+        r, h = size[0], 2 * size[1]
+        volume = math.pi * r * r * (h + 4 / 3 * r)
+        shape = np.array([(3 * r * r + h * h) / 12, (3 * r * r + h * h) / 12, r * r / 2])  # as a cylinder
+    elif kind == "ellipsoid":
+        a, b, c = size[:3]
+        volume, shape = 4 / 3 * math.pi * a * b * c, np.array([b * b + c * c, a * a + c * c, a * a + b * b]) / 5
+    else:
+        return None
+    mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * volume
+    return mass, np.diag(mass * shape)
+
+
+class _Tree:
+    """The body tree walked into links and joints, and the text handed to Pinocchio."""
+
+    def __init__(self, reader: _Reader) -> None:
+        self.r = reader
+        self.links: list[LinkDescription] = []
+        self.joints: list[JointDescription] = []
+        self.limits: dict[str, dict[str, float]] = {}
+        self.mesh_notes = 0
+        self.counter = 0
+        self.planar_base: tuple[JointDescription, ...] = ()
+
+    def name(self, element: ElementTree.Element, prefix: str) -> str:
+        name = element.get("name")
+        if not name:
+            self.counter += 1
+            name = f"{prefix}{self.counter}"
+            element.set("name", name)  # Pinocchio's model then uses the same name
+        return name
+
+    def walk(self, body: ElementTree.Element, parent: str | None, childclass: str, root: bool) -> None:
+        r = self.r
+        name = self.name(body, "body")
+        childclass = body.get("childclass", childclass)
+        where = f"body {name!r}"
+        joints = [j for j in body if j.tag in ("joint", "freejoint")]
+        if root:
+            free = [
+                j for j in joints if j.tag == "freejoint" or r.attributes(j, "joint", childclass).get("type") == "free"
+            ]
+            for j in free:
+                body.remove(j)
+                self.r.notes.append(
+                    f"the free joint of the root body {name!r} is dropped (mobmanip adds the platform's)"
+                )
+            joints = [j for j in joints if j not in free]
+        body_origin = r.origin(dict(body.attrib), where)
+        described = []
+        for j in joints:
+            attrs = r.attributes(j, "joint", childclass)
+            kind = "free" if j.tag == "freejoint" else attrs.get("type", "hinge")
+            jname = self.name(j, f"{name}_joint")
+            if kind in ("free", "ball"):
+                raise r.fail(
+                    f"joint {jname!r} of {where} is a {kind} joint; mobmanip models one-degree-of-freedom joints only"
+                )
+            if kind not in ("hinge", "slide"):
+                raise r.fail(f"joint {jname!r} has an unknown type {kind!r}")
+            described.append((j, jname, kind, attrs))
+        anchors = {tuple(_floats(a.get("pos"), "joint pos", 3) or (0.0, 0.0, 0.0)) for _, _, _, a in described}
+        if len(anchors) > 1:
+            raise r.fail(f"{where} has several joints with different anchors (pos); mobmanip reads one anchor per body")
+        shift = np.array(anchors.pop()) if anchors else np.zeros(3)
+        if root and described:
+            self.planar_base = self.base_joints(name, described)
+            for element, _, _, _ in described:
+                body.remove(element)
+            described = []
+        if root:
+            moved = any(key in body.attrib for key in ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis"))
+            for key in ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis"):
+                body.attrib.pop(key, None)
+            if moved:
+                r.notes.append(
+                    f"the root body {name!r}'s placement in the world is dropped (the platform pose is mobmanip's)"
+                )
+        # a chain: one link per joint, the body's own link last
+        previous, origin = parent, body_origin
+        if described and np.any(shift):
+            R = body_origin.rotation
+            origin = Origin(xyz=tuple(float(v) for v in np.asarray(body_origin.xyz) + R @ shift), rpy=body_origin.rpy)  # type: ignore[arg-type]
+        for k, (_, jname, kind, attrs) in enumerate(described):
+            link_name = name if k == len(described) - 1 else f"{name}__{jname}"
+            if k < len(described) - 1:
+                self.links.append(LinkDescription(link_name))
+            self.joints.append(self.joint(jname, kind, attrs, previous, link_name, origin))
+            previous, origin = link_name, Origin()
+        if not described and parent is not None:
+            self.joints.append(JointDescription(f"{name}_fixed", "fixed", parent, name, body_origin))
+        self.links.append(self.link(body, name, childclass, shift if described else None))
+        for site in body.findall("site"):
+            sname = self.name(site, f"{name}_site")
+            attrs = r.attributes(site, "site", childclass)
+            self.links.append(LinkDescription(sname))
+            self.joints.append(
+                JointDescription(
+                    f"{sname}_site",
+                    "fixed",
+                    name,
+                    sname,
+                    r.origin(attrs, f"site {sname!r}", shift if described else None),
+                )
+            )
+        for child in body.findall("body"):
+            self.walk(child, name, childclass, root=False)
+        if len(described) > 1:
+            self.split(body, described)
+
+    def base_joints(self, body: str, described) -> tuple[JointDescription, ...]:
+        """The root body's own joints as a planar base: a slide along x, a slide along y and a
+        hinge about z (any order, anchors at the body's origin), returned as (x, y, yaw).
+
+        Raises:
+            MjcfError: the root has other joints (mobmanip moves the root with the platform).
+        """
+        found: dict[str, JointDescription] = {}
+        for _, jname, kind, attrs in described:
+            axis = np.array(_floats(attrs.get("axis"), f"joint {jname!r} axis", 3) or (0.0, 0.0, 1.0))
+            axis = axis / np.linalg.norm(axis)
+            anchor = _floats(attrs.get("pos"), f"joint {jname!r} pos", 3) or (0.0, 0.0, 0.0)
+            role = None
+            if kind == "slide" and abs(abs(axis[0]) - 1.0) < 1e-9:
+                role = "x"
+            elif kind == "slide" and abs(abs(axis[1]) - 1.0) < 1e-9:
+                role = "y"
+            elif kind == "hinge" and abs(abs(axis[2]) - 1.0) < 1e-9 and not any(anchor):
+                role = "yaw"
+            if role is None or role in found:
+                listed = ", ".join(f"{j} ({k})" for _, j, k, _ in described)
+                raise self.r.fail(
+                    f"the root body {body!r} has joints {listed}: mobmanip moves the root with the platform's own "
+                    "joint, and reads a root's joints only as a planar base (a slide along x, a slide along y and a "
+                    "hinge about z)"
+                )
+            found[role] = self.joint(jname, kind, attrs, body, body, Origin())
+        if set(found) != {"x", "y", "yaw"}:
+            raise self.r.fail(
+                f"the root body {body!r} has joints {', '.join(j.name for j in found.values())}: a planar base "
+                "needs a slide along x, a slide along y and a hinge about z"
+            )
+        self.r.notes.append(
+            f"the root body {body!r} moves on planar joints {found['x'].name}, {found['y'].name}, "
+            f"{found['yaw'].name}: an omnidirectional platform replaces them (their limits are the base's)"
+        )
+        return found["x"], found["y"], found["yaw"]
+
+    def split(self, body: ElementTree.Element, described) -> None:
+        """Rewrite a body with several joints as nested bodies, one joint each (Pinocchio would
+        make one composite joint of them)."""
+        name = body.get("name")
+        outer_attrs = {
+            k: v for k, v in body.attrib.items() if k in ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis")
+        }
+        for key in outer_attrs:
+            del body.attrib[key]
+        parent = self.parent_of(body)
+        index = list(parent).index(body)
+        parent.remove(body)
+        container = parent
+        for k, (j, jname, _, _) in enumerate(described[:-1]):
+            virtual = ElementTree.Element("body", {"name": f"{name}__{jname}", **(outer_attrs if k == 0 else {})})
+            if "childclass" in body.attrib:
+                virtual.set("childclass", body.get("childclass", ""))
+            body.remove(j)
+            virtual.append(j)
+            container.insert(index if container is parent else 0, virtual)
+            container = virtual
+        container.append(body)
+
+    def parent_of(self, element: ElementTree.Element) -> ElementTree.Element:
+        for candidate in self.r.root.iter():
+            if element in list(candidate):
+                return candidate
+        raise self.r.fail("a body without a parent")  # pragma: no cover
+
+    def joint(self, name, kind, attrs, parent, child, origin) -> JointDescription:
+        r = self.r
+        axis = tuple(_floats(attrs.get("axis"), f"joint {name!r} axis", 3) or (0.0, 0.0, 1.0))
+        range_ = _floats(attrs.get("range"), f"joint {name!r} range", 2)
+        limited = attrs.get("limited", "auto")
+        bounded = range_ is not None and (limited == "true" or (limited == "auto" and r.autolimits))
+        lower = upper = None
+        if bounded and range_ is not None:
+            lower, upper = (r.angle(v) if kind == "hinge" else v for v in range_)
+        effort = None
+        force = _floats(attrs.get("actuatorfrcrange"), f"joint {name!r} actuatorfrcrange", 2)
+        flimited = attrs.get("actuatorfrclimited", "auto")
+        if force is not None and (flimited == "true" or (flimited == "auto" and r.autolimits)):
+            effort = max(abs(force[0]), abs(force[1]))
+        from_actuators = self.limits.get(name, {})
+        if effort is None:
+            effort = from_actuators.get("effort")
+        urdf_type = "prismatic" if kind == "slide" else ("revolute" if bounded else "continuous")
+        limits = JointLimits(lower, upper, from_actuators.get("velocity"), effort)
+        damping = float(attrs["damping"]) if "damping" in attrs else None
+        friction = float(attrs["frictionloss"]) if "frictionloss" in attrs else None
+        return JointDescription(name, urdf_type, parent, child, origin, axis, limits, None, damping, friction)  # type: ignore[arg-type]
+
+    def link(self, body, name: str, childclass: str, shift: np.ndarray | None) -> LinkDescription:
+        r = self.r
+        inertial = None
+        element = body.find("inertial")
+        collisions, visuals = [], []
+        geom_masses = []
+        for geom in body.findall("geom"):
+            attrs = r.attributes(geom, "geom", childclass)
+            shape = self.shape(geom, attrs, name, shift)
+            if shape is None:
+                continue
+            visuals.append(shape)
+            if attrs.get("contype", "1") != "0" or attrs.get("conaffinity", "1") != "0":
+                collisions.append(shape)
+            geom_masses.append((shape, attrs))
+        if element is not None:
+            attrs = dict(element.attrib)
+            mass = float(attrs.get("mass", 0.0))
+            where = f"link {name!r} <inertial>"
+            if "fullinertia" in attrs:
+                xx, yy, zz, xy, xz, yz = _floats(attrs["fullinertia"], f"{where} fullinertia", 6)  # type: ignore[misc]
+                tensor = ((xx, xy, xz), (xy, yy, yz), (xz, yz, zz))
+            else:
+                d = _floats(attrs.get("diaginertia"), f"{where} diaginertia", 3) or (0.0, 0.0, 0.0)
+                tensor = ((d[0], 0.0, 0.0), (0.0, d[1], 0.0), (0.0, 0.0, d[2]))
+            inertial = Inertial(mass, r.origin(attrs, where, shift), tensor)
+        elif geom_masses:
+            inertial = self.geom_inertial(name, geom_masses)
+        return LinkDescription(name, inertial, tuple(collisions), tuple(visuals))
+
+    def geom_inertial(self, name: str, geoms) -> Inertial | None:
+        """The bodies' geoms' mass properties, as one inertial about their centre of mass."""
+        parts = []
+        for shape, attrs in geoms:
+            kind = attrs.get("type", "sphere")
+            if shape.kind == "box":
+                size = [v / 2 for v in shape.size]
+            elif shape.kind == "cylinder":
+                size = [shape.radius, shape.length / 2]
+            else:
+                size = [shape.radius or 0.0] * 3
+            if kind == "ellipsoid":
+                size = [float(v) for v in (attrs.get("size") or "0 0 0").split()][:3]
+            props = _geom_mass_properties(kind, size, attrs) if kind != "mesh" else None
+            if props is None:
+                mass = float(attrs.get("mass", 0.0))
+                if kind == "mesh" and mass > 0.0:
+                    self.mesh_notes += 1
+                props = (mass, np.zeros((3, 3)))
+            if props[0] > 0.0:
+                R = shape.origin.rotation
+                parts.append((props[0], np.asarray(shape.origin.xyz), R @ props[1] @ R.T))
+        total = sum(m for m, _, _ in parts)
+        if total <= 0.0:
+            return None
+        com = sum(m * p for m, p, _ in parts) / total
+        tensor = np.zeros((3, 3))
+        for m, p, inertia in parts:
+            d = p - com
+            tensor += inertia + m * (float(d @ d) * np.eye(3) - np.outer(d, d))
+        x, y, z = (float(v) for v in np.asarray(com))
+        rows = tuple((float(row[0]), float(row[1]), float(row[2])) for row in tensor)
+        return Inertial(total, Origin(xyz=(x, y, z)), (rows[0], rows[1], rows[2]))
+
+    def shape(self, geom, attrs, body: str, shift) -> Shape | None:
+        r = self.r
+        kind = attrs.get("type", "sphere")
+        where = f"a geom of body {body!r}"
+        size = [float(v) for v in (attrs.get("size") or "0 0 0").split()]
+        if "fromto" in attrs and kind in ("capsule", "cylinder", "box", "ellipsoid"):
+            a, b = np.split(np.array(_floats(attrs["fromto"], f"{where} fromto", 6)), 2)
+            axis = b - a
+            length = float(np.linalg.norm(axis))
+            z = axis / length if length > 0 else np.array([0.0, 0.0, 1.0])
+            rot = np.cross([0.0, 0.0, 1.0], z)
+            R = (
+                _axis_angle(rot, math.acos(max(-1.0, min(1.0, float(z[2])))))
+                if np.linalg.norm(rot) > 1e-12
+                else np.eye(3)
+            )
+            center = (a + b) / 2 - (shift if shift is not None else 0.0)
+            origin = Origin(xyz=tuple(float(v) for v in center), rpy=_rpy(R))  # type: ignore[arg-type]
+            size = [size[0], length / 2, size[0]]
+        else:
+            origin = r.origin(attrs, where, shift)
+        if kind == "sphere":
+            return Shape("sphere", origin, radius=size[0])
+        if kind in ("cylinder", "capsule"):
+            return Shape("cylinder", origin, radius=size[0], length=2 * size[1])
+        if kind == "box":
+            return Shape("box", origin, size=(2 * size[0], 2 * size[1], 2 * size[2]))
+        if kind == "ellipsoid":
+            return Shape("sphere", origin, radius=max(size[:3]))
+        if kind == "mesh":
+            mesh = attrs.get("mesh")
+            if mesh not in r.meshes:
+                raise r.fail(f"{where} uses mesh {mesh!r}, which no <asset> <mesh> defines")
+            file, scale = r.meshes[mesh]
+            return Shape("mesh", origin, filename=str(file), scale=scale)
+        return None  # planes, height fields: not the robot's
+
+    def actuators(self) -> None:
+        """Velocity and effort limits from the actuators that drive a joint directly."""
+        r = self.r
+        through = 0
+        for section in r.root.iter("actuator"):
+            for actuator in section:
+                if actuator.tag not in ACTUATORS:
+                    continue
+                attrs = r.attributes(actuator, "actuator", "main")
+                joint = attrs.get("joint")
+                if joint is None:
+                    through += 1
+                    continue
+                gear = abs((_floats(attrs.get("gear"), f"actuator on {joint!r} gear") or [1.0])[0]) or 1.0
+                entry = self.limits.setdefault(joint, {})
+                force = _floats(attrs.get("forcerange"), f"actuator on {joint!r} forcerange", 2)
+                ctrl = _floats(attrs.get("ctrlrange"), f"actuator on {joint!r} ctrlrange", 2)
+                forced = attrs.get("forcelimited", "auto")
+                if force is not None and (forced == "true" or (forced == "auto" and r.autolimits)):
+                    entry["effort"] = max(entry.get("effort", 0.0), gear * max(abs(force[0]), abs(force[1])))
+                elif actuator.tag == "motor" and ctrl is not None:
+                    entry["effort"] = max(entry.get("effort", 0.0), gear * max(abs(ctrl[0]), abs(ctrl[1])))
+                if actuator.tag == "velocity" and ctrl is not None:
+                    entry["velocity"] = max(entry.get("velocity", 0.0), max(abs(ctrl[0]), abs(ctrl[1])) / gear)
+        if through:
+            r.notes.append(
+                f"not read: {through} actuator(s) acting through tendons or sites (no joint limit from them)"
+            )
+
+
+def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = None) -> RobotDescription:
+    """Read an MJCF file into its checked description (see the module docstring).
+
+    Args:
+        path: the ``.xml`` / ``.mjcf`` file (an ``.xml`` file whose root is ``<robot>`` is read as
+            a URDF).
+        package_dirs: where mesh files resolve besides the compiler's ``meshdir`` (default: the
+            file's folder).
+
+    Raises:
+        MjcfError: the file is missing, malformed, or uses what mobmanip cannot model (a ball
+            joint, several robots under ``<worldbody>``), naming it.
+        DescriptionError: the robot it describes is not physical (as for a URDF).
+    """
+    from ..support.files import note_input
+
+    path = Path(path)
+    if not path.is_file():
+        raise MjcfError(str(path), "file not found")
+    note_input(path)
+    with contextlib.suppress(OSError, ElementTree.ParseError):
+        if ElementTree.parse(path).getroot().tag == "robot":  # a URDF that calls itself .xml
+            from .urdf import read_urdf
+
+            return read_urdf(path, package_dirs=package_dirs)
+    reader = _Reader(path)
+    tree = _Tree(reader)
+    world = reader.root.find("worldbody")
+    bodies = [] if world is None else world.findall("body")
+    if len(bodies) != 1:
+        names = ", ".join(repr(b.get("name", "?")) for b in bodies) or "none"
+        raise reader.fail(f"<worldbody> must hold one robot body (the root link); it holds {names}")
+    try:
+        tree.actuators()
+        tree.walk(bodies[0], None, "main", root=True)
+    except MjcfError as exc:
+        raise exc if exc.path else reader.fail(exc.reason) from None
+    except ValueError as exc:  # a number attribute that is not one
+        raise reader.fail(str(exc)) from None
+    if tree.mesh_notes:
+        reader.notes.append(
+            f"{tree.mesh_notes} mesh geom(s) in bodies without <inertial>: neither mobmanip nor Pinocchio integrates "
+            "a mesh (Pinocchio gives such a body 1 kg and a unit tensor), so the dynamic measures are not the robot's; "
+            "give those bodies an <inertial>"
+        )
+    for element in reader.root.iter("compiler"):  # Pinocchio reads the copy from a temporary folder
+        for key in ("meshdir", "assetdir", "texturedir"):
+            element.attrib.pop(key, None)
+    compiler = reader.root.find("compiler")
+    if compiler is None:
+        compiler = ElementTree.Element("compiler")
+        reader.root.insert(0, compiler)
+    compiler.set("meshdir", str(reader.meshdir))
+    compiler.set("texturedir", str(reader.texturedir))
+    text = ElementTree.tostring(reader.root, encoding="unicode")
+    builder = MjcfBuilder(text, tuple(reader.notes))
+    dirs = tuple(Path(p) for p in package_dirs) if package_dirs is not None else (path.parent,)
+    description = assemble(reader.root.get("model") or path.stem, path, "mjcf", tree.links, tree.joints, builder, dirs)
+    import dataclasses
+
+    return dataclasses.replace(description, notes=tuple(reader.notes), planar_base=tree.planar_base)
+
+
+class MjcfBuilder(ModelBuilder):
+    """An MJCF's text for Pinocchio (``buildModelFromMJCF``, ``buildGeomFromMJCF``), written to a
+    temporary file when a model is built (Pinocchio reads MJCF from files only).
+
+    Args:
+        text: the MJCF as mobmanip rewrote it: includes expanded, the root's free joint dropped, a
+            body with several joints split, unnamed elements named, asset folders absolute.
+        notes: what the reader skipped.
+    """
+
+    language = "MJCF"
+
+    def __init__(self, text: str, notes: tuple[str, ...] = ()) -> None:
+        self.text = text
+        self.notes = notes
+
+    def error(self, source: str, reason: str) -> MjcfError:
+        """A :class:`~mobmanip.errors.MjcfError` naming ``source``."""
+        return MjcfError(source, reason)
+
+    def _call(self, source: str, what: str, function: Any, *arguments: Any, text: str | None = None) -> Any:
+        with tempfile.TemporaryDirectory(prefix="mobmanip-mjcf-") as folder:
+            file = Path(folder) / "model.xml"
+            file.write_text(self.text if text is None else text, encoding="utf-8")
+            failure: Exception | None = None
+            with captured_native_stderr() as native, warnings.catch_warnings():
+                warnings.simplefilter("ignore", DeprecationWarning)
+                try:
+                    result = call_with_large_stack(function, *[str(file) if a is _FILE else a for a in arguments])
+                except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on what it cannot build
+                    result, failure = None, exc
+        if result is None:
+            reason = native.first_error() or " ".join(str(failure).split()).replace(str(file), Path(source).name)
+            raise MjcfError(source, f"Pinocchio cannot {what}: {reason}")
+        return result
+
+    def build_model(self, source: str, root_joint: pin.JointModel | None = None) -> pin.Model:
+        """Pinocchio's model under ``root_joint`` (see :meth:`ModelBuilder.build_model`)."""
+        import pinocchio as pin
+
+        if root_joint is None:
+            return self._call(source, "build a model", pin.buildModelFromMJCF, _FILE)
+        return self._call(source, "build a model", pin.buildModelFromMJCFAndRootJoint, _FILE, root_joint)
+
+    def build_geometry(
+        self,
+        source: str,
+        model: pin.Model,
+        kind: str,
+        package_dirs: tuple[Path, ...],
+        meshes: MeshFilter | None = None,
+    ) -> pin.GeometryModel:
+        """The geoms on ``model`` (see :meth:`ModelBuilder.build_geometry`); with ``meshes``, each
+        mesh file is replaced by the file it gives or its geoms left out."""
+        import pinocchio as pin
+
+        text = self.text if meshes is None else self._with_meshes(meshes)
+        geometry_type = pin.GeometryType.COLLISION if kind == "collision" else pin.GeometryType.VISUAL
+        return self._call(
+            source, f"load the {kind} geometry", pin.buildGeomFromMJCF, model, _FILE, geometry_type, text=text
+        )
+
+    def _with_meshes(self, meshes: MeshFilter) -> str:
+        root = ElementTree.fromstring(self.text)
+        meshdir = Path((root.find("compiler") or ElementTree.Element("compiler")).get("meshdir", ""))
+        dropped = set()
+        for asset in root.iter("asset"):
+            for mesh in list(asset.findall("mesh")):
+                file = mesh.get("file", "")
+                name = mesh.get("name") or Path(file).stem
+                replacement = meshes("", str(meshdir / file))
+                if replacement is None:
+                    asset.remove(mesh)
+                    dropped.add(name)
+                else:
+                    mesh.set("name", name)
+                    mesh.set("file", str(Path(replacement).resolve()))
+        for parent in root.iter():
+            for geom in list(parent.findall("geom")):
+                if geom.get("mesh") in dropped:
+                    parent.remove(geom)
+        for texture in root.iter("texture"):
+            texture.attrib.pop("file", None)
+        return ElementTree.tostring(root, encoding="unicode")
+
+
+_FILE = object()  # stands for the temporary file's path in a builder call
+
+
+def _read(path: Path, *, package_dirs: Iterable[str | Path] | None = None) -> RobotDescription:
+    return read_mjcf(path, package_dirs=package_dirs)
+
+
+#: The MJCF format (suffixes ``.xml``, ``.mjcf``), registered at import.
+FORMAT = register_format(DescriptionFormat("mjcf", (".xml", ".mjcf"), _read))
