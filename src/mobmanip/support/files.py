@@ -214,9 +214,10 @@ def _refuse_special_path(path: Path, option: str = "") -> None:
     resolved = os.path.realpath(path)
     for candidate in (literal, resolved):
         if any(candidate == root.rstrip("/") or candidate.startswith(root) for root in _SPECIAL_ROOTS):
+            where = (option + " " if option else "") + str(path)
             raise OutputError(
-                f"cannot write {(option + ' ') if option else ''}{path}: it is a special file ({candidate.split('/')[1]}/...), not a file on a disk; "
-                "give the path of a regular file (results are printed on standard output anyway)"
+                f"cannot write {where}: it is a special file (under /{candidate.split('/')[1]}), not a file on a "
+                "disk; give the path of a regular file (results are printed on standard output anyway)"
             )
 
 
