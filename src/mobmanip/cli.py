@@ -58,8 +58,27 @@ def main(argv: list[str] | None = None) -> int:
     environment to see its traceback instead.
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
-    _configure_logging(args.verbose)
+    with _escaped_output():
+        args = parser.parse_args(argv)
+        _configure_logging(args.verbose)
+        return _run(args)
+
+
+@contextlib.contextmanager
+def _escaped_output():
+    """Standard output and error escape the control characters of what is printed (a robot
+    named with ESC or BEL bytes must not drive the user's terminal)."""
+    from .support.text import EscapingStream
+
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = EscapingStream(stdout), EscapingStream(stderr)  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        sys.stdout, sys.stderr = stdout, stderr
+
+
+def _run(args) -> int:
     try:
         # A command's output files are published together when it succeeds, all or none.
         with (

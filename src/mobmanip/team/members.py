@@ -234,22 +234,19 @@ def load_team(path: str | Path) -> Team:
         TeamError: the file cannot be read or parsed, or its content is wrong (the message
             names the value and where it is); other :class:`MobmanipError` from loading a robot.
     """
-    from ..support.files import note_input
+    from ..support.reading import read_user_text
 
     path = Path(path)
-    note_input(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise TeamError(f"cannot read team {path}: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise TeamError(f"team {path} is not UTF-8 text (byte {exc.start})") from exc
+    text = read_user_text(path, "team", limit=MAX_TEAM_BYTES, error=TeamError)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise TeamError(f"team {path} is not valid TOML: {exc}") from exc
     return team_from_dict(data, path.resolve().parent, where=str(path))
 
+
+#: Largest team file read (bytes): a team of the most robots fits in a few kilobytes.
+MAX_TEAM_BYTES = 4 * 1024 * 1024
 
 _TOP = {"name", "task", "tolerance", "decoupled", "object", "robots"}
 _OBJECT = {"mass", "position", "yaw_deg", "size", "inertia"}
@@ -327,9 +324,15 @@ def _member(entry: Mapping, here: str, base_dir: Path, center: np.ndarray, R: np
         raise TeamError(f"{here}: no 'robot' (a built-in robot name or a spec path)")
     name = _get(entry, "name", str, here, reference)
     here = f"{here} ({name})"
-    candidate = base_dir / reference
+    from ..support.reading import looks_like_path, read_user_bytes, resolve_beside
+
     try:
-        robot = load_robot(candidate if reference.endswith(".toml") and candidate.is_file() else reference)
+        if looks_like_path(reference):  # a spec path, relative to the team file: never the current folder
+            candidate = resolve_beside(reference, base_dir / "team.toml")
+            read_user_bytes(candidate, "robot file", limit=MAX_TEAM_BYTES, error=TeamError)  # no /dev/zero
+            robot = load_robot(candidate)
+        else:
+            robot = load_robot(reference)
     except MobmanipError as exc:
         raise TeamError(f"{here}: {exc}") from None
     platform = _get(entry, "platform", str, here, "own")
