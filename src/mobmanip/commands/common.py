@@ -219,3 +219,13 @@ def apply_analysis_options(robot, args):
     if args.platform == "fixed":
         robot = robot.with_platform("fixed")
     return robot
+
+
+def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """--max-work N: raise the bound on the command's work (see :mod:`mobmanip.support.work`)."""
+    parser.add_argument(
+        "--max-work",
+        type=int,
+        metavar="N",
+        help=f"the most {what} run without refusing (the estimate is checked before any work)",
+    )

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+from .common import add_work_option
+
 PLACE_HELP = """\
 objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX one of
   log_volume    log of the ellipsoid's volume
@@ -74,7 +76,31 @@ def register(sub) -> None:
         "--map-extent", metavar="XMIN,XMAX,YMIN,YMAX", help="the map's platform positions (default: the arms' reach)"
     )
     parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
+    add_work_option(parser, f"starts and map cells (defaults {MAX_STARTS:,} starts, {MAX_MAP_CELLS:,} cells)")
     parser.set_defaults(func=run)
+
+
+#: Starts and map cells (--map-cells squared) place runs without being asked.
+MAX_STARTS = 1_000
+MAX_MAP_CELLS = 10_000
+#: Wall time of one start and of one map cell on the paper's robot (s), rounded up.
+SECONDS_PER_START = 0.25
+SECONDS_PER_CELL = 0.03
+
+
+def _check_work(args) -> None:
+    from ..errors import UsageError
+    from ..support.work import WorkEstimate, check_work
+    from ..support.work import bound as _bound
+
+    if args.starts < 1:
+        raise UsageError(f"--starts must be at least 1, got {args.starts}")
+    check_work(WorkEstimate("place", "starts", args.starts, SECONDS_PER_START), _bound(args.max_work, MAX_STARTS))
+    if args.map:
+        cells = args.map_cells**2
+        detail = f"--map-cells {args.map_cells} per axis"
+        check_work(WorkEstimate("place --map", "map cells", cells, SECONDS_PER_CELL, detail),
+                   _bound(args.max_work, MAX_MAP_CELLS))  # fmt: skip
 
 
 def _parse_point(text: str):
@@ -98,6 +124,7 @@ def run(args) -> int:
     from ..support.files import write_json
     from .common import print_warnings
 
+    _check_work(args)
     robot = load_robot(find_spec(args.robot))
     target = _parse_point(args.object)
     reference = None if args.posture is None else named_configuration(robot, args.posture)

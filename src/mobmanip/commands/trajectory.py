@@ -5,6 +5,12 @@ from __future__ import annotations
 import argparse
 
 from ..robot.tasks import TASKS
+from .common import add_work_option
+
+#: Samples a trajectory analysis runs without being asked (each: both ellipsoids, RNEA, scaling).
+MAX_SAMPLES = 200_000
+#: Wall time of one sample on the paper's robot (s), rounded up (with --polytope: ten times).
+SECONDS_PER_SAMPLE = 3e-3
 
 TRAJECTORY_HELP = """\
 TRAJ.csv has a header: t (s), platform_x, platform_y (m), platform_yaw (rad), then one column
@@ -50,7 +56,19 @@ def register(sub) -> None:
     parser.add_argument(
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
+    add_work_option(parser, f"samples (rows of TRAJ.csv; default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
+
+
+def _check_work(args) -> None:
+    """Count the samples (lines) before the file is parsed, and refuse more than the bound."""
+    from ..support.reading import read_user_bytes
+    from ..support.work import WorkEstimate, check_work
+    from ..support.work import bound as _bound
+
+    lines = read_user_bytes(args.trajectory, "trajectory").count(b"\n")
+    each = SECONDS_PER_SAMPLE * (10 if args.polytope else 1)
+    check_work(WorkEstimate("trajectory", "samples", max(lines - 1, 0), each), _bound(args.max_work, MAX_SAMPLES))
 
 
 def run(args) -> int:
@@ -62,6 +80,7 @@ def run(args) -> int:
     from .outputs import trajectory_outputs
 
     note_input(args.trajectory)
+    _check_work(args)
     if args.out:  # refuse an unwritable output before the analysis runs
         out = output_directory(args.out)
         for suffix in (".csv", ".json", ".png"):

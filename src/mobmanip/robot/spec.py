@@ -370,12 +370,13 @@ def load_spec(path: str | Path) -> RobotSpec:
     Raises:
         SpecError: the file cannot be read or parsed, or its content is inconsistent.
     """
-    from ..support.reading import read_user_text
+    from ..support.reading import check_toml_numbers, read_user_text
 
     path = Path(path)
     text = read_user_text(path, "spec", limit=MAX_SPEC_BYTES, error=SpecError)
     try:
         data = tomllib.loads(text)
+        check_toml_numbers(data, str(path), error=SpecError)
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"spec {path} is not valid TOML: {exc}") from exc
     return spec_from_dict(data, path.resolve().parent, source=path)

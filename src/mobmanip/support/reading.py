@@ -175,3 +175,25 @@ def looks_like_path(reference: str) -> bool:
     """Whether a reference that may be a name (a built-in robot) or a path is a path: it has a
     folder separator or a file suffix."""
     return "/" in reference or os.sep in reference or Path(reference).suffix != ""
+
+
+#: Largest integer read from a TOML file: larger ones are not quantities (a mass written with
+#: 400 digits would overflow a float).
+MAX_TOML_INTEGER = 10**15
+
+
+def check_toml_numbers(data: object, where: str, *, error: ErrorFactory = ArgumentError) -> None:
+    """Refuse integers above :data:`MAX_TOML_INTEGER` and non-finite floats anywhere in a parsed
+    TOML document, naming the key (``team.toml: object.mass``)."""
+    stack: list[tuple[object, str]] = [(data, "")]
+    while stack:
+        value, key = stack.pop()
+        if isinstance(value, dict):
+            stack.extend((v, f"{key}.{k}" if key else str(k)) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, f"{key}[{i}]") for i, v in enumerate(value))
+        elif isinstance(value, bool):
+            continue
+        elif isinstance(value, int) and abs(value) > MAX_TOML_INTEGER:
+            digits = len(str(abs(value)))
+            raise error(f"{where}: {key} is an integer of {digits} digits, larger than {MAX_TOML_INTEGER:g}")
