@@ -85,8 +85,8 @@ def _check_work(args, path) -> None:
     low, high = STEP_RANGE
     if not (math.isfinite(args.step) and low <= args.step <= high):
         raise UsageError(f"--step must be between {low:g} and {high:g} s, got {args.step!r}")
-    if not (math.isfinite(args.prepare) and args.prepare >= 0):
-        raise UsageError(f"--prepare must be a non-negative number of seconds, got {args.prepare!r}")
+    if not (math.isfinite(args.prepare) and (args.prepare == 0 or args.prepare >= args.step)):
+        raise UsageError(f"--prepare must be 0 (none) or at least one step ({args.step:g} s), got {args.prepare!r} s")
     duration = float(path.t[-1] - path.t[0])
     steps = (duration + args.prepare) / args.step
     detail = f"path {duration:g} s + --prepare {args.prepare:g} s, step {args.step:g} s"

@@ -221,6 +221,7 @@ def _check_map_options(args):
     """The map's extent (or None for the default) after checking --map-extent and --map-cells."""
     from ..errors import UsageError
     from ..placement.maps import MAX_CELLS_PER_AXIS
+    from ..support.ranges import PLATFORM_POSITION
 
     if not 2 <= args.map_cells <= MAX_CELLS_PER_AXIS:
         raise UsageError(f"--map-cells must be between 2 and {MAX_CELLS_PER_AXIS}, got {args.map_cells}")
@@ -232,12 +233,12 @@ def _check_map_options(args):
         values = []
     if (
         len(values) != 4
-        or not all(math.isfinite(v) for v in values)
+        or not all(math.isfinite(v) and abs(v) <= PLATFORM_POSITION for v in values)
         or values[0] >= values[1]
         or values[2] >= values[3]
     ):
         raise UsageError(f"--map-extent must be XMIN,XMAX,YMIN,YMAX in metres with XMIN < XMAX, YMIN < YMAX, "
-                         f"got {args.map_extent!r}")  # fmt: skip
+                         f"each within +-{PLATFORM_POSITION:g} m, got {args.map_extent!r}")  # fmt: skip
     return values
 
 
