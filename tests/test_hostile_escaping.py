@@ -66,3 +66,16 @@ def test_a_hostile_name_in_an_exported_page_is_inert(tmp_path, capfd):
     html = page.read_text()
     assert hostile not in html  # names travel inside the scene's encoded commands, never as markup
     assert "<script>alert(1)" not in html
+
+
+def test_the_readme_promise_names_every_command():
+    """The README's promise paragraph covers every command the CLI registers."""
+    from mobmanip.cli import build_parser
+
+    text = (ROOT / "README.md").read_text()
+    start = text.index("The promise, for every command")
+    paragraph = text[start : text.index("\n\n", start)]
+    parser = build_parser()
+    commands = next(a for a in parser._actions if a.dest == "command").choices
+    for name in commands:
+        assert f"`{name}`" in paragraph, name
