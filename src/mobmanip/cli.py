@@ -71,7 +71,7 @@ def _escaped_output():
     from .support.text import EscapingStream
 
     stdout, stderr = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = EscapingStream(stdout), EscapingStream(stderr)  # type: ignore[assignment]
+    sys.stdout, sys.stderr = EscapingStream(stdout), EscapingStream(stderr)
     try:
         yield
     finally:
