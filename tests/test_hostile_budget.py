@@ -10,7 +10,7 @@ import time
 import pytest
 
 from hostile_util import ROOT, assert_one_line_error, run_cli
-from mobmanip.errors import UsageError
+from mobmanip.errors import ArgumentError
 from mobmanip.support.work import WorkEstimate, check_work, duration
 
 TEAM_TEXT = (ROOT / "examples" / "beam_team.toml").read_text()
@@ -94,6 +94,6 @@ def test_estimates_read_for_people():
     assert duration(30) == "30.0 s" and duration(600) == "10 min" and duration(7200) == "2.0 h"
     assert "days" in duration(1e9) and duration(float("inf")) == "forever"
     estimate = WorkEstimate("carry", "QP steps", 5e6, 2.5e-3, "path 1e5 s")
-    with pytest.raises(UsageError, match=r"5,000,000 QP steps \(path 1e5 s\), about 3.5 h"):
+    with pytest.raises(ArgumentError, match=r"5,000,000 QP steps \(path 1e5 s\), about 3.5 h"):
         check_work(estimate, 200_000)
     assert check_work(estimate, 10**7) is estimate

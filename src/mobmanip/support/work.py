@@ -14,7 +14,7 @@ import math
 import sys
 from dataclasses import dataclass
 
-from ..errors import UsageError
+from ..errors import ArgumentError
 
 #: An estimate above this many seconds is announced on standard error before the work starts.
 ANNOUNCE_SECONDS = 30.0
@@ -73,12 +73,12 @@ def check_work(estimate: WorkEstimate, limit: int | None, option: str = "--max-w
     the limit); announce it on standard error when it exceeds :data:`ANNOUNCE_SECONDS`.
 
     Raises:
-        UsageError: more work than ``limit``, or a ``limit`` below 1.
+        ArgumentError: more work than ``limit``, or a ``limit`` below 1.
     """
     if limit is not None and limit < 1:
-        raise UsageError(f"{option} must be at least 1, got {limit}")
+        raise ArgumentError(f"{option} must be at least 1, got {limit}")
     if limit is not None and not estimate.count <= limit:
-        raise UsageError(
+        raise ArgumentError(
             f"{estimate.command}: {estimate.describe()}; more than the {limit:,} {estimate.units} it runs without "
             f"being asked (raise the bound with {option} N, or ask for less)"
         )
