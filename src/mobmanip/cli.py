@@ -7,8 +7,10 @@ bad input prints one line ``mobmanip: error: ...`` on standard error and exits w
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import os
+import signal
 import sys
 import warnings
 
@@ -57,11 +59,31 @@ def main(argv: list[str] | None = None) -> int:
     environment to see its traceback instead.
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
-    _configure_logging(args.verbose)
+    with _escaped_output():
+        args = parser.parse_args(argv)
+        _configure_logging(args.verbose)
+        return _run(args)
+
+
+@contextlib.contextmanager
+def _escaped_output():
+    """Standard output and error escape the control characters of what is printed (a robot
+    named with ESC or BEL bytes must not drive the user's terminal)."""
+    from .support.text import EscapingStream
+
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = EscapingStream(stdout), EscapingStream(stderr)
+    try:
+        yield
+    finally:
+        sys.stdout, sys.stderr = stdout, stderr
+
+
+def _run(args) -> int:
     try:
         # A command's output files are published together when it succeeds, all or none.
         with (
+            _terminate_as_interrupt(),
             warnings.catch_warnings(),
             np.errstate(all="ignore"),
             protect_inputs(),
@@ -76,8 +98,11 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
+    except Terminated:
+        print("mobmanip: terminated; no output was written", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
-        print("mobmanip: interrupted", file=sys.stderr)
+        print("mobmanip: interrupted; no output was written", file=sys.stderr)
         return 130
     except RecursionError:
         return _fail("an input is nested too deeply to read")
@@ -87,6 +112,30 @@ def main(argv: list[str] | None = None) -> int:
         if os.environ.get("MOBMANIP_TRACEBACK"):
             raise
         return _fail(f"internal error ({type(exc).__name__}: {exc}); please report it with the command that caused it")
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so the same clean-up runs (temporary files and created
+    directories removed, nothing published)."""
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """While a command runs in the main thread, SIGTERM raises :class:`Terminated`."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _configure_logging(verbosity: int) -> None:
@@ -104,19 +153,30 @@ def _configure_logging(verbosity: int) -> None:
 
 #: Options that name one output file (a directory or prefix option is checked when written).
 _OUTPUT_FILES = ("json", "save_q", "export")
+#: Options that name a figure to write (its suffix must name a format matplotlib writes).
+_FIGURE_FILES = ("figure", "plot")
+#: Options that name an output directory or prefix: never taken for an input.
+_OUTPUT_PLACES = ("out", "map", "output")
 
 
 def _check_outputs_first(args) -> None:
     """Refuse a bad output file before any work: one that is also a file the command was
-    given, or a directory, FIFO or device (so a long computation is not thrown away)."""
-    outputs = [getattr(args, dest) for dest in _OUTPUT_FILES if getattr(args, dest, None)]
-    if not outputs:
-        return
+    given, or a directory, FIFO or device, or a figure of an unknown format (so a long
+    computation is not thrown away)."""
+    from .support.files import check_figure_output
+
+    outputs = [(dest, getattr(args, dest, None)) for dest in (*_OUTPUT_FILES, *_FIGURE_FILES)]
+    outputs = [(dest, value) for dest, value in outputs if isinstance(value, str) and value]
     for dest, value in vars(args).items():
-        if dest not in _OUTPUT_FILES and isinstance(value, str) and os.path.isfile(value):
+        if dest in _OUTPUT_FILES or dest in _FIGURE_FILES or dest in _OUTPUT_PLACES:
+            continue  # an output written by an earlier run is not an input of this one
+        if isinstance(value, str) and os.path.isfile(value):
             note_input(value)
-    for path in outputs:
-        check_output(path)
+    for dest, path in outputs:
+        if dest in _FIGURE_FILES:
+            check_figure_output(path, "--" + dest.replace("_", "-"))
+        else:
+            check_output(path)
 
 
 def _fail(message: str) -> int:

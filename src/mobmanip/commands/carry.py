@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..robot.tasks import TASKS
+from .common import add_work_option
 
 CARRY_HELP = """\
 PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
@@ -60,7 +61,36 @@ def register(sub) -> None:
         help="longest self-motion before the path (s, default 30; 0: none)",
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    add_work_option(parser, f"QP steps ((path duration + --prepare) / --step; default {MAX_STEPS:,})")
     parser.set_defaults(func=run)
+
+
+#: QP steps (of the path and of the self-motion before it) a carry runs without being asked.
+MAX_STEPS = 200_000
+#: Wall time of one step, QP motion and baseline together, on the paper's robot (s), rounded up.
+SECONDS_PER_STEP = 2.5e-3
+#: Time steps carry accepts (s): at 2e-4 s the QP of the paper robot's example path already fails
+#: at its first step (rounding in the rate constraints); 5e-4 s is the smallest step checked to work.
+STEP_RANGE = (1e-3, 1.0)
+
+
+def _check_work(args, path) -> None:
+    """Refuse a step outside :data:`STEP_RANGE` and more than the bound of QP steps, before any work."""
+    import math
+
+    from ..errors import UsageError
+    from ..support.work import WorkEstimate, check_work
+    from ..support.work import bound as _bound
+
+    low, high = STEP_RANGE
+    if not (math.isfinite(args.step) and low <= args.step <= high):
+        raise UsageError(f"--step must be between {low:g} and {high:g} s, got {args.step!r}")
+    if not (math.isfinite(args.prepare) and (args.prepare == 0 or args.prepare >= args.step)):
+        raise UsageError(f"--prepare must be 0 (none) or at least one step ({args.step:g} s), got {args.prepare!r} s")
+    duration = float(path.t[-1] - path.t[0])
+    steps = (duration + args.prepare) / args.step
+    detail = f"path {duration:g} s + --prepare {args.prepare:g} s, step {args.step:g} s"
+    check_work(WorkEstimate("carry", "QP steps", steps, SECONDS_PER_STEP, detail), _bound(args.max_work, MAX_STEPS))
 
 
 def run(args) -> int:
@@ -75,6 +105,7 @@ def run(args) -> int:
     note_input(args.path)
     robot = load_robot(find_spec(args.robot))
     path = read_path(args.path)
+    _check_work(args, path)
     start = read_configuration(robot, args.start) if args.start else None
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)

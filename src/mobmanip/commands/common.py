@@ -327,3 +327,13 @@ def cluster_executor(args):
     from ..support.cluster import dask_executor
 
     return dask_executor(args.dask)
+
+
+def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
+    """--max-work N: raise the bound on the command's work (see :mod:`mobmanip.support.work`)."""
+    parser.add_argument(
+        "--max-work",
+        type=int,
+        metavar="N",
+        help=f"the most {what} run without refusing (the estimate is checked before any work)",
+    )

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+from .common import add_work_option
+
 PLACE_HELP = """\
 objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX one of
   log_volume    log of the ellipsoid's volume
@@ -83,7 +85,31 @@ def register(sub) -> None:
     from .common import add_dask_option
 
     add_dask_option(parser)
+    add_work_option(parser, f"starts and map cells (defaults {MAX_STARTS:,} starts, {MAX_MAP_CELLS:,} cells)")
     parser.set_defaults(func=run)
+
+
+#: Starts and map cells (--map-cells squared) place runs without being asked.
+MAX_STARTS = 1_000
+MAX_MAP_CELLS = 10_000
+#: Wall time of one start and of one map cell on the paper's robot (s), rounded up.
+SECONDS_PER_START = 0.25
+SECONDS_PER_CELL = 0.03
+
+
+def _check_work(args) -> None:
+    from ..errors import UsageError
+    from ..support.work import WorkEstimate, check_work
+    from ..support.work import bound as _bound
+
+    if args.starts < 1:
+        raise UsageError(f"--starts must be at least 1, got {args.starts}")
+    check_work(WorkEstimate("place", "starts", args.starts, SECONDS_PER_START), _bound(args.max_work, MAX_STARTS))
+    if args.map:
+        cells = args.map_cells**2
+        detail = f"--map-cells {args.map_cells} per axis"
+        check_work(WorkEstimate("place --map", "map cells", cells, SECONDS_PER_CELL, detail),
+                   _bound(args.max_work, MAX_MAP_CELLS))  # fmt: skip
 
 
 def _parse_point(text: str):
@@ -119,6 +145,7 @@ def _run(args, executor) -> int:
     from ..support.files import write_json
     from .common import print_warnings
 
+    _check_work(args)
     robot = load_robot(find_spec(args.robot))
     target = _parse_point(args.object)
     reference = None if args.posture is None else named_configuration(robot, args.posture)
@@ -215,6 +242,7 @@ def _check_map_options(args):
     """The map's extent (or None for the default) after checking --map-extent and --map-cells."""
     from ..errors import UsageError
     from ..placement.maps import MAX_CELLS_PER_AXIS
+    from ..support.ranges import PLATFORM_POSITION
 
     if not 2 <= args.map_cells <= MAX_CELLS_PER_AXIS:
         raise UsageError(f"--map-cells must be between 2 and {MAX_CELLS_PER_AXIS}, got {args.map_cells}")
@@ -226,12 +254,12 @@ def _check_map_options(args):
         values = []
     if (
         len(values) != 4
-        or not all(math.isfinite(v) for v in values)
+        or not all(math.isfinite(v) and abs(v) <= PLATFORM_POSITION for v in values)
         or values[0] >= values[1]
         or values[2] >= values[3]
     ):
         raise UsageError(f"--map-extent must be XMIN,XMAX,YMIN,YMAX in metres with XMIN < XMAX, YMIN < YMAX, "
-                         f"got {args.map_extent!r}")  # fmt: skip
+                         f"each within +-{PLATFORM_POSITION:g} m, got {args.map_extent!r}")  # fmt: skip
     return values
 
 

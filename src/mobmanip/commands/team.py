@@ -12,7 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import add_measure_option, requested_measures
+from .common import add_measure_option, add_work_option, requested_measures
+
+#: Robots of a team, and robot-headings of a heading sweep, run without being asked.
+MAX_ROBOTS = 64
+MAX_ROBOT_HEADINGS = 100_000
+#: Wall time of one robot at one heading (reach, terms, sets) on the paper's robot (s), rounded up.
+SECONDS_PER_ROBOT_HEADING = 0.05
 
 
 def register(sub) -> None:
@@ -29,11 +35,39 @@ def register(sub) -> None:
         metavar="GRID",
         help="object heading changes, deg: START:STOP:COUNT or V1,V2,... (robots reach for the moved grasps)",
     )
+    add_work_option(
+        parser, f"robots and robot-headings (robots x sweep headings; defaults {MAX_ROBOTS}, {MAX_ROBOT_HEADINGS:,})"
+    )
     parser.set_defaults(func=run)
 
 
-def run(args) -> int:
+def _read_checked(args, offsets):
+    """The team file's TOML, after checking its robots and the sweep's robot-headings against the bounds."""
     import tomllib
+
+    from ..errors import TeamError
+    from ..support.reading import check_toml_numbers, read_user_text
+    from ..support.work import WorkEstimate, check_work
+    from ..support.work import bound as _bound
+    from ..team.members import MAX_TEAM_BYTES
+
+    text = read_user_text(args.description, "team", limit=MAX_TEAM_BYTES, error=TeamError)
+    try:
+        data = tomllib.loads(text)
+        check_toml_numbers(data, str(args.description), error=TeamError)
+    except tomllib.TOMLDecodeError as exc:
+        raise TeamError(f"team {args.description} is not valid TOML: {exc}") from exc
+    robots = data.get("robots")
+    count = len(robots) if isinstance(robots, list) else 0
+    check_work(WorkEstimate("team", "robots", count, SECONDS_PER_ROBOT_HEADING), _bound(args.max_work, MAX_ROBOTS))
+    if offsets is not None:
+        work = WorkEstimate("team --sweep-heading", "robot-headings", count * len(offsets), SECONDS_PER_ROBOT_HEADING,
+                            f"{count} robots x {len(offsets)} headings")  # fmt: skip
+        check_work(work, _bound(args.max_work, MAX_ROBOT_HEADINGS))
+    return data
+
+
+def run(args) -> int:
     from pathlib import Path
 
     from ..measures import get_measure
@@ -46,6 +80,7 @@ def run(args) -> int:
     if args.plot:
         check_output(args.plot)
     offsets = parse_grid(args.sweep_heading, "--sweep-heading") if args.sweep_heading else None
+    data = _read_checked(args, offsets)
     team = load_team(args.description)
     measures = requested_measures(args)
     analysis = analyze_team(team, measures)
@@ -99,7 +134,6 @@ def run(args) -> int:
         from ..team.sweep import sweep_heading
 
         path = Path(args.description)
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
         sweep = sweep_heading(data, offsets, base_dir=path.resolve().parent, measures=measures, where=str(path))
         reachable = int(sweep.reachable.sum())
         print(f"heading sweep: {reachable} of {len(offsets)} headings reachable")

@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 
 from ..robot.tasks import TASKS
-from .common import add_strict_option
+from .common import add_strict_option, add_work_option
+
+#: Samples a trajectory analysis runs without being asked (each: both ellipsoids, RNEA, scaling).
+MAX_SAMPLES = 200_000
+#: Wall time of one sample on the paper's robot (s), rounded up (with --polytope: ten times).
+SECONDS_PER_SAMPLE = 3e-3
 
 TRAJECTORY_HELP = """\
 TRAJ.csv has a header: t (s), platform_x, platform_y (m), platform_yaw (rad), then one column
@@ -77,6 +82,7 @@ def register(sub) -> None:
     parser.add_argument(
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
+    add_work_option(parser, f"samples (rows of TRAJ.csv; default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
 
 
@@ -94,6 +100,19 @@ def _read_bag(robot, args):
     return recording.trajectory
 
 
+def _check_work(args) -> None:
+    """Count the samples (lines) before the file is parsed, and refuse more than the bound."""
+    from ..support.reading import read_user_bytes
+    from ..support.work import WorkEstimate, check_work
+    from ..support.work import bound as _bound
+
+    if args.trajectory is None:  # a recording: its messages are counted as they are read
+        return
+    lines = read_user_bytes(args.trajectory, "trajectory").count(b"\n")
+    each = SECONDS_PER_SAMPLE * (10 if args.polytope else 1)
+    check_work(WorkEstimate("trajectory", "samples", max(lines - 1, 0), each), _bound(args.max_work, MAX_SAMPLES))
+
+
 def run(args) -> int:
     from ..errors import UsageError
     from ..motion.trajectory import read_trajectory
@@ -108,6 +127,7 @@ def run(args) -> int:
     if args.bag is None and (args.start is not None or args.end is not None):
         raise UsageError("--start and --end cut a --bag recording")
     note_input(args.trajectory or args.bag)
+    _check_work(args)
     if args.out:  # refuse an unwritable output before the analysis runs
         out = output_directory(args.out)
         for suffix in (".csv", ".json", ".png"):

@@ -38,7 +38,6 @@ The path (CSV, :func:`read_path`) has ``t`` and the object's ``x``, ``y`` (m) an
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -147,30 +146,30 @@ def read_path(path: str | Path) -> ObjectPath:
         ArgumentError: unreadable file, unknown or missing columns, a cell that is not a finite
             number (naming line and column), too few rows or time stamps that do not increase.
     """
+    from ..support.ranges import PLATFORM_POSITION
+    from ..support.reading import TIME_STAMP, check_time_stamps, parse_cell, read_csv_rows
+
     path = Path(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as handle:
-            rows = [r for r in csv.reader(handle) if r and any(c.strip() for c in r)]
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ArgumentError(f"cannot read object path {path}: {exc}") from None
-    if not rows:
+    numbered = read_csv_rows(path, "object path")
+    if not numbered:
         raise ArgumentError(f"object path {path} is empty")
+    lines = [line for line, _ in numbered]
+    rows = [row for _, row in numbered]
     header = [c.strip() for c in rows[0]]
     unknown = [c for c in header if c not in PATH_COLUMNS]
     if unknown or not {"t", "x", "y"} <= set(header) or len(set(header)) != len(header):
         raise ArgumentError(f"object path {path}: header {header} must name t, x, y and optionally z, yaw (each once)")
+    bounds = {"t": (TIME_STAMP, "s"), "yaw": (1e4, "rad")}
     values = np.zeros((len(rows) - 1, len(header)))
-    for i, row in enumerate(rows[1:], start=2):
+    for k, (i, row) in enumerate(zip(lines[1:], rows[1:], strict=True)):
         if len(row) != len(header):
             raise ArgumentError(f"object path {path} line {i}: {len(row)} cells, the header has {len(header)}")
         for j, cell in enumerate(row):
-            try:
-                value = float(cell)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise ArgumentError(f"object path {path} line {i}, column {header[j]!r}: not a finite number: {cell!r}")
-            values[i - 2, j] = value
+            bound, unit = bounds.get(header[j], (PLATFORM_POSITION, "m"))
+            where = f"object path {path} line {i}, column {header[j]!r}"
+            values[k, j] = parse_cell(cell, where, bound=bound, unit=unit)
+    if "t" in header:
+        check_time_stamps(values[:, header.index("t")], f"object path {path}", lines[1:])
     col = {name: values[:, k] for k, name in enumerate(header)}
     try:
         return ObjectPath(col["t"], np.column_stack([col["x"], col["y"]]), col.get("z"), col.get("yaw"))

@@ -16,7 +16,6 @@ columns of :data:`ANNOTATION_COLUMNS` are allowed and ignored.
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -241,15 +240,15 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
             too few samples or time stamps that do not increase (naming the row and column).
         JointNotFoundError: a column that is not a joint of the robot.
     """
+    from ..support.ranges import JOINT_POSITION, PLATFORM_POSITION
+    from ..support.reading import TIME_STAMP, check_time_stamps, parse_cell, read_csv_rows
+
     path = Path(path)
-    try:
-        with open(path, newline="", encoding="utf-8") as handle:
-            rows = list(csv.reader(handle))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ArgumentError(f"cannot read trajectory {path}: {exc}") from None
-    rows = [r for r in rows if r and any(cell.strip() for cell in r)]
-    if not rows:
+    numbered = read_csv_rows(path, "trajectory")
+    if not numbered:
         raise ArgumentError(f"trajectory {path} is empty")
+    lines = [line for line, _ in numbered]
+    rows = [row for _, row in numbered]
     header = [cell.strip() for cell in rows[0]]
     for needed in ("t",) + PLATFORM_COLUMNS:
         if needed not in header:
@@ -262,19 +261,17 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
     for name in joints:
         if name not in known:
             raise JointNotFoundError(name, robot.joint_names, where=f"robot {robot.name} (trajectory {path})")
+    bounds = {"t": (TIME_STAMP, "s"), PLATFORM_COLUMNS[0]: (PLATFORM_POSITION, "m"),
+              PLATFORM_COLUMNS[1]: (PLATFORM_POSITION, "m")}  # fmt: skip
     values = np.zeros((len(rows) - 1, len(header)))
-    for i, row in enumerate(rows[1:], start=2):
+    for k, (i, row) in enumerate(zip(lines[1:], rows[1:], strict=True)):
         if len(row) != len(header):
             raise ArgumentError(f"trajectory {path} line {i}: {len(row)} cells, the header has {len(header)}")
         for j, cell in enumerate(row):
-            try:
-                value = float(cell)
-            except ValueError:
-                where = f"trajectory {path} line {i}, column {header[j]!r}"
-                raise ArgumentError(f"{where}: not a number: {cell!r}") from None
-            if not math.isfinite(value):
-                raise ArgumentError(f"trajectory {path} line {i}, column {header[j]!r}: {cell!r} is not finite")
-            values[i - 2, j] = value
+            bound, unit = bounds.get(header[j], (JOINT_POSITION if header[j] in known else math.inf, ""))
+            values[k, j] = parse_cell(cell, f"trajectory {path} line {i}, column {header[j]!r}", bound=bound,
+                                      unit=unit)  # fmt: skip
+    check_time_stamps(values[:, header.index("t")], f"trajectory {path}", lines[1:])
     column = {name: values[:, k] for k, name in enumerate(header)}
     qs = np.array(
         [

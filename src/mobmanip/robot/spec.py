@@ -419,24 +419,23 @@ def spec_from_dict(data: Mapping, base_dir: Path, source: Path | None = None) ->
     )
 
 
+#: Largest spec file read (bytes): specs are a few kilobytes.
+MAX_SPEC_BYTES = 4 * 1024 * 1024
+
+
 def load_spec(path: str | Path) -> RobotSpec:
     """Read a spec TOML file.
 
     Raises:
         SpecError: the file cannot be read or parsed, or its content is inconsistent.
     """
-    from ..support.files import note_input
+    from ..support.reading import check_toml_numbers, read_user_text
 
     path = Path(path)
-    note_input(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SpecError(f"cannot read spec {path}: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise SpecError(f"spec {path} is not UTF-8 text (byte {exc.start})") from exc
+    text = read_user_text(path, "spec", limit=MAX_SPEC_BYTES, error=SpecError)
     try:
         data = tomllib.loads(text)
+        check_toml_numbers(data, str(path), error=SpecError)
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"spec {path} is not valid TOML: {exc}") from exc
     return spec_from_dict(data, path.resolve().parent, source=path)
@@ -453,6 +452,6 @@ def find_spec(name_or_path: str | Path) -> RobotSpec:
     if "/" not in text and not text.endswith(".toml") and builtin.is_file():
         return load_spec(builtin)
     path = Path(text)
-    if path.is_file():
+    if path.is_file() or (path.exists() and not path.is_dir()):  # a device or FIFO: refused by the reader
         return load_spec(path)
     raise UnknownRobotError(text, builtin_robot_names())

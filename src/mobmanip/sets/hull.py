@@ -143,6 +143,11 @@ def _polygon(W: np.ndarray, use: np.ndarray) -> Hull:
         if left.all():
             break
         keep, x, y = keep[left], x[left], y[left]
+    if len(x) < 3:
+        # Near-duplicate rays across the +-pi cut (a heavy object's box-like polytope: polar points
+        # 5e-12 rad apart) can leave too few points to bound the polygon: Qhull decides instead.
+        keep = ConvexHull(W).vertices  # counter-clockwise in 2-D
+        x, y = W[keep, 0], W[keep, 1]
     # Facet i (polar point w_i) and facet i + 1 meet at the vertex u with w_i . u = w_(i+1) . u = 1.
     # A facet whose two vertices coincide to round-off (a third line through a vertex, nearly but
     # not exactly collinear in the polar picture) is no facet: dropped, as Qhull's copies merge.

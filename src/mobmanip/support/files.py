@@ -7,6 +7,7 @@ import contextvars
 import json
 import math
 import os
+import signal
 import stat
 import tempfile
 from collections.abc import Iterator
@@ -20,6 +21,31 @@ from ..errors import NumericalError, OutputError
 _INPUTS: contextvars.ContextVar[set | None] = contextvars.ContextVar("mobmanip_inputs", default=None)
 #: The outputs of :func:`publish_together` waiting to be published: ``[(temporary, final)]``.
 _PENDING: contextvars.ContextVar[list | None] = contextvars.ContextVar("mobmanip_pending", default=None)
+#: Directories :func:`output_directory` created inside :func:`publish_together`, removed again
+#: (when still empty) if the block fails.
+_CREATED: contextvars.ContextVar[list | None] = contextvars.ContextVar("mobmanip_created", default=None)
+
+#: The longest file name most file systems accept (bytes); temporary names beside an output fit it.
+NAME_MAX = 255
+#: The signals during which a temporary file is created or the outputs are renamed into place:
+#: held back for that moment, so an interruption never leaves a temporary file or half the outputs.
+_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+#: Paths that are not files on a disk: ``--json /dev/stdout`` is refused like any other device
+#: (the results are printed on standard output anyway; ``--json`` names a file to keep).
+_SPECIAL_ROOTS = ("/dev/", "/proc/", "/sys/")
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold back SIGINT and SIGTERM for the block (delivered at its end)."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 @contextlib.contextmanager
@@ -53,21 +79,46 @@ def publish_together() -> Iterator[None]:
     At the end the files are renamed into place; if one rename fails, the files already
     replaced are restored from links kept beside them.
 
+    SIGINT and SIGTERM are held back while the files are renamed, so an interruption comes
+    before (nothing published, temporaries removed) or after (all published). Directories created
+    by :func:`output_directory` inside the block are removed again, when still empty, if it fails.
+
     Raises:
         OutputError: a file could not be published (none of them was).
     """
     pending: list[tuple[str, Path]] = []
-    token = _PENDING.set(pending)
+    created: list[Path] = []
+    token, created_token = _PENDING.set(pending), _CREATED.set(created)
     try:
-        yield
-    except BaseException:
-        _PENDING.reset(token)
-        for tmp, _ in pending:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-        raise
-    _PENDING.reset(token)
-    _publish_all(pending)
+        try:
+            yield
+        except BaseException:
+            _discard(pending, created)
+            raise
+        finally:
+            _PENDING.reset(token)
+        try:
+            with _signals_held():
+                _publish_all(pending)
+        except BaseException:
+            _remove_created(created)
+            raise
+    finally:
+        _CREATED.reset(created_token)
+
+
+def _discard(pending: list[tuple[str, Path]], created: list[Path]) -> None:
+    """Remove the temporary files of a failed block and the directories it created."""
+    for tmp, _ in pending:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+    _remove_created(created)
+
+
+def _remove_created(created: list[Path]) -> None:
+    for directory in reversed(created):  # deepest first
+        with contextlib.suppress(OSError):
+            directory.rmdir()  # only if still empty: never a file of the user's
 
 
 def _publish_all(pending: list[tuple[str, Path]]) -> None:
@@ -105,8 +156,13 @@ def output_directory(path: str | Path, option: str = "--out") -> Path:
         OutputError: the path names a file, or the directory cannot be created.
     """
     out = Path(path)
+    _refuse_special_path(out, option)
+    missing = [p for p in (out, *out.parents) if not p.exists() and not p.is_symlink()]
     try:
         out.mkdir(parents=True, exist_ok=True)
+        created = _CREATED.get()
+        if created is not None:
+            created.extend(reversed(missing))  # outermost first: removed deepest first
     except FileExistsError as exc:
         raise OutputError(f"{option} {out}: a file of that name exists, not a directory") from exc
     except OSError as exc:
@@ -134,6 +190,7 @@ def _check_target(path: Path) -> tuple[Path, int | None]:
     try:
         info = os.stat(path)
     except FileNotFoundError:
+        _refuse_special_path(path)
         if path.is_symlink():  # a dangling link: write where it points
             return Path(os.path.realpath(path)), None
         return path, None
@@ -142,10 +199,36 @@ def _check_target(path: Path) -> tuple[Path, int | None]:
     if not stat.S_ISREG(info.st_mode):
         kind = next((name for test, name in _KINDS if test(info.st_mode)), "not a regular file")
         raise OutputError(f"cannot write {path}: it is {kind}; give the path of a regular file")
+    _refuse_special_path(path)
     inputs = _INPUTS.get()
     if inputs is not None and (info.st_dev, info.st_ino) in inputs:
         raise OutputError(f"refusing to write {path}: it is an input of this command; choose another output path")
     return Path(os.path.realpath(path)), stat.S_IMODE(info.st_mode)
+
+
+def _refuse_special_path(path: Path, option: str = "") -> None:
+    """Refuse a path in /dev, /proc or /sys (itself or where its links lead): ``/dev/stdout``
+    leads to whatever standard output is (a terminal, a pipe, or a file that a rename would
+    replace under the shell's redirection)."""
+    literal = os.path.abspath(path)
+    resolved = os.path.realpath(path)
+    for candidate in (literal, resolved):
+        if any(candidate == root.rstrip("/") or candidate.startswith(root) for root in _SPECIAL_ROOTS):
+            where = (option + " " if option else "") + str(path)
+            raise OutputError(
+                f"cannot write {where}: it is a special file (under /{candidate.split('/')[1]}), not a file on a "
+                "disk; give the path of a regular file (results are printed on standard output anyway)"
+            )
+
+
+def temporary_prefix(name: str) -> str:
+    """The prefix of a temporary file beside ``name``: ``.NAME.`` shortened so that the
+    temporary name and its backup (``.NAME.XXXXXXXX.tmp.previous``) fit :data:`NAME_MAX` bytes."""
+    room = NAME_MAX - len(".") - len(".") - 8 - len(".tmp") - len(".previous")
+    encoded = name.encode("utf-8", "surrogateescape")
+    if len(encoded) > room:
+        name = encoded[:room].decode("utf-8", "ignore")
+    return f".{name}."
 
 
 _KINDS = (
@@ -183,7 +266,8 @@ def atomic_output(path: str | Path, mode: str = "w", **open_options: Any) -> Ite
     tmp = None
     try:
         directory = target.parent if str(target.parent) else Path(".")
-        fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{target.name}.", suffix=".tmp")
+        with _signals_held():  # no interruption between creating the file and knowing its name
+            fd, tmp = tempfile.mkstemp(dir=directory, prefix=temporary_prefix(target.name), suffix=".tmp")
         with os.fdopen(fd, mode, **open_options) as handle:
             yield handle
         # mkstemp creates 0600: give the file the permissions of the one it replaces, else the usual ones
@@ -247,11 +331,41 @@ def require_finite(document: object, what: str = "the result") -> None:
         raise NumericalError(f"{found} is not finite; the inputs lie outside the range where results are certified")
 
 
-def save_figure(figure: Any, path: str | Path, **options: Any) -> Path:
-    """Save a matplotlib figure atomically, in the format named by the file's suffix (PNG by default)."""
+def figure_formats() -> tuple[str, ...]:
+    """The figure formats matplotlib writes (file suffixes without the dot)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return tuple(sorted(FigureCanvasBase.get_supported_filetypes()))
+
+
+def check_figure_output(path: str | Path, option: str = "--figure") -> None:
+    """Refuse, before any work, a figure path whose suffix names no format matplotlib writes, or
+    that :func:`check_output` refuses.
+
+    Raises:
+        OutputError: naming the option, the path and the formats there are.
+    """
     path = Path(path)
+    check_output(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    formats = figure_formats()
+    if fmt not in formats:
+        raise OutputError(f"{option} {path}: unknown figure format {fmt!r}; use one of {', '.join(formats)}")
+
+
+def save_figure(figure: Any, path: str | Path, **options: Any) -> Path:
+    """Save a matplotlib figure atomically, in the format named by the file's suffix (PNG by default).
+
+    Raises:
+        OutputError: the suffix names no figure format (see :func:`check_figure_output`), or the
+            file cannot be written.
+    """
+    path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    if fmt not in figure_formats():
+        check_figure_output(path, "figure")
     with atomic_output(path, "wb") as handle:
-        figure.savefig(handle, format=path.suffix.lstrip(".").lower() or "png", **options)
+        figure.savefig(handle, format=fmt, **options)
     return path
 
 

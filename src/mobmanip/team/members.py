@@ -234,22 +234,20 @@ def load_team(path: str | Path) -> Team:
         TeamError: the file cannot be read or parsed, or its content is wrong (the message
             names the value and where it is); other :class:`MobmanipError` from loading a robot.
     """
-    from ..support.files import note_input
+    from ..support.reading import check_toml_numbers, read_user_text
 
     path = Path(path)
-    note_input(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise TeamError(f"cannot read team {path}: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise TeamError(f"team {path} is not UTF-8 text (byte {exc.start})") from exc
+    text = read_user_text(path, "team", limit=MAX_TEAM_BYTES, error=TeamError)
     try:
         data = tomllib.loads(text)
+        check_toml_numbers(data, str(path), error=TeamError)
     except tomllib.TOMLDecodeError as exc:
         raise TeamError(f"team {path} is not valid TOML: {exc}") from exc
     return team_from_dict(data, path.resolve().parent, where=str(path))
 
+
+#: Largest team file read (bytes): a team of the most robots fits in a few kilobytes.
+MAX_TEAM_BYTES = 4 * 1024 * 1024
 
 _TOP = {"name", "task", "tolerance", "decoupled", "object", "robots"}
 _OBJECT = {"mass", "position", "yaw_deg", "size", "inertia"}
@@ -327,9 +325,15 @@ def _member(entry: Mapping, here: str, base_dir: Path, center: np.ndarray, R: np
         raise TeamError(f"{here}: no 'robot' (a built-in robot name or a spec path)")
     name = _get(entry, "name", str, here, reference)
     here = f"{here} ({name})"
-    candidate = base_dir / reference
+    from ..support.reading import looks_like_path, read_user_bytes, resolve_beside
+
     try:
-        robot = load_robot(candidate if reference.endswith(".toml") and candidate.is_file() else reference)
+        if looks_like_path(reference):  # a spec path, relative to the team file: never the current folder
+            candidate = resolve_beside(reference, base_dir / "team.toml")
+            read_user_bytes(candidate, "robot file", limit=MAX_TEAM_BYTES, error=TeamError)  # no /dev/zero
+            robot = load_robot(candidate)
+        else:
+            robot = load_robot(reference)
     except MobmanipError as exc:
         raise TeamError(f"{here}: {exc}") from None
     platform = _get(entry, "platform", str, here, "own")
@@ -433,8 +437,13 @@ def _inertia(obj: Mapping, mass: float, R: np.ndarray, here: str) -> np.ndarray 
         raise TeamError(f"{here}: give either size or inertia, not both")
     if "size" in obj:
         size = _vector(obj["size"], 3, f"{here} size")
-        if np.any(size < 0):
-            raise TeamError(f"{here}: size must be three non-negative lengths (m), got {obj['size']!r}")
+        from ..support.ranges import LINK_OFFSET
+
+        if np.any(size < 0) or np.any(size > LINK_OFFSET):
+            raise TeamError(
+                f"{here}: size must be three lengths from 0 to {LINK_OFFSET:g} m (the supported range), "
+                f"got {obj['size']!r}"
+            )
         return R @ np.diag(box_inertia(mass, [float(v) for v in size])) @ R.T
     if "inertia" not in obj:
         return None
@@ -473,7 +482,10 @@ def _number(value, what: str, positive: bool | None = None) -> float:
     """A finite number; ``positive`` True: > 0, False: >= 0, None: any sign."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TeamError(f"{what} must be a number, got {value!r}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise TeamError(f"{what} must be a finite number, got an integer of {len(str(abs(value)))} digits") from None
     if not math.isfinite(value) or (positive and value <= 0.0) or (positive is False and value < 0.0):
         sign = {True: "a positive", False: "a non-negative", None: "a finite"}[positive]
         raise TeamError(f"{what} must be {sign} number, got {value!r}")

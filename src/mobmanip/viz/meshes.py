@@ -6,6 +6,10 @@ and an exported page is meant to be shared, so a mesh is read only when it resol
 followed) to a file inside one of the spec's package directories (``RobotSpec.package_dirs``:
 the URDF's own folder for a local robot, the share folder of example-robot-data for its robots).
 Every other mesh, and every mesh that cannot be found, is left out of the drawing with a note.
+
+The boundary holds for every file a mesh references too: a Collada mesh's textures
+(``<library_images><image><init_from>``), which the viewer embeds in the page beside the mesh,
+must lie inside the package roots as well, or the mesh is left out (:func:`mesh_references`).
 """
 
 from __future__ import annotations
@@ -78,6 +82,58 @@ def resolve_mesh(filename: str, urdf_dir: Path, roots: Sequence[Path]) -> tuple[
     return None, f"no such file in the robot's package directories ({roots_text})"
 
 
+#: Largest mesh file whose references are read (bytes).
+MAX_MESH_BYTES = 256 * 1024 * 1024
+
+
+def mesh_references(path: Path) -> tuple[list[str] | None, str]:
+    """The files a mesh file references, as written (a Collada file's texture images), or
+    ``None`` and the reason when they cannot be read (the mesh is then not drawn).
+
+    Every ``init_from`` under every ``library_images`` of a ``.dae`` file counts, whatever its
+    namespace (Pinocchio's viewer reads them and embeds their bytes); OBJ and STL files
+    reference nothing the viewer reads.
+    """
+    if path.suffix.lower() != ".dae":
+        return [], ""
+    import xml.etree.ElementTree as ET
+
+    try:
+        if path.stat().st_size > MAX_MESH_BYTES:
+            return None, f"it is larger than {MAX_MESH_BYTES} bytes"
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError, ValueError) as exc:
+        return None, f"it cannot be read as Collada ({exc})"
+    references = []
+    for library in root.iter():
+        if not library.tag.endswith("library_images"):
+            continue
+        for element in library.iter():
+            if "init_from" in element.tag:
+                text = (element.text or "").strip()
+                if not text:
+                    return None, "a texture's <init_from> is empty"
+                references.append(text)
+    return references, ""
+
+
+def _references_inside(path: Path, roots: Sequence[Path]) -> str:
+    """Why a mesh may not be drawn because of a file it references ("" when every one is inside)."""
+    references, reason = mesh_references(path)
+    if references is None:
+        return reason
+    real_roots = [os.path.realpath(root) for root in roots]
+    for reference in references:
+        # as the viewer reads it: a path, absolute or relative to the mesh's folder (no URI schemes)
+        written = Path(reference)
+        real = os.path.realpath(written if written.is_absolute() else path.parent / written)
+        if not _inside(real, real_roots):
+            return f"its texture {reference!r} lies outside the robot's package directories"
+        if not os.path.isfile(real):
+            return f"its texture {reference!r} is not a file in the robot's package directories"
+    return ""
+
+
 def visual_meshes(description: RobotDescription) -> VisualMeshes:
     """Each visual mesh of ``description`` resolved by :func:`resolve_mesh` against its package
     directories (relative paths from the file's folder); those that may not be read are noted
@@ -90,6 +146,9 @@ def visual_meshes(description: RobotDescription) -> VisualMeshes:
                 continue
             filename = shape.filename or ""
             path, reason = resolve_mesh(filename, folder, description.package_dirs)
+            if path is not None:
+                reason = _references_inside(path, description.package_dirs)
+                path = None if reason else path
             if path is None:
                 out.skipped.append(f"mesh {filename!r} of link {link.name!r} not drawn: {reason}")
             else:

@@ -1,0 +1,199 @@
+"""Reading the user's files: one bounded reader for every file a command is given.
+
+Files come from others (a team file from a colleague, a path exported by another tool): a
+device such as ``/dev/zero`` named as a robot file, a FIFO, a file of gigabytes or a CSV field
+of megabytes must end in one clear line, quickly, not in memory exhaustion or an internal error.
+Paths written inside a file resolve against that file's folder, never the current directory.
+Numbers read from a table are checked against a stated range with the file, line and column
+named.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import stat
+from collections.abc import Callable
+from pathlib import Path
+
+from ..errors import ArgumentError, MobmanipError
+from .files import note_input
+
+#: Largest user text file read (bytes): specs, team files, configurations, CSV paths and
+#: trajectories (a 10^5-sample trajectory of a 30-joint robot is about 60 MB).
+MAX_TEXT_BYTES = 256 * 1024 * 1024
+#: Longest CSV field (characters): a number never needs more than a few dozen.
+MAX_CSV_FIELD = 1024
+#: Longest number written as text (characters): ``-1.2345678901234567e-308`` has 24.
+MAX_NUMBER_TEXT = 64
+#: Time stamps of a path or trajectory (s): their magnitude, and the smallest step between two.
+TIME_STAMP = 1e9
+MIN_TIME_STEP = 1e-6
+
+ErrorFactory = Callable[[str], MobmanipError]
+
+
+def read_user_bytes(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
+                    error: ErrorFactory = ArgumentError) -> bytes:  # fmt: skip
+    """The bytes of a user file: a regular file of at most ``limit`` bytes, noted as an input
+    of the running command (:func:`mobmanip.support.files.note_input`).
+
+    Args:
+        path: the file.
+        what: what the file is, for messages (``"object path"``, ``"team robot file"``).
+        limit: the largest size accepted (bytes).
+        error: builds the exception raised (a :class:`MobmanipError` subclass taking a message).
+
+    Raises:
+        MobmanipError: (from ``error``) the file is missing, unreadable, not a regular file (a
+            device, FIFO, directory or socket: never read, so ``/dev/zero`` is refused at once), or
+            larger than ``limit``.
+    """
+    path = Path(path)
+    try:
+        info = os.stat(path)
+    except OSError as exc:
+        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a directory" if stat.S_ISDIR(info.st_mode) else "not a regular file (a device, FIFO or socket)"
+        raise error(f"cannot read {what} {path}: it is {kind}")
+    if info.st_size > limit:
+        raise error(f"{what} {path} is {info.st_size} bytes, more than the {limit} this reads")
+    note_input(path)
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(limit + 1)
+    except OSError as exc:
+        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    if len(data) > limit:  # grew while being read
+        raise error(f"{what} {path} is more than the {limit} bytes this reads")
+    return data
+
+
+def read_user_text(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
+                   error: ErrorFactory = ArgumentError) -> str:  # fmt: skip
+    """A user file as UTF-8 text (see :func:`read_user_bytes`; a leading byte-order mark is dropped).
+
+    Raises:
+        MobmanipError: (from ``error``) as :func:`read_user_bytes`, or the file is not UTF-8.
+    """
+    data = read_user_bytes(path, what, limit=limit, error=error)
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} {path} is not UTF-8 text (byte {exc.start})") from None
+
+
+def read_csv_rows(path: str | Path, what: str, *, error: ErrorFactory = ArgumentError,
+                  max_field: int = MAX_CSV_FIELD) -> list[tuple[int, list[str]]]:  # fmt: skip
+    """The non-blank rows of a user CSV file as ``(line number, cells)``.
+
+    Raises:
+        MobmanipError: (from ``error``) as :func:`read_user_text`, a field longer than
+            ``max_field`` characters or malformed CSV (naming the line).
+    """
+    text = read_user_text(path, what, error=error)
+    reader = csv.reader(io.StringIO(text, newline=""))
+    rows: list[tuple[int, list[str]]] = []
+    limit = csv.field_size_limit()
+    csv.field_size_limit(max(max_field + 1, 1))
+    try:
+        for row in reader:
+            if any(len(cell) > max_field for cell in row):
+                raise error(f"{what} {path} line {reader.line_num}: a field longer than {max_field} characters")
+            if row and any(cell.strip() for cell in row):
+                rows.append((reader.line_num, row))
+    except csv.Error as exc:
+        line = reader.line_num
+        if "field larger than field limit" in str(exc):
+            raise error(f"{what} {path} line {line}: a field longer than {max_field} characters") from None
+        raise error(f"{what} {path} line {line}: not valid CSV ({exc})") from None
+    finally:
+        csv.field_size_limit(limit)
+    return rows
+
+
+def parse_cell(cell: str, where: str, *, bound: float = math.inf, unit: str = "",
+               error: ErrorFactory = ArgumentError) -> float:  # fmt: skip
+    """A finite number from a table cell, ``|value| <= bound``.
+
+    Args:
+        cell: the text.
+        where: the file, line and column (``"object path p.csv line 3, column 'x'"``).
+        bound: the largest magnitude accepted.
+        unit: the unit, for the message.
+
+    Raises:
+        MobmanipError: (from ``error``) naming ``where`` and the text (shortened): not a number,
+            not finite, or out of range.
+    """
+    shown = repr(cell if len(cell) <= 40 else cell[:37] + "...")
+    text = cell.strip()
+    if len(text) > MAX_NUMBER_TEXT:
+        raise error(f"{where}: {shown} is not a number of at most {MAX_NUMBER_TEXT} characters")
+    try:
+        value = float(text)
+    except ValueError:
+        raise error(f"{where}: not a number: {shown}") from None
+    if not math.isfinite(value):
+        raise error(f"{where}: not a finite number: {shown}")
+    if abs(value) > bound:
+        units = f" {unit}" if unit else ""
+        raise error(f"{where}: {shown} is outside the supported range [-{bound:g}, {bound:g}]{units}")
+    return value
+
+
+def check_time_stamps(t, what: str, lines, *, error: ErrorFactory = ArgumentError) -> None:
+    """Time stamps that increase by at least :data:`MIN_TIME_STEP` (naming the lines).
+
+    Args:
+        t: the time stamps (s), in file order.
+        what: the file, for messages (``"trajectory m.csv"``).
+        lines: the file line of each stamp.
+    """
+    for k in range(1, len(t)):
+        if not t[k] - t[k - 1] >= MIN_TIME_STEP:
+            raise error(
+                f"{what} line {lines[k]}, column 't': {float(t[k])!r} s follows {float(t[k - 1])!r} s "
+                f"(line {lines[k - 1]}); time stamps must increase by at least {MIN_TIME_STEP:g} s"
+            )
+
+
+def resolve_beside(reference: str, named_in: str | Path) -> Path:
+    """A path written inside a file, resolved against that file's folder (absolute paths and
+    ``~`` as given): ``robot = "r.toml"`` in ``sub/team.toml`` is ``sub/r.toml``, never
+    ``./r.toml``."""
+    path = Path(reference).expanduser()
+    if path.is_absolute():
+        return path
+    return Path(named_in).parent / path
+
+
+def looks_like_path(reference: str) -> bool:
+    """Whether a reference that may be a name (a built-in robot) or a path is a path: it has a
+    folder separator or a file suffix."""
+    return "/" in reference or os.sep in reference or Path(reference).suffix != ""
+
+
+#: Largest integer read from a TOML file: larger ones are not quantities (a mass written with
+#: 400 digits would overflow a float).
+MAX_TOML_INTEGER = 10**15
+
+
+def check_toml_numbers(data: object, where: str, *, error: ErrorFactory = ArgumentError) -> None:
+    """Refuse integers above :data:`MAX_TOML_INTEGER` and non-finite floats anywhere in a parsed
+    TOML document, naming the key (``team.toml: object.mass``)."""
+    stack: list[tuple[object, str]] = [(data, "")]
+    while stack:
+        value, key = stack.pop()
+        if isinstance(value, dict):
+            stack.extend((v, f"{key}.{k}" if key else str(k)) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, f"{key}[{i}]") for i, v in enumerate(value))
+        elif isinstance(value, bool):
+            continue
+        elif isinstance(value, int) and abs(value) > MAX_TOML_INTEGER:
+            digits = len(str(abs(value)))
+            raise error(f"{where}: {key} is an integer of {digits} digits, larger than {MAX_TOML_INTEGER:g}")

@@ -1,0 +1,220 @@
+"""Hostile input, round 2 (classes 2, 3 and 10): one output path for every command. A run killed
+with SIGINT or SIGTERM at any moment leaves no temporary file, no partial output and no new empty
+directory; outputs are all or none; special files, inputs behind symlinks and long names are
+handled before any work."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from hostile_util import ROOT, assert_one_line_error, run_cli, write_robot
+from mobmanip.support.files import NAME_MAX, publish_together, temporary_prefix, write_text
+
+SRC = ROOT / "src"
+CARRY_PATH = ROOT / "examples" / "carry_line.csv"
+
+
+def _start(cwd: Path, *argv) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    return subprocess.Popen(
+        [sys.executable, "-m", "mobmanip", *map(str, argv)],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def _kill_after(proc: subprocess.Popen, delay: float, signum: int) -> tuple[int, str]:
+    time.sleep(delay)
+    if proc.poll() is None:
+        proc.send_signal(signum)
+    _, err = proc.communicate(timeout=120)
+    return proc.returncode, err
+
+
+def _listing(directory: Path) -> list[str]:
+    return sorted(str(p.relative_to(directory)) for p in directory.rglob("*"))
+
+
+@pytest.mark.parametrize(
+    ("command", "files"),
+    [
+        ("carry", {"trajectory.csv", "baseline.csv", "carry.json", "capacity.png"}),
+        ("trajectory", {"analysis.csv", "analysis.json", "analysis.png"}),
+    ],
+)
+def test_a_killed_run_leaves_nothing_behind(tmp_path, command, files):
+    """Killed at several moments (loading, computing, writing): the new output directory is
+    gone, or holds every file; an existing directory keeps its earlier files untouched."""
+    trajectory = tmp_path / "motion.csv"
+    if command == "trajectory":
+        subprocess.run(
+            [sys.executable, "-m", "mobmanip", "carry", "planar_dual_arm", "--path", CARRY_PATH, "--prepare", "0",
+             "--out", tmp_path / "made"],
+            env={**os.environ, "PYTHONPATH": str(SRC)}, check=True, capture_output=True,
+        )  # fmt: skip
+        (tmp_path / "made" / "trajectory.csv").rename(trajectory)
+
+    def argv(out):
+        if command == "carry":
+            return ("carry", "planar_dual_arm", "--path", CARRY_PATH, "--prepare", "0", "--out", out)
+        return ("trajectory", "planar_dual_arm", trajectory, "--out", out)
+
+    outcomes = set()
+    for k, (delay, signum) in enumerate([(0.3, signal.SIGTERM), (1.2, signal.SIGINT), (2.0, signal.SIGTERM),
+                                         (3.0, signal.SIGTERM), (4.5, signal.SIGINT)]):  # fmt: skip
+        work = tmp_path / f"run{k}"
+        work.mkdir()
+        existing = work / "kept"
+        existing.mkdir()
+        (existing / next(iter(sorted(files)))).write_text("earlier result")
+        code_new, err_new = _kill_after(_start(work, *argv("new/sub")), delay, signum)
+        code_old, err_old = _kill_after(_start(work, *argv("kept")), delay, signum)
+        for code, err in ((code_new, err_new), (code_old, err_old)):
+            # Ctrl-C while Python is still importing the package (before the command starts) is
+            # Python's own KeyboardInterrupt; from the command's start on, one line.
+            assert "Traceback" not in err or err.strip().endswith("KeyboardInterrupt"), err
+            assert code in (0, 130, 143, -signum), (code, err)
+        listing = _listing(work)
+        assert not [name for name in listing if ".tmp" in name or name.endswith(".previous")], listing
+        # A signal that arrives while the files are renamed into place is held until all are.
+        if (work / "new").exists():
+            assert set(_listing(work / "new" / "sub")) == files, listing
+            outcomes.add("done")
+        else:
+            assert code_new != 0  # the directories it made are removed
+            outcomes.add("killed")
+        kept = set(_listing(existing))
+        if kept != files:
+            assert code_old != 0
+            assert kept == {sorted(files)[0]} and (existing / sorted(files)[0]).read_text() == "earlier result"
+    assert "killed" in outcomes, outcomes
+
+
+def test_a_failed_command_removes_the_directories_it_created(tmp_path, capfd):
+    trajectory = tmp_path / "bad.csv"
+    trajectory.write_text("t,platform_x\n0,1\n")
+    code, _, err = run_cli(capfd, "trajectory", "planar_dual_arm", trajectory, "--out", tmp_path / "a" / "b")
+    assert_one_line_error(code, err)
+    assert not (tmp_path / "a").exists()
+    path = tmp_path / "path.csv"
+    path.write_text("t,x,y\n0,0,0\n")  # one row: too short
+    code, _, err = run_cli(capfd, "carry", "planar_dual_arm", "--path", path, "--out", tmp_path / "c")
+    assert_one_line_error(code, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "path.csv"]
+
+
+def test_publish_together_removes_created_directories_on_interrupt(tmp_path):
+    from mobmanip.support.files import output_directory
+
+    with pytest.raises(KeyboardInterrupt):
+        with publish_together():
+            out = output_directory(tmp_path / "x" / "y")
+            write_text(out / "a.txt", "a")
+            raise KeyboardInterrupt
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("length", [200, 240, 250, 255])
+def test_long_output_names_work_up_to_the_file_system_limit(tmp_path, capfd, length):
+    name = "a" * (length - len(".json")) + ".json"
+    code, _, err = run_cli(capfd, "analyze", "planar_dual_arm", "--json", tmp_path / name)
+    assert code == 0, err
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+    assert len(temporary_prefix(name).encode()) + 8 + len(".tmp.previous") <= NAME_MAX
+    multibyte = "é" * 127 + ".j"  # 256 bytes would be too long; 127 two-byte letters and .j fit
+    assert len(temporary_prefix(multibyte).encode()) + 8 + len(".tmp.previous") <= NAME_MAX
+
+
+def test_a_name_over_the_limit_is_one_line(tmp_path, capfd):
+    code, _, err = run_cli(capfd, "analyze", "planar_dual_arm", "--json", tmp_path / ("a" * 256))
+    assert_one_line_error(code, err, "too long")
+
+
+def test_place_twice_with_the_same_figure_and_json(tmp_path, capfd):
+    """The figure and JSON written by the first run are outputs, not inputs, of the second."""
+    spec = write_robot(tmp_path)
+    argv = ["place", spec, "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x", "--starts", "1",
+            "--figure", tmp_path / "f.png", "--json", tmp_path / "j.json", "--save-q", tmp_path / "q.json"]  # fmt: skip
+    for _ in range(2):
+        code, _, err = run_cli(capfd, *argv)
+        assert code == 0, err
+
+
+@pytest.mark.parametrize("name", ["out.xyz", "out.png.bak", "out.docx"])
+@pytest.mark.parametrize("command", ["place", "team"])
+def test_unknown_figure_formats_are_refused_before_work(tmp_path, capfd, command, name):
+    if command == "place":
+        argv = ["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
+                "--figure", tmp_path / name]  # fmt: skip
+    else:
+        argv = ["team", ROOT / "examples" / "beam_team.toml", "--plot", tmp_path / name]
+    code, out, err = run_cli(capfd, *argv)
+    assert_one_line_error(code, err, "unknown figure format")
+    assert out == "" and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("special", ["/dev/stdout", "/dev/stderr", "/dev/fd/1", "/proc/self/fd/1"])
+def test_standard_output_as_a_file_is_refused(tmp_path, special):
+    """Decided: ``--json /dev/stdout`` is refused like every device (the results are printed on
+    standard output anyway). When standard output is redirected to a file, writing there
+    atomically would replace the file under the shell's redirection."""
+    redirected = tmp_path / "printed.txt"
+    with open(redirected, "w") as stdout:
+        proc = subprocess.run(
+            [sys.executable, "-m", "mobmanip", "analyze", "planar_dual_arm", "--json", special],
+            env={**os.environ, "PYTHONPATH": str(SRC)}, stdout=stdout, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+    assert_one_line_error(proc.returncode, proc.stderr, special)
+    assert redirected.read_text() == ""
+    proc = subprocess.run(
+        [sys.executable, "-m", "mobmanip", "analyze", "planar_dual_arm", "--json", special],
+        env={**os.environ, "PYTHONPATH": str(SRC)}, capture_output=True, text=True,
+    )  # fmt: skip
+    assert_one_line_error(proc.returncode, proc.stderr)
+
+
+def test_place_map_entries_that_lead_to_inputs_or_devices_are_refused(tmp_path, capfd):
+    spec = write_robot(tmp_path)
+    urdf = spec.with_suffix(".urdf")
+    before = {p: p.read_bytes() for p in (spec, urdf)}
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for name, target in (("map.csv", spec), ("map.npz", urdf), ("map.png", spec), ("map.csv", fifo),
+                         ("map.npz", Path(os.devnull))):  # fmt: skip
+        directory = tmp_path / f"d_{name}_{target.name}"
+        directory.mkdir()
+        (directory / name).symlink_to(target)
+        code, out, err = run_cli(
+            capfd, "place", spec, "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x", "--starts", "1",
+            "--map", directory, "--map-cells", "3",
+        )  # fmt: skip
+        assert_one_line_error(code, err, name)
+        assert out == ""
+        assert [p.name for p in directory.iterdir()] == [name]
+    code, out, err = run_cli(
+        capfd, "place", spec, "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x", "--map", fifo
+    )
+    assert_one_line_error(code, err, "not a directory")
+    assert {p: p.read_bytes() for p in before} == before
+
+
+def test_a_failed_place_map_writes_no_file(tmp_path, capfd):
+    """All or none across the whole command: the map, the JSON and the figure together."""
+    out = tmp_path / "maps"
+    code, _, err = run_cli(
+        capfd, "place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
+        "--starts", "1", "--map", out, "--map-cells", "3", "--json", tmp_path / "j.json",
+        "--export", tmp_path / "missing" / "page.html",
+    )  # fmt: skip
+    assert_one_line_error(code, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
