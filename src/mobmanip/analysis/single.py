@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import types
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import cast
 
 import numpy as np
@@ -50,8 +50,8 @@ class Analysis:
             (read-only); see :mod:`mobmanip.measures`. By default ``kinematic`` and ``dynamic``.
         object_given: whether the object was given (``held_object=``) rather than the default
             one between the hands.
-        terms: what the measures were computed from (:class:`mobmanip.terms.builder.MeasureTerms`),
-            with the constraints beyond the joint boxes they must honour.
+        given_terms: the terms the measures were computed from, when they were assembled
+            (see :attr:`terms`).
 
     ``warnings`` (computed on first access) says what makes the numbers doubtful: the robot file's
     flaws repaired at load (:attr:`mobmanip.robot.model.Robot.warnings`), placeholder limits,
@@ -73,12 +73,24 @@ class Analysis:
     grasp_matrix: np.ndarray
     measures: Mapping[str, TaskSet]
     object_given: bool = False
-    terms: MeasureTerms | None = None
+    given_terms: MeasureTerms | None = field(default=None, repr=False)
+
+    @functools.cached_property
+    def terms(self) -> MeasureTerms:
+        """What the measures were computed from (:class:`mobmanip.terms.builder.MeasureTerms`),
+        with the constraints beyond the joint boxes they honour; assembled on first access when
+        the compiled engine gave every set asked for."""
+        if self.given_terms is not None:
+            return self.given_terms
+        return assemble_terms(
+            self.robot, self.q, self.task, self.decoupled, self.unified_jacobian, self.reduced_inertia,
+            self.bias, self.end_effector_positions, self.held_object, self.grasp_matrix,
+        )  # fmt: skip
 
     @property
     def constraints(self) -> tuple[Constraint, ...]:
         """The constraints beyond the joint boxes that the sets were asked to honour."""
-        return () if self.terms is None else self.terms.constraints
+        return () if self.given_terms is None else self.given_terms.constraints
 
     def ignored_constraints(self, name: str) -> tuple[str, ...]:
         """The names of the constraints measure ``name`` ignored: those on its quantity's problem
@@ -327,11 +339,30 @@ def _analyze_compiled(robot, q, task, mass, held_object, decoupled, wanted, cons
     instead, and any other measure from the terms by its definition."""
     row = evaluate_one(robot, q, task, mass, held_object, decoupled, method="kernel", validate=False)
     obj = held_object if held_object is not None else HeldObject.between(row.positions, mass)
-    terms = assemble_terms(
-        robot, q, task.name, decoupled, row.J_u, row.P, row.xi, row.positions, obj, row.W, constraints
+    given: dict[str, TaskSet | None] = {KINEMATIC.name: row.kinematic, DYNAMIC.name: row.dynamic}
+    computed = {m.name: given.get(m.name) for m in wanted}
+    if constraints or any(s is None for s in computed.values()):
+        terms = assemble_terms(
+            robot, q, task.name, decoupled, row.J_u, row.P, row.xi, row.positions, obj, row.W, constraints
+        )
+        return _assemble(terms, wanted, given, given_object=held_object is not None)
+    # the engine gave every set asked for: the terms are assembled only if asked for (Analysis.terms)
+    return Analysis(
+        robot=robot,
+        q=q,
+        task=task.name,
+        decoupled=decoupled,
+        unified_jacobian=row.J_u,
+        reduced_inertia=row.P,
+        reduced_inertia_decoupled=decouple(robot, row.P),
+        input_matrix=robot.Q,
+        bias=row.xi,
+        end_effector_positions=row.positions,
+        held_object=obj,
+        grasp_matrix=row.W,
+        measures=types.MappingProxyType(cast(dict[str, TaskSet], computed)),
+        object_given=held_object is not None,
     )
-    given = {KINEMATIC.name: row.kinematic, DYNAMIC.name: row.dynamic}
-    return _assemble(terms, wanted, given, given_object=held_object is not None)
 
 
 def _assemble(terms: MeasureTerms, wanted: Iterable[Measure], given: Mapping[str, TaskSet | None], given_object: bool):
@@ -359,5 +390,5 @@ def _assemble(terms: MeasureTerms, wanted: Iterable[Measure], given: Mapping[str
         grasp_matrix=terms.W,
         measures=types.MappingProxyType(sets),
         object_given=given_object,
-        terms=terms,
+        given_terms=terms,
     )
