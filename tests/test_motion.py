@@ -86,7 +86,8 @@ def test_torques_equal_rnea(tiago, rng):
         a_o = rng.normal(size=terms.task.dim)
         xdot = terms.joint_accelerations(a_o)
         S = terms.S
-        tau_rnea = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, S @ xdot)
+        a = S @ xdot + tiago.null_space_rate(q, x) @ x  # the joint accelerations, Sdot x included
+        tau_rnea = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, a)
         h = np.linalg.pinv(terms.W) @ (terms.M_o @ a_o + terms.c_o + terms.g_o)
         expected = np.linalg.solve(terms.Q, tau_rnea + terms.J_u.T @ h)
         # the same torques from the in-motion ellipsoid's form: Q^-1 (P J^+ W^T + J^T W^+ M_o) a_o + mu_o
@@ -112,7 +113,8 @@ def test_in_motion_ellipsoid_boundary_saturates_torques(tiago, rng):
         u = rng.normal(size=3)
         a_o = ma.dynamic.center + ma.dynamic.generator @ (u / np.linalg.norm(u))
         xdot = terms.joint_accelerations(a_o)
-        tau = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, S @ xdot)
+        a = S @ xdot + tiago.null_space_rate(q, x) @ x
+        tau = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, a)
         tau = np.linalg.solve(terms.Q, tau + terms.J_u.T @ np.linalg.pinv(terms.W) @ (terms.M_o @ a_o + terms.g_o))
         assert np.linalg.norm(tau / terms.effort_limits) == pytest.approx(1.0, abs=1e-8)
 
