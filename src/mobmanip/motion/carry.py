@@ -34,6 +34,9 @@ capacity term would.
 
 The path (CSV, :func:`read_path`) has ``t`` and the object's ``x``, ``y`` (m) and optionally ``z``
 (m) and ``yaw`` (rad); by default it is relative to where the start posture holds the object.
+Between its samples the path is a cubic spline in time (:meth:`ObjectPath.sample`), so the
+object's acceleration is continuous: interpolated linearly, a path sampled every 0.1 s and
+tracked every 0.02 s asked for an impulse of acceleration at each sample and none between.
 """
 
 from __future__ import annotations
@@ -110,15 +113,21 @@ class ObjectPath:
         return float(np.sum(np.linalg.norm(np.diff(self.xy, axis=0), axis=1)))
 
     def sample(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Displacement from the start (N, 3) (m) and turn from the start (N,) (rad) at ``times``
-        (linear interpolation between the path's samples)."""
+        """Displacement from the start (N, 3) (m) and turn from the start (N,) (rad) at ``times``.
+
+        Between the path's samples each coordinate follows a cubic spline in time through them
+        (:func:`smooth`: twice continuously differentiable, so the object's acceleration is
+        continuous; linear interpolation made it an impulse at every sample and zero between).
+        Times outside the path hold its ends.
+        """
+        times = np.clip(np.asarray(times, dtype=float), self.t[0], self.t[-1])
         d = np.zeros((len(times), 3))
-        d[:, 0] = np.interp(times, self.t, self.xy[:, 0]) - self.xy[0, 0]
-        d[:, 1] = np.interp(times, self.t, self.xy[:, 1]) - self.xy[0, 1]
+        d[:, 0] = smooth(self.t, self.xy[:, 0], times) - self.xy[0, 0]
+        d[:, 1] = smooth(self.t, self.xy[:, 1], times) - self.xy[0, 1]
         if self.z is not None:
-            d[:, 2] = np.interp(times, self.t, self.z) - self.z[0]
+            d[:, 2] = smooth(self.t, self.z, times) - self.z[0]
         if self.yaw is not None:
-            turn = np.interp(times, self.t, np.unwrap(self.yaw)) - self.yaw[0]
+            turn = smooth(self.t, np.unwrap(self.yaw), times) - self.yaw[0]
         else:
             turn = self._heading_turn(times)
         return d, turn
@@ -137,7 +146,22 @@ class ObjectPath:
                 heading[k] = first if k == 0 else heading[k - 1]
         heading = np.unwrap(heading)
         mids = 0.5 * (self.t[1:] + self.t[:-1])
-        return np.interp(times, mids, heading) - heading[0]
+        return smooth(mids, heading, np.clip(times, mids[0], mids[-1])) - heading[0]
+
+
+def smooth(t: np.ndarray, values: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """values (N,) given at t (N,) evaluated at ``times`` inside [t[0], t[-1]] by a cubic spline
+    in time (SciPy's ``CubicSpline``, not-a-knot ends: C2, exact for cubic motions); two
+    samples give the straight line between them, one its value."""
+    from scipy.interpolate import CubicSpline
+
+    t = np.asarray(t, dtype=float)
+    values = np.asarray(values, dtype=float)
+    if t.shape[0] == 1:
+        return np.full(np.shape(times), float(values[0]))
+    if t.shape[0] == 2:
+        return np.interp(times, t, values)
+    return CubicSpline(t, values)(times)
 
 
 def read_path(path: str | Path) -> ObjectPath:
