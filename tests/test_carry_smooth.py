@@ -147,3 +147,14 @@ def test_a_smooth_path_is_not_flagged():
     path = ObjectPath(t, np.column_stack([0.1 * np.sin(t), np.zeros_like(t)]))
     d, _ = path.sample(t)
     np.testing.assert_allclose(d[:, 0], 0.1 * np.sin(t), atol=1e-12)
+
+
+def test_time_stamps_print_as_written(tmp_path):
+    """carry's CSV time stamps are the step's multiples as written (6.02, not 6.0200000000000005)."""
+    out = tmp_path / "out"
+    path = tmp_path / "path.csv"
+    path.write_text("t,x,y\n0,0,0\n1,0.1,0\n2,0.2,0.05\n3,0.3,0.1\n")
+    assert main(["carry", "planar_dual_arm", "--path", str(path), "--out", str(out), "--step", "0.02"]) == 0
+    for name in ("trajectory.csv", "baseline.csv", "preparation.csv"):
+        cells = [line.split(",")[0] for line in (out / name).read_text().splitlines()[1:]]
+        assert cells and all(len(c.split(".")[-1]) <= 9 for c in cells), [c for c in cells if len(c) > 12][:3]

@@ -68,6 +68,9 @@ LIMIT_HORIZON = 0.2
 #: The QP keeps each step's efforts within this share of their limits (its model takes the
 #: velocity terms at the previous step's rates; the margin covers the difference).
 EFFORT_SHARE = 0.99
+#: Time stamps of the synthesised motions are rounded to this many decimals (ns): the step's
+#: multiples then print as written (6.02, not 6.0200000000000005).
+TIME_DECIMALS = 9
 #: Longest self-motion before the path (s); 0 starts the path from the start posture.
 DEFAULT_PREPARE = 30.0
 #: The self-motion stops when the objective rose by less than this fraction of its value ...
@@ -607,7 +610,7 @@ def _run(
     first step (default rest), from which the first step's efforts are counted."""
     model = robot.model
     n = int(math.floor((path.t[-1] - path.t[0]) / dt + 1e-9)) + 1
-    times = path.t[0] + dt * np.arange(n)
+    times = np.round(path.t[0] + dt * np.arange(n), TIME_DECIMALS)  # 6.02, not 6.0200000000000005
     if times[-1] < path.t[-1] - 1e-12:
         times = np.append(times, path.t[-1])
         n += 1
@@ -726,7 +729,7 @@ def carry(
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
             preparation.method,
-            preparation.t + shift,
+            np.round(preparation.t + shift, TIME_DECIMALS),
             *(getattr(preparation, f) for f in ("q", "x", "capacity", "tracking_error", "hand_error")),
         )
         q_path = preparation.q[-1]
