@@ -18,7 +18,8 @@ import pytest
 
 import mobmanip
 from mobmanip.cli import main
-from mobmanip.motion.carry import CarryFailed, ObjectPath, carry, read_path
+from mobmanip.errors import CarryFailed
+from mobmanip.motion.carry import ObjectPath, carry, read_path
 from mobmanip.motion.trajectory import read_trajectory
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

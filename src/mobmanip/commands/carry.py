@@ -66,7 +66,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
 
-    from ..motion.carry import CarryFailed, carry, read_path
+    from ..errors import CarryFailed
+    from ..motion.carry import carry, read_path
     from ..robot.configurations import read_configuration
     from ..robot.model import load_robot
     from ..robot.spec import find_spec

@@ -24,7 +24,8 @@ from numpy.typing import ArrayLike
 from ..support.files import atomic_output, save_figure, write_json
 
 if TYPE_CHECKING:
-    from ..motion.carry import CarryFailed, CarryResult
+    from ..errors import CarryFailed
+    from ..motion.carry import CarryResult
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
     from ..robot.model import Robot

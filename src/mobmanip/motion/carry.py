@@ -50,11 +50,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ArgumentError, MeasureError, NumericalError, SpecError
+from ..errors import ArgumentError, CarryFailed, MeasureError, SpecError
 from ..gradients.evaluator import GradientEvaluator, Objective
 from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
-from ..robot.tasks import get_task
+from ..robot.tasks import TaskSpace, get_task
 from .trajectory import tangent_integrate
 
 PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
@@ -364,27 +364,30 @@ class CarryDiagnosis:
         }
 
 
-class CarryFailed(NumericalError):
-    """The carry QP has no solution at some step.
-
-    Attributes:
-        diagnosis: what binds (:class:`CarryDiagnosis`).
-        partial: the motion up to the failing step (:class:`CarryRun`).
-        preparation: the self-motion before the path, when the path's motion failed after one.
-    """
-
-    def __init__(self, message: str, diagnosis: CarryDiagnosis, partial: CarryRun, preparation: CarryRun | None = None):
-        super().__init__(message)
-        self.diagnosis = diagnosis
-        self.partial = partial
-        self.preparation = preparation
-
-
-def diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, step: int, t: float) -> CarryDiagnosis:
+def diagnose_step(
+    robot: Robot,
+    q: np.ndarray,
+    x_prev: np.ndarray,
+    h: float,
+    task: TaskSpace,
+    object_mass: float | None,
+    J_u: np.ndarray,
+    b: np.ndarray,
+    step: int,
+    t: float,
+) -> CarryDiagnosis:
     """Which limit makes the step's QP infeasible: each limit of each wheel and joint relaxed
     alone (position bounds widened to the velocity limits, a velocity limit lifted, an effort
     row dropped); the first whose relaxation alone makes the step feasible binds, and the
-    relaxed solution says what the step asks of it."""
+    relaxed solution says what the step asks of it.
+
+    Args:
+        robot, q: the robot and its configuration at the step, (nq,).
+        x_prev: the previous step's reduced velocity, (nx,); h: the step's duration (s).
+        task, object_mass: as :func:`carry`.
+        J_u, b: the step's tracking equality J_u x = b.
+        step, t: the step's index and time (s), reported.
+    """
     nx = robot.nx
     vel = np.asarray(robot.velocity_limits, dtype=float)
     effort = np.asarray(robot.effort_limits, dtype=float)
