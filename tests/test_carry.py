@@ -38,11 +38,16 @@ def test_example_paths_are_2_m(paper_run):
 
 
 def test_tracks_the_path_within_1_mm(paper_run):
+    """Against the path as the module doc defines it between samples: a cubic spline in time
+    (SciPy's, not-a-knot), built here from the CSV's samples."""
+    from scipy.interpolate import CubicSpline
+
     robot, path, result = paper_run
+    spline = CubicSpline(path.t, path.xy)
     for run in (result.motion, result.baseline):
         start = end_effector_positions(robot, run.q[0]).mean(axis=0)
         for t, q in zip(run.t, run.q):
-            goal = start[:2] + [np.interp(t, path.t, path.xy[:, k]) - path.xy[0, k] for k in (0, 1)]
+            goal = start[:2] + spline(t) - path.xy[0]
             centre = end_effector_positions(robot, q).mean(axis=0)
             assert np.linalg.norm(centre[:2] - goal) <= 1e-3
 
@@ -74,9 +79,17 @@ def test_self_motion_before_the_path(paper_run):
     held = end_effector_positions(robot, prep.q[0]).mean(axis=0)
     for q in prep.q:
         assert np.linalg.norm(end_effector_positions(robot, q).mean(axis=0) - held) <= 1e-3
-    assert prep.capacity[-1] > prep.capacity[0]
+
+    # the capacities recomputed by analyze (not the evaluator that drove the motion)
+    def minor(q):
+        return mobmanip.analyze(robot, q, "planar", method="exact").kinematic.semi_axes[-1]
+
+    assert minor(prep.q[-1]) > minor(prep.q[0]) * 1.05
     start = result.starts()
-    assert start["qp"]["capacity"] == motion.capacity[0] and start["pinv"]["capacity"] == base.capacity[0]
+    assert start["qp"]["capacity"] == pytest.approx(minor(motion.q[0]), rel=1e-9)
+    assert start["pinv"]["capacity"] == pytest.approx(minor(base.q[0]), rel=1e-9)
+    assert start["qp"]["self_motion_start_capacity"] == pytest.approx(minor(prep.q[0]), rel=1e-9)
+    assert start["qp"]["capacity"] > start["pinv"]["capacity"]  # the self-motion raised it
     short = ObjectPath(path.t[:3], path.xy[:3])
     plain = carry(robot, short, prepare=0.0)
     assert plain.preparation is None
@@ -133,18 +146,28 @@ def test_capacity_beats_the_baseline_by_20_percent(paper_run):
     assert minima[0] >= 1.2 * minima[1]
 
 
-def _check_efforts(robot, result):
+#: The documented effort reserve: the QP keeps each step's efforts within 99 % of the limits
+#: (written out here, not read from the module under test).
+EFFORT_RESERVE = 0.99
+
+
+def _check_efforts(robot, result) -> float:
     """The QP motions' wheel and joint efforts are within their limits: per step, from the
     step's change of rates by the paper's policy (MotionTerms.torques, not the QP's own matrix),
-    and per sample as mobmanip trajectory estimates them from the configurations alone."""
+    and per sample as mobmanip trajectory estimates them from the configurations alone.
+    Returns the largest share of a limit used by a step."""
     previous = np.zeros(robot.nx)
+    largest = 0.0
     for run in (result.preparation, result.motion):
         for q, x, dt in zip(run.q[:-1], run.x, np.diff(run.t)):
             tau = motion_terms(robot, q, previous).torques((x - previous) / dt)
-            assert np.all(np.abs(tau) <= carry_module.EFFORT_SHARE * robot.effort_limits * (1 + 1e-9))
+            share = float(np.max(np.abs(tau) / robot.effort_limits))
+            assert share <= EFFORT_RESERVE * (1 + 1e-9)
+            largest = max(largest, share)
             previous = x
         sampled = trajectory_from_samples(robot, run.t, run.q)
         assert analyze_trajectory(robot, sampled).effort_use.max() <= 1.0
+    return largest
 
 
 @pytest.mark.parametrize("name", ["carry_line.csv", "carry_turn.csv"])
@@ -163,7 +186,10 @@ def test_tiago_capacity_against_the_baseline_and_the_best_start(name):
     result = carry(robot, read_path(EXAMPLES / name))
     motion, base = result.motion, result.baseline
     assert motion.tracking_error.max() <= 1e-3 and result.preparation.tracking_error.max() <= 1e-3
-    _check_efforts(robot, result)
+    # the reserve from both sides: the self-motion's first step (from rest, the capacity term
+    # asking half the velocity limits at once) is held exactly at the reserve, not below it
+    assert _check_efforts(robot, result) == pytest.approx(EFFORT_RESERVE, abs=1e-6)
+    assert carry_module.EFFORT_SHARE == EFFORT_RESERVE
     values = [mobmanip.analyze(robot, q, "spatial").kinematic.semi_axes[-1] for q in (motion.q[0], base.q[0])]
     np.testing.assert_allclose(values, [motion.capacity[0], base.capacity[0]], rtol=1e-9)
     if name == "carry_turn.csv":

@@ -215,6 +215,31 @@ def test_platform_gradient_is_the_world_derivative(robots):
         vals = [ev(robot.configuration(tuple(pose + f * e), joints))[0] for f in (2, 1, -1, -2)]
         want[k] = (-vals[0] + 8 * vals[1] - 8 * vals[2] + vals[3]) / (12 * STEP)
     np.testing.assert_allclose(platform_gradient(q, g), want, rtol=1e-7, atol=1e-9)
+    # a capacity measure does not change when the platform translates, so its x and y parts are
+    # zero on both sides above; the map's translation part is checked on a function that does
+    # depend on where the platform is: f = a . (a hand's world position)
+    model, data = robot.model, robot.model.createData()
+    frame = robot.arms[0].frame_id
+    weights = np.array([1.0, 2.0, 0.0])
+
+    def f(qq):
+        pin.framesForwardKinematics(model, data, qq)
+        return float(weights @ data.oMf[frame].translation)
+
+    tangent = np.zeros(model.nv)
+    for k in range(3):
+        e = np.zeros(model.nv)
+        e[k] = STEP
+        tangent[k] = (f(pin.integrate(model, q, e)) - f(pin.integrate(model, q, -e))) / (2 * STEP)
+    world = np.zeros(3)
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = STEP
+        world[k] = (
+            f(robot.configuration(tuple(pose + e), joints)) - f(robot.configuration(tuple(pose - e), joints))
+        ) / (2 * STEP)
+    np.testing.assert_allclose(world[:2], weights[:2], atol=1e-6)  # translating the platform moves the hand
+    np.testing.assert_allclose(platform_gradient(q, tangent), world, atol=1e-6)
 
 
 def test_explicit_object_is_constant(robots):

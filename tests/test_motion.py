@@ -86,7 +86,8 @@ def test_torques_equal_rnea(tiago, rng):
         a_o = rng.normal(size=terms.task.dim)
         xdot = terms.joint_accelerations(a_o)
         S = terms.S
-        tau_rnea = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, S @ xdot)
+        a = S @ xdot + tiago.null_space_rate(q, x) @ x  # the joint accelerations, Sdot x included
+        tau_rnea = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, a)
         h = np.linalg.pinv(terms.W) @ (terms.M_o @ a_o + terms.c_o + terms.g_o)
         expected = np.linalg.solve(terms.Q, tau_rnea + terms.J_u.T @ h)
         # the same torques from the in-motion ellipsoid's form: Q^-1 (P J^+ W^T + J^T W^+ M_o) a_o + mu_o
@@ -112,7 +113,8 @@ def test_in_motion_ellipsoid_boundary_saturates_torques(tiago, rng):
         u = rng.normal(size=3)
         a_o = ma.dynamic.center + ma.dynamic.generator @ (u / np.linalg.norm(u))
         xdot = terms.joint_accelerations(a_o)
-        tau = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, S @ xdot)
+        a = S @ xdot + tiago.null_space_rate(q, x) @ x
+        tau = S.T @ pin.rnea(tiago.model, tiago.model.createData(), q, S @ x, a)
         tau = np.linalg.solve(terms.Q, tau + terms.J_u.T @ np.linalg.pinv(terms.W) @ (terms.M_o @ a_o + terms.g_o))
         assert np.linalg.norm(tau / terms.effort_limits) == pytest.approx(1.0, abs=1e-8)
 
@@ -139,6 +141,23 @@ def test_planar_task_velocity_terms_paper_robot(robot, rng):
     rnea0 = pin.rnea(robot.model, robot.model.createData(), q, S @ x, np.zeros(robot.model.nv))
     np.testing.assert_allclose(terms.xi, -S.T @ rnea0, atol=1e-10)
     np.testing.assert_allclose(terms.W_rate, 0.0)  # W = [I I] is constant in the planar task
+    # that zero is not the code's answer to every input: with the object's yaw in the task, the
+    # same motion turns the grasp and W_rate equals the central difference of W along the motion
+    v = S @ x
+    e = 1e-6
+    qp, qm = pin.integrate(robot.model, q, e * v), pin.integrate(robot.model, q, -e * v)
+    for task, moving in (("planar", False), ("planar_rigid", True)):
+        rate = motion_terms(robot, q, x, task).W_rate
+        fd = (_default_W(robot, qp, task) - _default_W(robot, qm, task)) / (2 * e)
+        np.testing.assert_allclose(rate, fd, atol=1e-6)
+        assert (np.abs(fd).max() > 1e-2) == moving
+        # and the hands' drift is the derivative of J_u along the motion in both tasks
+        Jp = frame_jacobians(robot, qp, task) @ robot.null_space(qp)
+        Jm = frame_jacobians(robot, qm, task) @ robot.null_space(qm)
+        fd_drift = (Jp - Jm) @ x / (2 * e)
+        np.testing.assert_allclose(
+            motion_terms(robot, q, x, task).drift, fd_drift, atol=1e-6 * max(1, np.abs(fd_drift).max())
+        )
 
 
 def test_bad_velocity_is_refused(robot):

@@ -71,7 +71,8 @@ def _limit_use(robot, trajectory):
     for q, x, xdot in zip(trajectory.q, trajectory.x, trajectory.xdot):
         terms = motion_terms(robot, q, x)
         S = terms.S
-        tau = S.T @ pin.rnea(robot.model, data, q, S @ x, S @ xdot)
+        a = S @ xdot + robot.null_space_rate(q, x) @ x  # joint accelerations, Sdot x included
+        tau = S.T @ pin.rnea(robot.model, data, q, S @ x, a)
         a_o = terms.object_acceleration(xdot)
         wrench = terms.M_o @ a_o + terms.c_o + terms.g_o
         tau = np.linalg.solve(terms.Q, tau + terms.J_u.T @ np.linalg.pinv(terms.W) @ wrench)

@@ -89,3 +89,58 @@ def test_exported_page_plays_the_trajectory(motion, tmp_path):
                 expected = G @ G.T + np.diag([0.0, 0.0, PLANAR_THICKNESS[False, name] ** 2])
                 np.testing.assert_allclose(drawn[:3, :3] @ drawn[:3, :3].T, expected, atol=TOL)
         page.close()
+
+
+#: Share of the viewport's smaller side the robot, object and sets together must span at every
+#: sampled time (the whole path is framed, so a frame's own span is a part of it).
+MIN_SPAN = 0.08
+
+
+def test_exported_page_keeps_the_moving_robot_in_view(tmp_path):
+    """The paper robot carries the object 2 m along the example line. The exported page's camera
+    frames the whole motion: at every sampled time of the played animation the robot's visual
+    geometry, the object and the points of both drawn ellipsoids project inside the viewport, and
+    together span at least MIN_SPAN of it. (Framed on the first frame only, the camera lost the
+    robot once it had driven on: the issue's 'from 10 s on only the grid is visible'.)"""
+    from pathlib import Path
+
+    from browser_util import project, wait_for_scene
+    from mobmanip.motion.carry import read_path
+    from mobmanip.viz.page import visual_points
+
+    reason = missing_browser()
+    if reason is not None:
+        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
+    robot = mobmanip.load_robot("planar_dual_arm")
+    path = read_path(Path(__file__).resolve().parents[1] / "examples" / "carry_line.csv")
+    run = carry(robot, path, step=0.1, prepare=0.0).motion
+    trajectory = trajectory_from_samples(robot, run.t, run.q)
+    frames, times = trajectory_frames(robot, trajectory, "planar", every=10)
+    with EllipsoidViewer(robot) as viewer:
+        animate_trajectory(viewer, frames, times)
+        page_path = viewer.export_html(tmp_path / "trajectory.html")
+        scales = viewer.scales
+    picked = frame_samples(len(trajectory), 10)
+    travelled = np.linalg.norm(trajectory.q[-1, :2] - trajectory.q[0, :2])
+    assert travelled > 1.5  # m: the robot drives far beyond its own size
+    with chromium() as browser:
+        page = browser.new_page(viewport=VIEWPORT)
+        page.goto(page_path.as_uri())
+        wait_for_scene(page, (f"{M}{OBJECT_PATH}",))
+        for k in np.linspace(0, len(picked) - 1, 7).round().astype(int):
+            page.evaluate(f"() => {{ viewer.animator.pause(); viewer.animator.seek({times[k]}); }}")
+            i = picked[k]
+            direct = analyze_motion(robot, trajectory.q[i], trajectory.x[i], "planar")
+            centre = direct.terms.held_object.center
+            points = [visual_points(robot.model, viewer.visual_model, trajectory.q[i]), centre[None, :]]
+            for name in ("kinematic", "dynamic"):
+                e = getattr(direct, name)
+                G = scales[name] * np.eye(3)[:, :2] @ e.generator
+                ring = np.array([[np.cos(a), np.sin(a)] for a in np.linspace(0, 2 * np.pi, 16)])
+                points.append(centre + scales[name] * np.r_[e.center, 0.0] + ring @ G.T)
+            xy = project(page, np.vstack(points))
+            w, h = VIEWPORT["width"], VIEWPORT["height"]
+            assert np.all((xy[:, 0] >= 0) & (xy[:, 0] <= w) & (xy[:, 1] >= 0) & (xy[:, 1] <= h)), (times[k], xy)
+            span = max(np.ptp(xy[:, 0]) / w, np.ptp(xy[:, 1]) / h)
+            assert span >= MIN_SPAN, (times[k], span)
+        page.close()

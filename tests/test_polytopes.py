@@ -100,10 +100,20 @@ def test_gravity_load_shifts_the_dynamic_set_by_the_load_alone(tiago, rng):
     """With and without a load the exact sets differ, and each matches its own program: the
     load is really in the numbers (not a test that passes for any mass)."""
     robot, q = tiago
+    heavy_terms = terms(robot, q, "translational", 3.0)[1]
     light = dynamic_polytope(**dynamic_terms(terms(robot, q, "translational", 0.0)[1]))
-    heavy = dynamic_polytope(**dynamic_terms(terms(robot, q, "translational", 3.0)[1]))
+    heavy = dynamic_polytope(**dynamic_terms(heavy_terms))
     up = np.array([0.0, 0.0, 1.0])
     assert heavy.support(up) < light.support(up) - 0.1  # a 3 kg load costs upward acceleration
+    # the wrench that holds the load points up (the model's gravity points down)
+    assert robot.model.gravity.linear[2] < 0
+    np.testing.assert_allclose(heavy_terms["g_o"], -3.0 * robot.model.gravity.linear, rtol=1e-12)
+    # and the set matches the exact LP (tests/polytope_util.py, written from the equations with
+    # W h = M_o a_o + g_o) along and against gravity: a sign flipped inside the set's
+    # construction moves its supports by several m/s^2
+    lp = dynamic_lp(*dynamic_terms(heavy_terms).values())
+    for d in (up, -up):
+        assert heavy.support(d) == pytest.approx(lp(d), rel=1e-6, abs=1e-6)
 
 
 # ---------------------------------------------------------------------------------------------

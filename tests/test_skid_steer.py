@@ -169,6 +169,18 @@ def test_s_is_constant_along_motions_and_sdot_is_zero(husky, rng):
     minus = husky.null_space(pin.integrate(husky.model, q, -husky.null_space(q) @ x * h))
     np.testing.assert_allclose((plus - minus) / (2 * h), husky.null_space_rate(q, x), atol=1e-9)
     np.testing.assert_array_equal(husky.null_space_rate(q, x), 0.0)
+    # Robot.null_space returns its cached S for a kind that says it does not vary with q, so the
+    # difference above is of a constant; the kind's own block, evaluated at each configuration,
+    # must not change along the motion (else the cache and Sdot = 0 would be wrong) ...
+    assert not husky.platform.varies_with_q
+    v = husky.null_space(q) @ x
+    for step in (h, 0.3, 1.7):
+        for sign in (1.0, -1.0):
+            moved = pin.integrate(husky.model, q, sign * step * v)
+            rows, block = husky.platform.tangent_block(moved)
+            np.testing.assert_allclose(block, husky.platform.tangent_block(q)[1], atol=1e-12)
+            # ... and the cached S satisfies the wheels' constraints there, from the geometry
+            np.testing.assert_allclose(constraint_matrix(husky, moved) @ husky.null_space(moved), 0.0, atol=1e-12)
 
 
 def test_kinetic_energy_of_the_reduced_inertia(husky, rng):

@@ -232,6 +232,29 @@ def test_analyze_at_rest_gives_finite_ellipsoids_and_a_moving_platform_helps(tri
     assert result.kinematic.volume > locked.kinematic.volume
     exact = mobmanip.analyze(tricycle, q, task="translational", method="exact")
     np.testing.assert_allclose(result.kinematic.semi_axes, exact.kinematic.semi_axes, rtol=1e-10)
+    # independently of the analysis: one hand, so W = I and the kinematic semi-axes are the
+    # singular values of J_u diag(xdot_max), J_u's columns the tool's central differences
+    # along each reduced direction S(q) e_k (S itself checked against the wheels' constraints)
+    tool = tricycle.frame_id("tool_link")
+
+    def tip(robot, qq):
+        pin.framesForwardKinematics(robot.model, robot.data, qq)
+        return robot.data.oMf[tool].translation.copy()
+
+    for robot, measured in ((tricycle, result), (tricycle.with_platform("fixed"), locked)):
+        S, h = robot.null_space(q), 1e-6
+        J = np.column_stack(
+            [
+                (
+                    tip(robot, pin.integrate(robot.model, q, h * S[:, k]))
+                    - tip(robot, pin.integrate(robot.model, q, -h * S[:, k]))
+                )
+                / (2 * h)
+                for k in range(robot.nx)
+            ]
+        )
+        expected = np.linalg.svd(J * robot.velocity_limits, compute_uv=False)
+        np.testing.assert_allclose(measured.kinematic.semi_axes, expected, rtol=1e-6)
 
 
 def test_batches_refuse_a_configuration_dependent_s_by_name(tricycle, rng):

@@ -55,6 +55,44 @@ def test_the_json_holds_the_stacked_terms_and_the_exact_set(beam_run):
     assert (out / "beam.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_load_sharing_of_a_lifted_box_is_the_minimax_over_internal_forces(tmp_path):
+    """The beam is held in the plane (no gravity, every choice of internal force gives zero
+    torque), so its check above cannot see the load-sharing objective. The 10 kg box in the
+    spatial task can: the JSON's worst normalised torque equals an independent LP over the
+    JSON's own stacked terms (min t with |Z Q^-1 (-bias + J^T h)| <= t, W h = g_o), and the
+    hands' wrenches it reports reach that optimum and hold the box."""
+    import scipy.optimize
+
+    out = tmp_path / "box.json"
+    assert main(["team", str(EXAMPLES / "two_arms_box.toml"), "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    J, W = np.array(doc["unified_jacobian"]), np.array(doc["grasp_matrix"])
+    Q, bias = np.array(doc["input_matrix"]), np.array(doc["bias"])
+    Z = 1.0 / np.array(doc["effort_limits"])
+    g_o = np.array([0.0, 0.0, 9.81 * 10.0, 0.0, 0.0, 0.0])
+    A = Z[:, None] * np.linalg.solve(Q, J.T)
+    c = Z * np.linalg.solve(Q, -bias)
+    n = W.shape[1]
+    cost = np.r_[np.zeros(n), 1.0]
+    ones = np.ones((A.shape[0], 1))
+    lp = scipy.optimize.linprog(
+        cost,
+        A_ub=np.block([[A, -ones], [-A, -ones]]),
+        b_ub=np.r_[-c, c],
+        A_eq=np.hstack([W, np.zeros((W.shape[0], 1))]),
+        b_eq=g_o,
+        bounds=[(None, None)] * (n + 1),
+        method="highs",
+    )
+    assert lp.status == 0
+    sharing = doc["load_sharing"]
+    assert lp.fun > 0.05  # the load really costs torque: the objective matters here
+    assert sharing["worst_normalised_torque"] == pytest.approx(lp.fun, rel=1e-6)
+    h = np.concatenate([np.ravel(sharing["hand_wrenches"][hand]) for hand in doc["object"]["hands"]])
+    np.testing.assert_allclose(W @ h, g_o, atol=1e-6 * np.abs(g_o).max())
+    assert np.max(np.abs(A @ h + c)) == pytest.approx(lp.fun, rel=1e-6)
+
+
 def test_a_bad_description_is_one_error_line(tmp_path, capsys):
     text = BEAM.read_text().replace('name = "north"', 'name = "south"')
     bad = tmp_path / "bad.toml"

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
+from typing import Any
 
 
 class MobmanipError(Exception):
@@ -247,6 +248,22 @@ class RangeError(ArgumentError):
 
 class NumericalError(MobmanipError):
     """A result that is not finite: mobmanip reports it instead of printing or writing NaN or inf."""
+
+
+class CarryFailed(NumericalError):
+    """The carry QP (:func:`mobmanip.motion.carry.carry`) has no solution at some step.
+
+    Attributes:
+        diagnosis: what binds (:class:`mobmanip.motion.carry.CarryDiagnosis`).
+        partial: the motion up to the failing step (:class:`mobmanip.motion.carry.CarryRun`).
+        preparation: the self-motion before the path, when the path's motion failed after one.
+    """
+
+    def __init__(self, message: str, diagnosis: Any, partial: Any, preparation: Any = None):
+        super().__init__(message)
+        self.diagnosis = diagnosis
+        self.partial = partial
+        self.preparation = preparation
 
 
 class TeamError(SpecError):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..robot.tasks import TASKS
 from .common import add_work_option
@@ -95,12 +96,13 @@ def _check_work(args, path) -> None:
 
 def run(args) -> int:
 
+    from ..errors import CarryFailed
     from ..motion.carry import carry, read_path
     from ..robot.configurations import read_configuration
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
     from ..support.files import check_output, note_input, output_directory
-    from .outputs import CARRY_FILES, carry_outputs
+    from .outputs import CARRY_FILES, carry_outputs, carry_partial_outputs
 
     note_input(args.path)
     robot = load_robot(find_spec(args.robot))
@@ -111,16 +113,26 @@ def run(args) -> int:
         out = output_directory(args.out)
         for name in CARRY_FILES:
             check_output(out / name)
-    result = carry(
-        robot,
-        path,
-        args.objective,
-        args.task,
-        start=start,
-        object_mass=args.object_mass,
-        step=args.step,
-        prepare=args.prepare,
-    )
+    try:
+        result = carry(
+            robot,
+            path,
+            args.objective,
+            args.task,
+            start=start,
+            object_mass=args.object_mass,
+            step=args.step,
+            prepare=args.prepare,
+        )
+    except CarryFailed as failure:
+        if not args.out:
+            raise
+        # keep what succeeded, flagged partial: returning (not raising) lets the command's
+        # outputs be published; the error is still one line and the exit status 2
+        for written in carry_partial_outputs(robot, failure, args.out):
+            print(f"wrote {written} (partial: up to t = {failure.partial.t[-1]:g} s)")
+        print(f"mobmanip: error: {failure}", file=sys.stderr)
+        return 2
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
     prep = result.preparation

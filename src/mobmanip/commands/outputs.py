@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from ..support.files import atomic_output, save_figure, write_json
 
 if TYPE_CHECKING:
+    from ..errors import CarryFailed
     from ..motion.carry import CarryResult
     from ..motion.ground import GroundAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
@@ -203,6 +204,35 @@ def trajectory_outputs(
         save_figure(fig, paths[2], dpi=100)
     finally:
         _close(fig)
+    return [str(p) for p in paths]
+
+
+def carry_partial_outputs(robot: Robot, failure: CarryFailed, out_dir: str | Path) -> list[str]:
+    """After a failed carry: the part of the motion that succeeded as trajectory.csv (a valid
+    input of ``mobmanip trajectory``), the self-motion before it as preparation.csv (when there
+    is one) and carry.json flagged ``"partial": true`` with the diagnosis; returns the paths."""
+    out = Path(out_dir)
+    run = failure.partial
+    paths = [out / CARRY_FILES[0], out / CARRY_FILES[2]]
+    write_trajectory_csv(
+        robot, paths[0], run.t, run.q, {"capacity": run.capacity, "tracking_error": run.tracking_error}
+    )
+    summary = {
+        "robot": robot.name,
+        "partial": True,
+        "method": run.method,
+        "completed_until": float(run.t[-1]),
+        "failure": failure.diagnosis.to_dict(),
+        "min_capacity": float(run.capacity.min()),
+        "max_tracking_error": float(run.tracking_error.max()),
+    }
+    write_json(paths[1], summary)
+    prep = failure.preparation
+    if prep is not None:
+        paths.append(out / CARRY_FILES[4])
+        write_trajectory_csv(
+            robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
+        )
     return [str(p) for p in paths]
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..robot.tasks import TASKS
 from .common import add_strict_option, add_work_option
@@ -149,6 +150,15 @@ def run(args) -> int:
         f"smallest velocity capacity along v_o {result.velocity_capacity.min():.4g}, "
         f"acceleration capacity along a_o {result.acceleration_capacity.min():.4g}"
     )
+    if result.impulsive.size:
+        times = ", ".join(f"{trajectory.t[i]:.6g}" for i in result.impulsive[:8])
+        more = f" and {result.impulsive.size - 8} more" if result.impulsive.size > 8 else ""
+        print(
+            f"warning: the object's acceleration is impulsive at {result.impulsive.size} of {len(trajectory)} samples "
+            f"(t = {times}{more} s): it jumps between samples (e.g. a path interpolated linearly), so the efforts "
+            "and the time-scaling margin there come from those jumps",
+            file=sys.stderr,
+        )
     if result.velocity_polytope_capacity is not None:
         print(f"smallest kinematic polytope reach along v_o {result.velocity_polytope_capacity.min():.4g}")
     if not s.feasible:

@@ -30,6 +30,7 @@ M and g follow from the bodies' world inertias through their subtrees' composite
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from dataclasses import dataclass
 
@@ -38,6 +39,7 @@ import pinocchio as pin
 
 from ..engine.probed import ProbedModel, frame_positions
 from ..errors import ModelError
+from ..support.compile_notice import announced_compile
 
 #: Joint kinds whose configuration moves the joint frame by exp(v S) for a tangent v (what the
 #: closed forms here assume); other kinds (spherical, free flyer, mimic) take the Hessian path.
@@ -189,17 +191,18 @@ class TreeAdjoint:
         n, nj = I.shape[:2]
         if self.kernel is not None:
             t.M, t.g = np.empty((n, self.nv, self.nv)), np.empty((n, self.nv))
-            self.kernel.mass_and_gravity(
-                t.xi,
-                I,
-                self.parent0,
-                self.dof_start,
-                self.dof_count,
-                self.gravity_acceleration,
-                self.armature,
-                t.M,
-                t.g,
-            )
+            with _first_call("mass_and_gravity"):
+                self.kernel.mass_and_gravity(
+                    t.xi,
+                    I,
+                    self.parent0,
+                    self.dof_start,
+                    self.dof_count,
+                    self.gravity_acceleration,
+                    self.armature,
+                    t.M,
+                    t.g,
+                )
             return
         Ic = (I.reshape(n, nj, 36).transpose(0, 2, 1).reshape(-1, nj) @ self.desc).reshape(n, 36, nj)
         Ic = Ic[..., self.dof_joint].reshape(n, 6, 6, self.nv)  # (n, 6, 6, nv): Ic of each dof's joint
@@ -214,7 +217,8 @@ class TreeAdjoint:
         """The bodies' spatial inertias about ``t.reference`` (world-aligned), (n, nj, 6, 6)."""
         if t.inertia is None and self.kernel is not None:
             t.inertia = np.empty(t.rotations.shape[:2] + (6, 6))
-            self.kernel.world_inertias(t.rotations, t.origins, self.mass, self.lever, self.rot_inertia, t.inertia)
+            with _first_call("world_inertias"):
+                self.kernel.world_inertias(t.rotations, t.origins, self.mass, self.lever, self.rot_inertia, t.inertia)
         if t.inertia is None:
             R, o = t.rotations, t.origins
             c = o + np.einsum("njab,jb->nja", R, self.lever)  # centres of mass
@@ -283,7 +287,8 @@ class TreeAdjoint:
         coef = np.concatenate([a, b], axis=1)  # (n, 2R, nv): a's then b's
         if self.kernel is not None:
             out = np.empty((n, nv))
-            self.kernel.bilinear_rows(xi, coef, offset, I, self.parent0, self.dof_start, self.dof_count, R, out)
+            with _first_call("bilinear_rows"):
+                self.kernel.bilinear_rows(xi, coef, offset, I, self.parent0, self.dof_start, self.dof_count, R, out)
             return out
         # twists of every joint's body (n, 6, 2R, nj): V_j = offset + sum_(i <= j) xi_i c_i
         V = ((xi[:, :, None, :] * coef[:, None, :, :]).reshape(-1, nv) @ self.anc).reshape(n, 6, 2 * R, nj)
@@ -314,6 +319,23 @@ def _gamma(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     spatial vectors on axis 1."""
     vy, wy, xl, xa = y[:, :3], y[:, 3:], x[:, :3], x[:, 3:]
     return np.concatenate([_cross(wy, xl), _cross(vy, xl) + _cross(wy, xa)], axis=1)
+
+
+#: Compile time of each compiled loop on the project's 2-core machine with an empty cache (s),
+#: printed as the expectation when a first call compiles it.
+_COMPILE_SECONDS = {"world_inertias": 2.0, "mass_and_gravity": 3.0, "bilinear_rows": 3.0}
+#: The loops already called in this process (no compile, no announcement).
+_CALLED: set[str] = set()
+
+
+def _first_call(name: str):
+    """A context for a call of the tree kernel's loop ``name``: the first in a process announces
+    a compile on standard error when Numba's disk cache does not hold the loop."""
+    if name in _CALLED:
+        return contextlib.nullcontext()
+    _CALLED.add(name)
+    kernel = _kernel()
+    return announced_compile(f"the gradient tree kernel's {name} loop", _COMPILE_SECONDS[name], [getattr(kernel, name)])
 
 
 @functools.cache

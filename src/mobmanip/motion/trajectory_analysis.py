@@ -30,6 +30,40 @@ from ..terms.grasp import HeldObject
 from .in_motion import motion_terms
 from .trajectory import Trajectory
 
+#: A sample's object acceleration is *impulsive* when it differs from its neighbours' mean
+#: (interpolated to its time) by more than this share of the largest object acceleration ...
+IMPULSE_SHARE = 0.25
+#: ... and by more than this (m/s^2, rad/s^2): a motion standing still is not impulsive.
+IMPULSE_FLOOR = 1e-3
+
+
+def acceleration_deviation(t: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Per sample, the norm of a_i minus its neighbours' values interpolated linearly to t_i,
+    (N,) (0 at both ends). Small (O(h) times the jump of the jerk) for a C2 motion sampled every
+    h; of the size of a itself where the accelerations are impulses at some samples.
+
+    Args:
+        t: time stamps (s), (N,); a: accelerations, (N, m).
+    """
+    t = np.asarray(t, dtype=float)
+    a = np.asarray(a, dtype=float).reshape(len(t), -1)
+    out = np.zeros(len(t))
+    if len(t) < 3:
+        return out
+    w = ((t[1:-1] - t[:-2]) / (t[2:] - t[:-2]))[:, None]
+    between = (1.0 - w) * a[:-2] + w * a[2:]
+    out[1:-1] = np.linalg.norm(a[1:-1] - between, axis=1)
+    return out
+
+
+def impulsive_samples(t: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Indices of the samples whose acceleration is impulsive (:data:`IMPULSE_SHARE`,
+    :data:`IMPULSE_FLOOR`), ascending."""
+    a = np.asarray(a, dtype=float).reshape(len(t), -1)
+    scale = float(np.linalg.norm(a, axis=1).max()) if len(a) else 0.0
+    bound = max(IMPULSE_SHARE * scale, IMPULSE_FLOOR)
+    return np.flatnonzero(acceleration_deviation(t, a) > bound)
+
 
 @dataclass(frozen=True)
 class TimeScaling:
@@ -144,6 +178,9 @@ class TrajectoryAnalysis:
             ellipsoid's measure of the demand: 1 on its boundary when the motion's
             accelerations are the paper's policy (no null-space acceleration).
         scaling: the time-scaling margin.
+        impulsive: the samples whose object acceleration is impulsive (:func:`impulsive_samples`):
+            an input whose accelerations jump between samples, e.g. a path interpolated
+            linearly; its efforts and the time-scaling margin there come from those jumps.
     """
 
     robot_name: str
@@ -164,6 +201,7 @@ class TrajectoryAnalysis:
     effort_use: np.ndarray = field(repr=False)
     scaling: TimeScaling = field(repr=False)
     velocity_polytope_capacity: np.ndarray | None = None
+    impulsive: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def table(self) -> tuple[list[str], np.ndarray]:
         """Per-sample CSV columns: header and values."""
@@ -216,6 +254,7 @@ class TrajectoryAnalysis:
             "max_slip": float(self.trajectory.slip.max()),
             "min_velocity_capacity": float(self.velocity_capacity.min()),
             "min_acceleration_capacity": float(self.acceleration_capacity.min()),
+            "impulsive_samples": [int(i) for i in self.impulsive],
             **extra,
             "columns": {name: values[:, k].tolist() for k, name in enumerate(header)},
         }
@@ -301,4 +340,5 @@ def analyze_trajectory(
         effort_use=np.abs(tau) / elim,
         scaling=scaling,
         velocity_polytope_capacity=v_poly,
+        impulsive=impulsive_samples(trajectory.t, a_o),
     )

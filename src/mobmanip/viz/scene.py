@@ -104,6 +104,7 @@ ELLIPSOIDS_PATH = f"{ROOT}/ellipsoids"
 LOCKED_PATH = f"{ROOT}/locked"
 OBJECT_COLOR = 0xF0F0F0
 OBJECT_RADIUS = 0.035  # m
+CAMERA_FRAMES = 25  # frames an animation's camera frames at most (evenly spread, the last included)
 
 __all__ = [
     "COLORS",
@@ -386,15 +387,37 @@ class EllipsoidViewer:
             self._vis["/Cameras/default/rotated/<object>"].set_property("position", local)
             self._send_page(camera=_page.look_request(position, target, self._camera_serial))
 
-    def frame_camera(self, frame: Frame) -> dict:
+    def frame_camera(self, frame: Frame | Sequence[Frame]) -> dict:
         """Frame the robot at ``frame.q`` (its visual geometry), the held object and the drawn
         sets: the page places the camera so that their bounding box fills most of its view, seen
-        from the front right of the platform and 25 deg above the horizon.
+        from the front right of the platform and 25 deg above the horizon. Given several frames
+        (an animation), the box holds them all (up to :data:`CAMERA_FRAMES` of them, evenly
+        spread, the last included), seen from the first frame's platform heading: the camera
+        frames the whole path, so the robot stays in view while it moves.
 
         Returns:
             The camera request sent (see :mod:`mobmanip.viz.page`); its ``box`` is the framed
             box (lower, upper), m.
         """
+        frames = [frame] if isinstance(frame, Frame) else list(frame)
+        if len(frames) > CAMERA_FRAMES:
+            picked = np.unique(np.linspace(0, len(frames) - 1, CAMERA_FRAMES).round().astype(int))
+            frames = [frames[i] for i in picked]
+        all_points, all_boxes = [], []
+        for one in frames:
+            points, boxes = self._frame_extent(one)
+            all_points.append(points)
+            all_boxes.extend(boxes)
+        first = frames[0]
+        heading = math.atan2(first.q[3], first.q[2]) if self.model.nq >= 4 else 0.0
+        self._camera_serial += 1
+        request = _page.fit_request(np.vstack(all_points), all_boxes, heading, self._camera_serial)
+        with self._commands():
+            self._send_page(camera=request)
+        return request
+
+    def _frame_extent(self, frame: Frame) -> tuple[np.ndarray, list]:
+        """Points (n, 3) and boxes of what one frame draws: the robot, the object, the sets."""
         points, boxes = _page.visual_points(self.model, self.visual_model, frame.q), []
         for source, locked in ((frame.analysis, False), (frame.locked, True)):
             if source is None:
@@ -412,12 +435,7 @@ class EllipsoidViewer:
                     boxes.append(
                         _page.sphere_box(center, DRAWINGS[task_set.kind].extent(task_set, source.task) * scale)
                     )
-        heading = math.atan2(frame.q[3], frame.q[2]) if self.model.nq >= 4 else 0.0
-        self._camera_serial += 1
-        request = _page.fit_request(points, boxes, heading, self._camera_serial)
-        with self._commands():
-            self._send_page(camera=request)
-        return request
+        return points, boxes
 
     def _send_page(self, **changes) -> None:
         """Update what the page shows (legend, camera) if it changed."""
@@ -587,6 +605,8 @@ class EllipsoidViewer:
         kinds = {key: sets[key].kind for sets in per_frame for key in sets}
         first = frames[0]
         self.show(first.q, first.analysis, first.locked)
+        if len(frames) > 1:  # frame the whole motion, not only its start
+            self.frame_camera(frames)
         shown: dict = {}  # each set as drawn in the legend: its first non-empty frame
         for key in keys:
             shown[key] = next((s[key] for s in per_frame if key in s and not s[key].empty), None)
