@@ -82,10 +82,13 @@ class Site:
         Raises:
             SpecError: unreadable, malformed, or with no or too many positions.
         """
+        from ..support.reading import read_user_text
+
         path = Path(path)
+        text = read_user_text(path, "site file", error=SpecError)  # a regular file of bounded size
         try:
-            document = tomllib.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+            document = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
             raise SpecError(f"site file {path}: {exc}") from None
         return cls.from_document(document, path.parent, str(path))
 
