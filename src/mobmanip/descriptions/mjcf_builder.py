@@ -1,0 +1,110 @@
+"""How an MJCF description builds Pinocchio's model and geometry (:class:`MjcfBuilder`)."""
+
+from __future__ import annotations
+
+import tempfile
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from xml.etree import ElementTree
+
+from ..errors import MjcfError
+from ..support.native_stderr import call_with_large_stack, captured_native_stderr
+from .description import (
+    MeshFilter,
+    ModelBuilder,
+)
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+#: Actuator elements: all set the attributes of MuJoCo's ``general`` actuator.
+
+
+class MjcfBuilder(ModelBuilder):
+    """An MJCF's text for Pinocchio (``buildModelFromMJCF``, ``buildGeomFromMJCF``), written to a
+    temporary file when a model is built (Pinocchio reads MJCF from files only).
+
+    Args:
+        text: the MJCF as mobmanip rewrote it: includes expanded, the root's free joint dropped, a
+            body with several joints split, unnamed elements named, asset folders absolute.
+        notes: what the reader skipped.
+    """
+
+    language = "MJCF"
+
+    def __init__(self, text: str, notes: tuple[str, ...] = ()) -> None:
+        self.text = text
+        self.notes = notes
+
+    def error(self, source: str, reason: str) -> MjcfError:
+        """A :class:`~mobmanip.errors.MjcfError` naming ``source``."""
+        return MjcfError(source, reason)
+
+    def _call(self, source: str, what: str, function: Any, *arguments: Any, text: str | None = None) -> Any:
+        with tempfile.TemporaryDirectory(prefix="mobmanip-mjcf-") as folder:
+            file = Path(folder) / "model.xml"
+            file.write_text(self.text if text is None else text, encoding="utf-8")
+            failure: Exception | None = None
+            with captured_native_stderr() as native, warnings.catch_warnings():
+                warnings.simplefilter("ignore", DeprecationWarning)
+                try:
+                    result = call_with_large_stack(function, *[str(file) if a is _FILE else a for a in arguments])
+                except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on what it cannot build
+                    result, failure = None, exc
+        if result is None:
+            reason = native.first_error() or " ".join(str(failure).split()).replace(str(file), Path(source).name)
+            raise MjcfError(source, f"Pinocchio cannot {what}: {reason}")
+        return result
+
+    def build_model(self, source: str, root_joint: pin.JointModel | None = None) -> pin.Model:
+        """Pinocchio's model under ``root_joint`` (see :meth:`ModelBuilder.build_model`)."""
+        import pinocchio as pin
+
+        if root_joint is None:
+            return self._call(source, "build a model", pin.buildModelFromMJCF, _FILE)
+        return self._call(source, "build a model", pin.buildModelFromMJCFAndRootJoint, _FILE, root_joint)
+
+    def build_geometry(
+        self,
+        source: str,
+        model: pin.Model,
+        kind: str,
+        package_dirs: tuple[Path, ...],
+        meshes: MeshFilter | None = None,
+    ) -> pin.GeometryModel:
+        """The geoms on ``model`` (see :meth:`ModelBuilder.build_geometry`); with ``meshes``, each
+        mesh file is replaced by the file it gives or its geoms left out."""
+        import pinocchio as pin
+
+        text = self.text if meshes is None else self._with_meshes(meshes)
+        geometry_type = pin.GeometryType.COLLISION if kind == "collision" else pin.GeometryType.VISUAL
+        return self._call(
+            source, f"load the {kind} geometry", pin.buildGeomFromMJCF, model, _FILE, geometry_type, text=text
+        )
+
+    def _with_meshes(self, meshes: MeshFilter) -> str:
+        root = ElementTree.fromstring(self.text)
+        meshdir = Path((root.find("compiler") or ElementTree.Element("compiler")).get("meshdir", ""))
+        dropped = set()
+        for asset in root.iter("asset"):
+            for mesh in list(asset.findall("mesh")):
+                file = mesh.get("file", "")
+                name = mesh.get("name") or Path(file).stem
+                replacement = meshes("", str(meshdir / file))
+                if replacement is None:
+                    asset.remove(mesh)
+                    dropped.add(name)
+                else:
+                    mesh.set("name", name)
+                    mesh.set("file", str(Path(replacement).resolve()))
+        for parent in root.iter():
+            for geom in list(parent.findall("geom")):
+                if geom.get("mesh") in dropped:
+                    parent.remove(geom)
+        for texture in root.iter("texture"):
+            texture.attrib.pop("file", None)
+        return ElementTree.tostring(root, encoding="unicode")
+
+
+_FILE = object()  # stands for the temporary file's path in a builder call
