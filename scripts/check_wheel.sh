@@ -49,7 +49,7 @@ bin="$work/wheel-env/bin"
 import sys
 from pathlib import Path
 import mobmanip
-from mobmanip.resources import builtin_robots_dir
+from mobmanip.descriptions.resources import builtin_robots_dir
 source = Path(sys.argv[1]).resolve()
 for path in (Path(mobmanip.__file__), builtin_robots_dir()):
     assert source not in path.resolve().parents, f"{path} comes from the source tree"
@@ -66,7 +66,7 @@ for f in case_study.json fig3_kinematic.png fig4_dynamic.png fig4_dynamic_couple
 done
 
 step "mobmanip analyze on every built-in robot"
-robots="$("$bin/python" -c 'from mobmanip.resources import builtin_robot_names; print(" ".join(builtin_robot_names()))')"
+robots="$("$bin/python" -c 'from mobmanip.descriptions.resources import builtin_robot_names; print(" ".join(builtin_robot_names()))')"
 test -n "$robots"
 for robot in $robots; do
     "$bin/mobmanip" analyze "$robot" --json "analyze_$robot.json" >/dev/null
@@ -86,6 +86,6 @@ pipq "$work/sdist-env/bin/pip" install "$sdist"
 cd "$run"
 "$work/sdist-env/bin/mobmanip" --version
 "$work/sdist-env/bin/mobmanip" analyze planar_dual_arm >/dev/null
-"$work/sdist-env/bin/python" -c "from mobmanip.resources import builtin_robots_dir as d; assert 'site-packages' in str(d()), d(); print('sdist robots at', d())"
+"$work/sdist-env/bin/python" -c "from mobmanip.descriptions.resources import builtin_robots_dir as d; assert 'site-packages' in str(d()), d(); print('sdist robots at', d())"
 
 step "done"
