@@ -357,7 +357,9 @@ def polygon_margin(polygon: np.ndarray, p) -> float:
     return distance if inside else -distance
 
 
-def support(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=False) -> FloorSolution:
+def support(
+    problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=False, springs=False, reserve=0.0
+) -> FloorSolution:
     """max e.a_o over the grounded set (other components free), with a maximiser.
 
     Args:
@@ -368,37 +370,60 @@ def support(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=Fal
             ``faces``-sided pyramid inscribed in the cone of coefficient ``mu``).
         policy: the paper's minimum-norm policy (xdot = J_u^+ W^T a_o, h = W^+ (M_o a_o + g_o));
             tau and the contact forces stay free within their constraints.
+        springs: the contacts share the weight as equally stiff springs under a rigid base: each
+            normal force is a + b x + c y at the contact's floor position (x, y), with a, b, c
+            three more unknowns. Without it, any sharing that balances the robot.
+        reserve: a fraction r: every normal force at least r (robot + object weight) / (number of
+            contacts), every driven wheel's pyramid shrunk to 1 - r of its size.
     """
     e = np.asarray(e, dtype=float)
-    return _solve(problem, mode, mu, faces, policy, objective=np.append(-e, 0.0))
+    objective = np.append(-e, 0.0)
+    return _solve(problem, mode, mu, faces, policy, objective=objective, springs=springs, reserve=reserve)
 
 
-def straight_line(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=False) -> FloorSolution:
+def straight_line(
+    problem: FloorProblem, e, mode="ideal", mu=None, faces=8, policy=False, springs=False, reserve=0.0
+) -> FloorSolution:
     """max s such that a_o = s e is in the grounded set (arguments as :func:`support`)."""
     e = np.asarray(e, dtype=float)
-    return _solve(problem, mode, mu, faces, policy, objective=np.append(np.zeros_like(e), -1.0), line=e)
+    objective = np.append(np.zeros_like(e), -1.0)
+    return _solve(problem, mode, mu, faces, policy, objective=objective, line=e, springs=springs, reserve=reserve)
 
 
-def force_support(problem: FloorProblem, e, mode="ideal", mu=None, faces=8) -> FloorSolution:
+def force_support(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, springs=False) -> FloorSolution:
     """max e.f over the wrenches f the object exerts on the environment, robot and object at rest
     (modes as :func:`support`; the solution's ``a_o`` holds f)."""
     e = np.asarray(e, dtype=float)
-    return _solve(problem, mode, mu, faces, False, objective=np.append(-e, 0.0), force=True)
+    return _solve(problem, mode, mu, faces, False, objective=np.append(-e, 0.0), force=True, springs=springs)
 
 
-def force_straight_line(problem: FloorProblem, e, mode="ideal", mu=None, faces=8) -> FloorSolution:
+def force_straight_line(problem: FloorProblem, e, mode="ideal", mu=None, faces=8, springs=False) -> FloorSolution:
     """max s such that the object exerts f = s e on the environment at rest (as :func:`force_support`)."""
     e = np.asarray(e, dtype=float)
-    return _solve(problem, mode, mu, faces, False, objective=np.append(np.zeros_like(e), -1.0), line=e, force=True)
+    objective = np.append(np.zeros_like(e), -1.0)
+    return _solve(problem, mode, mu, faces, False, objective=objective, line=e, force=True, springs=springs)
 
 
-def equilibrium(problem: FloorProblem, mode="no_tip", mu=None, faces=8) -> FloorSolution:
+def equilibrium(problem: FloorProblem, mode="no_tip", mu=None, faces=8, springs=False) -> FloorSolution:
     """Robot and object held still (xdot = 0, a_o = 0): one feasible set of efforts and forces."""
-    return _solve(problem, mode, mu, faces, False, objective=np.zeros(problem.W.shape[0] + 1), still=True)
+    objective = np.zeros(problem.W.shape[0] + 1)
+    return _solve(problem, mode, mu, faces, False, objective=objective, still=True, springs=springs)
 
 
-def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still=False, force=False) -> FloorSolution:
-    """The LP over z = [xdot, tau, lambda, h, h_level, a_o, s]; ``objective``: the cost of (a_o, s).
+def _solve(
+    P: FloorProblem,
+    mode,
+    mu,
+    faces,
+    policy,
+    objective,
+    line=None,
+    still=False,
+    force=False,
+    springs=False,
+    reserve=0.0,
+) -> FloorSolution:
+    """The LP over z = [xdot, tau, lambda, h, h_level, a_o, s, (a, b, c)]; ``objective``: the cost of (a_o, s).
     ``force``: at rest, the a_o columns hold the wrench f on the environment (W h = g_o + f)."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
@@ -407,8 +432,8 @@ def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still
     nx = P.S.shape[1]
     C, slices = contact_force_columns(P)
     m, km = P.W.shape
-    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1])
-    X, T, L, H, V, A, S_ = (slice(offsets[i], offsets[i + 1]) for i in range(7))
+    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1, 3 if springs else 0])
+    X, T, L, H, V, A, S_, D = (slice(offsets[i], offsets[i + 1]) for i in range(8))
     n = int(offsets[-1])
     rows, rhs = [], []
 
@@ -438,13 +463,21 @@ def _solve(P: FloorProblem, mode, mu, faces, policy, objective, line=None, still
     if still:
         equation([(X, np.eye(nx))], np.zeros(nx))
         equation([(A, np.eye(m))], np.zeros(m))
+    if springs:  # normal_c - (a + b x_c + c y_c) = 0
+        for sl, p in zip(slices, P.points):
+            row = np.zeros((1, n))
+            row[0, L.start + sl.stop - 1] = 1.0
+            row[0, D] = -1.0, -p[0], -p[1]
+            rows.append(row)
+            rhs.append(np.zeros(1))
 
-    bounds, cone = [(None, None)] * n, (mu or 0.0) * math.cos(math.pi / faces)
+    bounds, cone = [(None, None)] * n, (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
+    least = reserve * P.total_mass * GRAVITY / len(P.contacts)
     bounds[T] = [(-limit, limit) for limit in P.tau_max]
     A_ub = []
     for contact, sl in zip(P.contacts, slices):
         if mode != "ideal":
-            bounds[L.start + sl.stop - 1] = (0.0, None)  # the normal is the last (z) component
+            bounds[L.start + sl.stop - 1] = (least, None)  # the normal is the last (z) component
         if contact.driven and mode == "friction":  # face k: (cos, sin) . f_t <= mu cos(pi / N) f_n
             for angle in 2.0 * math.pi * np.arange(faces) / faces:
                 A_ub.append(np.zeros(n))

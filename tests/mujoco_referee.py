@@ -204,6 +204,7 @@ def build(
     impratio: float = 100.0,
     penetration: float = 1e-12,
     regularisation: float = 1e-2,
+    equal_supports: bool = True,
 ) -> Referee:
     """A MuJoCo model of ``robot`` at configuration ``q`` standing on the floor, at rest.
 
@@ -226,6 +227,12 @@ def build(
         regularisation: factor on each constraint's softness R = (1 - d) / d * A_approx, d = 0.9999
             (MuJoCo's cap), through the bodies' ``invweight0`` (A_approx). At 1 the paper robot's
             2 kg object sags at 0.015 m/s^2 at rest, at 1e-2 at 1.3e-4 m/s^2.
+        equal_supports: make every support equally stiff. A robot on more than three contacts
+            shares its weight by their compliance; MuJoCo's soft contacts are stiffer, in
+            proportion, on bodies that are easier to move (R scales with each body's invweight0),
+            which is an artefact of its regularisation, not of a floor: the wheel bodies' weights
+            are set to the root's, so that each contact's force is the same function of its depth
+            (the model mobmanip's compliant floor assumes). Off: MuJoCo's own sharing.
 
     Raises:
         ValueError: wheels or supports not on one floor, a hand that is not a URDF link, an object
@@ -328,6 +335,10 @@ def build(
         qpos0 = configuration(model)
         qpos0[model.joint("object_free").qposadr[0] :][:7] = [*centre, 1.0, 0.0, 0.0, 0.0]
     model.body_invweight0[:] *= regularisation
+    if equal_supports:
+        root = model.body(base.name).id
+        for s in supports:
+            model.body_invweight0[model.body(s.body).id, 0] = model.body_invweight0[root, 0]
     return Referee(robot, model, qpos0, tuple(supports), hands, object is not None, repairs, lift)
 
 

@@ -26,6 +26,7 @@ from mobmanip.terms.constraints.floor import CONTACT_FORCES, Floor, ground_react
 MASS = 2.0
 FLOORS = {"no_tip": (None, "no_tip"), "mu=0.5": (0.5, "friction"), "mu=1.0": (1.0, "friction")}
 MEASURES = {"dynamic_polytope": False, "dynamic_polytope_min_norm": True}
+LOADS = {"compliant": True, "any": False}  # the floor's load sharing -> the reference's springs
 
 
 def _cases():
@@ -48,30 +49,89 @@ def _directions(m: int) -> np.ndarray:
     return np.vstack([axes, -axes, mixed])
 
 
+@pytest.mark.parametrize("load", list(LOADS))
 @pytest.mark.parametrize("floor", list(FLOORS))
 @pytest.mark.parametrize("case", list(CASES))
-def test_grounded_reaches_equal_the_independent_lp(case, floor):
+def test_grounded_reaches_equal_the_independent_lp(case, floor, load):
     robot, q, task, casters = CASES[case]
     mu, mode = FLOORS[floor]
+    springs = LOADS[load]
     analysis = mobmanip.analyze(
-        robot, q, task, object_mass=MASS, measures=tuple(MEASURES), constraints=(Floor(mu=mu),)
+        robot, q, task, object_mass=MASS, measures=tuple(MEASURES), constraints=(Floor(mu=mu, load=load),)
     )  # fmt: skip
     problem = build_problem(robot, q, task, analysis.held_object, casters=casters)
     for name, policy in MEASURES.items():
         grounded = analysis.measures[name]
         for e in _directions(grounded.dim):
             e = e / np.linalg.norm(e)
-            ref_line = straight_line(problem, e, mode=mode, mu=mu, policy=policy).value
-            ref_support = support(problem, e, mode=mode, mu=mu, policy=policy).value
+            ref_line = straight_line(problem, e, mode=mode, mu=mu, policy=policy, springs=springs).value
+            ref_support = support(problem, e, mode=mode, mu=mu, policy=policy, springs=springs).value
             assert grounded.straight_line_reach(e) == pytest.approx(ref_line, rel=1e-6, abs=1e-9), (name, e)
             assert grounded.support(e) == pytest.approx(ref_support, rel=1e-6, abs=1e-9), (name, e)
 
 
+@pytest.mark.parametrize("case", ["tiago_dual hold", "paper 90 deg"])
+def test_a_reserve_equals_the_independent_lp_and_keeps_its_margins(case):
+    """With a reserve r every support keeps r of its equal share of the weight and every wheel
+    uses at most 1 - r of its pyramid: the reaches equal the reference's with the same margins
+    (1e-6), and at each maximum the contact forces keep them."""
+    robot, q, task, casters = CASES[case]
+    analysis = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, reserve=0.1),)
+    )
+    problem = build_problem(robot, q, task, analysis.held_object, casters=casters)
+    P = analysis.measures["dynamic_polytope"]
+    weight = problem.total_mass * 9.81
+    for e in _directions(P.dim)[:4]:
+        e = e / np.linalg.norm(e)
+        ref = straight_line(problem, e, mode="friction", mu=0.5, springs=True, reserve=0.1).value
+        assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6), e
+        floor = ground_reaction(P.model["floor"], P.straight_line_witness(e).variables[CONTACT_FORCES])
+        normals = [c["normal"] for c in floor["contacts"].values()]
+        assert min(normals) >= 0.1 * weight / len(normals) * (1 - 1e-7)
+        uses = [c["traction_use"] for c in floor["contacts"].values() if c.get("traction_use") is not None]
+        assert max(uses) <= 0.9 * (1 + 1e-7)  # the pyramid's faces are inside 0.9 of the cone
+
+
+def test_the_least_motion_witness_reaches_the_point_with_less_motion():
+    """witness_at(p, least="xdot") reaches p with at least half the greatest slack and a 1-norm
+    of the reduced accelerations no larger than the most-slack witness's."""
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    P = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+    ).measures["dynamic_polytope"]
+    target = 0.9 * P.straight_line_reach(-np.eye(6)[0]) * -np.eye(6)[0]
+    wide, calm = P.witness_at(target), P.witness_at(target, least="xdot")
+    assert np.allclose(calm.point, target, atol=1e-9) and np.allclose(wide.point, target, atol=1e-9)
+    assert np.abs(calm.variables["xdot"]).sum() <= np.abs(wide.variables["xdot"]).sum() + 1e-9
+    floor = ground_reaction(P.model["floor"], calm.variables[CONTACT_FORCES])
+    assert min(c["normal"] for c in floor["contacts"].values()) > 0.0
+    with pytest.raises(MobmanipError, match="least must name one of the set's variables"):
+        P.witness_at(target, least="nothing")
+
+
+def test_compliant_normals_are_an_affine_function_of_the_contacts_positions():
+    """At every compliant maximum the normal forces lie on a plane over the contacts' floor
+    positions (equally stiff springs under a rigid base), and the sharing 'any' leaves it."""
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    for load, affine in (("compliant", True), ("any", False)):
+        P = mobmanip.analyze(
+            robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, load=load),)
+        ).measures["dynamic_polytope"]
+        floor = ground_reaction(P.model["floor"], P.straight_line_witness(np.eye(6)[0]).variables[CONTACT_FORCES])
+        points = np.array([c["point"][:2] for c in P.model["floor"]["contacts"]])
+        normals = np.array([c["normal"] for c in floor["contacts"].values()])
+        fit = np.column_stack([np.ones(len(points)), points])
+        residual = normals - fit @ np.linalg.lstsq(fit, normals, rcond=None)[0]
+        assert (np.abs(residual).max() < 1e-6 * normals.sum()) == affine, (load, residual)
+
+
 def test_the_issue_table_in_numbers():
-    """Issue 24's table (measured with an LP of this kind), at its printed rounding."""
+    """Issue 24's table (measured with an LP of this kind, any sharing of the load), at its
+    printed rounding."""
     robot, q, task, _ = CASES["tiago_dual hold"]
     reach = {}
-    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5),))):
+    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5, load="any"),))):
         P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=floor)
         e = np.eye(6)[0]
         reach[label] = (
@@ -83,7 +143,7 @@ def test_the_issue_table_in_numbers():
     assert [round(v, 2) for v in reach["mu=0.5"]] == [37.08, 27.87]
     paper, q0, _, _ = CASES["paper 0 deg"]
     policy = {}
-    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5),))):
+    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5, load="any"),))):
         P = mobmanip.analyze(
             paper, q0, "planar", object_mass=MASS, measures=("dynamic_polytope_min_norm",), constraints=floor
         )
@@ -192,7 +252,7 @@ def test_a_badly_scaled_posture_still_solves():
         ]
     )  # place's optimum for an object at (1, 0.5, 0.35), +x
     analysis = mobmanip.analyze(
-        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, load="any"),)
     )
     problem = build_problem(robot, q, "planar", analysis.held_object, casters=PAPER_CASTERS)
     P = analysis.measures["dynamic_polytope"]

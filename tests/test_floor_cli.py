@@ -22,13 +22,13 @@ def _cli(*args, cwd=None):
 def test_ground_from_the_command_line_equals_the_python_api(tmp_path):
     out = tmp_path / "g.json"
     run = _cli("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
-               "--json", str(out))  # fmt: skip
+               "--load", "any", "--json", str(out))  # fmt: skip
     assert run.returncode == 0, run.stderr
     doc = json.loads(out.read_text())
     robot = mobmanip.load_robot("tiago_dual")
     api = mobmanip.analyze(
         robot, named_configuration(robot, "hold"), "spatial", object_mass=2.0,
-        measures=("kinematic", "dynamic", "dynamic_polytope"), constraints=(Floor(mu=0.5),),
+        measures=("kinematic", "dynamic", "dynamic_polytope"), constraints=(Floor(mu=0.5, load="any"),),
     )  # fmt: skip
     reaches = {r["axis"]: r for r in doc["dynamic_polytope"]["reaches"]}
     P = api.measures["dynamic_polytope"]
@@ -42,14 +42,40 @@ def test_ground_from_the_command_line_equals_the_python_api(tmp_path):
     assert 0.0 <= reaches["+x"]["floor"]["margin"] < 1e-3  # the ZMP inside, near the front edge
     # the summary names the readings and what stops them
     assert "straight line 37.08, support 42.94" in run.stdout
-    assert "support lifting off (tip-over): caster_front_left_2_link, caster_front_right_2_link" in run.stdout
+    assert "support lifting off: caster_front_left_2_link, caster_front_right_2_link" in run.stdout
     assert "dynamic ellipsoid (coupled) [ignores floor" in run.stdout
+    assert doc["dynamic_polytope"]["model"]["floor"]["load"] == "any"
+
+
+def test_the_default_load_sharing_is_compliant_with_traction_and_any_without(tmp_path):
+    base = ("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial")
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    for extra, floor, load in (
+        (("--mu", "0.5", "--reserve", "0.05"), Floor(mu=0.5, load="compliant", reserve=0.05), "compliant"),
+        (("--no-traction",), Floor(mu=None, load="any"), "any"),
+    ):
+        out = tmp_path / "g.json"
+        run = _cli(*base, *extra, "--json", str(out))
+        assert run.returncode == 0, run.stderr
+        doc = json.loads(out.read_text())
+        model = doc["dynamic_polytope"]["model"]["floor"]
+        assert model["load"] == load and model["reserve"] == (0.05 if load == "compliant" else 0.0)
+        api = mobmanip.analyze(
+            robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",), constraints=(floor,)
+        )
+        P = api.measures["dynamic_polytope"]
+        reaches = {r["axis"]: r for r in doc["dynamic_polytope"]["reaches"]}
+        for axis, e in (("+x", [1, 0, 0, 0, 0, 0]), ("-y", [0, -1, 0, 0, 0, 0])):
+            assert reaches[axis]["straight_line"] == pytest.approx(P.straight_line_reach(e), rel=1e-9)
 
 
 @pytest.mark.parametrize(
     "args, message",
     [
         (["--mu", "-0.5"], "mu must be a finite friction coefficient >= 0, got -0.5"),
+        (["--reserve", "1.5"], "--reserve must be a fraction in [0, 1), got 1.5"),
+        (["--reserve", "nan"], "--reserve must be a fraction in [0, 1), got nan"),
         (["--mu", "0.5", "--no-traction"], "--mu and --no-traction contradict each other"),
     ],
 )

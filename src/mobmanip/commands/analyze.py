@@ -115,7 +115,7 @@ def _describe_blocks(blocks: dict, units: str) -> str:
     return "  per block: " + "; ".join(parts)
 
 
-_KIND = (("lifts off", "support lifting off (tip-over)"), ("slips", "wheel traction"), ("limit", "joint effort"))
+_KIND = (("lifts off", "support lifting off"), ("slips", "wheel traction"), ("limit", "joint effort"))
 
 
 def _binding_summary(binding: list[str]) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 import numpy as np
 
@@ -246,19 +247,38 @@ def add_floor_options(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="on the floor, only no tip-over: the wheels' traction is not limited (implies --ground)",
     )
+    parser.add_argument(
+        "--load",
+        choices=("auto", "compliant", "any"),
+        help="how the wheels and casters share the weight (implies --ground): compliant (equally stiff "
+        "contacts, every support stays loaded), any (every balancing share: exact tip-over, optimistic "
+        "traction); default auto: compliant with a traction limit, any without",
+    )
+    parser.add_argument(
+        "--reserve",
+        type=float,
+        metavar="R",
+        help="safety reserve on the floor, a fraction in [0, 1): every support keeps R times its equal "
+        "share of the weight, every wheel uses at most 1 - R of its friction (implies --ground; default 0)",
+    )
 
 
 def floor_constraints(args) -> tuple:
-    """The constraints --ground, --mu and --no-traction ask for (empty: the ideal robot)."""
+    """The constraints --ground, --mu, --no-traction, --load and --reserve ask for (empty: the
+    ideal robot)."""
     from ..errors import ArgumentError
     from ..terms.constraints.floor import Floor
 
     mu, no_traction = getattr(args, "mu", None), getattr(args, "no_traction", False)
-    if not (getattr(args, "ground", False) or mu is not None or no_traction):
+    load, reserve = getattr(args, "load", None), getattr(args, "reserve", None)
+    if not (getattr(args, "ground", False) or mu is not None or no_traction or load or reserve is not None):
         return ()
     if mu is not None and no_traction:
         raise ArgumentError("--mu and --no-traction contradict each other: choose one")
-    return (Floor(mu=None if no_traction else ("spec" if mu is None else mu)),)
+    if reserve is not None and not (math.isfinite(reserve) and 0.0 <= reserve < 1.0):
+        raise ArgumentError(f"--reserve must be a fraction in [0, 1), got {reserve!r}")
+    mu_used = None if no_traction else ("spec" if mu is None else mu)
+    return (Floor(mu=mu_used, load=load or "auto", reserve=float(reserve or 0.0)),)
 
 
 def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:

@@ -187,14 +187,24 @@ class LiftedPolytope(TaskSet):
             raise TaskError("the origin is outside the set: no straight line from rest exists")
         return self._witness(found[0], found[1][:-1], found[2])
 
-    def witness_at(self, point: ArrayLike) -> Witness:
+    def witness_at(self, point: ArrayLike, least: str | None = None) -> Witness:
         """A solution that reaches ``point``, as far inside every inequality row as it can be
         (max t with each row's slack >= t |row|): no limit is tight unless ``point`` needs it.
 
+        Args:
+            point: in the set, (m,).
+            least: the name of a variable (e.g. ``"xdot"``, the reduced accelerations) to keep
+                small: among the solutions with at least half that greatest slack, the one with
+                the least 1-norm of that variable. The greatest slack alone may use large
+                internal motions (self-motions of redundant arms) to gain a little margin; a
+                replay of such a solution drifts away from it within milliseconds.
+
         Raises:
-            TaskError: the point is not in the set.
+            TaskError: the point is not in the set, or ``least`` is not one of its variables.
         """
         p = check_points(point, self.dim)[0]
+        if least is not None and least not in self.variables:
+            raise TaskError(f"least must name one of the set's variables {sorted(self.variables)}, got {least!r}")
         n = len(self._lower)
         fix = np.zeros((self.dim, n + 1))
         fix[np.arange(self.dim), self._task] = 1.0
@@ -208,7 +218,29 @@ class LiftedPolytope(TaskSet):
         result = program.solve(cost)
         if result is None or result[0] < -1e-9 * max(self._size, 1.0):
             raise TaskError(f"the point {p.tolist()} is not in the set")
-        return self._witness(float(result[0]), result[1][:-1], None)
+        if least is None:
+            return self._witness(float(result[0]), result[1][:-1], None)
+        # the same rows with half the slack, and |v| <= u for the chosen variable v: min sum u
+        where = np.arange(n)[self.variables[least]]
+        k = len(where)
+        pick = np.zeros((k, n))
+        pick[np.arange(k), where] = 1.0
+        half = 0.5 * max(float(result[0]), 0.0) * norms
+        A2 = np.block(
+            [
+                [self._A_eq, np.zeros((len(self._A_eq), k))],
+                [fix[:, :n], np.zeros((self.dim, k))],
+                [self._A_ub, np.zeros((len(self._A_ub), k))],
+                [pick, -np.eye(k)],
+                [-pick, -np.eye(k)],
+            ]
+        )
+        lo2 = np.r_[self._b_eq, p, np.full(len(self._b_ub) + 2 * k, -np.inf)]
+        hi2 = np.r_[self._b_eq, p, self._b_ub - half, np.zeros(2 * k)]
+        calm = LinearProgram(A2, lo2, hi2, np.r_[self._lower, np.zeros(k)], np.r_[self._upper, np.full(k, np.inf)])
+        second = calm.solve(np.r_[np.zeros(n), -np.ones(k)])
+        z = result[1][:-1] if second is None else second[1][:n]
+        return self._witness(float(result[0]), z, None)
 
     def _ray(self, direction: ArrayLike, origin: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
         d = check_direction(direction, self.dim)

@@ -21,6 +21,27 @@ Inequalities: every normal force >= 0 (no contact pulls: the robot does not tip 
 friction coefficient mu, each driven wheel's tangential force lies in the pyramid with
 ``faces`` faces inscribed in its cone |f_t| <= mu f_n (conservative by 1 - cos(pi / faces)).
 Passive supports are frictionless. With every contact force free, the set is the ideal one.
+
+How the weight is shared (``load``). A robot on more than three contacts is statically
+indeterminate: the six rows above fix the total normal force and its moments, not how the
+contacts share them. The sharing does not matter for tip-over (every sharing with normals >= 0
+puts the zero-moment point in the support polygon, and every such point has one), but it decides
+how hard each wheel may push. ``"compliant"`` shares it as the floor and the tyres do: the
+platform is rigid and every contact an equally stiff spring, so the normal forces are an affine
+function of the contacts' positions on the floor, f_n,c = a + b x_c + c y_c (n - 3 equations over
+the normals, none with three contacts). With the normals >= 0 every support stays loaded: the
+zero-moment point stays in the support's *core*, which is smaller than its polygon (for four
+corners, the diamond through the edges' midpoints), so the no-tip-over limit is conservative;
+and each wheel's traction is limited by the load the springs give it, not by the most
+favourable load. ``"any"`` admits every sharing that balances the robot: the tip-over limit is
+exact (the zero-moment point anywhere in the polygon) but the traction limit is optimistic
+(it assumes the wheels carry as much as the balance allows; measured in MuJoCo, whose
+contacts share by compliance, the wheels of TIAGo++ and the paper robot then slip on some axes).
+``"auto"`` (the default) is ``"compliant"`` with a traction limit and ``"any"`` without one.
+Where the robot cannot even stand still with every support loaded (its centre of mass outside
+the core, e.g. arms stretched far out), the compliant set is empty; the exact compliant model,
+where lightly loaded supports may lift, is a union of such sets (one per set of lifted supports)
+and is not built.
 """
 
 from __future__ import annotations
@@ -42,6 +63,8 @@ _G = float(-GRAVITY[2])  # m/s^2, the magnitude of gravity (along world -z)
 #: Rows of a 6-D wrench (force, then moment; world axes) the object is balanced in even when the
 #: task leaves them out: its vertical force and its roll and pitch moments (it is held level).
 LEVEL_ROWS = (2, 3, 4)
+#: How the contacts may share the weight (see the module's docstring).
+LOADS = ("auto", "compliant", "any")
 #: The name of the contact force variable (world x, y, z per driven wheel; z per passive support).
 CONTACT_FORCES = "contact_forces"
 #: The name of the hands' wrench components on the level rows a task leaves out.
@@ -63,12 +86,24 @@ class Floor(Constraint):
         support: the contacts; default: :func:`mobmanip.robot.support.robot_support`.
         lift: allow contacts to pull (normal forces of any sign): the ideal set, with the floor's
             forces reported (where its zero-moment point would be). Off by default.
+        load: how the contacts share the weight: ``"compliant"`` (equally stiff contacts under a
+            rigid platform; every support stays loaded), ``"any"`` (every sharing that balances
+            the robot) or ``"auto"``: compliant with a traction limit, any without one; see the
+            module's docstring.
+        reserve: a safety reserve, a fraction r in [0, 1): every support keeps at least r times
+            its equal share of the weight (robot and object), and every driven wheel uses at most
+            1 - r of its friction pyramid. 0 (the default): the exact limits. A replay from rest
+            drifts from the instantaneous solution as the robot moves (in MuJoCo, within 20 ms at
+            97 % of a maximum, a nearly unloaded caster lifts and the load leaves the wheels);
+            a reserve keeps the maxima clear of that.
     """
 
     mu: float | str | None = "spec"
     faces: int | None = None
     support: Support | None = None
     lift: bool = False
+    load: str = "auto"
+    reserve: float = 0.0
     name: str = "floor"
     problem: str = "acceleration"
 
@@ -77,6 +112,10 @@ class Floor(Constraint):
             check_mu(self.mu, "the floor's mu")
         if self.faces is not None:
             check_faces(self.faces, "the floor's faces")
+        if not (isinstance(self.reserve, (int, float)) and 0.0 <= self.reserve < 1.0):
+            raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
+        if self.load not in LOADS:
+            raise ArgumentError(f"the floor's load must be one of {', '.join(LOADS)}, got {self.load!r}")
 
     def resolve(self, robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces this floor uses for ``robot``."""
@@ -85,12 +124,25 @@ class Floor(Constraint):
         faces = support.faces if self.faces is None else self.faces
         return support, (None if mu is None else float(mu)), faces
 
+    def sharing(self, mu: float | None) -> str | None:
+        """The load sharing used with friction coefficient ``mu`` (``None``: no traction limit):
+        ``"compliant"`` or ``"any"``; ``None`` when contacts may pull (``lift``)."""
+        if self.lift:
+            return None
+        if self.load == "auto":
+            return "any" if mu is None else "compliant"
+        return self.load
+
     def describe(self) -> dict:
         out: dict = {"name": self.name, "model": "whole robot on the floor, at rest"}
         out["mu"] = self.mu
         out["tip_over"] = "allowed (contacts may pull)" if self.lift else "not allowed"
+        if not self.lift:
+            out["load"] = self.load if self.load != "auto" else "compliant with a traction limit, else any"
         if self.faces is not None:
             out["faces"] = self.faces
+        if self.reserve:
+            out["reserve"] = self.reserve
         return out
 
     def rows(self, terms: Terms) -> ConstraintRows:
@@ -103,6 +155,7 @@ class Floor(Constraint):
                 f"{robot.name!r} has a {robot.platform.kind} platform"
             )
         support, mu, faces = self.resolve(robot)
+        sharing_model = self.sharing(mu)
         model, data = robot.model, robot.data
         task = get_task(terms.task)
         S = robot.null_space(q)
@@ -162,16 +215,26 @@ class Floor(Constraint):
             if moving.any():
                 equations.append(({"xdot": kin[moving]}, np.zeros(int(moving.sum()))))
             couplings["dynamics"] = {LEVEL_WRENCHES: np.hstack(couple)}
+        if sharing_model == "compliant":
+            sharing = compliant_sharing(points)
+            if len(sharing):
+                block = np.zeros((len(sharing), n_forces))
+                block[:, normal_col] = sharing
+                equations.append(({CONTACT_FORCES: block}, np.zeros(len(sharing))))
         E, e = _stack(equations, {"xdot": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl})
 
-        G_rows, labels = [], []
+        G_rows, h_rows, labels = [], [], []
+        least = self.reserve * (mass + terms.held_object.mass) * _G / len(support.contacts)
         for contact, col in zip(support.contacts if not self.lift else (), normal_col):
             row = np.zeros(n_forces)
             row[col] = -1.0
             G_rows.append(row)
-            labels.append(f"{contact.name} lifts off the floor (normal force 0)")
+            h_rows.append(-least)
+            lifts = "normal force 0" if least == 0.0 else f"normal force at its reserve {least:.4g} N"
+            why = "; the robot tips over" if sharing_model == "any" else "; equally stiff contacts, before any tip-over"
+            labels.append(f"{contact.name} lifts off the floor ({lifts}{why})")
         if mu is not None and not self.lift:
-            tilt = mu * math.cos(math.pi / faces)
+            tilt = mu * math.cos(math.pi / faces) * (1.0 - self.reserve)
             for contact, (a, b) in zip(support.contacts, slices):
                 if not contact.driven:
                     continue
@@ -179,11 +242,14 @@ class Floor(Constraint):
                     row = np.zeros(n_forces)
                     row[a:b] = (math.cos(angle), math.sin(angle), -tilt)
                     G_rows.append(row)
+                    h_rows.append(0.0)
                     labels.append(f"{contact.name} slips (traction at its friction limit, mu = {mu:g})")
         info = {
             "floor": {
                 "mu": None if self.lift else mu,
                 "lift": self.lift,
+                "load": sharing_model,
+                "reserve": self.reserve,
                 "faces": faces,
                 "pose": list(pose),
                 "contacts": [
@@ -195,8 +261,20 @@ class Floor(Constraint):
         }
         return ConstraintRows(
             self.name, self.problem, variables=variables, G={CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)},
-            h=np.zeros(len(G_rows)), E=E, e=e, couplings=couplings, labels=tuple(labels), info=info,
+            h=np.array(h_rows, dtype=float), E=E, e=e, couplings=couplings, labels=tuple(labels), info=info,
         )  # fmt: skip
+
+
+def compliant_sharing(points: np.ndarray) -> np.ndarray:
+    """The equations that make the normal forces at ``points`` (n, 2 or 3; m, on the floor) an
+    affine function of the points' floor positions (equally stiff contacts under a rigid
+    platform): an orthonormal basis N (n - 3, n) with N f_n = 0 exactly for those f_n; empty
+    for three contacts or fewer."""
+    xy = np.asarray(points, dtype=float)[:, :2]
+    affine = np.column_stack([np.ones(len(xy)), xy - xy.mean(axis=0)])
+    u, sigma, _ = np.linalg.svd(affine, full_matrices=True)
+    rank = int(np.sum(sigma > 1e-9 * max(float(sigma[0]), 1e-300)))
+    return u[:, rank:].T
 
 
 def _robot_support(robot) -> Support:
