@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from floor_reference import PAPER_CASTERS, build_problem, straight_line, support
+from floor_reference import PAPER_CASTERS, build_problem, equilibrium, straight_line, support
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.errors import MobmanipError, SpecError
 from mobmanip.postures.named import named_configuration
@@ -260,3 +260,16 @@ def test_a_badly_scaled_posture_still_solves():
         e = e / np.linalg.norm(e)
         ref = straight_line(problem, e, mode="friction", mu=0.5).value
         assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6, abs=1e-9)
+    # With equally stiff contacts the robot cannot even stand still there: the reference's LP with
+    # springs is infeasible, and held still with pulling allowed its springs pull on the contact the
+    # warning names.
+    compliant = mobmanip.analyze(
+        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+    )
+    assert compliant.measures["dynamic_polytope"].empty
+    with pytest.raises(RuntimeError, match="infeasible"):
+        equilibrium(problem, mode="friction", mu=0.5, springs=True)
+    still = equilibrium(problem, mode="ideal", springs=True)
+    pulled = [c.name for c, f in zip(problem.contacts, still.forces) if f[2] < 0.0]
+    (warning,) = [w for w in compliant.warnings if "on the floor is empty" in w]
+    assert pulled and f"would unload {', '.join(pulled)} (" in warning

@@ -121,6 +121,43 @@ def rest_warnings(analysis) -> list[str]:
                 "ellipsoid adds all efforts up in one Euclidean norm (||Z tau|| <= 1), so it reads 'cannot hold the "
                 "load' where each joint can; the dynamic polytopes (--polytope) bound each effort on its own"
             )
+    out.extend(floor_warnings(analysis))
+    return out
+
+
+def floor_warnings(analysis) -> list[str]:
+    """A grounded set that is empty, with the reason at rest: with compliant sharing, the supports
+    that the robot's weight (and the object's) would unload, standing still (the zero-moment point
+    at the centre of mass, outside the support's core); else the efforts or the traction."""
+    import pinocchio as pin
+
+    out = []
+    for name, task_set in analysis.measures.items():
+        model = getattr(task_set, "model", None)
+        if not task_set.empty or not isinstance(model, dict) or "floor" not in model:
+            continue
+        floor = model["floor"]
+        robot, obj = analysis.robot, analysis.held_object
+        mass = float(pin.computeTotalMass(robot.model))
+        centre = pin.centerOfMass(robot.model, robot.data, analysis.q)[:2] * mass
+        centre = (centre + obj.mass * np.asarray(obj.center, dtype=float)[:2]) / (mass + obj.mass)
+        points = np.array([c["point"][:2] for c in floor["contacts"]])
+        middle = points.mean(axis=0)
+        plate = np.column_stack([np.ones(len(points)), points - middle])  # equally stiff contacts
+        normals = plate @ np.linalg.solve(plate.T @ plate, np.r_[1.0, centre - middle])  # per unit weight
+        unloaded = [c["name"] for c, f in zip(floor["contacts"], normals) if f <= 0.0]
+        if floor.get("load") == "compliant" and unloaded:
+            out.append(
+                f"{name} on the floor is empty: standing still, with equally stiff contacts, the weight would "
+                f"unload {', '.join(unloaded)} (the centre of mass at ({centre[0]:.3f}, {centre[1]:.3f}) m is outside "
+                "the support's core; compliant sharing keeps every support loaded); --load any gives the "
+                "tip-over limit, with optimistic traction"
+            )
+        else:
+            out.append(
+                f"{name} on the floor is empty: the robot cannot hold the object still on its support within its "
+                "effort limits and the wheels' friction"
+            )
     return out
 
 
