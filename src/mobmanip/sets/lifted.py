@@ -26,6 +26,7 @@ supports along +-e_i), a point of the set for every convex K.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -33,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import TaskError
-from .linear_programs import LinearProgram
+from .linear_programs import CertifiedProgram, LinearProgram
 from .taskset import TaskSet, check_dims, check_direction, check_points
 
 _TOL = 1e-9  # relative to the set's size: a support beyond a facet by less than this adds no vertex
@@ -55,6 +56,9 @@ class LiftedPolytope(TaskSet):
     """
 
     kind = "polytope"
+    #: Whether the projection's vertex programs go to the certified DAQP path
+    #: (:class:`~mobmanip.sets.linear_programs.CertifiedProgram`) or all to HiGHS (for comparisons).
+    certified_vertices: bool = True
 
     def __init__(
         self,
@@ -118,13 +122,31 @@ class LiftedPolytope(TaskSet):
             self._cache["program"] = LinearProgram(A, lo, hi, self._lower, self._upper)
         return self._cache["program"]
 
+    def _vertex_program(self) -> CertifiedProgram:
+        """The program the projection's many support queries use: DAQP, certified, else HiGHS."""
+        if "certified" not in self._cache:
+            A = np.vstack([self._A_eq, self._A_ub])
+            lo = np.r_[self._b_eq, np.full(len(self._b_ub), -np.inf)]
+            hi = np.r_[self._b_eq, self._b_ub]
+            self._cache["certified"] = CertifiedProgram(A, lo, hi, self._lower, self._upper, self._program)
+        return self._cache["certified"]
+
+    def _vertex(self, d: np.ndarray) -> tuple[float, np.ndarray]:
+        """A maximiser along d for the projection (its multipliers are not kept)."""
+        if not self.certified_vertices:
+            return self._maximise(d)
+        result = self._vertex_program().solve(self._cost(d))
+        if result is None:
+            raise TaskError("the set is empty: it has no maximiser")
+        return result
+
     def _cost(self, d: np.ndarray) -> np.ndarray:
         cost = np.zeros(len(self._lower))
         cost[self._task] = d
         return cost
 
     def _feasible_point(self) -> np.ndarray | None:
-        result = self._program().solve(np.zeros(len(self._lower)))
+        result = self._vertex_program().solve(np.zeros(len(self._lower)))
         return None if result is None else result[1]
 
     def _maximise(self, d: np.ndarray) -> tuple[float, np.ndarray]:
@@ -339,13 +361,17 @@ class LiftedPolytope(TaskSet):
         With ``first`` (called before the set's size is known), the extreme points along the task
         axes size the tolerance before the refinement starts."""
         m = self.dim
-        found = [self._maximise(s * e)[1][self._task] for e in np.eye(m) for s in (1.0, -1.0)]
+        found = [self._vertex(s * e)[1][self._task] for e in np.eye(m) for s in (1.0, -1.0)]
         if first:
             box = np.ptp(np.array(found), axis=0)
             self._size = float(max(np.max(box), 1e-300))
         if m == 1:
             return np.unique(np.round(np.array(found), 15), axis=0)
         tol = _TOL * self._size
+        if m == 2:
+            planar = self._refine_planar(np.array(found), tol)
+            if planar is not None:
+                return planar
         checked: set[tuple] = set()
         for _ in range(_MAX_ROUNDS):
             V = _unique_rows(np.array(found), tol)
@@ -354,7 +380,7 @@ class LiftedPolytope(TaskSet):
                 extra = _across(V, m, tol)
                 added = False
                 for d in extra:
-                    p = self._maximise(d)[1][self._task]
+                    p = self._vertex(d)[1][self._task]
                     if np.min(np.linalg.norm(V - p, axis=1)) > tol:
                         found.append(p)
                         added = True
@@ -367,7 +393,7 @@ class LiftedPolytope(TaskSet):
                 key = tuple(np.round(n, 12)) + (round(float(b) / self._size, 12),)
                 if key in checked:
                     continue
-                value, z = self._maximise(n)
+                value, z = self._vertex(n)
                 if value > b + tol:
                     found.append(z[self._task])
                     added = True
@@ -376,6 +402,38 @@ class LiftedPolytope(TaskSet):
             if not added:
                 return _ordered(V)
         raise TaskError("the projection did not converge (a set with very many vertices)")
+
+    def _refine_planar(self, found: np.ndarray, tol: float) -> np.ndarray | None:
+        """Bretl and Lall's projection for a polygon, edge by edge: the support along each edge's
+        outer normal either lies on the edge (the edge is a facet) or is a new vertex that splits
+        it in two. One program per vertex and one per facet; ``None`` when the starting points
+        span no area (the general refinement handles flat sets)."""
+        start = _ordered(_unique_rows(found, tol))
+        if len(start) < 3:
+            return None
+        out: list[np.ndarray] = []
+        known = list(start)
+        pending = [(start[k], start[(k + 1) % len(start)]) for k in reversed(range(len(start)))]
+        for _ in range(_MAX_ROUNDS):
+            if not pending:
+                return _ordered(np.array(out))
+            a, b = pending.pop()
+            edge = b - a
+            length = math.hypot(edge[0], edge[1])
+            if length <= tol:
+                continue
+            normal = np.array([edge[1], -edge[0]]) / length  # outward: the polygon runs counter-clockwise
+            value, z = self._vertex(normal)
+            p = z[self._task]
+            if value <= normal @ a + tol:
+                out.append(a)
+                continue
+            if np.min(np.linalg.norm(np.array(known) - p, axis=1)) <= tol:
+                return None  # a known point beyond an edge: too thin to order this way
+            known.append(p)
+            pending.append((p, b))  # a -> p first, then p -> b
+            pending.append((a, p))
+        return None  # very many vertices: the general refinement decides
 
     @property
     def halfspaces(self) -> tuple[np.ndarray, np.ndarray]:
@@ -542,18 +600,21 @@ def _ordered(V: np.ndarray) -> np.ndarray:
     lower: list = []
     upper: list = []
     for p in pts:
-        while len(lower) >= 2 and _cross(lower[-2], lower[-1], p) <= 0:
+        while len(lower) >= 2 and _turns_right(lower[-2], lower[-1], p):
             lower.pop()
         lower.append(p)
     for p in reversed(pts):
-        while len(upper) >= 2 and _cross(upper[-2], upper[-1], p) <= 0:
+        while len(upper) >= 2 and _turns_right(upper[-2], upper[-1], p):
             upper.pop()
         upper.append(p)
     return np.array(lower[:-1] + upper[:-1])
 
 
-def _cross(o, a, b) -> float:
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+def _turns_right(o, a, b) -> bool:
+    """Whether o -> a -> b turns clockwise or goes straight on (a is then no vertex): the cross
+    product at most _TOL times the two lengths (a point on an edge, up to rounding, is dropped)."""
+    cross = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    return cross <= _TOL * math.hypot(a[0] - o[0], a[1] - o[1]) * math.hypot(b[0] - a[0], b[1] - a[1])
 
 
 def _across(V: np.ndarray, m: int, tol: float) -> list[np.ndarray]:
