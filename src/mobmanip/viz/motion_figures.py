@@ -15,6 +15,7 @@ import numpy as np
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from ..coordination.carry import TeamCarryResult
     from ..motion.carry import CarryResult
     from ..motion.trajectory_analysis import TrajectoryAnalysis
 
@@ -61,9 +62,10 @@ def trajectory_figure(result: TrajectoryAnalysis) -> Figure:
     return fig
 
 
-def carry_figure(result: CarryResult) -> Figure:
+def carry_figure(result: CarryResult | TeamCarryResult) -> Figure:
     """The objective over time along a carried path: the self-motion before the path (when there
-    is one), the QP motion with its capacity term and the weighted pseudo-inverse baseline."""
+    is one), the QP motion with its capacity term and the weighted pseudo-inverse baseline (of
+    one robot, or of a team: :func:`mobmanip.coordination.team_carry`)."""
     plt = _pyplot()
     motion, base = result.motion, result.baseline
     fig, ax = plt.subplots(figsize=(7, 3.5))

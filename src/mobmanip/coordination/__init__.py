@@ -1,0 +1,1 @@
+"""Teams that move: several mobile manipulators carrying one object along a path."""
