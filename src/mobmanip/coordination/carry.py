@@ -110,14 +110,6 @@ class TeamCarryRun:
     grasp_strain: np.ndarray
     effort: np.ndarray
 
-    def truncated(self, n: int) -> TeamCarryRun:
-        """The first n samples."""
-        return TeamCarryRun(
-            self.method, self.t[:n], tuple(q[:n] for q in self.q), tuple(x[: n - 1] for x in self.x),
-            self.capacity[:n], self.tracking_error[:n], self.hand_error[:n], self.turn_error[:n],
-            self.grasp_strain[:n], self.effort[: n - 1],
-        )  # fmt: skip
-
     def shifted(self, dt: float) -> TeamCarryRun:
         """The run with its time stamps moved by dt (s)."""
         return TeamCarryRun(
