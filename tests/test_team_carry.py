@@ -143,6 +143,10 @@ def test_every_robot_stays_within_its_position_and_velocity_limits(beam):
             v = _velocities(model, run.t, q)
             limited = np.isfinite(model.velocityLimit) & (model.velocityLimit < 1e300)
             assert np.all(np.abs(v[:, limited]) <= model.velocityLimit[limited] * (1 + 1e-6))
+    summary = result.summary()
+    assert summary["qp"]["samples_beyond_a_joint_range"] == 0 and summary["qp"]["max_velocity_share"] <= 1.0
+    # the baseline has no limits: on this path it takes the north robot's arm past its range
+    assert summary["pinv"]["samples_beyond_a_joint_range"] > 0
 
 
 def _efforts(team: Team, run, mass_matrix: np.ndarray) -> np.ndarray:

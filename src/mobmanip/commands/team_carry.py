@@ -142,13 +142,17 @@ def run(args) -> int:
             f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
             f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the team's posture"
         )
-    for method, label in (("qp", "QP with capacity"), ("pinv", "pseudo-inverse baseline")):
+    for method, label, motion in (
+        ("qp", "QP with capacity", result.motion),
+        ("pinv", "pseudo-inverse baseline", result.baseline),
+    ):
         s = summary[method]
         print(
             f"{label}: min {result.objective.name} {s['min_capacity']:.4g}, mean {s['mean_capacity']:.4g}; "
             f"max hand error {1e3 * s['max_hand_error']:.3f} mm, lateral slip {s['max_lateral_slip']:.2g} m/s, "
-            f"grasp strain {1e3 * s['max_grasp_strain']:.3f} mm, efforts up to {100 * s['max_effort_share']:.1f}% "
-            "of their limits"
+            f"grasp strain {1e3 * s['max_grasp_strain']:.3f} mm; efforts up to {100 * s['max_effort_share']:.1f}%, "
+            f"rates up to {100 * s['max_velocity_share']:.1f}% of their limits, "
+            f"{s['samples_beyond_a_joint_range']} of {len(motion.t)} samples with a joint beyond its range"
         )
     ratio = summary["min_capacity_ratio"]
     if ratio is not None:

@@ -166,6 +166,22 @@ class TeamCarryResult:
         values = [np.abs(lateral_slip(m.robot, run.t, q)) for m, q in zip(self.team.members, run.q)]
         return float(max((v.max() for v in values if v.size), default=0.0))
 
+    def limits_kept(self, run: TeamCarryRun) -> tuple[float, int]:
+        """(largest reduced velocity over its limit, samples with a joint beyond its position
+        range) along a run, over every robot (the baseline has no limits and may break them)."""
+        share, beyond = 0.0, np.zeros(len(run.t), dtype=bool)
+        for member, q, x in zip(self.team.members, run.q, run.x):
+            robot = member.robot
+            if x.size:
+                share = max(share, float(np.max(np.abs(x) / np.asarray(robot.velocity_limits, dtype=float))))
+            model = robot.model
+            for joint in model.joints[1:]:
+                if joint.nq == 1:
+                    values = q[:, joint.idx_q]
+                    lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+                    beyond |= (values < lower - 1e-9) | (values > upper + 1e-9)
+        return share, int(beyond.sum())
+
     def summary(self) -> dict:
         """Minimum capacities, their ratio, tracking, slip, strain and effort figures (JSON-ready)."""
         out: dict[str, Any] = {
@@ -186,6 +202,8 @@ class TeamCarryResult:
                 "max_grasp_strain": float(run.grasp_strain.max()),
                 "max_lateral_slip": self.slip(run),
                 "max_effort_share": float(run.effort.max()) if run.effort.size else 0.0,
+                "max_velocity_share": self.limits_kept(run)[0],
+                "samples_beyond_a_joint_range": self.limits_kept(run)[1],
                 "seconds": float(run.t[-1] - run.t[0]),
             }
         out["pinv"]["start"] = {"posture": self.start, "capacity": float(self.baseline.capacity[0])}

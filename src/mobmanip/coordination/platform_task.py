@@ -34,7 +34,7 @@ __all__ = ["CONTROL_DISTANCE", "PLATFORM_GAIN", "PLATFORM_WEIGHT", "PlatformTask
 #: Distance of each platform's control point from its axle's midpoint (m).
 CONTROL_DISTANCE = 0.5
 #: Weight of the platform task relative to a wheel at its velocity limit.
-PLATFORM_WEIGHT = 10.0
+PLATFORM_WEIGHT = 1.0
 #: Feedback gain of the control point's position error (1/s).
 PLATFORM_GAIN = 2.0
 
