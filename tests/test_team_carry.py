@@ -124,6 +124,10 @@ def test_no_platform_slides_sideways(beam):
             if run is result.motion:
                 assert np.abs(along).max() > 0.1  # the platforms do drive
                 assert np.ptp(heading) > np.radians(30)  # and turn
+        # no collision rows: how close the platforms came, from the poses (0.5 m x 0.28 m boxes)
+        gap = np.linalg.norm(run.q[0][:, :2] - run.q[1][:, :2], axis=1).min()
+        assert result.summary()[run.method]["min_platform_distance"] == pytest.approx(gap)
+        assert gap > 1.0
 
 
 def _velocities(model, t, qs) -> np.ndarray:
@@ -296,7 +300,7 @@ def test_command_writes_one_trajectory_per_robot(tmp_path, capsys):
         motion = read_trajectory(member.robot, out / f"trajectory_{member.name}.csv")
         assert motion.t[0] == pytest.approx(0.0) and motion.t[-1] == pytest.approx(2.0)
     assert summary["qp"]["max_hand_error"] <= 1e-3
-    assert (out / "capacity.png").stat().st_size > 0
+    assert (out / "capacity.png").stat().st_size > 0 and (out / "paths.png").stat().st_size > 0
 
 
 @pytest.mark.parametrize(
@@ -320,6 +324,14 @@ def test_command_refuses_an_unknown_frame(capsys):
         main(["team-carry", str(TEAM), "--path", str(EXAMPLES / "carry_turn.csv"), "--frame", "robot"])
     err = capsys.readouterr().err
     assert exit_.value.code == 2 and err.startswith("mobmanip: error: ") and "--frame" in err
+
+
+def test_command_refuses_a_scale_beyond_the_supported_positions(tmp_path, capsys):
+    far = tmp_path / "far.csv"
+    far.write_text("t,x,y\n0,0,0\n1,900000,0\n")
+    code = main(["team-carry", str(TEAM), "--path", str(far), "--scale", "1000"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("mobmanip: error: --scale 1000") and err.count("\n") == 1
 
 
 def test_command_refuses_a_missing_path(tmp_path, capsys):

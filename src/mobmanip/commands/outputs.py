@@ -280,7 +280,7 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
 # teams carrying an object
 
 #: The files ``team-carry --out DIR`` writes in DIR besides one trajectory per robot.
-TEAM_CARRY_FILES = ("team_carry.json", "capacity.png")
+TEAM_CARRY_FILES = ("team_carry.json", "capacity.png", "paths.png")
 
 
 def team_file_stem(team: Team, index: int) -> str:
@@ -314,9 +314,10 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
     """One trajectory per robot (``trajectory_<robot>.csv``, each a valid input of ``mobmanip
     trajectory``, with the team's capacity, the baseline's and the object's tracking error), the
     baseline's (``baseline_<robot>.csv``), the self-motion's (``preparation_<robot>.csv``, when
-    there is one), ``team_carry.json`` (:meth:`TeamCarryResult.summary` and which file is whose)
-    and ``capacity.png`` (:func:`mobmanip.viz.motion_figures.carry_figure`); returns the paths."""
-    from ..viz.motion_figures import carry_figure
+    there is one), ``team_carry.json`` (:meth:`TeamCarryResult.summary` and which file is whose),
+    ``capacity.png`` (:func:`mobmanip.viz.motion_figures.carry_figure`) and ``paths.png`` (the top
+    view, :func:`mobmanip.viz.motion_figures.team_carry_figure`); returns the paths."""
+    from ..viz.motion_figures import carry_figure, team_carry_figure
 
     team = result.team
     paths = team_carry_paths(team, out_dir)
@@ -332,17 +333,18 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
         written += _team_run_files(
             team, prep, paths["preparation"], {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
         )
-    summary, figure = paths["summary"]
+    summary, figure, top = paths["summary"]
     files = {kind: {m.name: p.name for m, p in zip(team.members, paths[kind])} for kind in ("trajectory", "baseline")}
     if prep is not None:
         files["preparation"] = {m.name: p.name for m, p in zip(team.members, paths["preparation"])}
     write_json(summary, {**result.summary(), "files": files})
-    fig = carry_figure(result)
-    try:
-        save_figure(fig, figure, dpi=100)
-    finally:
-        _close(fig)
-    return written + [str(summary), str(figure)]
+    for draw, path in ((carry_figure, figure), (team_carry_figure, top)):
+        fig = draw(result)
+        try:
+            save_figure(fig, path, dpi=100)
+        finally:
+            _close(fig)
+    return written + [str(summary), str(figure), str(top)]
 
 
 def team_carry_partial_outputs(team: Team, failure: CarryFailed, out_dir: str | Path) -> list[str]:

@@ -24,7 +24,8 @@ posture with the object held still (--prepare seconds at most; 0: none).
 --out DIR writes trajectory_ROBOT.csv for each robot (t, platform_x, platform_y, platform_yaw,
 joints, then the team's capacity, the baseline's and the object's tracking error; a valid
 input of `mobmanip trajectory`), baseline_ROBOT.csv, preparation_ROBOT.csv, team_carry.json
-(the summary: capacities, tracking, lateral slip, grasp strain, efforts) and capacity.png.
+(the summary: capacities, tracking, lateral slip, grasp strain, efforts, limits), capacity.png
+and paths.png (top view of the platforms and the object).
 
 examples:
   mobmanip team-carry examples/beam_team.toml --path examples/carry_turn.csv --scale 2 --out results/
@@ -100,7 +101,7 @@ def run(args) -> int:
     from ..coordination.carry import team_carry
     from ..errors import CarryFailed
     from ..motion.carry import ObjectPath, read_path
-    from ..support.files import check_output, note_input, output_directory
+    from ..support.files import check_output, note_input, output_directory, require_finite
     from ..team.members import load_team
     from .outputs import team_carry_outputs, team_carry_partial_outputs, team_carry_paths
     from .team import _read_checked
@@ -111,8 +112,17 @@ def run(args) -> int:
     robots = data.get("robots")
     _check(args, path, len(robots) if isinstance(robots, list) else 0)
     if args.scale != 1.0:
+        from ..errors import UsageError
+        from ..support.ranges import PLATFORM_POSITION
+
         z = None if path.z is None else path.z * args.scale
         path = ObjectPath(path.t, path.xy * args.scale, z, path.yaw)
+        farthest = max(float(np.abs(path.xy).max()), 0.0 if z is None else float(np.abs(z).max()))
+        if farthest > PLATFORM_POSITION:
+            raise UsageError(
+                f"--scale {args.scale:g} takes the path {farthest:.3g} m out, beyond the {PLATFORM_POSITION:g} m "
+                "mobmanip supports"
+            )
     team = load_team(args.description)
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
@@ -129,6 +139,7 @@ def run(args) -> int:
         print(f"mobmanip: error: {failure}", file=sys.stderr)
         return 2
     summary = result.summary()
+    require_finite(summary)
     names = ", ".join(f"{m.name} ({m.robot.name})" for m in team.members)
     print(
         f"team {team.name}: {names}; task {result.task}; object path {path.length():.3f} m in "
@@ -157,6 +168,9 @@ def run(args) -> int:
     ratio = summary["min_capacity_ratio"]
     if ratio is not None:
         print(f"min capacity ratio (QP / baseline): {ratio:.3f}")
+    closest = summary["qp"]["min_platform_distance"]
+    if closest is not None:
+        print(f"platforms at least {closest:.3f} m apart (centre to centre; the QP has no collision rows)")
     if args.out:
         for written in team_carry_outputs(result, args.out):
             print(f"wrote {written}")

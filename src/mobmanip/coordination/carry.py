@@ -166,6 +166,26 @@ class TeamCarryResult:
         values = [np.abs(lateral_slip(m.robot, run.t, q)) for m, q in zip(self.team.members, run.q)]
         return float(max((v.max() for v in values if v.size), default=0.0))
 
+    def hand_positions(self, run: TeamCarryRun) -> np.ndarray:
+        """Every grasping hand's world position along a run (m), (N, n_hands, 3), by forward kinematics."""
+        return np.array(
+            [[h.translation for h in _hand_poses(self.team, [q[k] for q in run.q])] for k in range(len(run.t))]
+        )
+
+    def platform_distance(self, run: TeamCarryRun) -> float | None:
+        """The smallest distance between two platforms' reference points along a run (m); the QP
+        does not keep robots apart (no collision rows), this says how close they came. ``None``
+        for a team of one robot."""
+        points = []
+        for member, q in zip(self.team.members, run.q):
+            root = member.robot.model.joints[1]
+            points.append(q[:, root.idx_q : root.idx_q + 2])
+        best = math.inf
+        for i in range(len(points)):
+            for j in range(i + 1, len(points)):
+                best = min(best, float(np.min(np.linalg.norm(points[i] - points[j], axis=1))))
+        return best if math.isfinite(best) else None
+
     def limits_kept(self, run: TeamCarryRun) -> tuple[float, int]:
         """(largest reduced velocity over its limit, samples with a joint beyond its position
         range) along a run, over every robot (the baseline has no limits and may break them)."""
@@ -204,6 +224,7 @@ class TeamCarryResult:
                 "max_effort_share": float(run.effort.max()) if run.effort.size else 0.0,
                 "max_velocity_share": self.limits_kept(run)[0],
                 "samples_beyond_a_joint_range": self.limits_kept(run)[1],
+                "min_platform_distance": self.platform_distance(run),
                 "seconds": float(run.t[-1] - run.t[0]),
             }
         out["pinv"]["start"] = {"posture": self.start, "capacity": float(self.baseline.capacity[0])}
