@@ -5,7 +5,7 @@ program per time step over the team's reduced velocities x = (x_1, ..., x_k), ea
 and joint rates, so that every platform keeps its own nonholonomic constraint exactly (robot i's
 velocity is S_i x_i: a differential drive cannot slide sideways)::
 
-    minimise    1/2 x^T D^-2 x - w g^T x                       (D = diag(xdot_max), all robots)
+    minimise    1/2 x^T D^-2 x - w g^T x + sum_i beta_i / 2 |J_p,i x_i - v_i*|^2   (D = diag(xdot_max))
     subject to  J x = b                                        (every hand follows the object)
                 max(-xdot_max, (q_lo - q) / T) <= x <= min(xdot_max, (q_hi - q) / T)
                 |tau(x)| <= 0.99 tau_max                       (every robot's wheels and joints)
@@ -20,7 +20,10 @@ of the paper's policy for the whole team (:func:`mobmanip.coordination.effort.te
 the load shared by W^+ over all hands. g is the gradient of the team's capacity
 (:class:`mobmanip.coordination.capacity.TeamCapacity`: the measure ``mobmanip team`` computes,
 for the object held by all hands) over x; w is fixed at the first step so that the capacity
-term alone would move at half the velocity limits, as in ``carry``.
+term alone would move at half the velocity limits, as in ``carry``. The last term is each
+platform's soft task along the path (:mod:`mobmanip.coordination.platform_task`): a control
+point off its axle follows where the object would carry it, so the platforms turn with the path
+(without it the beam example's arms absorbed the turn until a joint reached its range, 4 s in).
 
 As in ``carry``, the capacity-aware motion first moves to a better posture with the object held
 still (a self-motion of the whole team, for at most ``prepare`` seconds); the baseline tracks
