@@ -36,6 +36,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("gradients",),
     ("analysis",),
     ("sweep", "team", "motion", "casestudy"),
+    ("coordination",),  # teams that move: the team's terms with carry's machinery
     ("placement",),
     ("viz",),
     ("commands",),

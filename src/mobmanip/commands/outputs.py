@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from ..support.files import atomic_output, save_figure, write_json
 
 if TYPE_CHECKING:
+    from ..coordination.carry import TeamCarryResult, TeamCarryRun
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
     from ..motion.ground import GroundAlong
@@ -32,6 +33,7 @@ if TYPE_CHECKING:
     from ..placement.site import SiteResult
     from ..robot.model import Robot
     from ..sweep.results import SweepResult
+    from ..team import Team
 
 #: The files ``place --map DIR`` writes in DIR.
 PLACEMENT_MAP_FILES = ("map.npz", "map.csv", "map.png")
@@ -272,6 +274,103 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
     finally:
         _close(fig)
     return [str(p) for p in paths]
+
+
+# ------------------------------------------------------------------------------------------------
+# teams carrying an object
+
+#: The files ``team-carry --out DIR`` writes in DIR besides one trajectory per robot.
+TEAM_CARRY_FILES = ("team_carry.json", "capacity.png", "paths.png")
+
+
+def team_file_stem(team: Team, index: int) -> str:
+    """The robot's name in the team when it is a safe file name (letters, digits, ``_``, ``-``, ``.``,
+    not starting with a dot, at most 64 characters), else ``robot<index + 1>``."""
+    import re
+
+    name = team.members[index].name
+    if re.fullmatch(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,63}", name):
+        return name
+    return f"robot{index + 1}"
+
+
+def team_carry_paths(team: Team, out_dir: str | Path) -> dict[str, list[Path]]:
+    """Every file ``team-carry --out DIR`` may write, by kind: ``trajectory``, ``baseline`` and
+    ``preparation`` (one per robot, ``<kind>_<robot>.csv``) and ``summary`` (the JSON and figure)."""
+    out = Path(out_dir)
+    stems = [team_file_stem(team, k) for k in range(len(team.members))]
+    paths = {kind: [out / f"{kind}_{stem}.csv" for stem in stems] for kind in ("trajectory", "baseline", "preparation")}
+    paths["summary"] = [out / name for name in TEAM_CARRY_FILES]
+    return paths
+
+
+def _team_run_files(team: Team, run: TeamCarryRun, paths: list[Path], extra: Mapping[str, ArrayLike]) -> list[str]:
+    for member, q, path in zip(team.members, run.q, paths):
+        write_trajectory_csv(member.robot, path, run.t, q, extra)
+    return [str(p) for p in paths]
+
+
+def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str]:
+    """One trajectory per robot (``trajectory_<robot>.csv``, each a valid input of ``mobmanip
+    trajectory``, with the team's capacity, the baseline's and the object's tracking error), the
+    baseline's (``baseline_<robot>.csv``), the self-motion's (``preparation_<robot>.csv``, when
+    there is one), ``team_carry.json`` (:meth:`TeamCarryResult.summary` and which file is whose),
+    ``capacity.png`` (:func:`mobmanip.viz.motion_figures.carry_figure`) and ``paths.png`` (the top
+    view, :func:`mobmanip.viz.motion_figures.team_carry_figure`); returns the paths."""
+    from ..viz.motion_figures import carry_figure, team_carry_figure
+
+    team = result.team
+    paths = team_carry_paths(team, out_dir)
+    motion, base, prep = result.motion, result.baseline, result.preparation
+    written = _team_run_files(
+        team, motion, paths["trajectory"],
+        {"capacity": motion.capacity, "baseline_capacity": base.capacity, "tracking_error": motion.tracking_error},
+    )  # fmt: skip
+    written += _team_run_files(
+        team, base, paths["baseline"], {"capacity": base.capacity, "tracking_error": base.tracking_error}
+    )
+    if prep is not None:
+        written += _team_run_files(
+            team, prep, paths["preparation"], {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
+        )
+    summary, figure, top = paths["summary"]
+    files = {kind: {m.name: p.name for m, p in zip(team.members, paths[kind])} for kind in ("trajectory", "baseline")}
+    if prep is not None:
+        files["preparation"] = {m.name: p.name for m, p in zip(team.members, paths["preparation"])}
+    write_json(summary, {**result.summary(), "files": files})
+    for draw, path in ((carry_figure, figure), (team_carry_figure, top)):
+        fig = draw(result)
+        try:
+            save_figure(fig, path, dpi=100)
+        finally:
+            _close(fig)
+    return written + [str(summary), str(figure), str(top)]
+
+
+def team_carry_partial_outputs(team: Team, failure: CarryFailed, out_dir: str | Path) -> list[str]:
+    """After a failed team carry: the part of the motion that succeeded, one trajectory per robot,
+    the self-motion before it (when there is one) and ``team_carry.json`` flagged ``"partial":
+    true`` with the diagnosis; returns the paths."""
+    paths = team_carry_paths(team, out_dir)
+    run = failure.partial
+    kind = "preparation" if run.method == "self-motion" else "trajectory"
+    written = _team_run_files(team, run, paths[kind], {"capacity": run.capacity, "tracking_error": run.tracking_error})
+    prep = failure.preparation
+    if prep is not None and kind != "preparation":
+        written += _team_run_files(
+            team, prep, paths["preparation"], {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
+        )
+    summary = {
+        "team": team.name,
+        "partial": True,
+        "method": run.method,
+        "completed_until": float(run.t[-1]),
+        "failure": failure.diagnosis.to_dict(),
+        "min_capacity": float(run.capacity.min()),
+        "max_tracking_error": float(run.tracking_error.max()),
+    }
+    write_json(paths["summary"][0], summary)
+    return written + [str(paths["summary"][0])]
 
 
 # ------------------------------------------------------------------------------------------------

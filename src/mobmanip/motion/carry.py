@@ -57,7 +57,7 @@ from ..robot.tasks import get_task
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
 from .carry_step import CarryDiagnosis as CarryDiagnosis
-from .carry_step import _bounds, _effort_rows, _solve_qp, diagnose_step
+from .carry_step import _effort_rows, diagnose_step, solve_step_qp, velocity_bounds
 from .trajectory import tangent_integrate
 
 PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
@@ -392,9 +392,9 @@ def _run(
             if weight is None:
                 norm = float(np.linalg.norm(np.sqrt(D2) * g))
                 weight = gain / norm if norm > 0 else 0.0
-            lo, hi = _bounds(robot, q, h)
+            lo, hi = velocity_bounds(robot, q, h)
             G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
-            x = _solve_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+            x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
             if x is None:
                 diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
                 partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],

@@ -123,7 +123,7 @@ def diagnose_step(
     nx = robot.nx
     vel = np.asarray(robot.velocity_limits, dtype=float)
     effort = np.asarray(robot.effort_limits, dtype=float)
-    lo, hi = _bounds(robot, q, h)
+    lo, hi = velocity_bounds(robot, q, h)
     A, offset = _effort_map(robot, q, x_prev, h, task, object_mass)
     H = np.diag(1.0 / vel**2)
     c = np.zeros(nx)
@@ -134,7 +134,7 @@ def diagnose_step(
         bound = EFFORT_SHARE * effort[rows]
         G = np.vstack([A[rows], -A[rows]]) if len(rows) else None
         g = np.concatenate([bound - offset[rows], bound + offset[rows]]) if len(rows) else None
-        return _solve_qp(H, c, J_u, b, lo_, hi_, G, g)
+        return solve_step_qp(H, c, J_u, b, lo_, hi_, G, g)
 
     everything = np.arange(nx)
 
@@ -227,8 +227,10 @@ def _joint_position_and_limit(robot: Robot, q: np.ndarray, k: int, upper: bool) 
     return float(q[joint.idx_q]), float(limit)
 
 
-def _bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity bounds from the velocity limits and from the joint position limits over one step."""
+def velocity_bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds (lower, upper) on the reduced velocities x over one step of ``dt`` (s), (nx,) each:
+    the velocity limits, and each joint's position limit approached at most at (distance to the
+    limit) / max(dt, :data:`LIMIT_HORIZON`)."""
     hi = np.array(robot.velocity_limits, dtype=float)
     lo = -hi
     model = robot.model
@@ -249,7 +251,9 @@ def _bounds(robot: Robot, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndar
     return lo, hi
 
 
-def _solve_qp(H, c, A, b, lo, hi, G=None, h=None) -> np.ndarray | None:
+def solve_step_qp(H, c, A, b, lo, hi, G=None, h=None) -> np.ndarray | None:
+    """min 1/2 x^T H x + c^T x subject to A x = b, lo <= x <= hi and G x <= h (DAQP through
+    qpsolvers); ``None`` when it has no solution."""
     from qpsolvers import solve_qp
 
     return solve_qp(H, c, G=G, h=h, A=A, b=b, lb=lo, ub=hi, solver="daqp")

@@ -1,6 +1,6 @@
 """Figures of motions over time: a trajectory's demands against its capacity
-(``mobmanip trajectory --out``) and the capacity profiles of a carried path (``mobmanip carry
---out``).
+(``mobmanip trajectory --out``), the capacity profiles of a carried path (``mobmanip carry
+--out``, ``mobmanip team-carry --out``) and the top view of a team's carried path.
 
 Each function returns a matplotlib ``Figure``; the caller saves it
 (:func:`mobmanip.support.files.save_figure`) and closes it.
@@ -15,6 +15,7 @@ import numpy as np
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from ..coordination.carry import TeamCarryResult
     from ..motion.carry import CarryResult
     from ..motion.trajectory_analysis import TrajectoryAnalysis
 
@@ -61,9 +62,10 @@ def trajectory_figure(result: TrajectoryAnalysis) -> Figure:
     return fig
 
 
-def carry_figure(result: CarryResult) -> Figure:
+def carry_figure(result: CarryResult | TeamCarryResult) -> Figure:
     """The objective over time along a carried path: the self-motion before the path (when there
-    is one), the QP motion with its capacity term and the weighted pseudo-inverse baseline."""
+    is one), the QP motion with its capacity term and the weighted pseudo-inverse baseline (of
+    one robot, or of a team: :func:`mobmanip.coordination.team_carry`)."""
     plt = _pyplot()
     motion, base = result.motion, result.baseline
     fig, ax = plt.subplots(figsize=(7, 3.5))
@@ -75,5 +77,40 @@ def carry_figure(result: CarryResult) -> Figure:
     ax.set_xlabel("t (s)")
     ax.set_ylabel(result.objective.name)
     ax.legend(loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def team_carry_figure(result: TeamCarryResult, poses: int = 7) -> Figure:
+    """Top view of a team's carried path: each platform's path (the QP motion solid, the
+    baseline dashed) with its heading at ``poses`` instants, and the object (the segment through
+    its farthest hands) at the same instants."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 7))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    runs = [(result.motion, "-", 1.0), (result.baseline, "--", 0.6)]
+    for run, style, alpha in runs:
+        picks = np.unique(np.linspace(0, len(run.t) - 1, poses).round().astype(int))
+        for i, (member, q) in enumerate(zip(result.team.members, run.q)):
+            color = colors[i % len(colors)]
+            label = f"{member.name} ({'QP' if run.method == 'qp' else 'pseudo-inverse'})"
+            ax.plot(q[:, 0], q[:, 1], style, color=color, alpha=alpha, label=label)
+            if run.method == "qp":
+                heading = np.arctan2(q[picks, 3], q[picks, 2])
+                ax.quiver(
+                    q[picks, 0], q[picks, 1], np.cos(heading), np.sin(heading), color=color, scale=20, width=0.004
+                )
+        if run.method == "qp":
+            hands = result.hand_positions(run)[picks]
+            for k, points in enumerate(hands):
+                gaps = np.linalg.norm(points[:, None, :2] - points[None, :, :2], axis=2)
+                a, b = np.unravel_index(int(np.argmax(gaps)), gaps.shape)
+                ax.plot(points[[a, b], 0], points[[a, b], 1], color="0.2", lw=3, alpha=0.35 + 0.65 * k / len(hands),
+                        label="object" if k == 0 else None)  # fmt: skip
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(f"team {result.team.name}: platforms and object, top view")
     fig.tight_layout()
     return fig

@@ -1,0 +1,516 @@
+"""Teams that move: several mobile manipulators carrying one object along a path.
+
+``carry`` (:mod:`mobmanip.motion.carry`) for a team (:mod:`mobmanip.team`). One quadratic
+program per time step over the team's reduced velocities x = (x_1, ..., x_k), each robot's wheel
+and joint rates, so that every platform keeps its own nonholonomic constraint exactly (robot i's
+velocity is S_i x_i: a differential drive cannot slide sideways)::
+
+    minimise    1/2 x^T D^-2 x - w g^T x + sum_i beta_i / 2 |J_p,i x_i - v_i*|^2   (D = diag(xdot_max))
+    subject to  J x = b                                        (every hand follows the object)
+                max(-xdot_max, (q_lo - q) / T) <= x <= min(xdot_max, (q_hi - q) / T)
+                |tau(x)| <= 0.99 tau_max                       (every robot's wheels and joints)
+
+J = blkdiag(J_i S_i) over each robot's grasping hands (their task rows) and b the hands' task
+velocities that bring each hand to its target at the next step: the hands keep the grasp of the
+start, each hand's target is its start pose moved with the object (translated along the path
+and turned about the vertical by the path's turn), so the object follows the path and the hands
+keep their places on it (the grasp constraints tie every hand to the one object). The limits
+and T are ``carry``'s (:func:`mobmanip.motion.carry_step.velocity_bounds`); tau is the efforts
+of the paper's policy for the whole team (:func:`mobmanip.coordination.effort.team_effort_map`),
+the load shared by W^+ over all hands. g is the gradient of the team's capacity
+(:class:`mobmanip.coordination.capacity.TeamCapacity`: the measure ``mobmanip team`` computes,
+for the object held by all hands) over x; w is fixed at the first step so that the capacity
+term alone would move at half the velocity limits, as in ``carry``. The last term is each
+platform's soft task along the path (:mod:`mobmanip.coordination.platform_task`): a control
+point off its axle follows where the object would carry it, so the platforms turn with the path
+(without it the beam example's arms absorbed the turn until a joint reached its range, 4 s in).
+
+As in ``carry``, the capacity-aware motion first moves to a better posture with the object held
+still (a self-motion of the whole team, for at most ``prepare`` seconds); the baseline tracks
+the same targets from the team's start posture with the weighted pseudo-inverse
+``x = D^2 J^T (J D^2 J^T)^-1 b`` (no capacity term, no limits; J being block-diagonal, each
+robot's own).
+
+**Internal forces.** The QP is kinematic in the hands' motion and the load is shared by the
+least-norm wrenches W^+ (M_o a_o + c_o + g_o): in the model the hands apply no internal
+(squeezing or stretching) force, and every robot's efforts for that share stay within its
+limits. What would load a real object internally is the hands' disagreement with the rigid
+grasp: each run reports ``grasp_strain``, the largest change of a distance between two hands from
+the start (m), bounded by twice the largest hand error; with grasps of stiffness k the internal
+force is about k times it. Internal forces are not decision variables here: they are bounded
+through the tracking, not chosen to widen the efforts.
+
+The path (:class:`mobmanip.motion.carry.ObjectPath`) is relative to where the start posture
+holds the object; with ``frame="object"`` (the default) its x axis is the object's heading at the
+start (for a beam, along it: the path ``x`` moves the beam lengthwise), with ``"world"`` the
+world's axes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import scipy.linalg
+
+from ..errors import ArgumentError, CarryFailed, MeasureError
+from ..gradients import Objective
+from ..motion.carry import (
+    DEFAULT_GAIN,
+    DEFAULT_PREPARE,
+    DEFAULT_STEP,
+    PREPARE_TOLERANCE,
+    PREPARE_WINDOW,
+    TIME_DECIMALS,
+    ObjectPath,
+)
+from ..motion.carry_step import solve_step_qp, velocity_bounds
+from ..motion.trajectory import tangent_integrate
+from ..robot.tasks import get_task
+from ..team import Team
+from ..terms.grasp import HeldObject
+from .capacity import TeamCapacity
+from .effort import diagnose_team_step, effort_rows, team_effort_map
+from .platform_task import PlatformTask
+
+__all__ = ["FRAMES", "TeamCarryResult", "TeamCarryRun", "lateral_slip", "team_carry"]
+
+#: The frames a path may be given in.
+FRAMES = ("object", "world")
+
+
+@dataclass(frozen=True)
+class TeamCarryRun:
+    """One synthesised motion of the team.
+
+    Attributes:
+        method: ``"qp"``, ``"pinv"`` (the weighted pseudo-inverse baseline) or ``"self-motion"``.
+        t: time stamps (s), (N,).
+        q: each robot's configurations, one (N, nq_i) array per robot, in the team's order.
+        x: each robot's reduced velocities held over each step, one (N - 1, nx_i) per robot.
+        capacity: the team's objective at each time, (N,).
+        tracking_error: distance of the hands' centroid from their targets' centroid (m), (N,):
+            the object's position error for an object moving rigidly with its hands.
+        hand_error: largest distance of a hand from its target position (m), (N,).
+        turn_error: largest angle of a hand's orientation from its target (rad), (N,).
+        grasp_strain: largest change of a distance between two hands from the run's start (m), (N,).
+        effort: largest modelled effort of any wheel or joint over its limit during each step,
+            (N - 1,) (the policy's efforts; the QP keeps it within 0.99).
+    """
+
+    method: str
+    t: np.ndarray
+    q: tuple[np.ndarray, ...]
+    x: tuple[np.ndarray, ...]
+    capacity: np.ndarray
+    tracking_error: np.ndarray
+    hand_error: np.ndarray
+    turn_error: np.ndarray
+    grasp_strain: np.ndarray
+    effort: np.ndarray
+
+    def shifted(self, dt: float) -> TeamCarryRun:
+        """The run with its time stamps moved by dt (s)."""
+        return TeamCarryRun(
+            self.method, np.round(self.t + dt, TIME_DECIMALS), self.q, self.x, self.capacity, self.tracking_error,
+            self.hand_error, self.turn_error, self.grasp_strain, self.effort,
+        )  # fmt: skip
+
+
+def lateral_slip(robot: Any, t: np.ndarray, qs: np.ndarray) -> np.ndarray:
+    """Each step's platform velocity across its heading (m/s), (N - 1,): the displacement between
+    consecutive poses projected on the normal of the mean heading, over the step (zero for an arc
+    driven without slip, whatever its curvature). Zero for a platform without a planar root."""
+    root = robot.model.joints[1]
+    if root.shortname() != "JointModelPlanar":
+        return np.zeros(max(len(t) - 1, 0))
+    block = np.asarray(qs)[:, root.idx_q : root.idx_q + 4]
+    heading = np.unwrap(np.arctan2(block[:, 3], block[:, 2]))
+    mid = 0.5 * (heading[1:] + heading[:-1])
+    step = np.diff(block[:, :2], axis=0)
+    across = -np.sin(mid) * step[:, 0] + np.cos(mid) * step[:, 1]
+    return across / np.diff(t)
+
+
+@dataclass(frozen=True)
+class TeamCarryResult:
+    """The capacity-maximising motion of a team and its baseline along the same path.
+
+    Attributes:
+        team: the team (its start configurations are the members' ``q``).
+        objective: the measure maximised (and reported as capacity).
+        motion, baseline: the QP motion along the path and the pseudo-inverse one.
+        preparation: the self-motion before the path, or ``None`` (``prepare=0``).
+        frame: the path's frame (``"object"`` or ``"world"``).
+        start: the posture both runs set out from, in words.
+    """
+
+    team: Team
+    objective: Objective
+    motion: TeamCarryRun
+    baseline: TeamCarryRun
+    preparation: TeamCarryRun | None = None
+    frame: str = "object"
+    start: str = "the team's posture"
+
+    @property
+    def task(self) -> str:
+        return self.team.task
+
+    def robots(self) -> tuple[str, ...]:
+        return tuple(m.name for m in self.team.members)
+
+    def slip(self, run: TeamCarryRun) -> float:
+        """The largest lateral slip of any platform along a run (m/s)."""
+        values = [np.abs(lateral_slip(m.robot, run.t, q)) for m, q in zip(self.team.members, run.q)]
+        return float(max((v.max() for v in values if v.size), default=0.0))
+
+    def hand_positions(self, run: TeamCarryRun) -> np.ndarray:
+        """Every grasping hand's world position along a run (m), (N, n_hands, 3), by forward kinematics."""
+        return np.array(
+            [[h.translation for h in _hand_poses(self.team, [q[k] for q in run.q])] for k in range(len(run.t))]
+        )
+
+    def platform_distance(self, run: TeamCarryRun) -> float | None:
+        """The smallest distance between two platforms' reference points along a run (m); the QP
+        does not keep robots apart (no collision rows), this says how close they came. ``None``
+        for a team of one robot."""
+        points = []
+        for member, q in zip(self.team.members, run.q):
+            root = member.robot.model.joints[1]
+            points.append(q[:, root.idx_q : root.idx_q + 2])
+        best = math.inf
+        for i in range(len(points)):
+            for j in range(i + 1, len(points)):
+                best = min(best, float(np.min(np.linalg.norm(points[i] - points[j], axis=1))))
+        return best if math.isfinite(best) else None
+
+    def limits_kept(self, run: TeamCarryRun) -> tuple[float, int]:
+        """(largest reduced velocity over its limit, samples with a joint beyond its position
+        range) along a run, over every robot (the baseline has no limits and may break them)."""
+        share, beyond = 0.0, np.zeros(len(run.t), dtype=bool)
+        for member, q, x in zip(self.team.members, run.q, run.x):
+            robot = member.robot
+            if x.size:
+                share = max(share, float(np.max(np.abs(x) / np.asarray(robot.velocity_limits, dtype=float))))
+            model = robot.model
+            for joint in model.joints[1:]:
+                if joint.nq == 1:
+                    values = q[:, joint.idx_q]
+                    lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+                    beyond |= (values < lower - 1e-9) | (values > upper + 1e-9)
+        return share, int(beyond.sum())
+
+    def summary(self) -> dict:
+        """Minimum capacities, their ratio, tracking, slip, strain and effort figures (JSON-ready)."""
+        out: dict[str, Any] = {
+            "team": self.team.name,
+            "robots": list(self.robots()),
+            "objective": self.objective.name,
+            "task": self.task,
+            "path_frame": self.frame,
+        }
+        runs = [self.motion, self.baseline] + ([self.preparation] if self.preparation is not None else [])
+        for run in runs:
+            out[run.method] = {
+                "min_capacity": float(run.capacity.min()),
+                "mean_capacity": float(run.capacity.mean()),
+                "max_tracking_error": float(run.tracking_error.max()),
+                "max_hand_error": float(run.hand_error.max()),
+                "max_turn_error": float(run.turn_error.max()),
+                "max_grasp_strain": float(run.grasp_strain.max()),
+                "max_lateral_slip": self.slip(run),
+                "max_effort_share": float(run.effort.max()) if run.effort.size else 0.0,
+                "max_velocity_share": self.limits_kept(run)[0],
+                "samples_beyond_a_joint_range": self.limits_kept(run)[1],
+                "min_platform_distance": self.platform_distance(run),
+                "seconds": float(run.t[-1] - run.t[0]),
+            }
+        out["pinv"]["start"] = {"posture": self.start, "capacity": float(self.baseline.capacity[0])}
+        posture = self.start if self.preparation is None else f"the end of a self-motion from {self.start}"
+        out["qp"]["start"] = {"posture": posture, "capacity": float(self.motion.capacity[0])}
+        base = self.baseline.capacity.min()
+        out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
+        out["internal_forces"] = (
+            "the load is shared by the least-norm hand wrenches (no internal force in the model); "
+            "max_grasp_strain is the hands' disagreement with the rigid grasp that would load the object"
+        )
+        return out
+
+
+class _Targets:
+    """Every hand's target pose along the path (see the module's docstring)."""
+
+    def __init__(self, team: Team, qs: Sequence[np.ndarray], path: ObjectPath, times: np.ndarray, frame: str):
+        self.hands: list[pin.SE3] = []
+        for member, q in zip(team.members, qs):
+            robot = member.robot
+            pin.framesForwardKinematics(robot.model, robot.data, q)
+            self.hands.extend(robot.data.oMf[robot.arms[a].frame_id].copy() for a in member.arms)
+        self.center0 = np.asarray(team.held_object.center, dtype=float)
+        shift, self.turn = path.sample(times)
+        if frame == "object":
+            c, s = math.cos(team.object_yaw), math.sin(team.object_yaw)
+            shift = shift @ np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        self.shift = shift
+        self.offsets0 = np.array([h.translation for h in self.hands]) - self.center0
+        self.inertia0 = team.held_object.inertia
+        self.mass = team.held_object.mass
+
+    def rotation(self, k: int) -> np.ndarray:
+        return pin.rpy.rpyToMatrix(0.0, 0.0, float(self.turn[k]))
+
+    def hand(self, k: int, i: int) -> pin.SE3:
+        R = self.rotation(k)
+        start = self.hands[i]
+        return pin.SE3(R @ start.rotation, self.center0 + self.shift[k] + R @ self.offsets0[i])
+
+    def held(self, k: int) -> HeldObject:
+        """The object where the path has it at step k, its grasp offsets turned with it."""
+        R = self.rotation(k)
+        return HeldObject(self.mass, R @ self.inertia0 @ R.T, self.center0 + self.shift[k], self.offsets0 @ R.T)
+
+
+def _hand_poses(team: Team, qs: Sequence[np.ndarray]) -> list[pin.SE3]:
+    """Every grasping hand's pose (frame placements of each robot's data updated)."""
+    out: list[pin.SE3] = []
+    for member, q in zip(team.members, qs):
+        robot = member.robot
+        pin.framesForwardKinematics(robot.model, robot.data, q)
+        out.extend(robot.data.oMf[robot.arms[a].frame_id].copy() for a in member.arms)
+    return out
+
+
+def _jacobian(team: Team, qs: Sequence[np.ndarray], rows: list[int]) -> np.ndarray:
+    """J = blkdiag(J_i S_i) over each robot's grasping hands' task rows."""
+    blocks = []
+    for member, q in zip(team.members, qs):
+        robot = member.robot
+        model, data = robot.model, robot.data
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        J = np.vstack(
+            [
+                pin.getFrameJacobian(model, data, robot.arms[a].frame_id, pin.LOCAL_WORLD_ALIGNED)[rows]
+                for a in member.arms
+            ]
+        )
+        blocks.append(J @ robot.null_space(q))
+    return scipy.linalg.block_diag(*blocks)
+
+
+def _errors(hands: list[pin.SE3], targets: _Targets, k: int, start: np.ndarray) -> tuple[float, float, float, float]:
+    """(centroid error, largest hand error, largest orientation error, largest strain)."""
+    goals = [targets.hand(k, i) for i in range(len(hands))]
+    p = np.array([h.translation for h in hands])
+    g = np.array([h.translation for h in goals])
+    hand = float(np.max(np.linalg.norm(p - g, axis=1)))
+    turn = max(float(np.linalg.norm(pin.log3(goal.rotation @ h.rotation.T))) for h, goal in zip(hands, goals))
+    distances = np.linalg.norm(p[:, None] - p[None], axis=2)
+    strain = float(np.max(np.abs(distances - start))) if len(p) > 1 else 0.0
+    return float(np.linalg.norm(p.mean(axis=0) - g.mean(axis=0))), hand, turn, strain
+
+
+class _Problem:
+    """What every run of one team shares: its capacity, limits and names."""
+
+    def __init__(self, team: Team, objective: Objective):
+        self.team = team
+        self.task = get_task(team.task)
+        self.rows = list(self.task.rows)
+        self.capacity = TeamCapacity(team, objective)
+        self.slices = team.member_slices()
+        robots = [m.robot for m in team.members]
+        self.D2 = np.concatenate([np.asarray(r.velocity_limits, dtype=float) for r in robots]) ** 2
+        self.effort_limits = np.concatenate([np.asarray(r.effort_limits, dtype=float) for r in robots])
+        self.names = [f"{m.name}/{n}" for m in team.members for n in m.robot.reduced_velocity_names]
+
+    def bounds(self, qs: Sequence[np.ndarray], h: float) -> tuple[np.ndarray, np.ndarray]:
+        pairs = [velocity_bounds(m.robot, q, h) for m, q in zip(self.team.members, qs)]
+        return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
+
+    def joint_positions(self, qs: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+        """Each reduced velocity's joint position and limits (NaN for wheels) and units."""
+        pos, low, up, units = [], [], [], []
+        for member, q in zip(self.team.members, qs):
+            robot = member.robot
+            model = robot.model
+            S = robot.null_space(q)
+            for k in range(robot.nx):
+                v = int(np.flatnonzero(S[:, k])[0])
+                joint = next(j for j in model.joints[1:] if j.idx_v <= v < j.idx_v + j.nv)
+                wheel = k < robot.platform.n_reduced or joint.nq != 1
+                prismatic = not wheel and "P" in joint.shortname().replace("Planar", "")
+                units.append(("m/s", "N") if prismatic else ("rad/s", "N m"))
+                pos.append(np.nan if wheel else q[joint.idx_q])
+                low.append(np.nan if wheel else model.lowerPositionLimit[joint.idx_q])
+                up.append(np.nan if wheel else model.upperPositionLimit[joint.idx_q])
+        return np.array(pos), np.array(low), np.array(up), units
+
+
+def _run(
+    problem: _Problem,
+    qs0: Sequence[np.ndarray],
+    path: ObjectPath,
+    frame: str,
+    dt: float,
+    method: str,
+    gain: float,
+    weight: float | None = None,
+    converge: bool = False,
+    x_start: np.ndarray | None = None,
+) -> tuple[TeamCarryRun, float]:
+    """One motion of the team along ``path`` from ``qs0``; returns it and the capacity term's weight."""
+    team = problem.team
+    n = int(math.floor((path.t[-1] - path.t[0]) / dt + 1e-9)) + 1
+    times = np.round(path.t[0] + dt * np.arange(n), TIME_DECIMALS)
+    if times[-1] < path.t[-1] - 1e-12:
+        times = np.append(times, path.t[-1])
+        n += 1
+    targets = _Targets(team, qs0, path, times, frame)
+    nx = team.nx
+    H = np.diag(1.0 / problem.D2)
+    Q = [np.zeros((n, m.robot.model.nq)) for m in team.members]
+    X = np.zeros((n - 1, nx))
+    capacity, track, hand, turn, strain = (np.zeros(n) for _ in range(5))
+    effort = np.zeros(max(n - 1, 0))
+    qs = [np.array(q, dtype=float) for q in qs0]
+    p0 = np.array([h.translation for h in _hand_poses(team, qs)])
+    start_distances = np.linalg.norm(p0[:, None] - p0[None], axis=2)
+    x_prev = np.zeros(nx) if x_start is None else np.asarray(x_start, dtype=float)
+    window = max(1, int(round(PREPARE_WINDOW / dt)))
+    platforms = PlatformTask(team, qs, targets.center0 + targets.shift, targets.turn) if method == "qp" else None
+
+    def partial(k: int) -> TeamCarryRun:
+        return TeamCarryRun(
+            method, times[: k + 1], tuple(q[: k + 1] for q in Q), tuple(X[:k, s] for s in problem.slices),
+            capacity[: k + 1], track[: k + 1], hand[: k + 1], turn[: k + 1], strain[: k + 1], effort[:k],
+        )  # fmt: skip
+
+    for k in range(n):
+        for i, q in enumerate(qs):
+            Q[i][k] = q
+        held = targets.held(k)
+        try:
+            if method == "pinv":
+                capacity[k], grad = problem.capacity.value(qs, held), None
+            else:
+                capacity[k], grad = problem.capacity.gradient(qs, held)
+        except MeasureError as exc:
+            raise MeasureError(f"{exc} at step {k} (t = {times[k]:g} s) of the team's {method} motion") from None
+        track[k], hand[k], turn[k], strain[k] = _errors(_hand_poses(team, qs), targets, k, start_distances)
+        if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
+            n = k + 1
+            break
+        if k == n - 1:
+            break
+        h = float(times[k + 1] - times[k])
+        J = _jacobian(team, qs, problem.rows)  # also updates the frame placements
+        hands = _hand_poses(team, qs)
+        b = (
+            np.concatenate(
+                [
+                    np.concatenate([g.translation - now.translation, pin.log3(g.rotation @ now.rotation.T)])[
+                        problem.rows
+                    ]
+                    for now, g in ((now, targets.hand(k + 1, i)) for i, now in enumerate(hands))
+                ]
+            )
+            / h
+        )
+        A, offset = team_effort_map(team, qs, x_prev, h, problem.task, held)
+        if method == "pinv":
+            D2 = problem.D2
+            x = D2 * (J.T @ np.linalg.solve((J * D2) @ J.T, b))
+        else:
+            assert grad is not None
+            if weight is None:
+                norm = float(np.linalg.norm(np.sqrt(problem.D2) * grad))
+                weight = gain / norm if norm > 0 else 0.0
+            lo, hi = problem.bounds(qs, h)
+            G, g_hi = effort_rows(A, offset, problem.effort_limits)
+            H_k, c_k = H, -weight * grad
+            if platforms is not None:
+                H_p, c_p = platforms.cost(qs, k, h)
+                H_k, c_k = H + H_p, c_k + c_p
+            x = solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi)
+            if x is None:
+                pos, low, up, units = problem.joint_positions(qs)
+                diagnosis = diagnose_team_step(
+                    problem.names, units, H, J, b, lo, hi, np.sqrt(problem.D2), A, offset, problem.effort_limits,
+                    pos, (low, up), k, float(times[k]),
+                )  # fmt: skip
+                raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis, partial(k))
+        X[k] = x
+        effort[k] = float(np.max(np.abs(A @ x + offset) / problem.effort_limits))
+        x_prev = x
+        qs = [
+            tangent_integrate(m.robot.model, q, m.robot.null_space(q) @ x[s] * h)
+            for m, q, s in zip(team.members, qs, problem.slices)
+        ]
+    return partial(n - 1), (0.0 if weight is None else weight)
+
+
+def team_carry(
+    team: Team,
+    path: ObjectPath,
+    objective: Objective | str | None = None,
+    *,
+    frame: str = "object",
+    step: float = DEFAULT_STEP,
+    gain: float = DEFAULT_GAIN,
+    prepare: float = DEFAULT_PREPARE,
+) -> TeamCarryResult:
+    """Synthesise the team's capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
+
+    Args:
+        team: the team, its robots in their start configurations (``Member.q``), every robot's
+            platform S independent of q (as for ``carry``).
+        path: the object's path, relative to where the team holds it at the start.
+        objective: what to maximise (``ELLIPSOID:INDEX[:DIRECTION]`` or an :class:`Objective`),
+            of the team's set; default ``kinematic:minor_axis``.
+        frame: ``"object"`` (the path's x along the object's start heading) or ``"world"``.
+        step: time step (s); gain: the capacity term's share of the velocity limits at the
+            first step; prepare: longest self-motion before the path (s), 0 for none.
+
+    Raises:
+        ArgumentError: a bad step, gain, prepare, frame or path.
+        MeasureError: the objective is not defined along a motion.
+        CarryFailed: the QP has no solution at some step; the error names the binding limit
+            (``"robot/joint"``) and holds the part of the motion that succeeded.
+    """
+    if not (isinstance(step, (int, float)) and math.isfinite(step) and 0.0 < step <= 1.0):
+        raise ArgumentError(f"step must be a time in (0, 1] s, got {step!r}")
+    if not (isinstance(gain, (int, float)) and math.isfinite(gain) and gain >= 0.0):
+        raise ArgumentError(f"gain must be a finite non-negative number, got {gain!r}")
+    if not (isinstance(prepare, (int, float)) and math.isfinite(prepare) and prepare >= 0.0):
+        raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
+    if frame not in FRAMES:
+        raise ArgumentError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+    if not isinstance(path, ObjectPath):
+        raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
+    if not isinstance(team, Team):
+        raise ArgumentError(f"team must be a Team, got {type(team).__name__}")
+    if objective is None or isinstance(objective, str):
+        objective = Objective.parse(objective or "kinematic:minor_axis", team.task)
+    problem = _Problem(team, objective)
+    q0 = [m.robot.check_configuration(m.q) for m in team.members]
+    step, gain = float(step), float(gain)
+    preparation, weight, q_path, x_start = None, None, q0, None
+    if prepare > 0.0 and gain > 0.0:
+        still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
+        run, weight = _run(problem, q0, still, frame, step, "self-motion", gain, converge=True)
+        preparation = run.shifted(path.t[0] - run.t[-1])
+        q_path = [q[-1] for q in preparation.q]
+        x_start = np.concatenate([x[-1] for x in preparation.x]) if len(preparation.t) > 1 else None
+    try:
+        motion, _ = _run(problem, q_path, path, frame, step, "qp", gain, weight=weight, x_start=x_start)
+    except CarryFailed as exc:
+        exc.preparation = preparation
+        raise
+    baseline, _ = _run(problem, q0, path, frame, step, "pinv", 0.0)
+    return TeamCarryResult(team, objective, motion, baseline, preparation, frame)
