@@ -177,6 +177,7 @@ def _run(args, executor) -> int:
     joints = robot.configuration_dict(result.q)["joints"]
     print("joints: " + ", ".join(f"{name} {value:.4f}" for name, value in joints.items()))
     print(f"{result.objective.name} = {result.value:.6g}")
+    _warn_if_collapsed(robot, result, args)
     if result.start_value is not None:
         print(f"best start (reference hold placed at the object): {result.start_value:.6g}")
     print(
@@ -297,6 +298,23 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference, e
         f"(place: {result.value:.6g}); {grid.evaluations} evaluations, {grid.seconds:.2f} s"
     )
     print(f"wrote {', '.join(str(path) for path in written)}")
+
+
+def _warn_if_collapsed(robot, result, args) -> None:
+    """One line on standard error when the optimum's set has collapsed (a singular posture): its
+    value then says little about the directions the objective does not look along."""
+    import sys
+
+    from ..analysis.single import analyze
+    from ..measures import get_measure
+    from ..support.notices import notice
+    from ..viz.placement import collapsed_note
+
+    analysis = analyze(robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled)
+    name = result.objective.ellipsoid
+    note = collapsed_note(analysis.measure(name), get_measure(name).quantity.units_for(analysis.task))  # type: ignore[arg-type]
+    if note is not None:
+        notice(f"at the optimum, {note}", stream=sys.stderr)
 
 
 def _show(args, robot, result) -> None:
