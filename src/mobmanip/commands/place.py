@@ -13,7 +13,9 @@ objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX on
   log_isotropy  log of the geometric over the arithmetic mean of the squared semi-axes (0: a ball)
   capacity      how far the set reaches along DIRECTION (from the origin: gravity's shift counts)
   minor_axis    the smallest semi-axis (worst-direction capacity about the centre)
-DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0).
+DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0). ELLIPSOID:INDEX:linear
+(or :angular) takes the index of the set's shadow on the task's linear (angular) rows, one unit,
+as `analyze` reports per block: dynamic:minor_axis:linear on a spatial task.
 
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
