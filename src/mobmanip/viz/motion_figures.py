@@ -82,7 +82,7 @@ def carry_figure(result: CarryResult, robot_name: str | None = None) -> Figure:
     if prep is not None:
         ax.plot(prep.t, prep.capacity, color="0.5", label="self-motion before the path (object held still)")
     ax.plot(motion.t, motion.capacity, label="QP with capacity term")
-    ax.plot(base.t, base.capacity, label="weighted pseudo-inverse from the given start")
+    ax.plot(base.t, base.capacity, label="weighted pseudo-inverse from the start posture")
     prepared = getattr(result, "prepared_baseline", None)
     if prepared is not None:
         ax.plot(prepared.t, prepared.capacity, "--", label="weighted pseudo-inverse from the QP's prepared start")

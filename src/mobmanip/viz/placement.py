@@ -22,22 +22,21 @@ if TYPE_CHECKING:
     from ..placement.optimize import Placement
 
 
-#: Below this ratio of the smallest to the largest semi-axis an objective's set counts as collapsed.
-COLLAPSED_RATIO = 1e-3
-
-
 def collapsed_note(ellipsoid: Ellipsoid, unit: str) -> str | None:
     """Why an objective's ellipsoid has collapsed (empty, or its smallest semi-axis below
-    :data:`COLLAPSED_RATIO` times its largest: a singular posture), or ``None``."""
+    :data:`mobmanip.analysis.plausibility.COLLAPSED_RATIO` times its largest: a singular
+    posture), or ``None``."""
+    from ..analysis.plausibility import collapsed
+
     if ellipsoid.empty:
         return "the set is empty: the limits cannot hold the load still"
+    if not collapsed(ellipsoid):
+        return None
     semi = np.asarray(ellipsoid.semi_axes, dtype=float)
-    if semi[0] <= 0.0 or semi[-1] < COLLAPSED_RATIO * semi[0]:
-        return (
-            f"the set has collapsed: smallest semi-axis {semi[-1]:.2g} {unit} against a largest of "
-            f"{semi[0]:.3g} {unit} (a singular posture)"
-        )
-    return None
+    return (
+        f"the set has collapsed: smallest semi-axis {semi[-1]:.2g} {unit} against a largest of "
+        f"{semi[0]:.3g} {unit} (a singular posture)"
+    )
 
 
 def _vertical(objective, task: str) -> bool:
