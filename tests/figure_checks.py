@@ -76,6 +76,9 @@ def check_paper_ready(fig: Figure, name: str = "figure") -> None:
     for ax in fig.axes:
         if is_colorbar(ax):
             check_label(ax.get_ylabel() or ax.get_xlabel(), f"{name}: colour bar")
+            bar = ax.get_window_extent(renderer)
+            for data in data_axes:  # no panel's tick labels or axis labels run under the colour bar
+                assert not data.get_tightbbox(renderer).overlaps(bar), f"{name}: a panel runs under the colour bar"
     for legend in legends(fig):
         box = legend.get_window_extent(renderer)
         for ax in data_axes:

@@ -167,7 +167,7 @@ def sweep_plot_figure(result: SweepResult, index: str, max_panels: int = 6) -> F
             caption = f"{AXIS_LABELS[AXES[panel_axis]]} = {getattr(grid, AXES[panel_axis])[pick]:g}"
             ax.set_title(caption, fontsize=9, pad=16 if polar else 6)
     if mesh is not None:
-        fig.colorbar(mesh, ax=fig.axes, label=label, shrink=0.8)
+        fig.colorbar(mesh, ax=fig.axes, label=label, shrink=0.8, pad=0.12 if polar else 0.05)
     fixed = [
         f"{AXIS_LABELS[AXES[i]]} {getattr(grid, AXES[i])[0]:g}"
         for i in range(5)
