@@ -74,6 +74,8 @@ PUBLIC_MODULES = [
     "mobmanip.support.tolerances",
     "mobmanip.viz.sweep_plot",
     "mobmanip.viz.team_figure",
+    "mobmanip.viz.labels",
+    "mobmanip.viz.nesting",
     "mobmanip.robot.support",
     "mobmanip.robot.support_spec",
     "mobmanip.terms.constraints.base",

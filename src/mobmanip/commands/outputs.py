@@ -203,7 +203,7 @@ def trajectory_outputs(
     write_json(paths[1], document)
     fig = trajectory_figure(result)
     try:
-        save_figure(fig, paths[2], dpi=100)
+        save_figure(fig, paths[2], dpi=100, bbox_inches="tight")
     finally:
         _close(fig)
     return [str(p) for p in paths]
@@ -268,9 +268,9 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
         write_trajectory_csv(
             robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
         )
-    fig = carry_figure(result)
+    fig = carry_figure(result, robot.name)
     try:
-        save_figure(fig, paths[3], dpi=100)
+        save_figure(fig, paths[3], dpi=100, bbox_inches="tight")
     finally:
         _close(fig)
     return [str(p) for p in paths]

@@ -13,7 +13,9 @@ objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX on
   log_isotropy  log of the geometric over the arithmetic mean of the squared semi-axes (0: a ball)
   capacity      how far the set reaches along DIRECTION (from the origin: gravity's shift counts)
   minor_axis    the smallest semi-axis (worst-direction capacity about the centre)
-DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0).
+DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0). ELLIPSOID:INDEX:linear
+(or :angular) takes the index of the set's shadow on the task's linear (angular) rows, one unit,
+as `analyze` reports per block: dynamic:minor_axis:linear on a spatial task.
 
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
@@ -177,6 +179,7 @@ def _run(args, executor) -> int:
     joints = robot.configuration_dict(result.q)["joints"]
     print("joints: " + ", ".join(f"{name} {value:.4f}" for name, value in joints.items()))
     print(f"{result.objective.name} = {result.value:.6g}")
+    _warn_if_collapsed(robot, result, args)
     if result.start_value is not None:
         print(f"best start (reference hold placed at the object): {result.start_value:.6g}")
     print(
@@ -297,6 +300,23 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference, e
         f"(place: {result.value:.6g}); {grid.evaluations} evaluations, {grid.seconds:.2f} s"
     )
     print(f"wrote {', '.join(str(path) for path in written)}")
+
+
+def _warn_if_collapsed(robot, result, args) -> None:
+    """One line on standard error when the optimum's set has collapsed (a singular posture): its
+    value then says little about the directions the objective does not look along."""
+    import sys
+
+    from ..analysis.single import analyze
+    from ..measures import get_measure
+    from ..support.notices import notice
+    from ..viz.placement import collapsed_note
+
+    analysis = analyze(robot, result.q, args.task, object_mass=args.mass, decoupled=args.decoupled)
+    name = result.objective.ellipsoid
+    note = collapsed_note(analysis.measure(name), get_measure(name).quantity.units_for(analysis.task))  # type: ignore[arg-type]
+    if note is not None:
+        notice(f"at the optimum, {note}", stream=sys.stderr)
 
 
 def _show(args, robot, result) -> None:

@@ -42,7 +42,7 @@ tracked every 0.02 s asked for an impulse of acceleration at each sample and non
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -238,6 +238,13 @@ class CarryResult:
             configuration (time stamps ending at the path's start), or ``None`` when the motion
             starts from the start posture (``prepare=0``).
         start: which start posture both runs set out from, in words.
+        prepared_baseline: the pseudo-inverse baseline from the QP's prepared start (the end of
+            the self-motion), or ``None`` without a self-motion: with it the gain splits into
+            what the preparation gives and what the motion gives (:meth:`summary`).
+        collapsed: per run (``"qp"``, ``"pinv"``, ``"pinv_prepared"``), the objective's set at
+            the run's minimum as its smallest and largest semi-axes when it has collapsed there
+            (:func:`mobmanip.analysis.plausibility.collapsed`: a singular posture); a ratio to
+            that minimum is not reported.
     """
 
     objective: Objective
@@ -246,6 +253,8 @@ class CarryResult:
     baseline: CarryRun
     preparation: CarryRun | None = None
     start: str = "the given start configuration"
+    prepared_baseline: CarryRun | None = None
+    collapsed: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def starts(self) -> dict:
         """What each run started from, in words and numbers (JSON-ready)."""
@@ -268,10 +277,22 @@ class CarryResult:
         return {"qp": qp, "pinv": base}
 
     def summary(self) -> dict:
-        """Minimum capacities, their ratio, tracking and limit figures (JSON-ready)."""
+        """Minimum capacities, their ratios, tracking and limit figures (JSON-ready).
+
+        ``min_capacity_ratio`` is the QP's minimum over the baseline's from the start posture;
+        with a self-motion, ``ratio_parts`` splits it: ``preparation`` (the baseline from the
+        QP's prepared start over the baseline from the start posture: what starting from a better
+        posture gives) and ``motion`` (the QP over the baseline from the prepared start: what the
+        capacity term gives along the path); their product is the whole ratio. A ratio whose
+        denominator's set has collapsed (a singular posture) is ``None`` and ``collapsed`` says
+        which run and its semi-axes there.
+        """
         out: dict[str, Any] = {"objective": self.objective.name, "task": self.task}
-        for run in (self.motion, self.baseline):
-            out[run.method] = {
+        runs = {"qp": self.motion, "pinv": self.baseline}
+        if self.prepared_baseline is not None:
+            runs["pinv_prepared"] = self.prepared_baseline
+        for key, run in runs.items():
+            out[key] = {
                 "min_capacity": float(run.capacity.min()),
                 "mean_capacity": float(run.capacity.mean()),
                 "max_tracking_error": float(run.tracking_error.max()),
@@ -279,8 +300,21 @@ class CarryResult:
             }
         for method, start in self.starts().items():
             out[method]["start"] = start
-        base = self.baseline.capacity.min()
-        out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
+        if self.prepared_baseline is not None:
+            out["pinv_prepared"]["start"] = dict(out["qp"]["start"])
+
+        def ratio(top: str, bottom: str) -> float | None:
+            low = runs[bottom].capacity.min()
+            if low <= 0 or bottom in self.collapsed:
+                return None
+            return float(runs[top].capacity.min() / low)
+
+        out["min_capacity_ratio"] = ratio("qp", "pinv")
+        if self.prepared_baseline is not None:
+            out["ratio_parts"] = {"preparation": ratio("pinv_prepared", "pinv"), "motion": ratio("qp", "pinv_prepared")}
+        out["collapsed"] = {
+            key: {"smallest_semi_axis": a, "largest_semi_axis": b} for key, (a, b) in self.collapsed.items()
+        }
         return out
 
 
@@ -486,4 +520,30 @@ def carry(
             exc.preparation = preparation
         raise
     baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
-    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
+    prepared = None
+    if preparation is not None:  # the same baseline from the QP's prepared start
+        prepared, _ = _run(robot, q_path, path, evaluator, task, step, "pinv", 0.0)
+    runs = {"qp": motion, "pinv": baseline} | ({} if prepared is None else {"pinv_prepared": prepared})
+    found = {
+        key: _collapsed_at_minimum(robot, run, evaluator.objective, task.name, object_mass) for key, run in runs.items()
+    }
+    collapsed = {key: value for key, value in found.items() if value is not None}
+    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label, prepared, collapsed)
+
+
+def _collapsed_at_minimum(
+    robot: Robot, run: CarryRun, objective: Objective, task: str, object_mass: float | None
+) -> tuple[float, float] | None:
+    """(smallest, largest semi-axis) of the objective's set (its block's shadow for a block
+    objective) at the run's minimum, when it has collapsed there; else ``None``."""
+    from ..analysis.plausibility import collapsed
+    from ..analysis.single import analyze
+
+    q = run.q[int(np.argmin(run.capacity))]
+    task_set = analyze(robot, q, task, object_mass=object_mass).measure(objective.ellipsoid)
+    if objective.rows is not None:
+        task_set = task_set.project(objective.rows)
+    if not collapsed(task_set):
+        return None
+    semi = np.asarray(getattr(task_set, "semi_axes", [0.0]), dtype=float)
+    return float(semi[-1]), float(semi[0])
