@@ -32,6 +32,7 @@ COVERED = {
     "trajectory_figure": "test_trajectory_figure_of_a_planar_task",
     "team_figure": "test_team_figure",
     "plot_site": "test_site_figure",
+    "team_carry_figure": "test_team_carry.py (test_team_carry_figures_meet_the_paper_figures_standard)",
 }
 
 

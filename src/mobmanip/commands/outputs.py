@@ -338,8 +338,7 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
     if prep is not None:
         files["preparation"] = {m.name: p.name for m, p in zip(team.members, paths["preparation"])}
     write_json(summary, {**result.summary(), "files": files})
-    for draw, path in ((carry_figure, figure), (team_carry_figure, top)):
-        fig = draw(result)
+    for fig, path in ((carry_figure(result, f"team {team.name}"), figure), (team_carry_figure(result), top)):
         try:
             save_figure(fig, path, dpi=100)
         finally:

@@ -102,7 +102,7 @@ def team_carry_figure(result: TeamCarryResult, poses: int = 7) -> Figure:
     baseline dashed) with its heading at ``poses`` instants, and the object (the segment through
     its farthest hands) at the same instants."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig, ax = plt.subplots(figsize=(7, 7.6), layout="constrained")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     runs = [(result.motion, "-", 1.0), (result.baseline, "--", 0.6)]
     for run, style, alpha in runs:
@@ -124,9 +124,9 @@ def team_carry_figure(result: TeamCarryResult, poses: int = 7) -> Figure:
                 ax.plot(points[[a, b], 0], points[[a, b], 1], color="0.2", lw=3, alpha=0.35 + 0.65 * k / len(hands),
                         label="object" if k == 0 else None)  # fmt: skip
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.legend(loc="best", fontsize=8)
-    ax.set_title(f"team {result.team.name}: platforms and object, top view")
-    fig.tight_layout()
+    ax.set_xlabel("$x$ (m)")
+    ax.set_ylabel("$y$ (m)")
+    ax.grid(True, lw=0.3)
+    fig.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
+    ax.set_title(f"team {result.team.name}: platforms and object, top view", fontsize=10)
     return fig
