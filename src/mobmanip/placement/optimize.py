@@ -158,6 +158,21 @@ class PlacementProblem:
         self.constraint_evaluations = 0
         self.rows = None
         self.rows = self._moving_rows()
+        #: Indices of the collision pairs kept as constraints: with the hands' poses held (the
+        #: object's orientation held by every hand), pairs of shapes on two different hands keep
+        #: their reference distance, so they are left out (the reference's touching pairs already
+        #: are): as constraints they only repeat the hold's, and SLSQP found them incompatible.
+        self.collision_rows = np.zeros(0, dtype=int)
+        if collision is not None:
+            hands = {self.model.frames[f].parentJoint for f in self.frames} if self.orientation else set()
+            self.collision_rows = np.array(
+                [
+                    k
+                    for k, pair in enumerate(collision.pairs)
+                    if not (set(pair.joints) <= hands and len(set(pair.joints)) == 2)
+                ],
+                dtype=int,
+            )
 
     def _moving_rows(self) -> np.ndarray:
         """Hold constraints that some variable can change: rows of the constraint Jacobian that
@@ -298,8 +313,9 @@ class PlacementProblem:
         """Signed distances minus the margin of the shape pairs that may meet, (P,) (to keep
         >= 0), and their Jacobian over z, (P, n)."""
         q = self.configuration(z)
-        d, G = self.collision._raw(q)  # q from the optimiser: finite, unit (cos, sin) by construction
-        return d - self.collision.margin, self._to_z(q, G)
+        d, G = self.collision.distances_unchecked(q)  # q from the optimiser: finite, unit (cos, sin) by construction
+        rows = self.collision_rows
+        return d[rows] - self.collision.margin, self._to_z(q, G[rows])
 
     # ----- starts -----
 
@@ -330,7 +346,7 @@ def slsqp_constraints(problem: PlacementProblem) -> list[dict]:
             "jac": lambda z: problem.constraints(z)[1],
         }
     ]
-    if problem.collision is not None and problem.collision.pairs:
+    if problem.collision is not None and problem.collision_rows.size:
         out.append(
             {"type": "ineq", "fun": lambda z: problem.clearances(z)[0], "jac": lambda z: problem.clearances(z)[1]}
         )
