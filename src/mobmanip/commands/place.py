@@ -186,6 +186,10 @@ def _run(args, executor) -> int:
     if collision is not None:
         print(f"self-collision: {len(collision.pairs)} shape pairs kept >= {collision.margin:g} m apart; "
               f"clearance {collision.clearance(result.q):.4f} m")  # fmt: skip
+        if collision.matrix is not None:
+            left_out = collision.left_out_clearance(result.q)
+            print(f"collision matrix: {collision.candidates - len(collision.pairs)} pairs left out "
+                  f"(clearance {left_out:.4f} m{'' if left_out >= collision.margin else ', BELOW the margin'})")  # fmt: skip
     if args.save_q:
         write_json(args.save_q, robot.configuration_dict(result.q))
         print(f"wrote {args.save_q}")

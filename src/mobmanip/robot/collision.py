@@ -101,9 +101,13 @@ class SelfCollision:
             matrix.check_fits(robot, self.geometry)
         #: The allowed-collision matrix used, or None.
         self.matrix = matrix
+        left_out: list[tuple[int, int]] = []
         if matrix is not None:
             disabled = matrix.disabled_for(self.margin)
+            left_out = [pair for pair in candidates if pair in disabled]
             candidates = [pair for pair in candidates if pair not in disabled]
+        #: The pairs the matrix left out, checked only by :meth:`left_out_clearance`.
+        self.left_out = PairDistances(self.model, self.geometry, left_out, self.activation)
         q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference)
         touching = PairDistances(self.model, self.geometry, candidates, self.activation).distances(q_ref, False)[0]
         kept = [pair for pair, d in zip(candidates, touching) if not d < self.margin]
@@ -124,6 +128,13 @@ class SelfCollision:
         (pairs at least that far apart count as that far), and their gradients in the tangent
         space, (P, nv) (zero where clipped)."""
         return self.distances_unchecked(self.robot.check_configuration(q))
+
+    def left_out_clearance(self, q: np.ndarray) -> float:
+        """The smallest signed distance over the pairs the matrix left out (m), clipped at
+        :attr:`activation`; inf without a matrix. Below the margin, the matrix's sampling missed
+        a configuration like q (regenerate it with more samples or a larger distance)."""
+        d, _ = self.left_out.distances(self.robot.check_configuration(q), gradients=False)
+        return float(d.min()) if d.size else float("inf")
 
     def clearance(self, q: np.ndarray) -> float:
         """The smallest signed distance over the pairs (m); inf without pairs."""

@@ -26,7 +26,7 @@ class PairDistances:
 
     Args:
         model: the kinematic model the geometry hangs on.
-        geometry: its shapes; its collision pairs are replaced by ``pairs``.
+        geometry: its shapes (copied: the copy's collision pairs are ``pairs``).
         pairs: (first, second) geometry indices.
         activation: the clip distance (m).
     """
@@ -34,6 +34,7 @@ class PairDistances:
     def __init__(
         self, model: pin.Model, geometry: pin.GeometryModel, pairs: Sequence[tuple[int, int]], activation: float
     ) -> None:
+        geometry = geometry.copy()
         self.model, self.geometry, self.activation = model, geometry, float(activation)
         geometry.removeAllCollisionPairs()
         for a, b in pairs:
@@ -149,7 +150,10 @@ def vertex_hull(convex):
     vertex: GJK returned distances up to 2e-5 m too large, changing in steps as the robot moved
     (finite differences of 1e3 m per rad), and SLSQP failed on them. On the rebuilt hull GJK
     agrees with a quadratic program over the vertices."""
-    import hppfcl
+    try:
+        import coal as hppfcl  # hpp-fcl's name from version 3 (Pinocchio 3.3 and later)
+    except ImportError:  # pragma: no cover - older Pinocchio
+        import hppfcl
 
     points = np.unique(np.asarray(convex.points(), dtype=float).reshape(-1, 3), axis=0)
     vertices = hppfcl.StdVec_Vec3s()
