@@ -5,6 +5,7 @@ computing their signed distances and gradients (Pinocchio + hpp-fcl), shared by
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -141,8 +142,9 @@ def candidate_pairs(robot: Robot, geometry: pin.GeometryModel) -> list[tuple[int
     return out
 
 
-def vertex_hull(convex):
-    """The convex hull of a hull's points, rebuilt by qhull: the same set, with only its vertices.
+def vertex_hull(convex: Any) -> Any:
+    """The convex hull of a hull's points (an hpp-fcl ``ConvexBase``), rebuilt by qhull: the same
+    set, with only its vertices.
 
     hpp-fcl's hull of a mesh (``buildConvexRepresentation``) keeps points that are not vertices
     (5,100 points for TIAGo++'s 64 meshes, 4,089 vertices); above 32 points its support function
