@@ -116,11 +116,18 @@ class PairDistances:
             N = np.array(normals)
             # velocity of a point p on joint j's body: (J_lin + omega x p) on the columns moving j;
             # n . (omega x p) = (p x n) . omega
-            linear = N @ J[:3]
-            second = (linear + np.cross(np.array(points2), N) @ J[3:]) * self._moves[self._joint_second[index]]
-            first = (linear + np.cross(np.array(points1), N) @ J[3:]) * self._moves[self._joint_first[index]]
+            # (K, 3) x (3, nv) products as three broadcast terms: a threaded BLAS call here cost
+            # five times the whole placement on a busy machine
+            linear = _times(N, J[:3])
+            second = (linear + _times(np.cross(np.array(points2), N), J[3:])) * self._moves[self._joint_second[index]]
+            first = (linear + _times(np.cross(np.array(points1), N), J[3:])) * self._moves[self._joint_first[index]]
             G[index] = second - first
         return d, G
+
+
+def _times(rows: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """rows @ matrix for (K, 3) rows and a (3, n) matrix, without BLAS."""
+    return rows[:, 0:1] * matrix[0] + rows[:, 1:2] * matrix[1] + rows[:, 2:3] * matrix[2]
 
 
 def candidate_pairs(robot: Robot, geometry: pin.GeometryModel) -> list[tuple[int, int]]:
