@@ -22,6 +22,7 @@ Usage::
     python scripts/benchmark.py            # full run (a few minutes)
     python scripts/benchmark.py --quick    # smoke run (seconds)
     python scripts/benchmark.py --polytopes [--quick]   # the capacity polytopes instead
+    python scripts/benchmark.py --decisions [--quick]   # decisions beside the code they replace
 """
 
 from __future__ import annotations
@@ -200,6 +201,11 @@ def main(argv=None) -> int:
         "--polytopes", action="store_true", help="only the capacity polytopes (scripts/benchmark_polytopes.py)"
     )
     parser.add_argument("--floor", action="store_true", help="only the grounded capacity (scripts/benchmark_floor.py)")
+    parser.add_argument(
+        "--decisions",
+        action="store_true",
+        help="decisions beside the code they replace, on one run (scripts/benchmark_decisions.py)",
+    )
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
@@ -208,6 +214,10 @@ def main(argv=None) -> int:
         from benchmark_polytopes import run
 
         return run(quick=args.quick)
+    if args.decisions:
+        from benchmark_decisions import run as run_decisions
+
+        return run_decisions(quick=args.quick, rounds=args.rounds)
     if args.floor:
         from benchmark_floor import run as run_floor
 

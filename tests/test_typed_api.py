@@ -58,6 +58,8 @@ PUBLIC_MODULES = [
     "mobmanip.motion.carry",
     "mobmanip.placement.maps",
     "mobmanip.robot.collision",
+    "mobmanip.robot.collision_matrix",
+    "mobmanip.robot.shape_pairs",
     "mobmanip.viz.placement",
     "mobmanip.viz.motion_figures",
     "mobmanip.commands.outputs",

@@ -20,8 +20,10 @@ as `analyze` reports per block: dynamic:minor_axis:linear on a spatial task.
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
 platform origin in a rectangle. --avoid-collision M keeps the shapes that may meet at least M
-metres apart (pairs touching in the reference posture, such as hands meeting at the object,
-excepted); without it self-collision is not checked.
+metres apart (excepted: pairs touching in the reference posture, such as hands meeting at the
+object; pairs on two hands that hold the object's orientation, whose distance the hold fixes; and
+pairs the robot's collision matrix leaves out, NAME.collision.json beside its spec, written by
+`mobmanip collision-matrix`); without it self-collision is not checked.
 
 --object-yaw fixes the object's orientation: the hold turned by YAW degrees about the vertical
 from its reference posture's (default: free).
@@ -189,6 +191,10 @@ def _run(args, executor) -> int:
     if collision is not None:
         print(f"self-collision: {len(collision.pairs)} shape pairs kept >= {collision.margin:g} m apart; "
               f"clearance {collision.clearance(result.q):.4f} m")  # fmt: skip
+        if collision.matrix is not None:
+            left_out = collision.left_out_clearance(result.q)
+            print(f"collision matrix: {collision.left_out.first.size} pairs left out, their clearance "
+                  f"{left_out:.4f} m{'' if left_out >= collision.margin else ' (BELOW the margin)'}")  # fmt: skip
     if args.save_q:
         write_json(args.save_q, robot.configuration_dict(result.q))
         print(f"wrote {args.save_q}")
