@@ -40,12 +40,16 @@ class GroundAlong:
         margin: its signed distance to the support polygon's nearest edge (m), (N,).
         normal: the floor's total normal force (N), (N,) (0 or less: the robot leaves the floor).
         support: the contacts used.
+        force: the floor's resultant force on the robot and its object (N, world), (N, 3).
+        moment: its moment about the world origin (N m, world), (N, 3).
     """
 
     zmp: np.ndarray
     margin: np.ndarray
     normal: np.ndarray
     support: Support
+    force: np.ndarray | None = None
+    moment: np.ndarray | None = None
 
     def worst(self) -> int:
         """The sample with the smallest margin."""
@@ -81,6 +85,7 @@ def ground_along(
     mass = float(pin.computeTotalMass(model))
     n = len(trajectory)
     zmp, margin, normal = np.zeros((n, 2)), np.zeros(n), np.zeros(n)
+    forces, moments = np.zeros((n, 3)), np.zeros((n, 3))
     full = np.zeros((n, 6))
     full[:, list(task.rows)] = np.asarray(object_acceleration, dtype=float)
     z_floor = support.floor_z
@@ -102,6 +107,7 @@ def ground_along(
         if mass_o > 0.0:
             moment += HeldObject.between(placed_end_effectors(robot), mass_o).inertia @ full[i, 3:]
         normal[i] = force[2]
+        forces[i], moments[i] = force, moment
         if force[2] <= 1e-9:
             raise NumericalError(
                 f"at sample {i} (t = {trajectory.t[i]:.6g} s) the floor's normal force is {force[2]:.6g} N: "
@@ -111,4 +117,4 @@ def ground_along(
         x0, y0, c0, s0 = q[0], q[1], q[2], q[3]
         pose = (float(x0), float(y0), math.atan2(float(s0), float(c0)))
         margin[i] = polygon_margin(support.polygon(pose), zmp[i])
-    return GroundAlong(zmp, margin, normal, support)
+    return GroundAlong(zmp, margin, normal, support, forces, moments)
