@@ -54,6 +54,7 @@ from ..gradients.evaluator import GradientEvaluator, Objective
 from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from .carry_floor import CarryFloor, floor_binding, floor_rows, solve_with_floor
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
 from .carry_step import CarryDiagnosis as CarryDiagnosis
@@ -238,6 +239,7 @@ class CarryResult:
             configuration (time stamps ending at the path's start), or ``None`` when the motion
             starts from the start posture (``prepare=0``).
         start: which start posture both runs set out from, in words.
+        floor: the floor the QP motion kept (:meth:`CarryFloor.describe`), or ``None``.
     """
 
     objective: Objective
@@ -246,6 +248,7 @@ class CarryResult:
     baseline: CarryRun
     preparation: CarryRun | None = None
     start: str = "the given start configuration"
+    floor: dict | None = None
 
     def starts(self) -> dict:
         """What each run started from, in words and numbers (JSON-ready)."""
@@ -281,6 +284,8 @@ class CarryResult:
             out[method]["start"] = start
         base = self.baseline.capacity.min()
         out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
+        if self.floor is not None:
+            out["floor"] = self.floor
         return out
 
 
@@ -344,7 +349,19 @@ def _default_start_label(robot: Robot, q0: np.ndarray) -> str:
 
 
 def _run(
-    robot, q0, path, evaluator, task, dt, method, gain, weight=None, converge=False, object_mass=None, x_start=None
+    robot,
+    q0,
+    path,
+    evaluator,
+    task,
+    dt,
+    method,
+    gain,
+    weight=None,
+    converge=False,
+    object_mass=None,
+    x_start=None,
+    floor=None,
 ) -> tuple[CarryRun, float]:
     """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
     ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
@@ -367,6 +384,7 @@ def _run(
     x_prev = np.zeros(robot.nx) if x_start is None else np.asarray(x_start, dtype=float)
     effort_limits = np.asarray(robot.effort_limits, dtype=float)
     window = max(1, int(round(PREPARE_WINDOW / dt)))
+    resolved = None if floor is None or method == "pinv" else floor.resolve(robot)
     for k in range(n):
         qs[k] = q
         value, grad, ok = evaluator(q)
@@ -394,9 +412,20 @@ def _run(
                 weight = gain / norm if norm > 0 else 0.0
             lo, hi = _bounds(robot, q, h)
             G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
-            x = _solve_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+            if resolved is None:
+                x = _solve_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+            else:
+                floor_G, floor_g, labels = floor_rows(robot, q, x_prev, h, task, object_mass, floor, resolved)
+                x = solve_with_floor(_solve_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g)
             if x is None:
-                diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
+                binding = None
+                if resolved is not None:
+                    binding = floor_binding(_solve_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g,
+                                            labels)  # fmt: skip
+                if binding is not None:
+                    diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=True)
+                else:
+                    diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
                 partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
                                    hand[: k + 1])  # fmt: skip
                 raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)
@@ -427,6 +456,7 @@ def carry(
     step: float = DEFAULT_STEP,
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
+    floor: CarryFloor | None = None,
 ) -> CarryResult:
     """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -442,6 +472,10 @@ def carry(
         gain: the capacity term's share of the velocity limits at the first step.
         prepare: longest self-motion (s) before the path (module doc); 0: the QP motion
             starts from ``start`` like the baseline.
+        floor: keep the robot on its floor (:class:`mobmanip.motion.carry_floor.CarryFloor`): the
+            QP motion's (and the self-motion's) steps keep the zero-moment point inside the
+            support polygon with a margin, every support loaded and the driven wheels within
+            friction; the baseline does not.
 
     Raises:
         ArgumentError: a bad step, gain or prepare.
@@ -457,6 +491,8 @@ def carry(
         raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
     if not isinstance(path, ObjectPath):
         raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
+    if floor is not None and not isinstance(floor, CarryFloor):
+        raise ArgumentError(f"floor must be a CarryFloor, got {type(floor).__name__}")
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
     q0 = default_start(robot) if start is None else robot.check_configuration(start)
@@ -466,8 +502,9 @@ def carry(
     if prepare > 0.0 and gain > 0.0:
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
         preparation, weight = _run(
-            robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass
-        )
+            robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass,
+            floor=floor,
+        )  # fmt: skip
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
             preparation.method,
@@ -479,11 +516,12 @@ def carry(
     try:
         motion, _ = _run(
             robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass,
-            x_start=x_start,
+            x_start=x_start, floor=floor,
         )  # fmt: skip
     except CarryFailed as exc:
         if exc.partial.method == "qp":
             exc.preparation = preparation
         raise
     baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
-    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
+    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label,
+                       None if floor is None else floor.describe())  # fmt: skip
