@@ -62,6 +62,7 @@ class PolytopeObjective:
     reading: str
     direction: tuple[float, ...]
     text: str
+    direction_text: str = ""
 
     @property
     def name(self) -> str:
@@ -71,7 +72,7 @@ class PolytopeObjective:
     def surrogate(self) -> str:
         """Stage 1's ellipsoid objective: its capacity along the same direction."""
         ellipsoid = SURROGATES[get_measure(self.measure).quantity.name]
-        return f"{ellipsoid}:capacity:" + ",".join(repr(v) for v in self.direction)
+        return f"{ellipsoid}:capacity:" + (self.direction_text or ",".join(repr(v) for v in self.direction))
 
     @classmethod
     def parse(cls, text: str, task) -> PolytopeObjective:
@@ -100,7 +101,7 @@ class PolytopeObjective:
         unit = Objective.parse(f"dynamic:capacity:{direction}", task)  # its direction, checked and made unit
         unit.check_task(task)
         assert unit.direction is not None
-        return cls(measure, reading, unit.direction, str(text))
+        return cls(measure, reading, unit.direction, str(text), direction.strip())
 
 
 def is_polytope_objective(text: str) -> bool:
