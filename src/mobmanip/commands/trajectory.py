@@ -227,8 +227,14 @@ def run(args) -> int:
             f"smallest stability margin {ground.margin[k]:.4f} m{tipping} at sample {k} (t = {trajectory.t[k]:g} s), "
             f"zero-moment point ({ground.zmp[k, 0]:.3f}, {ground.zmp[k, 1]:.3f}) m"
         )
-        traction = traction_along(ground, trajectory, args.mu)
-        _report_traction(traction, trajectory)
+        from ..errors import SpecError
+
+        try:
+            traction = traction_along(ground, trajectory, args.mu)
+        except SpecError as exc:  # e.g. more than two driven wheels: the margin stands, the traction is left out
+            print(f"traction per wheel: not computed ({exc})")
+        else:
+            _report_traction(traction, trajectory)
     if args.out:
         for path in trajectory_outputs(robot, result, args.out, ground=ground, traction=traction):
             print(f"wrote {path}")
