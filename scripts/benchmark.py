@@ -200,6 +200,9 @@ def main(argv=None) -> int:
         "--polytopes", action="store_true", help="only the capacity polytopes (scripts/benchmark_polytopes.py)"
     )
     parser.add_argument("--floor", action="store_true", help="only the grounded capacity (scripts/benchmark_floor.py)")
+    parser.add_argument(
+        "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
+    )
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
@@ -212,6 +215,10 @@ def main(argv=None) -> int:
         from benchmark_floor import run as run_floor
 
         return run_floor(quick=args.quick)
+    if args.sweeps:
+        from benchmark_sweeps import run as run_sweeps
+
+        return run_sweeps(quick=args.quick)
     quick = args.quick
     rounds = args.rounds or (2 if quick else 7)
     n_single, n_batch = (200, 2000) if quick else (1000, 10000)

@@ -1,0 +1,123 @@
+"""Polytope sweeps: the compiled batch beside one polytope per configuration, in one run.
+
+Run as ``python scripts/benchmark.py --sweeps`` (one core: ``NUMBA_NUM_THREADS=1
+OPENBLAS_NUM_THREADS=1``). Prints:
+
+- per configuration (ms, median of interleaved rounds), a sweep of the paper robot
+  (``planar_dual_arm``, planar task) recording the kinematic and the exact dynamic polytope's
+  indices, in this process: with one :class:`~mobmanip.sets.polytope.Polytope` per configuration
+  (the path before the compiled batch) and with :mod:`mobmanip.sets.capacity_batch`, and their ratio;
+- a 10^5-point planar polytope sweep on the compiled path (target: at most 10 s on one core);
+- the compile time of the planar kernel, in a child process with an empty Numba cache.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from mobmanip.sets import capacity
+from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
+
+POLYTOPES = ("kinematic_polytope", "dynamic_polytope")
+
+
+def _grid(count: int) -> SweepGrid:
+    """About ``count`` reachable points of the paper robot: angles x distances (0.6 to 1.4 m)."""
+    distances = max(1, int(round(np.sqrt(count / 4.0))))
+    angles = max(1, count // distances)
+    return SweepGrid(
+        angle_deg=np.linspace(0.0, 360.0, angles, endpoint=False), distance=np.linspace(0.6, 1.4, distances)
+    )
+
+
+def _one_at_a_time():
+    """The sweep's polytope batch with one Polytope per configuration (the path before)."""
+    original = capacity.polytope_batch
+
+    def batch(kind, **terms):
+        return original(kind, compiled=False, **terms)
+
+    return original, batch
+
+
+def _timed(spec: SweepSpec, grid: SweepGrid, compiled: bool) -> float:
+    original, slow = _one_at_a_time()
+    capacity.polytope_batch = original if compiled else slow  # type: ignore[assignment]
+    try:
+        start = time.perf_counter()
+        result = run_sweep(spec, grid, workers=1)
+        seconds = time.perf_counter() - start
+    finally:
+        capacity.polytope_batch = original  # type: ignore[assignment]
+    return seconds / max(int(result.reachable.sum()), 1)
+
+
+_COMPILE_CHILD = """
+import time, numpy as np
+from mobmanip.sets import polygon_kernel
+G = np.random.default_rng(0).normal(size=(4, 4, 8))
+F = np.broadcast_to(np.vstack([np.eye(2), np.eye(2)]), (4, 4, 2))
+args = (F, np.zeros((4, 4)), G, np.zeros((4, 2)), np.zeros(4, dtype=bool))
+start = time.perf_counter(); polygon_kernel.polygons(*args); first = time.perf_counter() - start
+start = time.perf_counter(); polygon_kernel.polygons(*args); second = time.perf_counter() - start
+print(first, second)
+"""
+
+
+def _compile_seconds() -> float:
+    """First call minus second call of the planar kernel in a process with an empty Numba cache."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        out = subprocess.run(
+            [sys.executable, "-c", _COMPILE_CHILD], env=env, capture_output=True, text=True, check=True
+        )
+    first, second = (float(x) for x in out.stdout.split())
+    return first - second
+
+
+def run(quick: bool = False) -> int:
+    rounds = 2 if quick else 5
+    n_compare, n_total = (400, 10_000) if quick else (2_000, 100_000)
+    threads = ", ".join(f"{k}={os.environ.get(k, 'unset')}" for k in ("NUMBA_NUM_THREADS", "OPENBLAS_NUM_THREADS"))
+    print(f"polytope sweeps, one worker in this process ({threads}); load {os.getloadavg()[0]:.2f}")
+    paper = SweepSpec("planar_dual_arm", measures=POLYTOPES)
+    cases = {
+        "paper robot, planar kinematic + exact dynamic polytope": (paper, _grid(n_compare)),
+    }
+    for spec, grid in cases.values():  # warm-up: compiles, postures, caches
+        small = SweepGrid(angle_deg=grid.angle_deg[:2], distance=grid.distance[:2])
+        _timed(spec, small, True)
+        _timed(spec, small, False)
+    samples: dict[str, dict[bool, list[float]]] = {name: {True: [], False: []} for name in cases}
+    for _ in range(rounds):
+        for name, (spec, grid) in cases.items():
+            for compiled in (False, True):
+                samples[name][compiled].append(_timed(spec, grid, compiled))
+    title = f"per configuration, ms (median of {rounds} interleaved rounds)"
+    print(f"{title:<58} {'before':>9} {'now':>9} {'ratio':>7}")
+    for name, by in samples.items():
+        before, now = np.median(by[False]) * 1e3, np.median(by[True]) * 1e3
+        print(f"{name:<58} {before:9.4f} {now:9.4f} {before / now:6.1f}x")
+    grid = _grid(n_total)
+    start = time.perf_counter()
+    result = run_sweep(paper, grid, workers=1)
+    total = time.perf_counter() - start
+    count = int(result.reachable.sum())
+    print(
+        f"planar polytope sweep of the paper robot, {count} points, compiled: {total:.2f} s "
+        f"({total / count * 1e3:.4f} ms per point)"
+    )
+    if count >= 100_000:
+        print(f"target 10^5 points <= 10 s on one core: {'met' if total <= 10.0 else 'NOT met'}")
+    print(f"compile time of the planar polytope kernel (empty Numba cache): {_compile_seconds():.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(run(quick="--quick" in sys.argv))
