@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
+import mobmanip
 from conftest import random_configurations
 from mobmanip.errors import ModelError
 from mobmanip.sets.capacity import polytope_batch
-from mobmanip.sets.capacity_batch import PlanarPolytopeBatch
+from mobmanip.sets.capacity_batch import CompiledPolytopeBatch
 from mobmanip.terms.builder import terms_at
 from polytope_util import dynamic_lp, kinematic_lp
 
@@ -73,7 +74,7 @@ def test_compiled_batch_equals_one_polytope_per_configuration(paper_terms, kind,
     terms = _pick(paper_terms, names)
     fast = polytope_batch(kind, **terms)
     ref = polytope_batch(kind, compiled=False, **terms)
-    assert isinstance(fast, PlanarPolytopeBatch) and fast.computed.all()  # every row compiled
+    assert isinstance(fast, CompiledPolytopeBatch) and fast.computed.all()  # every row compiled
     n = len(ref)
     rng = np.random.default_rng(3)
     d = rng.normal(size=(n, 2))
@@ -255,3 +256,99 @@ def test_a_planar_sweep_uses_the_compiled_batch_and_keeps_its_indices():
         for index in ("volume", "isotropy", "capacity", "width_1", "width_2"):
             a, b = fast.index(f"{name}.{index}"), slow.index(f"{name}.{index}")
             assert _rel(a, b) <= 1e-12, (name, index)
+
+
+# --------------------------------------------------------------------------- 3-D zonotopes
+
+
+@pytest.fixture(scope="module")
+def tiago_terms():
+    """TIAGo++ holding 2 kg at 200 random joint configurations, translational task (m = 3)."""
+    from polytope_util import random_joint_configuration
+
+    robot = mobmanip.load_robot("tiago_dual")
+    rng = np.random.default_rng(9)
+    rows = [
+        terms_at(robot, random_joint_configuration(robot, rng), "translational", object_mass=2.0) for _ in range(200)
+    ]
+    t0 = rows[0]
+    return {
+        "J_u": np.stack([t.J_u for t in rows]),
+        "W": t0.W,
+        "P": np.stack([t.P for t in rows]),
+        "Q": t0.Q,
+        "xi": np.stack([t.xi for t in rows]),
+        "M_o": t0.M_o,
+        "g_o": t0.g_o,
+        "velocity_limits": t0.velocity_limits,
+        "effort_limits": t0.effort_limits,
+    }
+
+
+def test_3d_exact_dynamic_batch_equals_one_polytope_per_configuration(tiago_terms):
+    terms = _pick(tiago_terms, DYNAMIC)
+    fast = polytope_batch("dynamic", **terms)
+    ref = polytope_batch("dynamic", compiled=False, **terms)
+    assert isinstance(fast, CompiledPolytopeBatch) and fast.dim == 3 and fast.computed.all()
+    d = np.random.default_rng(4).normal(size=(len(ref), 3))
+    np.testing.assert_array_equal(fast.degenerate, ref.degenerate)
+    assert _rel(fast.volume, ref.volume) <= 1e-12
+    assert _rel(fast.isotropy, ref.isotropy) <= 1e-12
+    assert _rel(fast.support(d), ref.support(d)) <= 1e-12
+    assert _rel(fast.radius_along(d), ref.radius_along(d)) <= 1e-12
+    assert _rel(fast.widths, ref.widths) <= 1e-12
+    rows = range(0, len(ref), 20)
+    expected = np.array([ref[i].straight_line_reach(d[i]) for i in rows])
+    size = max(ref[i].circumradius for i in rows)
+    # HiGHS' optimum, to its feasibility tolerance (1e-7 of the set's size at worst)
+    np.testing.assert_allclose(fast.straight_line_reach(d)[list(rows)], expected, rtol=0, atol=1e-7 * size)
+
+
+def test_3d_indices_equal_the_hull_of_the_torque_corners(tiago_terms):
+    """Volume, isotropy, support and widths of TIAGo++'s exact dynamic set (under gravity: its
+    centre is off the origin) against Qhull's hull of the accelerations at all 2^16 torque
+    corners, each from the defining equations solved densely."""
+    rows = [0, 50, 199]
+    sub = {k: (v[rows] if k in ("J_u", "P", "xi") else v) for k, v in _pick(tiago_terms, DYNAMIC).items()}
+    batch = polytope_batch("dynamic", **sub)
+    assert batch.computed.all()
+    nx = sub["J_u"].shape[2]
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=nx)))
+    d = np.random.default_rng(2).normal(size=(5, 3))
+    for r in range(len(rows)):
+        args = (sub["J_u"][r], sub["W"], sub["P"][r], sub["Q"], sub["xi"][r], sub["M_o"], sub["g_o"])
+        # the acceleration is affine in the torques: a = a0 + B tau, B's columns from unit torques
+        unit = [_dynamic_point(*args, tau) for tau in np.vstack([np.zeros(nx), np.eye(nx)])]
+        a0, B = unit[0], np.array(unit[1:]).T - unit[0][:, None]
+        corners = a0 + (signs * sub["effort_limits"]) @ B.T
+        hull = ConvexHull(corners)
+        V = corners[hull.vertices]
+        assert batch.volume[r] == pytest.approx(hull.volume, rel=1e-12)
+        inradius = np.min(-(hull.equations[:, :3] @ a0 + hull.equations[:, 3]))
+        circumradius = np.max(np.linalg.norm(V - a0, axis=1))
+        assert batch.isotropy[r] == pytest.approx(inradius / circumradius, rel=1e-12)
+        for direction in d:
+            one = np.broadcast_to(direction, (len(rows), 3))
+            assert batch.support(one)[r] == pytest.approx(np.max(V @ direction), rel=1e-12)
+        for k, e in enumerate(np.eye(3)):
+            assert batch.widths[r, k] == pytest.approx(np.max(V @ e) - np.min(V @ e), rel=1e-12)
+
+
+def _dynamic_point(J, W, P, Q, xi, M_o, g_o, tau) -> np.ndarray:
+    """The object's acceleration at torque tau from the three defining equations (unknowns qdd, h, a)."""
+    mk, n = J.shape
+    m = W.shape[0]
+    A = np.zeros((n + mk + m, n + mk + m))
+    A[:n, :n], A[:n, n : n + mk] = P, J.T
+    A[n : n + mk, :n], A[n : n + mk, n + mk :] = J, -W.T
+    A[n + mk :, n : n + mk], A[n + mk :, n + mk :] = W, -M_o
+    return np.linalg.solve(A, np.r_[xi + Q @ tau, np.zeros(mk), g_o])[n + mk :]
+
+
+def test_3d_kinematic_sections_stay_on_the_reference_path(tiago_terms):
+    """Two hands: a section of a 6-D zonotope, whose 3-D facets need a hull (the reference's Qhull)."""
+    terms = {k: (v[:6] if k in ("J_u", "P", "xi") else v) for k, v in _pick(tiago_terms, KINEMATIC).items()}
+    fast = polytope_batch("kinematic", **terms)
+    ref = polytope_batch("kinematic", compiled=False, **terms)
+    assert not fast.computed.any()
+    np.testing.assert_array_equal(fast.volume, ref.volume)

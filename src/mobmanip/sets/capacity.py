@@ -50,7 +50,7 @@ from .polytope import Polytope
 from .taskset import TaskSet
 
 if TYPE_CHECKING:
-    from .capacity_batch import PlanarPolytopeBatch
+    from .capacity_batch import CompiledPolytopeBatch
 
 KINDS = ("kinematic", "dynamic", "dynamic_min_norm")
 
@@ -308,15 +308,15 @@ class PolytopeBatch:
 _STACKED = {"J_u": 3, "W": 3, "P": 3, "Q": 3, "xi": 2, "M_o": 3, "g_o": 2, "velocity_limits": 2, "effort_limits": 2}
 
 
-def polytope_batch(kind: str, *, compiled: bool = True, **terms: Any) -> PolytopeBatch | PlanarPolytopeBatch:
+def polytope_batch(kind: str, *, compiled: bool = True, **terms: Any) -> PolytopeBatch | CompiledPolytopeBatch:
     """One kind of polytope for N configurations.
 
     Args:
         kind: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
-        compiled: for a planar task (m = 2), build the kinematic and exact dynamic sets of all
-            rows at once and compute their indices in one compiled pass
-            (:mod:`mobmanip.sets.capacity_batch`; the same sets, to round-off); False: one
-            :class:`Polytope` per row, as every other case.
+        compiled: for a planar task (m = 2) build the kinematic and exact dynamic sets of all
+            rows at once and compute their indices in one compiled pass, for a 3-D task the
+            zonotopes among them (:mod:`mobmanip.sets.capacity_batch`; the same sets, to
+            round-off); False: one :class:`Polytope` per row, as every other case.
         **terms: the arrays of :func:`polytopes`, each stacked with a leading axis N
             (``J_u`` (N, m k, nx), ``xi`` (N, nx), ...); an array without it (``Q`` (nx, nx),
             limits (nx,), ``M_o`` (m, m), ...) is shared by every configuration.
@@ -344,10 +344,10 @@ def polytope_batch(kind: str, *, compiled: bool = True, **terms: Any) -> Polytop
     def row(i: int) -> Polytope:
         return polytopes(kind, **{name: (v[i] if per_row else v) for name, v, per_row in rows})
 
-    if compiled and "W" in terms and np.ndim(terms["W"]) >= 2 and np.shape(terms["W"])[-2] == 2:
-        from .capacity_batch import planar_polytope_batch
+    if compiled and "W" in terms and np.ndim(terms["W"]) >= 2 and np.shape(terms["W"])[-2] in (2, 3):
+        from .capacity_batch import compiled_polytope_batch
 
-        fast = planar_polytope_batch(kind, row, **{name: v for name, v, _ in rows})
+        fast = compiled_polytope_batch(kind, row, **{name: v for name, v, _ in rows})
         if fast is not None:
             return fast
     return PolytopeBatch(row(i) for i in range(count))

@@ -1,9 +1,10 @@
-"""Planar capacity polytopes of a sweep's chunk, stacked and compiled instead of one at a time.
+"""Capacity polytopes of a sweep's chunk, stacked and compiled instead of one at a time.
 
 :func:`mobmanip.sets.capacity.polytope_batch` builds one :class:`~mobmanip.sets.polytope.Polytope`
 per configuration (about 0.4 ms each for the paper robot's planar sets). For a planar task
-(m = 2) the kinematic polytope and the exact dynamic polytope are built here for the whole chunk
-at once:
+(m = 2) the kinematic polytope and the exact dynamic polytope, and for a 3-D task
+(translational, planar rigid) the exact dynamic polytope and a one-hand kinematic one (the
+zonotopes), are built here for the whole chunk at once:
 
 - kinematic: F = W^T, c = 0, G = J_u diag(xdot_max), stacked (a zonotope section centred at the
   origin; a plain zonotope with one hand, W = I);
@@ -13,13 +14,15 @@ at once:
   :func:`mobmanip.sets.capacity.dynamic_polytope` builds it;
 
 then :mod:`mobmanip.sets.polygon_kernel` gives every polygon's vertices, facets, area, inradius
-and circumradius in one compiled pass, and :class:`PlanarPolytopeBatch` answers the sweep's
+and circumradius in one compiled pass (:mod:`mobmanip.sets.zonotope_batch_kernel` every 3-D
+zonotope's facets, volume, inradius and circumradius), and :class:`CompiledPolytopeBatch` answers the sweep's
 queries (support, widths, radius along, straight-line reach) from them. Rows outside the
 generic case (a non-finite term, a grasp or closed chain that loses rank, a set the kernel
 declines: flat or ill-conditioned) are computed one at a time by the reference path, so they
-get the same sets, flags and errors as before. The paper's minimum-norm dynamic polytope, 3-D
-and 6-D tasks, and polytopes under constraints beyond the joint boxes (the floor's contacts:
-linear programs) keep the one-at-a-time path.
+get the same sets, flags and errors as before. The paper's minimum-norm dynamic polytope (its
+centre is a least-effort program), 3-D sections (several hands' kinematic sets: a 3-D hull),
+6-D tasks, and polytopes under constraints beyond the joint boxes (the floor's contacts: linear
+programs, :mod:`mobmanip.measures.polytopes`) keep the one-at-a-time path.
 """
 
 from __future__ import annotations
@@ -32,23 +35,23 @@ from numpy.typing import ArrayLike
 
 from ..errors import TaskError
 from ..support.tolerances import RANK_RTOL
-from . import polygon_kernel
+from . import polygon_kernel, zonotope_batch_kernel
 from .polytope import Polytope
 
 #: Kinds built here (the minimum-norm set needs a least-effort program for its centre).
 FAST_KINDS = ("kinematic", "dynamic")
 
 
-class PlanarPolytopeBatch:
-    """N planar capacity polytopes of one kind, indices computed in one compiled pass.
+class CompiledPolytopeBatch:
+    """N capacity polytopes of one kind (2-D, or 3-D zonotopes), indices computed in one compiled pass.
 
     A :class:`mobmanip.sets.taskset.TaskSetBatch`: ``batch[n]`` is the reference
     :class:`Polytope` of row n (built on demand); ``volume``, ``isotropy``, ``support``,
     ``widths``, ``radius_along`` and :meth:`straight_line_reach` answer for every row at once.
 
     Args:
-        F, c, G: the rows' maps (N, p, 2), zonotope centres (N, p) and generators (N, p, n).
-        centre: each set's centre (N, 2).
+        F, c, G: the rows' maps (N, p, m), zonotope centres (N, p) and generators (N, p, n).
+        centre: each set's centre (N, m), m = 2 or 3.
         is_zonotope: (N,) bool, F = I.
         generic: (N,) bool, rows the stacked construction covers; the others (and rows the
             kernel declines) come from ``reference``.
@@ -66,24 +69,33 @@ class PlanarPolytopeBatch:
         reference: Callable[[int], Polytope],
     ) -> None:
         self._reference = reference
-        self._count = len(generic)
+        self._count, self._dim = len(generic), centre.shape[1]
         self._F, self._c, self._G, self._centre = F, c, G, centre
         self._is_zonotope = np.asarray(is_zonotope, dtype=bool)
-        rows = np.flatnonzero(generic)
-        out = polygon_kernel.polygons(F[rows], c[rows], G[rows], centre[rows], self._is_zonotope[rows])
+        m = self._dim
+        if m == 2:
+            rows = np.flatnonzero(generic)
+            out = polygon_kernel.polygons(F[rows], c[rows], G[rows], centre[rows], self._is_zonotope[rows])
+            out["volume"] = out["area"]
+        else:  # 3-D: zonotopes only (a section's facets need a 3-D hull: the reference's Qhull)
+            rows = np.flatnonzero(generic & self._is_zonotope)
+            out = zonotope_batch_kernel.zonotopes(c[rows], G[rows])
+            out["vertices"], out["count"] = np.zeros((len(rows), 0, m)), np.zeros(len(rows), dtype=np.int64)
         fast = np.zeros(self._count, dtype=bool)
         fast[rows[out["status"] == 0]] = True
         self._fast = fast
         self._V = np.zeros((self._count,) + out["vertices"].shape[1:])
         self._facets = np.zeros((self._count,) + out["facets"].shape[1:])
         self._nv = np.zeros(self._count, dtype=np.int64)
-        self._V[rows], self._facets[rows], self._nv[rows] = out["vertices"], out["facets"], out["count"]
-        area, inr, circ = np.zeros(self._count), np.zeros(self._count), np.zeros(self._count)
-        area[rows], inr[rows], circ[rows] = out["area"], out["inradius"], out["circumradius"]
+        self._nf = np.zeros(self._count, dtype=np.int64)
+        self._V[rows], self._nv[rows] = out["vertices"], out["count"]
+        self._facets[rows], self._nf[rows] = out["facets"], out["facet_count"]
+        volume, inr, circ = np.zeros(self._count), np.zeros(self._count), np.zeros(self._count)
+        volume[rows], inr[rows], circ[rows] = out["volume"], out["inradius"], out["circumradius"]
         self._polytopes: dict[int, Polytope] = {i: reference(i) for i in np.flatnonzero(~fast).tolist()}
         self.empty = np.zeros(self._count, dtype=bool)
         self.degenerate = np.zeros(self._count, dtype=bool)
-        self._volume = np.where(fast, area, 0.0)
+        self._volume = np.where(fast, volume, 0.0)
         self._isotropy = np.where(fast & (circ > 0.0), inr / np.where(circ > 0.0, circ, 1.0), 0.0)
         for i, p in self._polytopes.items():
             self.empty[i], self.degenerate[i] = p.empty, p.degenerate
@@ -101,8 +113,8 @@ class PlanarPolytopeBatch:
 
     @property
     def dim(self) -> int:
-        """Task dimension, 2."""
-        return 2
+        """Task dimension m."""
+        return self._dim
 
     @property
     def computed(self) -> np.ndarray:
@@ -123,12 +135,15 @@ class PlanarPolytopeBatch:
         d = np.asarray(direction, dtype=float)
         if d.ndim == 1:
             d = np.broadcast_to(d, (self._count, d.shape[0]))
-        if d.shape != (self._count, 2) or not np.all(np.isfinite(d)):
-            raise TaskError(f"directions must be finite, (2,) or ({self._count}, 2), got shape {np.shape(direction)}")
+        m = self._dim
+        if d.shape != (self._count, m) or not np.all(np.isfinite(d)):
+            raise TaskError(
+                f"directions must be finite, ({m},) or ({self._count}, {m}), got shape {np.shape(direction)}"
+            )
         return d
 
     def support(self, direction: ArrayLike) -> np.ndarray:
-        """max over set n of d . a, (N,), for one direction (2,) or one per row (N, 2); 0 where empty."""
+        """max over set n of d . a, (N,), for one direction (m,) or one per row (N, m); 0 where empty."""
         d = self._rows(direction)
         out = np.zeros(self._count)
         zono = self._fast & self._is_zonotope
@@ -151,17 +166,19 @@ class PlanarPolytopeBatch:
         if np.any(norms == 0.0):
             raise TaskError("radius_along needs non-zero directions")
         u = d / norms[:, None]
-        centres = np.array([self._centre[i] if self._fast[i] else self[i].center for i in range(self._count)])
-        out = np.maximum(self.support(u) - np.einsum("ni,ni->n", u, centres.reshape(-1, 2)), 0.0)
+        centres = self._centre.copy()
+        for i in np.flatnonzero(~self._fast).tolist():
+            centres[i] = self[i].center
+        out = np.maximum(self.support(u) - np.einsum("ni,ni->n", u, centres), 0.0)
         return np.where(self.empty, 0.0, out)
 
     @property
     def widths(self) -> np.ndarray:
-        """Extent along each task axis, support(e_k) + support(-e_k), (N, 2) (0 where empty)."""
+        """Extent along each task axis, support(e_k) + support(-e_k), (N, m) (0 where empty)."""
         if self._widths is None:
-            out = np.zeros((self._count, 2))
-            for k in range(2):
-                e = np.eye(2)[k]
+            out = np.zeros((self._count, self._dim))
+            for k in range(self._dim):
+                e = np.eye(self._dim)[k]
                 out[:, k] = np.maximum(self.support(e) + self.support(-e), 0.0)
             self._widths = np.where(self.empty[:, None], 0.0, out)
         return self._widths
@@ -178,8 +195,8 @@ class PlanarPolytopeBatch:
         out = np.zeros(self._count)
         rows = np.flatnonzero(self._fast)
         if len(rows):
-            A, b = self._facets[rows, :, :2], self._facets[rows, :, 2]
-            live = np.arange(A.shape[1])[None, :] < self._nv[rows][:, None]
+            A, b = self._facets[rows, :, :-1], self._facets[rows, :, -1]
+            live = np.arange(A.shape[1])[None, :] < self._nf[rows][:, None]
             au = np.einsum("nfi,ni->nf", A, u[rows])
             with np.errstate(divide="ignore", invalid="ignore"):
                 ratio = b / au
@@ -212,23 +229,26 @@ def _grasp_rank_ok(W: np.ndarray) -> np.ndarray:
     return (W.shape[1] <= W.shape[2]) & (s[:, 0] > 1e-6 * np.maximum(s[:, -1], 1e-300))
 
 
-def planar_polytope_batch(kind: str, reference: Callable[[int], Polytope], **terms: Any) -> PlanarPolytopeBatch | None:
+def compiled_polytope_batch(
+    kind: str, reference: Callable[[int], Polytope], **terms: Any
+) -> CompiledPolytopeBatch | None:
     """The batch of ``kind`` for the stacked ``terms`` of :func:`mobmanip.sets.capacity.polytope_batch`,
-    or None where this route does not apply (not planar, another kind, no Numba, a term with an
-    unexpected shape): the caller then builds the polytopes one at a time.
+    or None where this route does not apply (a task dimension other than 2 or 3, another kind, no
+    Numba, a term with an unexpected shape): the caller then builds the polytopes one at a time.
 
     Args:
         kind: ``"kinematic"`` or ``"dynamic"``.
         reference: row index -> the reference path's polytope (for the rows outside the generic case).
         **terms: as :func:`mobmanip.sets.capacity.polytope_batch`.
     """
-    if kind not in FAST_KINDS or not polygon_kernel.available():
+    if kind not in FAST_KINDS or not (polygon_kernel.available() and zonotope_batch_kernel.available()):
         return None
     try:
         J_u = np.asarray(terms["J_u"], dtype=float)
         count, mk, nx = J_u.shape
         W = _stack(terms["W"], count, 3)
-        if W.shape[1:] != (2, mk):
+        m = W.shape[1]
+        if m not in (2, 3) or W.shape[2] != mk:
             return None
         limit_name = "velocity_limits" if kind == "kinematic" else "effort_limits"
         limits = _stack(terms[limit_name], count, 2)
@@ -243,13 +263,13 @@ def planar_polytope_batch(kind: str, reference: Callable[[int], Polytope], **ter
     if kind == "kinematic":
         F = Wt
         is_zonotope = np.zeros(count, dtype=bool)
-        if mk == 2:  # one hand: a plain zonotope when W is the identity (else the reference's inverse)
-            is_zonotope = (W == np.eye(2)).all(axis=(1, 2))
+        if mk == m:  # one hand: a plain zonotope when W is the identity (else the reference's inverse)
+            is_zonotope = (W == np.eye(m)).all(axis=(1, 2))
             generic &= is_zonotope
         c = np.zeros((count, mk))
         G = J_u * limits[:, None, :]
-        centre = np.zeros((count, 2))
-        return PlanarPolytopeBatch(F, c, G, centre, is_zonotope, generic, reference)
+        centre = np.zeros((count, m))
+        return CompiledPolytopeBatch(F, c, G, centre, is_zonotope, generic, reference)
     try:
         P = _stack(terms["P"], count, 3)
         Q = _stack(terms["Q"], count, 3)
@@ -258,17 +278,17 @@ def planar_polytope_batch(kind: str, reference: Callable[[int], Polytope], **ter
         g_o = _stack(terms["g_o"], count, 2)
     except KeyError:
         return None
-    if P.shape[1:] != (nx, nx) or Q.shape[1:] != (nx, nx) or xi.shape[1:] != (nx,) or M_o.shape[1:] != (2, 2):
+    if P.shape[1:] != (nx, nx) or Q.shape[1:] != (nx, nx) or xi.shape[1:] != (nx,) or M_o.shape[1:] != (m, m):
         return None
-    if g_o.shape[1:] != (2,):
+    if g_o.shape[1:] != (m,):
         return None
     generic &= _finite_rows(P, Q, xi, M_o, g_o)
     identity_q = (Q == np.eye(nx)).all(axis=(1, 2))
     if not identity_q.all():  # the reference checks Q's rank: keep rows with a clearly regular Q
         sq = np.linalg.svd(np.where(generic[:, None, None], Q, np.eye(nx)), compute_uv=False)
         generic &= identity_q | (sq[:, -1] > 1e-8 * sq[:, 0])
-    c = np.zeros((count, 2))
-    G = np.zeros((count, 2, nx))
+    c = np.zeros((count, m))
+    G = np.zeros((count, m, nx))
     rows = np.flatnonzero(generic)
     if len(rows):
         # the closed chain C = [J_u, -W^T] and its null space (the reference's SVD, stacked)
@@ -294,5 +314,5 @@ def planar_polytope_batch(kind: str, reference: Callable[[int], Polytope], **ter
         rhs = np.einsum("nqd,nq->nd", N_q, xi[rows]) - np.einsum("nad,na->nd", N_a, g_o[rows])
         c[rows] = np.einsum("nad,nd->na", K, rhs)
         G[rows] = K @ (np.swapaxes(N_q, 1, 2) @ (Q[rows] * limits[rows][:, None, :]))
-    F = np.broadcast_to(np.eye(2), (count, 2, 2))
-    return PlanarPolytopeBatch(F, c, G, c.copy(), np.ones(count, dtype=bool), generic, reference)
+    F = np.broadcast_to(np.eye(m), (count, m, m))
+    return CompiledPolytopeBatch(F, c, G, c.copy(), np.ones(count, dtype=bool), generic, reference)
