@@ -7,6 +7,10 @@ OPENBLAS_NUM_THREADS=1``). Prints:
   (``planar_dual_arm``, planar task) recording the kinematic and the exact dynamic polytope's
   indices, in this process: with one :class:`~mobmanip.sets.polytope.Polytope` per configuration
   (the path before the compiled batch) and with :mod:`mobmanip.sets.capacity_batch`, and their ratio;
+- per configuration (ms), TIAGo++'s translational (3-D) exact dynamic polytope: the indices a
+  sweep records (volume, isotropy, support, widths) for a chunk of 200 random configurations
+  whose terms are given, one polytope at a time beside the compiled batch (a TIAGo++ sweep's
+  inverse kinematics, a few ms per point, would hide both);
 - a 10^5-point planar polytope sweep on the compiled path (target: at most 10 s on one core);
 - the compile time of the planar kernel, in a child process with an empty Numba cache.
 """
@@ -30,7 +34,7 @@ POLYTOPES = ("kinematic_polytope", "dynamic_polytope")
 def _grid(count: int) -> SweepGrid:
     """About ``count`` reachable points of the paper robot: angles x distances (0.6 to 1.4 m)."""
     distances = max(1, int(round(np.sqrt(count / 4.0))))
-    angles = max(1, count // distances)
+    angles = max(1, -(-count // distances))
     return SweepGrid(
         angle_deg=np.linspace(0.0, 360.0, angles, endpoint=False), distance=np.linspace(0.6, 1.4, distances)
     )
@@ -44,6 +48,43 @@ def _one_at_a_time():
         return original(kind, compiled=False, **terms)
 
     return original, batch
+
+
+def _tiago_chunk(count: int):
+    """The stacked terms of TIAGo++ holding 2 kg at ``count`` random joint configurations (translational)."""
+    import mobmanip
+    from mobmanip.terms.builder import terms_at
+
+    robot = mobmanip.load_robot("tiago_dual")
+    rng = np.random.default_rng(3)
+    lo, hi = robot.model.lowerPositionLimit, robot.model.upperPositionLimit
+    rows = []
+    for _ in range(count):
+        q = robot.neutral()
+        for name in robot.spec.arm_joint_names:
+            j = robot.model.joints[robot.model.getJointId(name)]
+            q[j.idx_q] = rng.uniform(max(lo[j.idx_q], -np.pi), min(hi[j.idx_q], np.pi))
+        rows.append(terms_at(robot, q, "translational", object_mass=2.0))
+    t0 = rows[0]
+    return {
+        "J_u": np.stack([t.J_u for t in rows]),
+        "W": t0.W,
+        "P": np.stack([t.P for t in rows]),
+        "Q": t0.Q,
+        "xi": np.stack([t.xi for t in rows]),
+        "M_o": t0.M_o,
+        "g_o": t0.g_o,
+        "effort_limits": t0.effort_limits,
+    }
+
+
+def _chunk_indices(terms: dict, compiled: bool) -> float:
+    """Seconds per configuration for the indices a sweep records, from given terms."""
+    start = time.perf_counter()
+    batch = capacity.polytope_batch("dynamic", compiled=compiled, **terms)
+    batch.volume, batch.isotropy, batch.widths  # noqa: B018 - computed on access
+    batch.support(np.array([1.0, 0.0, 0.0]))
+    return (time.perf_counter() - start) / len(batch)
 
 
 def _timed(spec: SweepSpec, grid: SweepGrid, compiled: bool) -> float:
@@ -90,15 +131,21 @@ def run(quick: bool = False) -> int:
     cases = {
         "paper robot, planar kinematic + exact dynamic polytope": (paper, _grid(n_compare)),
     }
+    tiago = _tiago_chunk(200)
+    tiago_name = "TIAGo++, translational exact dynamic polytope (chunk of 200)"
     for spec, grid in cases.values():  # warm-up: compiles, postures, caches
         small = SweepGrid(angle_deg=grid.angle_deg[:2], distance=grid.distance[:2])
         _timed(spec, small, True)
         _timed(spec, small, False)
-    samples: dict[str, dict[bool, list[float]]] = {name: {True: [], False: []} for name in cases}
+    _chunk_indices(tiago, True)
+    _chunk_indices(tiago, False)
+    samples: dict[str, dict[bool, list[float]]] = {name: {True: [], False: []} for name in (*cases, tiago_name)}
     for _ in range(rounds):
         for name, (spec, grid) in cases.items():
             for compiled in (False, True):
                 samples[name][compiled].append(_timed(spec, grid, compiled))
+        for compiled in (False, True):
+            samples[tiago_name][compiled].append(_chunk_indices(tiago, compiled))
     title = f"per configuration, ms (median of {rounds} interleaved rounds)"
     print(f"{title:<58} {'before':>9} {'now':>9} {'ratio':>7}")
     for name, by in samples.items():
