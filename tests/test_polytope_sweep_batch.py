@@ -17,7 +17,7 @@ from mobmanip.errors import ModelError
 from mobmanip.sets.capacity import polytope_batch
 from mobmanip.sets.capacity_batch import CompiledPolytopeBatch
 from mobmanip.terms.builder import terms_at
-from polytope_util import dynamic_lp, kinematic_lp
+from polytope_util import dynamic_lp, kinematic_lp, min_norm_lp, policy_map
 
 KINEMATIC = ("J_u", "W", "velocity_limits")
 DYNAMIC = ("J_u", "W", "P", "Q", "xi", "M_o", "g_o", "effort_limits")
@@ -41,7 +41,7 @@ def _stacked_terms(robot, qs, decoupled=False) -> dict:
 
 
 @pytest.fixture(scope="module")
-def paper_terms(robot):
+def paper_configurations(robot):
     """300 configurations of the paper robot: 150 random (any joint angles), 150 holding the
     object at random directions in the case study's posture, with random arm perturbations."""
     from mobmanip.casestudy import configuration_at, optimal_posture
@@ -57,7 +57,18 @@ def paper_terms(robot):
         q = configuration_at(robot, posture, float(alpha))
         q[arms] += rng.normal(0.0, 0.2, 6)
         qs.append(q)
-    return _stacked_terms(robot, np.array(qs))
+    return np.array(qs)
+
+
+@pytest.fixture(scope="module")
+def paper_terms(robot, paper_configurations):
+    return _stacked_terms(robot, paper_configurations)
+
+
+@pytest.fixture(scope="module")
+def paper_terms_decoupled(robot, paper_configurations):
+    """The same with the paper's decoupled inertia (platform-arm blocks of P zero)."""
+    return _stacked_terms(robot, paper_configurations, decoupled=True)
 
 
 def _pick(terms: dict, names) -> dict:
@@ -69,9 +80,12 @@ def _rel(a, b) -> float:
     return float(np.max(np.abs(a - b) / np.maximum(np.abs(b), 1e-300)))
 
 
-@pytest.mark.parametrize("kind, names", [("kinematic", KINEMATIC), ("dynamic", DYNAMIC)])
-def test_compiled_batch_equals_one_polytope_per_configuration(paper_terms, kind, names):
-    terms = _pick(paper_terms, names)
+@pytest.mark.parametrize("kind, names", [("kinematic", KINEMATIC), ("dynamic", DYNAMIC), ("dynamic_min_norm", DYNAMIC)])
+@pytest.mark.parametrize("decoupled", [False, True])
+def test_compiled_batch_equals_one_polytope_per_configuration(
+    paper_terms, paper_terms_decoupled, kind, names, decoupled
+):
+    terms = _pick(paper_terms_decoupled if decoupled else paper_terms, names)
     fast = polytope_batch(kind, **terms)
     ref = polytope_batch(kind, compiled=False, **terms)
     assert isinstance(fast, CompiledPolytopeBatch) and fast.computed.all()  # every row compiled
@@ -141,11 +155,26 @@ def _reach(hull: ConvexHull, u: np.ndarray) -> float:
     return float(np.min(-offset[along > 0] / along[along > 0]))
 
 
-@pytest.mark.parametrize("kind", ["kinematic", "dynamic"])
+def _min_norm_polygon(J, W, P, Q, xi, M_o, g_o, tau_max) -> np.ndarray:
+    """Vertices (with repeats) of {a : |Lambda_o a + mu_o| <= tau_max}: every pair of the 2 n
+    boundary lines intersected, kept where every torque is within its limit (numpy's pinv)."""
+    Lam, mu = policy_map(J, W, P, Q, xi, M_o, g_o)
+    lines = [(Lam[i], side * tau_max[i] - mu[i]) for i in range(len(mu)) for side in (-1.0, 1.0)]
+    points = []
+    for (a1, b1), (a2, b2) in itertools.combinations(lines, 2):
+        M = np.array([a1, a2])
+        if abs(np.linalg.det(M)) < 1e-12 * np.abs(M).max() ** 2:
+            continue
+        p = np.linalg.solve(M, [b1, b2])
+        if np.all(np.abs(Lam @ p + mu) <= tau_max * (1.0 + 1e-12)):
+            points.append(p)
+    return np.array(points)
+
+
+@pytest.mark.parametrize("kind", ["kinematic", "dynamic", "dynamic_min_norm"])
 def test_each_index_equals_an_independent_computation(paper_terms, kind):
     rows = [0, 7, 151, 222, 299]
-    names = KINEMATIC if kind == "kinematic" else DYNAMIC
-    terms = _pick(paper_terms, names)
+    terms = _pick(paper_terms, KINEMATIC if kind == "kinematic" else DYNAMIC)
     sub = {k: (v[rows] if k in ("J_u", "P", "xi") else v) for k, v in terms.items()}
     batch = polytope_batch(kind, **sub)
     assert batch.computed.all()
@@ -156,10 +185,16 @@ def test_each_index_equals_an_independent_computation(paper_terms, kind):
         if kind == "kinematic":
             points, centre = _kinematic_polygon(J, sub["W"], sub["velocity_limits"]), np.zeros(2)
             lp = kinematic_lp(J, sub["W"], sub["velocity_limits"])
-        else:
+        elif kind == "dynamic":
             args = (J, sub["W"], sub["P"][r], sub["Q"], sub["xi"][r], sub["M_o"], sub["g_o"], sub["effort_limits"])
             points, centre = _dynamic_polygon(*args)
             lp = dynamic_lp(*args)
+        else:  # horizontal motion: mu_o is round-off, the least-effort point solves Lambda_o a = -mu_o
+            args = (J, sub["W"], sub["P"][r], sub["Q"], sub["xi"][r], sub["M_o"], sub["g_o"], sub["effort_limits"])
+            Lam, mu = policy_map(*args[:-1])
+            assert np.linalg.norm(mu) <= 1e-12 * np.linalg.norm(sub["effort_limits"])
+            points, centre = _min_norm_polygon(*args), np.linalg.lstsq(Lam, -mu, rcond=None)[0]
+            lp = min_norm_lp(*args)
         hull = ConvexHull(points)
         corners = points[hull.vertices]
         size = np.abs(corners).max()
@@ -174,7 +209,7 @@ def test_each_index_equals_an_independent_computation(paper_terms, kind):
             assert batch.support(one)[r] == pytest.approx(expected, rel=1e-12)
             assert batch.support(one)[r] == pytest.approx(lp(d), abs=1e-9 * size * np.linalg.norm(d))  # HiGHS
             u = d / np.linalg.norm(d)
-            if kind == "kinematic" or np.all(hull.equations[:, 2] < 0):  # the origin inside
+            if np.all(hull.equations[:, 2] < 0):  # the origin inside
                 assert batch.straight_line_reach(one)[r] == pytest.approx(_reach(hull, u), rel=1e-12)
         for k, e in enumerate(np.eye(2)):
             width = np.max(corners @ e) - np.min(corners @ e)
@@ -186,7 +221,7 @@ def test_straight_line_reach_equals_the_reference_program(paper_terms):
     not at, the origin; the reference solves one linear program per row."""
     rows = np.arange(0, 300, 30)
     rng = np.random.default_rng(5)
-    for kind, names in (("kinematic", KINEMATIC), ("dynamic", DYNAMIC)):
+    for kind, names in (("kinematic", KINEMATIC), ("dynamic", DYNAMIC), ("dynamic_min_norm", DYNAMIC)):
         terms = {k: (v[rows] if k in ("J_u", "P", "xi") else v) for k, v in _pick(paper_terms, names).items()}
         fast = polytope_batch(kind, **terms)
         ref = polytope_batch(kind, compiled=False, **terms)
@@ -200,7 +235,9 @@ def test_straight_line_reach_equals_the_reference_program(paper_terms):
 
 def test_rows_outside_the_generic_case_take_the_reference_path(paper_terms):
     """A flat set (limits zero on the arms' joints, or on all but one torque) is declined by the
-    compiled pass and built one at a time: the same flags, zero volume and isotropy."""
+    compiled pass and built one at a time: the same flags, zero volume and isotropy. (The
+    minimum-norm rows of the 300 with round-off in mu_o take the least-squares centre, as the
+    reference does: covered by the comparisons above.)"""
     n = 40
     terms = {k: (v[:n] if k in ("J_u", "P", "xi") else v) for k, v in paper_terms.items()}
     vlim = np.tile(terms["velocity_limits"], (n, 1))
@@ -228,6 +265,15 @@ def test_rows_outside_the_generic_case_take_the_reference_path(paper_terms):
     np.testing.assert_array_equal(dyn.degenerate, ref.degenerate)
     assert _rel(dyn.volume[~flat], ref.volume[~flat]) <= 1e-12
 
+    # the policy's set with one torque: a segment (or less); the reference decides, as before
+    pol = polytope_batch("dynamic_min_norm", **{**_pick(terms, DYNAMIC), "effort_limits": tlim})
+    ref = polytope_batch("dynamic_min_norm", compiled=False, **{**_pick(terms, DYNAMIC), "effort_limits": tlim})
+    np.testing.assert_array_equal(pol.computed, ~flat)
+    np.testing.assert_array_equal(pol.degenerate, ref.degenerate)
+    np.testing.assert_array_equal(pol.empty, ref.empty)
+    assert pol.degenerate[flat].all()
+    assert _rel(pol.volume[~flat], ref.volume[~flat]) <= 1e-12
+
 
 def test_a_bad_row_raises_as_the_reference_does(paper_terms):
     terms = {k: (v[:5].copy() if k in ("J_u", "P", "xi") else v) for k, v in _pick(paper_terms, DYNAMIC).items()}
@@ -243,7 +289,8 @@ def test_a_planar_sweep_uses_the_compiled_batch_and_keeps_its_indices():
     from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
 
     grid = SweepGrid(angle_deg=np.linspace(0.0, 330.0, 12), distance=[0.8, 1.1], heading_deg=[0.0, 40.0])
-    spec = SweepSpec("planar_dual_arm", measures=("kinematic_polytope", "dynamic_polytope"))
+    polytopes = ("kinematic_polytope", "dynamic_polytope", "dynamic_polytope_min_norm")
+    spec = SweepSpec("planar_dual_arm", measures=polytopes, decoupled=True)
     fast = run_sweep(spec, grid, workers=1)
     original = capacity.polytope_batch
     try:
@@ -252,7 +299,7 @@ def test_a_planar_sweep_uses_the_compiled_batch_and_keeps_its_indices():
     finally:
         capacity.polytope_batch = original
     assert fast.reachable.all()
-    for name in ("kinematic_polytope", "dynamic_polytope"):
+    for name in polytopes:
         for index in ("volume", "isotropy", "capacity", "width_1", "width_2"):
             a, b = fast.index(f"{name}.{index}"), slow.index(f"{name}.{index}")
             assert _rel(a, b) <= 1e-12, (name, index)

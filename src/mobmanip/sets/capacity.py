@@ -313,10 +313,10 @@ def polytope_batch(kind: str, *, compiled: bool = True, **terms: Any) -> Polytop
 
     Args:
         kind: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
-        compiled: for a planar task (m = 2) build the kinematic and exact dynamic sets of all
-            rows at once and compute their indices in one compiled pass, for a 3-D task the
-            zonotopes among them (:mod:`mobmanip.sets.capacity_batch`; the same sets, to
-            round-off); False: one :class:`Polytope` per row, as every other case.
+        compiled: build the sets of all rows at once and compute their indices in one compiled
+            pass where :mod:`mobmanip.sets.capacity_batch` covers them (planar tasks; the
+            zonotopes of 3-D tasks; the same sets, to round-off); False: one :class:`Polytope`
+            per row, as every other case.
         **terms: the arrays of :func:`polytopes`, each stacked with a leading axis N
             (``J_u`` (N, m k, nx), ``xi`` (N, nx), ...); an array without it (``Q`` (nx, nx),
             limits (nx,), ``M_o`` (m, m), ...) is shared by every configuration.

@@ -2,7 +2,7 @@
 
 :func:`mobmanip.sets.capacity.polytope_batch` builds one :class:`~mobmanip.sets.polytope.Polytope`
 per configuration (about 0.4 ms each for the paper robot's planar sets). For a planar task
-(m = 2) the kinematic polytope and the exact dynamic polytope, and for a 3-D task
+(m = 2) the kinematic polytope, the exact dynamic polytope and the minimum-norm policy's, and for a 3-D task
 (translational, planar rigid) the exact dynamic polytope and a one-hand kinematic one (the
 zonotopes), are built here for the whole chunk at once:
 
@@ -12,6 +12,9 @@ zonotopes), are built here for the whole chunk at once:
   inertia H = N_q^T P N_q + N_a^T M_o N_a (stacked Cholesky factors) and the zonotope
   c = N_a H^-1 (N_q^T xi - N_a^T g_o), G = N_a H^-1 N_q^T Q diag(tau_max), as
   :func:`mobmanip.sets.capacity.dynamic_polytope` builds it;
+- minimum-norm policy (planar): F = Lambda_o, c = -mu_o, G = diag(tau_max) from stacked SVDs
+  of J_u, as :func:`mobmanip.sets.capacity.min_norm_dynamic_polytope` builds it, for the rows
+  whose centre is the origin or the least-squares point (no gravity in a horizontal task);
 
 then :mod:`mobmanip.sets.polygon_kernel` gives every polygon's vertices, facets, area, inradius
 and circumradius in one compiled pass (:mod:`mobmanip.sets.zonotope_batch_kernel` every 3-D
@@ -19,8 +22,9 @@ zonotope's facets, volume, inradius and circumradius), and :class:`CompiledPolyt
 queries (support, widths, radius along, straight-line reach) from them. Rows outside the
 generic case (a non-finite term, a grasp or closed chain that loses rank, a set the kernel
 declines: flat or ill-conditioned) are computed one at a time by the reference path, so they
-get the same sets, flags and errors as before. The paper's minimum-norm dynamic polytope (its
-centre is a least-effort program), 3-D sections (several hands' kinematic sets: a 3-D hull),
+get the same sets, flags and errors as before. Minimum-norm sets whose centre is a
+least-effort program (gravity in the task) or with blocked directions, 3-D sections (several
+hands' kinematic sets, the minimum-norm 3-D sets: a 3-D hull),
 6-D tasks, and polytopes under constraints beyond the joint boxes (the floor's contacts: linear
 programs, :mod:`mobmanip.measures.polytopes`) keep the one-at-a-time path.
 """
@@ -38,8 +42,8 @@ from ..support.tolerances import RANK_RTOL
 from . import polygon_kernel, zonotope_batch_kernel
 from .polytope import Polytope
 
-#: Kinds built here (the minimum-norm set needs a least-effort program for its centre).
-FAST_KINDS = ("kinematic", "dynamic")
+#: Kinds built here (the minimum-norm set for planar tasks only, where its centre is not a program).
+FAST_KINDS = ("kinematic", "dynamic", "dynamic_min_norm")
 
 
 class CompiledPolytopeBatch:
@@ -237,7 +241,7 @@ def compiled_polytope_batch(
     Numba, a term with an unexpected shape): the caller then builds the polytopes one at a time.
 
     Args:
-        kind: ``"kinematic"`` or ``"dynamic"``.
+        kind: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
         reference: row index -> the reference path's polytope (for the rows outside the generic case).
         **terms: as :func:`mobmanip.sets.capacity.polytope_batch`.
     """
@@ -287,6 +291,9 @@ def compiled_polytope_batch(
     if not identity_q.all():  # the reference checks Q's rank: keep rows with a clearly regular Q
         sq = np.linalg.svd(np.where(generic[:, None, None], Q, np.eye(nx)), compute_uv=False)
         generic &= identity_q | (sq[:, -1] > 1e-8 * sq[:, 0])
+    if kind == "dynamic_min_norm":
+        shared_w = np.ndim(terms["W"]) == 2
+        return _min_norm(J_u, W, shared_w, P, Q, xi, M_o, g_o, limits, identity_q, generic, reference)
     c = np.zeros((count, m))
     G = np.zeros((count, m, nx))
     rows = np.flatnonzero(generic)
@@ -316,3 +323,50 @@ def compiled_polytope_batch(
         G[rows] = K @ (np.swapaxes(N_q, 1, 2) @ (Q[rows] * limits[rows][:, None, :]))
     F = np.broadcast_to(np.eye(m), (count, m, m))
     return CompiledPolytopeBatch(F, c, G, c.copy(), np.ones(count, dtype=bool), generic, reference)
+
+
+def _min_norm(
+    J_u, W, shared_w, P, Q, xi, M_o, g_o, limits, identity_q, generic, reference
+) -> CompiledPolytopeBatch | None:
+    """The minimum-norm policy's planar sets, {a : |Lambda_o a + mu_o| <= tau_max}, stacked as
+    :func:`mobmanip.sets.capacity.min_norm_dynamic_polytope` builds them: F = Lambda_o, c = -mu_o,
+    G = diag(tau_max). Rows where J_u loses rank (the end effectors cannot follow every object
+    acceleration: blocked directions) or whose centre needs the least-effort program (c outside
+    the range of F) are left to the reference."""
+    count, mk, nx = J_u.shape
+    m = W.shape[1]
+    if m != 2:  # a 3-D section: the reference's Qhull
+        return None
+    U, s, Vt = np.linalg.svd(J_u, full_matrices=False)
+    top = np.maximum(s[:, 0], 1e-300)
+    generic &= ((s > RANK_RTOL * top[:, None]).sum(axis=1) == mk) & (s[:, -1] > 1e-8 * top)
+    J_pinv = (np.swapaxes(Vt, 1, 2) / s[:, None, :]) @ np.swapaxes(U, 1, 2)
+    # the reference's pinv(W), once when every row shares W
+    W_pinv = np.broadcast_to(np.linalg.pinv(W[0]), (count, mk, m)) if shared_w else np.linalg.pinv(W)
+    Wt = np.swapaxes(W, 1, 2)
+    Jt = np.swapaxes(J_u, 1, 2)
+    Lam = P @ (J_pinv @ Wt) + Jt @ (W_pinv @ M_o)
+    mu = -xi + np.einsum("nxk,nk->nx", Jt, np.einsum("nkm,nm->nk", W_pinv, g_o))
+    if not identity_q.all():
+        Qs = np.where(generic[:, None, None], Q, np.eye(nx))
+        Lam = np.linalg.solve(Qs, Lam)
+        mu = np.linalg.solve(Qs, mu[:, :, None])[:, :, 0]
+    with np.errstate(all="ignore"):
+        Uf, sf, Vft = np.linalg.svd(np.where(generic[:, None, None], Lam, 0.0), full_matrices=False)
+    generic &= sf[:, -1] > 1e-8 * np.maximum(sf[:, 0], 1e-300)  # F injective (the reference's check)
+    c = -mu
+    centre = np.zeros((count, m))
+    offset = np.flatnonzero(generic & c.any(axis=1))
+    if len(offset):  # as Polytope: the least-squares point when F a = c holds to 1e-12 of the set's size
+        a = np.einsum(
+            "nij,nj->ni",
+            np.swapaxes(Vft[offset], 1, 2) / sf[offset][:, None, :],
+            np.einsum("nki,nk->ni", Uf[offset], c[offset]),
+        )
+        residual = np.linalg.norm(np.einsum("nij,nj->ni", Lam[offset], a) - c[offset], axis=1)
+        scale = np.maximum(np.linalg.norm(c[offset], axis=1), limits[offset].max(axis=1))
+        consistent = residual <= 0.5e-12 * np.maximum(scale, 1e-300)  # half the reference's bound: no close calls
+        centre[offset] = a
+        generic[offset[~consistent]] = False
+    G = limits[:, :, None] * np.eye(nx)  # diag(tau_max) per row
+    return CompiledPolytopeBatch(Lam, c, G, centre, np.zeros(count, dtype=bool), generic, reference)
