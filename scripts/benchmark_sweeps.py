@@ -4,14 +4,15 @@ Run as ``python scripts/benchmark.py --sweeps`` (one core: ``NUMBA_NUM_THREADS=1
 OPENBLAS_NUM_THREADS=1``). Prints:
 
 - per configuration (ms, median of interleaved rounds), a sweep of the paper robot
-  (``planar_dual_arm``, planar task) recording the kinematic and the exact dynamic polytope's
-  indices, in this process: with one :class:`~mobmanip.sets.polytope.Polytope` per configuration
-  (the path before the compiled batch) and with :mod:`mobmanip.sets.capacity_batch`, and their ratio;
+  (``planar_dual_arm``, planar task, decoupled as in the paper) recording the three polytopes'
+  indices (kinematic, exact dynamic, minimum-norm: ``sweep --polytope``), in this process: with
+  one :class:`~mobmanip.sets.polytope.Polytope` per configuration (the path before the compiled
+  batch) and with :mod:`mobmanip.sets.capacity_batch`, and their ratio;
 - per configuration (ms), TIAGo++'s translational (3-D) exact dynamic polytope: the indices a
   sweep records (volume, isotropy, support, widths) for a chunk of 200 random configurations
   whose terms are given, one polytope at a time beside the compiled batch (a TIAGo++ sweep's
   inverse kinematics, a few ms per point, would hide both);
-- a 10^5-point planar polytope sweep on the compiled path (target: at most 10 s on one core);
+- a 10^5-point planar sweep of the three polytopes on the compiled path (target: at most 10 s on one core);
 - the compile time of the planar kernel, in a child process with an empty Numba cache.
 """
 
@@ -28,7 +29,7 @@ import numpy as np
 from mobmanip.sets import capacity
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
 
-POLYTOPES = ("kinematic_polytope", "dynamic_polytope")
+POLYTOPES = ("kinematic_polytope", "dynamic_polytope", "dynamic_polytope_min_norm")  # sweep --polytope
 
 
 def _grid(count: int) -> SweepGrid:
@@ -127,9 +128,9 @@ def run(quick: bool = False) -> int:
     n_compare, n_total = (400, 10_000) if quick else (2_000, 100_000)
     threads = ", ".join(f"{k}={os.environ.get(k, 'unset')}" for k in ("NUMBA_NUM_THREADS", "OPENBLAS_NUM_THREADS"))
     print(f"polytope sweeps, one worker in this process ({threads}); load {os.getloadavg()[0]:.2f}")
-    paper = SweepSpec("planar_dual_arm", measures=POLYTOPES)
+    paper = SweepSpec("planar_dual_arm", measures=POLYTOPES, decoupled=True)
     cases = {
-        "paper robot, planar kinematic + exact dynamic polytope": (paper, _grid(n_compare)),
+        "paper robot, planar: the three polytopes (sweep --polytope)": (paper, _grid(n_compare)),
     }
     tiago = _tiago_chunk(200)
     tiago_name = "TIAGo++, translational exact dynamic polytope (chunk of 200)"
