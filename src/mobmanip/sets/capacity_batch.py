@@ -370,3 +370,13 @@ def _min_norm(
         generic[offset[~consistent]] = False
     G = limits[:, :, None] * np.eye(nx)  # diag(tau_max) per row
     return CompiledPolytopeBatch(Lam, c, G, centre, np.zeros(count, dtype=bool), generic, reference)
+
+
+def warm_kernels(dim: int) -> None:
+    """Compile (or load from Numba's disk cache) the kernel for ``dim``-dimensional sets now,
+    announcing a compile: a sweep calls this before its progress bar and its worker processes."""
+    if dim == 2 and polygon_kernel.available():
+        F = np.broadcast_to(np.eye(2), (1, 2, 2))
+        polygon_kernel.polygons(F, np.zeros((1, 2)), np.eye(2)[None], np.zeros((1, 2)), np.ones(1, dtype=bool))
+    elif dim == 3 and zonotope_batch_kernel.available():
+        zonotope_batch_kernel.zonotopes(np.zeros((1, 3)), np.eye(3)[None])

@@ -1,8 +1,9 @@
 """Planar capacity polytopes of many configurations in one compiled pass (the sweeps' hot path).
 
 Row r is the polygon K_r = {a in R^2 : F_r a in c_r + G_r [-1, 1]^n} (F_r injective, (p, 2)),
-either a zonotope (F = I, p = 2, any centre) or a section of a zonotope centred at the origin
-(c = 0: a velocity set). For each row, as :class:`mobmanip.sets.polytope.Polytope` does one at a
+either a zonotope (F = I, p = 2, its centre c) or a section of a zonotope whose centre the
+caller gives (the origin for a velocity set, the least-squares point of F a = c for the
+minimum-norm policy's set). For each row, as :class:`mobmanip.sets.polytope.Polytope` does one at a
 time but without Qhull or NumPy calls:
 
 1. the zonotope's facet normals nu in R^p, one per (p - 1)-subset of independent generators
@@ -19,7 +20,8 @@ time but without Qhull or NumPy calls:
 
 A row is declined (status 1; the caller computes it one at a time, the reference way) when its
 generators nearly lose rank, a slack is not clearly positive, or the hull has fewer than three
-points (where the reference asks Qhull): flat, empty or ill-conditioned sets stay on the reference path.
+points (where the reference asks Qhull): flat, empty or ill-conditioned sets stay on the
+reference path.
 """
 
 from __future__ import annotations
@@ -75,7 +77,7 @@ def _polygon_rows(
         for i in range(p):
             for j in range(n):
                 Gr[i, j] = G[r, i, j]
-        # rank of G: singular values of the p x p Gram matrix G G^T
+        # G must span R^p clearly (else the reference's equalities: a flat set)
         if n < p:
             continue
         sv = np.linalg.svd(Gr, False)[1]
@@ -232,7 +234,7 @@ def _supports(V, nv, D, out):  # pragma: no cover - compiled
 _compiled: dict[str, Any] = {}
 _CALLED: list[bool] = []
 #: Compile time of the kernel on the project's 2-core machine with an empty cache (s), printed.
-_COMPILE_SECONDS = 6.0
+_COMPILE_SECONDS = 8.0
 
 
 _normals = zonotope._normals_kernel
