@@ -399,3 +399,34 @@ def test_3d_kinematic_sections_stay_on_the_reference_path(tiago_terms):
     ref = polytope_batch("kinematic", compiled=False, **terms)
     assert not fast.computed.any()
     np.testing.assert_array_equal(fast.volume, ref.volume)
+
+
+@pytest.mark.parametrize("task", ["planar", "translational"])
+def test_one_hand_kinematic_zonotopes(task):
+    """One hand (W = I): the kinematic set is the zonotope J_u box, compiled in 2-D and 3-D; its
+    volume and support equal the hull of its 2^n corners."""
+    from polytope_util import random_joint_configuration
+
+    robot = mobmanip.load_robot("panda")
+    rng = np.random.default_rng(12)
+    rows = [terms_at(robot, random_joint_configuration(robot, rng), task) for _ in range(100)]
+    terms = {"J_u": np.stack([t.J_u for t in rows]), "W": rows[0].W, "velocity_limits": rows[0].velocity_limits}
+    fast = polytope_batch("kinematic", **terms)
+    ref = polytope_batch("kinematic", compiled=False, **terms)
+    m = rows[0].W.shape[0]
+    assert fast.dim == m and fast.computed.all()
+    d = rng.normal(size=(100, m))
+    for a, b in (
+        (fast.volume, ref.volume),
+        (fast.isotropy, ref.isotropy),
+        (fast.support(d), ref.support(d)),
+        (fast.widths, ref.widths),
+    ):
+        assert _rel(a, b) <= 1e-12
+    n = terms["J_u"].shape[2]
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=n)))
+    for r in (0, 99):
+        corners = (signs * terms["velocity_limits"]) @ terms["J_u"][r].T
+        hull = ConvexHull(corners)
+        assert fast.volume[r] == pytest.approx(hull.volume, rel=1e-12)
+        assert fast.support(d)[r] == pytest.approx(np.max(corners @ d[r]), rel=1e-12)
