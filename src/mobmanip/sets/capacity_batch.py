@@ -103,7 +103,11 @@ class CompiledPolytopeBatch:
         self._isotropy = np.where(fast & (circ > 0.0), inr / np.where(circ > 0.0, circ, 1.0), 0.0)
         for i, p in self._polytopes.items():
             self.empty[i], self.degenerate[i] = p.empty, p.degenerate
-            self._volume[i], self._isotropy[i] = p.volume, p.isotropy
+            for name, values in (("volume", self._volume), ("isotropy", self._isotropy)):
+                try:
+                    values[i] = getattr(p, name)
+                except TaskError:  # as PolytopeBatch: too many facets to enumerate its vertices
+                    values[i] = np.nan
         self._widths: np.ndarray | None = None
 
     def __len__(self) -> int:
@@ -127,7 +131,8 @@ class CompiledPolytopeBatch:
 
     @property
     def volume(self) -> np.ndarray:
-        """Areas, (N,) (0 where empty or degenerate)."""
+        """Volumes (areas in 2-D), (N,) (0 where empty or degenerate; NaN where unavailable, as
+        :class:`~mobmanip.sets.capacity.PolytopeBatch`)."""
         return self._volume
 
     @property
