@@ -430,3 +430,19 @@ def test_one_hand_kinematic_zonotopes(task):
         hull = ConvexHull(corners)
         assert fast.volume[r] == pytest.approx(hull.volume, rel=1e-12)
         assert fast.support(d)[r] == pytest.approx(np.max(corners @ d[r]), rel=1e-12)
+
+
+def test_parallelograms_are_compiled_too():
+    """Two joints, one hand: the set is the parallelogram J diag(lim) [-1, 1]^2, area 4 |det J| lim_1 lim_2,
+    its inradius the smaller half-height over its farthest corner."""
+    rng = np.random.default_rng(1)
+    J, lim = rng.normal(size=(50, 2, 2)), np.array([1.0, 2.0])
+    batch = polytope_batch("kinematic", J_u=J, W=np.eye(2), velocity_limits=lim)
+    assert batch.computed.all()
+    G = J * lim
+    np.testing.assert_allclose(batch.volume, 4.0 * np.abs(np.linalg.det(G)), rtol=1e-12)
+    area = 4.0 * np.abs(np.linalg.det(G))
+    heights = area[:, None] / (2.0 * np.linalg.norm(G, axis=1))  # distance between each pair of sides
+    corners = np.stack([G[:, :, 0] + G[:, :, 1], G[:, :, 0] - G[:, :, 1]], axis=1)
+    far = np.linalg.norm(corners, axis=2).max(axis=1)
+    np.testing.assert_allclose(batch.isotropy, heights.min(axis=1) / 2.0 / far, rtol=1e-12)

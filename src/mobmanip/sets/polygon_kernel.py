@@ -117,7 +117,7 @@ def _polygon_rows(
                     rows[kept + t, 0], rows[kept + t, 1], slack[kept + t] = rows[i + t, 0], rows[i + t, 1], slack[i + t]
                 kept += 2
         k = kept
-        if k < 6:
+        if k < 4:  # a parallelogram has two pairs of facets
             continue
         smax, smin = 0.0, np.inf
         for i in range(k):
