@@ -446,3 +446,18 @@ def test_parallelograms_are_compiled_too():
     corners = np.stack([G[:, :, 0] + G[:, :, 1], G[:, :, 0] - G[:, :, 1]], axis=1)
     far = np.linalg.norm(corners, axis=2).max(axis=1)
     np.testing.assert_allclose(batch.isotropy, heights.min(axis=1) / 2.0 / far, rtol=1e-12)
+
+
+def test_nearly_flat_sets_are_left_to_the_reference():
+    """Generators whose smallest singular value is 1e-12 (flat for the reference) or 3e-9 (not
+    flat, but within the kernel's margin) of the largest: both rows are built one at a time."""
+    J = np.array([[[1.0, 2.0], [1.0, 2.0 + 1e-11]], [[1.0, 2.0], [1.0, 2.0 + 3e-8]], [[1.0, 0.0], [0.0, 1.0]]])
+    s = np.linalg.svd(J, compute_uv=False)
+    assert s[0, 1] / s[0, 0] < 1e-10 < 1e-9 < s[1, 1] / s[1, 0] < 1e-6
+    fast = polytope_batch("kinematic", J_u=J, W=np.eye(2), velocity_limits=np.ones(2))
+    ref = polytope_batch("kinematic", compiled=False, J_u=J, W=np.eye(2), velocity_limits=np.ones(2))
+    np.testing.assert_array_equal(fast.computed, [False, False, True])
+    np.testing.assert_array_equal(fast.degenerate, [True, False, False])
+    np.testing.assert_array_equal(fast.degenerate, ref.degenerate)
+    np.testing.assert_array_equal(fast.volume[:2], ref.volume[:2])
+    assert fast.volume[2] == pytest.approx(4.0, rel=1e-15)  # the unit square, side 2

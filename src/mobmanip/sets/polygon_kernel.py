@@ -41,13 +41,54 @@ except ImportError:  # pragma: no cover
     njit = None  # type: ignore[assignment]
 
 _OK, _DECLINED = 0, 1
-#: A row whose generators' smallest singular value is below this fraction of the largest is
-#: declined (the reference treats rank below 1e-10 as flat; the margin keeps borderline rows there).
-_RANK_MARGIN = 1e-8
+#: A row whose generators' rank-revealing pivot (Gram-Schmidt with pivoting, twice orthogonalised,
+#: i.e. QR of G^T with column pivoting) falls below this fraction of the first is declined. The
+#: reference treats singular values below 1e-10 of the largest as flat; the last pivot over the
+#: first exceeds sigma_min / sigma_max by at most 2^(p-1) sqrt(p), so the margin used is the
+#: larger of this and 1e-9 2^(p-1) sqrt(p): every flat row is declined, with a factor 10 to spare.
+_RANK_MARGIN = 1e-6
 #: Slacks below this fraction of the largest are declined (a centre on or near the boundary).
 _SLACK_MARGIN = 1e-9
 #: Vertices closer than this fraction of the polygon's size are one (mobmanip.sets.hull.MERGE_RTOL).
 _MERGE_RTOL = 1e-9
+
+
+def _clearly_full_rank(Gr, work):  # pragma: no cover - compiled
+    """Whether the rows of Gr (p, n) are independent with a margin: Gram-Schmidt with pivoting
+    (the remaining row of largest residual first); its pivots are the diagonal of a rank-revealing
+    QR of Gr^T. ``work`` is a (p, n) buffer."""
+    p, n = Gr.shape
+    margin = max(_RANK_MARGIN, 1e-9 * 2.0 ** (p - 1) * math.sqrt(p))
+    for i in range(p):
+        for j in range(n):
+            work[i, j] = Gr[i, j]
+    first = 0.0
+    for k in range(p):
+        best, bi = -1.0, k
+        for i in range(k, p):
+            acc = 0.0
+            for j in range(n):
+                acc += work[i, j] * work[i, j]
+            if acc > best:
+                best, bi = acc, i
+        if bi != k:
+            for j in range(n):
+                work[k, j], work[bi, j] = work[bi, j], work[k, j]
+        norm = math.sqrt(best)
+        if k == 0:
+            first = norm
+        if not norm > margin * first:
+            return False
+        for j in range(n):
+            work[k, j] /= norm
+        for i in range(k + 1, p):
+            for _ in range(2):  # twice: orthogonal to round-off
+                dot = 0.0
+                for j in range(n):
+                    dot += work[i, j] * work[k, j]
+                for j in range(n):
+                    work[i, j] -= dot * work[k, j]
+    return True
 
 
 def _polygon_rows(
@@ -70,6 +111,7 @@ def _polygon_rows(
     left = np.empty(2 * S, dtype=np.bool_)
     U = np.empty((2 * S, 2))
     Gr = np.empty((p, n))
+    work = np.empty((p, n))
     for r in range(count):
         status[r] = _DECLINED
         nv[r] = 0
@@ -80,8 +122,7 @@ def _polygon_rows(
         # G must span R^p clearly (else the reference's equalities: a flat set)
         if n < p:
             continue
-        sv = np.linalg.svd(Gr, False)[1]
-        if not sv[p - 1] > _RANK_MARGIN * sv[0]:
+        if not _full_rank(Gr, work):
             continue
         _normals(Gr, subsets, normals)
         k = 0
@@ -238,13 +279,14 @@ _COMPILE_SECONDS = 8.0
 
 
 _normals = zonotope._normals_kernel
+_full_rank = _clearly_full_rank
 
 
 def _compile():
     """Compile the kernels on first use (cached on disk by Numba between runs)."""
-    global _normals
+    global _normals, _full_rank
     jit = njit(cache=True, nogil=True)
-    _normals = jit(zonotope._normals_kernel)
+    _normals, _full_rank = jit(zonotope._normals_kernel), jit(_clearly_full_rank)
     _compiled["rows"] = jit(_polygon_rows)
     _compiled["supports"] = jit(_supports)
 
@@ -289,7 +331,9 @@ def polygons(F: np.ndarray, c: np.ndarray, G: np.ndarray, centre: np.ndarray, is
     if first:
         _CALLED.append(True)
         notice = announced_compile(
-            "the planar polytope sweep kernel", _COMPILE_SECONDS, [_compiled["rows"], _compiled["supports"], _normals]
+            "the planar polytope sweep kernel",
+            _COMPILE_SECONDS,
+            [_compiled["rows"], _compiled["supports"], _normals, _full_rank],
         )
     with notice:
         _compiled["rows"](

@@ -6,7 +6,7 @@ its faces from the compiled face kernel of :mod:`mobmanip.sets.zonotope_kernel` 
 the reference calls), then the volume 8 sum over generator triples of ``|det(g_i, g_j, g_k)|``
 (:func:`mobmanip.sets.zonotope.volume`), the inradius (the smallest facet width) and the
 circumradius (the farthest vertex from c). A row is declined (status 1; the caller computes it
-one at a time) when its generators nearly lose rank or the face kernel declines it.
+one at a time) when its generators nearly lose rank (the planar kernel's test) or the face kernel declines it.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..support.compile_notice import announced_compile
-from . import zonotope_kernel
+from . import polygon_kernel, zonotope_kernel
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
     from numba import njit
@@ -26,17 +26,19 @@ except ImportError:  # pragma: no cover
     njit = None  # type: ignore[assignment]
 
 _OK, _DECLINED = 0, 1
-#: As :data:`mobmanip.sets.polygon_kernel._RANK_MARGIN`: rows near the reference's rank test stay there.
-_RANK_MARGIN = 1e-8
 
 
 def _faces(center, G):  # pragma: no cover - replaced by the face kernel's compiled 3-D routine
     raise NotImplementedError
 
 
+_full_rank = polygon_kernel._clearly_full_rank
+
+
 def _zonotope_rows(c, G, cap, status, facets, nf, volume, inr, circ):  # pragma: no cover - compiled
     count, _, n = G.shape
     Gr = np.empty((3, n))
+    work = np.empty((3, n))
     centre = np.empty(3)
     for r in range(count):
         status[r] = _DECLINED
@@ -47,8 +49,7 @@ def _zonotope_rows(c, G, cap, status, facets, nf, volume, inr, circ):  # pragma:
                 Gr[i, j] = G[r, i, j]
         if n < 3:
             continue
-        sv = np.linalg.svd(Gr, False)[1]
-        if not sv[2] > _RANK_MARGIN * sv[0]:
+        if not _full_rank(Gr, work):  # as the planar kernel: flat rows stay on the reference path
             continue
         result = _faces(centre, Gr)
         if result[0] != 0:
@@ -89,11 +90,12 @@ _COMPILE_SECONDS = 12.0
 
 def _compile():
     """Compile on first use (cached on disk by Numba between runs)."""
-    global _faces
+    global _faces, _full_rank
     if not zonotope_kernel._compiled:
         zonotope_kernel._compile()
-    _faces = zonotope_kernel._compiled[3]
-    _compiled["rows"] = njit(cache=True, nogil=True)(_zonotope_rows)
+    jit = njit(cache=True, nogil=True)
+    _faces, _full_rank = zonotope_kernel._compiled[3], jit(polygon_kernel._clearly_full_rank)
+    _compiled["rows"] = jit(_zonotope_rows)
 
 
 def available() -> bool:
@@ -128,7 +130,9 @@ def zonotopes(c: np.ndarray, G: np.ndarray) -> dict:
     notice = contextlib.nullcontext()
     if not _CALLED:
         _CALLED.append(True)
-        notice = announced_compile("the 3-D zonotope sweep kernel", _COMPILE_SECONDS, [_compiled["rows"], _faces])
+        notice = announced_compile(
+            "the 3-D zonotope sweep kernel", _COMPILE_SECONDS, [_compiled["rows"], _faces, _full_rank]
+        )
     with notice:
         _compiled["rows"](
             np.ascontiguousarray(c, dtype=float),
