@@ -22,6 +22,8 @@ Usage::
     python scripts/benchmark.py            # full run (a few minutes)
     python scripts/benchmark.py --quick    # smoke run (seconds)
     python scripts/benchmark.py --polytopes [--quick]   # the capacity polytopes instead
+    python scripts/benchmark.py --decisions [--quick]   # decisions beside the code they replace
+    python scripts/benchmark.py --sweeps [--quick]      # polytope sweeps, compiled beside one at a time
 """
 
 from __future__ import annotations
@@ -201,6 +203,11 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--floor", action="store_true", help="only the grounded capacity (scripts/benchmark_floor.py)")
     parser.add_argument(
+        "--decisions",
+        action="store_true",
+        help="decisions beside the code they replace, on one run (scripts/benchmark_decisions.py)",
+    )
+    parser.add_argument(
         "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
     )
     args = parser.parse_args(argv)
@@ -211,6 +218,10 @@ def main(argv=None) -> int:
         from benchmark_polytopes import run
 
         return run(quick=args.quick)
+    if args.decisions:
+        from benchmark_decisions import run as run_decisions
+
+        return run_decisions(quick=args.quick, rounds=args.rounds)
     if args.floor:
         from benchmark_floor import run as run_floor
 

@@ -90,6 +90,13 @@ def test_coinciding_sets_are_drawn_once_with_a_note(paper):
     assert any("0.001" in text and "coincides with locked platform" in text for text in _texts(fig))
 
 
+def test_paper_figures_meet_the_standard_every_command_figure_meets(paper):
+    from figure_checks import check_paper_ready
+
+    for name, fig in paper["figures"].items():
+        check_paper_ready(fig, name)
+
+
 def test_support_function_of_an_ellipse_matches_its_boundary(paper):
     e = paper["study"].kinematic[0].analysis.kinematic
     d = np.column_stack([np.cos(np.linspace(0, 6, 40)), np.sin(np.linspace(0, 6, 40))])
@@ -165,7 +172,7 @@ def test_polar_sweep_plot_shows_the_swept_wedge_with_units(wedge, tmp_path):
         assert ax.get_rorigin() == pytest.approx(0.0)
         assert ax.get_ylim() == pytest.approx((0.7, 1.3))
         colorbar = fig.axes[-1]
-        assert colorbar.get_ylabel() == "kinematic.volume ((m/s)$^{2}$)"
+        assert colorbar.get_ylabel() == "kinematic ellipsoid volume ((m/s)$^{2}$)"
     finally:
         plt.close(fig)
     path = plot_sweep(wedge, "dynamic.isotropy", tmp_path / "iso.png")

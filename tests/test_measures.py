@@ -350,12 +350,12 @@ def test_command_line_summary_and_json_loop_over_measures(tmp_path, capsys, toys
     document = json.loads(out.read_text())
     assert "dynamic_ellipsoid" not in document and "dynamic ellipsoid" not in text
     kin = document["kinematic_ellipsoid"]
-    assert f"kinematic ellipsoid semi-axes (m/s, rad/s): {kin['semi_axes'][0]:.4f}" in text
+    assert f"kinematic ellipsoid semi-axes (m/s): {kin['semi_axes'][0]:.4f}" in text
     doubled = document["doubled_ellipsoid"]["semi_axes"]
-    assert f"doubled kinematic ellipsoid semi-axes (m/s, rad/s): {doubled[0]:.4f}, {doubled[1]:.4f}" in text
+    assert f"doubled kinematic ellipsoid semi-axes (m/s): {doubled[0]:.4f}, {doubled[1]:.4f}" in text
     widths = document["kinematic_bounding_box"]["half_widths"]
     reach = "; ".join(f"-{w:.4f} .. +{w:.4f}" for w in widths)
-    assert f"kinematic bounding box reach along the task axes (m/s, rad/s): {reach}" in text
+    assert f"kinematic bounding box reach along the task axes (m/s): {reach}" in text
     assert main(["analyze", "planar_dual_arm", "--measure", "nope"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("mobmanip: error: unknown measure 'nope'") and "kinematic_box" in err

@@ -137,10 +137,12 @@ def test_polytopes_are_drawn_in_the_browser_live_and_exported(browser, tmp_path,
     """TIAGo++ (translational): the kinematic polytope's mesh and edges exist at the registry's
     path in the page; its world points are the task point plus the scale times the set's
     vertices (their supports those of the joint box's program); the locked set is drawn as edges
-    only; the exported page holds the same objects at the same places."""
+    only; the exported page holds the same objects at the same places. Shown with the ellipsoids,
+    which the polytopes contain, every polytope is drawn as its edges only (no mesh to hide them)."""
     robot = mobmanip.load_robot("tiago_dual")
     q = random_configurations(robot, rng, 1)[0]
     analysis, locked = analyze_pair(robot, q, "translational", measures=MEASURES)
+    alone, _ = analyze_pair(robot, q, "translational", measures=("kinematic_polytope",))
     _, t = terms(robot, q, "translational")
     lp = kinematic_lp(t["J_u"], t["W"], t["velocity_limits"])
     base = f"{M}mobmanip/polytopes/kinematic_polytope"
@@ -149,16 +151,25 @@ def test_polytopes_are_drawn_in_the_browser_live_and_exported(browser, tmp_path,
         page = browser.new_page(viewport=VIEWPORT)
         try:
             page.goto(viewer.url)
-            required = (f"{base}/shape", f"{base}/edges", f"{M}mobmanip/locked/kinematic_polytope/edges")
+            required = (f"{base}/edges", f"{M}mobmanip/locked/kinematic_polytope/edges")
             wait_for_scene(page, required)
+            objects = scene_objects(page)
+            k, origin = viewer.scales["kinematic"], analysis.held_object.center
+            # the polytope contains the ellipsoid (the joint box holds the unit ball): outlined
+            assert (False, "kinematic") in viewer.outlined[False, "kinematic_polytope"]
+            for name in POLYTOPES:
+                assert f"{M}mobmanip/polytopes/{name}/shape" not in objects, name
+                assert objects[f"{M}mobmanip/polytopes/{name}/edges"]["type"] == "LineSegments"
+            edges, _ = _drawn_points(page, f"{base}/edges")
+            for d in _unit(rng, 10, 3):
+                assert float(np.max((edges - origin) @ d)) / k == pytest.approx(lp(d), rel=1e-5)
+            viewer.show(q, alone, None)  # the polytope alone: nothing inside it, a translucent mesh
+            wait_for_scene(page, (f"{base}/shape", f"{base}/edges"))
             objects = scene_objects(page)
             assert objects[f"{base}/shape"]["type"] == "Mesh" and objects[f"{base}/edges"]["type"] == "LineSegments"
             assert f"{M}mobmanip/locked/kinematic_polytope/shape" not in objects  # locked: edges only
-            for name in POLYTOPES[1:]:
-                assert objects[f"{M}mobmanip/polytopes/{name}/shape"]["type"] == "Mesh"
             points, index = _drawn_points(page, f"{base}/shape")
-            k, origin = viewer.scales["kinematic"], analysis.held_object.center
-            poly = analysis.measure("kinematic_polytope")
+            poly = alone.measure("kinematic_polytope")
             np.testing.assert_allclose(points, origin + k * poly.vertices, rtol=0, atol=1e-5)
             np.testing.assert_array_equal(np.array(index).reshape(-1, 3), poly.triangles)
             for d in _unit(rng, 10, 3):
@@ -167,9 +178,9 @@ def test_polytopes_are_drawn_in_the_browser_live_and_exported(browser, tmp_path,
             offline = browser.new_page(viewport=VIEWPORT)
             try:
                 offline.goto(exported.as_uri())
-                wait_for_scene(offline, required)
+                wait_for_scene(offline, (f"{base}/shape", f"{base}/edges"))
                 theirs = scene_objects(offline)
-                for path in required:
+                for path in (f"{base}/shape", f"{base}/edges"):
                     assert theirs[path]["type"] == objects[path]["type"]
                 again, _ = _drawn_points(offline, f"{base}/shape")
                 np.testing.assert_allclose(again, points, rtol=0, atol=1e-6)

@@ -244,6 +244,25 @@ def test_capacity_is_at_least_1_2_times_the_baseline_from_the_same_start(beam):
     assert result.summary()["min_capacity_ratio"] == pytest.approx(ratio)
 
 
+def test_team_carry_figures_meet_the_paper_figures_standard(beam):
+    """capacity.png and paths.png of a team carry (tests/figure_checks.py), the team named."""
+    import matplotlib.pyplot as plt
+
+    from figure_checks import check_paper_ready
+    from mobmanip.viz.motion_figures import carry_figure, team_carry_figure
+
+    team, _, result = beam
+    for name, fig in (
+        ("capacity.png", carry_figure(result, f"team {team.name}")),
+        ("paths.png", team_carry_figure(result)),
+    ):
+        try:
+            check_paper_ready(fig, name)
+            assert team.name in fig.axes[0].get_title()
+        finally:
+            plt.close(fig)
+
+
 def test_the_fast_kinematic_gradient_matches_the_stacked_terms_and_differences():
     team = load_team(TEAM)
     capacity = TeamCapacity(team, Objective.parse("kinematic:minor_axis", team.task))

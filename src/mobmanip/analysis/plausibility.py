@@ -161,6 +161,20 @@ def floor_warnings(analysis) -> list[str]:
     return out
 
 
+#: Below this ratio of its smallest to its largest semi-axis a set counts as collapsed (a
+#: singular posture): a measure of it, and any ratio to it, says more about the singularity than
+#: about the robot's capacity.
+COLLAPSED_RATIO = 1e-3
+
+
+def collapsed(task_set) -> bool:
+    """Whether an ellipsoid is empty or has collapsed (:data:`COLLAPSED_RATIO`)."""
+    if task_set.empty:
+        return True
+    semi = np.asarray(task_set.semi_axes, dtype=float)
+    return bool(semi[0] <= 0.0 or semi[-1] < COLLAPSED_RATIO * semi[0])
+
+
 def mixes_units(task: TaskSpace) -> bool:
     """Whether the task has both linear and angular rows (its volume multiplies m by rad)."""
     return bool(task.linear_rows) and bool(task.angular_rows)

@@ -140,7 +140,7 @@ class Analysis:
         """(measure name, units, one-line summary) of each set, for the two representations below."""
         rows = []
         for name, task_set in self.measures.items():
-            units = get_measure(name).quantity.units
+            units = get_measure(name).quantity.units_for(self.task)
             if task_set.empty:
                 rows.append((name, units, "empty"))
                 continue

@@ -216,17 +216,18 @@ def run(args) -> int:
     blocks = result.block_indices()
     for name, task_set in result.measures.items():
         measure = get_measure(name)
+        units = measure.quantity.units_for(result.task)
         label = f"{measure.label} ({coupling})" if measure.quantity.inertial else measure.label
         ignored = result.ignored_constraints(name)
         if ignored:
             label += f" [ignores {', '.join(ignored)}: an ellipsoid cannot honour it]"
-        print(_describe(label, task_set, measure.quantity.units, _ellipsoid_of(result, measure.quantity)))
+        print(_describe(label, task_set, units, _ellipsoid_of(result, measure.quantity)))
         if blocks is not None and not task_set.empty:
             print(_describe_blocks(blocks[name], measure.quantity.units))
         reaches = document[measure.json_key].get("reaches")
         if reaches:
             floor = document[measure.json_key].get("model", {}).get("floor")
-            print(_describe_reaches(reaches, measure.quantity.units, floor))
+            print(_describe_reaches(reaches, units, floor))
     if blocks is not None:
         print(
             f"(task {result.task} mixes linear and angular rows: its volumes and isotropies multiply metres by "

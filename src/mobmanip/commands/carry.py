@@ -19,7 +19,18 @@ gradient is climbed. The baseline tracks the same path with the weighted pseudo-
 Before the path, the QP motion first moves to a better posture holding the object where it
 is (a self-motion: the same QP with the object held still, until the objective stops rising
 or for at most --prepare seconds); the path's motion starts there, the baseline starts from
-the start posture. --prepare 0 starts both from the start posture.
+the start posture and is run again from the QP's prepared start, so that the ratio of minima
+splits into what the preparation gives and what the motion gives. A ratio whose baseline's set
+collapses (a singular posture) is not given. --prepare 0 starts both from the start posture.
+
+--ground (--mu MU, --no-traction, --reserve R, --zmp-margin M) keeps the robot on its floor: at
+every step of the QP motion (and of the self-motion) the zero-moment point stays M metres (default
+0.02) inside the support polygon, every wheel and caster stays loaded (the contacts share the
+load as equally stiff springs) and, unless --no-traction, each driven wheel's traction stays in
+its friction pyramid (mu: the spec's [support] mu, else 0.5). These are rows of the QP, exact for
+the step's floor wrench with the velocity terms at the previous step's rates; a step they make
+infeasible is reported with the floor's row that binds. The baseline ignores the floor. Check a
+result with `mobmanip trajectory OUT/trajectory.csv --ground --mu MU`.
 
 --out DIR writes trajectory.csv (t, platform_x, platform_y, platform_yaw, one column per joint
 as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
@@ -47,8 +58,8 @@ def register(sub) -> None:
     parser.add_argument(
         "--objective",
         default="kinematic:minor_axis",
-        metavar="ELLIPSOID:INDEX[:DIR]",
-        help="what to maximise (as for `place`; default kinematic:minor_axis)",
+        metavar="ELLIPSOID:INDEX[:DIR|:BLOCK]",
+        help="what to maximise (as for `place`, e.g. dynamic:minor_axis:linear; default kinematic:minor_axis)",
     )
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
@@ -62,6 +73,16 @@ def register(sub) -> None:
         help="longest self-motion before the path (s, default 30; 0: none)",
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    from .common import add_floor_options
+
+    add_floor_options(parser)
+    parser.add_argument(
+        "--zmp-margin",
+        type=float,
+        metavar="M",
+        help="with --ground: how far the zero-moment point stays inside the support polygon (m; implies --ground; "
+        "default 0.02)",
+    )
     add_work_option(parser, f"QP steps ((path duration + --prepare) / --step; default {MAX_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -94,6 +115,57 @@ def _check_work(args, path) -> None:
     check_work(WorkEstimate("carry", "QP steps", steps, SECONDS_PER_STEP, detail), _bound(args.max_work, MAX_STEPS))
 
 
+def print_ratio(label: str, ratio: float | None) -> None:
+    print(f"{label}: " + ("not given (its baseline's set has collapsed)" if ratio is None else f"{ratio:.3f}"))
+
+
+def objective_unit_text(result) -> str:
+    """`` m/s`` (a space and the objective's unit, plain text) or nothing for a dimensionless or
+    logarithmic one."""
+    from ..measures import get_measure
+
+    objective = result.objective
+    if objective.index in ("log_volume", "log_isotropy"):
+        return ""
+    quantity = get_measure(objective.ellipsoid).quantity
+    from ..robot.tasks import get_task
+
+    space = get_task(result.task)
+    rows = objective.rows
+    if rows is None and objective.direction is not None:
+        rows = [i for i, v in enumerate(objective.direction) if v != 0.0]
+    rows = range(space.dim) if rows is None else rows
+    linear, _, angular = quantity.units.partition(", ")
+    kinds = {bool(space.angular[i]) for i in rows}
+    if kinds == {False}:
+        return f" {linear}"
+    if kinds == {True}:
+        return f" {angular or linear}"
+    return f" ({quantity.units} mixed)"
+
+
+def _floor(args):
+    """The floor --ground, --mu, --no-traction, --reserve and --zmp-margin ask for, or ``None``."""
+    import math
+
+    from ..errors import UsageError
+    from ..motion.carry_floor import DEFAULT_ZMP_MARGIN, CarryFloor
+    from .common import floor_constraints
+
+    margin = args.zmp_margin
+    if margin is not None and not (math.isfinite(margin) and margin >= 0.0):
+        raise UsageError(f"--zmp-margin must be a distance >= 0 m, got {margin!r}")
+    if args.load not in (None, "auto", "compliant"):
+        raise UsageError(f"carry's floor shares the load as equally stiff contacts (compliant); --load {args.load} "
+                         "is for the capacity sets")  # fmt: skip
+    chosen = floor_constraints(args)
+    if not chosen and margin is None:
+        return None
+    mu = None if args.no_traction else ("spec" if args.mu is None else args.mu)
+    return CarryFloor(mu=mu, zmp_margin=DEFAULT_ZMP_MARGIN if margin is None else margin,
+                      reserve=float(args.reserve or 0.0))  # fmt: skip
+
+
 def run(args) -> int:
 
     from ..errors import CarryFailed
@@ -109,6 +181,7 @@ def run(args) -> int:
     path = read_path(args.path)
     _check_work(args, path)
     start = read_configuration(robot, args.start) if args.start else None
+    floor = _floor(args)
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
         for name in CARRY_FILES:
@@ -123,6 +196,7 @@ def run(args) -> int:
             object_mass=args.object_mass,
             step=args.step,
             prepare=args.prepare,
+            floor=floor,
         )
     except CarryFailed as failure:
         if not args.out:
@@ -142,16 +216,31 @@ def run(args) -> int:
             f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
             f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the start posture"
         )
-    for run in (result.motion, result.baseline):
-        s = summary[run.method]
-        label = "QP with capacity" if run.method == "qp" else "pseudo-inverse baseline"
+    labels = {
+        "qp": "QP with capacity",
+        "pinv": "pseudo-inverse baseline from the start posture",
+        "pinv_prepared": "pseudo-inverse baseline from the QP's prepared start",
+    }
+    unit = objective_unit_text(result)
+    for key, label in labels.items():
+        if key not in summary:
+            continue
+        s = summary[key]
         print(
-            f"{label}: min {result.objective.name} {s['min_capacity']:.4g}, mean {s['mean_capacity']:.4g}, "
+            f"{label}: min {result.objective.name} {s['min_capacity']:.4g}{unit}, mean {s['mean_capacity']:.4g}, "
             f"max tracking error {1e3 * s['max_tracking_error']:.3f} mm"
         )
-    ratio = summary["min_capacity_ratio"]
-    if ratio is not None:
-        print(f"min capacity ratio (QP / baseline): {ratio:.3f}")
+    for key, value in summary["collapsed"].items():
+        print(
+            f"{labels[key]}: its set has collapsed at its minimum (a singular posture: smallest semi-axis "
+            f"{value['smallest_semi_axis']:.2g} of {value['largest_semi_axis']:.3g}); no ratio to it is given"
+        )
+    print_ratio("min capacity ratio, QP / baseline from the start posture", summary["min_capacity_ratio"])
+    parts = summary.get("ratio_parts")
+    if parts is not None:
+        print_ratio("  of which the preparation gives (baseline from the prepared start / from the start posture)",
+                     parts["preparation"])  # fmt: skip
+        print_ratio("  and the motion gives (QP / baseline from the prepared start)", parts["motion"])
     if args.out:
         for written in carry_outputs(robot, result, args.out):
             print(f"wrote {written}")

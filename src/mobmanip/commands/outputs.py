@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
     from ..motion.ground import GroundAlong
+    from ..motion.traction import TractionAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
     from ..placement.site import SiteResult
@@ -178,11 +179,15 @@ def trajectory_outputs(
     out_dir: str | Path,
     prefix: str = "analysis",
     ground: GroundAlong | None = None,
+    traction: TractionAlong | None = None,
 ) -> list[str]:
     """``{prefix}.csv`` (:meth:`TrajectoryAnalysis.table`), ``{prefix}.json`` and ``{prefix}.png``
     (:func:`mobmanip.viz.motion_figures.trajectory_figure`) in ``out_dir``; returns the paths.
     With ``ground`` (:func:`mobmanip.motion.ground.ground_along`), the CSV and JSON also hold the
-    zero-moment point and the stability margin per sample."""
+    zero-moment point and the stability margin per sample; with ``traction``
+    (:func:`mobmanip.motion.traction.traction_along`), every contact's normal force
+    (``normal_force_<contact>``) and every driven wheel's traction use (``traction_use_<wheel>``;
+    an unloaded wheel's is ``inf`` in the CSV and ``null`` in the JSON)."""
     from ..viz.motion_figures import trajectory_figure
 
     out = Path(out_dir)
@@ -198,12 +203,29 @@ def trajectory_outputs(
             ("stability_margin", ground.margin),
         ):
             document["columns"][name] = column.tolist()
+    if traction is not None:
+        columns = [(f"normal_force_{name}", traction.normal[:, c]) for c, name in enumerate(traction.contacts)]
+        columns += [(f"traction_use_{name}", traction.use[:, w]) for w, name in enumerate(traction.wheels)]
+        header = [*header, *(name for name, _ in columns)]
+        values = np.hstack([values, *(column[:, None] for _, column in columns)])
+        for name, column in columns:
+            document["columns"][name] = [float(v) if math.isfinite(v) else None for v in column]
+        i, w = traction.worst()
+        worst = float(traction.use[i, w])
+        document["traction"] = {
+            "mu": traction.mu,
+            "load": "compliant",
+            "max_traction_use": worst if math.isfinite(worst) else None,
+            "worst": {"sample": i, "t": float(result.trajectory.t[i]), "wheel": traction.wheels[w]},
+            "slipping_samples": traction.slipping().tolist(),
+            "unloaded_samples": traction.unloaded().tolist(),
+        }  # fmt: skip
     paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
     write_table_csv(paths[0], header, values)
     write_json(paths[1], document)
     fig = trajectory_figure(result)
     try:
-        save_figure(fig, paths[2], dpi=100)
+        save_figure(fig, paths[2], dpi=100, bbox_inches="tight")
     finally:
         _close(fig)
     return [str(p) for p in paths]
@@ -268,9 +290,9 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
         write_trajectory_csv(
             robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
         )
-    fig = carry_figure(result)
+    fig = carry_figure(result, robot.name)
     try:
-        save_figure(fig, paths[3], dpi=100)
+        save_figure(fig, paths[3], dpi=100, bbox_inches="tight")
     finally:
         _close(fig)
     return [str(p) for p in paths]
@@ -338,8 +360,7 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
     if prep is not None:
         files["preparation"] = {m.name: p.name for m, p in zip(team.members, paths["preparation"])}
     write_json(summary, {**result.summary(), "files": files})
-    for draw, path in ((carry_figure, figure), (team_carry_figure, top)):
-        fig = draw(result)
+    for fig, path in ((carry_figure(result, f"team {team.name}"), figure), (team_carry_figure(result), top)):
         try:
             save_figure(fig, path, dpi=100)
         finally:

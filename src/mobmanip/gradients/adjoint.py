@@ -32,7 +32,19 @@ def _sym(a: np.ndarray) -> np.ndarray:
 
 
 def index_adjoint(objective, C: np.ndarray, c: np.ndarray | None):
-    """An objective's values (n,) and its sensitivities to C (n, m, m) and to c (n, m) or ``None``."""
+    """An objective's values (n,) and its sensitivities to C (n, m, m) and to c (n, m) or ``None``.
+    A block's objective (``objective.rows``) is that of the shadow on its rows: its sensitivities
+    are those of the rows' sub-matrix, zero elsewhere."""
+    if getattr(objective, "rows", None) is not None:
+        r = np.asarray(objective.rows)
+        value, sub_bar, sub_cbar = index_adjoint(objective.whole(), C[:, r][:, :, r], None if c is None else c[:, r])
+        C_bar = np.zeros_like(C)
+        C_bar[:, r[:, None], r[None, :]] = sub_bar
+        c_bar = None
+        if sub_cbar is not None and c is not None:
+            c_bar = np.zeros_like(c)
+            c_bar[:, r] = sub_cbar
+        return value, C_bar, c_bar
     m = C.shape[-1]
     index = objective.index
     if index in ("log_volume", "log_isotropy"):

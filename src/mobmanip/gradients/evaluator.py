@@ -57,6 +57,8 @@ from .tree_adjoint import TreeAdjoint
 ELLIPSOIDS = ("kinematic", "dynamic")
 #: The measures of an ellipsoid with gradients.
 INDICES = ("log_volume", "log_isotropy", "capacity", "minor_axis")
+#: The blocks of task rows an objective can be taken on (one unit each).
+BLOCKS = ("linear", "angular")
 
 
 @dataclass(frozen=True)
@@ -67,12 +69,17 @@ class Objective:
         ellipsoid: ``"kinematic"`` or ``"dynamic"``.
         index: one of :data:`INDICES`.
         direction: unit task direction for ``capacity``, (m,); ``None`` otherwise.
+        block: ``"linear"`` or ``"angular"``: the index of the set's shadow on those task rows
+            (one unit: m/s or rad/s), as ``analyze`` reports per block; ``None``: the whole set.
+        rows: the task rows of ``block`` (set by :meth:`parse` from the task), or ``None``.
     """
 
     ellipsoid: str
     index: str
     direction: tuple[float, ...] | None = None
     text: str | None = field(default=None, compare=False)
+    block: str | None = None
+    rows: tuple[int, ...] | None = None
 
     def __post_init__(self):
         if self.ellipsoid not in ELLIPSOIDS:
@@ -94,6 +101,20 @@ class Objective:
             object.__setattr__(self, "direction", tuple(float(v) for v in d / norm))
         elif self.direction is not None:
             raise ArgumentError(f"objective {self.index!r} takes no direction, got {list(self.direction)!r}")
+        if self.block is not None:
+            if self.block not in BLOCKS:
+                raise ArgumentError(f"block must be one of {', '.join(BLOCKS)}, got {self.block!r}")
+            if self.index == "capacity":
+                raise ArgumentError("a capacity's direction already picks its rows; it takes no block")
+            if not self.rows:
+                raise ArgumentError(f"objective block {self.block!r} needs its task rows")
+            object.__setattr__(self, "rows", tuple(int(i) for i in self.rows))
+        elif self.rows is not None:
+            raise ArgumentError("task rows are given by a block (linear or angular)")
+
+    def whole(self) -> Objective:
+        """The same objective of the whole set (no block)."""
+        return Objective(self.ellipsoid, self.index, self.direction)
 
     @property
     def name(self) -> str:
@@ -101,14 +122,18 @@ class Objective:
         if self.text is not None:
             return self.text
         tail = "" if self.direction is None else ":" + ",".join(f"{v:g}" for v in self.direction)
+        if self.block is not None:
+            tail = f":{self.block}"
         return f"{self.ellipsoid}:{self.index}{tail}"
 
     @classmethod
     def parse(cls, text: str, task: str | TaskSpace) -> Objective:
-        """An objective from ``ELLIPSOID:INDEX[:DIRECTION]``.
+        """An objective from ``ELLIPSOID:INDEX[:DIRECTION]`` or ``ELLIPSOID:INDEX:BLOCK``.
 
         DIRECTION is a signed task axis (``+x``, ``-z``, ``+yaw``; the task's axis labels) or
-        comma-separated components (``1,1,0``).
+        comma-separated components (``1,1,0``). BLOCK is ``linear`` or ``angular``: the index of
+        the set's shadow on the task's linear (m/s, m/s^2) or angular (rad/s, rad/s^2) rows, as
+        ``analyze`` reports per block (``dynamic:minor_axis:linear``).
 
         Raises:
             MeasureError: an unknown ellipsoid or index (the message lists the known ones).
@@ -118,13 +143,26 @@ class Objective:
         parts = str(text).split(":")
         if len(parts) not in (2, 3):
             raise ArgumentError(f"objective must be ELLIPSOID:INDEX[:DIRECTION], got {text!r}")
+        if len(parts) == 3 and parts[2].strip() in BLOCKS:
+            block = parts[2].strip()
+            rows = task.linear_rows if block == "linear" else task.angular_rows
+            if not rows:
+                raise ArgumentError(f"objective {text!r}: task {task.name!r} has no {block} rows")
+            if parts[1] == "capacity":
+                raise ArgumentError(f"objective {text!r}: a capacity needs a direction, not a block")
+            return cls(parts[0], parts[1], None, text=str(text), block=block, rows=tuple(rows))
         direction = None if len(parts) == 2 else _parse_direction(parts[2], task)
         if direction is None and parts[1:2] == ["capacity"]:
             raise ArgumentError(f"objective {text!r}: a capacity needs a direction, e.g. {parts[0]}:capacity:+x")
         return cls(parts[0], parts[1], direction, text=str(text))
 
     def check_task(self, task: TaskSpace) -> None:
-        """Raises ArgumentError when the capacity direction does not have the task's dimension."""
+        """Raises ArgumentError when the capacity direction does not have the task's dimension, or
+        the block's rows are not the task's rows of that kind."""
+        if self.block is not None:
+            rows = task.linear_rows if self.block == "linear" else task.angular_rows
+            if tuple(rows) != self.rows:
+                raise ArgumentError(f"objective {self.name!r}: task {task.name!r} has {self.block} rows {list(rows)}")
         if self.direction is not None and len(self.direction) != task.dim:
             raise ArgumentError(
                 f"capacity direction {list(self.direction)!r} has {len(self.direction)} components; "
@@ -459,7 +497,12 @@ def _dynamic_shape(t: dict, Q: np.ndarray | None, Z: np.ndarray):
 
 
 def _index(objective: Objective, C, dC, c, dc) -> tuple[np.ndarray, np.ndarray]:
-    """The objective's values (n,) and gradients (n, nv) from stacked C, c and their derivatives."""
+    """The objective's values (n,) and gradients (n, nv) from stacked C, c and their derivatives.
+    A block's objective is that of the shadow on its rows: C, c and their derivatives restricted
+    to the rows."""
+    if objective.rows is not None:
+        r = np.asarray(objective.rows)
+        return _index(objective.whole(), C[:, r][:, :, r], dC[:, :, r][:, :, :, r], c[:, r], dc[:, :, r])
     m = C.shape[-1]
     index = objective.index
     if index in ("log_volume", "log_isotropy"):

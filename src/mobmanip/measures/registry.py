@@ -45,7 +45,7 @@ import dataclasses
 import types
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -54,6 +54,9 @@ from ..errors import MeasureError, UnknownMeasureError
 from ..sets.taskset import TaskSet, TaskSetBatch
 from ..terms.builder import MeasureTerms
 from ..terms.constraints.base import Constraint
+
+if TYPE_CHECKING:
+    from ..robot.tasks import TaskSpace
 
 
 @dataclass(frozen=True)
@@ -81,6 +84,25 @@ class Quantity:
     def __post_init__(self):
         if self.limits not in ("velocity", "effort"):
             raise MeasureError(f"quantity {self.name!r}: limits must be 'velocity' or 'effort', got {self.limits!r}")
+
+    def units_for(self, task: str | TaskSpace) -> str:
+        """The units of a task's coordinates, printed: the linear unit alone for a task of linear
+        rows only (``"m/s"`` for ``translational``), the angular one alone for angular rows only,
+        both (:attr:`units`) for a task that mixes them (``spatial``, ``planar_rigid``).
+
+        Args:
+            task: a task space or its name.
+        """
+        from ..robot.tasks import get_task
+
+        space = get_task(task)
+        linear, _, angular = self.units.partition(", ")
+        n_angular = len(space.angular_rows)
+        if n_angular == 0:
+            return linear
+        if n_angular == space.dim:
+            return angular or linear
+        return self.units
 
 
 VELOCITY = Quantity("velocity", "kinematic", "m/s", "m/s, rad/s", limits="velocity", inertial=False)

@@ -42,7 +42,7 @@ tracked every 0.02 s asked for an impulse of acceleration at each sample and non
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +54,7 @@ from ..gradients.evaluator import GradientEvaluator, Objective
 from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from .carry_floor import CarryFloor, floor_binding, floor_rows, solve_with_floor
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
 from .carry_step import CarryDiagnosis as CarryDiagnosis
@@ -238,6 +239,14 @@ class CarryResult:
             configuration (time stamps ending at the path's start), or ``None`` when the motion
             starts from the start posture (``prepare=0``).
         start: which start posture both runs set out from, in words.
+        prepared_baseline: the pseudo-inverse baseline from the QP's prepared start (the end of
+            the self-motion), or ``None`` without a self-motion: with it the gain splits into
+            what the preparation gives and what the motion gives (:meth:`summary`).
+        collapsed: per run (``"qp"``, ``"pinv"``, ``"pinv_prepared"``), the objective's set at
+            the run's minimum as its smallest and largest semi-axes when it has collapsed there
+            (:func:`mobmanip.analysis.plausibility.collapsed`: a singular posture); a ratio to
+            that minimum is not reported.
+        floor: the floor the QP motion kept (:meth:`CarryFloor.describe`), or ``None``.
     """
 
     objective: Objective
@@ -246,6 +255,9 @@ class CarryResult:
     baseline: CarryRun
     preparation: CarryRun | None = None
     start: str = "the given start configuration"
+    prepared_baseline: CarryRun | None = None
+    collapsed: dict[str, tuple[float, float]] = field(default_factory=dict)
+    floor: dict | None = None
 
     def starts(self) -> dict:
         """What each run started from, in words and numbers (JSON-ready)."""
@@ -268,10 +280,22 @@ class CarryResult:
         return {"qp": qp, "pinv": base}
 
     def summary(self) -> dict:
-        """Minimum capacities, their ratio, tracking and limit figures (JSON-ready)."""
+        """Minimum capacities, their ratios, tracking and limit figures (JSON-ready).
+
+        ``min_capacity_ratio`` is the QP's minimum over the baseline's from the start posture;
+        with a self-motion, ``ratio_parts`` splits it: ``preparation`` (the baseline from the
+        QP's prepared start over the baseline from the start posture: what starting from a better
+        posture gives) and ``motion`` (the QP over the baseline from the prepared start: what the
+        capacity term gives along the path); their product is the whole ratio. A ratio whose
+        denominator's set has collapsed (a singular posture) is ``None`` and ``collapsed`` says
+        which run and its semi-axes there.
+        """
         out: dict[str, Any] = {"objective": self.objective.name, "task": self.task}
-        for run in (self.motion, self.baseline):
-            out[run.method] = {
+        runs = {"qp": self.motion, "pinv": self.baseline}
+        if self.prepared_baseline is not None:
+            runs["pinv_prepared"] = self.prepared_baseline
+        for key, run in runs.items():
+            out[key] = {
                 "min_capacity": float(run.capacity.min()),
                 "mean_capacity": float(run.capacity.mean()),
                 "max_tracking_error": float(run.tracking_error.max()),
@@ -279,8 +303,23 @@ class CarryResult:
             }
         for method, start in self.starts().items():
             out[method]["start"] = start
-        base = self.baseline.capacity.min()
-        out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
+        if self.prepared_baseline is not None:
+            out["pinv_prepared"]["start"] = dict(out["qp"]["start"])
+
+        def ratio(top: str, bottom: str) -> float | None:
+            low = runs[bottom].capacity.min()
+            if low <= 0 or bottom in self.collapsed:
+                return None
+            return float(runs[top].capacity.min() / low)
+
+        out["min_capacity_ratio"] = ratio("qp", "pinv")
+        if self.prepared_baseline is not None:
+            out["ratio_parts"] = {"preparation": ratio("pinv_prepared", "pinv"), "motion": ratio("qp", "pinv_prepared")}
+        out["collapsed"] = {
+            key: {"smallest_semi_axis": a, "largest_semi_axis": b} for key, (a, b) in self.collapsed.items()
+        }
+        if self.floor is not None:
+            out["floor"] = self.floor
         return out
 
 
@@ -344,7 +383,19 @@ def _default_start_label(robot: Robot, q0: np.ndarray) -> str:
 
 
 def _run(
-    robot, q0, path, evaluator, task, dt, method, gain, weight=None, converge=False, object_mass=None, x_start=None
+    robot,
+    q0,
+    path,
+    evaluator,
+    task,
+    dt,
+    method,
+    gain,
+    weight=None,
+    converge=False,
+    object_mass=None,
+    x_start=None,
+    floor=None,
 ) -> tuple[CarryRun, float]:
     """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
     ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
@@ -367,6 +418,7 @@ def _run(
     x_prev = np.zeros(robot.nx) if x_start is None else np.asarray(x_start, dtype=float)
     effort_limits = np.asarray(robot.effort_limits, dtype=float)
     window = max(1, int(round(PREPARE_WINDOW / dt)))
+    resolved = None if floor is None or method == "pinv" else floor.resolve(robot)
     for k in range(n):
         qs[k] = q
         value, grad, ok = evaluator(q)
@@ -394,9 +446,20 @@ def _run(
                 weight = gain / norm if norm > 0 else 0.0
             lo, hi = velocity_bounds(robot, q, h)
             G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
-            x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+            if resolved is None:
+                x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+            else:
+                floor_G, floor_g, labels = floor_rows(robot, q, x_prev, h, task, object_mass, floor, resolved)
+                x = solve_with_floor(solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g)
             if x is None:
-                diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
+                binding = None
+                if resolved is not None:
+                    binding = floor_binding(solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g,
+                                            labels)  # fmt: skip
+                if binding is not None:
+                    diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=True)
+                else:
+                    diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
                 partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
                                    hand[: k + 1])  # fmt: skip
                 raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)
@@ -427,6 +490,7 @@ def carry(
     step: float = DEFAULT_STEP,
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
+    floor: CarryFloor | None = None,
 ) -> CarryResult:
     """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -442,6 +506,10 @@ def carry(
         gain: the capacity term's share of the velocity limits at the first step.
         prepare: longest self-motion (s) before the path (module doc); 0: the QP motion
             starts from ``start`` like the baseline.
+        floor: keep the robot on its floor (:class:`mobmanip.motion.carry_floor.CarryFloor`): the
+            QP motion's (and the self-motion's) steps keep the zero-moment point inside the
+            support polygon with a margin, every support loaded and the driven wheels within
+            friction; the baseline does not.
 
     Raises:
         ArgumentError: a bad step, gain or prepare.
@@ -457,6 +525,8 @@ def carry(
         raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
     if not isinstance(path, ObjectPath):
         raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
+    if floor is not None and not isinstance(floor, CarryFloor):
+        raise ArgumentError(f"floor must be a CarryFloor, got {type(floor).__name__}")
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
     q0 = default_start(robot) if start is None else robot.check_configuration(start)
@@ -466,8 +536,9 @@ def carry(
     if prepare > 0.0 and gain > 0.0:
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
         preparation, weight = _run(
-            robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass
-        )
+            robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass,
+            floor=floor,
+        )  # fmt: skip
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
             preparation.method,
@@ -479,11 +550,40 @@ def carry(
     try:
         motion, _ = _run(
             robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass,
-            x_start=x_start,
+            x_start=x_start, floor=floor,
         )  # fmt: skip
     except CarryFailed as exc:
         if exc.partial.method == "qp":
             exc.preparation = preparation
         raise
     baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
-    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label)
+    prepared = None
+    if preparation is not None:  # the same baseline from the QP's prepared start
+        prepared, _ = _run(robot, q_path, path, evaluator, task, step, "pinv", 0.0)
+    runs = {"qp": motion, "pinv": baseline} | ({} if prepared is None else {"pinv_prepared": prepared})
+    found = {
+        key: _collapsed_at_minimum(robot, run, evaluator.objective, task.name, object_mass) for key, run in runs.items()
+    }
+    collapsed = {key: value for key, value in found.items() if value is not None}
+    return CarryResult(
+        evaluator.objective, task.name, motion, baseline, preparation, label, prepared, collapsed,
+        None if floor is None else floor.describe(),
+    )  # fmt: skip
+
+
+def _collapsed_at_minimum(
+    robot: Robot, run: CarryRun, objective: Objective, task: str, object_mass: float | None
+) -> tuple[float, float] | None:
+    """(smallest, largest semi-axis) of the objective's set (its block's shadow for a block
+    objective) at the run's minimum, when it has collapsed there; else ``None``."""
+    from ..analysis.plausibility import collapsed
+    from ..analysis.single import analyze
+
+    q = run.q[int(np.argmin(run.capacity))]
+    task_set = analyze(robot, q, task, object_mass=object_mass).measure(objective.ellipsoid)
+    if objective.rows is not None:
+        task_set = task_set.project(objective.rows)
+    if not collapsed(task_set):
+        return None
+    semi = np.asarray(getattr(task_set, "semi_axes", [0.0]), dtype=float)
+    return float(semi[-1]), float(semi[0])

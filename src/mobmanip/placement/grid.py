@@ -32,8 +32,13 @@ def objective_values(objective: Objective, ellipsoids: EllipsoidBatch) -> np.nda
     """The objective of each ellipsoid of a batch from its semi-axes, axes and centre, (N,);
     -inf where degenerate or empty (a measure of a set with no volume)."""
     s = ellipsoids.semi_axes
-    m = s.shape[1]
     bad = ellipsoids.degenerate | ellipsoids.empty
+    if objective.rows is not None:  # a block: the shadow on its rows, C restricted to them
+        r = np.asarray(objective.rows)
+        C = np.einsum("nki,nk,nkj->nij", ellipsoids.axes, s**2, ellipsoids.axes)[:, r][:, :, r]
+        s = np.sqrt(np.maximum(np.linalg.eigvalsh(C)[:, ::-1], 0.0))
+        bad = ellipsoids.empty | (s[:, -1] <= 0.0)
+    m = s.shape[1]
     safe = np.where(bad[:, None], 1.0, s)
     if objective.index == "log_volume":
         out = 0.5 * m * math.log(math.pi) - math.lgamma(0.5 * m + 1.0) + np.sum(np.log(safe), axis=1)

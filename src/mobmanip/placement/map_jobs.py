@@ -162,4 +162,5 @@ def run_map(job: MapJob, executor: cf.Executor | None = None, progress: bool = F
         evaluations=sum(band.evaluations for band in solved),
         seconds=time.perf_counter() - started,
         hold_turn=turns,
+        task=first.task,
     )

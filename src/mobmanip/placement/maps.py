@@ -78,6 +78,7 @@ class PlacementMap:
     evaluations: int
     seconds: float
     hold_turn: np.ndarray | None = None
+    task: str | None = None
 
     def best(self) -> tuple[float, np.ndarray, tuple[int, ...]]:
         """(best value, its configuration, its index into ``values``).
@@ -240,6 +241,7 @@ def placement_map(
         evaluations=evaluator.evaluations,
         seconds=time.perf_counter() - started,
         hold_turn=turns,
+        task=task.name,
     )
     if np.all(np.isnan(values)):
         raise UnreachableObjectError(

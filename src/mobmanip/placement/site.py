@@ -188,6 +188,7 @@ class SiteResult:
         columns: the column names.
         reasons: per position, why it has no placement ("" where it has one).
         seconds: wall time of the run (s).
+        task: the task space the objective was measured in (the site's, else the robot's default).
     """
 
     site: Site
@@ -195,6 +196,7 @@ class SiteResult:
     columns: tuple[str, ...]
     reasons: tuple[str, ...]
     seconds: float
+    task: str | None = None
 
     @property
     def values(self) -> np.ndarray:
@@ -281,7 +283,8 @@ def run_site(
     from ..robot.tasks import get_task
 
     # a malformed objective or task fails here, once, not in every task
-    Objective.parse(site.objective, get_task(site.task or robot.spec.default_task))
+    task = get_task(site.task or robot.spec.default_task)
+    Objective.parse(site.objective, task)
     n = len(site.positions)
     names = tuple(f"q_{k}" for k in range(robot.model.nq))
     table = np.full((n, len(COLUMNS) + len(names)), np.nan)
@@ -307,4 +310,4 @@ def run_site(
                 store(*future.result())
     finally:
         bar.close()
-    return SiteResult(site, table, COLUMNS + names, tuple(reasons), time.perf_counter() - started)
+    return SiteResult(site, table, COLUMNS + names, tuple(reasons), time.perf_counter() - started, task.name)

@@ -83,9 +83,10 @@ def robot_points(robot: Robot, q: np.ndarray) -> np.ndarray:
     return np.vstack(points)
 
 
-def draw_robot(ax: Axes, robot: Robot, q: np.ndarray, label_arms: bool = True) -> None:
+def draw_robot(ax: Axes, robot: Robot, q: np.ndarray, label_arms: bool = True, who: str = "") -> None:
     """Draw the platform with an arrow along its heading, its wheels and the arms (links as
-    lines through the joints, in greys, labelled ``arm 1 (right)``, ... for the legend) from above."""
+    lines through the joints, in greys, labelled ``arm 1 (right)``, ... for the legend, after
+    ``who``: ``north: arm 1 (right)`` in a figure of several robots) from above."""
     model, data = robot.model, robot.data
     pin.framesForwardKinematics(model, data, q)
     yaw = float(np.arctan2(q[3], q[2]))
@@ -125,7 +126,8 @@ def draw_robot(ax: Axes, robot: Robot, q: np.ndarray, label_arms: bool = True) -
         points = [data.oMi[model.getJointId(name)].translation[:2] for name in arm.joint_names]
         points.append(data.oMf[arm.frame_id].translation[:2])
         points = np.array(points)
-        label = arm_label(robot, k) if label_arms else "_arm"
+        label = f"{who}: {arm_label(robot, k)}" if who else arm_label(robot, k)
+        label = label if label_arms else "_arm"
         color = ARM_COLORS[k % len(ARM_COLORS)]
         ax.plot(points[:, 0], points[:, 1], "-o", color=color, lw=2.2, ms=3.5, zorder=3, label=label)
 

@@ -31,53 +31,69 @@ def _pyplot():
 
 def trajectory_figure(result: TrajectoryAnalysis) -> Figure:
     """Three panels over time: speed against velocity capacity, acceleration against
-    acceleration capacity, and the largest velocity and effort use (fractions of the limits)."""
+    acceleration capacity, and the largest velocity and effort use (fractions of the limits).
+
+    Each axis carries the unit of the task's coordinates (``m/s`` for a planar task, ``mixed:
+    m/s, rad/s`` where the task mixes linear and angular rows, whose norms mix them too); the
+    legends stand right of the panels, outside the data."""
+    from ..measures import ACCELERATION, VELOCITY
+    from .labels import task_unit
+
     plt = _pyplot()
     t = result.trajectory.t
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
+    task = result.task
+    fig, axes = plt.subplots(3, 1, figsize=(9.5, 8.5), sharex=True, layout="constrained")
     ax = axes[0]
-    ax.plot(t, np.linalg.norm(result.object_velocity, axis=1), label="object speed |v_o|")
-    ax.plot(t, result.velocity_capacity, label="kinematic capacity along v_o")
+    ax.plot(t, np.linalg.norm(result.object_velocity, axis=1), label="object speed $|v_o|$")
+    ax.plot(t, result.velocity_capacity, label="kinematic capacity along $v_o$")
     if result.velocity_polytope_capacity is not None:
-        ax.plot(t, result.velocity_polytope_capacity, label="kinematic polytope along v_o")
+        ax.plot(t, result.velocity_polytope_capacity, label="kinematic polytope along $v_o$")
     ax.plot(t, result.kinematic_semi_axes[:, -1], "--", label="kinematic minor semi-axis")
-    ax.set_ylabel("m/s (rad/s)")
-    ax.legend(loc="best", fontsize=8)
+    ax.set_ylabel(f"velocity ({task_unit(VELOCITY, task)})")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax = axes[1]
-    ax.plot(t, np.linalg.norm(result.object_acceleration, axis=1), label="object acceleration |a_o|")
-    ax.plot(t, result.acceleration_capacity, label="dynamic capacity along a_o (in motion)")
-    ax.set_ylabel("m/s^2 (rad/s^2)")
-    ax.legend(loc="best", fontsize=8)
+    ax.plot(t, np.linalg.norm(result.object_acceleration, axis=1), label="object acceleration $|a_o|$")
+    ax.plot(t, result.acceleration_capacity, label="dynamic capacity along $a_o$ (in motion)")
+    ax.set_ylabel(f"acceleration ({task_unit(ACCELERATION, task)})")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax = axes[2]
-    ax.plot(t, result.velocity_use.max(axis=1), label="largest |x_i| / xdot_max_i")
-    ax.plot(t, result.effort_use.max(axis=1), label="largest |tau_i| / tau_max_i")
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_ylabel("fraction of limit")
-    ax.set_xlabel("t (s)")
-    ax.legend(loc="best", fontsize=8)
+    ax.plot(t, result.velocity_use.max(axis=1), label="largest $|x_i| / \\dot{x}_{\\max,i}$")
+    ax.plot(t, result.effort_use.max(axis=1), label="largest $|\\tau_i| / \\tau_{\\max,i}$")
+    ax.axhline(1.0, color="k", lw=0.8, label="limit")
+    ax.set_ylabel("use of the limit (1)")
+    ax.set_xlabel("$t$ (s)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     k = result.scaling.k_max
     margin = "unbounded" if k is None else (f"{k:.3f}" if result.scaling.feasible else "none")
-    fig.suptitle(f"{result.robot_name}, task {result.task}: time-scaling margin {margin}")
-    fig.tight_layout()
+    fig.suptitle(f"{result.robot_name}, {task} task: time-scaling margin {margin}")
     return fig
 
 
-def carry_figure(result: CarryResult | TeamCarryResult) -> Figure:
+def carry_figure(result: CarryResult | TeamCarryResult, robot_name: str | None = None) -> Figure:
     """The objective over time along a carried path: the self-motion before the path (when there
-    is one), the QP motion with its capacity term and the weighted pseudo-inverse baseline (of
-    one robot, or of a team: :func:`mobmanip.coordination.team_carry`)."""
+    is one), the QP motion with its capacity term and the weighted pseudo-inverse baseline (and
+    the baseline from the QP's prepared start, when it was run), of one robot or of a team
+    (:func:`mobmanip.coordination.team_carry`). The y axis names the objective with its unit;
+    the legend stands below the plot."""
+    from .labels import objective_label, objective_words
+
     plt = _pyplot()
     motion, base = result.motion, result.baseline
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
     prep = result.preparation
     if prep is not None:
         ax.plot(prep.t, prep.capacity, color="0.5", label="self-motion before the path (object held still)")
     ax.plot(motion.t, motion.capacity, label="QP with capacity term")
-    ax.plot(base.t, base.capacity, label="weighted pseudo-inverse")
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel(result.objective.name)
-    ax.legend(loc="best")
-    fig.tight_layout()
+    ax.plot(base.t, base.capacity, label="weighted pseudo-inverse from the start posture")
+    prepared = getattr(result, "prepared_baseline", None)
+    if prepared is not None:
+        ax.plot(prepared.t, prepared.capacity, "--", label="weighted pseudo-inverse from the QP's prepared start")
+    ax.set_xlabel("$t$ (s)")
+    ax.set_ylabel(objective_label(result.objective, result.task))
+    who = f"{robot_name}: " if robot_name else ""
+    ax.set_title(f"{who}{objective_words(result.objective, result.task)} along the carried path", fontsize=10)
+    ax.grid(True, lw=0.3)
+    fig.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
     return fig
 
 
@@ -86,7 +102,7 @@ def team_carry_figure(result: TeamCarryResult, poses: int = 7) -> Figure:
     baseline dashed) with its heading at ``poses`` instants, and the object (the segment through
     its farthest hands) at the same instants."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig, ax = plt.subplots(figsize=(7, 7.6), layout="constrained")
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     runs = [(result.motion, "-", 1.0), (result.baseline, "--", 0.6)]
     for run, style, alpha in runs:
@@ -108,9 +124,9 @@ def team_carry_figure(result: TeamCarryResult, poses: int = 7) -> Figure:
                 ax.plot(points[[a, b], 0], points[[a, b], 1], color="0.2", lw=3, alpha=0.35 + 0.65 * k / len(hands),
                         label="object" if k == 0 else None)  # fmt: skip
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.legend(loc="best", fontsize=8)
-    ax.set_title(f"team {result.team.name}: platforms and object, top view")
-    fig.tight_layout()
+    ax.set_xlabel("$x$ (m)")
+    ax.set_ylabel("$y$ (m)")
+    ax.grid(True, lw=0.3)
+    fig.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
+    ax.set_title(f"team {result.team.name}: platforms and object, top view", fontsize=10)
     return fig

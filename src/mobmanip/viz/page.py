@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -170,6 +170,7 @@ def legend_rows(
     scales,
     magnified: Mapping[tuple[bool, str], float],
     object_color: int,
+    outlined: Mapping[tuple[bool, str], Sequence[tuple[bool, str]]] | None = None,
 ) -> tuple[list[dict], list[str]]:
     """The legend's rows and notes for the sets drawn, by (locked, measure name).
 
@@ -178,7 +179,9 @@ def legend_rows(
         scales: the viewer's :class:`~mobmanip.viz.scene.ScaleFactors`.
         magnified: the factor of each magnified set, by key.
         object_color: colour of the held object's sphere.
+        outlined: the sets drawn as outlines, with the sets each contains (a ring key and a note).
     """
+    outlined = outlined or {}
     from ..measures import get_measure, measure_names
 
     order = {name: i for i, name in enumerate(measure_names())}
@@ -200,6 +203,12 @@ def legend_rows(
                 f"{measure.quantity.label} sets, which would hide it"
             )
         color = measure.locked_color if locked else measure.color
-        rows.append({"color": color_hex(color), "style": "ring" if locked else "solid", "text": text})
+        inner = outlined.get((locked, name), ())
+        if inner:
+            text += " (outline)"
+            held = ", ".join(get_measure(n).label for _, n in inner)
+            notes.append(f"{measure.label} is drawn as an outline: it contains {held} as drawn")
+        style = "ring" if locked or inner else "solid"
+        rows.append({"color": color_hex(color), "style": style, "text": text})
     rows.append({"color": color_hex(object_color), "style": "dot", "text": "held object (the task point)"})
     return rows, notes

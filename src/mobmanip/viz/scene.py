@@ -49,6 +49,11 @@ What is drawn, and how:
   ``p = task point + k c`` with ``c`` the ellipsoid's centre (zero for velocities; the dynamic
   centre is shifted by gravity). A zero semi-axis (degenerate) is drawn :data:`MIN_SEMI_AXIS`
   long; an empty set (e.g. the torques cannot hold the load) is hidden.
+- Nested sets: a set of the robot's own whose drawing contains another of its sets (as drawn,
+  each at its scale; :mod:`mobmanip.viz.nesting`) is drawn as an outline -- an ellipsoid's three
+  principal rings (``outline``) instead of its surface (``shape``), a polytope's edges without
+  its mesh -- so that the inner set stays in sight; the legend marks it and names what it holds
+  (:attr:`EllipsoidViewer.outlined`). An animation decides this over all its frames.
 - Scale factors (:class:`ScaleFactors`): metres of scene per m/s and per m/s^2 (one per
   quantity, shared by the measures of that quantity), chosen so that the largest drawn extent
   (``|centre|`` + largest semi-axis for an ellipsoid, over the robot's and the locked sets) is
@@ -90,6 +95,7 @@ from ..sets.taskset import TaskSet
 from ..support.files import write_text
 from . import page as _page
 from .meshes import visual_model as visual_model
+from .nesting import nested, outlined
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE
 from .scales import ScaleFactors as ScaleFactors
 from .server import MeshcatServer, ViewerError
@@ -259,6 +265,9 @@ class EllipsoidViewer:
         self._visible: dict[tuple[bool, str], bool | None] = {}  # loaded sets, visibility as last sent
         #: Measures whose sets were not drawn: no drawing for their set kind yet (by name: kind).
         self.undrawn: dict[str, str] = {}
+        #: The robot's own sets drawn as outlines at the last show or animation, by (locked,
+        #: measure name): each contains the sets listed (as drawn), which its surface would hide.
+        self.outlined: dict[tuple[bool, str], tuple[tuple[bool, str], ...]] = {}
         self._server = MeshcatServer(port)
         try:
             with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we print ours
@@ -446,7 +455,7 @@ class EllipsoidViewer:
 
     def _legend(self, sets: dict, title: str, notes: Sequence[str] = ()) -> None:
         """Show the legend of the drawn ``sets`` (by (locked, measure name))."""
-        rows, more = _page.legend_rows(sets, self.scales, self.magnified, OBJECT_COLOR)
+        rows, more = _page.legend_rows(sets, self.scales, self.magnified, OBJECT_COLOR, self.outlined)
         with self._commands():
             self._send_page(title=title, rows=rows, notes=[*more, *notes])
 
@@ -455,6 +464,19 @@ class EllipsoidViewer:
         if analysis.task in ("spatial", "planar_rigid"):
             title += " (linear part drawn)"
         return title
+
+    def _outlined(self, frames: Sequence[Frame]) -> dict[tuple[bool, str], tuple[tuple[bool, str], ...]]:
+        """The robot's own sets drawn as outlines: those whose drawing contains another of its
+        sets in some frame, with the sets they contain (:func:`mobmanip.viz.nesting.nested`)."""
+        out: dict[tuple[bool, str], tuple[tuple[bool, str], ...]] = {}
+        for frame in frames:
+            own = {key: s for key, s in self._drawn(frame.analysis, False).items() if s.kind in DRAWINGS}
+            if len(own) < 2:
+                continue
+            found = outlined(nested(own, frame.analysis.task, self._set_scale))
+            for key, inner in found.items():
+                out[key] = tuple(dict.fromkeys((*out.get(key, ()), *inner)))
+        return out
 
     def _set_scale(self, key: tuple[bool, str]) -> float:
         """Metres of scene per task unit of set ``key``: its quantity's scale, magnified."""
@@ -487,18 +509,33 @@ class EllipsoidViewer:
 
         Only transforms and visibility are sent: the meshes were loaded when the viewer was
         created (or, for a measure it was not created for, now). Scales are fitted at the first
-        call when none were given (and for a quantity they do not have yet).
+        call when none were given (and for a quantity they do not have yet). A set whose drawing
+        contains another's is drawn as an outline (:attr:`outlined`).
         """
+        self._show(q, analysis, locked)
+
+    def _show(
+        self,
+        q: np.ndarray | None,
+        analysis: Analysis,
+        locked: Analysis | None,
+        outlined: Mapping[tuple[bool, str], tuple[tuple[bool, str], ...]] | None = None,
+    ) -> None:
+        """:meth:`show`, with the outlined sets given (an animation decides them over its frames)."""
         q = self.robot.check_configuration(analysis.q if q is None else q)
         frame = Frame(q, analysis, locked)
         self._fit_scales([analysis, locked])
         self._fit_magnified(self._extents([frame]))
         sets = {**self._drawn(analysis, False), **self._drawn(locked, True)}
+        self.outlined = dict(self._outlined([frame]) if outlined is None else outlined)
         with self._commands():
             self._pin.display(q)
             self._vis[OBJECT_PATH].set_transform(translation(analysis.held_object.center))
             for key, task_set in sets.items():
                 self._load(key, task_set.kind)
+                set_outlined = getattr(DRAWINGS[task_set.kind], "set_outlined", None)
+                if not key[0] and set_outlined is not None:
+                    set_outlined(self._vis, scene_path(key[1], key[0]), key in self.outlined)
                 visible = not task_set.empty
                 if visible:
                     source = locked if key[0] else analysis
@@ -604,7 +641,7 @@ class EllipsoidViewer:
         keys = sorted({key for sets in per_frame for key in sets}, key=lambda k: (k[0], order[k[1]]))
         kinds = {key: sets[key].kind for sets in per_frame for key in sets}
         first = frames[0]
-        self.show(first.q, first.analysis, first.locked)
+        self._show(first.q, first.analysis, first.locked, self._outlined(frames))
         if len(frames) > 1:  # frame the whole motion, not only its start
             self.frame_camera(frames)
         shown: dict = {}  # each set as drawn in the legend: its first non-empty frame

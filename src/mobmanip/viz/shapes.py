@@ -65,6 +65,11 @@ class SetDrawing(Protocol):
         """The group's pose (4x4, no scale) and scale (3,) in an animation, following the
         ``previous`` keyframe's rotation (3x3) for smooth motion; ``None``: not animated."""
 
+    def set_outlined(self, vis, path: str, outlined: bool) -> None:
+        """Draw the set at ``path`` as an outline (it contains another set, which its surface
+        would hide) or as a solid; takes effect now or, for a drawing that sends its meshes at
+        each :meth:`draw`, at the next draw."""
+
 
 # --------------------------------------------------------------------------- ellipsoid math
 
@@ -201,6 +206,10 @@ class EllipsoidDrawing:
         else:
             material = mg.MeshLambertMaterial(color=color, opacity=OPACITY, transparent=True, depthWrite=False)
             vis[f"{path}/shape"].set_object(mg.Sphere(1.0), material)
+            # The outline drawn instead of the surface when the set holds another (set_outlined).
+            vis[f"{path}/outline"].set_object(mg.LineSegments(mg.PointsGeometry(_unit_rings()), line_material(color)))
+            vis[f"{path}/outline/<object>"].set_property("renderOrder", 1)
+            vis[f"{path}/outline"].set_property("visible", False)
         # Principal axes: +-1 along local x, y, z (the group transform scales them).
         segments = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], dtype=np.float32).T
         vis[f"{path}/axes"].set_object(mg.LineSegments(mg.PointsGeometry(segments), line_material(_darker(color))))
@@ -211,6 +220,12 @@ class EllipsoidDrawing:
 
     def draw(self, vis, path, task_set, task, origin, scale, thickness) -> None:
         vis[path].set_transform(ellipsoid_matrix(task_set, task, origin, scale, thickness))
+
+    def set_outlined(self, vis, path: str, outlined: bool) -> None:
+        """The surface, or its three principal sections (rings) when ``outlined``; a locked set
+        is always rings."""
+        vis[f"{path}/shape"].set_property("visible", not outlined)
+        vis[f"{path}/outline"].set_property("visible", outlined)
 
     def keyframe(self, task_set, task, origin, scale, thickness, previous):
         p, R, semi = ellipsoid_frame(task_set, task, origin, scale, thickness)
@@ -269,6 +284,7 @@ class PolytopeDrawing:
 
     def __init__(self):
         self._styles: dict[str, tuple[int, bool]] = {}
+        self._outlined: set[str] = set()
 
     def load(self, vis, path: str, color: int, locked: bool) -> None:
         self._styles[path] = (color, locked)
@@ -285,16 +301,24 @@ class PolytopeDrawing:
         color, locked = self._styles.get(path, (0x888888, False))
         points, triangles, segments = polytope_geometry(task_set, task, scale, thickness)
         vis[path].set_transform(translation(origin))
-        if len(triangles) and not locked:
+        if len(triangles) and not locked and path not in self._outlined:
             material = mg.MeshLambertMaterial(color=color, opacity=POLYTOPE_OPACITY, transparent=True, depthWrite=False)
             geometry = mg.TriangularMeshGeometry(points.astype(np.float32), triangles.astype(np.uint32))
             vis[f"{path}/shape"].set_object(geometry, material)
         else:
             vis[f"{path}/shape"].delete()
         lines = points[segments.reshape(-1)].T.astype(np.float32) if len(segments) else np.zeros((3, 0), np.float32)
-        edge_color = color if locked or len(triangles) == 0 else _darker(color, 0.7)
+        meshed = len(triangles) and not locked and path not in self._outlined
+        edge_color = _darker(color, 0.7) if meshed else color
         vis[f"{path}/edges"].set_object(mg.LineSegments(mg.PointsGeometry(lines), line_material(edge_color)))
         vis[f"{path}/edges/<object>"].set_property("renderOrder", 1)
+
+    def set_outlined(self, vis, path: str, outlined: bool) -> None:
+        """Edges only when ``outlined`` (from the next :meth:`draw`, which sends the mesh)."""
+        if outlined:
+            self._outlined.add(path)
+        else:
+            self._outlined.discard(path)
 
     def keyframe(self, task_set, task, origin, scale, thickness, previous):
         return None  # the mesh changes shape with the configuration: shown as first drawn

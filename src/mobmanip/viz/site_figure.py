@@ -15,8 +15,14 @@ if TYPE_CHECKING:
 
 
 def site_figure(result: SiteResult, title: str | None = None) -> Figure:
-    """The figure (see the module's docstring); positions without a placement are grey crosses."""
+    """The figure (see the module's docstring); positions without a placement are grey crosses.
+    The colour bar names the objective with its unit; the legend stands below the map."""
+    from ..gradients.evaluator import Objective
     from .figures import plt
+    from .labels import objective_label, objective_words
+
+    task = result.task or result.site.task or "translational"
+    objective = Objective.parse(result.site.objective, task)
 
     columns = result.columns
     table = result.table
@@ -25,7 +31,7 @@ def site_figure(result: SiteResult, title: str | None = None) -> Figure:
     px, py = table[:, columns.index("platform_x")], table[:, columns.index("platform_y")]
     heading = np.radians(table[:, columns.index("heading_deg")])
     ok = np.isfinite(value)
-    fig, ax = plt.subplots(figsize=(7.0, 6.0))
+    fig, ax = plt.subplots(figsize=(7.0, 6.4), layout="constrained")
     for k in np.flatnonzero(ok):
         ax.plot([x[k], px[k]], [y[k], py[k]], color="0.7", lw=0.6, zorder=1)
     tick = 0.15
@@ -34,15 +40,15 @@ def site_figure(result: SiteResult, title: str | None = None) -> Figure:
     points = ax.scatter(x[ok], y[ok], c=value[ok], cmap="viridis", s=36, zorder=3, edgecolors="k", linewidths=0.3)
     if (~ok).any():
         ax.scatter(x[~ok], y[~ok], marker="x", color="0.5", s=30, zorder=3, label="no placement")
-        ax.legend(loc="best", fontsize=8)
+        fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=8, frameon=False)
     if ok.any():
-        fig.colorbar(points, ax=ax, label=result.site.objective)
+        fig.colorbar(points, ax=ax, label=objective_label(objective, task))
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    ax.set_xlabel("$x$ (m)")
+    ax.set_ylabel("$y$ (m)")
     reached = int(ok.sum())
     ax.set_title(title or f"{Path(result.site.robot).stem}: {reached} of {len(ok)} positions placed "
-                          f"({result.site.objective})", fontsize=10)  # fmt: skip
+                          f"({objective_words(objective, task)})", fontsize=10)  # fmt: skip
     return fig
 
 
@@ -53,7 +59,7 @@ def plot_site(result: SiteResult, path: str | Path, title: str | None = None) ->
 
     fig = site_figure(result, title)
     try:
-        save_figure(fig, path, dpi=110)
+        save_figure(fig, path, dpi=110, bbox_inches="tight")
     finally:
         plt.close(fig)
     return Path(path)

@@ -73,9 +73,27 @@ def index_unit(index: str, task: str) -> str:
     return "mixed: " + linear + ", " + angular
 
 
+def index_words(index: str, task: str) -> str:
+    """A sweep index in words: ``kinematic ellipsoid volume``, ``dynamic ellipsoid semi-axis 2``,
+    ``kinematic polytope width along x``."""
+    from ..measures import get_measure
+    from ..robot.tasks import get_task
+    from ..sweep.results import check_index_name
+
+    space = get_task(task)
+    kind, what, k = check_index_name(index, space.dim, [index.partition(".")[0]])
+    measure = get_measure(kind)
+    if k is None:
+        return f"{measure.label} {what.replace('_', ' ')}"
+    stem = dict(measure.axis_indices).get(what, what)
+    if what == "widths":
+        return f"{measure.label} {stem.replace('_', '-')} along {space.labels[k - 1]}"
+    return f"{measure.label} {stem.replace('_', '-')} {k}"
+
+
 def index_label(index: str, task: str) -> str:
-    """``kinematic.volume ((m/s)$^{2}$)``."""
-    return f"{index} ({index_unit(index, task)})"
+    """``kinematic ellipsoid volume ((m/s)$^{2}$)``: the index in words, with its unit."""
+    return f"{index_words(index, task)} ({index_unit(index, task)})"
 
 
 def plot_sweep(
@@ -149,7 +167,7 @@ def sweep_plot_figure(result: SweepResult, index: str, max_panels: int = 6) -> F
             caption = f"{AXIS_LABELS[AXES[panel_axis]]} = {getattr(grid, AXES[panel_axis])[pick]:g}"
             ax.set_title(caption, fontsize=9, pad=16 if polar else 6)
     if mesh is not None:
-        fig.colorbar(mesh, ax=fig.axes, label=label, shrink=0.8)
+        fig.colorbar(mesh, ax=fig.axes, label=label, shrink=0.8, pad=0.12 if polar else 0.05)
     fixed = [
         f"{AXIS_LABELS[AXES[i]]} {getattr(grid, AXES[i])[0]:g}"
         for i in range(5)
@@ -160,6 +178,14 @@ def sweep_plot_figure(result: SweepResult, index: str, max_panels: int = 6) -> F
         title += "; at " + ", ".join(fixed)
     fig.suptitle(title, fontsize=10)
     return fig
+
+
+def grid_ticks(values: np.ndarray, most: int = 9) -> np.ndarray:
+    """Tick positions on a grid's own values: every k-th of them (sorted, unique), the smallest k
+    that leaves at most ``most`` ticks."""
+    values = np.unique(np.asarray(values, dtype=float))
+    step = max(1, math.ceil(len(values) / most))
+    return values[::step]
 
 
 def _polar_panel(ax, angles_deg: np.ndarray, distances: np.ndarray, data: np.ndarray, vmin: float, vmax: float):
@@ -173,6 +199,7 @@ def _polar_panel(ax, angles_deg: np.ndarray, distances: np.ndarray, data: np.nda
     if hi - lo < 360.0 - 1e-9:
         ax.set_thetamin(lo)
         ax.set_thetamax(hi)
+    ax.set_thetagrids(grid_ticks(angles_deg))  # on the swept angles, not matplotlib's own steps
     ax.set_rorigin(0.0)
     ax.set_rlim(max(float(distances.min()) - half_d, 0.0), float(distances.max()) + half_d)
     ax.tick_params(labelsize=8)

@@ -29,6 +29,7 @@ import numpy as np
 from ..measures import get_measure
 from ..support.files import write_text
 from ..team.analysis import TeamAnalysis
+from .nesting import nested, outlined
 from .scene import DEFAULT_SIZE, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, line_material, translation
@@ -75,6 +76,8 @@ class TeamViewer:
         self.analysis = analysis
         self.mesh_notes: list[str] = []
         self.undrawn: dict[str, str] = {}
+        #: The team's sets drawn as outlines (they contain, as drawn, the sets listed).
+        self.outlined: dict[str, tuple[str, ...]] = {}
         self._closed = False
         self._server = MeshcatServer(port)
         try:
@@ -136,9 +139,13 @@ class TeamViewer:
             largest[quantity] = max(largest.get(quantity, 0.0), extent)
         scales = {q: (size / e if e > 0.0 else 1.0) for q, e in largest.items()}
         center = self.analysis.team.held_object.center
+        self.outlined = outlined(nested(sets, task, lambda name: scales[get_measure(name).quantity.name]))
         for name, task_set in sets.items():
             drawing, path = DRAWINGS[task_set.kind], self.scene_path(name)
             drawing.load(self._vis, path, scene_color(name), False)
+            set_outlined = getattr(drawing, "set_outlined", None)
+            if set_outlined is not None:
+                set_outlined(self._vis, path, name in self.outlined)
             if task_set.empty:
                 self._vis[path].set_property("visible", False)
                 continue

@@ -37,6 +37,11 @@ favourable load. ``"any"`` admits every sharing that balances the robot: the tip
 exact (the zero-moment point anywhere in the polygon) but the traction limit is optimistic
 (it assumes the wheels carry as much as the balance allows; measured in MuJoCo, whose
 contacts share by compliance, the wheels of TIAGo++ and the paper robot then slip on some axes).
+The driven wheels' sideways forces are not shared by compliance: two wheels on one axle are
+held sideways together (the axle is rigid), so while one of them holds, neither slides; a wheel
+at its friction limit passes the rest to the other, and any split within the two pyramids is what
+the floor can do (in MuJoCo, at the ideal +y maximum of TIAGo++, one wheel sits at its limit, the
+other holds, and nothing slides). Only the normal forces have no such mechanism.
 ``"auto"`` (the default) is ``"compliant"`` with a traction limit and ``"any"`` without one.
 Where the robot cannot even stand still with every support loaded (its centre of mass outside
 the core, e.g. arms stretched far out), the compliant set is empty; the exact compliant model,

@@ -1,0 +1,159 @@
+"""Decisions beside the code they replace, on one run (``python scripts/benchmark.py --decisions``).
+
+Each entry is a decision the code made, measured against the alternative it decided against
+(usually the code before it) in the same process, in interleaved rounds: each round times the
+current way, then the chosen way; the table prints both medians and their ratio. BLAS runs
+single-threaded (set by scripts/benchmark.py before NumPy loads).
+
+An entry is a :class:`Decision`: a name, the question, and a ``prepare(quick)`` that builds both
+sides once and returns them as :class:`Side` objects (a label and a callable that runs one round
+and returns its time per unit: per configuration, per call). Add an entry by appending to
+:data:`DECISIONS`.
+
+Entries:
+
+- self-collision distances and gradients of TIAGo++ per configuration (random configurations
+  within the joint limits, platform anywhere): every pair that may meet, against the pairs the
+  shipped collision matrix keeps (robots/tiago_dual.collision.json);
+- ``place tiago_dual --object 1.5,0.5,0.85 --mass 1 --objective dynamic:log_volume
+  --avoid-collision 0.02`` (8 starts), wall and CPU time of :func:`mobmanip.placement.place`
+  with every pair against with the matrix's pairs.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+import mobmanip
+
+
+@dataclass
+class Side:
+    """One way of doing it: ``run()`` does one round and returns its seconds per unit."""
+
+    label: str
+    run: Callable[[], float]
+
+
+@dataclass
+class Decision:
+    name: str
+    question: str
+    unit: str
+    prepare: Callable[[bool], tuple[Side, Side]]  # (current, chosen), given quick
+
+
+def _within_limits(robot, count: int, seed: int) -> list[np.ndarray]:
+    model = robot.model
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        q = pin.neutral(model)
+        yaw = rng.uniform(-math.pi, math.pi)
+        q[:4] = (*rng.uniform(-3.0, 3.0, 2), math.cos(yaw), math.sin(yaw))
+        for j in range(2, model.njoints):
+            i = model.joints[j].idx_q
+            if model.joints[j].nq == 2:
+                angle = rng.uniform(-math.pi, math.pi)
+                q[i : i + 2] = (math.cos(angle), math.sin(angle))
+            else:
+                lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
+                q[i] = rng.uniform(lo, hi) if np.isfinite(lo) and np.isfinite(hi) else rng.uniform(-math.pi, math.pi)
+        out.append(q)
+    return out
+
+
+def _collision_sides(quick: bool) -> tuple[Side, Side]:
+    from mobmanip.robot.collision import SelfCollision
+
+    robot = mobmanip.load_robot("tiago_dual")
+    every = SelfCollision(robot, margin=0.02, matrix=None)
+    kept = SelfCollision(robot, margin=0.02)  # the matrix stored beside the spec
+    assert kept.matrix is not None
+    configurations = _within_limits(robot, 100 if quick else 1000, 11)
+
+    def timer(checker):
+        def run() -> float:
+            times = []
+            for q in configurations:
+                start = time.perf_counter()
+                checker.distances(q)
+                times.append(time.perf_counter() - start)
+            return float(np.median(times))
+
+        return run
+
+    return (
+        Side(f"all pairs ({len(every.pairs)})", timer(every)),
+        Side(f"matrix ({len(kept.pairs)} pairs)", timer(kept)),
+    )
+
+
+def _place_sides(quick: bool) -> tuple[Side, Side]:
+    from mobmanip.placement import place
+    from mobmanip.robot.collision import SelfCollision
+
+    robot = mobmanip.load_robot("tiago_dual")
+    every = SelfCollision(robot, margin=0.02, matrix=None)
+    kept = SelfCollision(robot, margin=0.02)
+    starts = 2 if quick else 8
+    place(robot, [1.5, 0.5, 0.85], "dynamic:log_volume", object_mass=1.0, starts=1)  # compile, warm caches
+
+    def timer(checker):
+        def run() -> float:
+            wall, cpu = time.perf_counter(), time.process_time()
+            result = place(robot, [1.5, 0.5, 0.85], "dynamic:log_volume", object_mass=1.0, starts=starts,
+                           collision=checker)  # fmt: skip
+            wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+            print(f"    {checker.engine.first.size} pairs: value {result.value:.4f}, clearance "
+                  f"{every.clearance(result.q):.4f} m (all pairs), {wall:.2f} s wall, {cpu:.2f} s CPU")  # fmt: skip
+            return wall
+
+        return run
+
+    return (Side(f"all pairs ({len(every.pairs)})", timer(every)), Side(f"matrix ({len(kept.pairs)})", timer(kept)))
+
+
+DECISIONS: list[Decision] = [
+    Decision(
+        "self-collision, TIAGo++",
+        "an allowed-collision matrix computed once (robots/tiago_dual.collision.json) instead of every pair",
+        "ms per configuration",
+        _collision_sides,
+    ),
+    Decision(
+        "place --avoid-collision 0.02, TIAGo++",
+        "the same matrix as SLSQP constraints",
+        "s wall per placement",
+        _place_sides,
+    ),
+]
+
+
+def run(quick: bool = False, rounds: int | None = None) -> int:
+    rounds = rounds or (1 if quick else 3)
+    rows = []
+    for decision in DECISIONS:
+        print(f"{decision.name}: {decision.question}", flush=True)
+        current, chosen = decision.prepare(quick)
+        times: tuple[list[float], list[float]] = ([], [])
+        for _ in range(rounds):
+            times[0].append(current.run())
+            times[1].append(chosen.run())
+        a, b = float(np.median(times[0])), float(np.median(times[1]))
+        scale = 1e3 if decision.unit.startswith("ms") else 1.0
+        rows.append((decision.name, decision.unit, current.label, a * scale, chosen.label, b * scale, a / b))
+    print()
+    header = f"{'decision':<40}{'unit':<22}{'current':>30}{'':>10}{'chosen':>30}{'':>10}{'ratio':>8}"
+    print(f"medians of {rounds} interleaved rounds")
+    print(header)
+    print("-" * len(header))
+    for name, unit, label_a, a, label_b, b, ratio in rows:
+        print(f"{name:<40}{unit:<22}{label_a:>30}{a:>10.3f}{label_b:>30}{b:>10.3f}{ratio:>8.2f}")
+    return 0
