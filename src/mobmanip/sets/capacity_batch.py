@@ -2,9 +2,9 @@
 
 :func:`mobmanip.sets.capacity.polytope_batch` builds one :class:`~mobmanip.sets.polytope.Polytope`
 per configuration (about 0.4 ms each for the paper robot's planar sets). For a planar task
-(m = 2) the kinematic polytope, the exact dynamic polytope and the minimum-norm policy's, and for a 3-D task
-(translational, planar rigid) the exact dynamic polytope and a one-hand kinematic one (the
-zonotopes), are built here for the whole chunk at once:
+(m = 2) the kinematic polytope, the exact dynamic polytope and the minimum-norm policy's, and for
+a 3-D task (translational, planar rigid) the exact dynamic polytope and a one-hand kinematic one
+(the zonotopes), are built here for the whole chunk at once:
 
 - kinematic: F = W^T, c = 0, G = J_u diag(xdot_max), stacked (a zonotope section centred at the
   origin; a plain zonotope with one hand, W = I);
@@ -18,15 +18,16 @@ zonotopes), are built here for the whole chunk at once:
 
 then :mod:`mobmanip.sets.polygon_kernel` gives every polygon's vertices, facets, area, inradius
 and circumradius in one compiled pass (:mod:`mobmanip.sets.zonotope_batch_kernel` every 3-D
-zonotope's facets, volume, inradius and circumradius), and :class:`CompiledPolytopeBatch` answers the sweep's
-queries (support, widths, radius along, straight-line reach) from them. Rows outside the
-generic case (a non-finite term, a grasp or closed chain that loses rank, a set the kernel
-declines: flat or ill-conditioned) are computed one at a time by the reference path, so they
-get the same sets, flags and errors as before. Minimum-norm sets whose centre is a
+zonotope's facets, volume, inradius and circumradius), and :class:`CompiledPolytopeBatch`
+answers the sweep's queries (support, widths, radius along, straight-line reach) from them.
+
+Rows outside the generic case (a non-finite term, a grasp or closed chain that loses rank, a set
+the kernel declines: flat or ill-conditioned) are computed one at a time by the reference path,
+so they get the same sets, flags and errors as before. Minimum-norm sets whose centre is a
 least-effort program (gravity in the task) or with blocked directions, 3-D sections (several
-hands' kinematic sets, the minimum-norm 3-D sets: a 3-D hull),
-6-D tasks, and polytopes under constraints beyond the joint boxes (the floor's contacts: linear
-programs, :mod:`mobmanip.measures.polytopes`) keep the one-at-a-time path.
+hands' kinematic sets, minimum-norm 3-D sets: a 3-D hull), 6-D tasks, and polytopes under
+constraints beyond the joint boxes (the floor's contacts: linear programs,
+:mod:`mobmanip.measures.polytopes`) keep the one-at-a-time path.
 """
 
 from __future__ import annotations
