@@ -144,8 +144,21 @@ def _list_frames(path, read_options) -> int:
 
     description = read_description(path, **read_options)
     check_supported(description)
-    rows = candidate_frames(description, exclude=[c.name for c in wheel_candidates(description)])
-    print(f"{len(rows)} candidate end-effector frames of {path} (for --ee), the most likely first:")
+    wheels = [c.name for c in wheel_candidates(description)]
+    rows = candidate_frames(description, exclude=wheels)
+    if not rows:
+        moved = "beyond its wheels " if wheels else ""
+        print(
+            f"no candidate end-effector frames in {path}: no link {moved}is moved by an actuated joint, "
+            "so the file has no arm to analyse (a base alone, or an arm with fixed joints only)."
+        )
+        print(
+            "To analyse a base with an arm, give a URDF in which the arm's links and joints hang from "
+            "the base by a fixed joint, and list its frames."
+        )
+        return 0
+    plural = "s" if len(rows) != 1 else ""
+    print(f"{len(rows)} candidate end-effector frame{plural} of {path} (for --ee), the most likely first:")
     for link, count, leaf, tool in rows:
         kind = ", ".join(t for t, flag in (("leaf", leaf), ("named like a tool", tool)) if flag)
         print(f"  {link:<40} {count} actuated joint{'s' if count != 1 else ''} from the root; {kind}")
