@@ -24,6 +24,9 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    # MathJax 3 shipped with the built site (PyPI: sphinx-mathjax-offline), so that equations
+    # render from a local build opened without internet; it sets mathjax_path to _static/mathjax
+    "sphinx-mathjax-offline",
     "sphinx.ext.doctest",
     "sphinx.ext.viewcode",
     "sphinxarg.ext",
