@@ -54,7 +54,11 @@ def register(sub) -> None:
         help="the arm's root link in the frame of --on-link: metres and degrees about z (a fixed joint)",
     )
     mount.add_argument("--on-link", metavar="LINK", help="the base's link the arm is fixed to (default: its root link)")
-    mount.add_argument("--prefix", default="arm_", help="put before arm names the base already uses (default arm_)")
+    mount.add_argument(
+        "--prefix",
+        default="arm_",
+        help="put before arm names the base already uses (default: link_1 becomes arm_link_1)",
+    )
     given = parser.add_argument_group("values the URDF may lack")
     given.add_argument("--wheel-radius", type=float, metavar="M", help="radius of wheels with mesh geometry (m)")
     given.add_argument(
