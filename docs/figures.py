@@ -31,6 +31,22 @@ FIGURES: dict[str, tuple[list[str], str]] = {
         ["sweep", "planar_dual_arm", "--angle", "0:360:37", "--distance", "0.6:1.4:9", "--plot", "-o", "sweep"],
         "sweep.png",
     ),
+    "floor_sweep.png": (
+        [
+            "sweep",
+            "planar_dual_arm",
+            "--angle",
+            "0:360:13",
+            "--measure",
+            "dynamic_polytope",
+            "--mu",
+            "0.5",
+            "-o",
+            "grounded",
+            "--plot",
+        ],
+        "grounded.png",
+    ),  # fmt: skip
     "place_tiago_dual.png": (
         [
             "place",
