@@ -94,6 +94,7 @@ from ..robot.model import Robot
 from ..sets.taskset import TaskSet
 from ..support.files import write_text
 from . import page as _page
+from .compact_page import compact
 from .meshes import visual_model as visual_model
 from .nesting import nested, outlined
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE
@@ -705,9 +706,10 @@ class EllipsoidViewer:
     # ----- output and shutdown
 
     def static_html(self) -> str:
-        """The scene as one self-contained HTML page (meshcat's ``static_html``)."""
+        """The scene as one self-contained HTML page: meshcat's ``static_html`` with each mesh
+        file kept once, compressed (:mod:`mobmanip.viz.compact_page`)."""
         with self._commands():
-            return _page.inject(self._vis.static_html())
+            return _page.inject(compact(self._vis.static_html()))
 
     def export_html(self, path: str | Path) -> Path:
         """Write the scene (with its animation, if any) as a self-contained HTML page."""

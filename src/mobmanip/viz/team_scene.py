@@ -182,9 +182,12 @@ class TeamViewer:
         return self._server.web_url
 
     def static_html(self) -> str:
-        """The scene as one self-contained HTML page."""
+        """The scene as one self-contained HTML page, each mesh file kept once, compressed
+        (:mod:`mobmanip.viz.compact_page`)."""
+        from .compact_page import compact
+
         with self._commands():
-            return self._vis.static_html()
+            return compact(self._vis.static_html())
 
     def export_html(self, path: str | Path) -> Path:
         """Write the scene as a self-contained HTML page."""
