@@ -196,3 +196,21 @@ def test_trajectory_ground_gives_each_wheels_traction_and_warns_where_it_slips(t
     bad = _cli("trajectory", "planar_dual_arm", str(path), "--mu", "-1")
     assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0
     assert bad.stderr.startswith("mobmanip: error: --mu must be a positive friction coefficient")
+
+
+def test_a_collapsed_grounded_set_is_said_so_not_a_qhull_error(tmp_path):
+    """TIAGo++ in a translational task: with the floor, the minimum-norm policy leaves the object no
+    motion (its hands cannot keep it level): the set is the point at rest, and the command says so
+    instead of failing in Qhull (it did)."""
+    run = _cli("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "translational",
+               "--ground", "--polytope")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "Qhull" not in run.stderr and "internal error" not in run.stderr
+    assert "dynamic_polytope_min_norm on the floor has collapsed" in run.stderr
+    robot = mobmanip.load_robot("tiago_dual")
+    P = mobmanip.analyze(
+        robot, named_configuration(robot, "hold"), "translational", object_mass=2.0,
+        measures=("dynamic_polytope_min_norm",), constraints=(Floor(),),
+    ).measures["dynamic_polytope_min_norm"]  # fmt: skip
+    assert P.contains(np.zeros(3))[0]
+    assert max(P.support(e) + P.support(-e) for e in np.eye(3)) < 1e-9
