@@ -75,8 +75,9 @@ def register(sub) -> None:
         action="store_true",
         help="also the floor under the motion: the zero-moment point and its margin to the support polygon per "
         "sample, every contact's normal force (compliant sharing) and every driven wheel's traction use "
-        "|f_t| / (mu f_n) (columns zmp_x, zmp_y, stability_margin, normal_force_C, traction_use_W; the smallest "
-        "margin and the largest use printed; a wheel that slips or a support that unloads warned about)",
+        "tangential / (mu x normal force) (columns zmp_x, zmp_y, stability_margin, normal_force_C, "
+        "traction_use_W; the smallest margin and the largest use printed; a wheel that slips or a support that "
+        "unloads warned about)",
     )
     parser.add_argument(
         "--mu",

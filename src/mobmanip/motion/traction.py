@@ -19,7 +19,7 @@ as the floor constraint (:class:`mobmanip.terms.constraints.floor.Floor`) shares
   uses the least friction (the smallest largest use). Exact: the minimum over one variable of
   the largest of convex functions lies at one function's minimum or where two are equal.
 
-A wheel's *traction use* is |f_t| / (mu f_n) (the friction cone itself; the floor constraint's
+A wheel's *traction use* is ``|f_t| / (mu f_n)`` (the friction cone itself; the floor constraint's
 inscribed pyramid is conservative by 1 - cos(pi / faces)): above 1 the wheel slips; an unloaded
 wheel (f_n <= 0) has use +inf.
 """
@@ -51,7 +51,7 @@ class TractionAlong:
         wheels: the driven wheels' names, (d,).
         normal: each contact's normal force per sample (N), (N, n).
         tangential: each driven wheel's tangential force per sample (N, world x, y), (N, d, 2).
-        use: each driven wheel's traction use |f_t| / (mu f_n) per sample, (N, d) (+inf unloaded).
+        use: each driven wheel's traction use ``|f_t| / (mu f_n)`` per sample, (N, d) (+inf unloaded).
     """
 
     mu: float

@@ -194,7 +194,7 @@ class CompiledPolytopeBatch:
         return self._widths
 
     def straight_line_reach(self, direction: ArrayLike) -> np.ndarray:
-        """The largest s >= 0 with s d / |d| in set n, (N,): how far along d from rest (the origin)
+        """The largest s >= 0 with s d / ``|d|`` in set n, (N,): how far along d from rest (the origin)
         (0 where the origin's ray misses the set or it is empty). Computed rows intersect the ray
         with their facets; the others solve :meth:`Polytope.straight_line_reach`'s program."""
         d = self._rows(direction)

@@ -19,7 +19,7 @@ components balance its weight, and the robot feels their reaction.
 
 Inequalities: every normal force >= 0 (no contact pulls: the robot does not tip over); with a
 friction coefficient mu, each driven wheel's tangential force lies in the pyramid with
-``faces`` faces inscribed in its cone |f_t| <= mu f_n (conservative by 1 - cos(pi / faces)).
+``faces`` faces inscribed in its cone ``|f_t| <= mu f_n`` (conservative by 1 - cos(pi / faces)).
 Passive supports are frictionless. With every contact force free, the set is the ideal one.
 
 How the weight is shared (``load``). A robot on more than three contacts is statically
@@ -319,7 +319,7 @@ def ground_reaction(info: dict, forces: np.ndarray) -> dict:
         forces: the contact force variable at the solution (``witness.variables["contact_forces"]``).
 
     Returns:
-        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (|f_t| / (mu f_n);
+        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (``|f_t| / (mu f_n)``;
         ``None`` for an unloaded wheel)}),
         ``zmp`` (x, y; m, world: the centre of pressure, where the floor's resultant moment has no
         horizontal component), ``margin`` (m: signed distance of the ZMP to the support polygon's
