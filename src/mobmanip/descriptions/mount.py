@@ -26,7 +26,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import UrdfError, UsageError
+from ..errors import ArgumentError, UrdfError
 
 #: Name of the fixed joint that carries the arm (prefixed like the arm's names if the base uses it).
 MOUNT_JOINT = "arm_mount_joint"
@@ -60,7 +60,7 @@ def parse_pose(text: str) -> tuple[float, float, float, float]:
     """``X,Y,Z,YAW`` (m, m, m, degrees) as four finite floats, YAW in radians.
 
     Raises:
-        UsageError: not four comma-separated finite numbers.
+        ArgumentError: not four comma-separated finite numbers.
     """
     parts = [p.strip() for p in str(text).split(",")]
     try:
@@ -68,7 +68,7 @@ def parse_pose(text: str) -> tuple[float, float, float, float]:
     except ValueError:
         values = []
     if len(values) != 4 or not all(math.isfinite(v) for v in values):
-        raise UsageError(f"--at takes X,Y,Z,YAW (metres, metres, metres, degrees), got {text!r}")
+        raise ArgumentError(f"--at takes X,Y,Z,YAW (metres, metres, metres, degrees), got {text!r}")
     x, y, z, yaw = values
     return x, y, z, math.radians(yaw)
 
@@ -77,7 +77,7 @@ def _read(path: Path, role: str) -> ET.Element:
     from .formats import read_description
 
     if path.suffix.lower() != ".urdf":
-        raise UsageError(
+        raise ArgumentError(
             f"{role} {path}: --mount composes URDF files (.urdf); expand a xacro file first (xacro FILE > FILE.urdf)"
         )
     read_description(path)  # refuses what mobmanip cannot read (missing file, DTD, malformed, no robot)
@@ -159,19 +159,19 @@ def mount_urdf(
         name: the composed robot's name (default ``<base>_<arm>``, from their ``<robot name>``).
 
     Raises:
-        UsageError: a file that is not a URDF, ``on_link`` not a link of the base, a prefixed
+        ArgumentError: a file that is not a URDF, ``on_link`` not a link of the base, a prefixed
             name that still clashes, or a non-finite pose.
         DescriptionError: a file mobmanip cannot read.
     """
     arm, base = Path(arm), Path(base)
     if not all(math.isfinite(v) for v in at):
-        raise UsageError(f"--at must be finite numbers, got {at!r}")
+        raise ArgumentError(f"--at must be finite numbers, got {at!r}")
     base_robot, arm_robot = _read(base, "--on"), _read(arm, "--mount")
     base_links = _names(base_robot, "link")
     link = on_link if on_link is not None else _root_link(base_robot)
     if link not in base_links:
         shown = ", ".join(base_links[:12]) + (", ..." if len(base_links) > 12 else "")
-        raise UsageError(f"--on-link {link!r} is not a link of {base}; its links: {shown}")
+        raise ArgumentError(f"--on-link {link!r} is not a link of {base}; its links: {shown}")
     arm_root = _root_link(arm_robot)
 
     taken = {kind: set(_names(base_robot, kind)) for kind in ("link", "joint", "material")}
@@ -192,7 +192,7 @@ def mount_urdf(
         if old in taken[kind]:
             new = prefix + old
             if new in taken[kind] or new in _names(arm_robot, kind):
-                raise UsageError(
+                raise ArgumentError(
                     f"the arm's {kind} {old!r} clashes with the base's, and so does {new!r}: choose another --prefix"
                 )
             rename[kind][old] = new
@@ -201,7 +201,7 @@ def mount_urdf(
     if mount in taken["joint"] or mount in _names(arm_robot, "joint"):
         mount = prefix + MOUNT_JOINT
         if mount in taken["joint"] or mount in _names(arm_robot, "joint"):
-            raise UsageError(f"the joint name {MOUNT_JOINT!r} is taken in both files: choose another --prefix")
+            raise ArgumentError(f"the joint name {MOUNT_JOINT!r} is taken in both files: choose another --prefix")
 
     def apply(element: ET.Element) -> None:
         if element.tag in rename and element.get("name") in rename[element.tag]:
