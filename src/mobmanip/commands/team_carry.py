@@ -101,8 +101,10 @@ def _check(args, path, robots: int) -> None:
         raise UsageError(f"--prepare must be 0 (none) or at least one step ({args.step:g} s), got {args.prepare!r} s")
     if not (math.isfinite(args.scale) and 0.0 < args.scale <= MAX_SCALE):
         raise UsageError(f"--scale must be a number in (0, {MAX_SCALE:g}], got {args.scale!r}")
-    if args.every is not None and (args.export is None or args.every < 1):
-        raise UsageError(f"--every draws every K-th sample of --export's page: a whole number >= 1, got {args.every}")
+    if args.every is not None and args.export is None:
+        raise UsageError("--every thins the frames of --export's page: give --export PAGE.html too")
+    if args.every is not None and args.every < 1:
+        raise UsageError(f"--every must be a whole number of samples >= 1, got {args.every}")
     duration = float(path.t[-1] - path.t[0])
     steps = (duration + args.prepare) / args.step
     detail = f"{robots} robots x (path {duration:g} s + --prepare {args.prepare:g} s) / step {args.step:g} s"
