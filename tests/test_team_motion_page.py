@@ -165,3 +165,41 @@ def test_a_bad_export_is_one_error_line_before_any_work(extra, words, tmp_path, 
     assert words in printed.err
     assert printed.out == ""  # refused before the motion: its report is the command's first line
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_frames_play_the_self_motion_then_the_path():
+    """With --prepare, the page plays the self-motion first (the object held still where the
+    team holds it), then the path: frames on one clock from the team's start posture to the
+    motion's end, the object carried with the hands, its turn the path's."""
+    from mobmanip.coordination.carry import team_carry
+    from mobmanip.motion.carry import ObjectPath
+    from mobmanip.viz.team_motion_page import team_motion_frames
+
+    team = load_team(TEAM)
+    path = read_path(EXAMPLES / "carry_turn.csv")
+    path = ObjectPath(path.t, SCALE * path.xy)
+    result = team_carry(team, path, step=STEP, prepare=1.0)
+    prep, motion = result.preparation, result.motion
+    frames, times = team_motion_frames(result, every=1)
+    assert len(frames) == len(prep.t) + len(motion.t) - 1  # the self-motion's end is the path's start
+    np.testing.assert_allclose(times, np.r_[prep.t[:-1], motion.t] - prep.t[0], atol=1e-9)
+    assert np.all(np.diff(times) > 0)
+    first, last = frames[0].analysis.team, frames[-1].analysis.team
+    for member, start in zip(first.members, team.members):
+        np.testing.assert_array_equal(member.q, start.q)  # from the team's own posture
+    for member, q in zip(last.members, motion.q):
+        np.testing.assert_array_equal(member.q, q[-1])
+    assert [f.label.endswith("(self-motion)") for f in frames] == [k < len(prep.t) - 1 for k in range(len(frames))]
+    # at the start the object is the team's, its turn zero; at the end the path's 90 deg turn
+    np.testing.assert_allclose(first.held_object.center, team.held_object.center, atol=1e-12)
+    np.testing.assert_allclose(first.held_object.offsets, team.held_object.offsets, atol=1e-12)
+    assert frames[0].turn == pytest.approx(0.0, abs=1e-12)
+    assert frames[-1].turn == pytest.approx(np.pi / 2, abs=ON_PATH / 0.75)
+    # the object moves rigidly with its hands: its centre stays their centroid (the beam's grasps
+    # are symmetric about it) and each hand keeps its distance from the centre
+    for frame in frames:
+        held = frame.analysis.team.held_object
+        hands = np.vstack([hand_positions(m) for m in frame.analysis.team.members])
+        np.testing.assert_allclose(held.center, hands.mean(axis=0), atol=1e-9)
+        reach = np.linalg.norm(held.offsets, axis=1)
+        np.testing.assert_allclose(reach, np.linalg.norm(team.held_object.offsets, axis=1), atol=ON_PATH)

@@ -60,6 +60,13 @@ def export_team_motion_page(
         The page's path and one note per mesh left out of the drawing.
     """
     frames, times = team_motion_frames(result, every=every)
+    notes = []
+    if result.preparation is not None:
+        prep = result.preparation
+        notes.append(
+            f"0 to {prep.t[-1] - prep.t[0]:.2f} s: the self-motion to a better posture, the object held still; "
+            "then the path"
+        )
     with TeamViewer(frames[0].analysis, scales=team_scales(f.analysis for f in frames)) as viewer:
-        viewer.animate(frames, times)
+        viewer.animate(frames, times, notes=notes)
         return viewer.export_html(path), list(viewer.mesh_notes)

@@ -218,15 +218,15 @@ class TeamViewer:
             self._vis["mobmanip"].set_property(_page.PAGE_PROPERTY, page)
             self._page = page
 
-    def _legend(self, title: str) -> None:
-        """The legend: the team, each drawn set's colour and scale, the object."""
+    def _legend(self, title: str, more: Sequence[str] = ()) -> None:
+        """The legend: the team, each drawn set's colour and scale, the object; ``more`` notes."""
         scales = {name: self._set_scale(name) for name in self._sets}
         inner = {(False, name): tuple((False, n) for n in held) for name, held in self.outlined.items()}
         rows, notes = _page.legend_rows(
             {(False, name): s for name, s in self._sets.items()}, scales, {}, OBJECT_COLOR, inner
         )
         with self._commands():
-            self._send_page(title=title, rows=rows, notes=notes)
+            self._send_page(title=title, rows=rows, notes=[*notes, *more])
 
     def frame_camera(self, frames: Sequence[TeamFrame]) -> dict:
         """Frame every robot (its visual geometry), the object and the drawn sets of the frames (up
@@ -264,18 +264,26 @@ class TeamViewer:
 
     # ----- animation
 
-    def animate(self, frames: Sequence[TeamFrame], times: ArrayLike, *, fps: int = 30, play: bool = True) -> None:
+    def animate(
+        self,
+        frames: Sequence[TeamFrame],
+        times: ArrayLike,
+        *,
+        fps: int = 30,
+        play: bool = True,
+        notes: Sequence[str] = (),
+    ) -> None:
         """Send the frames as one meshcat animation (play / pause / time slider in the panel),
         frame ``k`` at ``times[k]`` s: every robot at its configuration, the object at its centre
         turned with it, the sets at the object; meshcat interpolates between frames. The scene as
-        created shows the first frame; the camera frames them all.
+        created shows the first frame; the camera frames them all; ``notes`` go under the legend.
         """
         import meshcat.animation as ma
 
         times = [float(t) for t in np.asarray(times, dtype=float).reshape(-1)]
         if not frames or len(frames) != len(times):
             raise ViewerError(f"an animation needs one time per frame, got {len(frames)} frames, {len(times)} times")
-        self._legend(f"{self._title()}, {len(frames)} frames (play them in Animations)")
+        self._legend(f"{self._title()}, {len(frames)} frames (play them in Animations)", notes)
         self.frame_camera(frames)
         animation = ma.Animation(default_framerate=fps)
         paths = {name: geometry_paths(viz, viz.visual_model) for name, viz in self._robots.items()}
