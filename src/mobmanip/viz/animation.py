@@ -21,8 +21,9 @@ from .shapes import DRAWINGS, ellipsoid_matrix
 
 #: Frames an animation's camera frames at most (evenly spread, the last included).
 CAMERA_FRAMES = 25
-#: The scale of a set hidden in a keyframe (empty or absent then): it shrinks to nothing.
-HIDDEN = np.full(3, 1e-6)
+#: The scale, along each axis, of a set hidden in a keyframe (a set without points, or absent,
+#: then): it shrinks to nothing.
+HIDDEN_SCALE = 1e-6
 
 #: One object's keyframe: its scene path, its 4x4 pose and its scale (3,), or ``None`` to leave
 #: the scale alone.
@@ -64,7 +65,7 @@ def set_pose(
     keyframe of ``key``, which it updates), or shrunk to nothing where it stood when the set is
     empty or absent; ``None`` for a drawing that does not animate (it stays as first shown)."""
     if task_set is None or task_set.empty:
-        return path, previous.get(key, (np.eye(4), None))[0], HIDDEN
+        return path, previous.get(key, (np.eye(4), None))[0], np.full(3, HIDDEN_SCALE)
     last = previous.get(key)
     placed = DRAWINGS[task_set.kind].keyframe(
         task_set, task, center, scale, thickness, None if last is None else last[0][:3, :3]
