@@ -368,6 +368,15 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
     return written + [str(summary), str(figure), str(top)]
 
 
+def team_carry_page(result: TeamCarryResult, path: str | Path, every: int | None = None) -> tuple[Path, list[str]]:
+    """The page ``team-carry --export PAGE.html`` writes: the team's QP motion played in the viewer
+    (:func:`mobmanip.viz.team_motion_page.export_team_motion_page`); returns its path and one note
+    per mesh left out."""
+    from ..viz.team_motion_page import export_team_motion_page
+
+    return export_team_motion_page(result, path, every=every)
+
+
 def team_carry_partial_outputs(team: Team, failure: CarryFailed, out_dir: str | Path) -> list[str]:
     """After a failed team carry: the part of the motion that succeeded, one trajectory per robot,
     the self-motion before it (when there is one) and ``team_carry.json`` flagged ``"partial":
