@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..robot.tasks import TASKS
-from .common import add_work_option
+from .common import add_progress_option, add_work_option, show_progress
 
 CARRY_HELP = """\
 PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
@@ -64,6 +64,7 @@ def register(sub) -> None:
         help="longest self-motion before the path (s, default 30; 0: none)",
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    add_progress_option(parser)
     add_work_option(parser, f"QP steps ((path duration + --prepare) / --step; default {MAX_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -154,6 +155,7 @@ def run(args) -> int:
             object_mass=args.object_mass,
             step=args.step,
             prepare=args.prepare,
+            progress=show_progress(args),
         )
     except CarryFailed as failure:
         if not args.out:

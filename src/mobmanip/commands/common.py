@@ -357,3 +357,21 @@ def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
         metavar="N",
         help=f"the most {what} run without refusing (the estimate is checked before any work)",
     )
+
+
+def add_progress_option(parser: argparse.ArgumentParser, what: str = "") -> None:
+    """``--no-progress``: a long run shows a progress bar on standard error when that is a terminal."""
+    suffix = f" for {what}" if what else ""
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help=f"no progress bar{suffix} (one is shown only when standard error is a terminal)",
+    )
+
+
+def show_progress(args) -> bool:
+    """Whether to show progress bars: not turned off, and standard error is a terminal (never
+    in piped or redirected output)."""
+    from ..support.progress import on_terminal
+
+    return not getattr(args, "no_progress", False) and on_terminal()

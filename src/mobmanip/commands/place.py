@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from .common import add_work_option
+from .common import add_progress_option, add_work_option, show_progress
 
 PLACE_HELP = """\
 objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX one of
@@ -85,7 +85,7 @@ def register(sub) -> None:
         "--map-extent", metavar="XMIN,XMAX,YMIN,YMAX", help="the map's platform positions (default: the arms' reach)"
     )
     parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar for --map")
+    add_progress_option(parser, "--map")
     from .common import add_dask_option
 
     add_dask_option(parser)
@@ -296,7 +296,7 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference, e
         hold_turn=yaw,
         avoid_collision=None if collision is None else collision.margin,
     )
-    grid = run_map(job, executor, progress=not args.no_progress)
+    grid = run_map(job, executor, progress=show_progress(args))
     written = placement_map_outputs(grid, output_directory(args.map, "--map"))
     value, q, _ = grid.best()
     reachable = int(np.sum(~np.isnan(grid.values)))

@@ -55,7 +55,7 @@ examples:
 
 
 def register(sub) -> None:
-    from .common import add_dask_option, add_floor_options, add_measure_option
+    from .common import add_dask_option, add_floor_options, add_measure_option, add_progress_option
 
     parser = sub.add_parser(
         "sweep",
@@ -111,7 +111,7 @@ def register(sub) -> None:
     run.add_argument("--no-csv", action="store_true", help="write only OUT.npz")
     run.add_argument("--plot", action="store_true", help="also write OUT.png")
     run.add_argument("--index", help="index to plot (default: the first measure's volume, kinematic.volume)")
-    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_progress_option(run)
     run.add_argument(
         "--max-points",
         type=int,
@@ -144,7 +144,7 @@ def run_command(args) -> int:
     from ..sweep.budget import check_grid
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
     from ..viz.sweep_plot import plot_sweep
-    from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers
+    from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers, show_progress
     from .outputs import write_sweep_csv, write_sweep_npz
 
     _check_outputs(args)  # before anything is loaded, compiled or computed
@@ -215,7 +215,7 @@ def run_command(args) -> int:
             executor=executor,
             workers=args.workers,
             chunk_size=args.chunk_size,
-            progress=not args.no_progress,
+            progress=show_progress(args),
             max_points=args.max_points,
         )
     table = result.postures

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..robot.tasks import TASKS
-from .common import add_strict_option, add_work_option
+from .common import add_progress_option, add_strict_option, add_work_option, show_progress
 
 #: Samples a trajectory analysis runs without being asked (each: both ellipsoids, RNEA, scaling).
 MAX_SAMPLES = 200_000
@@ -83,6 +83,7 @@ def register(sub) -> None:
     parser.add_argument(
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
+    add_progress_option(parser)
     add_work_option(parser, f"samples (rows of TRAJ.csv; default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
 
@@ -139,7 +140,13 @@ def run(args) -> int:
     else:
         trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(
-        robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled, polytope=args.polytope
+        robot,
+        trajectory,
+        args.task,
+        object_mass=args.object_mass,
+        decoupled=args.decoupled,
+        polytope=args.polytope,
+        progress=show_progress(args),
     )
     s = result.scaling
     duration = trajectory.t[-1] - trajectory.t[0]
