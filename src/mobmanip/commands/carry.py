@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from ..robot.tasks import TASKS
+from ..support.reading import decimal
 from .common import add_progress_option, add_work_option, show_progress
 
 CARRY_HELP = """\
@@ -54,11 +55,11 @@ def register(sub) -> None:
     )
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
-    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
-    parser.add_argument("--step", type=float, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
     parser.add_argument(
         "--prepare",
-        type=float,
+        type=decimal,
         default=30.0,
         metavar="S",
         help="longest self-motion before the path (s, default 30; 0: none)",

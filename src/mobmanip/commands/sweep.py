@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..support.reading import decimal
 from ..sweep.budget import MAX_GRID_POINTS
 
 GRID_HELP = """\
@@ -78,12 +79,14 @@ def register(sub) -> None:
     analysis = parser.add_argument_group("analysis")
     analysis.add_argument("--task", help="task space (default: the spec's default_task)")
     analysis.add_argument(
-        "--wheel-velocity-limit", type=float, metavar="RAD_S", help="both wheels' qdot_max before scaling"
+        "--wheel-velocity-limit", type=decimal, metavar="RAD_S", help="both wheels' qdot_max before scaling"
     )
-    analysis.add_argument("--wheel-effort-limit", type=float, metavar="NM", help="both wheels' tau_max before scaling")
+    analysis.add_argument(
+        "--wheel-effort-limit", type=decimal, metavar="NM", help="both wheels' tau_max before scaling"
+    )
     analysis.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     analysis.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
-    analysis.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    analysis.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     analysis.add_argument(
         "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
     )
@@ -128,7 +131,7 @@ def _direction(text: str):
     if text in ("radial", "tangential"):
         return text
     try:
-        return tuple(float(v) for v in text.split(","))
+        return tuple(decimal(v) for v in text.split(","))
     except ValueError:
         raise UsageError(f"--direction must be radial, tangential or numbers like 1,0; got {text!r}") from None
 

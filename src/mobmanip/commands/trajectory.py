@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from ..robot.tasks import TASKS
+from ..support.reading import decimal
 from .common import add_progress_option, add_strict_option, add_work_option, show_progress
 
 #: Samples a trajectory analysis runs without being asked (each: both ellipsoids, RNEA, scaling).
@@ -57,10 +58,10 @@ def register(sub) -> None:
         metavar="TOPIC",
         help="nav_msgs/Odometry topic (%(default)s); 'none' keeps the platform at the origin",
     )
-    recording.add_argument("--start", type=float, metavar="S", help="read from S seconds after the recording's start")
-    recording.add_argument("--end", type=float, metavar="S", help="read up to S seconds after the recording's start")
+    recording.add_argument("--start", type=decimal, metavar="S", help="read from S seconds after the recording's start")
+    recording.add_argument("--end", type=decimal, metavar="S", help="read up to S seconds after the recording's start")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
-    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument(
         "--polytope",

@@ -14,6 +14,7 @@ import csv
 import io
 import math
 import os
+import re
 import stat
 from collections.abc import Callable
 from pathlib import Path
@@ -40,6 +41,23 @@ MAX_ROBOT_FILE_BYTES = 64 * 1024 * 1024
 MAX_RECORDING_BYTES = 64 * 1024**3
 
 ErrorFactory = Callable[[str], MobmanipError]
+
+#: A number in decimal notation (ASCII digits, optional sign, point and exponent), or a
+#: not-a-number or infinity word (left for the caller to refuse with its own message).
+_DECIMAL = re.compile(r"\s*[+-]?(?:(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)\s*", re.I)
+
+
+def decimal(text: str) -> float:
+    """``float(text)`` for a number written in decimal notation only. Python's ``float`` also
+    reads ``"1_0"`` as 10 and digits of other scripts (``"١"``); a command line or a table that
+    says ``1_0`` holds a typing error, not ten, so those raise ValueError here.
+
+    Raises:
+        ValueError: not a decimal number (argparse reports it as ``invalid decimal value``).
+    """
+    if not isinstance(text, str) or _DECIMAL.fullmatch(text) is None:
+        raise ValueError(f"not a decimal number: {text!r}")
+    return float(text)
 
 
 def file_refusal(path: str | Path, *, limit: int) -> str | None:
@@ -174,7 +192,7 @@ def parse_cell(cell: str, where: str, *, bound: float = math.inf, unit: str = ""
     if len(text) > MAX_NUMBER_TEXT:
         raise error(f"{where}: {shown} is not a number of at most {MAX_NUMBER_TEXT} characters")
     try:
-        value = float(text)
+        value = decimal(text)
     except ValueError:
         raise error(f"{where}: not a number: {shown}") from None
     if not math.isfinite(value):
