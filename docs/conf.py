@@ -4,6 +4,9 @@ Build (warnings are errors) and run the examples::
 
     sphinx-build -W --keep-going -b html docs docs/_build/html
     sphinx-build -W --keep-going -b doctest docs docs/_build/doctest
+
+A build starts by making the pages' pictures with the project's own commands (``figures.py``,
+into ``_generated/``, not committed).
 """
 
 from __future__ import annotations
@@ -24,13 +27,16 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    # MathJax 3 shipped with the built site (PyPI: sphinx-mathjax-offline), so that equations
+    # render from a local build opened without internet; it sets mathjax_path to _static/mathjax
+    "sphinx-mathjax-offline",
     "sphinx.ext.doctest",
     "sphinx.ext.viewcode",
     "sphinxarg.ext",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
-exclude_patterns = ["_build"]
+exclude_patterns = ["_build", "_generated"]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 
@@ -100,6 +106,20 @@ def parser_without_epilogs():
     return parser
 
 
+def _generate_figures(app):
+    """The pages' pictures, made by the project's own commands (``docs/figures.py``)."""
+    import importlib.util
+
+    from sphinx.util import logging
+
+    spec = importlib.util.spec_from_file_location(
+        "mobmanip_docs_figures", os.path.join(os.path.dirname(__file__), "figures.py")
+    )
+    figures = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(figures)
+    figures.generate(log=logging.getLogger(__name__).info)
+
+
 def setup(app):
     import types
 
@@ -107,4 +127,5 @@ def setup(app):
     helpers.parser_without_epilogs = parser_without_epilogs
     sys.modules[helpers.__name__] = helpers
     app.add_directive("command-notes", _command_notes_directive())
+    app.connect("builder-inited", _generate_figures)
     return {"parallel_read_safe": True}

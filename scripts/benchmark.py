@@ -23,6 +23,7 @@ Usage::
     python scripts/benchmark.py --quick    # smoke run (seconds)
     python scripts/benchmark.py --polytopes [--quick]   # the capacity polytopes instead
     python scripts/benchmark.py --decisions [--quick]   # decisions beside the code they replace
+    python scripts/benchmark.py --sweeps [--quick]      # polytope sweeps, compiled beside one at a time
 """
 
 from __future__ import annotations
@@ -206,6 +207,9 @@ def main(argv=None) -> int:
         action="store_true",
         help="decisions beside the code they replace, on one run (scripts/benchmark_decisions.py)",
     )
+    parser.add_argument(
+        "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
+    )
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
@@ -222,6 +226,10 @@ def main(argv=None) -> int:
         from benchmark_floor import run as run_floor
 
         return run_floor(quick=args.quick)
+    if args.sweeps:
+        from benchmark_sweeps import run as run_sweeps
+
+        return run_sweeps(quick=args.quick)
     quick = args.quick
     rounds = args.rounds or (2 if quick else 7)
     n_single, n_batch = (200, 2000) if quick else (1000, 10000)

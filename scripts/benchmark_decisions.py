@@ -17,7 +17,10 @@ Entries:
   shipped collision matrix keeps (robots/tiago_dual.collision.json);
 - ``place tiago_dual --object 1.5,0.5,0.85 --mass 1 --objective dynamic:log_volume
   --avoid-collision 0.02`` (8 starts), wall and CPU time of :func:`mobmanip.placement.place`
-  with every pair against with the matrix's pairs.
+  with every pair against with the matrix's pairs;
+- a planar sweep of the paper robot's three polytopes (``sweep --polytope``), one ``Polytope`` per
+  configuration against the compiled batch, and TIAGo++'s translational exact dynamic polytope
+  likewise (a chunk's indices from given terms; scripts/benchmark_sweeps.py has the details).
 """
 
 from __future__ import annotations
@@ -120,6 +123,34 @@ def _place_sides(quick: bool) -> tuple[Side, Side]:
     return (Side(f"all pairs ({len(every.pairs)})", timer(every)), Side(f"matrix ({len(kept.pairs)})", timer(kept)))
 
 
+def _sweep_sides(quick: bool) -> tuple[Side, Side]:
+    """The paper robot's planar sweep of its three polytopes (scripts/benchmark_sweeps.py)."""
+    from benchmark_sweeps import POLYTOPES, _grid, _timed
+    from mobmanip.sweep import SweepGrid, SweepSpec
+
+    spec = SweepSpec("planar_dual_arm", measures=POLYTOPES, decoupled=True)
+    grid = _grid(400 if quick else 2000)
+    small = SweepGrid(angle_deg=grid.angle_deg[:2], distance=grid.distance[:2])
+    _timed(spec, small, True)  # compile, postures, caches
+    _timed(spec, small, False)
+    return (
+        Side("one Polytope per configuration", lambda: _timed(spec, grid, False)),
+        Side("compiled batch", lambda: _timed(spec, grid, True)),
+    )
+
+
+def _zonotope_sides(quick: bool) -> tuple[Side, Side]:
+    """TIAGo++'s translational exact dynamic polytope: a chunk's sweep indices, terms given."""
+    from benchmark_sweeps import _chunk_indices, _tiago_chunk
+
+    terms = _tiago_chunk(100 if quick else 200)
+    _chunk_indices(terms, True)
+    return (
+        Side("one Polytope per configuration", lambda: _chunk_indices(terms, False)),
+        Side("compiled batch", lambda: _chunk_indices(terms, True)),
+    )
+
+
 DECISIONS: list[Decision] = [
     Decision(
         "self-collision, TIAGo++",
@@ -132,6 +163,18 @@ DECISIONS: list[Decision] = [
         "the same matrix as SLSQP constraints",
         "s wall per placement",
         _place_sides,
+    ),
+    Decision(
+        "polytope sweep --polytope, paper robot",
+        "a chunk's planar polytopes stacked and measured in one compiled pass (sets/capacity_batch.py)",
+        "ms per configuration",
+        _sweep_sides,
+    ),
+    Decision(
+        "3-D exact dynamic polytope, TIAGo++",
+        "the same batch for 3-D zonotopes, through the reference's face kernel",
+        "ms per configuration",
+        _zonotope_sides,
     ),
 ]
 

@@ -153,3 +153,64 @@ def test_trajectory_ground_reports_the_margin_per_sample(tmp_path):
     margin = polygon_margin(robot_support(robot).polygon((0.0, 0.0, 0.0)), both)
     assert doc["min_stability_margin"] == pytest.approx(margin, abs=1e-9) and margin > 0
     assert f"smallest stability margin {margin:.4f} m" in run.stdout
+
+
+def test_trajectory_ground_gives_each_wheels_traction_and_warns_where_it_slips(tmp_path):
+    """The paper robot accelerating straight ahead at 3 m/s^2 (arms still, no object): the wheels
+    push M a together, shared so that their moment about the vertical carries the centre of
+    mass's offset (a hand computation); each wheel's use is its push over mu times its normal
+    force; with mu = 0.5 they slip, and the warning names the sample and the wheel."""
+    import pinocchio as pin
+
+    from mobmanip.robot.support import robot_support
+
+    a, mu = 3.0, 0.5
+    t = np.linspace(0.0, 1.0, 51)
+    path = tmp_path / "push.csv"
+    path.write_text(
+        "t,platform_x,platform_y,platform_yaw\n" + "".join(f"{s!r},{0.5 * a * s * s!r},0,0\n" for s in t.tolist())
+    )
+    out = tmp_path / "out"
+    run = _cli("trajectory", "planar_dual_arm", str(path), "--object-mass", "0", "--mu", str(mu), "--out", str(out))
+    assert run.returncode == 0, run.stderr
+    doc = json.loads((out / "analysis.json").read_text())
+    robot = mobmanip.load_robot("planar_dual_arm")
+    mass = pin.computeTotalMass(robot.model)
+    com = pin.centerOfMass(robot.model, robot.model.createData(), robot.neutral())
+    support = robot_support(robot)
+    wheels = [c for c in support.contacts if c.driven]
+    y = np.array([c.point[1] for c in wheels])
+    push = np.linalg.solve(np.array([[1.0, 1.0], y]), [mass * a, com[1] * mass * a])
+    normals = np.array([[doc["columns"][f"normal_force_{c.name}"][i] for c in support.contacts] for i in range(51)])
+    np.testing.assert_allclose(normals.sum(axis=1), mass * 9.81, rtol=1e-9)
+    for k, wheel in enumerate(wheels):
+        use = abs(push[k]) / (mu * normals[:, k])
+        np.testing.assert_allclose(doc["columns"][f"traction_use_{wheel.name}"][1:-1], use[1:-1], rtol=1e-9)
+    worst = doc["traction"]["worst"]
+    assert doc["traction"]["max_traction_use"] > 1.0 and doc["traction"]["slipping_samples"] == list(range(51))
+    assert f"largest traction use {doc['traction']['max_traction_use']:.4f} ({worst['wheel']} at sample" in run.stdout
+    assert "warning: a driven wheel slips (traction use above 1) at 51 of 51 samples: first wheel_" in run.stderr
+    assert "at sample 0 (t = 0 s" in run.stderr
+    header = (out / "analysis.csv").read_text().splitlines()[0].split(",")
+    assert "traction_use_wheel_right_joint" in header and "normal_force_caster_0" in header
+    bad = _cli("trajectory", "planar_dual_arm", str(path), "--mu", "-1")
+    assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0
+    assert bad.stderr.startswith("mobmanip: error: --mu must be a positive friction coefficient")
+
+
+def test_a_collapsed_grounded_set_is_said_so_not_a_qhull_error(tmp_path):
+    """TIAGo++ in a translational task: with the floor, the minimum-norm policy leaves the object no
+    motion (its hands cannot keep it level): the set is the point at rest, and the command says so
+    instead of failing in Qhull (it did)."""
+    run = _cli("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "translational",
+               "--ground", "--polytope")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "Qhull" not in run.stderr and "internal error" not in run.stderr
+    assert "dynamic_polytope_min_norm on the floor has collapsed" in run.stderr
+    robot = mobmanip.load_robot("tiago_dual")
+    P = mobmanip.analyze(
+        robot, named_configuration(robot, "hold"), "translational", object_mass=2.0,
+        measures=("dynamic_polytope_min_norm",), constraints=(Floor(),),
+    ).measures["dynamic_polytope_min_norm"]  # fmt: skip
+    assert P.contains(np.zeros(3))[0]
+    assert max(P.support(e) + P.support(-e) for e in np.eye(3)) < 1e-9

@@ -78,3 +78,81 @@ def test_at_rest_the_zmp_is_below_the_centre_of_mass_with_the_object():
     np.testing.assert_allclose(ground.zmp[0], both[:2], atol=1e-12)
     assert ground.normal[0] == pytest.approx((mass + 2.0) * 9.81, rel=1e-12)
     assert ground.margin[0] > 0.0
+
+
+def _reference_wrench(robot, q, x, xdot):
+    """The floor's resultant on the robot (force, moment about the world origin; world axes) from
+    the free-flyer RNEA."""
+    model = free_flyer_model(robot)
+    data = model.createData()
+    q_f = free_flyer_configuration(robot, model, q)
+    wrench = pin.rnea(model, data, q_f, free_flyer_null_space(robot, model, q) @ x,
+                      free_flyer_null_space(robot, model, q) @ xdot)[:6]  # fmt: skip
+    pin.forwardKinematics(model, data, q_f)
+    base = data.oMi[1]
+    force = base.rotation @ wrench[:3]
+    return force, base.rotation @ wrench[3:] + np.cross(base.translation, force)
+
+
+def _reference_contact_forces(support, q, force, moment, mu):
+    """The contacts' forces, independently: the compliant normals as a + b x + c y with (a, b, c)
+    from the floor's vertical force and horizontal moments (contacts on the floor plane); the
+    wheels' longitudinal forces from the platform's longitudinal balance and its moment about the
+    vertical; the lateral split between the two wheels (collinear, left open by the balance) that
+    uses the least friction, by scipy's bounded scalar minimiser."""
+    from scipy.optimize import minimize_scalar
+
+    yaw = math.atan2(q[3], q[2])
+    e, u = np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)])
+    points = support.world_points((q[0], q[1], yaw))
+    z = support.floor_z
+    xy = points[:, :2]
+    # sum fn = Fz; sum fn y = M_x + z F_y; sum fn x = -M_y + z F_x (tangential forces act at height z)
+    rhs = np.array([force[2], -moment[1] + z * force[0], moment[0] + z * force[1]])
+    basis = np.column_stack([np.ones(len(xy)), xy])  # fn = basis @ (a, b, c)
+    coef = np.linalg.solve(np.vstack([np.ones(len(xy)), xy.T]) @ basis, rhs)
+    normal = basis @ coef
+    driven = [k for k, c in enumerate(support.contacts) if c.driven]
+    assert len(driven) == 2
+    root = support.root_points()[driven]
+    assert abs(root[0, 0] - root[1, 0]) < 1e-12  # the wheels on one axle, across the heading
+    middle = points[driven, :2].mean(axis=0)
+    side = (points[driven, :2] - middle) @ u  # the wheels' lateral offsets from the axle's middle
+    cross = lambda a, b: a[0] * b[1] - a[1] * b[0]  # noqa: E731
+    # sum l = F.e; sum l * side = moment of the longitudinal forces about the middle's vertical
+    about_middle = moment[2] - cross(middle, force[:2])
+    longitudinal = np.linalg.solve(np.array([[1.0, 1.0], side]), [force[:2] @ e, -about_middle])
+    lateral = force[:2] @ u
+    weight = mu * normal[driven]
+
+    def largest(s):
+        split = np.array([s, lateral - s])
+        return float(np.max(np.hypot(longitudinal, split) / weight))
+
+    span = abs(lateral) + np.abs(longitudinal).sum() + 1.0
+    best = minimize_scalar(largest, bounds=(-span, span), method="bounded", options={"xatol": 1e-12})
+    split = np.array([best.x, lateral - best.x])
+    return normal, np.hypot(longitudinal, split) / weight
+
+
+@pytest.mark.parametrize("name", ["tiago_dual", "planar_dual_arm"])
+def test_contact_forces_along_a_motion_equal_an_independent_distribution(name):
+    from mobmanip.motion.traction import traction_along
+
+    robot = mobmanip.load_robot(name)
+    q0 = named_configuration(robot, "hold") if name == "tiago_dual" else robot.neutral()
+    motion = _random_motion(robot, q0, np.random.default_rng(11), n=12)
+    m = mobmanip.analyze(robot, q0, robot.spec.default_task).grasp_matrix.shape[0]
+    ground = ground_along(robot, motion, np.zeros((len(motion), m)), robot.spec.default_task, object_mass=0.0)
+    traction = traction_along(ground, motion, 0.7)
+    weight = pin.computeTotalMass(robot.model) * 9.81
+    for i in range(len(motion)):
+        force, moment = _reference_wrench(robot, motion.q[i], motion.x[i], motion.xdot[i])
+        normal, use = _reference_contact_forces(ground.support, motion.q[i], force, moment, 0.7)
+        np.testing.assert_allclose(traction.normal[i], normal, atol=1e-9 * weight)
+        if np.all(normal[[c.driven for c in ground.support.contacts]] > 0):
+            np.testing.assert_allclose(traction.use[i], use, rtol=1e-7)
+    # both kinds of optimal split occur: the two wheels equally used (a kink of the largest use)
+    # and one wheel at the minimum of its own use
+    equal = np.isclose(traction.use[:, 0], traction.use[:, 1], rtol=1e-9)
+    assert equal.any() and not equal.all()

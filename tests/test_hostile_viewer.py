@@ -12,6 +12,7 @@ import pytest
 from hostile_util import assert_one_line_error, run_cli, write_robot
 from mobmanip.viz.meshes import resolve_mesh
 from mobmanip.viz.server import MeshcatServer
+from page_util import page_contents
 
 # The paper robot's base box, replaced by a mesh visual.
 BASE_BOX = '<geometry><box size="0.5 0.28 0.18"/></geometry>'
@@ -52,7 +53,7 @@ def test_a_mesh_inside_the_package_is_embedded(tmp_path, capfd):
     (tmp_path / "meshes" / "base.stl").write_text(_stl(marker))
     code, out, err, page = _export(tmp_path, capfd, "meshes/base.stl")
     assert code == 0, err
-    html = page.read_bytes()
+    html = page_contents(page.read_bytes())  # the compressed store too
     assert any(form in html for form in _encodings(marker.encode()))  # the check below can see a mesh
     assert "not drawn" not in out
 
@@ -77,7 +78,7 @@ def test_no_byte_of_a_mesh_outside_the_package_reaches_the_page(tmp_path, capfd,
     }[how]
     code, out, err, page = _export(package, capfd, filename)
     assert code == 0, err
-    html = page.read_bytes()
+    html = page_contents(page.read_bytes())  # the compressed store too
     for form in _encodings(marker.encode()) + _encodings(secret.read_bytes()[:64]):
         assert form not in html
     assert "not drawn" in out and "outside the robot's package directories" in out

@@ -22,6 +22,7 @@ PUBLIC_MODULES = [
     "mobmanip.measures",
     "mobmanip.sets.polytope",
     "mobmanip.sets.capacity",
+    "mobmanip.sets.capacity_batch",
     "mobmanip.robot.model",
     "mobmanip.robot.spec",
     "mobmanip.sweep",

@@ -134,7 +134,17 @@ def floor_warnings(analysis) -> list[str]:
     out = []
     for name, task_set in analysis.measures.items():
         model = getattr(task_set, "model", None)
-        if not task_set.empty or not isinstance(model, dict) or "floor" not in model:
+        if not isinstance(model, dict) or "floor" not in model:
+            continue
+        if not task_set.empty and getattr(task_set, "degenerate", False):
+            widths = [task_set.support(e) + task_set.support(-e) for e in np.eye(task_set.dim)]
+            out.append(
+                f"{name} on the floor has collapsed (no extent along some direction; its widths along the task "
+                f"axes {', '.join(f'{w:.3g}' for w in widths)}): the floor's rows and the set's own policy leave "
+                "almost no motion (e.g. the minimum-norm policy cannot keep the object level in a translational task)"
+            )
+            continue
+        if not task_set.empty:
             continue
         floor = model["floor"]
         robot, obj = analysis.robot, analysis.held_object

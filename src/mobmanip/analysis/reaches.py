@@ -35,6 +35,11 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
     if task_set.empty or not hasattr(task_set, "straight_line_reach"):
         return None
     labels = get_task(task).labels
+    # a reading within the set's rounding of zero is zero (a collapsed set's "support -2.5e-14")
+    noise = 1e-9 * max(
+        (abs(float(task_set.support(s * e))) for e in np.eye(task_set.dim) for s in (1.0, -1.0)), default=0.0
+    )
+    noise = max(noise, 1e-10)
     out = []
     for k, label in enumerate(labels):
         for sign in (1.0, -1.0):
@@ -42,8 +47,8 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
             e[k] = sign
             entry: dict = {
                 "axis": f"{'+' if sign > 0 else '-'}{label}",
-                "straight_line": float(task_set.straight_line_reach(e)),
-                "support": float(task_set.support(e)),
+                "straight_line": _snap(float(task_set.straight_line_reach(e)), noise),
+                "support": _snap(float(task_set.support(e)), noise),
             }
             witness = getattr(task_set, "straight_line_witness", None)
             if witness is not None and entry["straight_line"] > 0.0:
@@ -82,3 +87,7 @@ def floor_at_rest(task_set: TaskSet) -> dict | None:
         "zmp": reaction["zmp"],
         "margin": reaction["margin"],
     }
+
+
+def _snap(value: float, noise: float) -> float:
+    return 0.0 if abs(value) <= noise else value

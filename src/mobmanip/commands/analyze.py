@@ -88,7 +88,9 @@ def _describe_polytope(name: str, polytope, unit: str, ellipsoid=None) -> str:
         else:
             ratio = "ratio n/a (zero semi-axis)"
         direction = "(" + ", ".join(f"{v:.3f}" for v in np.round(axis, 3) + 0.0) + ")"  # no "-0.000"
-        lines.append(f"  axis {k} {direction}: ellipsoid {s:.4f}, polytope +{plus:.4f} / -{minus:.4f}, {ratio}")
+        # the polytope's extent along the axis as coordinates from the centre (both signs when it
+        # lies to one side of the centre: "+0.0095 / +0.0085")
+        lines.append(f"  axis {k} {direction}: ellipsoid {s:.4f}, polytope {plus:+.4f} / {-minus:+.4f}, {ratio}")
     isotropy = f"isotropy {polytope.isotropy:.3f}" if _available(lambda: polytope.isotropy) else "isotropy n/a"
     tail = f"  {_volume_text(polytope, ellipsoid)}; {isotropy}"
     if polytope.degenerate:

@@ -24,6 +24,15 @@ the start posture and is run again from the QP's prepared start, so that the rat
 splits into what the preparation gives and what the motion gives. A ratio whose baseline's set
 collapses (a singular posture) is not given. --prepare 0 starts both from the start posture.
 
+--ground (--mu MU, --no-traction, --reserve R, --zmp-margin M) keeps the robot on its floor: at
+every step of the QP motion (and of the self-motion) the zero-moment point stays M metres (default
+0.02) inside the support polygon, every wheel and caster stays loaded (the contacts share the
+load as equally stiff springs) and, unless --no-traction, each driven wheel's traction stays in
+its friction pyramid (mu: the spec's [support] mu, else 0.5). These are rows of the QP, exact for
+the step's floor wrench with the velocity terms at the previous step's rates; a step they make
+infeasible is reported with the floor's row that binds. The baseline ignores the floor. Check a
+result with `mobmanip trajectory OUT/trajectory.csv --ground --mu MU`.
+
 --out DIR writes trajectory.csv (t, platform_x, platform_y, platform_yaw, one column per joint
 as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
 motion), preparation.csv (the self-motion), carry.json (summary, with what each run started
@@ -66,6 +75,16 @@ def register(sub) -> None:
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
     add_progress_option(parser)
+    from .common import add_floor_options
+
+    add_floor_options(parser)
+    parser.add_argument(
+        "--zmp-margin",
+        type=decimal,
+        metavar="M",
+        help="with --ground: how far the zero-moment point stays inside the support polygon (m; implies --ground; "
+        "default 0.02)",
+    )
     add_work_option(parser, f"QP steps ((path duration + --prepare) / --step; default {MAX_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -127,6 +146,28 @@ def objective_unit_text(result) -> str:
     return f" ({quantity.units} mixed)"
 
 
+def _floor(args):
+    """The floor --ground, --mu, --no-traction, --reserve and --zmp-margin ask for, or ``None``."""
+    import math
+
+    from ..errors import UsageError
+    from ..motion.carry_floor import DEFAULT_ZMP_MARGIN, CarryFloor
+    from .common import floor_constraints
+
+    margin = args.zmp_margin
+    if margin is not None and not (math.isfinite(margin) and margin >= 0.0):
+        raise UsageError(f"--zmp-margin must be a distance >= 0 m, got {margin!r}")
+    if args.load not in (None, "auto", "compliant"):
+        raise UsageError(f"carry's floor shares the load as equally stiff contacts (compliant); --load {args.load} "
+                         "is for the capacity sets")  # fmt: skip
+    chosen = floor_constraints(args)
+    if not chosen and margin is None:
+        return None
+    mu = None if args.no_traction else ("spec" if args.mu is None else args.mu)
+    return CarryFloor(mu=mu, zmp_margin=DEFAULT_ZMP_MARGIN if margin is None else margin,
+                      reserve=float(args.reserve or 0.0))  # fmt: skip
+
+
 def run(args) -> int:
 
     from ..errors import CarryFailed
@@ -142,6 +183,7 @@ def run(args) -> int:
     path = read_path(args.path)
     _check_work(args, path)
     start = read_configuration(robot, args.start) if args.start else None
+    floor = _floor(args)
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
         for name in CARRY_FILES:
@@ -157,6 +199,7 @@ def run(args) -> int:
             step=args.step,
             prepare=args.prepare,
             progress=show_progress(args),
+            floor=floor,
         )
     except CarryFailed as failure:
         if not args.out:

@@ -18,7 +18,7 @@ def register(sub) -> None:
         help="write a robot spec (TOML) inferred from a URDF",
         description="Detect the drive wheels and the arms of a URDF and write a commented spec to edit.",
     )
-    parser.add_argument("urdf", metavar="PATH", help="the robot file (URDF, xacro, MJCF)")
+    parser.add_argument("urdf", metavar="PATH", nargs="?", help="the robot file (URDF, xacro, MJCF)")
     add_urdf_options(parser)
     parser.add_argument(
         "--list-frames", action="store_true", help="list the links that could be end effectors (for --ee) and exit"
@@ -43,6 +43,23 @@ def register(sub) -> None:
     parser.add_argument("--out", metavar="SPEC.toml", help="write here (default: standard output)")
     add_strict_option(parser)
     add_description_options(parser)
+    mount = parser.add_argument_group(
+        "an arm mounted on a base",
+        "compose two URDFs into one (written beside --out SPEC.toml as SPEC.urdf) and infer its spec; instead of PATH",
+    )
+    mount.add_argument("--mount", metavar="ARM.urdf", help="the arm's URDF")
+    mount.add_argument("--on", metavar="BASE.urdf", help="the base's URDF")
+    mount.add_argument(
+        "--at",
+        metavar="X,Y,Z,YAW",
+        help="the arm's root link in the frame of --on-link: metres and degrees about z (a fixed joint)",
+    )
+    mount.add_argument("--on-link", metavar="LINK", help="the base's link the arm is fixed to (default: its root link)")
+    mount.add_argument(
+        "--prefix",
+        default="arm_",
+        help="put before arm names the base already uses (default: link_1 becomes arm_link_1)",
+    )
     given = parser.add_argument_group("values the URDF may lack")
     given.add_argument("--wheel-radius", type=decimal, metavar="M", help="radius of wheels with mesh geometry (m)")
     given.add_argument(
@@ -62,15 +79,31 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..errors import UsageError
+
+    read_options = read_options_from_args(args)
+    mounting = args.mount is not None or args.on is not None or args.at is not None
+    if mounting:
+        return _run_mounted(args, read_options)
+    if args.on_link is not None:
+        raise UsageError("--on-link goes with --mount ARM.urdf --on BASE.urdf --at X,Y,Z,YAW")
+    if args.urdf is None:
+        raise UsageError("init-spec needs a robot file PATH, or --mount ARM.urdf --on BASE.urdf --at X,Y,Z,YAW")
+    if args.list_frames:
+        return _list_frames(args.urdf, read_options)
+    return _write_spec(args, args.urdf, read_options)
+
+
+def _write_spec(args, urdf, read_options, mounted=None, final_urdf=None) -> int:
+    """Detect the spec of ``urdf`` and write it (``mounted``: the composed file, moved to
+    ``final_urdf`` once the spec is known)."""
+    from ..errors import UsageError
     from ..robot.detect import detect_spec, parse_wheel_list, spec_to_toml
     from ..robot.detect_report import missing_message
     from ..support.files import write_text
 
-    read_options = read_options_from_args(args)
-    if args.list_frames:
-        return _list_frames(args.urdf, read_options)
+    shown = final_urdf if final_urdf is not None else urdf
     if not args.ee:
-        raise UsageError(f"init-spec needs at least one --ee FRAME (`mobmanip init-spec {args.urdf} --list-frames`)")
+        raise UsageError(f"init-spec needs at least one --ee FRAME (`mobmanip init-spec {_again(args)} --list-frames`)")
     for name in ("wheel_radius", "wheel_velocity_limit", "wheel_effort_limit"):
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
@@ -83,7 +116,7 @@ def run(args) -> int:
             limits[joint] = tuple(pair)
     wheels = None if args.wheels is None else parse_wheel_list(args.wheels)
     found = detect_spec(
-        args.urdf,
+        urdf,
         args.ee,
         wheels,
         args.platform,
@@ -96,8 +129,17 @@ def run(args) -> int:
         read_options=read_options,
     )
 
+    if final_urdf is not None:  # detected on a draft: name the file the spec will point to
+        spec = dataclasses.replace(found.spec, urdf=Path(final_urdf).resolve())
+        renamed = [tuple(n.replace(str(urdf), str(final_urdf)) for n in x) for x in (found.considered, found.notes)]
+        considered, notes = renamed
+        found = dataclasses.replace(found, spec=spec, considered=considered, notes=notes)
     if args.posture:
         found = dataclasses.replace(found, spec=_with_postures(found.spec, args.posture))
+    if mounted is not None:  # the spec is known: the composed URDF and its meshes take their place
+        _copy_meshes(mounted, Path(final_urdf).resolve().parent)
+        write_text(final_urdf, mounted.text)
+        print(f"wrote {final_urdf}: {_describe_mount(args, mounted)}")
     base_dir = Path(args.out).resolve().parent if args.out else None
     text = spec_to_toml(
         found.spec,
@@ -118,8 +160,77 @@ def run(args) -> int:
             f"wrote {args.out}: {spec.platform}, {len(spec.arms)} arm(s), {len(spec.active_joint_names)} active joints"
         )
     if found.missing:
-        print(f"warning: {missing_message(found.missing, args.urdf)}", file=sys.stderr)
+        print(f"warning: {missing_message(found.missing, shown)}", file=sys.stderr)
     return 0
+
+
+def _again(args) -> str:
+    """The robot-file part of the command line, to suggest a next command."""
+    if args.urdf is not None:
+        return str(args.urdf)
+    link = f" --on-link {args.on_link}" if args.on_link else ""
+    return f"--mount {args.mount} --on {args.on} --at {args.at}{link}"
+
+
+def _describe_mount(args, mounted) -> str:
+    link = args.on_link or "its root link"
+    text = f"{args.mount} mounted on {args.on} ({link}) at {args.at} by the fixed joint {mounted.mount_joint!r}"
+    if mounted.renamed:
+        text += "; renamed " + ", ".join(f"{kind} {old!r} -> {new!r}" for kind, old, new in mounted.renamed)
+    return text
+
+
+def _copy_meshes(mounted, folder: Path) -> None:
+    """Copy the composed robot's meshes (and textures) beside its URDF."""
+    import shutil
+
+    for source, target in mounted.copies:
+        destination = folder / target
+        destination.parent.mkdir(parents=True, exist_ok=True)
+        if not (destination.exists() and destination.samefile(source)):
+            shutil.copyfile(source, destination)
+
+
+def _run_mounted(args, read_options) -> int:
+    """``--mount ARM --on BASE --at X,Y,Z,YAW``: compose, then list frames or write the spec."""
+    import os
+    import tempfile
+
+    from ..descriptions.mount import mount_urdf, parse_pose
+    from ..errors import UsageError
+
+    missing = [f"--{n}" for n in ("mount", "on", "at") if getattr(args, n) is None]
+    if missing:
+        raise UsageError(f"--mount ARM.urdf --on BASE.urdf --at X,Y,Z,YAW go together; missing {', '.join(missing)}")
+    if args.urdf is not None:
+        raise UsageError(f"give either PATH ({args.urdf}) or --mount ARM.urdf --on BASE.urdf, not both")
+    pose = parse_pose(args.at)
+    if not args.list_frames and not args.out:
+        raise UsageError("--mount writes the composed URDF beside the spec: give --out SPEC.toml")
+    if not args.list_frames and not args.ee:
+        raise UsageError(f"init-spec needs at least one --ee FRAME (`mobmanip init-spec {_again(args)} --list-frames`)")
+    out_dir = Path(args.out).resolve().parent if args.out else Path.cwd()
+    final = Path(args.out).with_suffix(".urdf") if args.out else None
+    if final is not None:
+        target = final.resolve()
+        for option, given in (("--mount", args.mount), ("--on", args.on), ("--out", args.out)):
+            if Path(given).resolve() == target:
+                raise UsageError(f"the composed URDF would be written over {option} {given}: choose another --out")
+    meshes = f"{final.stem}_meshes" if final is not None else "meshes"
+    mounted = mount_urdf(args.mount, args.on, pose, meshes, on_link=args.on_link, prefix=args.prefix)
+    options = read_options
+    with tempfile.TemporaryDirectory(prefix=".mobmanip-mount-", dir=out_dir if final is not None else None) as tmp:
+        draft = Path(tmp) / f"{(final.stem if final is not None else 'mounted')}.urdf"
+        draft.write_text(mounted.text, encoding="utf-8")
+        if args.list_frames:
+            for kind, old, new in mounted.renamed:
+                print(f"renamed the arm's {kind} {old!r} -> {new!r}")
+            return _list_frames(draft, options, shown=f"{args.mount} on {args.on}")
+        try:
+            return _write_spec(args, draft, options, mounted=mounted, final_urdf=final)
+        finally:
+            if draft.exists():
+                os.unlink(draft)
 
 
 def _pairs(items, option: str):
@@ -137,16 +248,29 @@ def _pairs(items, option: str):
         yield name.strip(), value
 
 
-def _list_frames(path, read_options) -> int:
-    """Print the candidate end-effector frames of a robot file, the most likely first."""
+def _list_frames(path, read_options, shown=None) -> int:
+    """Print the candidate end-effector frames of a robot file (``shown``: its name in the
+    output), the most likely first."""
     from ..descriptions import check_supported, read_description
     from ..platforms.wheels import wheel_candidates
     from ..robot.detect_report import candidate_frames
 
     description = read_description(path, **read_options)
     check_supported(description)
-    rows = candidate_frames(description, exclude=[c.name for c in wheel_candidates(description)])
-    print(f"{len(rows)} candidate end-effector frames of {path} (for --ee), the most likely first:")
+    path = shown if shown is not None else path
+    wheels = [c.name for c in wheel_candidates(description)]
+    rows = candidate_frames(description, exclude=wheels)
+    if not rows:
+        moved = "beyond its wheels " if wheels else ""
+        print(
+            f"no candidate end-effector frames in {path}: no link {moved}is moved by an actuated joint, "
+            "so the file has no arm to analyse (a base alone, or an arm with fixed joints only)."
+        )
+        print("To analyse a base with an arm, mount an arm's URDF on it and list the composed robot's frames:")
+        print(f"  mobmanip init-spec --mount ARM.urdf --on {path} --at X,Y,Z,YAW --list-frames")
+        return 0
+    plural = "s" if len(rows) != 1 else ""
+    print(f"{len(rows)} candidate end-effector frame{plural} of {path} (for --ee), the most likely first:")
     for link, count, leaf, tool in rows:
         kind = ", ".join(t for t, flag in (("leaf", leaf), ("named like a tool", tool)) if flag)
         print(f"  {link:<40} {count} actuated joint{'s' if count != 1 else ''} from the root; {kind}")

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
     from ..motion.ground import GroundAlong
+    from ..motion.traction import TractionAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
     from ..placement.site import SiteResult
@@ -178,11 +179,15 @@ def trajectory_outputs(
     out_dir: str | Path,
     prefix: str = "analysis",
     ground: GroundAlong | None = None,
+    traction: TractionAlong | None = None,
 ) -> list[str]:
     """``{prefix}.csv`` (:meth:`TrajectoryAnalysis.table`), ``{prefix}.json`` and ``{prefix}.png``
     (:func:`mobmanip.viz.motion_figures.trajectory_figure`) in ``out_dir``; returns the paths.
     With ``ground`` (:func:`mobmanip.motion.ground.ground_along`), the CSV and JSON also hold the
-    zero-moment point and the stability margin per sample."""
+    zero-moment point and the stability margin per sample; with ``traction``
+    (:func:`mobmanip.motion.traction.traction_along`), every contact's normal force
+    (``normal_force_<contact>``) and every driven wheel's traction use (``traction_use_<wheel>``;
+    an unloaded wheel's is ``inf`` in the CSV and ``null`` in the JSON)."""
     from ..viz.motion_figures import trajectory_figure
 
     out = Path(out_dir)
@@ -198,6 +203,23 @@ def trajectory_outputs(
             ("stability_margin", ground.margin),
         ):
             document["columns"][name] = column.tolist()
+    if traction is not None:
+        columns = [(f"normal_force_{name}", traction.normal[:, c]) for c, name in enumerate(traction.contacts)]
+        columns += [(f"traction_use_{name}", traction.use[:, w]) for w, name in enumerate(traction.wheels)]
+        header = [*header, *(name for name, _ in columns)]
+        values = np.hstack([values, *(column[:, None] for _, column in columns)])
+        for name, column in columns:
+            document["columns"][name] = [float(v) if math.isfinite(v) else None for v in column]
+        i, w = traction.worst()
+        worst = float(traction.use[i, w])
+        document["traction"] = {
+            "mu": traction.mu,
+            "load": "compliant",
+            "max_traction_use": worst if math.isfinite(worst) else None,
+            "worst": {"sample": i, "t": float(result.trajectory.t[i]), "wheel": traction.wheels[w]},
+            "slipping_samples": traction.slipping().tolist(),
+            "unloaded_samples": traction.unloaded().tolist(),
+        }  # fmt: skip
     paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
     write_table_csv(paths[0], header, values)
     write_json(paths[1], document)
@@ -344,6 +366,15 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
         finally:
             _close(fig)
     return written + [str(summary), str(figure), str(top)]
+
+
+def team_carry_page(result: TeamCarryResult, path: str | Path, every: int | None = None) -> tuple[Path, list[str]]:
+    """The page ``team-carry --export PAGE.html`` writes: the team's QP motion played in the viewer
+    (:func:`mobmanip.viz.team_motion_page.export_team_motion_page`); returns its path and one note
+    per mesh left out."""
+    from ..viz.team_motion_page import export_team_motion_page
+
+    return export_team_motion_page(result, path, every=every)
 
 
 def team_carry_partial_outputs(team: Team, failure: CarryFailed, out_dir: str | Path) -> list[str]:

@@ -18,6 +18,12 @@ DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0). ELLIPSOID:
 (or :angular) takes the index of the set's shadow on the task's linear (angular) rows, one unit,
 as `analyze` reports per block: dynamic:minor_axis:linear on a spatial task.
 
+or POLYTOPE:READING:DIRECTION, POLYTOPE kinematic_polytope, dynamic_polytope or
+dynamic_polytope_min_norm, READING reach (straight-line reach from rest) or support: no gradient;
+the ellipsoid's capacity along DIRECTION is optimised first (without the floor), then a
+derivative-free search (Nelder-Mead, --budget evaluations) maximises the polytope's reading from
+there. With --ground (--mu, --no-traction, --load, --reserve) the reading is the grounded one.
+
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
 platform origin in a rectangle. --avoid-collision M keeps the shapes that may meet at least M
@@ -43,6 +49,7 @@ examples:
   mobmanip place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x
   mobmanip place tiago_dual --object 2,1,0.85 --mass 3 --objective dynamic:log_volume --json out.json
   mobmanip place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x --map maps/
+  mobmanip place tiago_dual --object 2,1,0.85 --mass 2 --objective dynamic_polytope:reach:+x --mu 0.5
 """
 
 
@@ -87,13 +94,30 @@ def register(sub) -> None:
     )
     parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
     add_progress_option(parser, "--map")
-    from .common import add_dask_option
+    from .common import add_dask_option, add_floor_options
 
+    add_floor_options(parser)
+    parser.add_argument(
+        "--budget",
+        type=int,
+        default=DEFAULT_BUDGET,
+        metavar="N",
+        help=f"with a polytope objective: evaluations of the derivative-free search (default {DEFAULT_BUDGET})",
+    )
     add_dask_option(parser)
-    add_work_option(parser, f"starts and map cells (defaults {MAX_STARTS:,} starts, {MAX_MAP_CELLS:,} cells)")
+    add_work_option(
+        parser,
+        f"starts, map cells and search evaluations (defaults {MAX_STARTS:,} starts, {MAX_MAP_CELLS:,} cells, "
+        f"{MAX_EVALUATIONS:,} evaluations)",
+    )
     parser.set_defaults(func=run)
 
 
+#: Default evaluations of a polytope objective's derivative-free search (--budget).
+DEFAULT_BUDGET = 300
+#: Evaluations of that search place runs without being asked, and the wall time of one (s).
+MAX_EVALUATIONS = 20_000
+SECONDS_PER_EVALUATION = 0.25
 #: Starts and map cells (--map-cells squared) place runs without being asked.
 MAX_STARTS = 1_000
 MAX_MAP_CELLS = 10_000
@@ -110,11 +134,22 @@ def _check_work(args) -> None:
     if args.starts < 1:
         raise UsageError(f"--starts must be at least 1, got {args.starts}")
     check_work(WorkEstimate("place", "starts", args.starts, SECONDS_PER_START), _bound(args.max_work, MAX_STARTS))
+    if args.budget < 1:
+        raise UsageError(f"--budget must be at least 1 evaluation, got {args.budget}")
+    if _polytope_objective(args):
+        check_work(WorkEstimate("place", "search evaluations", args.budget, SECONDS_PER_EVALUATION),
+                   _bound(args.max_work, MAX_EVALUATIONS))  # fmt: skip
     if args.map:
         cells = args.map_cells**2
         detail = f"--map-cells {args.map_cells} per axis"
         check_work(WorkEstimate("place --map", "map cells", cells, SECONDS_PER_CELL, detail),
                    _bound(args.max_work, MAX_MAP_CELLS))  # fmt: skip
+
+
+def _polytope_objective(args) -> bool:
+    from ..placement.grounded import is_polytope_objective
+
+    return is_polytope_objective(args.objective)
 
 
 def _parse_point(text: str):
@@ -148,11 +183,20 @@ def _run(args, executor) -> int:
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
     from ..support.files import write_json
-    from .common import print_warnings
+    from .common import floor_constraints, print_warnings
 
     _check_work(args)
     robot = load_robot(find_spec(args.robot))
     target = _parse_point(args.object)
+    if _polytope_objective(args):
+        return _run_polytope(args, robot, target)
+    if floor_constraints(args):
+        from ..errors import UsageError
+
+        raise UsageError(
+            f"--ground needs a polytope objective (e.g. dynamic_polytope:reach:+x): the ellipsoid of "
+            f"{args.objective!r} ignores the floor"
+        )
     reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
     extent = _check_map_options(args)
@@ -215,6 +259,80 @@ def _run(args, executor) -> int:
         print(f"wrote {path}")
     if args.map:
         _write_map(args, robot, target, result, extent, yaw, collision, reference, executor)
+    if args.view or args.export:
+        _show(args, robot, result)
+    return 0
+
+
+def _run_polytope(args, robot, target) -> int:
+    """``place`` with a polytope objective (:func:`mobmanip.placement.grounded.place_polytope`)."""
+    from ..analysis.single import analyze
+    from ..errors import UsageError
+    from ..placement.grounded import PolytopeObjective, place_polytope
+    from ..placement.optimize import Region
+    from ..postures.named import named_configuration
+    from ..robot.tasks import get_task
+    from ..support.files import write_json
+    from .common import floor_constraints, print_warnings
+
+    for option, given in (("--map", args.map), ("--figure", args.figure),
+                          ("--avoid-collision", args.avoid_collision is not None)):  # fmt: skip
+        if given:
+            raise UsageError(f"{option} is not available with a polytope objective ({args.objective})")
+    task = get_task(args.task or robot.spec.default_task)
+    objective = PolytopeObjective.parse(args.objective, task)
+    constraints = floor_constraints(args)
+    reference = None if args.posture is None else named_configuration(robot, args.posture)
+    region = None if args.region is None else Region.parse(args.region)
+    _check_outputs(args)
+    yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    result = place_polytope(robot, target, objective, task.name, constraints=constraints, object_mass=args.mass,
+                            decoupled=args.decoupled, region=region, reference=reference, starts=args.starts,
+                            hold_turn=yaw, budget=args.budget)  # fmt: skip
+    x, y, heading = result.platform
+    where = "on the floor" if constraints else "ideal"
+    print(f"robot {robot.name}: object at ({target[0]:g}, {target[1]:g}, {target[2]:g}) m, {objective.name} ({where})")
+    print(f"platform: x {x:.4f} m, y {y:.4f} m, heading {math.degrees(heading):.2f} deg")
+    joints = robot.configuration_dict(result.q)["joints"]
+    print("joints: " + ", ".join(f"{name} {value:.4f}" for name, value in joints.items()))
+    print(f"{objective.name} = {result.value:.6g}")
+    print(
+        f"at the optimum of {objective.surrogate} ({result.ungrounded.value:.6g}, without the floor): "
+        f"{objective.name} = {result.ungrounded_value:.6g}"
+    )
+    print(
+        f"{result.evaluations} search evaluations (budget {result.budget}), {len(result.ungrounded.runs)} starts, "
+        f"hold error {result.residual:.1e}, {result.seconds:.2f} s"
+    )
+    if args.save_q:
+        write_json(args.save_q, robot.configuration_dict(result.q))
+        print(f"wrote {args.save_q}")
+    if args.json:
+        analysis = analyze(robot, result.q, task.name, object_mass=args.mass, decoupled=args.decoupled,
+                           constraints=constraints, measures=(objective.measure,))  # fmt: skip
+        document = {
+            "robot": robot.name,
+            "object": [float(v) for v in target],
+            "objective": objective.name,
+            "constraints": [c.describe() for c in constraints],
+            "value": result.value,
+            "ungrounded": {
+                "objective": objective.surrogate,
+                "value": result.ungrounded.value,
+                "q": robot.configuration_dict(result.ungrounded.q),
+                "objective_value": result.ungrounded_value,
+            },
+            "hold_turn": result.hold_turn,
+            "hold_error": result.residual,
+            "evaluations": result.evaluations,
+            "budget": result.budget,
+            "seconds": result.seconds,
+            "q": robot.configuration_dict(result.q),
+            "analysis": analysis.to_dict(),
+        }
+        write_json(args.json, document)
+        print_warnings(analysis)
+        print(f"wrote {args.json}")
     if args.view or args.export:
         _show(args, robot, result)
     return 0

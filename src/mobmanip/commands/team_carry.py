@@ -28,8 +28,15 @@ input of `mobmanip trajectory`), baseline_ROBOT.csv, preparation_ROBOT.csv, team
 (the summary: capacities, tracking, lateral slip, grasp strain, efforts, limits), capacity.png
 and paths.png (top view of the platforms and the object).
 
+--export PAGE.html writes a self-contained page that plays the QP motion (the self-motion first):
+every robot with its meshes at its own configuration, the object where its hands carry it and
+the team's kinematic ellipsoid there (its linear part), the camera framing the whole team along
+the whole motion, a legend with the scale; --every K draws every K-th sample (default: about 200
+frames).
+
 examples:
   mobmanip team-carry examples/beam_team.toml --path examples/carry_turn.csv --scale 2 --out results/
+  mobmanip team-carry examples/beam_team.toml --path examples/carry_turn.csv --scale 2 --export beam.html
 """
 
 #: QP steps times robots a team carry runs without being asked.
@@ -70,6 +77,12 @@ def register(sub) -> None:
         "--prepare", type=decimal, default=30.0, metavar="S", help="longest self-motion before the path (s, default 30)"
     )
     parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
+    parser.add_argument(
+        "--export", metavar="PAGE.html", help="write a self-contained page that plays the team's motion (see below)"
+    )
+    parser.add_argument(
+        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    )
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -89,6 +102,10 @@ def _check(args, path, robots: int) -> None:
         raise UsageError(f"--prepare must be 0 (none) or at least one step ({args.step:g} s), got {args.prepare!r} s")
     if not (math.isfinite(args.scale) and 0.0 < args.scale <= MAX_SCALE):
         raise UsageError(f"--scale must be a number in (0, {MAX_SCALE:g}], got {args.scale!r}")
+    if args.every is not None and args.export is None:
+        raise UsageError("--every thins the frames of --export's page: give --export PAGE.html too")
+    if args.every is not None and args.every < 1:
+        raise UsageError(f"--every must be a whole number of samples >= 1, got {args.every}")
     duration = float(path.t[-1] - path.t[0])
     steps = (duration + args.prepare) / args.step
     detail = f"{robots} robots x (path {duration:g} s + --prepare {args.prepare:g} s) / step {args.step:g} s"
@@ -104,7 +121,7 @@ def run(args) -> int:
     from ..motion.carry import ObjectPath, read_path
     from ..support.files import check_output, note_input, output_directory, require_finite
     from ..team.members import load_team
-    from .outputs import team_carry_outputs, team_carry_partial_outputs, team_carry_paths
+    from .outputs import team_carry_outputs, team_carry_page, team_carry_partial_outputs, team_carry_paths
     from .team import _read_checked
 
     note_input(args.path)
@@ -125,6 +142,14 @@ def run(args) -> int:
                 "mobmanip supports"
             )
     team = load_team(args.description)
+    if args.export:  # refuse an unwritable page before the motion is computed
+        from pathlib import Path
+
+        from ..errors import UsageError
+
+        check_output(args.export)
+        if not Path(args.export).resolve().parent.is_dir():
+            raise UsageError(f"--export {args.export}: its directory does not exist")
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
         for paths in team_carry_paths(team, out).values():
@@ -175,4 +200,9 @@ def run(args) -> int:
     if args.out:
         for written in team_carry_outputs(result, args.out):
             print(f"wrote {written}")
+    if args.export:
+        page, notes = team_carry_page(result, args.export, args.every)
+        for note in notes:
+            print(f"note: {note}")
+        print(f"wrote {page}")
     return 0

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+
+import numpy as np
 
 from ..robot.tasks import TASKS
 from ..support.reading import decimal
@@ -72,7 +75,17 @@ def register(sub) -> None:
         "--ground",
         action="store_true",
         help="also the floor under the motion: the zero-moment point and its margin to the support polygon per "
-        "sample (columns zmp_x, zmp_y, stability_margin; the smallest margin printed)",
+        "sample, every contact's normal force (compliant sharing) and every driven wheel's traction use "
+        "tangential / (mu x normal force) (columns zmp_x, zmp_y, stability_margin, normal_force_C, "
+        "traction_use_W; the smallest margin and the largest use printed; a wheel that slips or a support that "
+        "unloads warned about)",
+    )
+    parser.add_argument(
+        "--mu",
+        type=decimal,
+        metavar="MU",
+        help="with --ground: friction coefficient of the driven wheels (implies --ground; default: the spec's "
+        "[support] mu, else 0.5)",
     )
     parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
     add_strict_option(parser)
@@ -116,6 +129,36 @@ def _check_work(args) -> None:
     check_work(WorkEstimate("trajectory", "samples", max(lines - 1, 0), each), _bound(args.max_work, MAX_SAMPLES))
 
 
+def _report_traction(traction, trajectory) -> None:
+    """The largest traction use printed; a wheel that slips and a support that unloads warned about."""
+    i, k = traction.worst()
+    use = traction.use[i, k]
+    print(
+        f"largest traction use {use:.4f} ({traction.wheels[k]} at sample {i}, t = {trajectory.t[i]:g} s; "
+        f"mu = {traction.mu:g}, compliant load sharing)"
+    )
+    slipping = traction.slipping()
+    if slipping.size:
+        j = int(slipping[0])
+        w = int(np.argmax(traction.use[j]))
+        print(
+            f"warning: a driven wheel slips (traction use above 1) at {slipping.size} of {len(trajectory)} samples: "
+            f"first {traction.wheels[w]} at sample {j} (t = {trajectory.t[j]:g} s, use {traction.use[j, w]:.4g}); "
+            f"the worst {traction.wheels[k]} at sample {i} (t = {trajectory.t[i]:g} s)",
+            file=sys.stderr,
+        )
+    unloaded = traction.unloaded()
+    if unloaded.size:
+        j = int(unloaded[0])
+        c = int(np.argmin(traction.normal[j]))
+        print(
+            f"warning: a support unloads (normal force 0 or less with the contacts equally stiff) at {unloaded.size} "
+            f"of {len(trajectory)} samples: first {traction.contacts[c]} at sample {j} (t = {trajectory.t[j]:g} s, "
+            f"{traction.normal[j, c]:.4g} N)",
+            file=sys.stderr,
+        )
+
+
 def run(args) -> int:
     from ..errors import UsageError
     from ..motion.trajectory import read_trajectory
@@ -129,6 +172,10 @@ def run(args) -> int:
         raise UsageError("give a trajectory: either TRAJ.csv or --bag RUN, not both")
     if args.bag is None and (args.start is not None or args.end is not None):
         raise UsageError("--start and --end cut a --bag recording")
+    if args.mu is not None:
+        if not (math.isfinite(args.mu) and args.mu > 0.0):
+            raise UsageError(f"--mu must be a positive friction coefficient, got {args.mu!r}")
+        args.ground = True
     note_input(args.trajectory or args.bag)
     _check_work(args)
     if args.out:  # refuse an unwritable output before the analysis runs
@@ -177,9 +224,10 @@ def run(args) -> int:
         print(f"time-scaling margin {s.k_max:.6g} (decided by the {s.limit} limit at sample {s.sample})")
         if s.k_min > 0.0:
             print(f"slowest feasible speed-up {s.k_min:.6g}")
-    ground = None
+    ground = traction = None
     if args.ground:
         from ..motion.ground import ground_along
+        from ..motion.traction import traction_along
 
         ground = ground_along(robot, trajectory, result.object_acceleration, result.task, object_mass=args.object_mass)
         k = ground.worst()
@@ -188,8 +236,16 @@ def run(args) -> int:
             f"smallest stability margin {ground.margin[k]:.4f} m{tipping} at sample {k} (t = {trajectory.t[k]:g} s), "
             f"zero-moment point ({ground.zmp[k, 0]:.3f}, {ground.zmp[k, 1]:.3f}) m"
         )
+        from ..errors import SpecError
+
+        try:
+            traction = traction_along(ground, trajectory, args.mu)
+        except SpecError as exc:  # e.g. more than two driven wheels: the margin stands, the traction is left out
+            print(f"traction per wheel: not computed ({exc})")
+        else:
+            _report_traction(traction, trajectory)
     if args.out:
-        for path in trajectory_outputs(robot, result, args.out, ground=ground):
+        for path in trajectory_outputs(robot, result, args.out, ground=ground, traction=traction):
             print(f"wrote {path}")
     if args.export:
         from ..viz.trajectory_page import export_trajectory_page

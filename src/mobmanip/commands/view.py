@@ -97,6 +97,13 @@ def _describe_empty(name: str, analysis) -> list[str]:
     ]
 
 
+def _serving(duration: float | None) -> str:
+    """How long the server will run, as the line with the viewer's URL says it."""
+    if duration is None:
+        return "Ctrl-C to stop"
+    return f"serving for {duration:g} s, then stopping; Ctrl-C stops it sooner"
+
+
 def run(args) -> int:
     from ..viz.scene import EllipsoidViewer, analyze_pair
     from ..viz.server import ViewerError
@@ -145,7 +152,7 @@ def run(args) -> int:
             return 0
         if args.open:
             viewer.open()
-        print(f"meshcat viewer: {viewer.url}  (Ctrl-C to stop)", flush=True)
+        print(f"meshcat viewer: {viewer.url}  ({_serving(args.duration)})", flush=True)
         deadline = None if args.duration is None else time.monotonic() + args.duration
         try:
             while deadline is None or time.monotonic() < deadline:

@@ -39,7 +39,7 @@ GRADIENT_STEP = 1e-6
 
 
 def shape_index(objective: Objective, C: np.ndarray, c: np.ndarray) -> float:
-    """The objective's index of the ellipsoid {c + G z : |z| <= 1} with shape C = G G^T, (m, m):
+    """The objective's index of the ellipsoid {c + G z : ``|z| <= 1``} with shape C = G G^T, (m, m):
     ``minor_axis`` its smallest semi-axis sqrt(lambda_min(C)), ``log_volume`` log of its volume,
     ``log_isotropy`` 1/m log det C - log(tr C / m), ``capacity`` d . c + sqrt(d^T C d).
 

@@ -48,6 +48,7 @@ world's axes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -71,7 +72,7 @@ from ..motion.carry import (
 from ..motion.carry_step import solve_step_qp, velocity_bounds
 from ..motion.trajectory import tangent_integrate
 from ..robot.tasks import get_task
-from ..team import Team
+from ..team import Member, Team
 from ..terms.grasp import HeldObject
 from .capacity import TeamCapacity
 from .effort import diagnose_team_step, effort_rows, team_effort_map
@@ -174,6 +175,33 @@ class TeamCarryResult:
         return np.array(
             [[h.translation for h in _hand_poses(self.team, [q[k] for q in run.q])] for k in range(len(run.t))]
         )
+
+    def carried(self, qs: Sequence[np.ndarray]) -> tuple[Team, float]:
+        """The team at the configurations ``qs`` (one per robot) with its object where the hands
+        carry it, and the object's turn (rad) from the team's start.
+
+        The object moves rigidly with its hands: its pose is the planar rigid motion (a turn about
+        the vertical and a shift, least squares over the hands; the height shifts by the hands'
+        mean) that takes the hands from their grasp at the start (``team.held_object``) to where
+        the robots hold them at ``qs``; its grasp offsets are the hands' positions from the moved
+        centre, its inertia turned with it.
+        """
+        team = self.team
+        start = team.held_object
+        before = start.center + start.offsets
+        after = np.array([hand.translation for hand in _hand_poses(team, qs)])
+        a, b = before - before.mean(axis=0), after - after.mean(axis=0)
+        # the angle of sum(conj(a) b) over the hands, a and b as complex numbers x + iy
+        turn = math.atan2(float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])), float(np.sum(a[:, :2] * b[:, :2])))
+        R = pin.rpy.rpyToMatrix(0.0, 0.0, turn)
+        centre = after.mean(axis=0) + R @ (start.center - before.mean(axis=0))
+        held = HeldObject(start.mass, R @ start.inertia @ R.T, centre, after - centre)
+        members = tuple(Member(m.name, m.robot, np.asarray(q, dtype=float), m.arms) for m, q in zip(team.members, qs))
+        grasp_points = centre + (team.grasp_points - start.center) @ R.T
+        moved = dataclasses.replace(
+            team, members=members, held_object=held, grasp_points=grasp_points, object_yaw=team.object_yaw + turn
+        )
+        return moved, turn
 
     def platform_distance(self, run: TeamCarryRun) -> float | None:
         """The smallest distance between two platforms' reference points along a run (m); the QP

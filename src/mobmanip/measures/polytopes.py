@@ -92,8 +92,9 @@ def sets_one_at_a_time(request: BatchRequest) -> dict[str, list[TaskSet]]:
 
 
 def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
-    """The polytopes of a chunk, one configuration at a time from the chunk's terms (the
-    engine's J_u, P, xi and grasp; the same arrays :class:`MeasureTerms` holds)."""
+    """The polytopes of a chunk from the chunk's terms (the engine's J_u, P, xi and grasp; the
+    same arrays :class:`MeasureTerms` holds): stacked and measured in one compiled pass where
+    :mod:`mobmanip.sets.capacity_batch` covers the set, else one configuration at a time."""
     from ..engine.terms import ChunkTerms, numpy_terms
     from ..sets.capacity import polytope_batch
 

@@ -55,6 +55,7 @@ from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
+from .carry_floor import CarryFloor, floor_binding, floor_rows, solve_with_floor
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
 from .carry_step import CarryDiagnosis as CarryDiagnosis
@@ -246,6 +247,7 @@ class CarryResult:
             the run's minimum as its smallest and largest semi-axes when it has collapsed there
             (:func:`mobmanip.analysis.plausibility.collapsed`: a singular posture); a ratio to
             that minimum is not reported.
+        floor: the floor the QP motion kept (:meth:`CarryFloor.describe`), or ``None``.
     """
 
     objective: Objective
@@ -256,6 +258,7 @@ class CarryResult:
     start: str = "the given start configuration"
     prepared_baseline: CarryRun | None = None
     collapsed: dict[str, tuple[float, float]] = field(default_factory=dict)
+    floor: dict | None = None
 
     def starts(self) -> dict:
         """What each run started from, in words and numbers (JSON-ready)."""
@@ -316,6 +319,8 @@ class CarryResult:
         out["collapsed"] = {
             key: {"smallest_semi_axis": a, "largest_semi_axis": b} for key, (a, b) in self.collapsed.items()
         }
+        if self.floor is not None:
+            out["floor"] = self.floor
         return out
 
 
@@ -391,6 +396,7 @@ def _run(
     converge=False,
     object_mass=None,
     x_start=None,
+    floor=None,
     progress=False,
 ) -> tuple[CarryRun, float]:
     """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
@@ -414,6 +420,7 @@ def _run(
     x_prev = np.zeros(robot.nx) if x_start is None else np.asarray(x_start, dtype=float)
     effort_limits = np.asarray(robot.effort_limits, dtype=float)
     window = max(1, int(round(PREPARE_WINDOW / dt)))
+    resolved = None if floor is None or method == "pinv" else floor.resolve(robot)
     with progress_bar(n, desc=f"carry {method}", unit="step", show=progress) as bar:
         for k in range(n):
             bar.update(1)
@@ -443,9 +450,21 @@ def _run(
                     weight = gain / norm if norm > 0 else 0.0
                 lo, hi = velocity_bounds(robot, q, h)
                 G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
-                x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+                if resolved is None:
+                    x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+                else:
+                    floor_G, floor_g, labels = floor_rows(robot, q, x_prev, h, task, object_mass, floor, resolved)
+                    x = solve_with_floor(solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g)
                 if x is None:
-                    diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
+                    binding = None
+                    if resolved is not None:
+                        binding = floor_binding(
+                            solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g, labels
+                        )
+                    if binding is not None:
+                        diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=True)
+                    else:
+                        diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
                     partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
                                        hand[: k + 1])  # fmt: skip
                     raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)
@@ -476,6 +495,7 @@ def carry(
     step: float = DEFAULT_STEP,
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
+    floor: CarryFloor | None = None,
     progress: bool = False,
 ) -> CarryResult:
     """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
@@ -492,6 +512,10 @@ def carry(
         gain: the capacity term's share of the velocity limits at the first step.
         prepare: longest self-motion (s) before the path (module doc); 0: the QP motion
             starts from ``start`` like the baseline.
+        floor: keep the robot on its floor (:class:`mobmanip.motion.carry_floor.CarryFloor`): the
+            QP motion's (and the self-motion's) steps keep the zero-moment point inside the
+            support polygon with a margin, every support loaded and the driven wheels within
+            friction; the baseline does not.
         progress: show a progress bar per motion on standard error.
 
     Raises:
@@ -508,6 +532,8 @@ def carry(
         raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
     if not isinstance(path, ObjectPath):
         raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
+    if floor is not None and not isinstance(floor, CarryFloor):
+        raise ArgumentError(f"floor must be a CarryFloor, got {type(floor).__name__}")
     task = get_task(task or robot.spec.default_task)
     evaluator = GradientEvaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
     q0 = default_start(robot) if start is None else robot.check_configuration(start)
@@ -518,7 +544,7 @@ def carry(
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
         preparation, weight = _run(
             robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass,
-            progress=progress,
+            floor=floor, progress=progress,
         )  # fmt: skip
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
@@ -531,7 +557,7 @@ def carry(
     try:
         motion, _ = _run(
             robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass,
-            x_start=x_start, progress=progress,
+            x_start=x_start, floor=floor, progress=progress,
         )  # fmt: skip
     except CarryFailed as exc:
         if exc.partial.method == "qp":
@@ -546,7 +572,10 @@ def carry(
         key: _collapsed_at_minimum(robot, run, evaluator.objective, task.name, object_mass) for key, run in runs.items()
     }
     collapsed = {key: value for key, value in found.items() if value is not None}
-    return CarryResult(evaluator.objective, task.name, motion, baseline, preparation, label, prepared, collapsed)
+    return CarryResult(
+        evaluator.objective, task.name, motion, baseline, preparation, label, prepared, collapsed,
+        None if floor is None else floor.describe(),
+    )  # fmt: skip
 
 
 def _collapsed_at_minimum(

@@ -28,7 +28,8 @@ class CarryDiagnosis:
         joint: the reduced velocity whose limit binds (a wheel or joint name), or ``""`` when no
             single limit does (then ``kind`` names what does).
         kind: ``"position"`` (the joint reaches the end of its range), ``"velocity"``,
-            ``"effort"``, ``"limits together"`` (no single limit: several at once) or
+            ``"effort"``, ``"floor"`` (a row of ``carry``'s floor: ``joint`` then names it),
+            ``"limits together"`` (no single limit: several at once) or
             ``"singular"`` (the hands cannot move as asked at this posture, whatever the limits).
         asked, allowed: for the binding limit, what the step needs and what the limit allows
             (rad/s or m/s for position and velocity, N m or N for effort); ``None`` when no
@@ -60,6 +61,11 @@ class CarryDiagnosis:
             return (
                 f"{where} the hands cannot move as the path asks at this posture even without limits (a singular "
                 "posture); slowing down does not help: change the start posture or the path"
+            )
+        if self.kind == "floor":
+            return (
+                f"{where} the floor binds: {self.joint} cannot hold together with the path and the limits; slowing "
+                "the path down likely helps (the floor's forces from the accelerations fall with the speed squared)"
             )
         if self.kind == "limits together":
             return (

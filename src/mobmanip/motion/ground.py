@@ -40,16 +40,70 @@ class GroundAlong:
         margin: its signed distance to the support polygon's nearest edge (m), (N,).
         normal: the floor's total normal force (N), (N,) (0 or less: the robot leaves the floor).
         support: the contacts used.
+        force: the floor's resultant force on the robot and its object (N, world), (N, 3).
+        moment: its moment about the world origin (N m, world), (N, 3).
     """
 
     zmp: np.ndarray
     margin: np.ndarray
     normal: np.ndarray
     support: Support
+    force: np.ndarray | None = None
+    moment: np.ndarray | None = None
 
     def worst(self) -> int:
         """The sample with the smallest margin."""
         return int(np.argmin(self.margin))
+
+
+def floor_wrench(
+    robot: Robot,
+    q: np.ndarray,
+    x: np.ndarray,
+    object_mass: float,
+    object_acceleration: np.ndarray,
+    object_acceleration_rate: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The floor's resultant wrench on the robot and its object, affine in the reduced
+    accelerations: (offset (6,), linear (6, nx)) with [force; moment about the world origin] =
+    offset + linear @ xdot (N, N m; world axes), the velocity terms at (q, x).
+
+    Args:
+        robot, q, x: the robot, its configuration (nq,) and reduced velocity (nx,).
+        object_mass: the object's mass (kg), held between the hands.
+        object_acceleration, object_acceleration_rate: the object's 6-D acceleration (linear, then
+            angular; world) as ``object_acceleration + object_acceleration_rate @ xdot``, (6,) and (6, nx).
+    """
+    g = np.asarray(GRAVITY, dtype=float)
+    model, data = robot.model, robot.data
+    mass = float(pin.computeTotalMass(model))
+    S = robot.null_space(q)
+    v = S @ x
+    A_G = pin.computeCentroidalMap(model, data, q).copy()
+    dA_G = pin.computeCentroidalMapTimeVariation(model, data, q, v)
+    c = data.com[0].copy()
+    # d/dt of the momentum about the centre of mass: A_G qdd + dA_G v, qdd = S xdot + Sdot x
+    rate0 = A_G @ (robot.null_space_rate(q, x) @ x) + dA_G @ v
+    rate1 = A_G @ S
+    pin.framesForwardKinematics(model, data, q)
+    hands = placed_end_effectors(robot)
+    c_o = hands.mean(axis=0)
+    a0, a1 = np.asarray(object_acceleration, dtype=float), np.asarray(object_acceleration_rate, dtype=float)
+    offset, linear = np.zeros(6), np.zeros((6, S.shape[1]))
+    offset[:3] = rate0[:3] + object_mass * a0[:3] - (mass + object_mass) * g
+    linear[:3] = rate1[:3] + object_mass * a1[:3]
+    offset[3:] = rate0[3:] + np.cross(c, rate0[:3]) + object_mass * np.cross(c_o, a0[:3])
+    offset[3:] -= np.cross(c, mass * g) + np.cross(c_o, object_mass * g)
+    linear[3:] = rate1[3:] + _skew(c) @ rate1[:3] + object_mass * _skew(c_o) @ a1[:3]
+    if object_mass > 0.0:
+        inertia = HeldObject.between(hands, object_mass).inertia
+        offset[3:] += inertia @ a0[3:]
+        linear[3:] += inertia @ a1[3:]
+    return offset, linear
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def ground_along(
@@ -76,32 +130,19 @@ def ground_along(
     task = get_task(task or robot.spec.default_task)
     support = robot_support(robot) if support is None else support
     mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
-    g = np.asarray(GRAVITY, dtype=float)
-    model, data = robot.model, robot.data
-    mass = float(pin.computeTotalMass(model))
     n = len(trajectory)
     zmp, margin, normal = np.zeros((n, 2)), np.zeros(n), np.zeros(n)
+    forces, moments = np.zeros((n, 3)), np.zeros((n, 3))
     full = np.zeros((n, 6))
     full[:, list(task.rows)] = np.asarray(object_acceleration, dtype=float)
     z_floor = support.floor_z
     for i in range(n):
         q, x, xdot = trajectory.q[i], trajectory.x[i], trajectory.xdot[i]
-        S = robot.null_space(q)
-        v = S @ x
-        qdd = S @ xdot + robot.null_space_rate(q, x) @ x
-        A_G = pin.computeCentroidalMap(model, data, q)
-        dA_G = pin.computeCentroidalMapTimeVariation(model, data, q, v)
-        c = data.com[0].copy()
-        rate = A_G @ qdd + dA_G @ v  # d/dt of the momentum about the centre of mass
-        pin.framesForwardKinematics(model, data, q)
-        c_o = placed_end_effectors(robot).mean(axis=0)
-        p_o = mass_o * full[i, :3]
-        force = rate[:3] + p_o - (mass + mass_o) * g
-        moment = rate[3:] + np.cross(c, rate[:3]) + np.cross(c_o, p_o)
-        moment -= np.cross(c, mass * g) + np.cross(c_o, mass_o * g)
-        if mass_o > 0.0:
-            moment += HeldObject.between(placed_end_effectors(robot), mass_o).inertia @ full[i, 3:]
+        offset, linear = floor_wrench(robot, q, x, mass_o, full[i], np.zeros((6, robot.nx)))
+        wrench = offset + linear @ xdot
+        force, moment = wrench[:3], wrench[3:]
         normal[i] = force[2]
+        forces[i], moments[i] = force, moment
         if force[2] <= 1e-9:
             raise NumericalError(
                 f"at sample {i} (t = {trajectory.t[i]:.6g} s) the floor's normal force is {force[2]:.6g} N: "
@@ -111,4 +152,4 @@ def ground_along(
         x0, y0, c0, s0 = q[0], q[1], q[2], q[3]
         pose = (float(x0), float(y0), math.atan2(float(s0), float(c0)))
         margin[i] = polygon_margin(support.polygon(pose), zmp[i])
-    return GroundAlong(zmp, margin, normal, support)
+    return GroundAlong(zmp, margin, normal, support, forces, moments)

@@ -247,14 +247,17 @@ def read_collision_matrix(path: str | Path) -> CollisionMatrix:
     try:
         data = json.loads(text)
         if data.get("format") != FORMAT:
-            raise ValueError(f"format is not {FORMAT!r}")
+            raise ModelError(f"collision matrix {path} is not a matrix file: format is not {FORMAT!r}")
         rule = data["rule"]
         shapes = tuple(str(s) for s in data["shapes"])
 
         def pairs(key: str) -> Pairs:
             out = tuple((int(a), int(b)) for a, b in data[key])
             if any(not 0 <= a < b < len(shapes) for a, b in out):
-                raise ValueError(f"a pair of {key!r} is not two shape indices, first < second")
+                raise ModelError(
+                    f"collision matrix {path} is not a matrix file: a pair of {key!r} is not two shape indices, "
+                    "first < second"
+                )
             return out
 
         return CollisionMatrix(
@@ -270,6 +273,8 @@ def read_collision_matrix(path: str | Path) -> CollisionMatrix:
             never=pairs("never"),
             adjacent=pairs("adjacent"),
         )
+    except ModelError:
+        raise
     except (ValueError, KeyError, TypeError, AttributeError) as exc:
         raise ModelError(f"collision matrix {path} is not a matrix file: {exc}") from None
 

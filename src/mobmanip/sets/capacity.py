@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.linalg
@@ -48,6 +48,9 @@ from ..errors import LimitError, ModelError, TaskError
 from .ellipsoid import _RANK_RTOL, _is_identity, _null_space, _torque_offset
 from .polytope import Polytope
 from .taskset import TaskSet
+
+if TYPE_CHECKING:
+    from .capacity_batch import CompiledPolytopeBatch
 
 KINDS = ("kinematic", "dynamic", "dynamic_min_norm")
 
@@ -305,11 +308,15 @@ class PolytopeBatch:
 _STACKED = {"J_u": 3, "W": 3, "P": 3, "Q": 3, "xi": 2, "M_o": 3, "g_o": 2, "velocity_limits": 2, "effort_limits": 2}
 
 
-def polytope_batch(kind: str, **terms: Any) -> PolytopeBatch:
+def polytope_batch(kind: str, *, compiled: bool = True, **terms: Any) -> PolytopeBatch | CompiledPolytopeBatch:
     """One kind of polytope for N configurations.
 
     Args:
         kind: ``"kinematic"``, ``"dynamic"`` or ``"dynamic_min_norm"``.
+        compiled: build the sets of all rows at once and compute their indices in one compiled
+            pass where :mod:`mobmanip.sets.capacity_batch` covers them (planar tasks; the
+            zonotopes of 3-D tasks; the same sets, to round-off); False: one :class:`Polytope`
+            per row, as every other case.
         **terms: the arrays of :func:`polytopes`, each stacked with a leading axis N
             (``J_u`` (N, m k, nx), ``xi`` (N, nx), ...); an array without it (``Q`` (nx, nx),
             limits (nx,), ``M_o`` (m, m), ...) is shared by every configuration.
@@ -333,9 +340,17 @@ def polytope_batch(kind: str, **terms: Any) -> PolytopeBatch:
         if value.ndim == stacked and value.shape[0] != count:
             raise TaskError(f"{name} has {value.shape[0]} rows but J_u has {count}")
         rows.append((name, value, value.ndim == stacked))
-    return PolytopeBatch(
-        polytopes(kind, **{name: (v[i] if per_row else v) for name, v, per_row in rows}) for i in range(count)
-    )
+
+    def row(i: int) -> Polytope:
+        return polytopes(kind, **{name: (v[i] if per_row else v) for name, v, per_row in rows})
+
+    if compiled and "W" in terms and np.ndim(terms["W"]) >= 2 and np.shape(terms["W"])[-2] in (2, 3):
+        from .capacity_batch import compiled_polytope_batch
+
+        fast = compiled_polytope_batch(kind, row, **{name: v for name, v, _ in rows})
+        if fast is not None:
+            return fast
+    return PolytopeBatch(row(i) for i in range(count))
 
 
 def polytope_indices(kind: str, directions: ArrayLike | None = None, **terms: Any) -> PolytopeIndices:

@@ -38,6 +38,9 @@ from .linear_programs import CertifiedProgram, LinearProgram
 from .taskset import TaskSet, check_dims, check_direction, check_points
 
 _TOL = 1e-9  # relative to the set's size: a support beyond a facet by less than this adds no vertex
+#: Below this (in the task's units: m/s^2, N, ...) two points are one, whatever the set's size: a
+#: set that has collapsed to a point (its extent some 1e-14) is not measured by its own rounding.
+_ABS_TOL = 1e-10
 _MAX_ROUNDS = 400
 
 
@@ -158,6 +161,10 @@ class LiftedPolytope(TaskSet):
     def _ub_duals(self, program: LinearProgram, first_ub: int) -> np.ndarray:
         return program.row_duals[first_ub : first_ub + len(self._b_ub)].copy()
 
+    def _tol(self) -> float:
+        """Two points closer than this are one: relative to the set's size, at least _ABS_TOL."""
+        return max(_TOL * getattr(self, "_size", 1.0), _ABS_TOL)
+
     def _axis_supports(self, sign: float) -> np.ndarray:
         return np.array([self._maximise(sign * row)[0] for row in np.eye(self.dim)])
 
@@ -167,9 +174,9 @@ class LiftedPolytope(TaskSet):
             V = self.vertices
             if len(V) <= self.dim:
                 return True
-            return bool(np.linalg.matrix_rank(V - V.mean(axis=0), tol=_TOL * self._size) < self.dim)
+            return bool(np.linalg.matrix_rank(V - V.mean(axis=0), tol=self._tol()) < self.dim)
         widths = [self._maximise(e)[0] + self._maximise(-e)[0] for e in np.eye(self.dim)]
-        return bool(min(widths) <= _TOL * self._size)
+        return bool(min(widths) <= self._tol())
 
     # ------------------------------------------------------------------------------------------
     # TaskSet queries
@@ -367,7 +374,7 @@ class LiftedPolytope(TaskSet):
             self._size = float(max(np.max(box), 1e-300))
         if m == 1:
             return np.unique(np.round(np.array(found), 15), axis=0)
-        tol = _TOL * self._size
+        tol = self._tol()
         if m == 2:
             planar = self._refine_planar(np.array(found), tol)
             if planar is not None:
@@ -439,7 +446,7 @@ class LiftedPolytope(TaskSet):
     def halfspaces(self) -> tuple[np.ndarray, np.ndarray]:
         """(A, b) with the set = {a : A a <= b}, rows of unit norm (m <= 3, full-dimensional)."""
         V = self.vertices
-        normals, offsets = _facets(V, _TOL * getattr(self, "_size", 1.0)) if len(V) else (None, None)
+        normals, offsets = _facets(V, self._tol()) if len(V) else (None, None)
         if normals is None or offsets is None:
             raise TaskError("the set has no interior: it has no halfspace description of its own dimension")
         return normals, offsets
@@ -576,9 +583,12 @@ def _facets(V: np.ndarray, tol: float) -> tuple[np.ndarray | None, np.ndarray | 
         keep = length > tol
         normals = normals[keep] / length[keep, None]
         return normals, np.einsum("ij,ij->i", normals, P[keep])
-    from scipy.spatial import ConvexHull
+    from scipy.spatial import ConvexHull, QhullError
 
-    hull = ConvexHull(V)
+    try:
+        hull = ConvexHull(V)
+    except QhullError:  # flat to Qhull's own precision: no facets of its dimension
+        return None, None
     normals, offsets = hull.equations[:, :-1], -hull.equations[:, -1]
     scale = np.linalg.norm(normals, axis=1)
     return normals / scale[:, None], offsets / scale

@@ -52,7 +52,7 @@ import pinocchio as pin
 
 from ..batch import BatchSetup, check_configurations, default_chunk, iter_terms, warm_kernel
 from ..errors import ArgumentError, GridError, MobmanipError, SpecError, UnreachableGridError
-from ..measures import BatchRequest, Measure, evaluate_batch, get_measure, resolve_measures
+from ..measures import POLYTOPE_KINDS, BatchRequest, Measure, evaluate_batch, get_measure, resolve_measures
 from ..postures.inverse_kinematics import POSITION_TOLERANCE, IKPostureTable, reference_configuration, solve_postures
 from ..postures.planar import (
     PlanarArm,
@@ -388,6 +388,10 @@ def run_sweep(
         # compile (or load) the kernel here, once: before the progress bar counts throughput and
         # before local workers fork from this process (they inherit it)
         warm_kernel(robot, task.name, spec.object_mass)
+    if executor is None and any(name in POLYTOPE_KINDS for name in measures):
+        from ..sets.capacity_batch import warm_kernels
+
+        warm_kernels(task.dim)  # the compiled polytope batch, likewise
     n_workers = workers or default_workers()
     _log.info(
         "sweep of %s: %d grid points, measures %s, %d worker(s)",

@@ -16,6 +16,7 @@ from typing import TypeVar
 
 import numpy as np
 
+from ..errors import TaskError
 from ..sets.taskset import TaskSet
 from .shapes import drawn_linear_part
 
@@ -37,7 +38,7 @@ def directions(k: int, n: int = 720) -> np.ndarray:
         r = np.sqrt(1.0 - z * z)
         phi = np.pi * (1.0 + 5.0**0.5) * i
         return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
-    raise ValueError(f"directions in {k} dimensions are not drawn")
+    raise TaskError(f"directions in {k} dimensions are not drawn")
 
 
 def drawn_supports(task_set: TaskSet, task: str, scale: float, D: np.ndarray) -> np.ndarray:

@@ -85,7 +85,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..analysis.single import Analysis, analyze
@@ -94,6 +93,9 @@ from ..robot.model import Robot
 from ..sets.taskset import TaskSet
 from ..support.files import write_text
 from . import page as _page
+from .animation import CAMERA_FRAMES as CAMERA_FRAMES
+from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
+from .compact_page import compact
 from .meshes import visual_model as visual_model
 from .nesting import nested, outlined
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE
@@ -110,7 +112,6 @@ ELLIPSOIDS_PATH = f"{ROOT}/ellipsoids"
 LOCKED_PATH = f"{ROOT}/locked"
 OBJECT_COLOR = 0xF0F0F0
 OBJECT_RADIUS = 0.035  # m
-CAMERA_FRAMES = 25  # frames an animation's camera frames at most (evenly spread, the last included)
 
 __all__ = [
     "COLORS",
@@ -409,9 +410,7 @@ class EllipsoidViewer:
             box (lower, upper), m.
         """
         frames = [frame] if isinstance(frame, Frame) else list(frame)
-        if len(frames) > CAMERA_FRAMES:
-            picked = np.unique(np.linspace(0, len(frames) - 1, CAMERA_FRAMES).round().astype(int))
-            frames = [frames[i] for i in picked]
+        frames = [frames[i] for i in camera_samples(len(frames))]
         all_points, all_boxes = [], []
         for one in frames:
             points, boxes = self._frame_extent(one)
@@ -436,14 +435,10 @@ class EllipsoidViewer:
             for (_, name), task_set in self._drawn(source, locked).items():
                 if task_set.empty:
                     continue
-                scale = self._set_scale((locked, name))
-                if task_set.kind == "ellipsoid":  # points on the drawn ellipsoid
-                    T = ellipsoid_matrix(task_set, source.task, center, scale, planar_thickness(name, locked))
-                    points = np.vstack([points, _page.DIRECTIONS @ T[:3, :3].T + T[:3, 3]])
-                else:
-                    boxes.append(
-                        _page.sphere_box(center, DRAWINGS[task_set.kind].extent(task_set, source.task) * scale)
-                    )
+                scale, thickness = self._set_scale((locked, name)), planar_thickness(name, locked)
+                more, around = set_extent(task_set, source.task, center, scale, thickness)
+                points = np.vstack([points, more])
+                boxes.extend(around)
         return points, boxes
 
     def _send_page(self, **changes) -> None:
@@ -656,45 +651,23 @@ class EllipsoidViewer:
                 self._load(key, kinds[key])
                 self._set_visible(key, True)
         animation = ma.Animation(default_framerate=fps)
-        data, geometry_data = self.model.createData(), self.visual_model.createData()
-        geometry_paths = [
-            self._pin.getViewerNodeName(geom, pin.GeometryType.VISUAL) for geom in self.visual_model.geometryObjects
-        ]
-        hidden = np.full(3, 1e-6)  # an empty (or absent) set shrinks to nothing
+        paths = geometry_paths(self._pin, self.visual_model)
         previous: dict = {}  # key -> (pose 4x4 without scale, semi-axes) of the last frame drawn
         schedule, t = [], 0.0
         for frame, sets in zip(frames, per_frame):
-            pin.forwardKinematics(self.model, data, frame.q)
-            pin.updateGeometryPlacements(self.model, data, self.visual_model, geometry_data)
-            poses: list[tuple[str, np.ndarray, np.ndarray | None]]
-            poses = [(path, geometry_data.oMg[g].homogeneous, None) for g, path in enumerate(geometry_paths)]
+            poses = robot_poses(self.model, self.visual_model, paths, frame.q)
             poses.append((OBJECT_PATH, translation(frame.analysis.held_object.center), None))
             for key in keys:
-                path, task_set = scene_path(key[1], key[0]), sets.get(key)
-                if task_set is None or task_set.empty:
-                    poses.append((path, previous.get(key, (np.eye(4), None))[0], hidden))
-                    continue
-                source = frame.locked if key[0] else frame.analysis
-                last = previous.get(key)
-                placed = DRAWINGS[task_set.kind].keyframe(
-                    task_set,
-                    source.task,
-                    source.held_object.center,
-                    self._set_scale(key),
-                    planar_thickness(key[1], key[0]),
-                    None if last is None else last[0][:3, :3],
-                )
-                if placed is None:  # a drawing that does not animate: it stays as first shown
-                    continue
-                previous[key] = placed
-                poses.append((path, *placed))
+                source = (frame.locked if key[0] else None) or frame.analysis  # the same task point
+                pose = set_pose(
+                    scene_path(key[1], key[0]), sets.get(key), source.task, source.held_object.center,
+                    self._set_scale(key), planar_thickness(key[1], key[0]), previous, key,
+                )  # fmt: skip
+                if pose is not None:
+                    poses.append(pose)
             times = [t] if frame.hold <= 0 else [t, t + frame.hold]
             for time_s in times:
-                with animation.at_frame(self._vis, time_s * fps) as at:
-                    for path, pose, scale in poses:
-                        at[path].set_transform(pose)  # position and rotation tracks
-                        if scale is not None:
-                            at[path].set_property("scale", "vector3", [float(s) for s in scale])
+                write_keyframe(animation, self._vis, time_s, fps, poses)
             if frame.label:
                 schedule.append((t, times[-1], frame.label))
             t = times[-1] + step
@@ -705,9 +678,10 @@ class EllipsoidViewer:
     # ----- output and shutdown
 
     def static_html(self) -> str:
-        """The scene as one self-contained HTML page (meshcat's ``static_html``)."""
+        """The scene as one self-contained HTML page: meshcat's ``static_html`` with each mesh
+        file kept once, compressed (:mod:`mobmanip.viz.compact_page`)."""
         with self._commands():
-            return _page.inject(self._vis.static_html())
+            return _page.inject(compact(self._vis.static_html()))
 
     def export_html(self, path: str | Path) -> Path:
         """Write the scene (with its animation, if any) as a self-contained HTML page."""

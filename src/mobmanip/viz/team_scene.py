@@ -13,31 +13,77 @@ Scene paths (under meshcat's root ``/meshcat``):
 ================================== ==============================================================
 
 Only the linear part of a task is drawn (as for one robot). Scales: metres of scene per unit of
-each quantity, so that the largest drawn extent of that quantity's sets is ``size``.
+each quantity, so that the largest drawn extent of that quantity's sets is ``size`` (over every
+frame of an animation).
+
+The page explains itself as the single robot's does (:mod:`mobmanip.viz.page`): a legend names
+the team, each drawn set by its colour with its scale and the object; the camera frames every
+robot, the object and the sets (in an animation, at up to
+:data:`~mobmanip.viz.animation.CAMERA_FRAMES` of its frames, so the whole team stays in view
+while it moves). :meth:`TeamViewer.animate` plays a team's motion (:class:`TeamFrame`): each
+robot at its own configuration, the object (its grasp segments turned with it) and the sets
+moving along (:mod:`mobmanip.viz.animation`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
+import math
 import warnings
 import webbrowser
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..measures import get_measure
 from ..support.files import write_text
 from ..team.analysis import TeamAnalysis
+from . import page as _page
+from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
 from .nesting import nested, outlined
 from .scene import DEFAULT_SIZE, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, line_material, translation
 
-__all__ = ["TEAM_PATH", "TeamViewer"]
+__all__ = ["TEAM_PATH", "TeamFrame", "TeamViewer", "team_scales"]
 
 TEAM_PATH = "mobmanip/team"
 OBJECT_LINK_COLOR = 0x8C6D31
+
+
+@dataclass(frozen=True)
+class TeamFrame:
+    """One state of a team's animation.
+
+    Attributes:
+        analysis: the team analysed there: its members' configurations, its object (centre and
+            grasp offsets) and the sets drawn.
+        turn: the object's turn about the vertical (rad) from the team's start; the object's grasp
+            segments turn with it.
+        label: what the frame shows.
+    """
+
+    analysis: TeamAnalysis
+    turn: float = 0.0
+    label: str = ""
+
+
+def team_scales(analyses: Iterable[TeamAnalysis], size: float = DEFAULT_SIZE) -> dict[str, float]:
+    """Metres of scene per unit of each quantity (by quantity name) that draw the largest extent
+    of that quantity's drawable sets, over all ``analyses``, ``size`` long (1 when it is zero)."""
+    largest: dict[str, float] = {}
+    for analysis in analyses:
+        for name, task_set in analysis.measures.items():
+            if task_set.kind in DRAWINGS:
+                quantity = get_measure(name).quantity.name
+                extent = DRAWINGS[task_set.kind].extent(task_set, analysis.team.task)
+                largest[quantity] = max(largest.get(quantity, 0.0), extent)
+    return {q: (size / e if e > 0.0 else 1.0) for q, e in largest.items()}
 
 
 class TeamViewer:
@@ -49,6 +95,8 @@ class TeamViewer:
         open_browser: open the page in the default browser.
         size: the largest drawn extent of each quantity's sets (m).
         timeout: seconds to wait for the server to answer a command.
+        scales: metres of scene per unit by quantity name (as :func:`team_scales`); default:
+            fitted to ``analysis`` and ``size``.
 
     Attributes:
         scales: metres of scene per task unit, by quantity name (``"velocity"``, ...).
@@ -67,6 +115,7 @@ class TeamViewer:
         open_browser: bool = False,
         size: float = DEFAULT_SIZE,
         timeout: float = 60.0,
+        scales: Mapping[str, float] | None = None,
     ):
         import zmq
 
@@ -79,6 +128,8 @@ class TeamViewer:
         #: The team's sets drawn as outlines (they contain, as drawn, the sets listed).
         self.outlined: dict[str, tuple[str, ...]] = {}
         self._closed = False
+        self._page: dict = {}  # what page.js shows (see mobmanip.viz.page)
+        self._camera_serial = 0
         self._server = MeshcatServer(port)
         try:
             with contextlib.redirect_stdout(io.StringIO()):
@@ -90,7 +141,9 @@ class TeamViewer:
             with self._commands():
                 self._draw_robots()
                 self._draw_object()
-                self.scales = self._draw_sets(size)
+                self.scales = self._draw_sets(team_scales([analysis], size) if scales is None else dict(scales))
+                self._legend(self._title())
+                self.frame_camera([TeamFrame(analysis)])
         except BaseException:
             self._server.stop()
             raise
@@ -124,7 +177,7 @@ class TeamViewer:
         )
         self._vis[path].set_transform(translation(obj.center))
 
-    def _draw_sets(self, size: float) -> dict[str, float]:
+    def _draw_sets(self, scales: dict[str, float]) -> dict[str, float]:
         task = self.analysis.team.task
         sets = {}
         for name, task_set in self.analysis.measures.items():
@@ -132,12 +185,7 @@ class TeamViewer:
                 sets[name] = task_set
             else:
                 self.undrawn[name] = task_set.kind
-        largest: dict[str, float] = {}
-        for name, task_set in sets.items():
-            quantity = get_measure(name).quantity.name
-            extent = DRAWINGS[task_set.kind].extent(task_set, task)
-            largest[quantity] = max(largest.get(quantity, 0.0), extent)
-        scales = {q: (size / e if e > 0.0 else 1.0) for q, e in largest.items()}
+        self._sets = sets
         center = self.analysis.team.held_object.center
         self.outlined = outlined(nested(sets, task, lambda name: scales[get_measure(name).quantity.name]))
         for name, task_set in sets.items():
@@ -152,6 +200,117 @@ class TeamViewer:
             scale = scales[get_measure(name).quantity.name]
             drawing.draw(self._vis, path, task_set, task, center, scale, planar_thickness(name))
         return scales
+
+    def _set_scale(self, name: str) -> float:
+        return self.scales[get_measure(name).quantity.name]
+
+    # ----- legend and camera (mobmanip.viz.page)
+
+    def _title(self) -> str:
+        team = self.analysis.team
+        robots = ", ".join(f"{m.name} ({m.robot.name})" for m in team.members)
+        title = f"team {team.name}: {robots}; {team.task} task"
+        return title + (" (linear part drawn)" if team.task in ("spatial", "planar_rigid") else "")
+
+    def _send_page(self, **changes) -> None:
+        page = {**self._page, **changes}
+        if page != self._page:
+            self._vis["mobmanip"].set_property(_page.PAGE_PROPERTY, page)
+            self._page = page
+
+    def _legend(self, title: str, more: Sequence[str] = ()) -> None:
+        """The legend: the team, each drawn set's colour and scale, the object; ``more`` notes."""
+        scales = {name: self._set_scale(name) for name in self._sets}
+        inner = {(False, name): tuple((False, n) for n in held) for name, held in self.outlined.items()}
+        rows, notes = _page.legend_rows(
+            {(False, name): s for name, s in self._sets.items()}, scales, {}, OBJECT_COLOR, inner
+        )
+        with self._commands():
+            self._send_page(title=title, rows=rows, notes=[*notes, *more])
+
+    def frame_camera(self, frames: Sequence[TeamFrame]) -> dict:
+        """Frame every robot (its visual geometry), the object and the drawn sets of the frames (up
+        to :data:`~mobmanip.viz.animation.CAMERA_FRAMES` of them, evenly spread, the last
+        included), seen as the single robot's page sees its robot, from the first robot's platform
+        heading in the first frame.
+
+        Returns:
+            The camera request sent (see :mod:`mobmanip.viz.page`).
+        """
+        points, boxes = [np.zeros((0, 3))], []
+        for i in camera_samples(len(frames)):
+            analysis = frames[i].analysis
+            team = analysis.team
+            for member in team.members:
+                viz = self._robots[member.name]
+                points.append(_page.visual_points(viz.model, viz.visual_model, member.q))
+            center = team.held_object.center
+            points.append(center + team.held_object.offsets)  # the grasp segments' ends
+            boxes.append(_page.sphere_box(center, OBJECT_RADIUS))
+            for name, task_set in analysis.measures.items():
+                if name in self._sets and not task_set.empty:
+                    more, around = set_extent(
+                        task_set, team.task, center, self._set_scale(name), planar_thickness(name)
+                    )
+                    points.append(more)
+                    boxes.extend(around)
+        first = frames[0].analysis.team.members[0]
+        heading = math.atan2(first.q[3], first.q[2]) if first.robot.model.nq >= 4 else 0.0
+        self._camera_serial += 1
+        request = _page.fit_request(np.vstack(points), boxes, heading, self._camera_serial)
+        with self._commands():
+            self._send_page(camera=request)
+        return request
+
+    # ----- animation
+
+    def animate(
+        self,
+        frames: Sequence[TeamFrame],
+        times: ArrayLike,
+        *,
+        fps: int = 30,
+        play: bool = True,
+        notes: Sequence[str] = (),
+    ) -> None:
+        """Send the frames as one meshcat animation (play / pause / time slider in the panel),
+        frame ``k`` at ``times[k]`` s: every robot at its configuration, the object at its centre
+        turned with it, the sets at the object; meshcat interpolates between frames. The scene as
+        created shows the first frame; the camera frames them all; ``notes`` go under the legend.
+        """
+        import meshcat.animation as ma
+
+        times = [float(t) for t in np.asarray(times, dtype=float).reshape(-1)]
+        if not frames or len(frames) != len(times):
+            raise ViewerError(f"an animation needs one time per frame, got {len(frames)} frames, {len(times)} times")
+        self._legend(f"{self._title()}, {len(frames)} frames (play them in Animations)", notes)
+        self.frame_camera(frames)
+        animation = ma.Animation(default_framerate=fps)
+        paths = {name: geometry_paths(viz, viz.visual_model) for name, viz in self._robots.items()}
+        previous: dict = {}  # set name -> (pose, semi-axes) of the last frame drawn
+        turn0 = frames[0].turn
+        for frame, time_s in zip(frames, times):
+            team = frame.analysis.team
+            poses = []
+            for member in team.members:
+                viz = self._robots[member.name]
+                poses.extend(robot_poses(viz.model, viz.visual_model, paths[member.name], member.q))
+            center = team.held_object.center
+            placed = translation(center)
+            placed[:3, :3] = pin.rpy.rpyToMatrix(0.0, 0.0, frame.turn - turn0)
+            poses.append((f"{TEAM_PATH}/object", placed, None))
+            for name in self._sets:
+                pose = set_pose(
+                    self.scene_path(name), frame.analysis.measures.get(name), team.task, center,
+                    self._set_scale(name), planar_thickness(name), previous, name,
+                )  # fmt: skip
+                if pose is not None:
+                    poses.append(pose)
+            write_keyframe(animation, self._vis, time_s, fps, poses)
+        with self._commands():
+            for name in self._sets:  # a set empty in the first frame may appear later: its scale hides it
+                self._vis[self.scene_path(name)].set_property("visible", True)
+            self._vis.set_animation(animation, play=play)
 
     @staticmethod
     def scene_path(name: str) -> str:
@@ -182,9 +341,12 @@ class TeamViewer:
         return self._server.web_url
 
     def static_html(self) -> str:
-        """The scene as one self-contained HTML page."""
+        """The scene as one self-contained HTML page, each mesh file kept once, compressed
+        (:mod:`mobmanip.viz.compact_page`)."""
+        from .compact_page import compact
+
         with self._commands():
-            return self._vis.static_html()
+            return _page.inject(compact(self._vis.static_html()))
 
     def export_html(self, path: str | Path) -> Path:
         """Write the scene as a self-contained HTML page."""

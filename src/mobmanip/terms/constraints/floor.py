@@ -19,7 +19,7 @@ components balance its weight, and the robot feels their reaction.
 
 Inequalities: every normal force >= 0 (no contact pulls: the robot does not tip over); with a
 friction coefficient mu, each driven wheel's tangential force lies in the pyramid with
-``faces`` faces inscribed in its cone |f_t| <= mu f_n (conservative by 1 - cos(pi / faces)).
+``faces`` faces inscribed in its cone ``|f_t| <= mu f_n`` (conservative by 1 - cos(pi / faces)).
 Passive supports are frictionless. With every contact force free, the set is the ideal one.
 
 How the weight is shared (``load``). A robot on more than three contacts is statically
@@ -37,6 +37,11 @@ favourable load. ``"any"`` admits every sharing that balances the robot: the tip
 exact (the zero-moment point anywhere in the polygon) but the traction limit is optimistic
 (it assumes the wheels carry as much as the balance allows; measured in MuJoCo, whose
 contacts share by compliance, the wheels of TIAGo++ and the paper robot then slip on some axes).
+The driven wheels' sideways forces are not shared by compliance: two wheels on one axle are
+held sideways together (the axle is rigid), so while one of them holds, neither slides; a wheel
+at its friction limit passes the rest to the other, and any split within the two pyramids is what
+the floor can do (in MuJoCo, at the ideal +y maximum of TIAGo++, one wheel sits at its limit, the
+other holds, and nothing slides). Only the normal forces have no such mechanism.
 ``"auto"`` (the default) is ``"compliant"`` with a traction limit and ``"any"`` without one.
 Where the robot cannot even stand still with every support loaded (its centre of mass outside
 the core, e.g. arms stretched far out), the compliant set is empty; the exact compliant model,
@@ -314,7 +319,7 @@ def ground_reaction(info: dict, forces: np.ndarray) -> dict:
         forces: the contact force variable at the solution (``witness.variables["contact_forces"]``).
 
     Returns:
-        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (|f_t| / (mu f_n);
+        JSON-ready: ``contacts`` (name -> {normal (N), tangential (N), traction_use (``|f_t| / (mu f_n)``;
         ``None`` for an unloaded wheel)}),
         ``zmp`` (x, y; m, world: the centre of pressure, where the floor's resultant moment has no
         horizontal component), ``margin`` (m: signed distance of the ZMP to the support polygon's

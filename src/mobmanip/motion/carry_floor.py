@@ -1,0 +1,222 @@
+"""The floor in ``carry``'s QP: rows that keep each step's zero-moment point inside the support
+polygon with a margin, every support loaded and the driven wheels within friction.
+
+At a step from reduced velocity x_prev to x over h seconds, xdot = (x - x_prev) / h and the
+floor's resultant wrench (:func:`mobmanip.motion.ground.floor_wrench`, the velocity terms at
+x_prev as the effort rows take them; the object's acceleration from the hands, as
+:meth:`mobmanip.motion.MotionTerms.object_acceleration`) is affine in x: force F(x), moment
+M(x) about the world origin. With the floor at height z_f, F_z times the zero-moment point is
+N(x) = (z_f F_x - M_y, M_x + z_f F_y), also affine. So, exactly for that wrench:
+
+- zero-moment point: for each edge of the support polygon (outward normal n_e through the
+  vertex p_e), n_e . N(x) <= (n_e . p_e - margin) F_z(x): the point at least ``margin`` inside;
+- no support unloads: the compliant normal forces (equally stiff contacts under a rigid platform,
+  as the floor constraint's :func:`~mobmanip.terms.constraints.floor.compliant_sharing`) are a
+  linear map of (F_z, N), each >= the reserve's share of the weight;
+- traction: the casters are frictionless, so the driven wheels carry (F_x, F_y, M_z); a
+  differential drive's two wheels leave the split of their lateral force open: one more QP
+  variable s (the tangential forces are t = P (F_x, F_y, M_z) + k s), and each wheel's tangential
+  force lies in the pyramid with ``faces`` faces inscribed in its cone, scaled by 1 - reserve.
+
+The rows are over (x, s); :func:`floor_rows` gives them with a label per row naming what it
+keeps (the zero-moment point, a support, a wheel's traction) for the diagnosis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArgumentError, SpecError
+from ..robot.model import Robot
+from ..robot.support import Support, check_faces, check_mu, robot_support
+from ..robot.tasks import TaskSpace
+from ..terms.constraints.floor import compliant_sharing
+from ..terms.grasp import GRAVITY
+from .ground import floor_wrench
+
+#: Default distance (m) the carry keeps its zero-moment point inside the support polygon.
+DEFAULT_ZMP_MARGIN = 0.02
+
+
+@dataclass(frozen=True)
+class CarryFloor:
+    """The floor a carry keeps (see the module's docstring).
+
+    Attributes:
+        mu: the driven wheels' friction coefficient; ``None``: no traction rows (tip-over only);
+            ``"spec"``: the support's own.
+        zmp_margin: how far (m) the zero-moment point stays inside the support polygon.
+        reserve: a fraction in [0, 1): each support keeps this share of its equal part of the
+            weight, each wheel uses at most 1 - reserve of its friction pyramid.
+        faces: faces of the friction pyramid (default: the support's).
+        support: the contacts (default: the robot's own).
+    """
+
+    mu: float | str | None = "spec"
+    zmp_margin: float = DEFAULT_ZMP_MARGIN
+    reserve: float = 0.0
+    faces: int | None = None
+    support: Support | None = None
+
+    def __post_init__(self):
+        if self.mu != "spec":
+            check_mu(self.mu, "the carry floor's mu")
+        if self.faces is not None:
+            check_faces(self.faces, "the carry floor's faces")
+        margin = self.zmp_margin
+        if (
+            isinstance(margin, bool)
+            or not isinstance(margin, (int, float))
+            or not (math.isfinite(margin) and margin >= 0)
+        ):
+            raise ArgumentError(f"the zero-moment point's margin must be a finite distance >= 0 m, got {margin!r}")
+        if not (isinstance(self.reserve, (int, float)) and 0.0 <= self.reserve < 1.0):
+            raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
+
+    def resolve(self, robot: Robot) -> tuple[Support, float | None, int]:
+        """The support, friction coefficient and faces for ``robot``."""
+        if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
+            raise SpecError(
+                f"the floor in carry covers differential-drive platforms; {robot.name!r} has a {robot.platform.kind} "
+                "platform"
+            )
+        support = self.support if self.support is not None else robot_support(robot)
+        mu = support.mu if self.mu == "spec" else self.mu
+        faces = support.faces if self.faces is None else self.faces
+        return support, (None if mu is None else float(mu)), int(faces)
+
+    def describe(self) -> dict:
+        return {"mu": self.mu, "zmp_margin": self.zmp_margin, "reserve": self.reserve, "load": "compliant"}
+
+
+def floor_rows(
+    robot: Robot,
+    q: np.ndarray,
+    x_prev: np.ndarray,
+    h: float,
+    task: TaskSpace,
+    object_mass: float | None,
+    floor: CarryFloor,
+    resolved: tuple[Support, float | None, int] | None = None,
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """The step's floor rows G [x; s] <= g (see the module's docstring).
+
+    Returns:
+        (G (r, nx + 1), g (r,), one label per row).
+    """
+    from .in_motion import motion_terms
+
+    support, mu, faces = floor.resolve(robot) if resolved is None else resolved
+    mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
+    terms = motion_terms(robot, q, x_prev, task, object_mass=mass_o)
+    to_object = np.linalg.pinv(terms.W.T)  # a_o = (W^T)^+ (J_u xdot + drift - grasp drift)
+    rows = list(task.rows)
+    a0, a1 = np.zeros(6), np.zeros((6, robot.nx))
+    a0[rows] = to_object @ (terms.drift - terms.grasp_drift)
+    a1[rows] = to_object @ terms.J_u
+    offset, linear = floor_wrench(robot, q, x_prev, mass_o, a0, a1)
+    # over x: wrench = w0 + w1 x (xdot = (x - x_prev) / h)
+    w1 = linear / h
+    w0 = offset - w1 @ x_prev
+    nx = robot.nx
+    z = support.floor_z
+    # affine maps over (x, s): value = c0 + c1 @ [x; s]
+    wrench0, wrench1 = w0, np.hstack([w1, np.zeros((6, 1))])
+    Fz0, Fz1 = wrench0[2], wrench1[2]
+    N0 = np.array([z * wrench0[0] - wrench0[4], wrench0[3] + z * wrench0[1]])
+    N1 = np.vstack([z * wrench1[0] - wrench1[4], wrench1[3] + z * wrench1[1]])
+
+    pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
+    points = support.world_points(pose)[:, :2]
+    G_rows, g_rows, labels = [], [], []
+    polygon = support.polygon(pose)
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]
+    for n_e, p_e in zip(normals, polygon):
+        # n_e . N <= (n_e . p_e - margin) F_z
+        reach = float(n_e @ p_e) - floor.zmp_margin
+        G_rows.append(n_e @ N1 - reach * Fz1)
+        g_rows.append(reach * Fz0 - float(n_e @ N0))
+        labels.append(f"the zero-moment point {floor.zmp_margin:g} m inside the support polygon")
+
+    # compliant normal forces: [balance; sharing] fn = [F_z, N_x, N_y, 0...]
+    n = len(points)
+    system = np.vstack([np.ones(n), points.T, compliant_sharing(points)])
+    L = np.linalg.inv(system)[:, :3]  # fn = L @ (F_z, N_x, N_y)
+    fn0 = L @ np.r_[Fz0, N0]
+    fn1 = L @ np.vstack([Fz1, N1])
+    least = floor.reserve * (float(robot_mass(robot)) + mass_o) * float(-GRAVITY[2]) / n
+    for c, contact in enumerate(support.contacts):
+        G_rows.append(-fn1[c])
+        g_rows.append(fn0[c] - least)
+        labels.append(f"support {contact.name} loaded")
+
+    if mu is not None:
+        driven = [c for c, contact in enumerate(support.contacts) if contact.driven]
+        w = points[driven]
+        d = len(driven)
+        B = np.zeros((3, 2 * d))
+        B[0, 0::2], B[1, 1::2] = 1.0, 1.0
+        B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
+        _, sigma, vt = np.linalg.svd(B)
+        free = vt[int(np.sum(sigma > 1e-12 * sigma[0])) :]
+        if len(free) != 1:
+            raise SpecError(f"the floor in carry covers two driven wheels on one axle; this support has {d}")
+        P = np.linalg.pinv(B)
+        H0 = np.array([wrench0[0], wrench0[1], wrench0[5]])
+        H1 = np.vstack([wrench1[0], wrench1[1], wrench1[5]])
+        t0 = P @ H0
+        t1 = P @ H1
+        t1[:, nx] = free[0]  # the lateral split s
+        tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
+        for i, c in enumerate(driven):
+            for angle in 2.0 * math.pi * np.arange(faces) / faces:
+                u = np.array([math.cos(angle), math.sin(angle)])
+                # u . t_i - tilt fn_c <= 0
+                G_rows.append(u @ t1[2 * i : 2 * i + 2] - tilt * fn1[c])
+                g_rows.append(tilt * fn0[c] - float(u @ t0[2 * i : 2 * i + 2]))
+                labels.append(f"traction of {support.contacts[c].name} within friction (mu = {mu:g})")
+    return np.array(G_rows), np.array(g_rows, dtype=float), labels
+
+
+def robot_mass(robot: Robot) -> float:
+    import pinocchio as pin
+
+    return float(pin.computeTotalMass(robot.model))
+
+
+#: Bound on the lateral split variable s (N): far beyond any floor force the rows allow.
+SPLIT_BOUND = 1e7
+#: The QP's weight on s (it is otherwise free; the rows decide it).
+SPLIT_WEIGHT = 1e-10
+
+
+def solve_with_floor(solve, H, c, J_u, b, lo, hi, G, g, floor_G, floor_g) -> np.ndarray | None:
+    """The step's QP over (x, s) with the floor's rows; x, or ``None`` when it has no solution.
+    ``solve`` is the QP solver ``solve(H, c, A, b, lo, hi, G, g)``."""
+    nx = len(c)
+    H2 = np.zeros((nx + 1, nx + 1))
+    H2[:nx, :nx] = H
+    H2[nx, nx] = SPLIT_WEIGHT
+    G2 = np.vstack([np.hstack([G, np.zeros((len(G), 1))]), floor_G]) if G is not None else floor_G
+    g2 = np.concatenate([g, floor_g]) if g is not None else floor_g
+    sol = solve(H2, np.r_[c, 0.0], np.hstack([J_u, np.zeros((len(J_u), 1))]), b, np.r_[lo, -SPLIT_BOUND],
+                np.r_[hi, SPLIT_BOUND], G2, g2)  # fmt: skip
+    return None if sol is None else sol[:nx]
+
+
+def floor_binding(solve, H, c, J_u, b, lo, hi, G, g, floor_G, floor_g, labels) -> str | None:
+    """Which of the floor's rows make the step infeasible: ``None`` when the step has no solution
+    without them either (a joint limit binds); else the label of the first group of rows whose
+    removal alone makes it feasible, or ``"the floor's rows together"``."""
+    if solve(H, c, J_u, b, lo, hi, G, g) is None:
+        return None
+    labels = np.asarray(labels)
+    for label in dict.fromkeys(labels.tolist()):
+        keep = labels != label
+        if solve_with_floor(solve, H, c, J_u, b, lo, hi, G, g, floor_G[keep], floor_g[keep]) is not None:
+            return str(label)
+    return "the floor's rows together"

@@ -1,0 +1,180 @@
+"""The driven wheels' traction along a motion: how much of its friction each wheel uses per sample.
+
+The floor's resultant wrench on the robot and its object at each sample
+(:func:`mobmanip.motion.ground.ground_along`, velocity terms included) is shared by the contacts
+as the floor constraint (:class:`mobmanip.terms.constraints.floor.Floor`) shares it:
+
+- normal forces, compliant: equally stiff contacts under a rigid platform, so the normal forces
+  are affine in the contacts' floor positions, f_n,c = a + b x_c + c y_c; the resultant's
+  normal force and its zero-moment point fix a, b and c (n - 3 equations of
+  :func:`~mobmanip.terms.constraints.floor.compliant_sharing` beside the three of the balance;
+  with three contacts every sharing is this one). A normal force of 0 or less is a support that
+  unloads (the compliant model keeps every support loaded; the robot may still stand, on fewer
+  supports);
+- tangential forces: the casters are frictionless, so the driven wheels carry the resultant's
+  horizontal force and its moment about the vertical: three equations over two components per
+  wheel. For a differential drive (two wheels on one axle) the longitudinal forces are fixed;
+  the split of the lateral force between the two wheels is not (both act along the axle's
+  line). The floor constraint admits any split; so does this reading: it takes the split that
+  uses the least friction (the smallest largest use). Exact: the minimum over one variable of
+  the largest of convex functions lies at one function's minimum or where two are equal.
+
+A wheel's *traction use* is ``|f_t| / (mu f_n)`` (the friction cone itself; the floor constraint's
+inscribed pyramid is conservative by 1 - cos(pi / faces)): above 1 the wheel slips; an unloaded
+wheel (f_n <= 0) has use +inf.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArgumentError, SpecError
+from ..terms.constraints.floor import compliant_sharing
+from .ground import GroundAlong
+from .trajectory import Trajectory
+
+#: A normal force at most this (N) counts as unloaded.
+UNLOADED = 1e-9
+
+
+@dataclass(frozen=True)
+class TractionAlong:
+    """The contacts' forces along a motion (see the module's docstring).
+
+    Attributes:
+        mu: the driven wheels' friction coefficient.
+        contacts: every contact's name (driven wheels first), (n,).
+        wheels: the driven wheels' names, (d,).
+        normal: each contact's normal force per sample (N), (N, n).
+        tangential: each driven wheel's tangential force per sample (N, world x, y), (N, d, 2).
+        use: each driven wheel's traction use ``|f_t| / (mu f_n)`` per sample, (N, d) (+inf unloaded).
+    """
+
+    mu: float
+    contacts: tuple[str, ...]
+    wheels: tuple[str, ...]
+    normal: np.ndarray
+    tangential: np.ndarray
+    use: np.ndarray
+
+    def worst(self) -> tuple[int, int]:
+        """(sample, wheel index) of the largest traction use."""
+        i, k = np.unravel_index(int(np.argmax(self.use)), self.use.shape)
+        return int(i), int(k)
+
+    def slipping(self) -> np.ndarray:
+        """The samples where some wheel's use exceeds 1 (it slips)."""
+        return np.flatnonzero((self.use > 1.0).any(axis=1))
+
+    def unloaded(self) -> np.ndarray:
+        """The samples where some contact's normal force is at most :data:`UNLOADED`."""
+        return np.flatnonzero((self.normal <= UNLOADED).any(axis=1))
+
+
+def contact_forces(
+    points: np.ndarray, driven: np.ndarray, force: np.ndarray, moment: np.ndarray, zmp: np.ndarray, mu: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The contacts' forces for one resultant (see the module's docstring).
+
+    Args:
+        points: the contacts' points in the world (m), (n, 2 or 3).
+        driven: which contacts are driven wheels, (n,) bool.
+        force: the floor's resultant force (N, world), (3,).
+        moment: its moment about the world origin (N m), (3,) (only the vertical component is used).
+        zmp: the resultant's zero-moment point (m, world x, y), (2,).
+        mu: the driven wheels' friction coefficient (> 0).
+
+    Returns:
+        (normal forces (n,), the driven wheels' tangential forces (d, 2), their traction use (d,)).
+    """
+    xy = np.asarray(points, dtype=float)[:, :2]
+    driven = np.asarray(driven, dtype=bool)
+    n = len(xy)
+    balance = np.vstack([np.ones(n), xy.T])
+    rhs = float(force[2]) * np.array([1.0, zmp[0], zmp[1]])
+    sharing = compliant_sharing(xy)
+    normal = np.linalg.solve(np.vstack([balance, sharing]), np.concatenate([rhs, np.zeros(len(sharing))]))
+
+    w = xy[driven]
+    d = len(w)
+    B = np.zeros((3, 2 * d))
+    B[0, 0::2] = 1.0
+    B[1, 1::2] = 1.0
+    B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
+    target = np.array([force[0], force[1], moment[2]])
+    particular, *_ = np.linalg.lstsq(B, target, rcond=None)
+    _, sigma, vt = np.linalg.svd(B)
+    rank = int(np.sum(sigma > 1e-12 * sigma[0]))
+    if np.linalg.norm(B @ particular - target) > 1e-9 * max(1.0, float(np.linalg.norm(target))):
+        raise SpecError("the driven wheels cannot carry the floor's horizontal force and moment (one wheel?)")
+    free = vt[rank:].T  # (2d, k)
+    weight = mu * normal[driven]
+    loaded = weight > mu * UNLOADED
+    a = particular.reshape(d, 2)
+    if free.shape[1] == 0:
+        tangential = a
+    elif free.shape[1] == 1:
+        k = free[:, 0].reshape(d, 2)
+        s = _least_largest_use(a[loaded], k[loaded], weight[loaded]) if loaded.any() else 0.0
+        tangential = a + s * k
+    else:
+        raise SpecError(f"traction along a motion covers two driven wheels on one axle; this support has {d}")
+    use = np.full(d, math.inf)
+    use[loaded] = np.linalg.norm(tangential[loaded], axis=1) / weight[loaded]
+    return normal, tangential, use
+
+
+def _least_largest_use(a: np.ndarray, k: np.ndarray, w: np.ndarray) -> float:
+    """The s minimising max_i |a_i + s k_i| / w_i (exactly: at one term's minimum or where two
+    terms are equal)."""
+    kk, ak, aa = (k * k).sum(axis=1), (a * k).sum(axis=1), (a * a).sum(axis=1)
+    candidates = [0.0] + [float(-ak[i] / kk[i]) for i in range(len(a)) if kk[i] > 0.0]
+    w2 = w**2
+    for i, j in itertools.combinations(range(len(a)), 2):
+        coefficients = (
+            kk[i] / w2[i] - kk[j] / w2[j],
+            2.0 * (ak[i] / w2[i] - ak[j] / w2[j]),
+            aa[i] / w2[i] - aa[j] / w2[j],
+        )
+        if abs(coefficients[0]) > 0.0 or abs(coefficients[1]) > 0.0:
+            candidates += [float(r.real) for r in np.roots(coefficients) if abs(r.imag) <= 1e-12 * max(1.0, abs(r))]
+
+    def largest(s: float) -> float:
+        return float(np.max(np.linalg.norm(a + s * k, axis=1) / w))
+
+    return min(candidates, key=largest)
+
+
+def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None = None) -> TractionAlong:
+    """Every contact's force and every driven wheel's traction use along a motion.
+
+    Args:
+        ground: the floor along the motion (:func:`mobmanip.motion.ground.ground_along`).
+        trajectory: the same motion.
+        mu: the driven wheels' friction coefficient (> 0); default the support's.
+
+    Raises:
+        ArgumentError: ``mu`` not a positive finite number.
+    """
+    support = ground.support
+    mu = support.mu if mu is None else mu
+    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not (math.isfinite(mu) and mu > 0.0):
+        raise ArgumentError(f"the traction along a motion needs a friction coefficient mu > 0, got {mu!r}")
+    if ground.force is None or ground.moment is None:
+        raise ArgumentError("the floor along the motion has no resultant forces (from ground_along)")
+    driven = np.array([c.driven for c in support.contacts])
+    n, d = len(trajectory), int(driven.sum())
+    normal, tangential, use = np.zeros((n, len(driven))), np.zeros((n, d, 2)), np.zeros((n, d))
+    for i in range(n):
+        q = trajectory.q[i]
+        points = support.world_points((float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))))
+        normal[i], tangential[i], use[i] = contact_forces(
+            points, driven, ground.force[i], ground.moment[i], ground.zmp[i], float(mu)
+        )
+    names = tuple(c.name for c in support.contacts)
+    wheels = tuple(c.name for c in support.contacts if c.driven)
+    return TractionAlong(float(mu), names, wheels, normal, tangential, use)

@@ -1,0 +1,263 @@
+"""Base placement that maximises a polytope's reading, on the floor or not.
+
+:func:`mobmanip.placement.optimize.place` climbs the ellipsoids' analytic gradients. A polytope's
+reading (its straight-line reach or its support along a task axis), and above all a grounded one
+(the floor constraint's contacts in the linear program), has no such gradient: it is the value of
+a linear program whose data move with the configuration, piecewise smooth, with kinks where the
+binding rows change. :func:`place_polytope` therefore works in two stages:
+
+1. the ellipsoid's capacity along the same direction (the kinematic ellipsoid for a velocity
+   polytope, the dynamic one for an acceleration polytope), without the floor, by
+   :func:`~mobmanip.placement.optimize.place` (its gradients, its starts): the *ungrounded
+   optimum*;
+2. the polytope's reading (with the constraints, e.g. on the floor) at the seeds: the ungrounded
+   optimum and place's own starts (the reference hold at the object, the platform at evenly
+   spread headings, projected onto the hold), while they take at most half the budget;
+3. from the :data:`SEARCHES` best seeds, derivative-free searches (scipy's Nelder-Mead, adaptive
+   to the dimension) over the placement variables z (platform pose, torso and arm joints, the
+   hold's turn psi), sharing what is left of a stated budget of evaluations. Each evaluation
+   takes the nearest z that holds the object (the same projection as the placement's starts)
+   and computes the polytope with the constraints there; a z no projection reaches counts as
+   infeasible.
+
+The best configuration evaluated wins, so the result is never worse than the ungrounded optimum
+read on the floor. The searches are local: a grid or more starts can still find better
+placements far away.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.optimize import minimize
+
+from ..analysis.single import analyze
+from ..errors import ArgumentError, MeasureError, MobmanipError
+from ..gradients.evaluator import GradientEvaluator, Objective
+from ..measures import MEASURES, get_measure
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from .optimize import DEFAULT_STARTS, Placement, PlacementProblem, Region, _project, check_turn, place
+
+#: Readings of a polytope an objective may name.
+READINGS = ("reach", "support")
+#: Default budget of the derivative-free stage (evaluations, each a projection and a polytope).
+DEFAULT_BUDGET = 300
+#: Derivative-free searches, from the best seeds (the budget shared among them).
+SEARCHES = 2
+#: The ellipsoid whose gradient gives stage 1's start, per quantity of the polytope.
+SURROGATES = {"velocity": "kinematic", "acceleration": "dynamic"}
+
+
+@dataclass(frozen=True)
+class PolytopeObjective:
+    """``POLYTOPE:READING:DIRECTION``: a polytope measure, ``reach`` (straight-line reach from
+    rest) or ``support`` (extent with the other components free), along a unit task direction."""
+
+    measure: str
+    reading: str
+    direction: tuple[float, ...]
+    text: str
+    direction_text: str = ""
+
+    @property
+    def name(self) -> str:
+        return self.text
+
+    @property
+    def surrogate(self) -> str:
+        """Stage 1's ellipsoid objective: its capacity along the same direction."""
+        ellipsoid = SURROGATES[get_measure(self.measure).quantity.name]
+        return f"{ellipsoid}:capacity:" + (self.direction_text or ",".join(repr(v) for v in self.direction))
+
+    @classmethod
+    def parse(cls, text: str, task) -> PolytopeObjective:
+        """From ``POLYTOPE:READING:DIRECTION`` (DIRECTION as :meth:`Objective.parse` reads it).
+
+        Raises:
+            ArgumentError: not three parts, an unknown reading, a bad direction.
+            MeasureError: not a polytope measure with an ellipsoid counterpart.
+        """
+        task = get_task(task)
+        parts = str(text).split(":")
+        if len(parts) != 3:
+            raise ArgumentError(f"a polytope objective is POLYTOPE:READING:DIRECTION (e.g. dynamic_polytope:reach:+x), "
+                                f"got {text!r}")  # fmt: skip
+        measure, reading, direction = parts
+        if not is_polytope_objective(text):
+            known = ", ".join(n for n, m in MEASURES.items() if m.set_kind == "polytope")
+            raise MeasureError(f"objective {text!r}: {measure!r} is not a polytope measure ({known})")
+        if get_measure(measure).quantity.name not in SURROGATES:
+            names = ", ".join(
+                n for n, m in MEASURES.items() if m.set_kind == "polytope" and m.quantity.name in SURROGATES
+            )
+            raise MeasureError(f"objective {text!r}: placement maximises the polytopes of motion ({names})")
+        if reading not in READINGS:
+            raise ArgumentError(f"objective {text!r}: the reading must be one of {', '.join(READINGS)}")
+        unit = Objective.parse(f"dynamic:capacity:{direction}", task)  # its direction, checked and made unit
+        unit.check_task(task)
+        assert unit.direction is not None
+        return cls(measure, reading, unit.direction, str(text), direction.strip())
+
+
+def is_polytope_objective(text: str) -> bool:
+    """Whether ``text`` names a registered polytope measure (``POLYTOPE:...``)."""
+    head = str(text).split(":", 1)[0]
+    return head in MEASURES and MEASURES[head].set_kind == "polytope"
+
+
+def polytope_value(
+    robot: Robot, q: np.ndarray, objective: PolytopeObjective, task, object_mass, constraints, decoupled=False
+) -> float:
+    """The objective's reading at ``q`` (0 when the set is empty)."""
+    result = analyze(robot, q, task, object_mass=object_mass, constraints=tuple(constraints),
+                     measures=(objective.measure,), decoupled=decoupled)  # fmt: skip
+    polytope = result.measure(objective.measure)
+    if polytope.empty:
+        return 0.0
+    reading = getattr(polytope, "straight_line_reach", None) if objective.reading == "reach" else polytope.support
+    if reading is None:
+        raise MeasureError(f"{objective.measure} has no straight-line reach")
+    return float(reading(np.asarray(objective.direction)))
+
+
+@dataclass(frozen=True)
+class PolytopePlacement:
+    """The result of :func:`place_polytope`.
+
+    Attributes:
+        q: the chosen configuration, (nq,).
+        objective: what was maximised.
+        value: its value at ``q``.
+        ungrounded: the first stage's placement (the ellipsoid's optimum, without constraints).
+        ungrounded_value: the objective (with the constraints) at ``ungrounded.q``.
+        hold_turn: psi at ``q`` (rad).
+        residual: largest hold error at ``q`` (m or rad).
+        evaluations: evaluations of the seeds and the searches (projections and polytopes).
+        budget: their budget.
+        seconds: wall time of both stages (s).
+    """
+
+    q: np.ndarray
+    objective: PolytopeObjective
+    value: float
+    ungrounded: Placement
+    ungrounded_value: float
+    hold_turn: float
+    residual: float
+    evaluations: int
+    budget: int
+    seconds: float
+
+    @property
+    def platform(self) -> tuple[float, float, float]:
+        """(x m, y m, heading rad) of the platform."""
+        return float(self.q[0]), float(self.q[1]), math.atan2(self.q[3], self.q[2])
+
+
+def place_polytope(
+    robot: Robot,
+    target: ArrayLike,
+    objective: str | PolytopeObjective,
+    task: str | None = None,
+    *,
+    constraints: tuple = (),
+    object_mass: float | None = None,
+    decoupled: bool = False,
+    region: Region | None = None,
+    reference: np.ndarray | None = None,
+    starts: int = DEFAULT_STARTS,
+    hold_turn: float | None = None,
+    budget: int = DEFAULT_BUDGET,
+) -> PolytopePlacement:
+    """The placement that maximises a polytope's reading (see the module's docstring).
+
+    Args:
+        robot, target, task, object_mass, decoupled, region, reference, starts, hold_turn: as
+            :func:`~mobmanip.placement.optimize.place`.
+        objective: ``POLYTOPE:READING:DIRECTION``, e.g. ``"dynamic_polytope:reach:+x"``.
+        constraints: the analysis's constraints (e.g. ``(Floor(mu=0.5),)``: the grounded reading).
+        budget: evaluations of the derivative-free stage (>= 1).
+
+    Raises:
+        ArgumentError, MeasureError: a malformed objective or budget.
+        UnreachableObjectError: no pose holds the object at ``target``.
+    """
+    started = time.perf_counter()
+    task = get_task(task or robot.spec.default_task)
+    if not isinstance(objective, PolytopeObjective):
+        objective = PolytopeObjective.parse(objective, task)
+    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+        raise ArgumentError(f"the search's budget must be a positive number of evaluations, got {budget!r}")
+    first = place(robot, target, objective.surrogate, task.name, object_mass=object_mass, decoupled=decoupled,
+                  region=region, reference=reference, starts=starts, hold_turn=hold_turn)  # fmt: skip
+    evaluator = GradientEvaluator(robot, objective.surrogate, task, object_mass=object_mass, decoupled=decoupled)
+    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
+    problem = PlacementProblem(robot, evaluator, first.target, region, q_ref)
+    bounds = problem.bounds()
+    if hold_turn is not None:
+        turn = check_turn(hold_turn)
+        bounds[-1] = (turn, turn)
+
+    def value_at(q: np.ndarray) -> float:
+        try:
+            return polytope_value(robot, q, objective, task.name, object_mass, constraints, decoupled)
+        except MobmanipError:  # e.g. the floor cannot hold the robot still there
+            return 0.0
+
+    z0 = problem.variables(first.q, first.hold_turn)
+    start_value = value_at(first.q)
+    best: dict = {"value": start_value, "z": z0}
+    count = [0]
+
+    def evaluate(z: np.ndarray) -> tuple[float, np.ndarray | None]:
+        """The reading at the nearest z that holds the object (-inf where none does)."""
+        count[0] += 1
+        held = _project(problem, z, bounds)
+        if held is None:
+            return -math.inf, None
+        value = value_at(problem.configuration(held))
+        if value > best["value"]:
+            best["value"], best["z"] = value, held
+        return value, held
+
+    def cost(z: np.ndarray) -> float:
+        value = evaluate(z)[0]
+        return 1e6 if value == -math.inf else -value
+
+    # the seeds: the ungrounded optimum and place's own starts (projected), best first
+    seeds = [(start_value, z0)]
+    rng = np.random.default_rng(0)
+    for s in range(starts):
+        if count[0] >= budget // 2:
+            break
+        z = problem.start(2.0 * math.pi * s / starts, rng)
+        if hold_turn is not None:
+            z[-1] = bounds[-1][0]
+        value, held = evaluate(z)
+        if held is not None:
+            seeds.append((value, held))
+    seeds.sort(key=lambda seed: -seed[0])
+    lower = np.array([-np.inf if lo is None else lo for lo, _ in bounds])
+    upper = np.array([np.inf if hi is None else hi for _, hi in bounds])
+    steps = np.full(problem.n, 0.1)
+    steps[:2] = 0.05
+    for k, (_, z_seed) in enumerate(seeds[:SEARCHES]):
+        left = budget - count[0]
+        share = left // (min(SEARCHES, len(seeds)) - k)
+        if share < problem.n + 2:
+            break
+        simplex = np.clip(np.vstack([z_seed, z_seed + np.diag(steps)]), lower, upper)
+        minimize(cost, z_seed, method="Nelder-Mead", bounds=list(zip(lower, upper)),
+                 options={"maxfev": share, "initial_simplex": simplex, "adaptive": True, "xatol": 1e-6,
+                          "fatol": 1e-9})  # fmt: skip
+    value, z = float(best["value"]), np.asarray(best["z"])
+    return PolytopePlacement(
+        q=problem.configuration(z), objective=objective, value=float(value), ungrounded=first,
+        ungrounded_value=float(start_value), hold_turn=float(z[-1]), residual=problem.residual(z),
+        evaluations=count[0], budget=budget, seconds=time.perf_counter() - started,
+    )  # fmt: skip

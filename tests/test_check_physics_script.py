@@ -1,0 +1,51 @@
+"""scripts/check_physics.py, the documented replay of a user's robot in MuJoCo (issue 24, item 6):
+its reaches are analyze's grounded straight-line reaches (asked through the Python API), MuJoCo's
+acceleration at t = 0 matches them within 3 %, and bad input is one line with exit code 2."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")
+import mobmanip  # noqa: E402
+from mobmanip.postures.named import named_configuration  # noqa: E402
+from mobmanip.terms.constraints.floor import Floor  # noqa: E402
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "check_physics.py"
+
+
+def _run(*args):
+    return subprocess.run([sys.executable, str(SCRIPT), *args], capture_output=True, text=True, timeout=300)
+
+
+def test_the_script_replays_every_axis_and_reports_the_grounded_reaches():
+    run = _run("tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--duration", "0.005")
+    assert run.returncode in (0, 1), run.stderr
+    robot = mobmanip.load_robot("tiago_dual")
+    P = mobmanip.analyze(
+        robot, named_configuration(robot, "hold"), "spatial", object_mass=2.0,
+        measures=("dynamic_polytope",), constraints=(Floor(),),
+    ).measures["dynamic_polytope"]  # fmt: skip
+    rows = {line.split()[0]: line.split() for line in run.stdout.splitlines()[2:]}
+    axes = [f"{s}{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw") for s in "+-"]
+    assert set(rows) == set(axes), run.stdout
+    for k, axis in enumerate(axes):
+        e = np.zeros(6)
+        e[k // 2] = 1.0 if axis[0] == "+" else -1.0
+        assert float(rows[axis][1]) == pytest.approx(P.straight_line_reach(e), abs=6e-4)
+        assert float(rows[axis][2]) <= 3.0  # % of the predicted acceleration, at t = 0
+        assert float(rows[axis][3]) <= 0.1  # % of the weight, the worst contact
+    assert "load sharing compliant, mu 0.5" in run.stdout
+    assert run.returncode == 0 and run.stdout.count("holds") == 12  # 5 ms: every axis holds
+
+
+@pytest.mark.parametrize("args, words", [(["tiago_dual", "--fraction", "2"], "--fraction"), (["nope"], "nope")])
+def test_bad_input_is_one_line_and_exit_2(args, words):
+    run = _run(*args)
+    assert run.returncode == 2 and run.stderr.count("\n") == 1 and words in run.stderr, run.stderr
+    assert "Traceback" not in run.stderr
