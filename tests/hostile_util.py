@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 from pathlib import Path
@@ -64,3 +65,59 @@ def assert_finite_output(out: str) -> None:
 
 def finite(value: float) -> bool:
     return math.isfinite(value)
+
+
+class FuzzRun:
+    """The cases of one fuzz test, run to the end: every case that breaks the promise is noted
+    (not only the first), and the test fails at the end listing them.
+
+    The environment sets the run: ``MOBMANIP_FUZZ_CASES`` (cases, default ``default``),
+    ``MOBMANIP_FUZZ_SEED`` (0: the fixed cases of the test suite), ``MOBMANIP_FUZZ_SECONDS``
+    (stop starting cases after this long) and ``MOBMANIP_FUZZ_REPORT`` (a file to which one JSON
+    line per test is appended: name, cases run, outcomes, problems). ``scripts/fuzz.py`` sets them.
+    """
+
+    def __init__(self, name: str, default: int):
+        import os
+        import time
+
+        self.name = name
+        self.cases = int(os.environ.get("MOBMANIP_FUZZ_CASES", str(default)))
+        self.seed = int(os.environ.get("MOBMANIP_FUZZ_SEED", "0"))
+        seconds = os.environ.get("MOBMANIP_FUZZ_SECONDS")
+        self._deadline = time.monotonic() + float(seconds) if seconds else math.inf
+        self.run = 0
+        self.outcomes = {"error": 0, "result": 0}
+        self.problems: list[str] = []
+
+    def __iter__(self):
+        import time
+
+        for case in range(self.cases):
+            if time.monotonic() > self._deadline:
+                return
+            self.run += 1
+            yield case
+
+    @contextlib.contextmanager
+    def case(self, case: int, argv, outcome: str):
+        """The assertions about one case: an AssertionError inside is noted as a problem, and the
+        run goes on; otherwise the case counts as ``outcome`` (``"error"`` or ``"result"``)."""
+        try:
+            yield
+        except AssertionError as exc:
+            self.problems.append(f"case {case}: {[str(a) for a in argv]}: {' '.join(str(exc).split())[:600]}")
+        else:
+            self.outcomes[outcome] += 1
+
+    def finish(self) -> None:
+        """Append the report line (when asked) and fail listing the problems, if any."""
+        import json
+        import os
+
+        report = os.environ.get("MOBMANIP_FUZZ_REPORT")
+        if report:
+            line = {"test": self.name, "seed": self.seed, "cases": self.run, **self.outcomes, "problems": self.problems}
+            with open(report, "a") as handle:
+                handle.write(json.dumps(line) + "\n")
+        assert not self.problems, f"{len(self.problems)} of {self.run} cases:\n" + "\n".join(self.problems[:20])

@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 
 import mobmanip
-from hostile_util import NON_FINITE, PAPER_SPEC_TEXT, PAPER_URDF_TEXT, assert_one_line_error, run_cli
+from hostile_util import NON_FINITE, PAPER_SPEC_TEXT, PAPER_URDF_TEXT, FuzzRun, assert_one_line_error, run_cli
 
 HOSTILE_NUMBERS = ("nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "1e-300", "1e12", "-0.5", "abc", "")
 NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?![\w.])")
 URDF_ELEMENTS = re.compile(
     r"<(link|joint|inertial|limit|axis|mass|inertia|origin|parent|child|visual|collision)\b[^>]*?(/>|>.*?</\1>)", re.S
 )
-CASES_PER_KIND = 100
+KINDS = ["urdf", "spec", "q"]
 VALID_Q = {"platform": [0.3, -0.2, 0.4], "joints": {"arm_right_2_joint": 0.7, "arm_left_2_joint": -0.7}}
 
 
@@ -98,26 +98,30 @@ def _check_result(spec, q_path, document, out: str) -> None:
         assert np.allclose(got["semi_axes"], expected.semi_axes, rtol=0, atol=1e-9 * scale), name
 
 
-@pytest.mark.parametrize("kind", ["urdf", "spec", "q"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_mutated_inputs_give_one_line_or_a_correct_result(tmp_path, capfd, kind):
-    outcomes = {"error": 0, "result": 0}
-    for seed in range(CASES_PER_KIND):
-        directory = tmp_path / f"{kind}{seed}"
+    fuzz = FuzzRun(f"analyze-{kind}", default=100)
+    for case in fuzz:
+        directory = tmp_path / f"{kind}{case}"
         directory.mkdir()
-        spec, q = _case(kind, 1000 * (1 + "urdf spec q".split().index(kind)) + seed, directory)
+        k = KINDS.index(kind)
+        seed = [fuzz.seed, k, case] if fuzz.seed else 1000 * (1 + k) + case  # seed 0: the suite's fixed cases
+        spec, q = _case(kind, seed, directory)
         inputs = {p: p.read_bytes() for p in directory.iterdir()}
         out_json = directory / "out.json"
-        code, out, err = run_cli(capfd, "analyze", spec, "--q", q, "--json", out_json)
-        assert {p: p.read_bytes() for p in inputs} == inputs, f"seed {seed}: an input changed"
-        if code == 0:
-            assert err == "", f"seed {seed}: {err}"
-            text = out_json.read_text()
-            assert NON_FINITE.search(text) is None
-            _check_result(spec, q, json.loads(text), out)
-            outcomes["result"] += 1
-        else:
-            assert_one_line_error(code, err)
-            assert "Traceback" not in err and out == "" or not NON_FINITE.search(out)
-            assert not out_json.exists()
-            outcomes["error"] += 1
-    assert outcomes["error"] > 0 and outcomes["result"] > 0, outcomes  # the mutations reach both outcomes
+        argv = ("analyze", spec, "--q", q, "--json", out_json)
+        code, out, err = run_cli(capfd, *argv)
+
+        with fuzz.case(case, argv, "result" if code == 0 else "error"):
+            assert {p: p.read_bytes() for p in inputs} == inputs, "an input changed"
+            if code == 0:
+                assert err == "", err
+                text = out_json.read_text()
+                assert NON_FINITE.search(text) is None
+                _check_result(spec, q, json.loads(text), out)
+            else:
+                assert_one_line_error(code, err)
+                assert "Traceback" not in err and out == "" or not NON_FINITE.search(out)
+                assert not out_json.exists()
+    fuzz.finish()
+    assert fuzz.outcomes["error"] > 0 and fuzz.outcomes["result"] > 0, fuzz.outcomes  # both outcomes reached

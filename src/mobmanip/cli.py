@@ -12,15 +12,11 @@ import logging
 import os
 import signal
 import sys
+import threading
 import warnings
 
-import numpy as np
-
-from .commands import COMMANDS
-from .errors import MobmanipError
-from .support.files import check_output, note_input, protect_inputs, publish_together
-from .support.notices import notice_session
-from .support.version import installed_version
+# Only the standard library at module level: the console script imports this module, and
+# Ctrl-C while NumPy or Pinocchio is still loading must end in one line too (see main).
 
 
 class _Parser(argparse.ArgumentParser):
@@ -31,6 +27,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .commands import COMMANDS
+    from .support.version import installed_version
+
     parser = _Parser(prog="mobmanip", description="What a wheeled mobile manipulator can do at the end effector.")
     parser.add_argument("--version", action="version", version=f"mobmanip {installed_version()}")
     parser.add_argument(
@@ -57,7 +56,53 @@ def main(argv: list[str] | None = None) -> int:
     finite is printed or written. A failure that is not one of mobmanip's
     errors (a bug) is reported in one line too, saying so; set ``MOBMANIP_TRACEBACK=1`` in the
     environment to see its traceback instead.
+
+    Ctrl-C and SIGTERM end the run with one line at any moment, including while the packages
+    mobmanip needs are still being imported (this module imports them only here). Called from
+    Python, ``main`` then returns 130 (Ctrl-C) or 143 (SIGTERM). Called as the program (``argv``
+    None: the console script and ``python -m mobmanip``), SIGTERM exits with 143 and Ctrl-C
+    ends the process by SIGINT itself once Python has shut down, as Python does for an
+    interrupted program: the shell reports 130, and a shell script running mobmanip in a loop
+    stops too (a plain exit code of 130 would let it go on). Ctrl-C or SIGTERM after the
+    command has finished, while Python shuts down, is ignored: its outputs are complete.
     """
+    program = argv is None and threading.current_thread() is threading.main_thread()
+    if program:
+        sys.excepthook = _quiet_interrupts(sys.excepthook)
+    try:
+        with _terminate_as_interrupt():
+            return _main(argv)
+    except Terminated:
+        return _interrupted("mobmanip: terminated; no output was written", 128 + signal.SIGTERM)
+    except KeyboardInterrupt:
+        code = _interrupted("mobmanip: interrupted; no output was written", 130)
+        if program:
+            raise  # Python ends the process by SIGINT after its shutdown; the hook prints nothing
+        return code
+    finally:
+        if program:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
+def _interrupted(line: str, code: int) -> int:
+    """Say that the run was interrupted (a closed standard error is no reason for a traceback)."""
+    with contextlib.suppress(OSError, ValueError):
+        print(line, file=sys.stderr)
+    return code
+
+
+def _quiet_interrupts(previous):
+    """``sys.excepthook`` that prints nothing for an interrupt (its one line is printed already)."""
+
+    def hook(kind, value, traceback):
+        if not issubclass(kind, KeyboardInterrupt):
+            previous(kind, value, traceback)
+
+    return hook
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     with _escaped_output():
         args = parser.parse_args(argv)
@@ -80,10 +125,15 @@ def _escaped_output():
 
 
 def _run(args) -> int:
+    import numpy as np
+
+    from .errors import MobmanipError
+    from .support.files import protect_inputs, publish_together
+    from .support.notices import notice_session
+
     try:
         # A command's output files are published together when it succeeds, all or none.
         with (
-            _terminate_as_interrupt(),
             warnings.catch_warnings(),
             np.errstate(all="ignore"),
             protect_inputs(),
@@ -98,12 +148,6 @@ def _run(args) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return 0
-    except Terminated:
-        print("mobmanip: terminated; no output was written", file=sys.stderr)
-        return 128 + signal.SIGTERM
-    except KeyboardInterrupt:
-        print("mobmanip: interrupted; no output was written", file=sys.stderr)
-        return 130
     except RecursionError:
         return _fail("an input is nested too deeply to read")
     except MemoryError:
@@ -122,8 +166,6 @@ class Terminated(KeyboardInterrupt):
 @contextlib.contextmanager
 def _terminate_as_interrupt():
     """While a command runs in the main thread, SIGTERM raises :class:`Terminated`."""
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -163,7 +205,7 @@ def _check_outputs_first(args) -> None:
     """Refuse a bad output file before any work: one that is also a file the command was
     given, or a directory, FIFO or device, or a figure of an unknown format (so a long
     computation is not thrown away)."""
-    from .support.files import check_figure_output
+    from .support.files import check_figure_output, check_output, note_input
 
     outputs = [(dest, getattr(args, dest, None)) for dest in (*_OUTPUT_FILES, *_FIGURE_FILES)]
     outputs = [(dest, value) for dest, value in outputs if isinstance(value, str) and value]

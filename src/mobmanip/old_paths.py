@@ -10,7 +10,6 @@ with a :class:`DeprecationWarning` that names the new path. The one module that 
 from __future__ import annotations
 
 import importlib
-import importlib.abc
 import importlib.machinery
 import sys
 import types
@@ -63,8 +62,10 @@ MOVED: dict[str, tuple[str, ...]] = {
 }
 
 
-class _MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
-    """Finds an old path of :data:`MOVED` and loads it as its successor."""
+class _MovedModules:
+    """Finds an old path of :data:`MOVED` and loads it as its successor: a meta path finder and
+    its loader by their methods (not subclassing :mod:`importlib.abc`, whose import costs more
+    than the rest of importing the package's top level)."""
 
     def __init__(self) -> None:
         self._specs: dict[str, importlib.machinery.ModuleSpec | None] = {}

@@ -6,7 +6,8 @@ import argparse
 import sys
 
 from ..robot.tasks import TASKS
-from .common import add_work_option
+from ..support.reading import decimal
+from .common import add_progress_option, add_work_option, show_progress
 
 CARRY_HELP = """\
 PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
@@ -63,22 +64,23 @@ def register(sub) -> None:
     )
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
-    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
-    parser.add_argument("--step", type=float, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
     parser.add_argument(
         "--prepare",
-        type=float,
+        type=decimal,
         default=30.0,
         metavar="S",
         help="longest self-motion before the path (s, default 30; 0: none)",
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    add_progress_option(parser)
     from .common import add_floor_options
 
     add_floor_options(parser)
     parser.add_argument(
         "--zmp-margin",
-        type=float,
+        type=decimal,
         metavar="M",
         help="with --ground: how far the zero-moment point stays inside the support polygon (m; implies --ground; "
         "default 0.02)",
@@ -196,6 +198,7 @@ def run(args) -> int:
             object_mass=args.object_mass,
             step=args.step,
             prepare=args.prepare,
+            progress=show_progress(args),
             floor=floor,
         )
     except CarryFailed as failure:

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import time
 
+from ..support.reading import decimal
+
 
 def register(sub) -> None:
     from ..robot.collision_matrix import DEFAULT_NEVER_CLOSER_THAN, DEFAULT_SAMPLES, DEFAULT_SEED
@@ -24,7 +26,7 @@ def register(sub) -> None:
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"random seed (default {DEFAULT_SEED})")
     parser.add_argument(
         "--never-closer-than",
-        type=float,
+        type=decimal,
         default=DEFAULT_NEVER_CLOSER_THAN,
         metavar="M",
         help=f"pairs never closer than M metres in the samples are left out for margins below M "

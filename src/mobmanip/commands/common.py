@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from ..robot.tasks import TASKS
+from ..support.reading import decimal
 
 
 def add_urdf_options(parser: argparse.ArgumentParser, ee_required: bool = False) -> None:
@@ -198,11 +199,11 @@ def format_matrix(matrix: np.ndarray, indent: str = "  ") -> str:
 
 def add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Limits, platform and object options shared by analyze, view and sweep."""
-    parser.add_argument("--wheel-velocity-limit", type=float, metavar="RAD_S", help="both wheels' qdot_max (rad/s)")
-    parser.add_argument("--wheel-effort-limit", type=float, metavar="NM", help="both wheels' tau_max (N m)")
+    parser.add_argument("--wheel-velocity-limit", type=decimal, metavar="RAD_S", help="both wheels' qdot_max (rad/s)")
+    parser.add_argument("--wheel-effort-limit", type=decimal, metavar="NM", help="both wheels' tau_max (N m)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
-    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     add_measure_option(parser)
 
 
@@ -237,7 +238,7 @@ def add_floor_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--mu",
-        type=float,
+        type=decimal,
         metavar="MU",
         help="friction coefficient of the driven wheels on the floor (implies --ground; default: the spec's "
         "[support] mu, else 0.5)",
@@ -256,7 +257,7 @@ def add_floor_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--reserve",
-        type=float,
+        type=decimal,
         metavar="R",
         help="safety reserve on the floor, a fraction in [0, 1): every support keeps R times its equal "
         "share of the weight, every wheel uses at most 1 - R of its friction (implies --ground; default 0)",
@@ -357,3 +358,21 @@ def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
         metavar="N",
         help=f"the most {what} run without refusing (the estimate is checked before any work)",
     )
+
+
+def add_progress_option(parser: argparse.ArgumentParser, what: str = "") -> None:
+    """``--no-progress``: a long run shows a progress bar on standard error when that is a terminal."""
+    suffix = f" for {what}" if what else ""
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help=f"no progress bar{suffix} (one is shown only when standard error is a terminal)",
+    )
+
+
+def show_progress(args) -> bool:
+    """Whether to show progress bars: not turned off, and standard error is a terminal (never
+    in piped or redirected output)."""
+    from ..support.progress import on_terminal
+
+    return not getattr(args, "no_progress", False) and on_terminal()

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..platforms import KINDS
+from ..support.reading import decimal
 from .common import add_description_options, add_strict_option, add_urdf_options, read_options_from_args
 
 
@@ -60,12 +61,12 @@ def register(sub) -> None:
         help="put before arm names the base already uses (default: link_1 becomes arm_link_1)",
     )
     given = parser.add_argument_group("values the URDF may lack")
-    given.add_argument("--wheel-radius", type=float, metavar="M", help="radius of wheels with mesh geometry (m)")
+    given.add_argument("--wheel-radius", type=decimal, metavar="M", help="radius of wheels with mesh geometry (m)")
     given.add_argument(
-        "--wheel-velocity-limit", type=float, metavar="RAD_S", help="each platform wheel's qdot_max the URDF lacks"
+        "--wheel-velocity-limit", type=decimal, metavar="RAD_S", help="each platform wheel's qdot_max the URDF lacks"
     )
     given.add_argument(
-        "--wheel-effort-limit", type=float, metavar="NM", help="each platform wheel's tau_max the URDF lacks"
+        "--wheel-effort-limit", type=decimal, metavar="NM", help="each platform wheel's tau_max the URDF lacks"
     )
     given.add_argument(
         "--velocity-limit", action="append", default=[], metavar="NAME=V", help="a joint's velocity limit (repeat)"
@@ -239,7 +240,7 @@ def _pairs(items, option: str):
     for item in items:
         name, sep, text = item.partition("=")
         try:
-            value = float(text)
+            value = decimal(text)
         except ValueError:
             value = math.nan
         if not sep or not name.strip() or not (math.isfinite(value) and value > 0):

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from .common import add_work_option
+from ..support.reading import decimal
+from .common import add_progress_option, add_work_option, show_progress
 
 PLACE_HELP = """\
 objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX one of
@@ -64,7 +65,7 @@ def register(sub) -> None:
     parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
     parser.add_argument("--object", required=True, metavar="X,Y,Z", help="object centre in the world (m)")
     parser.add_argument("--objective", required=True, metavar="ELLIPSOID:INDEX[:DIR]", help="what to maximise")
-    parser.add_argument("--mass", type=float, metavar="KG", help="object mass (default: the spec's)")
+    parser.add_argument("--mass", type=decimal, metavar="KG", help="object mass (default: the spec's)")
     parser.add_argument("--task", help="task space (default: the spec's default_task)")
     parser.add_argument("--region", metavar="XMIN,XMAX,YMIN,YMAX", help="rectangle for the platform origin (m)")
     parser.add_argument("--starts", type=int, default=8, help="number of starts (default 8)")
@@ -79,11 +80,11 @@ def register(sub) -> None:
     parser.add_argument("--save-q", metavar="Q.json", help="write the configuration for `analyze --q`")
     parser.add_argument(
         "--avoid-collision",
-        type=float,
+        type=decimal,
         metavar="M",
         help="keep shapes that may meet (URDF collision shapes, else visual ones) at least M metres apart",
     )
-    parser.add_argument("--object-yaw", type=float, metavar="DEG", help="fixed object orientation (default: free)")
+    parser.add_argument("--object-yaw", type=decimal, metavar="DEG", help="fixed object orientation (default: free)")
     parser.add_argument("--figure", metavar="OUT.png", help="write the start and the optimum from above (PNG or SVG)")
     parser.add_argument("--view", action="store_true", help="show the optimum in the meshcat viewer (Ctrl-C stops)")
     parser.add_argument("--export", metavar="PAGE.html", help="write the optimum's viewer scene as an HTML page")
@@ -92,7 +93,7 @@ def register(sub) -> None:
         "--map-extent", metavar="XMIN,XMAX,YMIN,YMAX", help="the map's platform positions (default: the arms' reach)"
     )
     parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar for --map")
+    add_progress_option(parser, "--map")
     from .common import add_dask_option, add_floor_options
 
     add_floor_options(parser)
@@ -155,7 +156,7 @@ def _parse_point(text: str):
     from ..errors import UsageError
 
     try:
-        values = [float(v) for v in text.split(",")]
+        values = [decimal(v) for v in text.split(",")]
     except ValueError:
         raise UsageError(f"--object must be X,Y,Z in metres, got {text!r}") from None
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
@@ -199,6 +200,8 @@ def _run(args, executor) -> int:
     reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
     extent = _check_map_options(args)
+    if args.map and extent is not None and not robot.platform_locked:
+        _check_extent_reaches(args, robot, target, extent, reference)
     _check_outputs(args)
     yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
     collision = None
@@ -376,7 +379,7 @@ def _check_map_options(args):
     if args.map_extent is None:
         return None
     try:
-        values = [float(v) for v in args.map_extent.split(",")]
+        values = [decimal(v) for v in args.map_extent.split(",")]
     except ValueError:
         values = []
     if (
@@ -388,6 +391,23 @@ def _check_map_options(args):
         raise UsageError(f"--map-extent must be XMIN,XMAX,YMIN,YMAX in metres with XMIN < XMAX, YMIN < YMAX, "
                          f"each within +-{PLATFORM_POSITION:g} m, got {args.map_extent!r}")  # fmt: skip
     return values
+
+
+def _check_extent_reaches(args, robot, target, extent, reference) -> None:
+    """Refuse, before any work, a --map-extent that lies wholly beyond the arms' reach bound from
+    the object: the map would find no cell that holds it (the map skips exactly those cells)."""
+    from ..errors import UsageError
+    from ..placement.maps import reach_bound
+
+    x0, x1, y0, y1 = extent
+    dx = max(x0 - target[0], 0.0, target[0] - x1)
+    dy = max(y0 - target[1], 0.0, target[1] - y1)
+    reach = reach_bound(robot, robot.hold_configuration() if reference is None else reference)
+    if math.hypot(dx, dy) > reach:
+        raise UsageError(
+            f"--map-extent {args.map_extent}: no platform position in it holds the object at "
+            f"({target[0]:g}, {target[1]:g}) m, {math.hypot(dx, dy):.3f} m away; the arms reach at most {reach:.3f} m"
+        )
 
 
 def _write_map(args, robot, target, result, extent, yaw, collision, reference, executor) -> None:
@@ -414,7 +434,7 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference, e
         hold_turn=yaw,
         avoid_collision=None if collision is None else collision.margin,
     )
-    grid = run_map(job, executor, progress=not args.no_progress)
+    grid = run_map(job, executor, progress=show_progress(args))
     written = placement_map_outputs(grid, output_directory(args.map, "--map"))
     value, q, _ = grid.best()
     reachable = int(np.sum(~np.isnan(grid.values)))

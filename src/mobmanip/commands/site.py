@@ -33,7 +33,7 @@ examples:
 
 
 def register(sub) -> None:
-    from .common import add_dask_option
+    from .common import add_dask_option, add_progress_option
 
     parser = sub.add_parser(
         "site",
@@ -45,7 +45,7 @@ def register(sub) -> None:
     parser.add_argument("site", metavar="SITE.toml", help="the site file (see below)")
     parser.add_argument("--output", "-o", default="site", metavar="OUT_DIR", help="output directory (default: site)")
     parser.add_argument("--positions-per-task", type=int, default=1, metavar="N", help="positions per task (default 1)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_progress_option(parser)
     add_dask_option(parser)
     parser.set_defaults(func=run)
 
@@ -58,7 +58,7 @@ def run(args) -> int:
     from ..errors import UsageError
     from ..placement.site import Site, run_site
     from ..support.files import check_output, output_directory
-    from .common import cluster_executor
+    from .common import cluster_executor, show_progress
     from .outputs import SITE_FILES, site_outputs
 
     site = Site.read(args.site)
@@ -75,7 +75,7 @@ def run(args) -> int:
         check_address(args.dask)
     print(f"site {args.site}: {len(site.positions)} object positions, robot {Path(site.robot).name}, {site.objective}")
     with cluster_executor(args) as executor:  # connected (or refused) before any work
-        result = run_site(site, executor, args.positions_per_task, progress=not args.no_progress)
+        result = run_site(site, executor, args.positions_per_task, progress=show_progress(args))
     values = result.values
     placed = int(np.isfinite(values).sum())
     line = f"{placed} of {len(values)} positions placed in {result.seconds:.2f} s"

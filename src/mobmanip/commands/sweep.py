@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..support.reading import decimal
 from ..sweep.budget import MAX_GRID_POINTS
 
 GRID_HELP = """\
@@ -55,7 +56,7 @@ examples:
 
 
 def register(sub) -> None:
-    from .common import add_dask_option, add_floor_options, add_measure_option
+    from .common import add_dask_option, add_floor_options, add_measure_option, add_progress_option
 
     parser = sub.add_parser(
         "sweep",
@@ -78,12 +79,14 @@ def register(sub) -> None:
     analysis = parser.add_argument_group("analysis")
     analysis.add_argument("--task", help="task space (default: the spec's default_task)")
     analysis.add_argument(
-        "--wheel-velocity-limit", type=float, metavar="RAD_S", help="both wheels' qdot_max before scaling"
+        "--wheel-velocity-limit", type=decimal, metavar="RAD_S", help="both wheels' qdot_max before scaling"
     )
-    analysis.add_argument("--wheel-effort-limit", type=float, metavar="NM", help="both wheels' tau_max before scaling")
+    analysis.add_argument(
+        "--wheel-effort-limit", type=decimal, metavar="NM", help="both wheels' tau_max before scaling"
+    )
     analysis.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     analysis.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
-    analysis.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    analysis.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     analysis.add_argument(
         "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
     )
@@ -111,7 +114,7 @@ def register(sub) -> None:
     run.add_argument("--no-csv", action="store_true", help="write only OUT.npz")
     run.add_argument("--plot", action="store_true", help="also write OUT.png")
     run.add_argument("--index", help="index to plot (default: the first measure's volume, kinematic.volume)")
-    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_progress_option(run)
     run.add_argument(
         "--max-points",
         type=int,
@@ -128,7 +131,7 @@ def _direction(text: str):
     if text in ("radial", "tangential"):
         return text
     try:
-        return tuple(float(v) for v in text.split(","))
+        return tuple(decimal(v) for v in text.split(","))
     except ValueError:
         raise UsageError(f"--direction must be radial, tangential or numbers like 1,0; got {text!r}") from None
 
@@ -144,7 +147,7 @@ def run_command(args) -> int:
     from ..sweep.budget import check_grid
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
     from ..viz.sweep_plot import plot_sweep
-    from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers
+    from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers, show_progress
     from .outputs import write_sweep_csv, write_sweep_npz
 
     _check_outputs(args)  # before anything is loaded, compiled or computed
@@ -215,7 +218,7 @@ def run_command(args) -> int:
             executor=executor,
             workers=args.workers,
             chunk_size=args.chunk_size,
-            progress=not args.no_progress,
+            progress=show_progress(args),
             max_points=args.max_points,
         )
     table = result.postures

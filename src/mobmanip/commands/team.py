@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import add_measure_option, add_work_option, requested_measures
+from .common import add_measure_option, add_progress_option, add_work_option, requested_measures, show_progress
 
 #: Robots of a team, and robot-headings of a heading sweep, run without being asked.
 MAX_ROBOTS = 64
@@ -35,6 +35,7 @@ def register(sub) -> None:
         metavar="GRID",
         help="object heading changes, deg: START:STOP:COUNT or V1,V2,... (robots reach for the moved grasps)",
     )
+    add_progress_option(parser, "--sweep-heading")
     add_work_option(
         parser, f"robots and robot-headings (robots x sweep headings; defaults {MAX_ROBOTS}, {MAX_ROBOT_HEADINGS:,})"
     )
@@ -134,7 +135,14 @@ def run(args) -> int:
         from ..team.sweep import sweep_heading
 
         path = Path(args.description)
-        sweep = sweep_heading(data, offsets, base_dir=path.resolve().parent, measures=measures, where=str(path))
+        sweep = sweep_heading(
+            data,
+            offsets,
+            base_dir=path.resolve().parent,
+            measures=measures,
+            where=str(path),
+            progress=show_progress(args),
+        )
         reachable = int(sweep.reachable.sum())
         print(f"heading sweep: {reachable} of {len(offsets)} headings reachable")
         for point in sweep.points:

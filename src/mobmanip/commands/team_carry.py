@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..support.reading import decimal
 from .common import add_work_option
 
 TEAM_CARRY_HELP = """\
@@ -70,10 +71,10 @@ def register(sub) -> None:
     parser.add_argument(
         "--frame", choices=("object", "world"), default="object", help="the path's axes (default: the object's)"
     )
-    parser.add_argument("--scale", type=float, default=1.0, metavar="S", help="multiply the path's positions by S")
-    parser.add_argument("--step", type=float, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument("--scale", type=decimal, default=1.0, metavar="S", help="multiply the path's positions by S")
+    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
     parser.add_argument(
-        "--prepare", type=float, default=30.0, metavar="S", help="longest self-motion before the path (s, default 30)"
+        "--prepare", type=decimal, default=30.0, metavar="S", help="longest self-motion before the path (s, default 30)"
     )
     parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
     parser.add_argument(

@@ -9,7 +9,8 @@ import sys
 import numpy as np
 
 from ..robot.tasks import TASKS
-from .common import add_strict_option, add_work_option
+from ..support.reading import decimal
+from .common import add_progress_option, add_strict_option, add_work_option, show_progress
 
 #: Samples a trajectory analysis runs without being asked (each: both ellipsoids, RNEA, scaling).
 MAX_SAMPLES = 200_000
@@ -60,10 +61,10 @@ def register(sub) -> None:
         metavar="TOPIC",
         help="nav_msgs/Odometry topic (%(default)s); 'none' keeps the platform at the origin",
     )
-    recording.add_argument("--start", type=float, metavar="S", help="read from S seconds after the recording's start")
-    recording.add_argument("--end", type=float, metavar="S", help="read up to S seconds after the recording's start")
+    recording.add_argument("--start", type=decimal, metavar="S", help="read from S seconds after the recording's start")
+    recording.add_argument("--end", type=decimal, metavar="S", help="read up to S seconds after the recording's start")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
-    parser.add_argument("--object-mass", type=float, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument(
         "--polytope",
@@ -81,7 +82,7 @@ def register(sub) -> None:
     )
     parser.add_argument(
         "--mu",
-        type=float,
+        type=decimal,
         metavar="MU",
         help="with --ground: friction coefficient of the driven wheels (implies --ground; default: the spec's "
         "[support] mu, else 0.5)",
@@ -96,6 +97,7 @@ def register(sub) -> None:
     parser.add_argument(
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
+    add_progress_option(parser)
     add_work_option(parser, f"samples (rows of TRAJ.csv; default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
 
@@ -186,7 +188,13 @@ def run(args) -> int:
     else:
         trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(
-        robot, trajectory, args.task, object_mass=args.object_mass, decoupled=args.decoupled, polytope=args.polytope
+        robot,
+        trajectory,
+        args.task,
+        object_mass=args.object_mass,
+        decoupled=args.decoupled,
+        polytope=args.polytope,
+        progress=show_progress(args),
     )
     s = result.scaling
     duration = trajectory.t[-1] - trajectory.t[0]

@@ -15,6 +15,7 @@ import signal
 import sys
 import time
 
+from ..support.reading import decimal
 from .common import (
     add_analysis_options,
     add_floor_options,
@@ -45,9 +46,9 @@ def register(sub) -> None:
     parser.add_argument("--open", action="store_true", help="open the viewer in the default web browser")
     parser.add_argument("--no-locked", action="store_true", help="leave out the locked-platform ellipsoids")
     parser.add_argument(
-        "--size", type=float, default=0.5, metavar="M", help="drawn length of the largest semi-axis (default 0.5 m)"
+        "--size", type=decimal, default=0.5, metavar="M", help="drawn length of the largest semi-axis (default 0.5 m)"
     )
-    parser.add_argument("--duration", type=float, metavar="S", help="stop serving after S seconds (default: Ctrl-C)")
+    parser.add_argument("--duration", type=decimal, metavar="S", help="stop serving after S seconds (default: Ctrl-C)")
     parser.set_defaults(func=run)
 
 

@@ -46,6 +46,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ..errors import MjcfError
+from ..support.reading import MAX_ROBOT_FILE_BYTES, read_bounded
 from .checks import assemble
 from .description import (
     Inertial,
@@ -117,15 +118,15 @@ def _rpy(R: np.ndarray) -> tuple[float, float, float]:
 class _Reader:
     """One MJCF file: includes expanded, defaults resolved, the tree walked into description parts."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, data: bytes) -> None:
         self.path = path
         self.notes: list[str] = []
+        #: Bytes read so far, the file's and its includes' (bounded together).
+        self.read_bytes = len(data)
         try:
-            self.root = ElementTree.parse(path).getroot()
+            self.root = ElementTree.fromstring(data)
         except ElementTree.ParseError as exc:
             raise self.fail(f"not well-formed XML: {exc}") from None
-        except OSError as exc:
-            raise self.fail(f"cannot read: {exc.strerror or exc}") from None
         if self.root.tag != "mujoco":
             raise self.fail(f"root element is <{self.root.tag}>, expected <mujoco>")
         self._expand_includes(self.root, path.parent, depth=0)
@@ -166,10 +167,21 @@ class _Reader:
         for k, child in enumerate(list(element)):
             if child.tag == "include":
                 file = folder / child.get("file", "")
+                where = f"<include file={child.get('file')!r}>"
+
+                def refuse(reason: str, where: str = where) -> MjcfError:
+                    return self.fail(f"{where}: {reason}")
+
+                data = read_bounded(file, limit=MAX_ROBOT_FILE_BYTES, refuse=refuse)
+                self.read_bytes += len(data)
+                if self.read_bytes > MAX_ROBOT_FILE_BYTES:
+                    raise refuse(
+                        f"the file and its includes come to more than the {MAX_ROBOT_FILE_BYTES} bytes this reads"
+                    )
                 try:
-                    included = ElementTree.parse(file).getroot()
-                except (OSError, ElementTree.ParseError) as exc:
-                    raise self.fail(f"<include file={child.get('file')!r}>: {exc}") from None
+                    included = ElementTree.fromstring(data)
+                except ElementTree.ParseError as exc:
+                    raise self.fail(f"{where}: {exc}") from None
                 self._expand_includes(included, file.parent, depth + 1)
                 element.remove(child)
                 for offset, item in enumerate(list(included)):
@@ -607,15 +619,14 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     from ..support.files import note_input
 
     path = Path(path)
-    if not path.is_file():
-        raise MjcfError(str(path), "file not found")
+    data = read_bounded(path, limit=MAX_ROBOT_FILE_BYTES, refuse=lambda reason: MjcfError(str(path), reason))
     note_input(path)
-    with contextlib.suppress(OSError, ElementTree.ParseError):
-        if ElementTree.parse(path).getroot().tag == "robot":  # a URDF that calls itself .xml
+    with contextlib.suppress(ElementTree.ParseError):
+        if ElementTree.fromstring(data).tag == "robot":  # a URDF that calls itself .xml
             from .urdf import read_urdf
 
             return read_urdf(path, package_dirs=package_dirs)
-    reader = _Reader(path)
+    reader = _Reader(path, data)
     tree = _Tree(reader)
     world = reader.root.find("worldbody")
     bodies = [] if world is None else world.findall("body")

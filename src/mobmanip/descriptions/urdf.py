@@ -25,6 +25,7 @@ from xml.etree import ElementTree
 
 from ..errors import UrdfError
 from ..support.native_stderr import call_with_large_stack, captured_native_stderr
+from ..support.reading import MAX_ROBOT_FILE_BYTES, read_bounded
 from .checks import assemble
 from .description import (
     JOINT_TYPES,
@@ -109,13 +110,8 @@ def read_urdf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     from ..support.files import note_input
 
     path = Path(path)
-    if not path.is_file():
-        raise UrdfError(str(path), "file not found")
+    data = read_bounded(path, limit=MAX_ROBOT_FILE_BYTES, refuse=lambda reason: UrdfError(str(path), reason))
     note_input(path)
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise UrdfError(str(path), f"cannot read: {exc.strerror or exc}") from exc
     return _describe(data.decode("utf-8-sig", errors="replace"), data, path, "urdf", package_dirs)
 
 

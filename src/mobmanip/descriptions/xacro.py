@@ -23,6 +23,7 @@ is captured and folded into the error message when the expansion fails.
 from __future__ import annotations
 
 import contextlib
+import errno
 import io
 import os
 import threading
@@ -32,6 +33,7 @@ from typing import Any
 from xml.etree import ElementTree
 
 from ..errors import XacroError
+from ..support.reading import MAX_ROBOT_FILE_BYTES, file_refusal
 from .description import RobotDescription
 from .formats import DescriptionFormat, register_format
 from .urdf import urdf_description
@@ -58,11 +60,36 @@ def search_roots(package_paths: Iterable[str | Path] = ()) -> list[Path]:
 
 def _package_name(folder: Path) -> str | None:
     """The ``<name>`` of the ``package.xml`` in ``folder`` (``None`` without a readable one)."""
+    file = folder / "package.xml"
+    if file_refusal(file, limit=MAX_ROBOT_FILE_BYTES) is not None:  # a FIFO or device: skipped, not read
+        return None
     try:
-        name = ElementTree.parse(folder / "package.xml").getroot().findtext("name")
+        name = ElementTree.parse(file).getroot().findtext("name")
     except (OSError, ElementTree.ParseError):
         return None
     return name.strip() if name else None
+
+
+class _BoundedOpen:
+    """xacro's ``open`` while it expands a file: what it reads (the file, its includes, the YAML
+    files it loads) must be regular files, of at most :data:`MAX_ROBOT_FILE_BYTES` together, so
+    a FIFO or ``/dev/zero`` included is refused at once, not read forever."""
+
+    def __init__(self) -> None:
+        self.read = 0
+        self.refused: str | None = None
+
+    def __call__(self, file, mode="r", *args, **kwargs):
+        if not any(flag in mode for flag in "wax+"):
+            reason = file_refusal(file, limit=MAX_ROBOT_FILE_BYTES)
+            if reason is None:
+                self.read += os.stat(file).st_size
+                if self.read > MAX_ROBOT_FILE_BYTES:
+                    reason = f"the file and its includes come to more than the {MAX_ROBOT_FILE_BYTES} bytes this reads"
+            if reason is not None:
+                self.refused = f"{file}: {reason}"
+                raise OSError(errno.EINVAL, reason, str(file))
+        return open(file, mode, *args, **kwargs)
 
 
 def find_package(name: str, roots: Iterable[Path]) -> Path | None:
@@ -129,8 +156,9 @@ def expand_xacro(
     except ImportError as exc:  # pragma: no cover - xacro is a dependency
         raise XacroError(str(path), "reading xacro needs the xacro package (pip install xacro)") from exc
     path = Path(path)
-    if not path.is_file():
-        raise XacroError(str(path), "file not found")
+    reason = file_refusal(path, limit=MAX_ROBOT_FILE_BYTES)
+    if reason is not None:
+        raise XacroError(str(path), reason)
     roots = search_roots(package_paths)
     packages = _Packages(roots)
     mappings = {str(k): str(v) for k, v in (xacro_args or {}).items()}
@@ -139,12 +167,17 @@ def expand_xacro(
         saved = substitution_args._eval_find, substitution_args._eval_dict.get("find")
         substitution_args._eval_find = packages
         substitution_args._eval_dict["find"] = packages
+        bounded = _BoundedOpen()
+        xacro.open = bounded  # found before the built-in by xacro's own calls to open()
         try:
             document = xacro.process_file(str(path.resolve()), mappings=mappings, verbosity=0)
             text = document.toxml()
         except Exception as exc:  # xacro raises its own and Python's exceptions alike
+            if bounded.refused is not None:
+                raise XacroError(str(path), bounded.refused) from None
             raise _failure(path, exc, packages, roots, mappings, printed.getvalue()) from None
         finally:
+            del xacro.open
             substitution_args._eval_find, substitution_args._eval_dict["find"] = saved
             xacro.all_includes.clear()
     return text, list(packages.found.values())

@@ -54,6 +54,7 @@ from ..gradients.evaluator import GradientEvaluator, Objective
 from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from ..support.progress import progress_bar
 from .carry_floor import CarryFloor, floor_binding, floor_rows, solve_with_floor
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
@@ -396,6 +397,7 @@ def _run(
     object_mass=None,
     x_start=None,
     floor=None,
+    progress=False,
 ) -> tuple[CarryRun, float]:
     """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
     ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
@@ -419,53 +421,56 @@ def _run(
     effort_limits = np.asarray(robot.effort_limits, dtype=float)
     window = max(1, int(round(PREPARE_WINDOW / dt)))
     resolved = None if floor is None or method == "pinv" else floor.resolve(robot)
-    for k in range(n):
-        qs[k] = q
-        value, grad, ok = evaluator(q)
-        if not ok:
-            raise MeasureError(
-                f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the {method} motion"
-            )
-        capacity[k] = value
-        S = robot.null_space(q)
-        J_u = _jacobian(robot, q, rows) @ S  # also updates the frame placements
-        track[k], hand[k] = _errors(robot, targets, k)
-        if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
-            n = k + 1
-            break
-        if k == n - 1:
-            break
-        h = times[k + 1] - times[k]
-        b = _hand_rates(robot, q, targets, k + 1, h, rows)
-        if method == "pinv":
-            x = D2 * (J_u.T @ np.linalg.solve((J_u * D2) @ J_u.T, b))
-        else:
-            g = S.T @ grad
-            if weight is None:
-                norm = float(np.linalg.norm(np.sqrt(D2) * g))
-                weight = gain / norm if norm > 0 else 0.0
-            lo, hi = velocity_bounds(robot, q, h)
-            G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
-            if resolved is None:
-                x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
+    with progress_bar(n, desc=f"carry {method}", unit="step", show=progress) as bar:
+        for k in range(n):
+            bar.update(1)
+            qs[k] = q
+            value, grad, ok = evaluator(q)
+            if not ok:
+                raise MeasureError(
+                    f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the {method} motion"
+                )
+            capacity[k] = value
+            S = robot.null_space(q)
+            J_u = _jacobian(robot, q, rows) @ S  # also updates the frame placements
+            track[k], hand[k] = _errors(robot, targets, k)
+            if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
+                n = k + 1
+                break
+            if k == n - 1:
+                break
+            h = times[k + 1] - times[k]
+            b = _hand_rates(robot, q, targets, k + 1, h, rows)
+            if method == "pinv":
+                x = D2 * (J_u.T @ np.linalg.solve((J_u * D2) @ J_u.T, b))
             else:
-                floor_G, floor_g, labels = floor_rows(robot, q, x_prev, h, task, object_mass, floor, resolved)
-                x = solve_with_floor(solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g)
-            if x is None:
-                binding = None
-                if resolved is not None:
-                    binding = floor_binding(solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g,
-                                            labels)  # fmt: skip
-                if binding is not None:
-                    diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=True)
+                g = S.T @ grad
+                if weight is None:
+                    norm = float(np.linalg.norm(np.sqrt(D2) * g))
+                    weight = gain / norm if norm > 0 else 0.0
+                lo, hi = velocity_bounds(robot, q, h)
+                G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
+                if resolved is None:
+                    x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
                 else:
-                    diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
-                partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
-                                   hand[: k + 1])  # fmt: skip
-                raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)
-        xs[k] = x
-        x_prev = x
-        q = tangent_integrate(model, q, S @ x * h)
+                    floor_G, floor_g, labels = floor_rows(robot, q, x_prev, h, task, object_mass, floor, resolved)
+                    x = solve_with_floor(solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g)
+                if x is None:
+                    binding = None
+                    if resolved is not None:
+                        binding = floor_binding(
+                            solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g, labels
+                        )
+                    if binding is not None:
+                        diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=True)
+                    else:
+                        diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
+                    partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
+                                       hand[: k + 1])  # fmt: skip
+                    raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)
+            xs[k] = x
+            x_prev = x
+            q = tangent_integrate(model, q, S @ x * h)
     run = CarryRun(method, times[:n], qs[:n], xs[: n - 1], capacity[:n], track[:n], hand[:n])
     return run, (0.0 if weight is None else weight)
 
@@ -491,6 +496,7 @@ def carry(
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
     floor: CarryFloor | None = None,
+    progress: bool = False,
 ) -> CarryResult:
     """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -510,6 +516,7 @@ def carry(
             QP motion's (and the self-motion's) steps keep the zero-moment point inside the
             support polygon with a margin, every support loaded and the driven wheels within
             friction; the baseline does not.
+        progress: show a progress bar per motion on standard error.
 
     Raises:
         ArgumentError: a bad step, gain or prepare.
@@ -537,7 +544,7 @@ def carry(
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
         preparation, weight = _run(
             robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass,
-            floor=floor,
+            floor=floor, progress=progress,
         )  # fmt: skip
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
@@ -550,16 +557,16 @@ def carry(
     try:
         motion, _ = _run(
             robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass,
-            x_start=x_start, floor=floor,
+            x_start=x_start, floor=floor, progress=progress,
         )  # fmt: skip
     except CarryFailed as exc:
         if exc.partial.method == "qp":
             exc.preparation = preparation
         raise
-    baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0)
+    baseline, _ = _run(robot, q0, path, evaluator, task, step, "pinv", 0.0, progress=progress)
     prepared = None
     if preparation is not None:  # the same baseline from the QP's prepared start
-        prepared, _ = _run(robot, q_path, path, evaluator, task, step, "pinv", 0.0)
+        prepared, _ = _run(robot, q_path, path, evaluator, task, step, "pinv", 0.0, progress=progress)
     runs = {"qp": motion, "pinv": baseline} | ({} if prepared is None else {"pinv_prepared": prepared})
     found = {
         key: _collapsed_at_minimum(robot, run, evaluator.objective, task.name, object_mass) for key, run in runs.items()

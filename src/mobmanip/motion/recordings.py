@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import ArgumentError, JointNotFoundError, RecordingError
 from ..robot.model import Robot, description_of
+from ..support.reading import MAX_RECORDING_BYTES, file_refusal
 from .trajectory import Trajectory, trajectory_from_samples
 
 #: A stream's interval longer than this many times its median period is a gap.
@@ -116,6 +117,33 @@ def _seconds(ns: int | float) -> float:
     return float(ns) * 1e-9
 
 
+def _check_recording_files(path: Path) -> None:
+    """A recording is a regular file, or a ROS 2 bag folder of regular files, of at most
+    :data:`~mobmanip.support.reading.MAX_RECORDING_BYTES` (together): a FIFO or a device is
+    refused at once, never opened.
+
+    Raises:
+        RecordingError: naming the file and why.
+    """
+    if not path.is_dir():
+        reason = file_refusal(path, limit=MAX_RECORDING_BYTES)
+        if reason is not None:
+            raise RecordingError(str(path), "not found" if reason == "file not found" else reason)
+        return
+    total = 0
+    for entry in sorted(path.iterdir()):
+        if entry.is_dir():
+            continue  # not part of the bag: rosbags reads the files its metadata names
+        reason = file_refusal(entry, limit=MAX_RECORDING_BYTES)
+        if reason is not None:
+            raise RecordingError(str(path), f"{entry.name}: {reason}")
+        total += entry.stat().st_size
+        if total > MAX_RECORDING_BYTES:
+            raise RecordingError(
+                str(path), f"its files come to more than the {MAX_RECORDING_BYTES} bytes this reads (at {entry.name})"
+            )
+
+
 def _open(path: Path):
     """An open rosbags AnyReader for the bag (a ROS 2 bag without type definitions gets the
     standard ROS 2 types)."""
@@ -124,8 +152,7 @@ def _open(path: Path):
         from rosbags.typesys import Stores, get_typestore
     except ImportError as exc:  # pragma: no cover - rosbags is a dependency
         raise RecordingError(str(path), "reading ROS bags needs rosbags (pip install rosbags)") from exc
-    if not path.exists():
-        raise RecordingError(str(path), "not found")
+    _check_recording_files(path)
     if path.is_file() and path.suffix.lower() not in BAG_SUFFIXES:
         raise RecordingError(
             str(path), f"suffix {path.suffix!r}: a ROS bag is a .bag (ROS 1), .mcap or .db3 file or a ROS 2 bag folder"

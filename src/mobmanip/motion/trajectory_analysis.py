@@ -26,6 +26,7 @@ from ..errors import ArgumentError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..sets.capacity import kinematic_polytope
+from ..support.progress import progress_bar
 from ..terms.grasp import HeldObject
 from .in_motion import motion_terms
 from .trajectory import Trajectory
@@ -269,6 +270,7 @@ def analyze_trajectory(
     held_object: HeldObject | None = None,
     decoupled: bool = False,
     polytope: bool = False,
+    progress: bool = False,
 ) -> TrajectoryAnalysis:
     """Both measures, the demands and the time-scaling margin along a trajectory.
 
@@ -281,6 +283,7 @@ def analyze_trajectory(
         polytope: also the kinematic polytope's reach along v_o
             (:attr:`TrajectoryAnalysis.velocity_polytope_capacity`; one LP-backed support query per
             sample).
+        progress: show a progress bar over the samples on standard error.
     """
     if not isinstance(trajectory, Trajectory):
         raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
@@ -292,31 +295,33 @@ def analyze_trajectory(
     v_cap, a_cap = np.zeros(n), np.zeros(n)
     tau, tau_static = np.zeros((n, nx)), np.zeros((n, nx))
     v_poly = np.zeros(n) if polytope else None
-    for i in range(n):
-        terms = motion_terms(
-            robot,
-            trajectory.q[i],
-            trajectory.x[i],
-            task,
-            object_mass=object_mass,
-            held_object=held_object,
-            decoupled=decoupled,
-        )
-        kin, dyn = terms.kinematic(), terms.dynamic()
-        kin_axes[i], dyn_axes[i], dyn_center[i], dyn_empty[i] = kin.semi_axes, dyn.semi_axes, dyn.center, dyn.empty
-        xdot = trajectory.xdot[i]
-        v_o[i] = terms.v_o
-        a_o[i] = terms.object_acceleration(xdot)
-        tau[i] = terms.torques(xdot, a_o[i])
-        tau_static[i] = terms.static_torques()
-        speed = float(np.linalg.norm(v_o[i]))
-        d = v_o[i] / speed if speed > 0.0 else kin.axes[0]
-        v_cap[i] = kin.radius_along(d) if not kin.empty else 0.0
-        if v_poly is not None:
-            v_poly[i] = kinematic_polytope(terms.J_u, terms.W, terms.velocity_limits).radius_along(d)
-        acc = float(np.linalg.norm(a_o[i]))
-        d = a_o[i] / acc if acc > 0.0 else dyn.axes[0]
-        a_cap[i] = _reach(dyn.center, dyn.generator, d, dyn.empty)
+    with progress_bar(n, desc=f"trajectory {robot.name}", unit="sample", show=progress) as bar:
+        for i in range(n):
+            bar.update(1)
+            terms = motion_terms(
+                robot,
+                trajectory.q[i],
+                trajectory.x[i],
+                task,
+                object_mass=object_mass,
+                held_object=held_object,
+                decoupled=decoupled,
+            )
+            kin, dyn = terms.kinematic(), terms.dynamic()
+            kin_axes[i], dyn_axes[i], dyn_center[i], dyn_empty[i] = kin.semi_axes, dyn.semi_axes, dyn.center, dyn.empty
+            xdot = trajectory.xdot[i]
+            v_o[i] = terms.v_o
+            a_o[i] = terms.object_acceleration(xdot)
+            tau[i] = terms.torques(xdot, a_o[i])
+            tau_static[i] = terms.static_torques()
+            speed = float(np.linalg.norm(v_o[i]))
+            d = v_o[i] / speed if speed > 0.0 else kin.axes[0]
+            v_cap[i] = kin.radius_along(d) if not kin.empty else 0.0
+            if v_poly is not None:
+                v_poly[i] = kinematic_polytope(terms.J_u, terms.W, terms.velocity_limits).radius_along(d)
+            acc = float(np.linalg.norm(a_o[i]))
+            d = a_o[i] / acc if acc > 0.0 else dyn.axes[0]
+            a_cap[i] = _reach(dyn.center, dyn.generator, d, dyn.empty)
     vlim = np.asarray(robot.velocity_limits, dtype=float)
     elim = np.asarray(robot.effort_limits, dtype=float)
     names = robot.reduced_velocity_names

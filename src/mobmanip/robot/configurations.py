@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigurationError
-from ..support.files import note_input
+from ..support.reading import read_user_text
 from .model import Robot
 
 
@@ -51,13 +51,7 @@ def _reject_constant(token: str):
 def read_configuration(robot: Robot, path: str | Path) -> np.ndarray:
     """Read a Q.json file (see :func:`configuration_from_dict`)."""
     path = Path(path)
-    note_input(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ConfigurationError(f"cannot read configuration {path}: {exc.strerror or exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigurationError(f"configuration {path} is not UTF-8 text: {exc.reason} at byte {exc.start}") from None
+    text = read_user_text(path, "configuration", error=ConfigurationError)
     try:
         # Integers are read as floats: a huge integer becomes inf and is rejected as non-finite.
         data = json.loads(text, parse_constant=_reject_constant, parse_int=float)

@@ -14,6 +14,7 @@ import csv
 import io
 import math
 import os
+import re
 import stat
 from collections.abc import Callable
 from pathlib import Path
@@ -32,7 +33,77 @@ MAX_NUMBER_TEXT = 64
 TIME_STAMP = 1e9
 MIN_TIME_STEP = 1e-6
 
+#: Largest robot file read (bytes): a URDF, xacro or MJCF file, and all the files it includes
+#: together (the largest vendor URDFs are a few megabytes).
+MAX_ROBOT_FILE_BYTES = 64 * 1024 * 1024
+#: Largest recording read (bytes): a ROS bag, or all the files of a ROS 2 bag folder together.
+#: A bag is read message by message, never whole; cameras fill a bag far faster than joint states.
+MAX_RECORDING_BYTES = 64 * 1024**3
+
 ErrorFactory = Callable[[str], MobmanipError]
+
+#: A number in decimal notation (ASCII digits, optional sign, point and exponent), or a
+#: not-a-number or infinity word (left for the caller to refuse with its own message).
+_DECIMAL = re.compile(r"\s*[+-]?(?:(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|nan|inf|infinity)\s*", re.I)
+
+
+def decimal(text: str) -> float:
+    """``float(text)`` for a number written in decimal notation only. Python's ``float`` also
+    reads ``"1_0"`` as 10 and digits of other scripts (``"١"``); a command line or a table that
+    says ``1_0`` holds a typing error, not ten, so those raise ValueError here.
+
+    Raises:
+        ValueError: not a decimal number (argparse reports it as ``invalid decimal value``).
+    """
+    if not isinstance(text, str) or _DECIMAL.fullmatch(text) is None:
+        raise ValueError(f"not a decimal number: {text!r}")
+    return float(text)
+
+
+def file_refusal(path: str | Path, *, limit: int) -> str | None:
+    """Why a user file is not read, or ``None`` when it is a regular file of at most ``limit``
+    bytes. Only the file's status is looked at (never its content), so a FIFO or ``/dev/zero``
+    is refused at once, and a huge file without being read.
+
+    Returns:
+        ``"file not found"``, another reason it cannot be read, ``"it is a directory"``,
+        ``"it is not a regular file (a device, FIFO or socket)"`` or ``"it is N bytes, more
+        than the LIMIT this reads"``; ``None`` when the file is fine.
+    """
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        return "file not found"
+    except OSError as exc:
+        return f"cannot read it: {exc.strerror or exc}"
+    if stat.S_ISDIR(info.st_mode):
+        return "it is a directory"
+    if not stat.S_ISREG(info.st_mode):
+        return "it is not a regular file (a device, FIFO or socket)"
+    if info.st_size > limit:
+        return f"it is {info.st_size} bytes, more than the {limit} this reads"
+    return None
+
+
+def read_bounded(path: str | Path, *, limit: int, refuse: ErrorFactory) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes (see :func:`file_refusal`).
+
+    Args:
+        path: the file.
+        limit: the largest size accepted (bytes).
+        refuse: builds the exception raised from the reason (``"it is a directory"``).
+    """
+    reason = file_refusal(path, limit=limit)
+    if reason is not None:
+        raise refuse(reason)
+    try:
+        with open(path, "rb") as handle:
+            data = handle.read(limit + 1)
+    except OSError as exc:
+        raise refuse(f"cannot read it: {exc.strerror or exc}") from None
+    if len(data) > limit:  # grew while being read
+        raise refuse(f"it grew to more than the {limit} bytes this reads")
+    return data
 
 
 def read_user_bytes(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
@@ -52,24 +123,11 @@ def read_user_bytes(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
             larger than ``limit``.
     """
     path = Path(path)
-    try:
-        info = os.stat(path)
-    except OSError as exc:
-        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
-    if not stat.S_ISREG(info.st_mode):
-        kind = "a directory" if stat.S_ISDIR(info.st_mode) else "not a regular file (a device, FIFO or socket)"
-        raise error(f"cannot read {what} {path}: it is {kind}")
-    if info.st_size > limit:
-        raise error(f"{what} {path} is {info.st_size} bytes, more than the {limit} this reads")
+    reason = file_refusal(path, limit=limit)
+    if reason is not None:
+        raise error(f"cannot read {what} {path}: {reason}")
     note_input(path)
-    try:
-        with open(path, "rb") as handle:
-            data = handle.read(limit + 1)
-    except OSError as exc:
-        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
-    if len(data) > limit:  # grew while being read
-        raise error(f"{what} {path} is more than the {limit} bytes this reads")
-    return data
+    return read_bounded(path, limit=limit, refuse=lambda reason: error(f"cannot read {what} {path}: {reason}"))
 
 
 def read_user_text(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
@@ -134,7 +192,7 @@ def parse_cell(cell: str, where: str, *, bound: float = math.inf, unit: str = ""
     if len(text) > MAX_NUMBER_TEXT:
         raise error(f"{where}: {shown} is not a number of at most {MAX_NUMBER_TEXT} characters")
     try:
-        value = float(text)
+        value = decimal(text)
     except ValueError:
         raise error(f"{where}: not a number: {shown}") from None
     if not math.isfinite(value):

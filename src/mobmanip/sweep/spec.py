@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import ArgumentError, GridError
 from ..robot.model import Robot, load_robot
+from ..support.reading import decimal
 from ..terms.constraints.base import Constraint
 from .budget import check_axis_count, check_values
 
@@ -39,11 +40,11 @@ def parse_grid(text: str, name: str = "grid", positive: bool = False) -> np.ndar
         if len(parts) != 3:
             raise GridError(f"{name}: expected START:STOP:COUNT, got {text!r}")
         count_text = parts[2].strip()
-        if not count_text.isdigit() or int(count_text) < 1:
+        if not (count_text.isascii() and count_text.isdigit()) or int(count_text) < 1:
             raise GridError(f"{name}: COUNT must be a positive integer, got {parts[2]!r} in {text!r}")
         check_axis_count(int(count_text), name)
         try:
-            start, stop = float(parts[0]), float(parts[1])
+            start, stop = decimal(parts[0]), decimal(parts[1])
         except ValueError:
             raise GridError(f"{name}: not a number in {text!r} ({hint})") from None
         count = int(count_text)
@@ -52,7 +53,7 @@ def parse_grid(text: str, name: str = "grid", positive: bool = False) -> np.ndar
         values = np.linspace(start, stop, count)
     else:
         try:
-            values = np.array([float(v) for v in text.split(",")])
+            values = np.array([decimal(v) for v in text.split(",")])
         except ValueError:
             raise GridError(f"{name}: not a number in {text!r} ({hint})") from None
     if values.size == 0 or not np.all(np.isfinite(values)):

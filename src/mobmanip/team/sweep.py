@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import ArgumentError, MobmanipError, TeamError
 from ..measures import resolve_measures
 from ..robot.tasks import get_task
+from ..support.progress import progress_bar
 from .analysis import analyze_team, ray_radius
 from .members import team_from_dict
 
@@ -105,6 +106,7 @@ def sweep_heading(
     base_dir: Path | str = ".",
     measures: Iterable[str] | str | None = None,
     where: str = "team",
+    progress: bool = False,
 ) -> TeamSweep:
     """Turn the object of a team description through ``offsets_deg`` (deg, added to its
     ``yaw_deg``) and analyse the team at each heading.
@@ -115,6 +117,7 @@ def sweep_heading(
         base_dir: where relative robot spec paths are found.
         measures: the measures (default: the default ones).
         where: the description's name in messages.
+        progress: show a progress bar over the headings on standard error.
 
     Raises:
         ArgumentError: no offsets, or a non-finite one; TeamError: the description is wrong
@@ -129,12 +132,14 @@ def sweep_heading(
     order = list(range(start, len(offsets))) + list(range(start - 1, -1, -1))
     points: dict[int, HeadingPoint] = {}
     seeds: dict[int, dict] = {}
-    for k in order:
-        neighbour = k - 1 if k > start else (k + 1 if k < start else None)
-        seed = seeds.get(neighbour) if neighbour is not None else None
-        point, solved = _one(data, offsets[k], seed, base_dir, names, where)
-        points[k] = point
-        seeds[k] = solved if solved is not None else (seed or {})
+    with progress_bar(len(order), desc="team headings", unit="heading", show=progress) as bar:
+        for k in order:
+            bar.update(1)
+            neighbour = k - 1 if k > start else (k + 1 if k < start else None)
+            seed = seeds.get(neighbour) if neighbour is not None else None
+            point, solved = _one(data, offsets[k], seed, base_dir, names, where)
+            points[k] = point
+            seeds[k] = solved if solved is not None else (seed or {})
     task = team_from_dict(data, base_dir, where=where).task
     return TeamSweep(task, names, tuple(points[k] for k in range(len(offsets))))
 
