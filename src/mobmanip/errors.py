@@ -175,6 +175,12 @@ class ArgumentError(MobmanipError):
     non-positive count, a malformed direction, ...); the message names it and the value."""
 
 
+class NotDecimalError(ArgumentError, ValueError):
+    """A number not written in decimal notation (``"1_0"``, digits of other scripts). Also a
+    ``ValueError``, as ``float``'s own refusal is, so that argparse reports it as an invalid value
+    of its option."""
+
+
 class UsageError(ArgumentError):
     """Command-line arguments that contradict each other or miss a required choice.
 

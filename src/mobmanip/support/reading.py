@@ -19,7 +19,7 @@ import stat
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import ArgumentError, MobmanipError
+from ..errors import ArgumentError, MobmanipError, NotDecimalError
 from .files import note_input
 
 #: Largest user text file read (bytes): specs, team files, configurations, CSV paths and
@@ -53,10 +53,11 @@ def decimal(text: str) -> float:
     says ``1_0`` holds a typing error, not ten, so those raise ValueError here.
 
     Raises:
-        ValueError: not a decimal number (argparse reports it as ``invalid decimal value``).
+        NotDecimalError: not a decimal number (a ValueError: argparse reports it as ``invalid
+            decimal value``).
     """
     if not isinstance(text, str) or _DECIMAL.fullmatch(text) is None:
-        raise ValueError(f"not a decimal number: {text!r}")
+        raise NotDecimalError(f"not a decimal number: {text!r}")
     return float(text)
 
 
