@@ -241,16 +241,7 @@ def carry_partial_outputs(robot: Robot, failure: CarryFailed, out_dir: str | Pat
     write_trajectory_csv(
         robot, paths[0], run.t, run.q, {"capacity": run.capacity, "tracking_error": run.tracking_error}
     )
-    summary = {
-        "robot": robot.name,
-        "partial": True,
-        "method": run.method,
-        "completed_until": float(run.t[-1]),
-        "failure": failure.diagnosis.to_dict(),
-        "min_capacity": float(run.capacity.min()),
-        "max_tracking_error": float(run.tracking_error.max()),
-    }
-    write_json(paths[1], summary)
+    write_json(paths[1], {"robot": robot.name, **_partial_summary(failure)})
     prep = failure.preparation
     if prep is not None:
         paths.append(out / CARRY_FILES[4])
@@ -390,16 +381,7 @@ def team_carry_partial_outputs(team: Team, failure: CarryFailed, out_dir: str | 
         written += _team_run_files(
             team, prep, paths["preparation"], {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
         )
-    summary = {
-        "team": team.name,
-        "partial": True,
-        "method": run.method,
-        "completed_until": float(run.t[-1]),
-        "failure": failure.diagnosis.to_dict(),
-        "min_capacity": float(run.capacity.min()),
-        "max_tracking_error": float(run.tracking_error.max()),
-    }
-    write_json(paths["summary"][0], summary)
+    write_json(paths["summary"][0], {"team": team.name, **_partial_summary(failure)})
     return written + [str(paths["summary"][0])]
 
 
@@ -430,3 +412,17 @@ def site_outputs(result: SiteResult, out_dir: str | Path) -> list[Path]:
     out = Path(out_dir)
     table, figure = (out / name for name in SITE_FILES)
     return [write_site_csv(result, table), plot_site(result, figure)]
+
+
+def _partial_summary(failure) -> dict:
+    """What a failed carry (one robot's or a team's) kept: flagged partial, how far it got, the
+    diagnosis, and the part's capacity and tracking."""
+    run = failure.partial
+    return {
+        "partial": True,
+        "method": run.method,
+        "completed_until": float(run.t[-1]),
+        "failure": failure.diagnosis.to_dict(),
+        "min_capacity": float(run.capacity.min()),
+        "max_tracking_error": float(run.tracking_error.max()),
+    }
