@@ -118,6 +118,42 @@ def test_an_interrupt_at_any_moment_is_one_line(tmp_path, entry):
     assert signal.SIGINT in seen and signal.SIGTERM in seen, seen
 
 
+_FINALISER_SCRIPT = """
+import signal, sys, time
+import mobmanip.cli as cli
+
+class Holder:
+    def __del__(self):  # stands for e.g. a matplotlib weak-reference callback
+        signal.raise_signal(signal.{signal})  # arrives while the finaliser runs
+
+def run(args):
+    Holder()  # dropped at once: the signal is raised inside __del__, where Python swallows it
+    for _ in range(100):  # the command goes on computing; the signal must still end it here
+        time.sleep(0.05)
+    print("finished")
+    return 0
+
+cli._run = run
+sys.argv = ["mobmanip", "analyze", "planar_dual_arm"]
+sys.exit(cli.main())
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_inside_a_finaliser_still_ends_the_run_in_one_line(signum):
+    """Python cannot raise an interrupt that arrives inside a finaliser or a garbage-collector
+    callback; it prints "Exception ignored in ..." with a traceback and goes on. The command
+    passes the signal on instead: the same one line and exit status as anywhere else."""
+    script = _FINALISER_SCRIPT.replace("{signal}", signal.Signals(signum).name)
+    start = time.monotonic()
+    proc = subprocess.run([sys.executable, "-c", script], env={**os.environ, "PYTHONPATH": str(SRC)},
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert time.monotonic() - start < 4.5  # ended at once, not after the command's work
+    assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr, proc.stderr
+    assert proc.stderr.strip().splitlines() == [_LINE[signum]], proc.stderr
+    assert proc.stdout == "" and proc.returncode == _EXIT[signum], (proc.returncode, proc.stdout)
+
+
 @pytest.mark.parametrize(
     ("command", "files"),
     [

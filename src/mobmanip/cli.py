@@ -13,6 +13,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import warnings
 
 # Only the standard library at module level: the console script imports this module, and
@@ -69,6 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     program = argv is None and threading.current_thread() is threading.main_thread()
     if program:
         sys.excepthook = _quiet_interrupts(sys.excepthook)
+        sys.unraisablehook = _redeliver_interrupts(sys.unraisablehook)
     try:
         with _terminate_as_interrupt():
             return _main(argv)
@@ -98,6 +100,35 @@ def _quiet_interrupts(previous):
     def hook(kind, value, traceback):
         if not issubclass(kind, KeyboardInterrupt):
             previous(kind, value, traceback)
+
+    return hook
+
+
+def _redeliver_interrupts(previous):
+    """``sys.unraisablehook`` that passes on a signal Python could not raise where it arrived.
+
+    Ctrl-C or SIGTERM that arrives while a finaliser or a garbage-collector callback runs (e.g.
+    one of matplotlib's weak references) raises in that callback, where Python cannot propagate
+    it: it would print "Exception ignored in ..." with a traceback and carry on as if nothing
+    had happened. The hook has the same signal sent to the main thread again a moment later,
+    from a helper thread (sent from the hook itself, it would be raised inside the hook and be
+    swallowed the same way), so it ends the run in its one line from the command's own code.
+    """
+
+    def hook(unraisable):
+        kind = unraisable.exc_type
+        if kind is None or not issubclass(kind, KeyboardInterrupt):
+            previous(unraisable)
+            return
+        signum = signal.SIGTERM if issubclass(kind, Terminated) else signal.SIGINT
+        main = threading.main_thread().ident
+        assert main is not None
+
+        def resend():
+            time.sleep(0.01)  # until the hook has returned
+            signal.pthread_kill(main, signum)
+
+        threading.Thread(target=resend, name="mobmanip-resend-signal", daemon=True).start()
 
     return hook
 
