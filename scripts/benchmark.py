@@ -207,6 +207,7 @@ def main(argv=None) -> int:
         action="store_true",
         help="decisions beside the code they replace, on one run (scripts/benchmark_decisions.py)",
     )
+    parser.add_argument("--only", metavar="TEXT", help="with --decisions: only the decisions whose name contains TEXT")
     parser.add_argument(
         "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
     )
@@ -221,7 +222,7 @@ def main(argv=None) -> int:
     if args.decisions:
         from benchmark_decisions import run as run_decisions
 
-        return run_decisions(quick=args.quick, rounds=args.rounds)
+        return run_decisions(quick=args.quick, rounds=args.rounds, only=args.only)
     if args.floor:
         from benchmark_floor import run as run_floor
 

@@ -12,6 +12,9 @@ and returns its time per unit: per configuration, per call). Add an entry by app
 
 Entries:
 
+- ``place planar_dual_arm ... --map`` (15 x 15) and ``place tiago_dual ...`` (8 starts), CPU
+  time: runs one after the other, one evaluation at a time, against runs advancing together
+  with their evaluations batched (the same cells and placement either way: they are printed);
 - self-collision distances and gradients of TIAGo++ per configuration (random configurations
   within the joint limits, platform anywhere): every pair that may meet, against the pairs the
   shipped collision matrix keeps (robots/tiago_dual.collision.json);
@@ -151,7 +154,89 @@ def _zonotope_sides(quick: bool) -> tuple[Side, Side]:
     )
 
 
+def _one_at_a_time():
+    """Lockstep runs executed one after the other, each evaluation on its own (the code before
+    the batching): a context manager."""
+    import contextlib
+
+    from mobmanip.support.lockstep import Lockstep
+
+    @contextlib.contextmanager
+    def patched():
+        batched = Lockstep.run
+        Lockstep.run = lambda self, runs: [run() for run in runs]
+        try:
+            yield
+        finally:
+            Lockstep.run = batched
+
+    return patched()
+
+
+def _cpu_timer(work, alone: bool) -> Callable[[], float]:
+    def run() -> float:
+        if alone:
+            with _one_at_a_time():
+                start = time.process_time()
+                work()
+                return time.process_time() - start
+        start = time.process_time()
+        work()
+        return time.process_time() - start
+
+    return run
+
+
+def _map_sides(quick: bool) -> tuple[Side, Side]:
+    """``place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x --map DIR``:
+    the 15 x 15 map (bands of 3 rows, as the command runs it), CPU time."""
+    from mobmanip.placement.map_jobs import MapJob, run_map
+    from mobmanip.placement.maps import default_extent
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    target = (1.0, 0.5, 0.35)
+    x0, x1, y0, y1 = default_extent(robot, target)
+    cells = 7 if quick else 15
+    job = MapJob(robot="planar_dual_arm", target=target, objective="kinematic:capacity:+x",
+                 x=tuple(np.linspace(x0, x1, cells)), y=tuple(np.linspace(y0, y1, cells)))  # fmt: skip
+    run_map(job)  # compile, warm caches
+
+    def work():
+        grid = run_map(job)
+        print(f"    {np.isfinite(grid.values).sum()} cells hold the object, {grid.evaluations} evaluations, "
+              f"sum of values {np.nansum(grid.values):.9f}")  # fmt: skip
+
+    return Side("bands one after the other", _cpu_timer(work, True)), Side("bands batched", _cpu_timer(work, False))
+
+
+def _starts_sides(quick: bool) -> tuple[Side, Side]:
+    """``place tiago_dual --object 1.5,0.5,0.85 --mass 1 --objective dynamic:log_volume`` (8
+    starts), CPU time of :func:`mobmanip.placement.place`."""
+    from mobmanip.placement import place
+
+    robot = mobmanip.load_robot("tiago_dual")
+    place(robot, [1.5, 0.5, 0.85], "dynamic:log_volume", object_mass=1.0, starts=1)
+
+    def work():
+        result = place(robot, [1.5, 0.5, 0.85], "dynamic:log_volume", object_mass=1.0, starts=8)
+        print(f"    value {result.value:.12f}, {result.evaluations} evaluations")
+
+    return Side("starts one after the other", _cpu_timer(work, True)), Side("starts batched", _cpu_timer(work, False))
+
+
 DECISIONS: list[Decision] = [
+    Decision(
+        "place --map, paper robot",
+        "a map's bands advance together, their evaluations batched (support/lockstep.py)",
+        "s CPU per map",
+        _map_sides,
+    ),
+    Decision(
+        "place, TIAGo++, 8 starts",
+        "the starts advance together, their evaluations batched",
+        "s CPU per placement",
+        _starts_sides,
+    ),
     Decision(
         "self-collision, TIAGo++",
         "an allowed-collision matrix computed once (robots/tiago_dual.collision.json) instead of every pair",
@@ -179,10 +264,12 @@ DECISIONS: list[Decision] = [
 ]
 
 
-def run(quick: bool = False, rounds: int | None = None) -> int:
+def run(quick: bool = False, rounds: int | None = None, only: str | None = None) -> int:
     rounds = rounds or (1 if quick else 3)
     rows = []
     for decision in DECISIONS:
+        if only is not None and only not in decision.name:
+            continue
         print(f"{decision.name}: {decision.question}", flush=True)
         current, chosen = decision.prepare(quick)
         times: tuple[list[float], list[float]] = ([], [])

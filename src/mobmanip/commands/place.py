@@ -38,9 +38,10 @@ from its reference posture's (default: free).
 --map OUT_DIR also maps the best value over heading and posture at every platform position of
 a grid around the object (--map-extent, --map-cells) and writes OUT_DIR/map.npz, map.csv and
 map.png. The map is solved in bands of 3 rows (continuation from neighbouring cells inside a
-band), in this process or, with --dask ADDRESS (tcp://HOST:PORT, or local:N for a local
-cluster), as tasks on Dask's distributed scheduler: the same bands give the same map either way,
-and a band whose worker is lost is run again by Dask.
+band), in this process (the bands advance together, their evaluations batched) or, with --dask
+ADDRESS (tcp://HOST:PORT, or local:N for a local cluster), as tasks on Dask's distributed
+scheduler: the same bands give the same map either way, and a band whose worker is lost is run
+again by Dask.
 
 --figure writes the result from above (PNG or SVG); --view serves it in the meshcat viewer,
 --export writes the viewer's scene as a self-contained HTML page.

@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError
+from .stacked_linalg import cross3
 
 #: Pinocchio's world convention for ``crba`` (CRBA then leaves the world joint Jacobians in
 #: ``data.J``), or ``None`` for bindings without conventions (the Jacobians take one more call).
@@ -109,8 +110,8 @@ def frame_positions(x_cols: np.ndarray, y_cols: np.ndarray) -> np.ndarray:
     component along w_x, which b = w_y x v_y keeps: p = a + w_x (w_x . b)."""
     vx, wx = np.swapaxes(x_cols[:, :3], 1, 2), np.swapaxes(x_cols[:, 3:], 1, 2)
     vy, wy = np.swapaxes(y_cols[:, :3], 1, 2), np.swapaxes(y_cols[:, 3:], 1, 2)
-    a = np.cross(wx, vx)
-    b = np.cross(wy, vy)
+    a = cross3(wx, vx)
+    b = cross3(wy, vy)
     return a + wx * np.sum(wx * b, axis=-1, keepdims=True)
 
 

@@ -249,7 +249,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
             P[:, :ne, ne:] = 0.0
             P[:, ne:, :ne] = 0.0
         assert t.g is not None  # a pass with dynamics computes gravity
-        xi = -t.g @ S
+        xi = -(t.g[:, None, :] @ S)[:, 0]  # row by row: a batch's rows equal one-row calls bit for bit
         Qi = None if ev.Q_identity else np.linalg.inv(ev.Q)
         value, ok, bars = dynamic_adjoint(ev.objective, J_u, P, xi, W, M_o, g_o, Qi, ev.Z, guarded, full_rank)
         J_u_bar, W_bar, M_o_bar = bars["J"], bars["W"], bars["M_o"]
@@ -262,7 +262,7 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
             Lb, B = np.concatenate([Lb, La], axis=2), np.concatenate([B, Ba], axis=2)
         a_pairs = _T(S @ Lb)  # (n, R, nv)
         b_pairs = _T(S @ B)
-        g_bar = -(bars["xi"] @ _T(S))
+        g_bar = -(bars["xi"][:, None, :] @ _T(S))[:, 0]
         grad = tree.bilinear_term(t, a_pairs, b_pairs, g_bar)
     J_bar6 = np.zeros((n, ka, 6, nv))
     J_bar6[:, :, rows] = (J_u_bar @ _T(S)).reshape(n, ka, m, nv)

@@ -38,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..engine.probed import ProbedModel, frame_positions
+from ..engine.stacked_linalg import cross3
 from ..errors import ModelError
 from ..support.compile_notice import announced_compile
 
@@ -164,7 +165,7 @@ class TreeAdjoint:
         x_cols, y_cols = Ja[:, :, cols[:, 0]], Ja[:, :, cols[:, 1]]
         points = frame_positions(x_cols, y_cols)  # (n, k + nj, 3)
         ex, ey = np.swapaxes(x_cols[:, 3:], 1, 2), np.swapaxes(y_cols[:, 3:], 1, 2)  # (n, k + nj, 3)
-        rotations = np.stack([ex, ey, np.cross(ex, ey)], axis=-1)[:, self.k :]  # (n, nj, 3, 3) columns
+        rotations = np.stack([ex, ey, cross3(ex, ey)], axis=-1)[:, self.k :]  # (n, nj, 3, 3) columns
         # spatial vectors about the first joint's origin (world-aligned): M's terms m |c|^2 then
         # stay of the robot's size wherever it stands, which keeps round-off off the values
         reference = points[:, self.k].copy()
@@ -304,14 +305,12 @@ class TreeAdjoint:
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """u x v for 3-vectors on axis 1 (any trailing axes)."""
-    return np.stack(
-        [
-            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
-            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
-            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
-        ],
-        axis=1,
-    )
+    c0 = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    out = np.empty(c0.shape[:1] + (3,) + c0.shape[1:])
+    out[:, 0] = c0
+    out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
 
 
 def _gamma(y: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -3,10 +3,12 @@ Dask cluster, with the same result.
 
 A :class:`MapJob` describes a map by values that travel (the robot's built-in name or spec path,
 the object, the objective's text, the grid). :func:`run_map` cuts the grid's rows into bands of
-``rows_per_task`` rows; each band is :func:`mobmanip.placement.maps.placement_map` over its
-rows alone (continuation from neighbouring cells inside the band, fresh starts on its first
-row), so a band's cells do not depend on which worker solved it, on the order the bands finish,
-or on a band being run twice after its worker was lost. The band boundaries are fixed by
+``rows_per_task`` rows; each band is solved on its own by
+:func:`mobmanip.placement.maps.placement_map` (continuation from the row before inside the
+band, fresh starts on its first row), so a band's cells do not depend on which worker solved
+it, on the order the bands finish, or on a band being run twice after its worker was lost. In
+this process every band goes into one call, which advances them together and batches their
+cells' evaluations; the cells come out the same. The band boundaries are fixed by
 ``rows_per_task``: keep it to compare runs.
 """
 
@@ -74,6 +76,11 @@ def _robot(name: str) -> Robot:
 
 def run_band(job: MapJob, start: int, stop: int) -> tuple[int, PlacementMap | None]:
     """Rows [start, stop) of the map (a worker task): their map, or None where no cell holds the object."""
+    return start, _rows(job, start, stop)
+
+
+def _rows(job: MapJob, start: int, stop: int, progress=None) -> PlacementMap | None:
+    """Rows [start, stop) of the map in bands of ``job.rows_per_task`` rows, solved together."""
     robot = _robot(job.robot)
     collision = None
     if job.avoid_collision is not None:
@@ -82,7 +89,7 @@ def run_band(job: MapJob, start: int, stop: int) -> tuple[int, PlacementMap | No
         collision = SelfCollision(robot, margin=job.avoid_collision)
     reference = None if job.reference is None else np.array(job.reference)
     try:
-        band = placement_map(
+        return placement_map(
             robot,
             job.target,
             job.objective,
@@ -94,10 +101,11 @@ def run_band(job: MapJob, start: int, stop: int) -> tuple[int, PlacementMap | No
             reference=reference,
             hold_turn=job.hold_turn,
             collision=collision,
+            rows_per_band=job.rows_per_task,
+            progress=progress,
         )
     except UnreachableObjectError:
-        return start, None
-    return start, band
+        return None
 
 
 def run_map(job: MapJob, executor: cf.Executor | None = None, progress: bool = False) -> PlacementMap:
@@ -120,13 +128,11 @@ def run_map(job: MapJob, executor: cf.Executor | None = None, progress: bool = F
 
     def store(start: int, band: PlacementMap | None) -> None:
         bands[start] = band
-        stop = start + (len(band.y) if band is not None else min(job.rows_per_task, ny - start))
-        bar.update(nx * (stop - start))
+        bar.update(nx * (min(start + job.rows_per_task, ny) - start))
 
     try:
-        if executor is None:
-            for start, stop in job.bands():
-                store(*run_band(job, start, stop))
+        if executor is None:  # every band in one call: their cells' evaluations are batched together
+            bands[0] = _rows(job, 0, ny, progress=bar.update)
         else:
             futures = [executor.submit(run_band, job, start, stop) for start, stop in job.bands()]
             for future in cf.as_completed(futures):

@@ -18,9 +18,10 @@ one layer per heading.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -162,6 +163,8 @@ def placement_map(
     tolerance: float = 1e-7,
     hold_turn: float | None = None,
     collision: SelfCollision | None = None,
+    rows_per_band: int | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> PlacementMap:
     """The best achievable objective at every platform position (x, y) of a grid.
 
@@ -176,6 +179,11 @@ def placement_map(
         max_iterations, tolerance: SLSQP's per cell.
         hold_turn, collision: a fixed object orientation and self-collision avoidance, as
             :func:`mobmanip.placement.place`'s.
+        rows_per_band: the rows are cut into bands of this many (default: one band); each band
+            is solved on its own, row after row from its first (each cell continued from the
+            row before), so a band's cells are the same whether the band is solved here with
+            the others or alone (e.g. on a cluster worker). All bands' rows advance together.
+        progress: called with 1 after each cell.
 
     Raises:
         ArgumentError: a malformed target or grid; a fixed platform.
@@ -186,6 +194,11 @@ def placement_map(
     target = check_target(target)
     xs, ys = _axis(x, "x"), _axis(y, "y")
     layers = None if headings is None else _axis(headings, "headings", increasing=False)
+    if rows_per_band is None:
+        rows_per_band = len(ys)
+    if isinstance(rows_per_band, bool) or not isinstance(rows_per_band, int) or rows_per_band < 1:
+        raise ArgumentError(f"rows per band must be a positive integer, got {rows_per_band!r}")
+    bands = [(start, min(start + rows_per_band, len(ys))) for start in range(0, len(ys), rows_per_band)]
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to map")
     task = get_task(task or robot.spec.default_task)
@@ -208,27 +221,39 @@ def placement_map(
     configurations = np.full(shape + (nq,), np.nan)
     for layer in [None] if layers is None else range(len(layers)):
         fixed_heading = None if layer is None or layers is None else float(layers[layer])
-        solved: dict[tuple[int, int], np.ndarray] = {}
-        previous = None
-        for iy, ix in _serpentine(len(ys), len(xs)):
+
+        def band(start: int, stop: int) -> None:
+            """Rows [start, stop), cell after cell along a serpentine, each continued from the
+            cell before it and from one solved neighbour."""
+            solved: dict[tuple[int, int], np.ndarray] = {}
+            previous = None
+            for iy, ix in _serpentine(start, stop, len(xs)):
+                z = cell(iy, ix, previous, solved)
+                previous = z
+                if z is not None:
+                    solved[(iy, ix)] = z
+                if progress is not None:
+                    progress(1)
+
+        def cell(iy: int, ix: int, previous, solved, fixed_heading=fixed_heading, layer=layer) -> np.ndarray | None:
             p = np.array([xs[ix], ys[iy]])
             if np.hypot(*(target[:2] - p)) > reach:
-                previous = None
-                continue
+                return None
             seeds = [previous] if previous is not None else []
             seeds += [solved[n] for n in _neighbours(iy, ix) if n in solved and solved[n] is not previous][:1]
             result = _solve_cell(problem, p, fixed_heading, turn, seeds, max_iterations, tolerance)
             if result is None:
-                previous = None
-                continue
+                return None
             value, z = result
-            solved[(iy, ix)] = z
-            previous = z
             index = (iy, ix) if layer is None else (layer, iy, ix)
             values[index] = value
             heading[index] = math.atan2(math.sin(z[2]), math.cos(z[2]))
             turns[index] = z[-1]
             configurations[index] = problem.configuration(z)
+            return z
+
+        # The bands run together: their cells' evaluations are batched, each band as on its own.
+        problem.lockstep.run([functools.partial(band, start, stop) for start, stop in bands])
     out = PlacementMap(
         objective=evaluator.objective,
         target=target,
@@ -252,7 +277,9 @@ def placement_map(
 
 
 def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance):
-    """(value, z) of the best run at platform position p, or None where nothing holds the object."""
+    """(value, z) of the best run at platform position p, or None where nothing holds the object:
+    from each seed (a neighbouring cell's optimum), then from the reference hold at four
+    platform headings; the first run that holds the object is kept."""
     bounds = problem.bounds()
     if turn is not None:
         bounds[-1] = (turn, turn)
@@ -262,18 +289,18 @@ def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, s
         bounds[2] = (fixed_heading, fixed_heading)
     toward = math.atan2(problem.target[1] - p[1], problem.target[0] - p[0])
     hold = problem.hold
-    fresh: list = []
-    for turn in (0.0, math.pi / 2, -math.pi / 2, math.pi):
-        heading = toward - math.atan2(hold.center[1], hold.center[0]) + turn if fixed_heading is None else fixed_heading
-        z = problem.start(heading, np.random.default_rng(len(fresh)))
+    starts: list = []
+    for offset in (0.0, math.pi / 2, -math.pi / 2, math.pi):
+        toward_hold = toward - math.atan2(hold.center[1], hold.center[0])
+        heading = toward_hold + offset if fixed_heading is None else fixed_heading
+        z = problem.start(heading, np.random.default_rng(len(starts)))
         z[:2] = p
-        if turn is not None:
-            z[-1] = turn
-        fresh.append(z)
+        z[-1] = offset  # a fixed hold turn replaces it (the bounds)
+        starts.append(z)
         if fixed_heading is not None:
             break
     best = None
-    for z0 in [_seeded(s, p, fixed_heading) for s in seeds] + fresh:
+    for z0 in [_seeded(s, p, fixed_heading) for s in seeds] + starts:
         z = newton_project(problem, clip_to_bounds(z0, bounds), bounds)
         if z is None:
             continue
@@ -291,7 +318,7 @@ def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, s
             z = newton_project(problem, z, bounds)
             if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding
                 continue
-        value, _, ok = problem.ev(problem.configuration(z))
+        value, _, ok = problem.lockstep.ask(problem.configuration(z))
         if ok and (best is None or value > best[0]):
             best = (float(value), z)
         if best is not None:  # a seeded or first fresh start that succeeds is kept
@@ -337,9 +364,9 @@ def _seeded(z: np.ndarray, p: np.ndarray, fixed_heading) -> np.ndarray:
     return z
 
 
-def _serpentine(ny: int, nx: int):
-    for iy in range(ny):
-        for ix in range(nx) if iy % 2 == 0 else range(nx - 1, -1, -1):
+def _serpentine(start: int, stop: int, nx: int):
+    for iy in range(start, stop):
+        for ix in range(nx) if (iy - start) % 2 == 0 else range(nx - 1, -1, -1):
             yield iy, ix
 
 

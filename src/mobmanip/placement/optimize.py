@@ -30,6 +30,7 @@ gradients; without it arms and platform may intersect.
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import time
@@ -47,6 +48,7 @@ from ..gradients.evaluator import GradientEvaluator, Objective, platform_gradien
 from ..postures.inverse_kinematics import hold_from
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from ..support.lockstep import Lockstep
 
 if TYPE_CHECKING:
     from ..robot.collision import SelfCollision
@@ -151,6 +153,7 @@ class PlacementProblem:
         names = robot.torso_joint_names + tuple(j for arm in robot.arms for j in arm.joint_names)
         self.joint_ids = [self.model.getJointId(n) for n in names]
         self.joint_names = names
+        self._joint_v = np.array([self.model.joints[j].idx_v for j in self.joint_ids], dtype=int)
         self.n = 3 + len(names) + 1  # platform, joints, psi
         task = evaluator.task
         self.orientation = bool(task.angular_rows) and len(robot.arms) >= 1 and _grasp_spread(self.hold) > 0.0
@@ -158,6 +161,9 @@ class PlacementProblem:
             self.orientation = True
         self.frames = [arm.frame_id for arm in robot.arms]
         self.constraint_evaluations = 0
+        #: Serves the objective's evaluations; runs inside ``self.lockstep.run`` (starts, map
+        #: cells) have theirs evaluated together, in one batched call per round.
+        self.lockstep: Lockstep = Lockstep(self._evaluate_batch)
         self.rows = None
         self.rows = self._moving_rows()
         #: Indices of the collision pairs kept as constraints: with the hands' poses held (the
@@ -257,15 +263,18 @@ class PlacementProblem:
         out[:, 0] = c * tangent_rows[:, 0] - s * tangent_rows[:, 1]
         out[:, 1] = s * tangent_rows[:, 0] + c * tangent_rows[:, 1]
         out[:, 2] = tangent_rows[:, 2]
-        for k, j in enumerate(self.joint_ids):
-            out[:, 3 + k] = tangent_rows[:, self.model.joints[j].idx_v]
+        out[:, 3:-1] = tangent_rows[:, self._joint_v]
         return out
 
     # ----- objective (to minimise: minus the measure) -----
 
+    def _evaluate_batch(self, qs: list[np.ndarray]) -> list[tuple[float, np.ndarray, bool]]:
+        value, grad, ok = self.ev._chunk(np.array(qs))
+        return [(float(value[i]), grad[i], bool(ok[i])) for i in range(len(qs))]
+
     def objective(self, z: np.ndarray) -> tuple[float, np.ndarray]:
         q = self.configuration(z)
-        value, grad, ok = self.ev(q)
+        value, grad, ok = self.lockstep.ask(q)
         if not ok:  # singular or empty: a large cost without slope pushes the line search back
             return 1e6, np.zeros(self.n)
         gz = np.zeros(self.n)
@@ -294,7 +303,7 @@ class PlacementProblem:
             values.append(data.oMf[f].translation - self.target - turned)
             if jacobian:
                 block = self._to_z(q, J[:3])
-                block[:, -1] = -np.cross(ez, turned)
+                block[:, -1] = (turned[1], -turned[0], 0.0)  # -(e_z x turned)
                 rows.append(block)
             if self.orientation:
                 R_t = Rz @ self.hold.rotations[i]
@@ -357,13 +366,16 @@ def _grasp_spread(hold) -> float:
 
 
 def slsqp_constraints(problem: PlacementProblem) -> list[dict]:
-    out = [
-        {
-            "type": "eq",
-            "fun": lambda z: problem.constraints(z, jacobian=False),
-            "jac": lambda z: problem.constraints(z)[1],
-        }
-    ]
+    """SLSQP's constraint dictionaries for one run. SLSQP asks for the hold errors and then their
+    Jacobian at the same point: both come from one Pinocchio pass, kept for the last point."""
+    last: list = [None, None]
+
+    def hold(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if last[0] is None or not np.array_equal(last[0], z):
+            last[:] = z.copy(), problem.constraints(z)
+        return last[1]
+
+    out = [{"type": "eq", "fun": lambda z: hold(z)[0], "jac": lambda z: hold(z)[1]}]
     if problem.collision is not None and problem.collision_rows.size:
         out.append(
             {"type": "ineq", "fun": lambda z: problem.clearances(z)[0], "jac": lambda z: problem.clearances(z)[1]}
@@ -465,19 +477,20 @@ def place(
             f"{'height' if problem.rows.size else 'position'} (the hold misses by {np.abs(fixed).max():.4g})"
         )
     rng = np.random.default_rng(0)
+    firsts = []
     for s in range(starts):
         z0 = problem.start(2.0 * math.pi * s / starts, rng)
         if hold_turn is not None:  # the object's orientation fixed: the arms turn it from the start's
             z0[-1] = hold_turn
+        firsts.append(z0)
+
+    def run(z0: np.ndarray) -> tuple[float | None, np.ndarray | None, tuple[float, np.ndarray, float] | None]:
+        """(start value, start configuration, (value, z, residual) of the run's result or None)."""
         z0 = _project(problem, z0, bounds)
         if z0 is None:
-            runs.append((None, None))
-            continue
+            return None, None, None
         start_value = -problem.objective(z0)[0]
         start_value = None if start_value <= -1e6 else start_value
-        if start_value is not None and (best_start is None or start_value > best_start):
-            best_start = start_value
-            best_start_q = problem.configuration(z0)
         res = minimize(
             problem.objective,
             z0,
@@ -491,16 +504,21 @@ def place(
         if problem.residual(z) > CONSTRAINT_TOLERANCE:  # stopped between iterates: back onto the hold
             z = _project(problem, z, bounds)
             if z is None:
-                runs.append((start_value, None))
-                continue
+                return start_value, z0, None
         residual = problem.residual(z)
-        value, _, ok = evaluator(problem.configuration(z))
+        value, _, ok = problem.lockstep.ask(problem.configuration(z))
         if residual > CONSTRAINT_TOLERANCE or not ok:
-            runs.append((start_value, None))
-            continue
-        runs.append((start_value, float(value)))
-        if best is None or value > best[0]:
-            best = (float(value), z, residual)
+            return start_value, z0, None
+        return start_value, z0, (float(value), z, residual)
+
+    # The starts run together: their evaluations are batched, each start's run as on its own.
+    for start_value, z0, result in problem.lockstep.run([functools.partial(run, z0) for z0 in firsts]):
+        if start_value is not None and (best_start is None or start_value > best_start):
+            best_start = start_value
+            best_start_q = problem.configuration(z0)
+        runs.append((start_value, None if result is None else result[0]))
+        if result is not None and (best is None or result[0] > best[0]):
+            best = result
     if best is None:
         where = "" if region is None else f" with the platform in region {_region_text(region)}"
         raise UnreachableObjectError(
