@@ -184,3 +184,33 @@ def test_a_batch_row_equals_the_same_configuration_alone_bit_for_bit(name, objec
     for i in range(len(qs)):
         v1, g1, ok1 = evaluator._chunk(qs[i : i + 1])
         assert ok1[0] == ok[i] and v1[0] == value[i] and np.array_equal(g1[0], grad[i]), (name, i)
+
+
+@pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual", "stretch"])
+def test_the_hands_frames_from_the_gradient_pass_equal_pinocchios(name):
+    """The hold constraints use the hands' poses and Jacobians that the objective's batched pass
+    brings along (from its probe joints); they equal Pinocchio's frame placements and
+    ``getFrameJacobian(LOCAL_WORLD_ALIGNED)``, platform far from the origin included."""
+    import pinocchio as pin
+
+    from mobmanip.gradients.evaluator import GradientEvaluator
+    from mobmanip.placement.optimize import PlacementProblem
+
+    robot = mobmanip.load_robot(name)
+    evaluator = GradientEvaluator(robot, "dynamic:log_volume", robot.spec.default_task, object_mass=1.0)
+    problem = PlacementProblem(robot, evaluator, np.array([1.0, 0.5, 0.8]), None, robot.hold_configuration())
+    model, data = robot.model, robot.model.createData()
+    rng = np.random.default_rng(5)
+    qs = []
+    for _ in range(6):
+        q = pin.integrate(model, robot.hold_configuration(), rng.normal(scale=0.5, size=model.nv))
+        q[:2] += rng.uniform(-5.0, 5.0, 2)
+        qs.append(q)
+    for q, (_, _, _, (positions, rotations, jacobians)) in zip(qs, problem._evaluate_batch(qs)):
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        for i, arm in enumerate(robot.arms):
+            np.testing.assert_allclose(positions[i], data.oMf[arm.frame_id].translation, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(rotations[i], data.oMf[arm.frame_id].rotation, rtol=0, atol=1e-12)
+            J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(jacobians[i], J, rtol=0, atol=1e-12)

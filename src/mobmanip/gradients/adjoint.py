@@ -225,10 +225,13 @@ def grasp_position_adjoint(positions, W_bar, M_o_bar, mass, rows, linear_rows, a
     return r_bar - r_bar.mean(axis=1, keepdims=True)
 
 
-def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray):
+def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None = None):
     """(values, gradients (n, nv), defined) of a :class:`mobmanip.gradients.GradientEvaluator`'s
-    objective at qs (n, nq), by the reverse chain."""
+    objective at qs (n, nq), by the reverse chain; the chunk's :class:`TreePass` is appended to
+    ``passes`` when given (its frames' poses and Jacobians, for callers that need them too)."""
     t: TreePass = tree.run(qs, dynamics=ev.objective.ellipsoid == "dynamic")
+    if passes is not None:
+        passes.append(t)
     n, nv = qs.shape[0], tree.nv
     task, S = ev.task, ev.S
     rows = list(task.rows)

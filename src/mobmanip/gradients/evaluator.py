@@ -304,6 +304,19 @@ class GradientEvaluator:
             return gradient_chunk(self, self.tree, qs)
         return self.forward_chunk(qs)
 
+    def chunk_with_frames(self, qs: np.ndarray):
+        """(values, gradients, defined, frames) at qs (n, nq): as the chain's chunk, and the end
+        effectors' world positions (n, k, 3), orientations (n, k, 3, 3) and
+        ``LOCAL_WORLD_ALIGNED`` Jacobians (n, k, 6, nv) from the same Pinocchio pass; frames is
+        ``None`` where the chain has no tree pass (joint kinds without closed forms)."""
+        if self.tree is None:
+            return (*self.forward_chunk(qs), None)
+        self.evaluations += qs.shape[0]
+        passes: list = []
+        value, grad, ok = gradient_chunk(self, self.tree, qs, passes)
+        t = passes[0]
+        return value, grad, ok, (t.positions + t.reference[:, None, :], t.frame_rotations, t.frames)
+
     def forward_chunk(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(values, gradients, defined) at qs (n, nq) by the forward chain (dC along every tangent
         direction from the kinematic Hessians): the reference the reverse chain is tested against."""

@@ -66,6 +66,7 @@ class TreePass:
         reference: the reference point in the world (m), (n, 3).
         inertia: bodies' spatial inertias about ``reference``, (n, nj, 6, 6); ``None`` until
             :meth:`TreeAdjoint.inertias` fills it.
+        frame_rotations: end-effector frames' orientations, (n, k, 3, 3).
     """
 
     xi: np.ndarray
@@ -77,6 +78,7 @@ class TreePass:
     origins: np.ndarray
     reference: np.ndarray
     inertia: np.ndarray | None = None
+    frame_rotations: np.ndarray | None = None
 
 
 class TreeAdjoint:
@@ -165,7 +167,8 @@ class TreeAdjoint:
         x_cols, y_cols = Ja[:, :, cols[:, 0]], Ja[:, :, cols[:, 1]]
         points = frame_positions(x_cols, y_cols)  # (n, k + nj, 3)
         ex, ey = np.swapaxes(x_cols[:, 3:], 1, 2), np.swapaxes(y_cols[:, 3:], 1, 2)  # (n, k + nj, 3)
-        rotations = np.stack([ex, ey, cross3(ex, ey)], axis=-1)[:, self.k :]  # (n, nj, 3, 3) columns
+        all_rotations = np.stack([ex, ey, cross3(ex, ey)], axis=-1)  # (n, k + nj, 3, 3) columns
+        rotations = all_rotations[:, self.k :]
         # spatial vectors about the first joint's origin (world-aligned): M's terms m |c|^2 then
         # stay of the robot's size wherever it stands, which keeps round-off off the values
         reference = points[:, self.k].copy()
@@ -180,6 +183,7 @@ class TreeAdjoint:
             frames[:, a, 3:] = w
             frames[:, a] *= self.supports[a]
         t = TreePass(xi, None, None, positions, frames, rotations, points[:, self.k :], reference)
+        t.frame_rotations = all_rotations[:, : self.k]
         if dynamics:
             self._mass_and_gravity(t)
         return t

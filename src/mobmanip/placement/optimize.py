@@ -164,6 +164,7 @@ class PlacementProblem:
         #: Serves the objective's evaluations; runs inside ``self.lockstep.run`` (starts, map
         #: cells) have theirs evaluated together, in one batched call per round.
         self.lockstep: Lockstep = Lockstep(self._evaluate_batch)
+        self._frames: tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self.rows = None
         self.rows = self._moving_rows()
         #: Indices of the collision pairs kept as constraints: with the hands' poses held (the
@@ -268,13 +269,34 @@ class PlacementProblem:
 
     # ----- objective (to minimise: minus the measure) -----
 
-    def _evaluate_batch(self, qs: list[np.ndarray]) -> list[tuple[float, np.ndarray, bool]]:
-        value, grad, ok = self.ev._chunk(np.array(qs))
-        return [(float(value[i]), grad[i], bool(ok[i])) for i in range(len(qs))]
+    def _evaluate_batch(self, qs: list[np.ndarray]) -> list[tuple[float, np.ndarray, bool, tuple | None]]:
+        """Value, gradient, defined and the hands' frames (world positions, orientations,
+        Jacobians) at each configuration, all from one pass of the gradient chain."""
+        value, grad, ok, frames = self.ev.chunk_with_frames(np.array(qs))
+        return [
+            (float(value[i]), grad[i], bool(ok[i]), None if frames is None else tuple(f[i] for f in frames))
+            for i in range(len(qs))
+        ]
+
+    def _frames_at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The hands' world positions (k, 3), orientations (k, 3, 3) and ``LOCAL_WORLD_ALIGNED``
+        Jacobians (k, 6, nv) at q: those the objective's evaluation at q brought along (SLSQP
+        asks for the hold constraints at the point it has just evaluated), else from Pinocchio."""
+        if self._frames is not None and np.array_equal(self._frames[0], q):
+            return self._frames[1]
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        positions = np.array([data.oMf[f].translation for f in self.frames])
+        rotations = np.array([data.oMf[f].rotation for f in self.frames])
+        jacobians = np.array([pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED) for f in self.frames])
+        return positions, rotations, jacobians
 
     def objective(self, z: np.ndarray) -> tuple[float, np.ndarray]:
         q = self.configuration(z)
-        value, grad, ok = self.lockstep.ask(q)
+        value, grad, ok, frames = self.lockstep.ask(q)
+        if frames is not None:
+            self._frames = (q, frames)
         if not ok:  # singular or empty: a large cost without slope pushes the line search back
             return 1e6, np.zeros(self.n)
         gz = np.zeros(self.n)
@@ -288,26 +310,24 @@ class PlacementProblem:
     def constraints(self, z: np.ndarray, jacobian: bool = True):
         """Hold errors (positions, then orientations), (r,), and their Jacobian over z, (r, n)."""
         self.constraint_evaluations += 1
-        model, data = self.model, self.data
         q = self.configuration(z)
         psi = z[-1]
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
+        positions, rotations, jacobians = self._frames_at(q)
         cz, sz = math.cos(psi), math.sin(psi)
         Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
         ez = np.array([0.0, 0.0, 1.0])
         values, rows = [], []
-        for i, f in enumerate(self.frames):
-            J = pin.getFrameJacobian(model, data, f, pin.LOCAL_WORLD_ALIGNED)
+        for i in range(len(self.frames)):
+            J = jacobians[i]
             turned = Rz @ self.hold.offsets[i]
-            values.append(data.oMf[f].translation - self.target - turned)
+            values.append(positions[i] - self.target - turned)
             if jacobian:
                 block = self._to_z(q, J[:3])
                 block[:, -1] = (turned[1], -turned[0], 0.0)  # -(e_z x turned)
                 rows.append(block)
             if self.orientation:
                 R_t = Rz @ self.hold.rotations[i]
-                M = data.oMf[f].rotation.T @ R_t
+                M = rotations[i].T @ R_t
                 values.append(pin.log3(M))
                 if jacobian:
                     Jl = pin.Jlog3(M)
@@ -506,7 +526,7 @@ def place(
             if z is None:
                 return start_value, z0, None
         residual = problem.residual(z)
-        value, _, ok = problem.lockstep.ask(problem.configuration(z))
+        value, _, ok, _ = problem.lockstep.ask(problem.configuration(z))
         if residual > CONSTRAINT_TOLERANCE or not ok:
             return start_value, z0, None
         return start_value, z0, (float(value), z, residual)
