@@ -154,6 +154,12 @@ class PlacementProblem:
         self.joint_ids = [self.model.getJointId(n) for n in names]
         self.joint_names = names
         self._joint_v = np.array([self.model.joints[j].idx_v for j in self.joint_ids], dtype=int)
+        continuous = np.array([self.model.joints[j].nq == 2 for j in self.joint_ids], dtype=bool)
+        slots = np.arange(3, 3 + len(names))
+        idx_q = np.array([self.model.joints[j].idx_q for j in self.joint_ids], dtype=int)
+        #: Where z's joint entries go in q: (z, q) indices of one-coordinate joints, then of
+        #: continuous ones (q holds cos, sin).
+        self._joint_slots = (slots[~continuous], idx_q[~continuous], slots[continuous], idx_q[continuous])
         self.n = 3 + len(names) + 1  # platform, joints, psi
         task = evaluator.task
         self.orientation = bool(task.angular_rows) and len(robot.arms) >= 1 and _grasp_spread(self.hold) > 0.0
@@ -237,12 +243,12 @@ class PlacementProblem:
     def configuration(self, z: np.ndarray) -> np.ndarray:
         q = self.q_ref.copy()
         q[:4] = (z[0], z[1], math.cos(z[2]), math.sin(z[2]))
-        for value, j in zip(z[3:-1], self.joint_ids):
-            joint = self.model.joints[j]
-            if joint.nq == 2:
-                q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
-            else:
-                q[joint.idx_q] = value
+        plain_z, plain_q, circle_z, circle_q = self._joint_slots
+        q[plain_q] = z[plain_z]
+        if circle_z.size:  # continuous joints: (cos, sin)
+            angles = z[circle_z]
+            q[circle_q] = np.cos(angles)
+            q[circle_q + 1] = np.sin(angles)
         return q
 
     def variables(self, q: np.ndarray, psi: float) -> np.ndarray:
@@ -315,25 +321,31 @@ class PlacementProblem:
         positions, rotations, jacobians = self._frames_at(q)
         cz, sz = math.cos(psi), math.sin(psi)
         Rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+        turned = self.hold.offsets @ Rz.T  # (k, 3)
+        position_errors = positions - self.target - turned
+        if jacobian:  # every hand's position rows at once, (3 k, n)
+            position_rows = self._to_z(q, jacobians[:, :3].reshape(-1, jacobians.shape[-1]))
+            position_rows[:, -1] = np.column_stack([turned[:, 1], -turned[:, 0], np.zeros(len(turned))]).ravel()
+        if not self.orientation:
+            value = position_errors.ravel()
+            if self.rows is not None:
+                value = value[self.rows]
+                return (value, position_rows[self.rows]) if jacobian else value
+            return (value, position_rows) if jacobian else value
         ez = np.array([0.0, 0.0, 1.0])
         values, rows = [], []
         for i in range(len(self.frames)):
-            J = jacobians[i]
-            turned = Rz @ self.hold.offsets[i]
-            values.append(positions[i] - self.target - turned)
+            values.append(position_errors[i])
             if jacobian:
-                block = self._to_z(q, J[:3])
-                block[:, -1] = (turned[1], -turned[0], 0.0)  # -(e_z x turned)
+                rows.append(position_rows[3 * i : 3 * i + 3])
+            R_t = Rz @ self.hold.rotations[i]
+            M = rotations[i].T @ R_t
+            values.append(pin.log3(M))
+            if jacobian:
+                Jl = pin.Jlog3(M)
+                block = self._to_z(q, -Jl @ R_t.T @ jacobians[i, 3:])
+                block[:, -1] = Jl @ R_t.T @ ez
                 rows.append(block)
-            if self.orientation:
-                R_t = Rz @ self.hold.rotations[i]
-                M = rotations[i].T @ R_t
-                values.append(pin.log3(M))
-                if jacobian:
-                    Jl = pin.Jlog3(M)
-                    block = self._to_z(q, -Jl @ R_t.T @ J[3:])
-                    block[:, -1] = Jl @ R_t.T @ ez
-                    rows.append(block)
         value = np.concatenate(values)
         if self.rows is not None:
             value = value[self.rows]
