@@ -370,9 +370,10 @@ def support(
             ``faces``-sided pyramid inscribed in the cone of coefficient ``mu``).
         policy: the paper's minimum-norm policy (xdot = J_u^+ W^T a_o, h = W^+ (M_o a_o + g_o));
             tau and the contact forces stay free within their constraints.
-        springs: the contacts share the weight as equally stiff springs under a rigid base: each
-            normal force is a + b x + c y at the contact's floor position (x, y), with a, b, c
-            three more unknowns. Without it, any sharing that balances the robot.
+        springs: the contacts share the weight as springs under a rigid base: each normal force
+            is k (a + b x + c y) at the contact's floor position (x, y), with a, b, c three more
+            unknowns and k the contact's stiffness: 1 for ``True``, else the array's entries (in
+            the problem's contact order). ``False``: any sharing that balances the robot.
         reserve: a fraction r: every normal force at least r (robot + object weight) / (number of
             contacts), every driven wheel's pyramid shrunk to 1 - r of its size.
     """
@@ -432,7 +433,7 @@ def _solve(
     nx = P.S.shape[1]
     C, slices = contact_force_columns(P)
     m, km = P.W.shape
-    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1, 3 if springs else 0])
+    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1, 0 if springs is False else 3])
     X, T, L, H, V, A, S_, D = (slice(offsets[i], offsets[i + 1]) for i in range(8))
     n = int(offsets[-1])
     rows, rhs = [], []
@@ -463,11 +464,12 @@ def _solve(
     if still:
         equation([(X, np.eye(nx))], np.zeros(nx))
         equation([(A, np.eye(m))], np.zeros(m))
-    if springs:  # normal_c - (a + b x_c + c y_c) = 0
-        for sl, p in zip(slices, P.points):
+    if springs is not False:  # normal_c - k_c (a + b x_c + c y_c) = 0
+        stiffness = np.ones(len(P.points)) if springs is True else np.asarray(springs, dtype=float)
+        for sl, p, k in zip(slices, P.points, stiffness):
             row = np.zeros((1, n))
             row[0, L.start + sl.stop - 1] = 1.0
-            row[0, D] = -1.0, -p[0], -p[1]
+            row[0, D] = -k, -k * p[0], -k * p[1]
             rows.append(row)
             rhs.append(np.zeros(1))
 

@@ -153,12 +153,15 @@ def floor_warnings(analysis) -> list[str]:
         centre = (centre + obj.mass * np.asarray(obj.center, dtype=float)[:2]) / (mass + obj.mass)
         points = np.array([c["point"][:2] for c in floor["contacts"]])
         middle = points.mean(axis=0)
-        plate = np.column_stack([np.ones(len(points)), points - middle])  # equally stiff contacts
-        normals = plate @ np.linalg.solve(plate.T @ plate, np.r_[1.0, centre - middle])  # per unit weight
+        plate = np.column_stack([np.ones(len(points)), points - middle])  # deflections, affine
+        k = np.array([c.get("stiffness", 1.0) for c in floor["contacts"]])
+        springs = "equally stiff contacts" if np.all(k == k[0]) else "the contacts' stiffness"
+        # f = K plate theta balancing a unit weight at the centre: plate^T K plate theta = (1, centre)
+        normals = k * (plate @ np.linalg.solve(plate.T @ (k[:, None] * plate), np.r_[1.0, centre - middle]))
         unloaded = [c["name"] for c, f in zip(floor["contacts"], normals) if f <= 0.0]
         if floor.get("load") == "compliant" and unloaded:
             out.append(
-                f"{name} on the floor is empty: standing still, with equally stiff contacts, the weight would "
+                f"{name} on the floor is empty: standing still, with {springs}, the weight would "
                 f"unload {', '.join(unloaded)} (the centre of mass at ({centre[0]:.3f}, {centre[1]:.3f}) m is outside "
                 "the support's core; compliant sharing keeps every support loaded); --load any gives the "
                 "tip-over limit, with optimistic traction"

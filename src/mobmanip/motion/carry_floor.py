@@ -144,7 +144,7 @@ def floor_rows(
 
     # compliant normal forces: [balance; sharing] fn = [F_z, N_x, N_y, 0...]
     n = len(points)
-    system = np.vstack([np.ones(n), points.T, compliant_sharing(points)])
+    system = np.vstack([np.ones(n), points.T, compliant_sharing(points, support.stiffness)])
     L = np.linalg.inv(system)[:, :3]  # fn = L @ (F_z, N_x, N_y)
     fn0 = L @ np.r_[Fz0, N0]
     fn1 = L @ np.vstack([Fz1, N1])

@@ -76,7 +76,13 @@ class TractionAlong:
 
 
 def contact_forces(
-    points: np.ndarray, driven: np.ndarray, force: np.ndarray, moment: np.ndarray, zmp: np.ndarray, mu: float
+    points: np.ndarray,
+    driven: np.ndarray,
+    force: np.ndarray,
+    moment: np.ndarray,
+    zmp: np.ndarray,
+    mu: float,
+    stiffness: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The contacts' forces for one resultant (see the module's docstring).
 
@@ -87,6 +93,7 @@ def contact_forces(
         moment: its moment about the world origin (N m), (3,) (only the vertical component is used).
         zmp: the resultant's zero-moment point (m, world x, y), (2,).
         mu: the driven wheels' friction coefficient (> 0).
+        stiffness: the contacts' relative vertical stiffness, (n,); default all equal.
 
     Returns:
         (normal forces (n,), the driven wheels' tangential forces (d, 2), their traction use (d,)).
@@ -96,7 +103,7 @@ def contact_forces(
     n = len(xy)
     balance = np.vstack([np.ones(n), xy.T])
     rhs = float(force[2]) * np.array([1.0, zmp[0], zmp[1]])
-    sharing = compliant_sharing(xy)
+    sharing = compliant_sharing(xy, stiffness)
     normal = np.linalg.solve(np.vstack([balance, sharing]), np.concatenate([rhs, np.zeros(len(sharing))]))
 
     w = xy[driven]
@@ -173,7 +180,7 @@ def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None
         q = trajectory.q[i]
         points = support.world_points((float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))))
         normal[i], tangential[i], use[i] = contact_forces(
-            points, driven, ground.force[i], ground.moment[i], ground.zmp[i], float(mu)
+            points, driven, ground.force[i], ground.moment[i], ground.zmp[i], float(mu), support.stiffness
         )
     names = tuple(c.name for c in support.contacts)
     wheels = tuple(c.name for c in support.contacts if c.driven)

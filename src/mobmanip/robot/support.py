@@ -15,6 +15,9 @@ The spec's table (all keys optional)::
     casters = [[0.25, 0.14], ...] # passive supports, [x, y] (on the floor) or [x, y, z] (m, root frame)
     urdf_casters = true           # also take the URDF's caster wheels
 
+    [support.stiffness]           # relative vertical stiffness per contact name (default 1)
+    caster_0 = 0.4
+
 :data:`~mobmanip.robot.support_spec.DEFAULT_MU` = 0.5 is a conservative value for rubber wheels on a dry indoor floor
 (rubber on concrete is usually quoted at 0.6 to 0.8; a polished or dusty floor is lower).
 A support needs at least three contacts that are not on one line, ``mu >= 0`` and ``faces >= 3``;
@@ -26,7 +29,7 @@ re-exported here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -57,12 +60,16 @@ class ContactPoint:
         point: where it touches the floor, in the platform's root frame (m), (3,).
         driven: a driven wheel (normal and tangential force) or a passive support (normal only).
         source: where it came from: ``"wheel"``, ``"urdf"`` or ``"spec"``.
+        stiffness: its vertical stiffness relative to the other contacts' (the spec's
+            ``[support.stiffness]``; 1 by default): how it shares the weight when the sharing is
+            compliant.
     """
 
     name: str
     point: np.ndarray
     driven: bool
     source: str
+    stiffness: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -104,6 +111,11 @@ class Support:
     def names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.contacts)
 
+    @property
+    def stiffness(self) -> np.ndarray:
+        """The contacts' relative vertical stiffness, (n,)."""
+        return np.array([c.stiffness for c in self.contacts], dtype=float)
+
     def root_points(self) -> np.ndarray:
         """The contact points in the root frame, (n, 3)."""
         return np.array([c.point for c in self.contacts])
@@ -128,7 +140,13 @@ class Support:
             "faces": self.faces,
             "floor_z": self.floor_z,
             "contacts": [
-                {"name": c.name, "point": c.point.tolist(), "driven": c.driven, "source": c.source}
+                {
+                    "name": c.name,
+                    "point": c.point.tolist(),
+                    "driven": c.driven,
+                    "source": c.source,
+                    "stiffness": c.stiffness,
+                }
                 for c in self.contacts
             ],
         }
@@ -174,6 +192,13 @@ def robot_support(robot: Robot, mu: float | None = None, faces: int | None = Non
     for k, row in enumerate(spec.casters):
         z = row[2] if len(row) == 3 else floor_z
         contacts.append(ContactPoint(f"caster_{k}", np.array([row[0], row[1], z], dtype=float), False, "spec"))
+    unknown = sorted(set(spec.stiffness) - {c.name for c in contacts})
+    if unknown:
+        raise SpecError(
+            f"[support] stiffness names {', '.join(map(repr, unknown))}, which {'is' if len(unknown) == 1 else 'are'} "
+            f"not among {robot.name}'s contacts: {', '.join(c.name for c in contacts)}"
+        )
+    contacts = [replace(c, stiffness=spec.stiffness.get(c.name, 1.0)) for c in contacts]
     check_mu(mu)
     if faces is not None:
         check_faces(faces)

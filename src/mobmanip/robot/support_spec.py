@@ -9,13 +9,22 @@ The table (all keys optional)::
     faces = 8                     # faces of the pyramid inscribed in each wheel's friction cone
     casters = [[0.25, 0.14], ...] # passive supports, [x, y] (on the floor) or [x, y, z] (m, root frame)
     urdf_casters = true           # also take the URDF's caster wheels
+
+    [support.stiffness]           # relative vertical stiffness per contact (default 1 each)
+    caster_0 = 0.4                # e.g. a sprung caster: only the ratios matter
+    wheel_left_joint = 1.0        # contacts by name: wheel joints, URDF caster links, caster_<k>
+
+The stiffness decides how a robot on more than three contacts shares its weight when the
+sharing is compliant (``Floor(load="compliant")``): under a rigid platform each contact is a
+spring, so its normal force is its stiffness times a deflection that is an affine function of
+its floor position.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..errors import SpecError
 
@@ -34,12 +43,14 @@ class SupportSpec:
         mu: friction coefficient of the driven wheels; ``None``: :data:`DEFAULT_MU`.
         faces: faces of the inscribed friction pyramid.
         urdf_casters: also take the URDF's caster wheels.
+        stiffness: relative vertical stiffness by contact name (> 0); contacts not named have 1.
     """
 
     casters: tuple[tuple[float, ...], ...] = ()
     mu: float | None = None
     faces: int = DEFAULT_FACES
     urdf_casters: bool = True
+    stiffness: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self):
         rows = []
@@ -57,13 +68,20 @@ class SupportSpec:
         check_faces(self.faces, "[support] faces")
         if not isinstance(self.urdf_casters, bool):
             raise SpecError(f"[support] urdf_casters must be true or false, got {self.urdf_casters!r}")
+        if not isinstance(self.stiffness, Mapping):
+            raise SpecError(f"[support] stiffness must be a table of contact = number, got {self.stiffness!r}")
+        for name, value in self.stiffness.items():
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not (number and math.isfinite(value) and value > 0):
+                raise SpecError(f"[support] stiffness of {name!r} must be a finite number > 0, got {value!r}")
+        object.__setattr__(self, "stiffness", {str(k): float(v) for k, v in self.stiffness.items()})
 
 
 def support_spec_from_table(table: object, where: str) -> SupportSpec:
     """A :class:`SupportSpec` from the spec's ``[support]`` TOML table."""
     if not isinstance(table, Mapping):
         raise SpecError(f"{where}: [support] must be a table, got {table!r}")
-    known = {"casters", "mu", "faces", "urdf_casters"}
+    known = {"casters", "mu", "faces", "urdf_casters", "stiffness"}
     extra = sorted(set(table) - known)
     if extra:
         raise SpecError(f"{where}: unknown keys in [support]: {extra}; expected some of {sorted(known)}")
@@ -75,6 +93,7 @@ def support_spec_from_table(table: object, where: str) -> SupportSpec:
         mu=table.get("mu"),
         faces=table.get("faces", DEFAULT_FACES),
         urdf_casters=table.get("urdf_casters", True),
+        stiffness=table.get("stiffness", {}),
     )
 
 

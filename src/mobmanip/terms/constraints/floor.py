@@ -27,9 +27,11 @@ indeterminate: the six rows above fix the total normal force and its moments, no
 contacts share them. The sharing does not matter for tip-over (every sharing with normals >= 0
 puts the zero-moment point in the support polygon, and every such point has one), but it decides
 how hard each wheel may push. ``"compliant"`` shares it as the floor and the tyres do: the
-platform is rigid and every contact an equally stiff spring, so the normal forces are an affine
-function of the contacts' positions on the floor, f_n,c = a + b x_c + c y_c (n - 3 equations over
-the normals, none with three contacts). With the normals >= 0 every support stays loaded: the
+platform is rigid and every contact a spring (equally stiff unless the spec's
+``[support.stiffness]`` says otherwise, e.g. for sprung casters), so each contact's deflection is
+an affine function of its position on the floor and its normal force that deflection times its
+stiffness, f_n,c = k_c (a + b x_c + c y_c) (n - 3 equations over the normals, none with three
+contacts). With the normals >= 0 every support stays loaded: the
 zero-moment point stays in the support's *core*, which is smaller than its polygon (for four
 corners, the diamond through the edges' midpoints), so the no-tip-over limit is conservative;
 and each wheel's traction is limited by the load the springs give it, not by the most
@@ -91,10 +93,10 @@ class Floor(Constraint):
         support: the contacts; default: :func:`mobmanip.robot.support.robot_support`.
         lift: allow contacts to pull (normal forces of any sign): the ideal set, with the floor's
             forces reported (where its zero-moment point would be). Off by default.
-        load: how the contacts share the weight: ``"compliant"`` (equally stiff contacts under a
-            rigid platform; every support stays loaded), ``"any"`` (every sharing that balances
-            the robot) or ``"auto"``: compliant with a traction limit, any without one; see the
-            module's docstring.
+        load: how the contacts share the weight: ``"compliant"`` (contacts as springs of their
+            stiffness, equal by default, under a rigid platform; every support stays loaded),
+            ``"any"`` (every sharing that balances the robot) or ``"auto"``: compliant with a
+            traction limit, any without one; see the module's docstring.
         reserve: a safety reserve, a fraction r in [0, 1): every support keeps at least r times
             its equal share of the weight (robot and object), and every driven wheel uses at most
             1 - r of its friction pyramid. 0 (the default): the exact limits. A replay from rest
@@ -221,7 +223,7 @@ class Floor(Constraint):
                 equations.append(({"xdot": kin[moving]}, np.zeros(int(moving.sum()))))
             couplings["dynamics"] = {LEVEL_WRENCHES: np.hstack(couple)}
         if sharing_model == "compliant":
-            sharing = compliant_sharing(points)
+            sharing = compliant_sharing(points, support.stiffness)
             if len(sharing):
                 block = np.zeros((len(sharing), n_forces))
                 block[:, normal_col] = sharing
@@ -236,7 +238,7 @@ class Floor(Constraint):
             G_rows.append(row)
             h_rows.append(-least)
             lifts = "normal force 0" if least == 0.0 else f"normal force at its reserve {least:.4g} N"
-            why = "; the robot tips over" if sharing_model == "any" else "; equally stiff contacts, before any tip-over"
+            why = "; the robot tips over" if sharing_model == "any" else f"; {_springs(support)}, before any tip-over"
             labels.append(f"{contact.name} lifts off the floor ({lifts}{why})")
         if mu is not None and not self.lift:
             tilt = mu * math.cos(math.pi / faces) * (1.0 - self.reserve)
@@ -258,7 +260,13 @@ class Floor(Constraint):
                 "faces": faces,
                 "pose": list(pose),
                 "contacts": [
-                    {"name": ct.name, "point": p.tolist(), "driven": ct.driven, "columns": list(s)}
+                    {
+                        "name": ct.name,
+                        "point": p.tolist(),
+                        "driven": ct.driven,
+                        "columns": list(s),
+                        "stiffness": ct.stiffness,
+                    }
                     for ct, p, s in zip(support.contacts, points, slices)
                 ],
                 "polygon": support.polygon(pose).tolist(),
@@ -270,16 +278,31 @@ class Floor(Constraint):
         )  # fmt: skip
 
 
-def compliant_sharing(points: np.ndarray) -> np.ndarray:
-    """The equations that make the normal forces at ``points`` (n, 2 or 3; m, on the floor) an
-    affine function of the points' floor positions (equally stiff contacts under a rigid
-    platform): an orthonormal basis N (n - 3, n) with N f_n = 0 exactly for those f_n; empty
-    for three contacts or fewer."""
+def compliant_sharing(points: np.ndarray, stiffness: np.ndarray | None = None) -> np.ndarray:
+    """The equations that make the normal forces at ``points`` (n, 2 or 3; m, on the floor) those
+    of springs under a rigid platform: f_i = k_i d_i with the deflections d an affine function of
+    the points' floor positions (``stiffness`` k, (n,), relative; default all equal). Returns
+    N (n - 3, n) with orthonormal rows and N f_n = 0 exactly for those f_n; empty for three
+    contacts or fewer."""
     xy = np.asarray(points, dtype=float)[:, :2]
     affine = np.column_stack([np.ones(len(xy)), xy - xy.mean(axis=0)])
     u, sigma, _ = np.linalg.svd(affine, full_matrices=True)
     rank = int(np.sum(sigma > 1e-9 * max(float(sigma[0]), 1e-300)))
-    return u[:, rank:].T
+    deflections = u[:, rank:].T  # N0 d = 0 for affine deflections d
+    if stiffness is None:
+        return deflections
+    k = np.asarray(stiffness, dtype=float)
+    if len(deflections) == 0 or np.all(k == k[0]):
+        return deflections
+    rows = deflections / k[None, :]  # d = f / k
+    q, _ = np.linalg.qr(rows.T)
+    return q.T
+
+
+def _springs(support: Support) -> str:
+    """How the compliant model sees the contacts, for messages."""
+    k = support.stiffness
+    return "equally stiff contacts" if np.all(k == k[0]) else "contacts as springs of the spec's stiffness"
 
 
 def _robot_support(robot) -> Support:
