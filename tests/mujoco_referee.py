@@ -205,6 +205,7 @@ def build(
     penetration: float = 1e-12,
     regularisation: float = 1e-2,
     equal_supports: bool = True,
+    stiffness: Mapping[str, float] | None = None,
 ) -> Referee:
     """A MuJoCo model of ``robot`` at configuration ``q`` standing on the floor, at rest.
 
@@ -233,6 +234,11 @@ def build(
             which is an artefact of its regularisation, not of a floor: the wheel bodies' weights
             are set to the root's, so that each contact's force is the same function of its depth
             (the model mobmanip's compliant floor assumes). Off: MuJoCo's own sharing.
+        stiffness: relative stiffness per support name (missing: 1), with ``equal_supports``:
+            each contact's softness R is divided by it (through its pair's solimp d, (1 - d) / d
+            scaled, the stiffest at MuJoCo's cap d = 0.9999). Holding still, MuJoCo's contact
+            forces minimise sum_c R_c f_c^2 over the balancing ones, i.e. f_c = k_c (a + b x_c +
+            c y_c): springs of stiffness k_c under a rigid platform.
 
     Raises:
         ValueError: wheels or supports not on one floor, a hand that is not a URDF link, an object
@@ -282,10 +288,17 @@ def build(
         centre = [point[0], point[1], -lift + 0.02 - penetration]
         base.add_geom(name=f"contact_{name}", type=sphere, size=[0.02, 0, 0], pos=centre, **free)
         supports.append(Support(name, False, base.name, point, friction(name, 0.0)))
+    k = {s.name: float((stiffness or {}).get(s.name, 1.0)) for s in supports}
+    stiffest = max(k.values())
     for s in supports:
         friction_5 = [s.mu, s.mu, 0.0, 0.0, 0.0]
         condim = 3 if s.mu > 0 else 1
-        spec.add_pair(geomname1="floor", geomname2=f"contact_{s.name}", condim=condim, friction=friction_5, **soft)
+        pair = dict(soft)
+        if k[s.name] != stiffest:  # (1 - d) / d grows as the contact is softer
+            ratio = (1.0 - soft["solimp"][0]) / soft["solimp"][0] * stiffest / k[s.name]
+            d = 1.0 / (1.0 + ratio)
+            pair["solimp"] = [d, d, *soft["solimp"][2:]]
+        spec.add_pair(geomname1="floor", geomname2=f"contact_{s.name}", condim=condim, friction=friction_5, **pair)
 
     (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), {}
     for j in range(2, robot.model.njoints):

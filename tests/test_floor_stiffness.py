@@ -169,3 +169,45 @@ def test_the_traction_along_a_motion_shares_by_the_springs_too():
     equal, _, _ = contact_forces(points, driven, force, moment, zmp, 0.5)
     assert np.abs(equal - normal).max() > 1.0  # newtons: the springs change the sharing
     np.testing.assert_allclose(tangential.sum(axis=0), force[:2], atol=1e-9)
+
+
+def test_mujoco_with_the_same_springs_shares_the_weight_as_predicted():
+    """MuJoCo (tests/mujoco_referee.py) with each contact's softness divided by its stiffness:
+    the efforts of grounded maxima of TIAGo++ (97 %, the calm witness) give every contact the
+    normal force mobmanip predicts, within 0.1 % of the weight, and the object the predicted
+    acceleration within 3 %; with equal springs the same efforts load the contacts otherwise."""
+    pytest.importorskip("mujoco")
+    from mujoco_referee import build, urdf_casters
+
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    base = robot_support(robot)
+    stiffness = _soft_casters(base)
+    floor = Floor(mu=0.5, support=_stiff(base, stiffness))
+    analysis = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(floor,))
+    P = analysis.measures["dynamic_polytope"]
+    casters = urdf_casters(robot)
+    # the referee's names for mobmanip's contacts (matched by their points in the root frame)
+    theirs = {name: name for name in robot.platform.drive_names}
+    for contact in base.contacts:
+        if not contact.driven:
+            theirs[contact.name] = min(casters, key=lambda n: np.linalg.norm(casters[n][:2] - contact.point[:2]))
+            assert np.linalg.norm(casters[theirs[contact.name]][:2] - contact.point[:2]) < 1e-9
+    springs = {theirs[name]: value for name, value in stiffness.items()}
+    referee = build(robot, q, support_points=casters, object=analysis.held_object, mu=0.5, stiffness=springs)
+    equal = build(robot, q, support_points=casters, object=analysis.held_object, mu=0.5)
+    names = [c["name"] for c in P.model["floor"]["contacts"]]
+    apart = 0.0
+    for e in (np.eye(6)[0], -np.eye(6)[0], np.eye(6)[1]):
+        target = 0.97 * P.straight_line_reach(e) * e
+        w = P.witness_at(target, least="xdot")
+        reaction = ground_reaction(P.model["floor"], w.variables[CONTACT_FORCES])
+        predicted = np.array([reaction["contacts"][name]["normal"] for name in names])
+        acc, contacts = referee.forward(w.variables["tau"])
+        scale = np.maximum(np.abs(target), 0.03 * np.linalg.norm(target))
+        assert np.all(np.abs(acc - target) <= 0.03 * scale), (e, acc, target)
+        measured = np.array([contacts[theirs[name]].normal for name in names])
+        assert np.abs(measured - predicted).max() <= 1e-3 * referee.weight, (e, measured, predicted)
+        _, contacts_equal = equal.forward(w.variables["tau"])
+        others = np.array([contacts_equal[theirs[name]].normal for name in names])
+        apart = max(apart, np.abs(others - predicted).max())
+    assert apart > 0.02 * referee.weight, apart / referee.weight  # the springs change how MuJoCo shares it too
