@@ -327,3 +327,33 @@ def test_a_failed_place_map_writes_no_file(tmp_path, capfd):
     )  # fmt: skip
     assert_one_line_error(code, err)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_map_whose_bands_run_in_threads_ends_in_one_line(tmp_path, signum):
+    """``place --map`` runs its bands as threads taking turns (mobmanip.support.lockstep); a
+    signal while they run ends the command at once, in its one line, with no map written."""
+    proc = _start(tmp_path, "place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective",
+                  "kinematic:capacity:+x", "--map", tmp_path / "map")  # fmt: skip
+    _wait_until_main_runs(proc)
+    before, began = _thread_count(proc.pid), False
+    deadline = time.monotonic() + 60
+    while not began and time.monotonic() < deadline and proc.poll() is None:  # until the map's 5 bands run
+        time.sleep(0.02)
+        began = _thread_count(proc.pid) >= before + 5
+    assert began and proc.poll() is None, "the command ended before its map began"
+    sent = time.monotonic()
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - sent < 5.0
+    assert "Traceback" not in err, err
+    assert err.strip().splitlines()[-1] == _LINE[signum], err
+    assert proc.returncode == _EXIT[signum]
+    assert not (tmp_path / "map").exists()
+
+
+def _thread_count(pid: int) -> int:
+    """How many threads a process has (Linux: /proc/PID/task)."""
+    with contextlib.suppress(OSError):
+        return len(list(Path(f"/proc/{pid}/task").iterdir()))
+    return 0
