@@ -11,7 +11,7 @@ marked unreachable (its values are absent, never NaN).
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -123,29 +123,64 @@ def sweep_heading(
         ArgumentError: no offsets, or a non-finite one; TeamError: the description is wrong
             (checked at its own heading first).
     """
-    offsets = np.asarray(offsets_deg, dtype=float).ravel()
-    if offsets.size == 0 or not np.all(np.isfinite(offsets)):
-        raise ArgumentError(f"heading offsets must be finite numbers of degrees, got {offsets_deg!r}")
-    names = tuple(m.name for m in resolve_measures(measures))
+    offsets = checked_offsets(offsets_deg)
+    names = measure_names(measures)
     team_from_dict(data, base_dir, where=where)  # the description itself must hold
-    start = int(np.argmin(np.abs(offsets)))
-    order = list(range(start, len(offsets))) + list(range(start - 1, -1, -1))
     points: dict[int, HeadingPoint] = {}
-    seeds: dict[int, dict] = {}
-    with progress_bar(len(order), desc="team headings", unit="heading", show=progress) as bar:
-        for k in order:
+    with progress_bar(len(offsets), desc="team headings", unit="heading", show=progress) as bar:
+
+        def visit(k: int, seed: dict | None) -> dict | None:
             bar.update(1)
-            neighbour = k - 1 if k > start else (k + 1 if k < start else None)
-            seed = seeds.get(neighbour) if neighbour is not None else None
-            point, solved = _one(data, offsets[k], seed, base_dir, names, where)
-            points[k] = point
-            seeds[k] = solved if solved is not None else (seed or {})
+            points[k], solved = _one(data, offsets[k], seed, base_dir, names, where)
+            return solved
+
+        walk_headings(offsets, visit)
     task = team_from_dict(data, base_dir, where=where).task
     return TeamSweep(task, names, tuple(points[k] for k in range(len(offsets))))
 
 
-def _one(data, offset, seed, base_dir, names, where):
-    """The point at one heading, and the joints solved there (robot name -> joints) or None."""
+def checked_offsets(offsets_deg: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The heading offsets as a flat float array (deg).
+
+    Raises:
+        ArgumentError: no offsets, or a non-finite one.
+    """
+    offsets = np.asarray(offsets_deg, dtype=float).ravel()
+    if offsets.size == 0 or not np.all(np.isfinite(offsets)):
+        raise ArgumentError(f"heading offsets must be finite numbers of degrees, got {offsets_deg!r}")
+    return offsets
+
+
+def measure_names(measures: Iterable[str] | str | None) -> tuple[str, ...]:
+    """The names of the measures asked for (default: the default ones), in order."""
+    return tuple(m.name for m in resolve_measures(measures))
+
+
+def walk_headings(offsets: np.ndarray, visit: Callable[[int, dict | None], dict | None]) -> None:
+    """Visit every heading in the sweep's order, each with the joints its inverse kinematics
+    starts from: from the heading nearest the description's own outwards, up then down.
+
+    ``visit(k, seed)`` handles heading ``k`` starting from ``seed`` and returns the joints solved
+    there (robot name -> joint -> value), or None where some hand cannot meet its grasp point. A
+    heading starts from the joints solved at its neighbour towards the start (the neighbour's own
+    seed if it was unreachable; the start from the description's joints, None). The seeds make the
+    postures continuous, and they are all a heading's point depends on besides its offset: given
+    its seed, a heading can be analysed anywhere, in any order, with the same result.
+    """
+    start = int(np.argmin(np.abs(offsets)))
+    order = list(range(start, len(offsets))) + list(range(start - 1, -1, -1))
+    seeds: dict[int, dict] = {}
+    for k in order:
+        neighbour = k - 1 if k > start else (k + 1 if k < start else None)
+        seed = seeds.get(neighbour) if neighbour is not None else None
+        solved = visit(k, seed)
+        seeds[k] = solved if solved is not None else (seed or {})
+
+
+def _solve(data, offset, seed, base_dir, where):
+    """The team at one heading, its hands reaching from ``seed``, and the grasping arms' joints
+    solved there (robot name -> joint -> value); (None, None) where some hand cannot meet its grasp
+    point."""
     moved = copy.deepcopy(dict(data))
     obj = dict(moved.get("object", {}))
     obj["yaw_deg"] = float(obj.get("yaw_deg", 0.0)) + float(offset)
@@ -162,6 +197,23 @@ def _one(data, offset, seed, base_dir, names, where):
     try:
         team = team_from_dict(moved, base_dir, where=where)
     except TeamError:
+        return None, None
+    joints = {
+        member.name: {
+            joint: value
+            for joint, value in member.robot.configuration_dict(member.q)["joints"].items()
+            if any(joint in member.robot.arms[i].joint_names for i in member.arms)
+        }
+        for member in team.members
+    }
+    return team, joints
+
+
+def _one(data, offset, seed, base_dir, names, where) -> tuple[HeadingPoint, dict | None]:
+    """The point at one heading, the hands reaching from ``seed`` (see :func:`walk_headings`),
+    and the joints solved there (None where unreachable)."""
+    team, joints = _solve(data, offset, seed, base_dir, where)
+    if team is None:
         return HeadingPoint(float(offset), False, {}, {}, {}, None, None, {}), None
     analysis = analyze_team(team, names)
     m = analysis.terms.W.shape[0]
@@ -176,13 +228,5 @@ def _one(data, offset, seed, base_dir, names, where):
         except MobmanipError:  # a set whose volume is not available
             pass
     sharing = analysis.load_sharing()
-    joints = {
-        member.name: {
-            joint: value
-            for joint, value in member.robot.configuration_dict(member.q)["joints"].items()
-            if any(joint in member.robot.arms[i].joint_names for i in member.arms)
-        }
-        for member in team.members
-    }
     point = HeadingPoint(float(offset), True, reach, limiting, volume, sharing.worst, sharing.empty, joints)
     return point, joints
