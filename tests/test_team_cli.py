@@ -149,3 +149,11 @@ def test_the_sweep_option_writes_its_points(tmp_path):
     doc = json.loads(out.read_text())
     points = doc["heading_sweep"]["points"]
     assert [p["offset_deg"] for p in points] == [0.0, 10.0] and all(p["reachable"] for p in points)
+
+
+def test_dask_without_a_heading_sweep_is_a_usage_error(tmp_path, capsys):
+    out = tmp_path / "t.json"
+    assert main(["team", str(BEAM), "--json", str(out), "--dask", "local:2"]) == 2
+    err = capsys.readouterr().err
+    assert err == "mobmanip: error: --dask runs a heading sweep on a cluster: give --sweep-heading GRID too\n"
+    assert not out.exists()
