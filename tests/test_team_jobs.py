@@ -5,6 +5,7 @@ which tasks run; every heading analysed once; the progress bar counts finished h
 from __future__ import annotations
 
 import concurrent.futures as cf
+import shutil
 import tomllib
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from mobmanip.team.sweep import sweep_heading
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 BEAM = EXAMPLES / "beam_team.toml"
+ROBOTS = EXAMPLES.parent / "robots"
 DATA = tomllib.loads(BEAM.read_text())
 #: From -90 deg (out of reach) to +40 deg: the sweep starts at 0 in the middle and goes both
 #: ways, and the unreachable headings hand their neighbour's seed on.
@@ -81,13 +83,17 @@ class Recording(cf.Executor):
         return future
 
 
-def test_each_heading_is_one_tasks_and_a_task_alone_gives_its_points(serial):
+def test_each_reachable_heading_is_in_one_task_and_a_task_alone_gives_its_points(serial):
     executor = Recording()
     job = HeadingJob(DATA, OFFSETS, str(EXAMPLES), MEASURES, str(BEAM), 4)
     run_heading_sweep(job, executor)
     headings = [k for _, items in executor.tasks for k, _ in items]
-    assert sorted(headings) == list(range(len(OFFSETS)))
-    assert [len(items) for _, items in executor.tasks] == [4, 4, 2]
+    assert sorted(headings) == np.flatnonzero(serial.reachable).tolist()  # the unreachable: no task
+    assert [len(items) for _, items in executor.tasks] == [4, 3]
+    # what travels is the solved joints, the same the serial sweep reports at that heading
+    for _, items in executor.tasks:
+        for k, joints in items:
+            assert joints == serial.points[k].joints
     # a task run again, by itself and in the reverse order (a lost worker's task, elsewhere)
     sent, items = executor.tasks[-1]
     for k, point in run_headings(sent, tuple(reversed(items))):
@@ -112,10 +118,13 @@ def test_the_bar_counts_finished_headings(monkeypatch):
             counts.append(n)
 
     monkeypatch.setattr(heading_jobs, "progress_bar", Bar)
-    job = HeadingJob(DATA, (-10.0, 0.0, 10.0, 20.0, 30.0), str(EXAMPLES), ("kinematic",), str(BEAM), 2)
+    job = HeadingJob(DATA, (-90.0, -10.0, 0.0, 10.0, 20.0), str(EXAMPLES), ("kinematic",), str(BEAM), 2)
     with cf.ThreadPoolExecutor(2) as executor:
-        run_heading_sweep(job, executor, progress=True)
-    assert sorted(counts) == [1, 2, 2]  # one update per finished task, by its headings
+        swept = run_heading_sweep(job, executor, progress=True)
+    assert swept.reachable.tolist() == [False, True, True, True, True]
+    # one update per finished task, by its headings (two tasks of two), and one for the heading
+    # found out of reach in this process
+    assert sorted(counts) == [1, 2, 2]
 
 
 @pytest.mark.parametrize("per_task", [0, -2, 1.5, True])
@@ -132,3 +141,20 @@ def test_bad_offsets_and_a_bad_description_are_refused_before_any_task():
     with pytest.raises(TeamError, match="no_such_robot"):
         run_heading_sweep(HeadingJob(broken, (0.0, 10.0), str(EXAMPLES)), executor)
     assert executor.tasks == []
+
+
+def test_robots_by_spec_path_load_on_the_workers_from_the_absolute_folder(tmp_path, monkeypatch):
+    # the team's robots by spec paths relative to the team file, the workers started elsewhere
+    specs = tmp_path / "team" / "specs"
+    specs.mkdir(parents=True)
+    for name in ("planar_dual_arm.toml", "planar_dual_arm.urdf"):
+        shutil.copy(ROBOTS / name, specs / name)
+    data = {**DATA, "robots": [{**entry, "robot": "specs/planar_dual_arm.toml"} for entry in DATA["robots"]]}
+    offsets = (-60.0, -20.0, 0.0, 20.0)
+    serial = sweep_heading(data, offsets, base_dir=tmp_path / "team", measures=("kinematic",))
+    assert serial.reachable.any()
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    job = HeadingJob(data, offsets, str(tmp_path / "team"), ("kinematic",), headings_per_task=1)
+    with cf.ProcessPoolExecutor(2) as executor:
+        assert_same_points(run_heading_sweep(job, executor), serial)

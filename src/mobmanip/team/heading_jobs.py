@@ -3,15 +3,17 @@ the same result.
 
 The headings of a sweep are not independent: each heading's inverse kinematics starts from the
 joints solved at its neighbour (see :func:`mobmanip.team.sweep.walk_headings`), which keeps the
-postures continuous. But the joints a heading starts from are all its point depends on besides
-its offset. So this process walks the headings in the sweep's order solving only the inverse
-kinematics (the seeds), and hands each heading with its seed to the executor in tasks of
-``headings_per_task`` headings; a task solves its headings again from their seeds and analyses
-the team there (the measures, their reach, load sharing: the larger part of the work with
-polytopes). A task's points depend on nothing but its headings and their seeds, not on which
-worker ran it, the order tasks finish, or a task being run twice after its worker was lost; the
-sweep equals :func:`mobmanip.team.sweep.sweep_heading` bit for bit (given the same NumPy and
-BLAS, see :mod:`mobmanip.support.cluster`).
+postures continuous, and cannot be cut into independent pieces without changing the sweep. But
+once a heading's joints are solved, the rest of its point (the measures, their reach, load
+sharing: most of the work with polytopes) depends on nothing else. So this process walks the
+headings in the sweep's order solving only the inverse kinematics, and hands each reachable
+heading with its solved joints to the executor in tasks of ``headings_per_task`` headings; a
+task builds the team with those joints in place (no inverse kinematics) and analyses it. A
+task's points depend on nothing but its headings and joints, not on which worker ran it, the
+order tasks finish, or a task being run twice after its worker was lost; the sweep equals
+:func:`mobmanip.team.sweep.sweep_heading` bit for bit (given the same NumPy and BLAS, see
+:mod:`mobmanip.support.cluster`). The walk bounds the speed-up: about the serial sweep's time
+spent in inverse kinematics.
 
 A :class:`HeadingJob` travels by values: the parsed team description, the absolute folder its
 robots' spec paths are relative to (built-in robots by name), the offsets and the measures'
@@ -28,7 +30,17 @@ from dataclasses import dataclass, field
 from ..errors import ArgumentError
 from ..support.progress import progress_bar
 from .members import team_from_dict
-from .sweep import HeadingPoint, TeamSweep, _one, _solve, checked_offsets, measure_names, sweep_heading, walk_headings
+from .sweep import (
+    HeadingPoint,
+    TeamSweep,
+    _placed,
+    _solve,
+    checked_offsets,
+    measure_names,
+    sweep_heading,
+    unreachable,
+    walk_headings,
+)
 
 __all__ = ["HEADINGS_PER_TASK", "HeadingJob", "run_heading_sweep", "run_headings"]
 
@@ -59,11 +71,12 @@ class HeadingJob:
     headings_per_task: int = HEADINGS_PER_TASK
 
 
-def run_headings(job: HeadingJob, items: tuple[tuple[int, dict | None], ...]) -> list[tuple[int, HeadingPoint]]:
-    """A worker task: the points at headings ``items`` (index into ``job.offsets``, the joints
-    its inverse kinematics starts from), with their indices."""
+def run_headings(job: HeadingJob, items: tuple[tuple[int, dict], ...]) -> list[tuple[int, HeadingPoint]]:
+    """A worker task: the points at reachable headings ``items`` (index into ``job.offsets``, the
+    grasping arms' joints solved there: robot name -> joint -> value), with their indices."""
     names = measure_names(job.measures)
-    return [(k, _one(job.description, job.offsets[k], seed, job.base_dir, names, job.where)[0]) for k, seed in items]
+    data, base_dir, where = job.description, job.base_dir, job.where
+    return [(k, _placed(data, job.offsets[k], joints, base_dir, names, where)) for k, joints in items]
 
 
 def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, progress: bool = False) -> TeamSweep:
@@ -93,7 +106,7 @@ def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, prog
     task = team_from_dict(job.description, job.base_dir, where=job.where).task  # the description must hold
     points: dict[int, HeadingPoint] = {}
     pending: set[cf.Future] = set()
-    batch: list[tuple[int, dict | None]] = []
+    batch: list[tuple[int, dict]] = []
     with progress_bar(len(offsets), desc="team headings", unit="heading", show=progress) as bar:
 
         def collect(futures) -> None:
@@ -109,10 +122,15 @@ def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, prog
             collect([f for f in pending if f.done()])
 
         def visit(k: int, seed: dict | None) -> dict | None:
-            batch.append((k, seed))
-            if len(batch) == job.headings_per_task:
-                submit()
-            return _solve(job.description, offsets[k], seed, job.base_dir, job.where)[1]
+            solved = _solve(job.description, offsets[k], seed, job.base_dir, job.where)[1]
+            if solved is None:
+                points[k] = unreachable(offsets[k])
+                bar.update(1)
+            else:
+                batch.append((k, solved))
+                if len(batch) == job.headings_per_task:
+                    submit()
+            return solved
 
         try:
             walk_headings(offsets, visit)

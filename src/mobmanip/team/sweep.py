@@ -177,10 +177,9 @@ def walk_headings(offsets: np.ndarray, visit: Callable[[int, dict | None], dict 
         seeds[k] = solved if solved is not None else (seed or {})
 
 
-def _solve(data, offset, seed, base_dir, where):
-    """The team at one heading, its hands reaching from ``seed``, and the grasping arms' joints
-    solved there (robot name -> joint -> value); (None, None) where some hand cannot meet its grasp
-    point."""
+def _moved(data, offset, joints, reach: bool) -> dict:
+    """The description with the object turned by ``offset`` (deg) and each robot's joints updated
+    from ``joints`` (robot name -> joint -> value; None: none), its arms reaching or not."""
     moved = copy.deepcopy(dict(data))
     obj = dict(moved.get("object", {}))
     obj["yaw_deg"] = float(obj.get("yaw_deg", 0.0)) + float(offset)
@@ -188,14 +187,21 @@ def _solve(data, offset, seed, base_dir, where):
     robots = []
     for entry in moved.get("robots", []):
         entry = dict(entry)
-        entry["reach"] = True
+        entry["reach"] = reach
         name = entry.get("name", entry.get("robot"))
-        if seed and name in seed:
-            entry["joints"] = {**entry.get("joints", {}), **seed[name]}
+        if joints and name in joints:
+            entry["joints"] = {**entry.get("joints", {}), **joints[name]}
         robots.append(entry)
     moved["robots"] = robots
+    return moved
+
+
+def _solve(data, offset, seed, base_dir, where):
+    """The team at one heading, its hands reaching from ``seed``, and the grasping arms' joints
+    solved there (robot name -> joint -> value); (None, None) where some hand cannot meet its grasp
+    point."""
     try:
-        team = team_from_dict(moved, base_dir, where=where)
+        team = team_from_dict(_moved(data, offset, seed, reach=True), base_dir, where=where)
     except TeamError:
         return None, None
     joints = {
@@ -209,12 +215,34 @@ def _solve(data, offset, seed, base_dir, where):
     return team, joints
 
 
+def _placed(data, offset, joints, base_dir, names, where) -> HeadingPoint:
+    """The point at a reachable heading whose grasping arms' joints ``joints`` were solved (by
+    :func:`_solve`): the team is built with them in place, no inverse kinematics, the same team
+    to the last bit (the arms' one-degree-of-freedom joints go into the configuration as they are).
+
+    Raises:
+        TeamError: a hand is not at its grasp point with these joints.
+    """
+    team = team_from_dict(_moved(data, offset, joints, reach=False), base_dir, where=where)
+    return _analyse(team, offset, names, joints)
+
+
 def _one(data, offset, seed, base_dir, names, where) -> tuple[HeadingPoint, dict | None]:
     """The point at one heading, the hands reaching from ``seed`` (see :func:`walk_headings`),
     and the joints solved there (None where unreachable)."""
     team, joints = _solve(data, offset, seed, base_dir, where)
     if team is None:
-        return HeadingPoint(float(offset), False, {}, {}, {}, None, None, {}), None
+        return unreachable(offset), None
+    return _analyse(team, offset, names, joints), joints
+
+
+def unreachable(offset: float) -> HeadingPoint:
+    """The point at a heading where some hand cannot meet its grasp point."""
+    return HeadingPoint(float(offset), False, {}, {}, {}, None, None, {})
+
+
+def _analyse(team, offset, names, joints) -> HeadingPoint:
+    """The point of a team at the heading ``offset``, its grasping arms at ``joints``."""
     analysis = analyze_team(team, names)
     m = analysis.terms.W.shape[0]
     axes = np.eye(m)
@@ -228,5 +256,4 @@ def _one(data, offset, seed, base_dir, names, where) -> tuple[HeadingPoint, dict
         except MobmanipError:  # a set whose volume is not available
             pass
     sharing = analysis.load_sharing()
-    point = HeadingPoint(float(offset), True, reach, limiting, volume, sharing.worst, sharing.empty, joints)
-    return point, joints
+    return HeadingPoint(float(offset), True, reach, limiting, volume, sharing.worst, sharing.empty, joints)
