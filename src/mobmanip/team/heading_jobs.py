@@ -33,10 +33,10 @@ from .members import team_from_dict
 from .sweep import (
     HeadingPoint,
     TeamSweep,
-    _placed,
-    _solve,
     checked_offsets,
     measure_names,
+    point_with_joints,
+    solve_heading,
     sweep_heading,
     unreachable,
     walk_headings,
@@ -76,7 +76,7 @@ def run_headings(job: HeadingJob, items: tuple[tuple[int, dict], ...]) -> list[t
     grasping arms' joints solved there: robot name -> joint -> value), with their indices."""
     names = measure_names(job.measures)
     data, base_dir, where = job.description, job.base_dir, job.where
-    return [(k, _placed(data, job.offsets[k], joints, base_dir, names, where)) for k, joints in items]
+    return [(k, point_with_joints(data, job.offsets[k], joints, base_dir, names, where)) for k, joints in items]
 
 
 def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, progress: bool = False) -> TeamSweep:
@@ -122,7 +122,7 @@ def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, prog
             collect([f for f in pending if f.done()])
 
         def visit(k: int, seed: dict | None) -> dict | None:
-            solved = _solve(job.description, offsets[k], seed, job.base_dir, job.where)[1]
+            solved = solve_heading(job.description, offsets[k], seed, job.base_dir, job.where)[1]
             if solved is None:
                 points[k] = unreachable(offsets[k])
                 bar.update(1)

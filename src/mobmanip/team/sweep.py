@@ -22,7 +22,7 @@ from ..measures import resolve_measures
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
 from .analysis import analyze_team, ray_radius
-from .members import team_from_dict
+from .members import Team, team_from_dict
 
 __all__ = ["HeadingPoint", "TeamSweep", "sweep_heading"]
 
@@ -196,7 +196,9 @@ def _moved(data, offset, joints, reach: bool) -> dict:
     return moved
 
 
-def _solve(data, offset, seed, base_dir, where):
+def solve_heading(
+    data: Mapping, offset: float, seed: Mapping | None, base_dir: Path | str, where: str
+) -> tuple[Team, dict] | tuple[None, None]:
     """The team at one heading, its hands reaching from ``seed``, and the grasping arms' joints
     solved there (robot name -> joint -> value); (None, None) where some hand cannot meet its grasp
     point."""
@@ -215,9 +217,11 @@ def _solve(data, offset, seed, base_dir, where):
     return team, joints
 
 
-def _placed(data, offset, joints, base_dir, names, where) -> HeadingPoint:
+def point_with_joints(
+    data: Mapping, offset: float, joints: Mapping, base_dir: Path | str, names: tuple[str, ...], where: str
+) -> HeadingPoint:
     """The point at a reachable heading whose grasping arms' joints ``joints`` were solved (by
-    :func:`_solve`): the team is built with them in place, no inverse kinematics, the same team
+    :func:`solve_heading`): the team is built with them in place, no inverse kinematics, the same team
     to the last bit (the arms' one-degree-of-freedom joints go into the configuration as they are).
 
     Raises:
@@ -230,7 +234,7 @@ def _placed(data, offset, joints, base_dir, names, where) -> HeadingPoint:
 def _one(data, offset, seed, base_dir, names, where) -> tuple[HeadingPoint, dict | None]:
     """The point at one heading, the hands reaching from ``seed`` (see :func:`walk_headings`),
     and the joints solved there (None where unreachable)."""
-    team, joints = _solve(data, offset, seed, base_dir, where)
+    team, joints = solve_heading(data, offset, seed, base_dir, where)
     if team is None:
         return unreachable(offset), None
     return _analyse(team, offset, names, joints), joints
