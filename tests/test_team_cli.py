@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 import tomllib
 from pathlib import Path
 
@@ -157,3 +158,13 @@ def test_dask_without_a_heading_sweep_is_a_usage_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err == "mobmanip: error: --dask runs a heading sweep on a cluster: give --sweep-heading GRID too\n"
     assert not out.exists()
+
+
+def test_with_dask_the_work_bound_is_checked_before_connecting(capsys):
+    # a scheduler nobody listens on: the bound must refuse first, at once, without waiting for it
+    started = time.monotonic()
+    argv = ["team", str(BEAM), "--sweep-heading=0:10:1000000", "--dask", "tcp://127.0.0.1:9"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "robot-headings" in err and "Dask" not in err
+    assert time.monotonic() - started < 2.0

@@ -34,7 +34,8 @@ point is marked unreachable. With --dask ADDRESS (tcp://HOST:PORT of a running s
 local:N for a local cluster of N processes) the headings are analysed as tasks on Dask's
 distributed scheduler: this process solves the arms' joints heading after heading, the workers
 analyse the team at each heading from them; the files equal a run without --dask, and a task
-whose worker is lost is run again by Dask.
+whose worker is lost is run again by Dask. The joints are still solved one heading after the
+other, so the cluster pays off for heavy measures (--polytope), hardly for ellipsoids alone.
 
 examples:
   mobmanip team examples/beam_team.toml
