@@ -1,7 +1,7 @@
 """Runs on a real Dask cluster from the command line: a ``dask scheduler`` and two ``dask worker``
-processes on localhost, ``sweep`` and ``place --map`` through ``--dask tcp://...`` with one worker
-killed while it runs a task, and the files compared with the serial run's byte for byte. An
-unreachable scheduler is refused in one line, in time."""
+processes on localhost, ``sweep``, ``place --map`` and ``team --sweep-heading`` through ``--dask
+tcp://...`` with one worker killed while it runs a task, and the files compared with the serial
+run's byte for byte. An unreachable scheduler is refused in one line, in time."""
 
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ SWEEP = ["sweep", "planar_dual_arm", "--angle", "0:360:181", "--distance", "0.6:
          "--chunk-size", "64", "--no-progress"]  # fmt: skip
 PLACE = ["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
          "--map-cells", "9", "--no-progress"]  # fmt: skip
+TEAM = ["team", str(ROOT / "examples" / "beam_team.toml"), "--polytope", "--sweep-heading=-40:40:17", "--no-progress"]
 
 
 def free_port() -> int:
@@ -121,6 +122,25 @@ def test_sweep_and_map_on_a_cluster_survive_a_killed_worker(cluster, tmp_path):
         assert (tmp_path / "dask_map" / name).read_bytes() == (tmp_path / "serial_map" / name).read_bytes(), name
 
 
+def test_a_team_sweep_on_a_cluster_survives_a_killed_worker(cluster, tmp_path):
+    address, workers = cluster
+    serial = cli([*TEAM, "--json", str(tmp_path / "serial.json"), "--plot", str(tmp_path / "serial.png")])
+    # a worker of its own to kill, whatever the earlier tests left of the cluster's two
+    workers["team"] = subprocess.Popen(
+        [str(BIN / "dask"), "worker", address, "--name", "team", "--nthreads", "1", "--no-nanny", "--no-dashboard"],
+        env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    with distributed.Client(address, timeout=30) as client:
+        client.wait_for_workers(1 + sum(w.poll() is None for n, w in workers.items() if n != "team"), timeout=60)
+    out = finish(serial)
+    dask = [*TEAM, "--json", str(tmp_path / "dask.json"), "--plot", str(tmp_path / "dask.png"), "--dask", address]
+    out_dask = run_killing(address, workers, "team", dask)
+    assert "heading sweep: " in out_dask
+    assert out_dask.replace("dask.", "serial.") == out  # the same report, line by line
+    for name in ("json", "png"):
+        assert (tmp_path / f"dask.{name}").read_bytes() == (tmp_path / f"serial.{name}").read_bytes(), name
+
+
 SITE = """robot = "planar_dual_arm"
 objective = "kinematic:capacity:+x"
 starts = 2
@@ -141,7 +161,7 @@ def test_site_on_a_cluster_equals_the_serial_run(cluster, tmp_path):
     assert (tmp_path / "dask" / "site.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.mark.parametrize("command", [SWEEP, [*PLACE, "--map", "MAP"]])
+@pytest.mark.parametrize("command", [SWEEP, [*PLACE, "--map", "MAP"], [*TEAM, "--json", "team.json"]])
 def test_an_unreachable_scheduler_is_refused_in_one_line_within_10_s(command, tmp_path):
     started = time.monotonic()
     process = cli([*command, "--dask", f"tcp://127.0.0.1:{free_port()}"], cwd=tmp_path)

@@ -1,5 +1,5 @@
 """Progress bars for long runs: every command that can run long (carry, trajectory, place with
---map, team --sweep-heading, sweep, site) draws one on standard error when that is a terminal
+--map, team --sweep-heading (also with --dask), sweep, site) draws one on standard error when that is a terminal
 (a pseudo-terminal here), and none when standard error is piped; standard output (results, JSON
 printed) never holds one, and ``--no-progress`` turns it off on a terminal too."""
 
@@ -41,6 +41,8 @@ COMMANDS = {
     "place": (["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
                "--starts", "1", "--map", "maps", "--map-cells", "5"], "map"),
     "team": (["team", EXAMPLES / "beam_team.toml", "--sweep-heading=-10:10:3"], "team headings"),
+    "team-dask": (["team", EXAMPLES / "beam_team.toml", "--sweep-heading=-10:10:3", "--dask", "local:1"],
+                  "team headings"),
     "sweep": (["sweep", "planar_dual_arm", "--angle", "0,90", "--distance", "1.0", "--workers", "1", "-o", "s"],
               "sweep planar_dual_arm"),
     "site": (["site", "../site.toml", "-o", "site"], "site planar_dual_arm"),

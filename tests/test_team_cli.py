@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 import tomllib
 from pathlib import Path
 
@@ -149,3 +150,21 @@ def test_the_sweep_option_writes_its_points(tmp_path):
     doc = json.loads(out.read_text())
     points = doc["heading_sweep"]["points"]
     assert [p["offset_deg"] for p in points] == [0.0, 10.0] and all(p["reachable"] for p in points)
+
+
+def test_dask_without_a_heading_sweep_is_a_usage_error(tmp_path, capsys):
+    out = tmp_path / "t.json"
+    assert main(["team", str(BEAM), "--json", str(out), "--dask", "local:2"]) == 2
+    err = capsys.readouterr().err
+    assert err == "mobmanip: error: --dask runs a heading sweep on a cluster: give --sweep-heading GRID too\n"
+    assert not out.exists()
+
+
+def test_with_dask_the_work_bound_is_checked_before_connecting(capsys):
+    # a scheduler nobody listens on: the bound must refuse first, at once, without waiting for it
+    started = time.monotonic()
+    argv = ["team", str(BEAM), "--sweep-heading=0:10:1000000", "--dask", "tcp://127.0.0.1:9"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "robot-headings" in err and "Dask" not in err
+    assert time.monotonic() - started < 2.0

@@ -4,15 +4,45 @@ Prints the team (robots, hands, object), each measure's reach along the task axe
 robot that limits the team there and every robot's share (:meth:`TeamAnalysis.contributions`),
 and the load sharing that holds the object still. ``--json`` writes everything,
 ``--sweep-heading GRID`` turns the object through heading changes (deg) with the robots reaching
-for the moved grasp points, ``--plot FILE`` draws the top view (and the sweep), ``--export
+for the moved grasp points (``--dask ADDRESS`` analyses its headings on a Dask cluster, see
+:mod:`mobmanip.team.heading_jobs`), ``--plot FILE`` draws the top view (and the sweep), ``--export
 SCENE.html`` writes the meshcat scene of all robots, the object and the team's sets.
 """
 
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 
-from .common import add_measure_option, add_progress_option, add_work_option, requested_measures, show_progress
+from .common import (
+    add_dask_option,
+    add_measure_option,
+    add_progress_option,
+    add_work_option,
+    cluster_executor,
+    requested_measures,
+    show_progress,
+)
+
+TEAM_HELP = """\
+--sweep-heading GRID turns the object about its centre through the heading changes of GRID (deg)
+while the robots stay where they stand; at each heading the grasping arms' joints are solved
+again, starting from the neighbouring heading's solution (from the description's own heading
+outwards, so the postures vary continuously). A heading where some hand cannot meet its grasp
+point is marked unreachable. With --dask ADDRESS (tcp://HOST:PORT of a running scheduler, or
+local:N for a local cluster of N processes) the headings are analysed as tasks on Dask's
+distributed scheduler: this process solves the arms' joints heading after heading, the workers
+analyse the team at each heading from them; the files equal a run without --dask, and a task
+whose worker is lost is run again by Dask. The joints are still solved one heading after the
+other, so the cluster pays off for heavy measures (--polytope), hardly for ellipsoids alone.
+
+examples:
+  mobmanip team examples/beam_team.toml
+  mobmanip team examples/beam_team.toml --polytope --json beam.json --plot beam.png
+  mobmanip team examples/beam_team.toml --sweep-heading=-60:60:13 --export beam.html
+  mobmanip team examples/beam_team.toml --polytope --sweep-heading=-60:60:61 --json beam.json --dask local:2
+"""
 
 #: Robots of a team, and robot-headings of a heading sweep, run without being asked.
 MAX_ROBOTS = 64
@@ -22,7 +52,14 @@ SECONDS_PER_ROBOT_HEADING = 0.05
 
 
 def register(sub) -> None:
-    parser = sub.add_parser("team", help="analyse several robots holding one object (a team description)")
+    parser = sub.add_parser(
+        "team",
+        help="analyse several robots holding one object (a team description)",
+        description="Analyse several robots holding one object: each measure's reach, the robot that "
+        "limits the team, load sharing; optionally over object headings.",
+        epilog=TEAM_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("description", metavar="TEAM.toml", help="the team description (robots, grasps, object)")
     add_measure_option(parser)
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
@@ -39,6 +76,7 @@ def register(sub) -> None:
     add_work_option(
         parser, f"robots and robot-headings (robots x sweep headings; defaults {MAX_ROBOTS}, {MAX_ROBOT_HEADINGS:,})"
     )
+    add_dask_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -69,19 +107,30 @@ def _read_checked(args, offsets):
 
 
 def run(args) -> int:
-    from pathlib import Path
-
-    from ..measures import get_measure
-    from ..robot.tasks import get_task
-    from ..support.files import check_output, require_finite, write_json
+    from ..support.files import check_output
     from ..sweep.runner import parse_grid
-    from ..team.analysis import analyze_team, ray_radius
-    from ..team.members import load_team
 
+    if args.dask is not None and not args.sweep_heading:
+        from ..errors import UsageError
+
+        raise UsageError("--dask runs a heading sweep on a cluster: give --sweep-heading GRID too")
     if args.plot:
         check_output(args.plot)
     offsets = parse_grid(args.sweep_heading, "--sweep-heading") if args.sweep_heading else None
     data = _read_checked(args, offsets)
+    with cluster_executor(args) as executor:  # connected (or refused) before any work
+        return _run(args, offsets, data, executor)
+
+
+def _run(args, offsets, data, executor) -> int:
+    from pathlib import Path
+
+    from ..measures import get_measure
+    from ..robot.tasks import get_task
+    from ..support.files import require_finite, write_json
+    from ..team.analysis import analyze_team, ray_radius
+    from ..team.members import load_team
+
     team = load_team(args.description)
     measures = requested_measures(args)
     analysis = analyze_team(team, measures)
@@ -132,17 +181,12 @@ def run(args) -> int:
         print(f"  most loaded joint: {sharing.limiting}")
     sweep = None
     if offsets is not None:
-        from ..team.sweep import sweep_heading
+        from ..team.heading_jobs import HeadingJob, run_heading_sweep
 
         path = Path(args.description)
-        sweep = sweep_heading(
-            data,
-            offsets,
-            base_dir=path.resolve().parent,
-            measures=measures,
-            where=str(path),
-            progress=show_progress(args),
-        )
+        names = None if measures is None else tuple(measures)
+        job = HeadingJob(data, tuple(float(v) for v in offsets), str(path.resolve().parent), names, str(path))
+        sweep = run_heading_sweep(job, executor, progress=show_progress(args))
         reachable = int(sweep.reachable.sum())
         print(f"heading sweep: {reachable} of {len(offsets)} headings reachable")
         for point in sweep.points:

@@ -11,7 +11,7 @@ marked unreachable (its values are absent, never NaN).
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,7 +22,7 @@ from ..measures import resolve_measures
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
 from .analysis import analyze_team, ray_radius
-from .members import team_from_dict
+from .members import Team, team_from_dict
 
 __all__ = ["HeadingPoint", "TeamSweep", "sweep_heading"]
 
@@ -123,29 +123,63 @@ def sweep_heading(
         ArgumentError: no offsets, or a non-finite one; TeamError: the description is wrong
             (checked at its own heading first).
     """
-    offsets = np.asarray(offsets_deg, dtype=float).ravel()
-    if offsets.size == 0 or not np.all(np.isfinite(offsets)):
-        raise ArgumentError(f"heading offsets must be finite numbers of degrees, got {offsets_deg!r}")
-    names = tuple(m.name for m in resolve_measures(measures))
+    offsets = checked_offsets(offsets_deg)
+    names = measure_names(measures)
     team_from_dict(data, base_dir, where=where)  # the description itself must hold
-    start = int(np.argmin(np.abs(offsets)))
-    order = list(range(start, len(offsets))) + list(range(start - 1, -1, -1))
     points: dict[int, HeadingPoint] = {}
-    seeds: dict[int, dict] = {}
-    with progress_bar(len(order), desc="team headings", unit="heading", show=progress) as bar:
-        for k in order:
+    with progress_bar(len(offsets), desc="team headings", unit="heading", show=progress) as bar:
+
+        def visit(k: int, seed: dict | None) -> dict | None:
             bar.update(1)
-            neighbour = k - 1 if k > start else (k + 1 if k < start else None)
-            seed = seeds.get(neighbour) if neighbour is not None else None
-            point, solved = _one(data, offsets[k], seed, base_dir, names, where)
-            points[k] = point
-            seeds[k] = solved if solved is not None else (seed or {})
+            points[k], solved = _one(data, offsets[k], seed, base_dir, names, where)
+            return solved
+
+        walk_headings(offsets, visit)
     task = team_from_dict(data, base_dir, where=where).task
     return TeamSweep(task, names, tuple(points[k] for k in range(len(offsets))))
 
 
-def _one(data, offset, seed, base_dir, names, where):
-    """The point at one heading, and the joints solved there (robot name -> joints) or None."""
+def checked_offsets(offsets_deg: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The heading offsets as a flat float array (deg).
+
+    Raises:
+        ArgumentError: no offsets, or a non-finite one.
+    """
+    offsets = np.asarray(offsets_deg, dtype=float).ravel()
+    if offsets.size == 0 or not np.all(np.isfinite(offsets)):
+        raise ArgumentError(f"heading offsets must be finite numbers of degrees, got {offsets_deg!r}")
+    return offsets
+
+
+def measure_names(measures: Iterable[str] | str | None) -> tuple[str, ...]:
+    """The names of the measures asked for (default: the default ones), in order."""
+    return tuple(m.name for m in resolve_measures(measures))
+
+
+def walk_headings(offsets: np.ndarray, visit: Callable[[int, dict | None], dict | None]) -> None:
+    """Visit every heading in the sweep's order, each with the joints its inverse kinematics
+    starts from: from the heading nearest the description's own outwards, up then down.
+
+    ``visit(k, seed)`` handles heading ``k`` starting from ``seed`` and returns the joints solved
+    there (robot name -> joint -> value), or None where some hand cannot meet its grasp point. A
+    heading starts from the joints solved at its neighbour towards the start (the neighbour's own
+    seed if it was unreachable; the start from the description's joints, None). The seeds make the
+    postures continuous, and they are all a heading's point depends on besides its offset: given
+    its seed, a heading can be analysed anywhere, in any order, with the same result.
+    """
+    start = int(np.argmin(np.abs(offsets)))
+    order = list(range(start, len(offsets))) + list(range(start - 1, -1, -1))
+    seeds: dict[int, dict] = {}
+    for k in order:
+        neighbour = k - 1 if k > start else (k + 1 if k < start else None)
+        seed = seeds.get(neighbour) if neighbour is not None else None
+        solved = visit(k, seed)
+        seeds[k] = solved if solved is not None else (seed or {})
+
+
+def _moved(data, offset, joints, reach: bool) -> dict:
+    """The description with the object turned by ``offset`` (deg) and each robot's joints updated
+    from ``joints`` (robot name -> joint -> value; None: none), its arms reaching or not."""
     moved = copy.deepcopy(dict(data))
     obj = dict(moved.get("object", {}))
     obj["yaw_deg"] = float(obj.get("yaw_deg", 0.0)) + float(offset)
@@ -153,16 +187,66 @@ def _one(data, offset, seed, base_dir, names, where):
     robots = []
     for entry in moved.get("robots", []):
         entry = dict(entry)
-        entry["reach"] = True
+        entry["reach"] = reach
         name = entry.get("name", entry.get("robot"))
-        if seed and name in seed:
-            entry["joints"] = {**entry.get("joints", {}), **seed[name]}
+        if joints and name in joints:
+            entry["joints"] = {**entry.get("joints", {}), **joints[name]}
         robots.append(entry)
     moved["robots"] = robots
+    return moved
+
+
+def solve_heading(
+    data: Mapping, offset: float, seed: Mapping | None, base_dir: Path | str, where: str
+) -> tuple[Team, dict] | tuple[None, None]:
+    """The team at one heading, its hands reaching from ``seed``, and the grasping arms' joints
+    solved there (robot name -> joint -> value); (None, None) where some hand cannot meet its grasp
+    point."""
     try:
-        team = team_from_dict(moved, base_dir, where=where)
+        team = team_from_dict(_moved(data, offset, seed, reach=True), base_dir, where=where)
     except TeamError:
-        return HeadingPoint(float(offset), False, {}, {}, {}, None, None, {}), None
+        return None, None
+    joints = {
+        member.name: {
+            joint: value
+            for joint, value in member.robot.configuration_dict(member.q)["joints"].items()
+            if any(joint in member.robot.arms[i].joint_names for i in member.arms)
+        }
+        for member in team.members
+    }
+    return team, joints
+
+
+def point_with_joints(
+    data: Mapping, offset: float, joints: Mapping, base_dir: Path | str, names: tuple[str, ...], where: str
+) -> HeadingPoint:
+    """The point at a reachable heading whose grasping arms' joints ``joints`` were solved (by
+    :func:`solve_heading`): the team is built with them in place, no inverse kinematics, the same team
+    to the last bit (the arms' one-degree-of-freedom joints go into the configuration as they are).
+
+    Raises:
+        TeamError: a hand is not at its grasp point with these joints.
+    """
+    team = team_from_dict(_moved(data, offset, joints, reach=False), base_dir, where=where)
+    return _analyse(team, offset, names, joints)
+
+
+def _one(data, offset, seed, base_dir, names, where) -> tuple[HeadingPoint, dict | None]:
+    """The point at one heading, the hands reaching from ``seed`` (see :func:`walk_headings`),
+    and the joints solved there (None where unreachable)."""
+    team, joints = solve_heading(data, offset, seed, base_dir, where)
+    if team is None:
+        return unreachable(offset), None
+    return _analyse(team, offset, names, joints), joints
+
+
+def unreachable(offset: float) -> HeadingPoint:
+    """The point at a heading where some hand cannot meet its grasp point."""
+    return HeadingPoint(float(offset), False, {}, {}, {}, None, None, {})
+
+
+def _analyse(team, offset, names, joints) -> HeadingPoint:
+    """The point of a team at the heading ``offset``, its grasping arms at ``joints``."""
     analysis = analyze_team(team, names)
     m = analysis.terms.W.shape[0]
     axes = np.eye(m)
@@ -176,13 +260,4 @@ def _one(data, offset, seed, base_dir, names, where):
         except MobmanipError:  # a set whose volume is not available
             pass
     sharing = analysis.load_sharing()
-    joints = {
-        member.name: {
-            joint: value
-            for joint, value in member.robot.configuration_dict(member.q)["joints"].items()
-            if any(joint in member.robot.arms[i].joint_names for i in member.arms)
-        }
-        for member in team.members
-    }
-    point = HeadingPoint(float(offset), True, reach, limiting, volume, sharing.worst, sharing.empty, joints)
-    return point, joints
+    return HeadingPoint(float(offset), True, reach, limiting, volume, sharing.worst, sharing.empty, joints)
