@@ -234,6 +234,11 @@ class Ellipsoid(TaskSet):
         }
 
 
+#: A ray whose unit direction has a component above this across a flat ellipsoid's plane crosses
+#: it (one point of the ray is in the set at most); below it, the ray runs along the plane.
+PLANE_CROSSING = 1e-8
+
+
 def straight_line_reaches(
     center: np.ndarray, semi_axes: np.ndarray, axes: np.ndarray, directions: np.ndarray
 ) -> np.ndarray:
@@ -243,9 +248,11 @@ def straight_line_reaches(
     In the axes' coordinates a point s u of the ray is ``s y - z`` from the centre (y = axes u,
     z = axes c). Along the positive semi-axes it must satisfy ``sum_k ((s y_k - z_k) / s_k)^2 <=
     1``, the quadratic ``a s^2 - 2 b s + e <= 0``: an interval of s between its roots. Along a
-    zero semi-axis (a flat set) it must stay within the set's rounding of the centre's plane,
-    ``|s y_k - z_k| <= RANK_RTOL * size``: another interval. The reach is the top of the
-    intersection of these intervals with s >= 0. Empty sets are the caller's to flag.
+    zero semi-axis (a flat set) it must stay in the centre's plane, to the set's rounding
+    ``tol = RANK_RTOL * size``: a ray that crosses the plane (``|y_k| > PLANE_CROSSING``) meets it
+    at the one point s = z_k / y_k, which counts when it satisfies every other condition; a ray
+    along the plane keeps ``|s y_k - z_k| <= tol`` over an interval. The reach is the top of what
+    remains with s >= 0. Empty sets are the caller's to flag.
 
     Args:
         center: centres, (N, m).
@@ -273,13 +280,25 @@ def straight_line_reaches(
     if flat.any():
         size = np.maximum(np.maximum(semi_axes[:, 0], np.linalg.norm(center, axis=1)), 1e-300)
         tol = _RANK_RTOL * size[:, None]
-        moving = flat & (y != 0.0)
+        # along the plane: an interval of s (the whole line when z_k is within tol)
+        along = flat & (np.abs(y) <= PLANE_CROSSING)
         with np.errstate(divide="ignore", invalid="ignore"):
             ends = np.stack([(z - tol) / y, (z + tol) / y])
+        moving = along & (y != 0.0)
         lo = np.maximum(lo, np.where(moving, ends.min(axis=0), -np.inf).max(axis=1))
         hi = np.minimum(hi, np.where(moving, ends.max(axis=0), np.inf).min(axis=1))
-        off_plane = (flat & (y == 0.0) & (np.abs(z) > tol)).any(axis=1)
-        hi = np.where(off_plane, -np.inf, hi)
+        hi = np.where((along & (y == 0.0) & (np.abs(z) > tol)).any(axis=1), -np.inf, hi)
+        # across the plane: the one crossing point, at the flat axis the ray crosses most steeply
+        across = flat & ~along
+        pinned = across.any(axis=1)
+        if pinned.any():
+            k = np.argmax(np.where(across, np.abs(y), -1.0), axis=1)
+            rows = np.arange(len(k))
+            point = np.where(pinned, z[rows, k] / np.where(pinned, y[rows, k], 1.0), 0.0)
+            in_plane = np.all(~across | (np.abs(point[:, None] * y - z) <= tol), axis=1)
+            ok = in_plane & (lo <= point) & (point <= hi)
+            lo = np.where(pinned, point, lo)
+            hi = np.where(pinned, np.where(ok, point, -np.inf), hi)
     return np.where((lo <= hi) & np.isfinite(hi), hi, 0.0)
 
 
