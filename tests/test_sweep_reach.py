@@ -218,23 +218,51 @@ def test_reach_is_a_sweep_index_everywhere(paper_sweep, tmp_path):
         np.testing.assert_allclose(column, values.ravel(), rtol=1e-11)  # written to 12 digits
 
 
-def test_empty_sets_record_nan():
-    """An empty set (here an ellipsoid flagged empty) has reach 0 in its batch, as its support, and
-    the sweep records NaN for both, never 0 or infinity."""
-    from mobmanip.measures import get_measure
-    from mobmanip.sweep.runner import _empty_chunk, _record
+def _no_set(terms):
+    raise AssertionError("only the batch form is used here")
 
+
+def _empty_batch(request):
+    (name,) = request.limits
+    out = EllipsoidBatch.allocate(len(request.terms), request.setup.m)
+    out.axes[:] = np.eye(request.setup.m)
+    out.empty[::2] = True  # every other configuration empty, the others a unit disc at the origin
+    out.semi_axes[~out.empty] = 1.0
+    return {name: out}
+
+
+def test_empty_sets_record_nan():
+    """A sweep records NaN for the reach and the support of an empty set (never 0 or infinity),
+    while its batch answers 0 as for every query on an empty set."""
+    from mobmanip import Measure, register_measure, unregister_measure
+    from mobmanip.measures import VELOCITY
+
+    measure = Measure(
+        name="half_empty",
+        json_key="half_empty",
+        quantity=VELOCITY,
+        label="half-empty disc",
+        set_kind="ellipsoid",
+        color=0x123456,
+        locked_color=0x654321,
+        compute=_no_set,
+        batch=_empty_batch,
+    )
+    register_measure(measure)
+    try:
+        grid = SweepGrid(angle_deg=[0.0, 90.0], distance=[1.0])
+        result = run_sweep(SweepSpec("planar_dual_arm", measures=("half_empty",)), grid, workers=1)
+        reach = result.index("half_empty.straight_line_reach").ravel()
+        support = result.index("half_empty.capacity").ravel()
+    finally:
+        unregister_measure("half_empty")
+    empty = result.indices["half_empty_empty"].ravel()
+    assert empty.tolist() == [True, False]
+    assert np.isnan(reach[0]) and np.isnan(support[0])
+    assert reach[1] == pytest.approx(1.0, rel=1e-15) and support[1] == pytest.approx(1.0, rel=1e-15)
     batch = EllipsoidBatch.allocate(2, 2)
-    batch.semi_axes[:] = [[2.0, 1.0], [0.0, 0.0]]
-    batch.axes[:] = np.eye(2)
-    batch.empty[1] = True
-    assert batch.straight_line_reach(np.array([1.0, 0.0])).tolist() == [2.0, 0.0]
-    measure = get_measure("kinematic")
-    out = _empty_chunk(2, 1, 1, 2, (measure,))
-    _record(batch, measure, np.array([[1.0, 0.0], [1.0, 0.0]]), np.arange(2), out, 0)
-    reach = out["kinematic_straight_line_reach"][:, 0]
-    assert reach[0] == 2.0 and np.isnan(reach[1])
-    assert np.isnan(out["kinematic_capacity"][1, 0])
+    batch.axes[:], batch.semi_axes[1], batch.empty[0] = np.eye(2), 1.0, True
+    assert batch.straight_line_reach(np.array([1.0, 0.0])).tolist() == [0.0, 1.0]
 
 
 # --------------------------------------------------------------------------- the batches
