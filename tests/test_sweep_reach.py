@@ -302,6 +302,41 @@ def test_compiled_and_per_configuration_batches_agree(kind):
     np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("m, flat", [(2, False), (3, False), (3, True), (4, False)])
+def test_polytope_reach_by_facets_or_program_equals_the_reference(m, flat):
+    """Random sections {a : F a in c + G [-1, 1]^n} around, off and far from the origin: full
+    sets of up to 3 dimensions are cut by their facets, flat and 4-D ones solve a program; both
+    equal the reference program over (s, y): F (s u) - G y = c."""
+    from mobmanip.sets.polytope import Polytope
+
+    rng = np.random.default_rng(10 * m + flat)
+    crossing = 0
+    for k in range(40):
+        p, n = m + 1, m + 4
+        F = rng.normal(size=(p, m))
+        G = rng.normal(size=(p, n))
+        if flat:  # the set lies in a plane: G and F share a (p - 1)-dimensional range
+            basis = np.linalg.qr(rng.normal(size=(p, p - 1)))[0]
+            G = basis @ basis.T @ G
+            F = np.hstack([basis[:, :2], rng.normal(size=(p, 1))])
+        u = rng.normal(size=m)
+        if flat and k % 2:  # along the set's plane through the origin, {a : F a in range(basis)}
+            normal = F.T @ np.linalg.svd(basis.T)[2][-1]
+            u -= (u @ normal) / (normal @ normal) * normal
+        u /= np.linalg.norm(u)
+        c = (0.0, 1.5, -1.5, 4.0)[k % 4] * F @ u + 0.2 * rng.normal(size=p)
+        if flat:
+            c = basis @ basis.T @ c
+        P = Polytope(F, c, G)
+        if P.empty:
+            continue
+        assert P.degenerate == flat
+        expected = _ray_program(-G, F, c, [(-1.0, 1.0)] * n, u)
+        assert P.straight_line_reach(u) == pytest.approx(expected, rel=1e-9, abs=1e-12), k
+        crossing += expected > 0.0
+    assert crossing > 10
+
+
 # --------------------------------------------------------------------------- ellipsoids alone
 
 
