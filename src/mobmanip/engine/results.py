@@ -99,7 +99,7 @@ class EllipsoidBatch:
         if d.shape != (n, m) or not np.all(np.isfinite(d)) or not np.all(d.any(axis=1)):
             raise SetQueryError(f"directions must be finite and non-zero, ({m},) or ({n}, {m}), got shape {d.shape}")
         reach = straight_line_reaches(self.center, self.semi_axes, self.axes, d)
-        return np.where(self.empty, 0.0, reach)
+        return np.where(self.empty, 0.0, reach) if self.empty.any() else reach
 
     def rows_view(self, rows: slice) -> EllipsoidBatch:
         """Views (not copies) of rows ``rows`` of every array: writing to them fills this batch."""

@@ -264,15 +264,21 @@ def straight_line_reaches(
     y = np.einsum("nkj,nj->nk", axes, u)
     z = np.einsum("nkj,nj->nk", axes, center)
     positive = semi_axes > 0.0
-    inverse = np.where(positive, 1.0 / np.where(positive, semi_axes, 1.0), 0.0)
+    full = bool(positive.all())  # a sweep's usual chunk: no flat set, a > 0 in every row
+    inverse = 1.0 / semi_axes if full else np.where(positive, 1.0 / np.where(positive, semi_axes, 1.0), 0.0)
     w, v = y * inverse, z * inverse
-    a, b, e = np.sum(w * w, axis=1), np.sum(w * v, axis=1), np.sum(v * v, axis=1) - 1.0
-    root = np.sqrt(np.maximum(b * b - a * e, 0.0))
-    crossed = (a > 0.0) & (b * b - a * e >= 0.0)
-    # the two roots without cancellation: (b +- root) / a, the smaller one as e / (larger) when b >= 0
+    a, b = np.einsum("nk,nk->n", w, w), np.einsum("nk,nk->n", w, v)
+    e = np.einsum("nk,nk->n", v, v) - 1.0
+    disc = b * b - a * e
+    # the two roots without cancellation: (b +- root) / a, the other one as e / (b +- root)
+    big = b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b)
     with np.errstate(divide="ignore", invalid="ignore"):
-        big = b + np.where(b >= 0.0, root, -root)
-        first, second = big / a, np.where(big != 0.0, e / big, 0.0)
+        first, second = big / a, e / big
+    if full:  # both roots 0 when big = 0 (e = 0: the origin on the boundary); fmax skips that NaN
+        hi = np.fmax(first, second)
+        return np.where((disc >= 0.0) & (hi >= 0.0), hi, 0.0)
+    crossed = (a > 0.0) & (disc >= 0.0)
+    second = np.where(big != 0.0, second, 0.0)
     lo = np.where(crossed, np.minimum(first, second), np.where(e <= 0.0, -np.inf, np.inf))
     hi = np.where(crossed, np.maximum(first, second), np.where(e <= 0.0, np.inf, -np.inf))
     lo = np.maximum(lo, 0.0)
