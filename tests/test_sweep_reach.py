@@ -21,6 +21,7 @@ from mobmanip.sets.capacity import polytope_batch
 from mobmanip.sets.ellipsoid import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep, sweep_configurations
 from mobmanip.terms.builder import terms_at
+from mobmanip.viz.sweep_plot import index_label
 from polytope_util import policy_map
 
 POLYTOPES = ("kinematic_polytope", "dynamic_polytope", "dynamic_polytope_min_norm")
@@ -216,6 +217,8 @@ def test_reach_is_a_sweep_index_everywhere(paper_sweep, tmp_path):
         np.testing.assert_array_equal(npz[f"{name}_straight_line_reach"], values)
         column = np.array([float(r[f"{name}_straight_line_reach"]) for r in rows])
         np.testing.assert_allclose(column, values.ravel(), rtol=1e-11)  # written to 12 digits
+    label = index_label("dynamic_polytope.straight_line_reach", "planar")
+    assert label == "dynamic polytope straight-line reach (m/s$^2$)"
 
 
 def _no_set(terms):
