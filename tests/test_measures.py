@@ -407,7 +407,10 @@ def test_a_registered_measure_is_swept_beside_the_ellipsoids(tmp_path, toys):
     assert header[6:] == [
         f"{kind}_{name}"
         for kind in ("kinematic", "doubled")
-        for name in ("volume", "isotropy", "capacity", "semi_axis_1", "semi_axis_2", "degenerate", "empty")
+        for name in (
+            *("volume", "isotropy", "capacity", "straight_line_reach"),
+            *("semi_axis_1", "semi_axis_2", "degenerate", "empty"),
+        )
     ]
     data = np.load(write_sweep_npz(result, tmp_path / "s.npz"))
     np.testing.assert_array_equal(data["doubled_semi_axes"], result.indices["doubled_semi_axes"])

@@ -29,10 +29,12 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
     Returns:
         One dict per axis and sense (``axis``, ``straight_line``, ``support`` and, for a set of
         linear programs, ``binding`` at the straight-line maximum, plus ``floor`` (ZMP, margin,
-        contact forces) on the floor); ``None`` for a set without straight-line reach (an
-        ellipsoid) or an empty set.
+        contact forces) on the floor); ``None`` for an ellipsoid, a set without straight-line
+        reach or an empty set.
     """
-    if task_set.empty or not hasattr(task_set, "straight_line_reach"):
+    # an ellipsoid has a straight-line reach too (sweeps record it) but the paper's ellipsoids
+    # are summarised by their axes here: the per-axis readings are the polytopes'
+    if task_set.empty or task_set.kind == "ellipsoid" or not hasattr(task_set, "straight_line_reach"):
         return None
     labels = get_task(task).labels
     # a reading within the set's rounding of zero is zero (a collapsed set's "support -2.5e-14")

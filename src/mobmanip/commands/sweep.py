@@ -32,8 +32,11 @@ indices per measure (--measure; by default the kinematic ellipsoid, m/s and rad/
 dynamic ellipsoid, m/s^2 and rad/s^2), named MEASURE.INDEX: volume, isotropy (min/max reach
 from the centre; for an ellipsoid min/max semi-axis), capacity: max d . p over the set for the
 unit --direction d (radial: from the reference point towards the object; tangential: 90 deg to
-its left; or task coordinates in the world, e.g. 1,0), and for ellipsoids semi_axis_K (K = 1 is
-the largest), e.g. kinematic.volume, dynamic.semi_axis_1.
+its left; or task coordinates in the world, e.g. 1,0), straight_line_reach: the largest s >= 0
+with s d in the set (how far exactly along d from rest; at most the capacity, 0 where the ray
+misses the set), and for ellipsoids semi_axis_K (K = 1 is the largest), for polytopes width_K
+(along task axis K), e.g. kinematic.volume, dynamic.semi_axis_1, dynamic_polytope.straight_line_reach.
+capacity and straight_line_reach are NaN where the set is empty.
 
 outputs: OUT.npz (grid axes, index arrays of shape angle x distance x heading x velocity scale x
 effort scale [x task axis], the arm joints' positions per angle x distance, settings) and OUT.csv

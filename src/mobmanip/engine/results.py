@@ -7,8 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import SetQueryError
 from ..robot.model import Robot
-from ..sets.ellipsoid import Ellipsoid
+from ..sets.ellipsoid import Ellipsoid, straight_line_reaches
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,23 @@ class EllipsoidBatch:
         along = np.einsum("nkj,...j->nk", self.axes, d) if d.ndim == 1 else np.einsum("nkj,nj->nk", self.axes, d)
         offset = self.center @ d if d.ndim == 1 else np.einsum("nj,nj->n", self.center, d)
         return offset + np.sqrt(np.sum((along * self.semi_axes) ** 2, axis=1))
+
+    def straight_line_reach(self, direction: np.ndarray) -> np.ndarray:
+        """The largest s >= 0 with ``s d / |d|`` in ellipsoid n, (N,): how far along d from rest
+        (the origin), for one direction (m,) or one per row (N, m); 0 where the ray misses the
+        set or it is empty (closed form, :func:`mobmanip.sets.ellipsoid.straight_line_reaches`).
+
+        Raises:
+            SetQueryError: a direction of the wrong shape, zero or not finite.
+        """
+        d = np.asarray(direction, dtype=float)
+        n, m = len(self), self.dim
+        if d.ndim == 1:
+            d = np.broadcast_to(d, (n,) + d.shape)
+        if d.shape != (n, m) or not np.all(np.isfinite(d)) or not np.all(d.any(axis=1)):
+            raise SetQueryError(f"directions must be finite and non-zero, ({m},) or ({n}, {m}), got shape {d.shape}")
+        reach = straight_line_reaches(self.center, self.semi_axes, self.axes, d)
+        return np.where(self.empty, 0.0, reach) if self.empty.any() else reach
 
     def rows_view(self, rows: slice) -> EllipsoidBatch:
         """Views (not copies) of rows ``rows`` of every array: writing to them fills this batch."""

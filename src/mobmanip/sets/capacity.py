@@ -291,6 +291,25 @@ class PolytopeBatch:
             raise TaskError("radius_along needs non-zero directions")
         return np.array([p.radius_along(row) for p, row in zip(self.polytopes, d)])
 
+    def straight_line_reach(self, direction: ArrayLike) -> np.ndarray:
+        """The largest s >= 0 with s d / ``|d|`` in set n, (N,): how far along d from rest (the origin)
+        (0 where the origin's ray misses the set or it is empty): each row's own
+        ``straight_line_reach`` (one linear program per row for a :class:`Polytope`).
+
+        Raises:
+            TaskError: a zero direction, or a set that has no straight-line reach.
+        """
+        d = self._rows(direction)
+        if np.any(~d.any(axis=1)):
+            raise TaskError("straight_line_reach needs non-zero directions")
+        out = np.zeros(len(self))
+        for i, (p, row) in enumerate(zip(self.polytopes, d)):
+            reach = getattr(p, "straight_line_reach", None)
+            if reach is None:
+                raise TaskError(f"a {p.kind} has no straight-line reach")
+            out[i] = 0.0 if p.empty else reach(row)
+        return out
+
     @property
     def widths(self) -> np.ndarray:
         """Extent along each task axis, support(e_k) + support(-e_k), (N, m) (0 where empty)."""

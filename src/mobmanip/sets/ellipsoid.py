@@ -123,6 +123,18 @@ class Ellipsoid(TaskSet):
         d = d / np.linalg.norm(d)
         return float(np.linalg.norm(self.generator.T @ d))
 
+    def straight_line_reach(self, direction: np.ndarray) -> float:
+        """The largest s >= 0 with ``s d / |d|`` in the ellipsoid: how far along d from rest (the
+        origin), exactly along d (closed form, :func:`straight_line_reaches`; 0 when the ray from
+        the origin misses the ellipsoid or it is empty). At most :meth:`support` of the unit d.
+
+        Raises:
+            SetQueryError: d has the wrong shape, is zero or not finite.
+        """
+        d = check_direction(direction, self.dim)
+        reach = straight_line_reaches(self.center[None], self.semi_axes[None], self.axes[None], d[None])
+        return 0.0 if self.empty else float(reach[0])
+
     def contains(self, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
         """Whether points, (n, m) or (m,), lie in the ellipsoid (within ``tol`` in the normalised
         norm, and ``tol`` in task units along a zero semi-axis); bool array (n,)."""
@@ -220,6 +232,80 @@ class Ellipsoid(TaskSet):
             "degenerate": self.degenerate,
             "empty": self.empty,
         }
+
+
+#: A ray whose unit direction has a component above this across a flat ellipsoid's plane crosses
+#: it (one point of the ray is in the set at most); below it, the ray runs along the plane.
+PLANE_CROSSING = 1e-8
+
+
+def straight_line_reaches(
+    center: np.ndarray, semi_axes: np.ndarray, axes: np.ndarray, directions: np.ndarray
+) -> np.ndarray:
+    """Straight-line reach of N ellipsoids: the largest s >= 0 with s u_n in ellipsoid n, (N,),
+    u_n the unit direction of ``directions[n]``; 0 where the ray from the origin misses the set.
+
+    In the axes' coordinates a point s u of the ray is ``s y - z`` from the centre (y = axes u,
+    z = axes c). Along the positive semi-axes it must satisfy ``sum_k ((s y_k - z_k) / s_k)^2 <=
+    1``, the quadratic ``a s^2 - 2 b s + e <= 0``: an interval of s between its roots. Along a
+    zero semi-axis (a flat set) it must stay in the centre's plane, to the set's rounding
+    ``tol = RANK_RTOL * size``: a ray that crosses the plane (``|y_k| > PLANE_CROSSING``) meets it
+    at the one point s = z_k / y_k, which counts when it satisfies every other condition; a ray
+    along the plane keeps ``|s y_k - z_k| <= tol`` over an interval. The reach is the top of what
+    remains with s >= 0. Empty sets are the caller's to flag.
+
+    Args:
+        center: centres, (N, m).
+        semi_axes: semi-axis lengths, (N, m) (zero along flat directions).
+        axes: unit directions, ``axes[n, k]`` belongs to ``semi_axes[n, k]``, (N, m, m).
+        directions: finite non-zero directions, (N, m); normalised here.
+    """
+    u = directions / np.linalg.norm(directions, axis=1, keepdims=True)
+    y = np.einsum("nkj,nj->nk", axes, u)
+    z = np.einsum("nkj,nj->nk", axes, center)
+    positive = semi_axes > 0.0
+    full = bool(positive.all())  # a sweep's usual chunk: no flat set, a > 0 in every row
+    inverse = 1.0 / semi_axes if full else np.where(positive, 1.0 / np.where(positive, semi_axes, 1.0), 0.0)
+    w, v = y * inverse, z * inverse
+    a, b = np.einsum("nk,nk->n", w, w), np.einsum("nk,nk->n", w, v)
+    e = np.einsum("nk,nk->n", v, v) - 1.0
+    disc = b * b - a * e
+    # the two roots without cancellation: (b +- root) / a, the other one as e / (b +- root)
+    big = b + np.copysign(np.sqrt(np.maximum(disc, 0.0)), b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        first, second = big / a, e / big
+    if full:  # both roots 0 when big = 0 (e = 0: the origin on the boundary); fmax skips that NaN
+        hi = np.fmax(first, second)
+        return np.where((disc >= 0.0) & (hi >= 0.0), hi, 0.0)
+    crossed = (a > 0.0) & (disc >= 0.0)
+    second = np.where(big != 0.0, second, 0.0)
+    lo = np.where(crossed, np.minimum(first, second), np.where(e <= 0.0, -np.inf, np.inf))
+    hi = np.where(crossed, np.maximum(first, second), np.where(e <= 0.0, np.inf, -np.inf))
+    lo = np.maximum(lo, 0.0)
+    flat = ~positive
+    if flat.any():
+        size = np.maximum(np.maximum(semi_axes[:, 0], np.linalg.norm(center, axis=1)), 1e-300)
+        tol = _RANK_RTOL * size[:, None]
+        # along the plane: an interval of s (the whole line when z_k is within tol)
+        along = flat & (np.abs(y) <= PLANE_CROSSING)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ends = np.stack([(z - tol) / y, (z + tol) / y])
+        moving = along & (y != 0.0)
+        lo = np.maximum(lo, np.where(moving, ends.min(axis=0), -np.inf).max(axis=1))
+        hi = np.minimum(hi, np.where(moving, ends.max(axis=0), np.inf).min(axis=1))
+        hi = np.where((along & (y == 0.0) & (np.abs(z) > tol)).any(axis=1), -np.inf, hi)
+        # across the plane: the one crossing point, at the flat axis the ray crosses most steeply
+        across = flat & ~along
+        pinned = across.any(axis=1)
+        if pinned.any():
+            k = np.argmax(np.where(across, np.abs(y), -1.0), axis=1)
+            rows = np.arange(len(k))
+            point = np.where(pinned, z[rows, k] / np.where(pinned, y[rows, k], 1.0), 0.0)
+            in_plane = np.all(~across | (np.abs(point[:, None] * y - z) <= tol), axis=1)
+            ok = in_plane & (lo <= point) & (point <= hi)
+            lo = np.where(pinned, point, lo)
+            hi = np.where(pinned, np.where(ok, point, -np.inf), hi)
+    return np.where((lo <= hi) & np.isfinite(hi), hi, 0.0)
 
 
 def kinematic_ellipsoid(J_u: np.ndarray, W: np.ndarray, velocity_limits: np.ndarray) -> Ellipsoid:

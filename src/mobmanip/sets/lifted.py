@@ -196,7 +196,7 @@ class LiftedPolytope(TaskSet):
 
     def straight_line_reach(self, direction: ArrayLike) -> float:
         """The largest s >= 0 with s d/|d| in the set: how far along d from rest, exactly along d
-        (0 when the origin is outside the set or the set is empty)."""
+        (0 when no point of that ray is in the set, or the set is empty)."""
         found = self._ray(direction, np.zeros(self.dim))
         return 0.0 if found is None else found[0]
 

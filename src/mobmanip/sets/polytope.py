@@ -241,7 +241,9 @@ class Polytope(TaskSet):
 
     def straight_line_reach(self, direction: ArrayLike) -> float:
         """The largest s >= 0 with ``s d / |d|`` in the set: how far along d from rest (the origin),
-        exactly along d (one linear program; 0 when the origin is outside the set or it is empty)."""
+        exactly along d (0 when no point of the ray is in the set, or it is empty). A full-dimensional
+        set of up to 3 dimensions intersects the ray with its facet inequalities; any other set
+        solves one linear program."""
         from scipy.optimize import linprog
 
         d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
@@ -250,6 +252,13 @@ class Polytope(TaskSet):
             raise TaskError("straight_line_reach needs a non-zero direction")
         if self.empty:
             return 0.0
+        if self.dim <= 3 and not len(self._eq_A):
+            try:
+                A, b0, h = self._inequalities()
+            except TaskError:  # too many candidate facets: the program below
+                pass
+            else:
+                return _ray_in_halfspaces(A, b0 + h, d / norm)
         n = self._G.shape[1]
         A = np.hstack([(self._F @ (d / norm))[:, None], -self._G])  # F (s u) - G y = c
         result = linprog(
@@ -664,3 +673,16 @@ class Polytope(TaskSet):
         if m <= 3:
             return volume_from_vertices(self.vertices, self.triangles, self.center)
         return volume_from_vertices(self._all_vertices(), np.zeros((0, 3), dtype=int), self.center)
+
+
+def _ray_in_halfspaces(A: np.ndarray, b: np.ndarray, u: np.ndarray) -> float:
+    """The largest s >= 0 with A (s u) <= b, or 0 when there is none: the ray leaves the set at
+    the nearest row it moves towards and must have entered it past the farthest it moves away from."""
+    au = A @ u
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = b / au
+    hi = float(np.min(ratio[au > 0.0], initial=np.inf))
+    lo = max(float(np.max(ratio[au < 0.0], initial=-np.inf)), 0.0)
+    if np.any((au == 0.0) & (b < 0.0)) or hi < lo or not np.isfinite(hi):
+        return 0.0
+    return hi

@@ -116,7 +116,8 @@ class TaskSetBatch(Protocol):
 
     Row n is the set ``batch[n]`` (a :class:`TaskSet`); the arrays answer for all rows at once.
     :class:`mobmanip.batch.EllipsoidBatch` is one. A measure's batch form returns these, and a
-    sweep records ``volume``, ``isotropy``, ``support`` along its capacity direction, the
+    sweep records ``volume``, ``isotropy``, ``support`` and ``straight_line_reach`` along its
+    capacity direction (NaN for a batch without the latter), the
     ``degenerate`` and ``empty`` flags and the per-axis arrays the measure names
     (:attr:`mobmanip.measures.Measure.axis_indices`).
     """
@@ -139,6 +140,10 @@ class TaskSetBatch(Protocol):
 
     def support(self, direction: np.ndarray) -> np.ndarray:
         """max over set n of d . p, (N,), for one direction (m,) or one per row (N, m)."""
+
+    def straight_line_reach(self, direction: np.ndarray) -> np.ndarray:
+        """The largest s >= 0 with s d / |d| in set n, (N,), for one direction (m,) or one per
+        row (N, m); 0 where the ray from the origin misses the set or it is empty."""
 
     def __len__(self) -> int: ...
 

@@ -24,8 +24,11 @@ from .spec import AXES
 if TYPE_CHECKING:
     from .spec import SweepGrid, SweepSpec
 
-#: Scalar indices recorded by a sweep for every measure.
-SCALAR_INDICES = ("volume", "isotropy", "capacity")
+#: Scalar indices recorded by a sweep for every measure: ``capacity`` is the support along the
+#: sweep's direction d (max d . p over the set), ``straight_line_reach`` the largest s >= 0 with
+#: s d in the set (how far exactly along d from rest); they differ when the set is shifted off
+#: the origin (gravity) or when its boundary point farthest along d is not on the ray.
+SCALAR_INDICES = ("volume", "isotropy", "capacity", "straight_line_reach")
 #: Flags recorded by a sweep for every measure.
 FLAGS = ("degenerate", "empty")
 
@@ -36,7 +39,8 @@ class SweepResult:
 
     ``indices[name]`` has the grid's shape (angle, distance, heading, wheel velocity scale,
     wheel effort scale), with a trailing task axis for per-axis arrays (``*_semi_axes``). Names:
-    ``<measure>_{volume,isotropy,capacity,degenerate,empty}`` for every measure swept, and its
+    ``<measure>_{volume,isotropy,capacity,straight_line_reach,degenerate,empty}`` for every
+    measure swept (see :data:`SCALAR_INDICES`), and its
     per-axis arrays (``<measure>_semi_axes`` for the ellipsoids), e.g. ``kinematic_volume``.
     Indices of velocities (kinematic) do not depend on the effort scale, nor those of
     accelerations (dynamic) on the velocity scale; both are repeated along that axis.

@@ -6,8 +6,11 @@ platform to ``heading`` (deg), and scales the wheels' velocity and effort limits
 point it records, for each measure swept (by default the kinematic and the dynamic ellipsoid;
 any measure of :mod:`mobmanip.measures` with a batch form), the volume, the isotropy, the
 directional capacity (how far the set reaches along a direction: ``max d . p`` over it, for a
-unit d), the empty and degenerate flags and the measure's per-axis arrays (the ellipsoids'
-semi-axes).
+unit d), the straight-line reach along d (the largest s >= 0 with s d in the set: how far
+exactly along d from rest; at most the capacity, smaller when gravity shifts the set or the set's
+farthest point along d is off the ray), the empty and degenerate flags and the measure's per-axis
+arrays (the ellipsoids' semi-axes, the polytopes' widths). Both directional indices are NaN where
+the set is empty.
 
 The arms' postures depend on (angle, distance) only; they are found once, in the calling
 process, before the grid's configurations are analysed. Two providers (``SweepSpec.postures``):
@@ -251,6 +254,9 @@ def _record(e: TaskSetBatch, measure: Measure, directions: np.ndarray, rows: np.
     out[f"{prefix}_isotropy"][rows, col] = e.isotropy
     capacity = e.support(directions)
     out[f"{prefix}_capacity"][rows, col] = np.where(e.empty, np.nan, capacity)
+    reach = getattr(e, "straight_line_reach", None)  # NaN for a batch form without it (a user's)
+    if reach is not None:
+        out[f"{prefix}_straight_line_reach"][rows, col] = np.where(e.empty, np.nan, reach(directions))
     for attribute, _ in measure.axis_indices:
         out[f"{prefix}_{attribute}"][rows, col] = getattr(e, attribute)
     out[f"{prefix}_degenerate"][rows, col] = e.degenerate

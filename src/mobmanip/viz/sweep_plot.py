@@ -73,6 +73,10 @@ def index_unit(index: str, task: str) -> str:
     return "mixed: " + linear + ", " + angular
 
 
+#: Index names whose words are not their name with spaces.
+_WORDS = {"straight_line_reach": "straight-line reach"}
+
+
 def index_words(index: str, task: str) -> str:
     """A sweep index in words: ``kinematic ellipsoid volume``, ``dynamic ellipsoid semi-axis 2``,
     ``kinematic polytope width along x``."""
@@ -84,7 +88,7 @@ def index_words(index: str, task: str) -> str:
     kind, what, k = check_index_name(index, space.dim, [index.partition(".")[0]])
     measure = get_measure(kind)
     if k is None:
-        return f"{measure.label} {what.replace('_', ' ')}"
+        return f"{measure.label} {_WORDS.get(what, what.replace('_', ' '))}"
     stem = dict(measure.axis_indices).get(what, what)
     if what == "widths":
         return f"{measure.label} {stem.replace('_', '-')} along {space.labels[k - 1]}"
