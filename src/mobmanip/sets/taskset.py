@@ -142,7 +142,7 @@ class TaskSetBatch(Protocol):
         """max over set n of d . p, (N,), for one direction (m,) or one per row (N, m)."""
 
     def straight_line_reach(self, direction: np.ndarray) -> np.ndarray:
-        """The largest s >= 0 with s d / |d| in set n, (N,), for one direction (m,) or one per
+        """The largest s >= 0 with ``s d / |d|`` in set n, (N,), for one direction (m,) or one per
         row (N, m); 0 where the ray from the origin misses the set or it is empty."""
 
     def __len__(self) -> int: ...
