@@ -106,8 +106,12 @@ class _Slot:
 
     def abandon(self) -> None:
         """End a run that has not finished (after an error or an interrupt): let it reach its
-        next request or its end, then unwind it there; wait for its thread."""
-        if self.state in ("new", "done"):
+        next request or its end, then unwind it there; wait for its thread (also a finished
+        run's, which has only to return)."""
+        if self.state == "new":
+            return
+        if self.state == "done":
+            self._thread.join()  # it has only to return
             return
         self._abandoned = True
         if self.state == "running":  # interrupted while the run went on
