@@ -139,6 +139,39 @@ sys.exit(cli.main())
 """
 
 
+_SWALLOWED_SCRIPT = """
+import signal, sys
+import mobmanip.cli as cli
+
+def extension_import():  # as an extension module's init does when its import is interrupted
+    try:
+        signal.raise_signal(signal.{signal})
+        for _ in range(10**6):
+            pass
+    except KeyboardInterrupt:
+        raise ImportError("initialization failed") from None
+
+{where} = lambda *a, **k: extension_import()
+sys.argv = ["mobmanip", "analyze", "planar_dual_arm"]
+sys.exit(cli.main())
+"""
+
+
+@pytest.mark.parametrize("where", ["cli._check_outputs_first", "cli.build_parser"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_an_interrupt_a_library_turns_into_its_own_error_is_still_an_interrupt(signum, where):
+    """CI saw a killed carry end in "internal error (ImportError: initialization failed)": the
+    signal arrived while an extension module was being imported, and its init reported an
+    ImportError instead. A signal received during the command makes any error after it the
+    interrupt's one line and exit status, in the command's work and before it."""
+    script = _SWALLOWED_SCRIPT.replace("{signal}", signal.Signals(signum).name).replace("{where}", where)
+    proc = subprocess.run([sys.executable, "-c", script], env={**os.environ, "PYTHONPATH": str(SRC)},
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert "Traceback" not in proc.stderr and "internal error" not in proc.stderr, proc.stderr
+    assert proc.stderr.strip().splitlines() == [_LINE[signum]], proc.stderr
+    assert proc.returncode == _EXIT[signum], (proc.returncode, proc.stderr)
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_inside_a_finaliser_still_ends_the_run_in_one_line(signum):
     """Python cannot raise an interrupt that arrives inside a finaliser or a garbage-collector

@@ -71,9 +71,15 @@ def main(argv: list[str] | None = None) -> int:
     if program:
         sys.excepthook = _quiet_interrupts(sys.excepthook)
         sys.unraisablehook = _redeliver_interrupts(sys.unraisablehook)
+    _RECEIVED.clear()
     try:
         with _terminate_as_interrupt():
-            return _main(argv)
+            try:
+                return _main(argv)
+            except Exception:
+                if _RECEIVED:  # an interrupt that a library turned into an error of its own
+                    raise _interrupt_received() from None
+                raise
     except Terminated:
         return _interrupted("mobmanip: terminated; no output was written", 128 + signal.SIGTERM)
     except KeyboardInterrupt:
@@ -184,6 +190,8 @@ def _run(args) -> int:
     except MemoryError:
         return _fail("out of memory: the request is too large for this machine")
     except Exception as exc:
+        if _RECEIVED:  # an interrupt that a library turned into an error of its own
+            raise _interrupt_received() from None
         if os.environ.get("MOBMANIP_TRACEBACK"):
             raise
         return _fail(f"internal error ({type(exc).__name__}: {exc}); please report it with the command that caused it")
@@ -194,21 +202,43 @@ class Terminated(KeyboardInterrupt):
     directories removed, nothing published)."""
 
 
+#: The signals received during the current :func:`main` call (SIGINT, SIGTERM), in order.
+_RECEIVED: list[int] = []
+
+
+def _interrupt_received() -> KeyboardInterrupt:
+    """The interrupt to raise in place of an error that followed a signal: an extension module
+    whose import was interrupted reports "ImportError: initialization failed", and other
+    libraries may turn a KeyboardInterrupt into an error of their own."""
+    return Terminated() if _RECEIVED[-1] == signal.SIGTERM else KeyboardInterrupt()
+
+
 @contextlib.contextmanager
 def _terminate_as_interrupt():
-    """While a command runs in the main thread, SIGTERM raises :class:`Terminated`."""
+    """While a command runs in the main thread, SIGTERM raises :class:`Terminated` and Ctrl-C
+    KeyboardInterrupt, as Python's own handler does; both are remembered in :data:`_RECEIVED`."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
-    def handler(signum, frame):
+    def terminate(signum, frame):
+        _RECEIVED.append(signal.SIGTERM)
         raise Terminated()
 
-    previous = signal.signal(signal.SIGTERM, handler)
+    def interrupt(signum, frame):
+        _RECEIVED.append(signal.SIGINT)
+        raise KeyboardInterrupt()
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    previous_int = signal.getsignal(signal.SIGINT)
+    if previous_int is signal.default_int_handler:  # not when SIGINT is ignored (e.g. a background job)
+        signal.signal(signal.SIGINT, interrupt)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+        if previous_int is signal.default_int_handler:
+            signal.signal(signal.SIGINT, previous_int)
 
 
 def _configure_logging(verbosity: int) -> None:
