@@ -181,6 +181,8 @@ def _run(args) -> int:
             _check_outputs_first(args)
             return args.func(args)
     except MobmanipError as exc:
+        if _RECEIVED:  # e.g. "install xacro" after the import of xacro was interrupted
+            raise _interrupt_received() from None
         return _fail(str(exc))
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
