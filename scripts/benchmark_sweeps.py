@@ -66,17 +66,7 @@ def _tiago_chunk(count: int):
             j = robot.model.joints[robot.model.getJointId(name)]
             q[j.idx_q] = rng.uniform(max(lo[j.idx_q], -np.pi), min(hi[j.idx_q], np.pi))
         rows.append(terms_at(robot, q, "translational", object_mass=2.0))
-    t0 = rows[0]
-    return {
-        "J_u": np.stack([t.J_u for t in rows]),
-        "W": t0.W,
-        "P": np.stack([t.P for t in rows]),
-        "Q": t0.Q,
-        "xi": np.stack([t.xi for t in rows]),
-        "M_o": t0.M_o,
-        "g_o": t0.g_o,
-        "effort_limits": t0.effort_limits,
-    }
+    return capacity.stacked_terms(rows)
 
 
 def _chunk_indices(terms: dict, compiled: bool) -> float:

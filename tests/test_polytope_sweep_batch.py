@@ -14,7 +14,7 @@ from scipy.spatial import ConvexHull
 import mobmanip
 from conftest import random_configurations
 from mobmanip.errors import ModelError
-from mobmanip.sets.capacity import polytope_batch
+from mobmanip.sets.capacity import polytope_batch, stacked_terms
 from mobmanip.sets.capacity_batch import CompiledPolytopeBatch
 from mobmanip.terms.builder import terms_at
 from polytope_util import dynamic_lp, kinematic_lp, min_norm_lp, policy_map
@@ -25,19 +25,7 @@ DYNAMIC = ("J_u", "W", "P", "Q", "xi", "M_o", "g_o", "effort_limits")
 
 def _stacked_terms(robot, qs, decoupled=False) -> dict:
     """The terms of every configuration, stacked (J_u, P, xi per row; the rest shared)."""
-    rows = [terms_at(robot, q, "planar", object_mass=2.0, decoupled=decoupled) for q in qs]
-    t0 = rows[0]
-    return {
-        "J_u": np.stack([t.J_u for t in rows]),
-        "W": t0.W,
-        "P": np.stack([t.P for t in rows]),
-        "Q": t0.Q,
-        "xi": np.stack([t.xi for t in rows]),
-        "M_o": t0.M_o,
-        "g_o": t0.g_o,
-        "velocity_limits": t0.velocity_limits,
-        "effort_limits": t0.effort_limits,
-    }
+    return stacked_terms([terms_at(robot, q, "planar", object_mass=2.0, decoupled=decoupled) for q in qs])
 
 
 @pytest.fixture(scope="module")
@@ -315,21 +303,9 @@ def tiago_terms():
 
     robot = mobmanip.load_robot("tiago_dual")
     rng = np.random.default_rng(9)
-    rows = [
-        terms_at(robot, random_joint_configuration(robot, rng), "translational", object_mass=2.0) for _ in range(200)
-    ]
-    t0 = rows[0]
-    return {
-        "J_u": np.stack([t.J_u for t in rows]),
-        "W": t0.W,
-        "P": np.stack([t.P for t in rows]),
-        "Q": t0.Q,
-        "xi": np.stack([t.xi for t in rows]),
-        "M_o": t0.M_o,
-        "g_o": t0.g_o,
-        "velocity_limits": t0.velocity_limits,
-        "effort_limits": t0.effort_limits,
-    }
+    return stacked_terms(
+        [terms_at(robot, random_joint_configuration(robot, rng), "translational", object_mass=2.0) for _ in range(200)]
+    )
 
 
 def test_3d_exact_dynamic_batch_equals_one_polytope_per_configuration(tiago_terms):
@@ -461,3 +437,25 @@ def test_nearly_flat_sets_are_left_to_the_reference():
     np.testing.assert_array_equal(fast.degenerate, ref.degenerate)
     np.testing.assert_array_equal(fast.volume[:2], ref.volume[:2])
     assert fast.volume[2] == pytest.approx(4.0, rel=1e-15)  # the unit square, side 2
+
+
+def test_stacked_terms_stack_what_changes_and_refuse_rows_of_different_batches():
+    import dataclasses
+
+    from mobmanip.errors import TaskError
+    from polytope_util import random_joint_configuration
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    rng = np.random.default_rng(8)
+    rows = [terms_at(robot, random_joint_configuration(robot, rng), "planar", object_mass=2.0) for _ in range(3)]
+    terms = stacked_terms(rows)
+    for i, row in enumerate(rows):
+        for name in ("J_u", "P", "xi"):
+            assert np.array_equal(terms[name][i], getattr(row, name))
+    for name in ("W", "Q", "M_o", "g_o", "velocity_limits", "effort_limits"):
+        assert np.array_equal(terms[name], getattr(rows[0], name))
+    heavier = dataclasses.replace(rows[2], M_o=2.0 * rows[2].M_o)  # a heavier object
+    with pytest.raises(TaskError, match="M_o of row 2 differs from row 0's"):
+        stacked_terms([*rows[:2], heavier])
+    with pytest.raises(TaskError, match="needs at least one"):
+        stacked_terms([])

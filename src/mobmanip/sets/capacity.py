@@ -36,7 +36,7 @@ torque needed for any acceleration, min_a ||Z (Lambda_o a + mu_o)||_inf, exceeds
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -325,6 +325,36 @@ class PolytopeBatch:
 
 
 _STACKED = {"J_u": 3, "W": 3, "P": 3, "Q": 3, "xi": 2, "M_o": 3, "g_o": 2, "velocity_limits": 2, "effort_limits": 2}
+
+
+#: Terms that change with the configuration (stacked by :func:`stacked_terms`); the others are
+#: the same at every configuration of one robot, task and object.
+_PER_ROW = ("J_u", "P", "xi")
+_SHARED = ("W", "Q", "M_o", "g_o", "velocity_limits", "effort_limits")
+
+
+def stacked_terms(rows: Sequence[Any]) -> dict[str, np.ndarray]:
+    """The keyword terms of :func:`polytope_batch` from per-configuration terms (objects with
+    ``J_u, W, P, Q, xi, M_o, g_o, velocity_limits, effort_limits``, e.g.
+    :func:`mobmanip.terms.builder.terms_at`'s): ``J_u``, ``P`` and ``xi`` stacked, the others shared.
+
+    Raises:
+        TaskError: no rows, or a shared term that differs between rows (a different robot,
+            task, object or limits: those rows belong to different batches).
+    """
+    rows = list(rows)
+    if not rows:
+        raise TaskError("stacked_terms needs at least one configuration's terms")
+    first = rows[0]
+    for name in _SHARED:
+        for k, row in enumerate(rows[1:], start=1):
+            if not np.array_equal(getattr(row, name), getattr(first, name)):
+                raise TaskError(
+                    f"{name} of row {k} differs from row 0's: one batch shares it (same robot, task, object)"
+                )
+    out = {name: np.stack([getattr(row, name) for row in rows]) for name in _PER_ROW}
+    out.update({name: np.asarray(getattr(first, name)) for name in _SHARED})
+    return out
 
 
 def polytope_batch(kind: str, *, compiled: bool = True, **terms: Any) -> PolytopeBatch | CompiledPolytopeBatch:
