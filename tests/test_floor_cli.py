@@ -214,3 +214,53 @@ def test_a_collapsed_grounded_set_is_said_so_not_a_qhull_error(tmp_path):
     ).measures["dynamic_polytope_min_norm"]  # fmt: skip
     assert P.contains(np.zeros(3))[0]
     assert max(P.support(e) + P.support(-e) for e in np.eye(3)) < 1e-9
+
+
+def test_hold_adds_the_reach_that_holds_per_axis(tmp_path):
+    """``--hold 0.02``: every axis entry of the grounded polytope gains the reach whose efforts hold
+    20 ms (:func:`mobmanip.motion.hold.held_reach`, checked in tests/test_hold.py and in MuJoCo):
+    never beyond the instantaneous reach, and where the instantaneous maximum gives way the
+    summary says after how long and what gave way."""
+    from mobmanip.motion.hold import replay
+
+    out = tmp_path / "h.json"
+    run = _cli("analyze", "planar_dual_arm", "--ground", "--mu", "0.5", "--object-mass", "2", "--hold", "0.02",
+               "--json", str(out))  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    reaches = json.loads(out.read_text())["dynamic_polytope"]["reaches"]
+    robot = mobmanip.load_robot("planar_dual_arm")
+    q = named_configuration(robot, "home")  # the command's configuration without --q or --posture
+    analysis = mobmanip.analyze(robot, q, object_mass=2.0, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),))
+    P = analysis.measures["dynamic_polytope"]
+    gave_way = 0
+    for k, r in enumerate(reaches):
+        held = r["held"]
+        assert held["duration"] == 0.02
+        assert 0.0 < held["straight_line"] <= r["straight_line"] + 1e-12
+        e = np.zeros(P.dim)
+        e[k // 2] = 1.0 if k % 2 == 0 else -1.0
+        tau = P.witness_at(held["straight_line"] * e, least="xdot").variables["tau"]
+        assert replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5)).holds
+        if held["instant_gives_way"] is not None:
+            gave_way += 1
+            assert held["instant_holds_for"] < 0.02
+            assert f"give way after {1e3 * held['instant_holds_for']:.3g} ms" in run.stdout
+    assert gave_way >= 1
+    assert run.stdout.count("held 20 ms: straight line") == len(reaches)
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (("--hold", "0.02"), "--hold replays efforts on the floor: it needs --ground with a traction limit"),
+        (("--ground", "--no-traction", "--hold", "0.02"), "it needs --ground with a traction limit"),
+        (("--ground", "--hold", "-0.01"), "--hold must be a duration in (0, 1] s, got -0.01"),
+        (("--ground", "--hold", "5"), "--hold must be a duration in (0, 1] s, got 5.0"),
+        (("--ground", "--hold", "nan"), "--hold must be a duration in (0, 1] s, got nan"),
+    ],
+)
+def test_bad_hold_is_one_line(extra, message):
+    run = _cli("analyze", "planar_dual_arm", *extra)
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and run.stderr.startswith("mobmanip: error: ")
+    assert message in run.stderr

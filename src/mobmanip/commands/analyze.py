@@ -6,15 +6,20 @@ its centre, both ways) beside the ellipsoid's semi-axes, and their ratio, and al
 axis its straight-line reach (from rest, exactly along the axis) and its support (the other
 components free). ``--ground`` (``--mu``, ``--no-traction``) computes the polytopes on the floor
 and names, for each axis, what stops it: a joint's effort, a wheel's traction or a support
-lifting off, with the zero-moment point and its margin to the support polygon.
+lifting off, with the zero-moment point and its margin to the support polygon. ``--hold SECONDS``
+(on the floor, with a traction limit) replays each axis maximum's efforts from rest in mobmanip's
+own model and gives, beside it, the largest straight-line reach whose efforts hold that long
+(:func:`mobmanip.motion.hold.held_reach`), and how long the instantaneous maximum holds.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
+from ..support.reading import decimal
 from .common import (
     add_analysis_options,
     add_floor_options,
@@ -33,8 +38,60 @@ def register(sub) -> None:
     add_robot_options(parser)
     add_analysis_options(parser)
     add_floor_options(parser)
+    parser.add_argument(
+        "--hold",
+        type=decimal,
+        metavar="SECONDS",
+        help="on the floor: also the straight-line reach along each axis whose efforts, held constant from rest, "
+        "keep every support loaded and every wheel within friction for SECONDS (e.g. 0.02; at most 1)",
+    )
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.set_defaults(func=run)
+
+
+#: The longest --hold (s): constant efforts replayed longer say little about a real motion.
+LONGEST_HOLD = 1.0
+
+
+def _check_hold(args, constraints) -> float | None:
+    """--hold's duration, or None; refused without a floor that limits traction."""
+    from ..errors import ArgumentError
+
+    hold = getattr(args, "hold", None)
+    if hold is None:
+        return None
+    if not (math.isfinite(hold) and 0.0 < hold <= LONGEST_HOLD):
+        raise ArgumentError(f"--hold must be a duration in (0, {LONGEST_HOLD:g}] s, got {hold!r}")
+    if not constraints or constraints[0].lift or constraints[0].mu is None:
+        raise ArgumentError(
+            "--hold replays efforts on the floor: it needs --ground with a traction limit (not --no-traction)"
+        )
+    return float(hold)
+
+
+def _add_held(robot, q, result, document, duration: float, floor) -> None:
+    """Each grounded polytope's axis entries gain ``held``: the reach that holds ``duration``."""
+    from ..measures import get_measure
+    from ..motion.hold import held_reach
+
+    for name, task_set in result.measures.items():
+        entry = document[get_measure(name).json_key]
+        reaches = entry.get("reaches")
+        if not reaches or "floor" not in entry.get("model", {}) or "tau" not in getattr(task_set, "variables", {}):
+            continue
+        for k, reach in enumerate(reaches):
+            direction = np.zeros(task_set.dim)
+            direction[k // 2] = 1.0 if k % 2 == 0 else -1.0
+            found = held_reach(robot, q, task_set, direction, result.task, object_mass=result.held_object.mass,
+                               floor=floor, duration=duration)  # fmt: skip
+            reach["held"] = {
+                "duration": duration,
+                "straight_line": found.reach,
+                "gives_way": None if found.hold is None else found.hold.binds,
+                "instant_fraction": found.fraction,
+                "instant_holds_for": found.instant_hold.held,
+                "instant_gives_way": found.instant_hold.binds,
+            }
 
 
 def _describe_ellipsoid(name: str, ellipsoid, unit: str) -> str:
@@ -141,6 +198,15 @@ def _describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str
         if ground and ground.get("zmp") is not None:
             zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
             text += f"; ZMP ({zmp}) m, margin {round(ground['margin'], 3) + 0.0:.3f} m"
+        held = r.get("held")
+        if held is not None:
+            ms = 1e3 * held["duration"]
+            text += f"\n          held {ms:g} ms: straight line {held['straight_line']:.4g}"
+            if held["instant_gives_way"] is not None:
+                text += (
+                    f" (at {100 * held['instant_fraction']:g} % of the maximum the efforts give way after "
+                    f"{1e3 * held['instant_holds_for']:.3g} ms: {held['instant_gives_way']})"
+                )
         lines.append(text)
     if floor is not None:
         mu = "no traction limit" if floor.get("mu") is None else f"mu = {floor['mu']:g}"
@@ -192,6 +258,8 @@ def run(args) -> int:
     measures = requested_measures(args)
     # one configuration: the reference path, which needs no compiled kernel and gives the same
     # numbers whatever this process ran before
+    constraints = floor_constraints(args)
+    hold = _check_hold(args, constraints)
     result = analyze(
         robot,
         q,
@@ -200,9 +268,11 @@ def run(args) -> int:
         decoupled=args.decoupled,
         measures=measures,
         method="exact",
-        constraints=floor_constraints(args),
+        constraints=constraints,
     )
     document = result.to_dict()
+    if hold is not None:
+        _add_held(robot, q, result, document, hold, constraints[0])
     require_finite(document)  # never a NaN or an infinity printed as a result
     print(f"robot {robot.name} ({robot.platform.kind}), task {result.task}, {robot.nx} reduced velocities")
     print("reduced velocities: " + ", ".join(robot.reduced_velocity_names))

@@ -102,7 +102,8 @@ class Floor(Constraint):
             1 - r of its friction pyramid. 0 (the default): the exact limits. A replay from rest
             drifts from the instantaneous solution as the robot moves (in MuJoCo, within 20 ms at
             97 % of a maximum, a nearly unloaded caster lifts and the load leaves the wheels);
-            a reserve keeps the maxima clear of that.
+            a reserve keeps the maxima clear of that; :func:`mobmanip.motion.hold.held_reach`
+            finds the reach that holds for a given time.
     """
 
     mu: float | str | None = "spec"
