@@ -17,7 +17,7 @@ import pytest
 
 import mobmanip
 from mobmanip.casestudy import configuration_at, optimal_posture
-from mobmanip.errors import ArgumentError, TaskError
+from mobmanip.errors import ArgumentError, SpecError, TaskError
 from mobmanip.motion.hold import forward_accelerations, held_reach, replay
 from mobmanip.motion.in_motion import motion_terms
 from mobmanip.postures.named import named_configuration
@@ -135,6 +135,24 @@ def test_bad_replays_say_what_is_wrong():
         replay(robot, q, tau[:-1], task)
     with pytest.raises(TaskError, match="needs a friction coefficient"):
         replay(robot, q, tau, task, floor=Floor(mu=None))
+    omni = mobmanip.load_robot("planar_dual_arm_omni")
+    with pytest.raises(SpecError, match="covers differential-drive platforms; 'planar_dual_arm_omni'"):
+        replay(omni, named_configuration(omni, "home"), np.zeros(omni.nx), "planar")
     polytope = _grounded(robot, q, task)
     with pytest.raises(TaskError, match="nonzero finite 6-vector"):
         held_reach(robot, q, polytope, np.zeros(6), task)
+
+
+@pytest.mark.parametrize("task", ["planar", "translational"])
+def test_a_task_that_leaves_rows_out_holds_the_object_level_as_the_floor_does(task):
+    """A planar or translational task on a spatial robot: the floor constraint keeps the object
+    level (the hands' level rows); the replay's closed chain does the same, so at t = 0 it gives
+    the object the acceleration the LP found for the same efforts."""
+    robot, q, _ = _tiago()
+    polytope = _grounded(robot, q, task)
+    for k in range(polytope.dim):
+        e = np.eye(polytope.dim)[k]
+        point = 0.9 * polytope.straight_line_reach(e) * e
+        tau = polytope.witness_at(point, least="xdot").variables["tau"]
+        hold = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU), duration=1e-3, stop=False)
+        assert np.abs(hold.object_acceleration[0] - point).max() <= 1e-9 * np.abs(point).max()

@@ -7,8 +7,9 @@ platform's own), and the contact forces drift: in MuJoCo, TIAGo++'s -x maximum (
 the held object) unloads a caster and slips a wheel after 7 ms. This module predicts that time
 and finds the largest reach that holds for a chosen duration.
 
-The replay integrates the reduced dynamics of the robot holding its object (the hands welded to
-it) under constant efforts tau: at each state (q, x), with the terms of
+The replay integrates the reduced dynamics of the robot holding its object (the hands hold it in
+the task's rows and keep it level, as the floor constraint does: a planar task's object may turn
+about the vertical in the hands) under constant efforts tau: at each state (q, x), with the terms of
 :func:`mobmanip.motion.in_motion.motion_terms`, the reduced accelerations xdot, the hands' wrench h
 (m k) and the object's acceleration a_o solve::
 
@@ -34,10 +35,10 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..errors import ArgumentError, TaskError
+from ..errors import ArgumentError, SpecError, TaskError
 from ..robot.model import Robot
-from ..robot.tasks import get_task
-from ..terms.constraints.floor import Floor
+from ..robot.tasks import TaskSpace, get_task
+from ..terms.constraints.floor import LEVEL_ROWS, Floor
 from ..terms.grasp import GRAVITY
 from .ground import floor_wrench
 from .in_motion import motion_terms
@@ -125,6 +126,7 @@ def replay(
     Raises:
         ArgumentError: a duration or step that is not a positive finite number, or ``tau`` of the
             wrong size.
+        SpecError: a platform that is not a differential drive (the floor model's).
         TaskError: a floor without a friction coefficient (the replay checks traction).
     """
     for value, what in ((duration, "duration"), (step, "step")):
@@ -134,6 +136,11 @@ def replay(
     tau = np.asarray(tau, dtype=float)
     if tau.shape != (robot.nx,) or not np.all(np.isfinite(tau)):
         raise ArgumentError(f"tau must be {robot.nx} finite efforts (wheels, then joints), got shape {tau.shape}")
+    if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
+        raise SpecError(
+            f"a replay on the floor covers differential-drive platforms; {robot.name!r} has a {robot.platform.kind} "
+            "platform"
+        )
     floor = Floor() if floor is None else floor
     support, mu, _ = floor.resolve(robot)
     if mu is None:
@@ -147,6 +154,12 @@ def replay(
     names = tuple(c.name for c in support.contacts)
     wheels = tuple(c.name for c in support.contacts if c.driven)
 
+    # the hands hold the object in the task's rows and keep it level (as the floor constraint
+    # does): a planar task's object is held level by the same closed chain that moves it
+    held_rows = tuple(sorted(set(task_space.rows) | set(LEVEL_ROWS)))
+    labels = get_task("spatial").labels
+    welded = TaskSpace(f"{task_space.name}_level", held_rows, tuple(labels[r] for r in held_rows))
+    rows = [held_rows.index(r) for r in task_space.rows]
     count = int(math.ceil(duration / step - 1e-9))
     x = np.zeros(robot.nx)
     times, configurations, accelerations, normals, uses = [], [], [], [], []
@@ -154,10 +167,10 @@ def replay(
     held = duration
     for i in range(count + 1):
         t = i * step
-        terms = motion_terms(robot, q, x, task_space, object_mass=mass_o)
+        terms = motion_terms(robot, q, x, welded, object_mass=mass_o)
         xdot, _, a_o = forward_accelerations(terms, tau)
         full = np.zeros(6)
-        full[list(task_space.rows)] = a_o
+        full[list(held_rows)] = a_o
         offset, linear = floor_wrench(robot, q, x, mass_o, full, np.zeros((6, robot.nx)))
         wrench = offset + linear @ xdot
         force, moment = wrench[:3], wrench[3:]
@@ -169,7 +182,7 @@ def replay(
         normal, _, use = contact_forces(support.world_points(pose), driven, force, moment, zmp, mu, stiffness)
         times.append(t)
         configurations.append(q)
-        accelerations.append(a_o)
+        accelerations.append(a_o[rows])
         normals.append(normal)
         uses.append(use)
         if binds is None:
