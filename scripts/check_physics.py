@@ -24,8 +24,9 @@ pinned to the hands in MuJoCo does not (TIAGo++ in its hold: 32 % apart sideways
 0.00 % with the spatial task).
 
 The capacity is instantaneous: held constant, efforts move the robot away from the state they were
-computed for (docs, "Capacity that holds on the floor"). Exit code 0 when every axis holds, 1 when
-one does not, 2 for bad input.
+computed for (docs, "Capacity that holds on the floor"); ``--held`` replays instead, per axis, the
+reach that mobmanip's own replay holds for ``--duration`` (``analyze --hold``). Exit code 0 when
+every axis holds, 1 when one does not, 2 for bad input.
 """
 
 from __future__ import annotations
@@ -55,6 +56,12 @@ def _parser() -> argparse.ArgumentParser:
         help="how MuJoCo holds the object: welded to the hands, or pinned at its centre (default: pinned "
         "for planar and translational tasks, else welded)",
     )
+    parser.add_argument(
+        "--held",
+        action="store_true",
+        help="replay, per axis, the reach mobmanip predicts to hold for --duration (analyze --hold) instead of "
+        "--fraction of the instantaneous maximum",
+    )
     return parser
 
 
@@ -70,6 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     import mobmanip
     from mobmanip.commands.common import floor_constraints, load_robot_and_configuration
     from mobmanip.errors import MobmanipError
+    from mobmanip.motion.hold import held_reach
     from mobmanip.robot.support import robot_support
     from mobmanip.robot.tasks import get_task
     from mobmanip.terms.constraints.floor import CONTACT_FORCES, Floor, ground_reaction
@@ -100,8 +108,9 @@ def main(argv: list[str] | None = None) -> int:
     info = grounded.model["floor"]
     pose = info["pose"]
     R = np.array([[np.cos(pose[2]), -np.sin(pose[2])], [np.sin(pose[2]), np.cos(pose[2])]])
+    what = "the reach mobmanip predicts to last" if args.held else f"{args.fraction:.0%} of each grounded maximum"
     print(f"{robot.name}, task {task}, load sharing {info['load']}, mu {info['mu']}: "
-          f"{args.fraction:.0%} of each grounded maximum held {1e3 * args.duration:g} ms in MuJoCo")  # fmt: skip
+          f"{what} held {1e3 * args.duration:g} ms in MuJoCo")  # fmt: skip
     print(f"{'axis':>6} {'reach':>9} {'acc err %':>10} {'normal err %W':>14} {'rise mm':>8} {'slip mm/s':>10}  verdict")
     names = get_task(task).labels
     failed = 0
@@ -114,8 +123,17 @@ def main(argv: list[str] | None = None) -> int:
             if reach <= 0.0:
                 print(f"{label:>6} {reach:9.3f}  (no motion along this axis from rest)")
                 continue
-            target = args.fraction * reach * e
-            w = grounded.witness_at(target, least="xdot")
+            if args.held:
+                found = held_reach(robot, q, grounded, e, task, object_mass=args.object_mass, floor=floor[0],
+                                   duration=args.duration, fraction=args.fraction)  # fmt: skip
+                if found.witness is None or found.reach <= 0.0:
+                    print(f"{label:>6} {0.0:9.3f}  (mobmanip predicts no reach along this axis holds)")
+                    continue
+                reach, w = found.reach, found.witness
+                target = reach * e
+            else:
+                target = args.fraction * reach * e
+                w = grounded.witness_at(target, least="xdot")
             acc, contacts = referee.forward(w.variables["tau"])
             got = acc[: grounded.dim] if task == "planar" else acc
             acc_err = 100.0 * np.abs(got - target).max() / np.linalg.norm(target)

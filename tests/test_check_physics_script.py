@@ -44,6 +44,25 @@ def test_the_script_replays_every_axis_and_reports_the_grounded_reaches():
     assert run.returncode == 0 and run.stdout.count("holds") == 12  # 5 ms: every axis holds
 
 
+def test_held_replays_the_reach_mobmanip_holds_and_mujoco_holds_it():
+    """``--held`` (TIAGo++ -x's instantaneous maximum gives way in MuJoCo after about 7 ms): per
+    axis the reach mobmanip's replay holds for 20 ms, equal to :func:`held_reach`, held in MuJoCo."""
+    from mobmanip.motion.hold import held_reach
+
+    run = _run("tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5", "--held")
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "the reach mobmanip predicts to last held 20 ms in MuJoCo" in run.stdout
+    rows = {line.split()[0]: line.split() for line in run.stdout.splitlines()[2:]}
+    assert len(rows) == 12 and run.stdout.count("holds") == 12
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    P = mobmanip.analyze(robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",),
+                         constraints=(Floor(mu=0.5),)).measures["dynamic_polytope"]  # fmt: skip
+    found = held_reach(robot, q, P, -np.eye(6)[0], "spatial", object_mass=2.0, floor=Floor(mu=0.5))
+    assert float(rows["-x"][1]) == pytest.approx(found.reach, abs=6e-4)
+    assert found.reach < 0.5 * P.straight_line_reach(-np.eye(6)[0])
+
+
 @pytest.mark.parametrize("args, words", [(["tiago_dual", "--fraction", "2"], "--fraction"), (["nope"], "nope")])
 def test_bad_input_is_one_line_and_exit_2(args, words):
     run = _run(*args)
