@@ -156,3 +156,21 @@ def test_a_task_that_leaves_rows_out_holds_the_object_level_as_the_floor_does(ta
         tau = polytope.witness_at(point, least="xdot").variables["tau"]
         hold = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU), duration=1e-3, stop=False)
         assert np.abs(hold.object_acceleration[0] - point).max() <= 1e-9 * np.abs(point).max()
+
+
+def test_a_reserve_ends_the_hold_where_a_support_reaches_it():
+    """With a reserve r every support must keep r of its equal share of the weight: the replay of
+    the same efforts gives way earlier, at the sample where the first normal force crosses it."""
+    robot, q, task = _tiago()
+    polytope = _grounded(robot, q, task)
+    e = -np.eye(6)[0]
+    tau = polytope.witness_at(0.9 * polytope.straight_line_reach(e) * e, least="xdot").variables["tau"]
+    plain = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU), stop=False)
+    weight = (float(pin.computeTotalMass(robot.model)) + MASS) * 9.81
+    n = plain.normal.shape[1]
+    reserve = 0.5 * plain.normal[0].min() * n / weight  # half the least-loaded support's start
+    share = reserve * weight / n
+    first = int(np.flatnonzero((plain.normal <= share).any(axis=1))[0])
+    reserved = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU, reserve=reserve))
+    assert "unloads to its reserve" in reserved.binds
+    assert reserved.held == pytest.approx(plain.time[first - 1]) and 0.0 < reserved.held < plain.held

@@ -188,7 +188,9 @@ def replay(
         if binds is None:
             low = np.flatnonzero(normal <= least)
             slips = np.flatnonzero(use > 1.0 - floor.reserve)
-            if len(low):
+            if len(low) and least > 0.0:
+                binds = f"{names[low[0]]} unloads to its reserve {least:.4g} N (normal force {normal[low[0]]:.4g} N)"
+            elif len(low):
                 binds = f"{names[low[0]]} lifts off the floor (normal force {normal[low[0]]:.4g} N)"
             elif len(slips):
                 binds = f"{wheels[slips[0]]} slips (traction use {use[slips[0]]:.4g})"
