@@ -160,3 +160,80 @@ def test_unsupported_joint_takes_the_hessian_path():
     model = pin.buildSampleModelHumanoid()
     with pytest.raises(ModelError, match="no closed-form derivative"):
         TreeAdjoint(model, [model.nframes - 1])
+
+
+def _frame_term_per_hand(tree, t, J_bar, p_bar):
+    """The frame term hand after hand (the loop the stacked form replaced), the reference for
+    bit-for-bit equality: maps and placements keep their iterates only if the sums do."""
+
+    def cross(u, v):
+        c0 = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+        out = np.empty(c0.shape[:1] + (3,) + c0.shape[1:])
+        out[:, 0], out[:, 1], out[:, 2] = (
+            c0,
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        )
+        return out
+
+    xi = t.xi
+    v, w = xi[:, :3], xi[:, 3:]
+    out = np.zeros((xi.shape[0], tree.nv))
+    for a in range(tree.k):
+        Jb = J_bar[:, a] * tree.supports[a]
+        bl, ba = Jb[:, :3], Jb[:, 3:]
+        ba = ba + cross(t.positions[:, a, :, None], bl)
+        w_bl = cross(w, bl)
+        gamma = np.concatenate([w_bl, cross(v, bl) + cross(w, ba)], axis=1)
+        G = (gamma.reshape(-1, tree.nv) @ tree.suffix).reshape(gamma.shape)
+        out += np.einsum("nxk,nxk->nk", xi, G) * tree.supports[a]
+        out += np.einsum("nx,nxk->nk", -w_bl.sum(axis=2) + p_bar[:, a], t.frames[:, a, :3])
+    return out
+
+
+@pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual"])
+def test_frames_and_frame_term_stacked_over_the_hands_equal_the_per_hand_forms_bit_for_bit(robots, name):
+    """The pass's frame Jacobians ((v + w x p_a, w) on the columns that move hand a) and the frame
+    term are computed for every hand at once; each hand's entries equal the per-hand forms bit
+    for bit, in batches of 1 to 5 configurations, so the optimisers' iterates do not change."""
+    robot = robots[name]
+    tree = TreeAdjoint(robot.model, [arm.frame_id for arm in robot.arms])
+    rng = np.random.default_rng(21)
+    nv = robot.model.nv
+    for n in (1, 3, 5):
+        t = tree.run(_configurations(robot, n, n), dynamics=False)
+        for a in range(tree.k):
+            p = t.positions[:, a]
+            wxp = np.stack([t.xi[:, 4] * p[:, 2, None] - t.xi[:, 5] * p[:, 1, None],
+                            t.xi[:, 5] * p[:, 0, None] - t.xi[:, 3] * p[:, 2, None],
+                            t.xi[:, 3] * p[:, 1, None] - t.xi[:, 4] * p[:, 0, None]], axis=1)  # fmt: skip
+            assert np.array_equal(t.frames[:, a, :3], (t.xi[:, :3] + wxp) * tree.supports[a])
+            assert np.array_equal(t.frames[:, a, 3:], t.xi[:, 3:] * tree.supports[a])
+        J_bar = rng.normal(size=(n, tree.k, 6, nv))
+        p_bar = rng.normal(size=(n, tree.k, 3))
+        assert np.array_equal(tree.frame_term(t, J_bar, p_bar), _frame_term_per_hand(tree, t, J_bar, p_bar))
+        zero = np.zeros((n, tree.k, 3))  # without p_bar: rho alone (adding zeros changes no bit)
+        assert np.array_equal(tree.frame_term(t, J_bar), _frame_term_per_hand(tree, t, J_bar, zero))
+
+
+def test_a_constant_objects_terms_are_the_objects_own_for_every_chunk_size(robots):
+    """The chain builds a constant object's W, M_o and g_o once per chunk size: they equal the
+    object's (here held between the planar robot's hands, whose planar task sees no offsets),
+    stacked, read-only, and follow a change of the object's mass."""
+    from mobmanip.terms.grasp import HeldObject
+
+    robot = robots["planar_dual_arm"]
+    ev = GradientEvaluator(robot, "dynamic:log_volume", robot.spec.default_task, object_mass=1.5)
+    task = ev.task
+    for mass in (1.5, 4.0):
+        ev.mass = mass
+        for n in (1, 4, 1):
+            positions = np.random.default_rng(n).normal(size=(n, len(robot.arms), 3))
+            W, M_o, g_o, moving = ev._object_terms(positions)
+            held = HeldObject.between(positions[0], mass)
+            assert not moving and W.shape[0] == n and M_o.shape[0] == n
+            assert all(np.array_equal(W[i], held.grasp_matrix(task)) for i in range(n))
+            assert all(np.array_equal(M_o[i], held.inertia_matrix(task)) for i in range(n))
+            assert np.array_equal(g_o, held.gravity_vector(task))
+            assert np.array_equal(M_o[0], mass * np.eye(task.dim))  # mass on every (linear) row
+            assert not (W.flags.writeable or M_o.flags.writeable or g_o.flags.writeable)

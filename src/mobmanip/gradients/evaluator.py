@@ -251,6 +251,8 @@ class GradientEvaluator:
             checked_object_mass(mass)
         self.mass = float(mass)
         self.held_object = held_object
+        #: W, M_o, g_o of a constant object per chunk size (:meth:`_object_terms`), with its key.
+        self._constant_object: tuple | None = None
         self.S = robot.S
         self.Q = robot.Q
         self.Q_identity = bool(np.array_equal(self.Q, np.eye(self.Q.shape[0])))
@@ -351,12 +353,25 @@ class GradientEvaluator:
         n, k = positions.shape[:2]
         obj = self.held_object
         moving = obj is None and bool(task.angular_rows) and k >= 2
-        if obj is None:
-            obj = HeldObject.between(positions[0], self.mass)
-        g_o = obj.gravity_vector(task)
         if not moving:
-            W, M_o = obj.grasp_matrix(task), obj.inertia_matrix(task)
-            return np.repeat(W[None], n, axis=0), np.repeat(M_o[None], n, axis=0), g_o, False
+            # Constant: an explicit object, or one held between the hands whose offsets the task
+            # does not see (no rotations) or that has one grasp point (offset p - p = 0): built
+            # once per (object, mass, task, chunk size), read-only (the chain never writes them).
+            key = (id(obj), self.mass, task)
+            if self._constant_object is None or self._constant_object[0] != key:
+                self._constant_object = (key, {})
+            sizes = self._constant_object[1]
+            if n not in sizes:
+                held = obj if obj is not None else HeldObject.between(positions[0], self.mass)
+                W, M_o = held.grasp_matrix(task), held.inertia_matrix(task)
+                W, M_o = np.repeat(W[None], n, axis=0), np.repeat(M_o[None], n, axis=0)
+                g_o = held.gravity_vector(task)
+                for a in (W, M_o, g_o):
+                    a.flags.writeable = False
+                sizes[n] = (W, M_o, g_o)
+            return (*sizes[n], False)
+        obj = HeldObject.between(positions[0], self.mass)
+        g_o = obj.gravity_vector(task)
         rows, m = list(task.rows), task.dim
         offsets = positions - positions.mean(axis=1, keepdims=True)
         full = np.zeros((n, 6, 6))

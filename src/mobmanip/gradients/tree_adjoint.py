@@ -146,6 +146,8 @@ class TreeAdjoint:
         self.dof_count = np.array([model.joints[j].nv for j in range(1, model.njoints)], dtype=np.int64)
         self.armature = np.asarray(model.armature, dtype=float)
         self._buffers: tuple[np.ndarray, np.ndarray] | None = None  # the largest chunk's so far
+        self._x_cols = self.probed.probe_cols[:, 0].astype(int)  # probe columns, as indices
+        self._y_cols = self.probed.probe_cols[:, 1].astype(int)
 
     # ----- the Pinocchio pass -----
 
@@ -163,8 +165,7 @@ class TreeAdjoint:
         for q, Jw in zip(qp, Ja):
             Jw[...] = jacobians(model, data, q)
         xi = Ja[:, :, self.vmap]
-        cols = probed.probe_cols.astype(int)
-        x_cols, y_cols = Ja[:, :, cols[:, 0]], Ja[:, :, cols[:, 1]]
+        x_cols, y_cols = Ja[:, :, self._x_cols], Ja[:, :, self._y_cols]
         points = frame_positions(x_cols, y_cols)  # (n, k + nj, 3)
         ex, ey = np.swapaxes(x_cols[:, 3:], 1, 2), np.swapaxes(y_cols[:, 3:], 1, 2)  # (n, k + nj, 3)
         all_rotations = np.stack([ex, ey, cross3(ex, ey)], axis=-1)  # (n, k + nj, 3, 3) columns
@@ -176,12 +177,11 @@ class TreeAdjoint:
         w = xi[:, 3:]
         xi[:, :3] += _cross(w, reference[:, :, None])
         positions = points[:, : self.k]
+        # every frame at once, (n, k, 6, nv): (v + w x p, w) on the columns that move it
         frames = np.empty((n, self.k, 6, self.nv))
-        for a in range(self.k):
-            p = positions[:, a, :, None]
-            frames[:, a, :3] = xi[:, :3] + _cross(w, p)
-            frames[:, a, 3:] = w
-            frames[:, a] *= self.supports[a]
+        frames[:, :, :3] = xi[:, None, :3] + _cross_frames(w, positions)
+        frames[:, :, 3:] = w[:, None]
+        frames *= self.supports[:, None, :]
         t = TreePass(xi, None, None, positions, frames, rotations, points[:, self.k :], reference)
         t.frame_rotations = all_rotations[:, : self.k]
         if dynamics:
@@ -249,23 +249,25 @@ class TreeAdjoint:
             p_bar: sensitivities of the frames' positions, (n, k, 3), or ``None``.
         """
         xi = t.xi
-        v, w = xi[:, :3], xi[:, 3:]  # (n, 3, nv)
-        out = np.zeros((xi.shape[0], self.nv))
-        for a in range(self.k):
-            Jb = J_bar[:, a] * self.supports[a]
-            bl, ba = Jb[:, :3], Jb[:, 3:]
-            p = t.positions[:, a, :, None]
-            ba = ba + _cross(p, bl)  # beta = X_p^T J_bar
-            w_bl = _cross(w, bl)
-            gamma = np.concatenate([w_bl, _cross(v, bl) + _cross(w, ba)], axis=1)  # (n, 6, nv)
-            out += (
-                np.einsum("nxk,nxk->nk", xi, (gamma.reshape(-1, self.nv) @ self.suffix).reshape(gamma.shape))
-                * self.supports[a]
-            )
-            rho = -w_bl.sum(axis=2)  # (n, 3)
-            if p_bar is not None:
-                rho = rho + p_bar[:, a]
-            out += np.einsum("nx,nxk->nk", rho, t.frames[:, a, :3])
+        n, k, nv = xi.shape[0], self.k, self.nv
+        v, w = xi[:, None, :3], xi[:, None, 3:]  # (n, 1, 3, nv): every frame at once below
+        Jb = J_bar * self.supports[:, None, :]  # (n, k, 6, nv)
+        bl = Jb[:, :, :3]
+        ba = Jb[:, :, 3:] + _cross_frames_left(t.positions, bl)  # beta = X_p^T J_bar
+        w_bl = _cross_frames_both(w, bl)
+        gamma = np.empty((n, k, 6, nv))
+        gamma[:, :, :3] = w_bl
+        gamma[:, :, 3:] = _cross_frames_both(v, bl) + _cross_frames_both(w, ba)
+        G = (gamma.reshape(-1, nv) @ self.suffix).reshape(n, k, 6, nv)
+        rho = -w_bl.sum(axis=3)  # (n, k, 3)
+        if p_bar is not None:
+            rho = rho + p_bar
+        turn = np.einsum("nxj,naxj->naj", xi, G) * self.supports  # (n, k, nv)
+        move = np.einsum("nax,naxj->naj", rho, t.frames[:, :, :3])
+        out = np.zeros((n, nv))
+        for a in range(k):  # the frames' terms summed in frame order
+            out += turn[:, a]
+            out += move[:, a]
         return out
 
     def bilinear_term(self, t: TreePass, a: np.ndarray, b: np.ndarray, g_bar: np.ndarray | None = None) -> np.ndarray:
@@ -314,6 +316,41 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     out[:, 0] = c0
     out[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
     out[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return out
+
+
+def _cross_frames(w: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """w x p_a for every frame a: w (n, 3, nv), p (n, k, 3) -> (n, k, 3, nv), each frame's the
+    products and differences of ``_cross(w, p[:, a, :, None])`` (equal bit for bit)."""
+    w0, w1, w2 = w[:, None, 0], w[:, None, 1], w[:, None, 2]  # (n, 1, nv)
+    p0, p1, p2 = p[:, :, 0, None], p[:, :, 1, None], p[:, :, 2, None]  # (n, k, 1)
+    out = np.empty(p.shape[:2] + (3,) + w.shape[2:])
+    out[:, :, 0] = w1 * p2 - w2 * p1
+    out[:, :, 1] = w2 * p0 - w0 * p2
+    out[:, :, 2] = w0 * p1 - w1 * p0
+    return out
+
+
+def _cross_frames_left(p: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """p_a x b_a for every frame a: p (n, k, 3), b (n, k, 3, nv) -> (n, k, 3, nv), each frame's
+    as ``_cross(p[:, a, :, None], b[:, a])`` (equal bit for bit)."""
+    p0, p1, p2 = p[:, :, 0, None], p[:, :, 1, None], p[:, :, 2, None]  # (n, k, 1)
+    b0, b1, b2 = b[:, :, 0], b[:, :, 1], b[:, :, 2]
+    out = np.empty(b.shape)
+    out[:, :, 0] = p1 * b2 - p2 * b1
+    out[:, :, 1] = p2 * b0 - p0 * b2
+    out[:, :, 2] = p0 * b1 - p1 * b0
+    return out
+
+
+def _cross_frames_both(u: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """u x b over axis 2 of (n, k or 1, 3, nv) stacks (broadcast over frames), as ``_cross``."""
+    u0, u1, u2 = u[:, :, 0], u[:, :, 1], u[:, :, 2]
+    b0, b1, b2 = b[:, :, 0], b[:, :, 1], b[:, :, 2]
+    out = np.empty(np.broadcast_shapes(u.shape, b.shape))
+    out[:, :, 0] = u1 * b2 - u2 * b1
+    out[:, :, 1] = u2 * b0 - u0 * b2
+    out[:, :, 2] = u0 * b1 - u1 * b0
     return out
 
 

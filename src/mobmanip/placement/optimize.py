@@ -170,7 +170,7 @@ class PlacementProblem:
         #: Serves the objective's evaluations; runs inside ``self.lockstep.run`` (starts, map
         #: cells) have theirs evaluated together, in one batched call per round.
         self.lockstep: Lockstep = Lockstep(self._evaluate_batch)
-        self._frames: tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        self._frames: tuple[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self.rows = None
         self.rows = self._moving_rows()
         #: Indices of the collision pairs kept as constraints: with the hands' poses held (the
@@ -288,7 +288,7 @@ class PlacementProblem:
         """The hands' world positions (k, 3), orientations (k, 3, 3) and ``LOCAL_WORLD_ALIGNED``
         Jacobians (k, 6, nv) at q: those the objective's evaluation at q brought along (SLSQP
         asks for the hold constraints at the point it has just evaluated), else from Pinocchio."""
-        if self._frames is not None and np.array_equal(self._frames[0], q):
+        if self._frames is not None and self._frames[0] == q.tobytes():  # the same q, bit for bit
             return self._frames[1]
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
@@ -302,13 +302,12 @@ class PlacementProblem:
         q = self.configuration(z)
         value, grad, ok, frames = self.lockstep.ask(q)
         if frames is not None:
-            self._frames = (q, frames)
+            self._frames = (q.tobytes(), frames)
         if not ok:  # singular or empty: a large cost without slope pushes the line search back
             return 1e6, np.zeros(self.n)
         gz = np.zeros(self.n)
         gz[:3] = platform_gradient(q, grad)
-        for k, j in enumerate(self.joint_ids):
-            gz[3 + k] = grad[self.model.joints[j].idx_v]
+        gz[3:-1] = grad[self._joint_v]
         return -value, -gz
 
     # ----- constraints -----
@@ -325,7 +324,9 @@ class PlacementProblem:
         position_errors = positions - self.target - turned
         if jacobian:  # every hand's position rows at once, (3 k, n)
             position_rows = self._to_z(q, jacobians[:, :3].reshape(-1, jacobians.shape[-1]))
-            position_rows[:, -1] = np.column_stack([turned[:, 1], -turned[:, 0], np.zeros(len(turned))]).ravel()
+            d_psi = np.zeros((len(turned), 3))  # d(error)/d(psi) = -(d/d psi) R_z(psi) r_i
+            d_psi[:, 0], d_psi[:, 1] = turned[:, 1], -turned[:, 0]
+            position_rows[:, -1] = d_psi.ravel()
         if not self.orientation:
             value = position_errors.ravel()
             if self.rows is not None:
@@ -403,8 +404,9 @@ def slsqp_constraints(problem: PlacementProblem) -> list[dict]:
     last: list = [None, None]
 
     def hold(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if last[0] is None or not np.array_equal(last[0], z):
-            last[:] = z.copy(), problem.constraints(z)
+        key = z.tobytes()  # SLSQP changes its x in place: compare the values, bit for bit
+        if last[0] != key:
+            last[:] = key, problem.constraints(z)
         return last[1]
 
     out = [{"type": "eq", "fun": lambda z: hold(z)[0], "jac": lambda z: hold(z)[1]}]

@@ -78,6 +78,15 @@ class Lockstep(Generic[T]):
         return [slot.result for slot in slots]
 
 
+def _closed() -> threading.Lock:
+    """A lock held from the start, used as a binary semaphore: ``release`` (from any thread)
+    lets one ``acquire`` through. Cheaper than ``threading.Semaphore`` (a condition variable
+    allocating a lock per wait), which the hand-over paid twice per request."""
+    lock = threading.Lock()
+    lock.acquire()
+    return lock
+
+
 class _Slot:
     """One run: its thread, its pending request, and the two semaphores of the hand-over."""
 
@@ -89,8 +98,8 @@ class _Slot:
         self.reply: Reply = None
         self.result: Any = None
         self.error: BaseException | None = None
-        self._go = threading.Semaphore(0)  # the scheduler lets the run go
-        self._back = threading.Semaphore(0)  # the run has asked or ended
+        self._go = _closed()  # the scheduler lets the run go
+        self._back = _closed()  # the run has asked or ended
         self._abandoned = False
         self._thread = threading.Thread(target=self._main, name="mobmanip-lockstep", daemon=True)
 
