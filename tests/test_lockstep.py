@@ -9,7 +9,6 @@ code before the batching), so the placement found is the same, not merely no wor
 
 from __future__ import annotations
 
-import threading
 import time
 
 import numpy as np
@@ -68,18 +67,17 @@ def test_runs_get_their_own_answers_in_fewer_batched_calls():
     assert sum(in_lockstep) == sum(steps for _, steps in alone)
 
 
-def _lockstep_threads() -> list[threading.Thread]:
-    """The lockstep's run threads still alive (other tests' threads do not count)."""
-    return [t for t in threading.enumerate() if t.name == "mobmanip-lockstep" and t.is_alive()]
-
-
 def test_a_failing_run_ends_the_others_and_raises_in_the_caller():
     lockstep = Lockstep(lambda requests: [r + 1 for r in requests])
+    unwound = []
 
-    def good():
+    def good(k):
         total = 0
-        for _ in range(100):
-            total = lockstep.ask(total)
+        try:
+            for _ in range(100):
+                total = lockstep.ask(total)
+        finally:
+            unwound.append((k, total))
         return total
 
     def bad():
@@ -87,9 +85,11 @@ def test_a_failing_run_ends_the_others_and_raises_in_the_caller():
         raise RuntimeError("run 1 broke")
 
     with pytest.raises(RuntimeError, match="run 1 broke"):
-        lockstep.run([good, bad, good])
-    assert not _lockstep_threads()  # the waiting runs were unwound, their threads ended
-    assert lockstep.run([good]) == [100]  # and the lockstep is usable again
+        lockstep.run([lambda: good(0), bad, lambda: good(2)])
+    # run 0 had its first reply and asked again; run 2, served after the failing run, had none:
+    # both were unwound where they waited
+    assert sorted(unwound) == [(0, 1), (2, 0)]
+    assert lockstep.run([lambda: good(3)]) == [100]  # and the lockstep is usable again
 
 
 def test_a_failing_evaluation_or_an_interrupt_ends_every_run():
@@ -100,10 +100,42 @@ def test_a_failing_evaluation_or_an_interrupt_ends_every_run():
                 raise error
             return requests
 
+        unwound: list[int] = []
+
+        def run(k, lockstep, unwound=unwound):
+            try:
+                return lockstep.ask(k)
+            finally:
+                unwound.append(k)
+
         lockstep = Lockstep(evaluate)
         with pytest.raises(type(error)):
-            lockstep.run([lambda ls=lockstep: ls.ask(1), lambda ls=lockstep: ls.ask(2)])
-        assert not _lockstep_threads()
+            lockstep.run([lambda ls=lockstep: run(1, ls), lambda ls=lockstep: run(2, ls)])
+        assert sorted(unwound) == [1, 2]
+
+
+def test_an_interrupt_inside_a_run_ends_every_run_at_once():
+    """A signal arrives in whichever run executes (the runs share the caller's thread): the
+    interrupt leaves that run, every other run is unwound, no batch is evaluated after it, and
+    the caller sees the interrupt itself."""
+    batches = []
+    lockstep = Lockstep(lambda requests: batches.append(len(requests)) or requests)
+    unwound = []
+
+    def run(k):
+        try:
+            for step in range(50):
+                lockstep.ask(step)
+                if k == 1 and step == 3:
+                    raise KeyboardInterrupt
+            return k
+        finally:
+            unwound.append(k)
+
+    with pytest.raises(KeyboardInterrupt):
+        lockstep.run([lambda k=k: run(k) for k in range(4)])
+    assert sorted(unwound) == [0, 1, 2, 3]
+    assert len(batches) == 4  # the rounds up to the interrupt, none after
 
 
 def test_runs_never_execute_at_the_same_time():

@@ -19,6 +19,7 @@ one layer per heading.
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -45,6 +46,8 @@ from .optimize import (
 
 if TYPE_CHECKING:
     from ..robot.collision import SelfCollision
+
+_log = logging.getLogger(__name__)
 
 #: Largest grid (cells per axis) a map accepts.
 MAX_CELLS_PER_AXIS = 400
@@ -253,6 +256,8 @@ def placement_map(
             return z
 
         # The bands run together: their cells' evaluations are batched, each band as on its own.
+        _log.info("placement map of %s: %d x %d cells in %d bands, solved together", robot.name, len(xs), len(ys),
+                  len(bands))  # fmt: skip
         problem.lockstep.run([functools.partial(band, start, stop) for start, stop in bands])
     out = PlacementMap(
         objective=evaluator.objective,
