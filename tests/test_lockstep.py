@@ -249,3 +249,28 @@ def test_the_hands_frames_from_the_gradient_pass_equal_pinocchios(name):
             np.testing.assert_allclose(rotations[i], data.oMf[arm.frame_id].rotation, rtol=0, atol=1e-12)
             J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)
             np.testing.assert_allclose(jacobians[i], J, rtol=0, atol=1e-12)
+
+
+def test_a_runs_last_evaluation_is_reused_only_at_the_same_point():
+    """A run's optimum is usually the point SLSQP evaluated last: ``value_at`` answers it from the
+    objective's last evaluation when the configuration is the same bit for bit, else asks anew;
+    both equal an independent evaluation of the measure at that configuration."""
+    from mobmanip.gradients.evaluator import GradientEvaluator
+    from mobmanip.placement.optimize import PlacementProblem
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    evaluator = GradientEvaluator(robot, "kinematic:capacity:+x", None)
+    problem = PlacementProblem(robot, evaluator, np.array([1.0, 0.5, 0.35]), None, robot.hold_configuration())
+    z = problem.start(0.3, np.random.default_rng(0))
+    problem.objective(z)
+    q = problem.configuration(z)
+    reference = mobmanip.analyze(robot, q, measures=("kinematic",)).measures["kinematic"].support(np.eye(2)[0])
+    before = evaluator.evaluations
+    value, ok = problem.value_at(q)
+    assert ok and evaluator.evaluations == before and value == pytest.approx(reference, rel=1e-12)
+    moved = q.copy()
+    moved[-1] += 1e-3
+    value2, _ = problem.value_at(moved)
+    assert evaluator.evaluations == before + 1
+    expected = mobmanip.analyze(robot, moved, measures=("kinematic",)).measures["kinematic"].support(np.eye(2)[0])
+    assert value2 == pytest.approx(expected, rel=1e-12)

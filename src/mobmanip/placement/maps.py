@@ -323,7 +323,7 @@ def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, s
             z = newton_project(problem, z, bounds)
             if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding
                 continue
-        value, _, ok, _ = problem.lockstep.ask(problem.configuration(z))
+        value, ok = problem.value_at(problem.configuration(z))
         if ok and (best is None or value > best[0]):
             best = (float(value), z)
         if best is not None:  # a seeded or first fresh start that succeeds is kept
