@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from .rank import guarded, svd_full_rank
-from .tree_adjoint import TreeAdjoint, TreePass
+from .tree_adjoint import TreeAdjoint, TreePass, _first_call
 
 
 def _T(a: np.ndarray) -> np.ndarray:
@@ -225,10 +225,58 @@ def grasp_position_adjoint(positions, W_bar, M_o_bar, mass, rows, linear_rows, a
     return r_bar - r_bar.mean(axis=1, keepdims=True)
 
 
+def kinematic_chunk_compiled(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None = None):
+    """:func:`gradient_chunk` for a kinematic objective through the compiled row loops of
+    :mod:`mobmanip.gradients.tree_kernel` (the index's own adjoint stays in NumPy): the same values
+    and gradients to round-off, each row computed on its own. ``None`` where a row's rank is not
+    certified by the Gram bound (then the NumPy chain decides, with its SVD)."""
+    with _first_call("kinematic chain"):  # its four loops compile on a first call, announced once
+        return _kinematic_chunk(ev, tree, qs, passes)
+
+
+def _kinematic_chunk(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None):
+    kernel = tree.kernel
+    assert kernel is not None
+    t = tree.run_kinematic(qs)
+    n, nv, k = qs.shape[0], tree.nv, tree.k
+    task = ev.task
+    rows, m = np.asarray(task.rows, dtype=np.int64), task.dim
+    S, vlim = ev.S_contiguous, ev.velocity_limits
+    W, _, _, moving = ev._object_terms(t.positions)
+    W = np.ascontiguousarray(W)
+    Jh, X, C, bound = np.empty((n, k * m, S.shape[1])), np.empty((n, k * m, m)), np.empty((n, m, m)), np.empty(n)
+    try:
+        kernel.kinematic_shape(t.frames, rows, S, vlim, W, Jh, X, C, bound)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.all(bound < GRAM_CERTIFICATE):
+        return None
+    value, C_bar, _ = index_adjoint(ev.objective, C, None)
+    J_bar6, W_bar = np.empty((n, k, 6, nv)), np.empty((n, m, k * m))
+    kernel.kinematic_shape_adjoint(C, np.ascontiguousarray(C_bar), X, Jh, W, S, rows, vlim, k, J_bar6, W_bar)
+    if moving:
+        p_bar = grasp_position_adjoint(t.positions, W_bar, None, ev.mass, list(task.rows), task.linear_rows,
+                                       task.angular_rows)  # fmt: skip
+        p_bar = np.ascontiguousarray(p_bar)
+    else:
+        p_bar = np.zeros((n, k, 3))
+    grad = np.empty((n, nv))
+    kernel.frame_term(t.xi, t.positions, t.frames, tree.supports, tree.suffix, J_bar6, p_bar, grad)
+    if passes is not None:
+        passes.append(t)
+    return np.asarray(value, dtype=float), grad, np.ones(n, dtype=bool)
+
+
 def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None = None):
     """(values, gradients (n, nv), defined) of a :class:`mobmanip.gradients.GradientEvaluator`'s
     objective at qs (n, nq), by the reverse chain; the chunk's :class:`TreePass` is appended to
-    ``passes`` when given (its frames' poses and Jacobians, for callers that need them too)."""
+    ``passes`` when given (its frames' poses and Jacobians, for callers that need them too). A
+    kinematic objective runs the compiled row loops where Numba is available
+    (:func:`kinematic_chunk_compiled`)."""
+    if ev.objective.ellipsoid == "kinematic" and tree.kernel is not None:
+        found = kinematic_chunk_compiled(ev, tree, qs, passes)
+        if found is not None:
+            return found
     t: TreePass = tree.run(qs, dynamics=ev.objective.ellipsoid == "dynamic")
     if passes is not None:
         passes.append(t)

@@ -254,6 +254,8 @@ class GradientEvaluator:
         #: W, M_o, g_o of a constant object per chunk size (:meth:`_object_terms`), with its key.
         self._constant_object: tuple | None = None
         self.S = robot.S
+        #: S as a C-contiguous float array (the compiled row loops' argument).
+        self.S_contiguous = np.ascontiguousarray(robot.S, dtype=float)
         self.Q = robot.Q
         self.Q_identity = bool(np.array_equal(self.Q, np.eye(self.Q.shape[0])))
         self.velocity_limits = np.asarray(robot.velocity_limits, dtype=float)

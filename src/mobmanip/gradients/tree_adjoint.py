@@ -137,7 +137,7 @@ class TreeAdjoint:
         self.mass = np.array([float(inr.mass) for inr in inertias])
         self.lever = np.array([np.asarray(inr.lever, dtype=float) for inr in inertias])
         self.rot_inertia = np.array([np.asarray(inr.inertia, dtype=float) for inr in inertias])
-        self.vmap = self.probed.vmap.astype(int)
+        self.vmap = self.probed.vmap.astype(np.int64)
         self.kernel = _kernel() if compiled is None or compiled else None
         if compiled and self.kernel is None:
             raise ModelError("the compiled tree loops need Numba")
@@ -146,14 +146,14 @@ class TreeAdjoint:
         self.dof_count = np.array([model.joints[j].nv for j in range(1, model.njoints)], dtype=np.int64)
         self.armature = np.asarray(model.armature, dtype=float)
         self._buffers: tuple[np.ndarray, np.ndarray] | None = None  # the largest chunk's so far
-        self._x_cols = self.probed.probe_cols[:, 0].astype(int)  # probe columns, as indices
-        self._y_cols = self.probed.probe_cols[:, 1].astype(int)
+        self._x_cols = self.probed.probe_cols[:, 0].astype(np.int64)  # probe columns, as indices
+        self._y_cols = self.probed.probe_cols[:, 1].astype(np.int64)
 
     # ----- the Pinocchio pass -----
 
-    def run(self, qs: np.ndarray, dynamics: bool = True) -> TreePass:
-        """The quantities at qs, (n, nq), from one ``computeJointJacobians`` call per configuration
-        of the probed model; M and g only with ``dynamics``."""
+    def _joint_jacobians(self, qs: np.ndarray) -> np.ndarray:
+        """The probed model's world joint Jacobians at qs (n, nq), (n, 6, nv_p): one
+        ``computeJointJacobians`` call per configuration, into a buffer reused across calls."""
         n = qs.shape[0]
         probed = self.probed
         model, data = probed.model, probed.data
@@ -164,6 +164,13 @@ class TreeAdjoint:
         jacobians = pin.computeJointJacobians
         for q, Jw in zip(qp, Ja):
             Jw[...] = jacobians(model, data, q)
+        return Ja
+
+    def run(self, qs: np.ndarray, dynamics: bool = True) -> TreePass:
+        """The quantities at qs, (n, nq), from one ``computeJointJacobians`` call per configuration
+        of the probed model; M and g only with ``dynamics``."""
+        n = qs.shape[0]
+        Ja = self._joint_jacobians(qs)
         xi = Ja[:, :, self.vmap]
         x_cols, y_cols = Ja[:, :, self._x_cols], Ja[:, :, self._y_cols]
         points = frame_positions(x_cols, y_cols)  # (n, k + nj, 3)
@@ -186,6 +193,22 @@ class TreeAdjoint:
         t.frame_rotations = all_rotations[:, : self.k]
         if dynamics:
             self._mass_and_gravity(t)
+        return t
+
+    def run_kinematic(self, qs: np.ndarray) -> TreePass:
+        """:meth:`run` without dynamics, through the compiled row loop
+        (:func:`mobmanip.gradients.tree_kernel.tree_frames`; needs :attr:`kernel`). The same
+        quantities to round-off (tests/test_gradient_kernel.py)."""
+        assert self.kernel is not None
+        n = qs.shape[0]
+        Ja = self._joint_jacobians(qs)
+        nf, k, nv = len(self._x_cols), self.k, self.nv
+        xi, points = np.empty((n, 6, nv)), np.empty((n, nf, 3))
+        rotations, reference, frames = np.empty((n, nf, 3, 3)), np.empty((n, 3)), np.empty((n, k, 6, nv))
+        self.kernel.tree_frames(Ja, self.vmap, self._x_cols, self._y_cols, k, self.supports, xi, points, rotations,
+                                reference, frames)  # fmt: skip
+        t = TreePass(xi, None, None, points[:, :k], frames, rotations[:, k:], points[:, k:], reference)
+        t.frame_rotations = rotations[:, :k]
         return t
 
     def _mass_and_gravity(self, t: TreePass) -> None:
@@ -363,7 +386,9 @@ def _gamma(y: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 #: Compile time of each compiled loop on the project's 2-core machine with an empty cache (s),
 #: printed as the expectation when a first call compiles it.
-_COMPILE_SECONDS = {"world_inertias": 2.0, "mass_and_gravity": 3.0, "bilinear_rows": 3.0}
+_COMPILE_SECONDS = {"world_inertias": 2.0, "mass_and_gravity": 3.0, "bilinear_rows": 3.0, "kinematic chain": 7.0}
+#: Loops compiled together, under one name: the kinematic measures' chain.
+_GROUPS = {"kinematic chain": ("tree_frames", "kinematic_shape", "kinematic_shape_adjoint", "frame_term")}
 #: The loops already called in this process (no compile, no announcement).
 _CALLED: set[str] = set()
 
@@ -375,7 +400,9 @@ def _first_call(name: str):
         return contextlib.nullcontext()
     _CALLED.add(name)
     kernel = _kernel()
-    return announced_compile(f"the gradient tree kernel's {name} loop", _COMPILE_SECONDS[name], [getattr(kernel, name)])
+    loops = [getattr(kernel, loop) for loop in _GROUPS.get(name, (name,))]
+    what = f"the gradient tree kernel's {name} loops" if name in _GROUPS else f"the gradient tree kernel's {name} loop"
+    return announced_compile(what, _COMPILE_SECONDS[name], loops)
 
 
 @functools.cache
