@@ -100,3 +100,17 @@ def test_an_uncertified_rank_is_left_to_the_numpy_chain():
     assert not ok[0] and ok[1] and np.array_equal(ok, ref_ok)
     assert value[0] == 0.0 and not grad[0].any()
     assert np.array_equal(value, ref_value) and np.array_equal(grad, ref_grad)
+
+
+def test_a_task_with_more_rows_than_the_robot_has_velocities_is_undefined():
+    """Stretch (5 reduced velocities) in the spatial task (6 rows): its kinematic ellipsoid is
+    flat in the task (analyze gives a zero semi-axis), so its log-volume has no value to climb:
+    the chain says undefined (it used to solve the singular Jh Jh^T and report about -40)."""
+    robot = mobmanip.load_robot("stretch")
+    q = robot.hold_configuration()
+    axes = mobmanip.analyze(robot, q, "spatial", measures=("kinematic",)).measures["kinematic"].semi_axes
+    assert robot.nx == 5 and axes.min() <= 1e-12 * axes.max()
+    ev = GradientEvaluator(robot, "kinematic:log_volume", "spatial")
+    value, grad, ok = ev(q)
+    assert not ok and value == 0.0 and not np.any(grad)
+    assert GradientEvaluator(robot, "kinematic:log_volume", "translational")(q)[2]  # 3 rows: defined

@@ -230,6 +230,8 @@ def kinematic_chunk_compiled(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list
     :mod:`mobmanip.gradients.tree_kernel` (the index's own adjoint stays in NumPy): the same values
     and gradients to round-off, each row computed on its own. ``None`` where a row's rank is not
     certified by the Gram bound (then the NumPy chain decides, with its SVD)."""
+    if tree.k * ev.task.dim > ev.S.shape[1]:  # more task rows than reduced velocities: NumPy says undefined
+        return None
     with _first_call("kinematic chain"):  # its four loops compile on a first call, announced once
         return _kinematic_chunk(ev, tree, qs, passes)
 
@@ -288,6 +290,10 @@ def gradient_chunk(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None = 
     J_u = J @ S
     W, M_o, g_o, moving = ev._object_terms(t.positions)
     if ev.objective.ellipsoid == "kinematic":
+        if ka * m > J_u.shape[-1]:
+            # K = Jh Jh^T is singular with fewer reduced velocities than the hands' task rows (a
+            # 5-joint arm in a 6-D task): the ellipsoid is flat in the task, its index undefined
+            return np.zeros(n), np.zeros((n, nv)), np.zeros(n, dtype=bool)
         Jh = J_u * ev.velocity_limits
         ok = full_rank(Jh)
         value, J_u_bar, W_bar = kinematic_adjoint(ev.objective, J_u, W, ev.velocity_limits, lambda A: guarded(A, ok))
