@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import mobmanip
@@ -239,8 +240,13 @@ def test_hold_adds_the_reach_that_holds_per_axis(tmp_path):
         assert 0.0 < held["straight_line"] <= r["straight_line"] + 1e-12
         e = np.zeros(P.dim)
         e[k // 2] = 1.0 if k % 2 == 0 else -1.0
-        tau = P.witness_at(held["straight_line"] * e, least="xdot").variables["tau"]
-        assert replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5)).holds
+        tau = np.array(held["efforts"])  # what the JSON says achieves it: a point of the set ...
+        assert P.witness_at(held["straight_line"] * e, least="xdot").variables["tau"] == pytest.approx(tau, abs=1e-9)
+        kept = replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5))  # ... that holds 20 ms
+        assert kept.holds and kept.object_acceleration[0] == pytest.approx(held["straight_line"] * e, abs=1e-9)
+        weight = (float(pin.computeTotalMass(robot.model)) + 2.0) * 9.81
+        normals = held["normal_forces"]
+        assert min(normals.values()) > 0.0 and sum(normals.values()) == pytest.approx(weight, rel=1e-6)
         if held["instant_gives_way"] is not None:
             gave_way += 1
             assert held["instant_holds_for"] < 0.02

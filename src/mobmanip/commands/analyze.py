@@ -84,10 +84,14 @@ def _add_held(robot, q, result, document, duration: float, floor) -> None:
             direction[k // 2] = 1.0 if k % 2 == 0 else -1.0
             found = held_reach(robot, q, task_set, direction, result.task, object_mass=result.held_object.mass,
                                floor=floor, duration=duration)  # fmt: skip
+            held = found.hold
             reach["held"] = {
                 "duration": duration,
                 "straight_line": found.reach,
-                "gives_way": None if found.hold is None else found.hold.binds,
+                # what achieves it: the efforts replayed and the floor's normal forces at the start
+                "efforts": None if found.witness is None else found.witness.variables["tau"].tolist(),
+                "normal_forces": None if held is None else dict(zip(held.contacts, held.normal[0].tolist())),
+                "gives_way": None if held is None else held.binds,
                 "instant_fraction": found.fraction,
                 "instant_holds_for": found.instant_hold.held,
                 "instant_gives_way": found.instant_hold.binds,
