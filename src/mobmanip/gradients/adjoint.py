@@ -244,8 +244,12 @@ def _kinematic_chunk(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None)
     task = ev.task
     rows, m = np.asarray(task.rows, dtype=np.int64), task.dim
     S, vlim = ev.S_contiguous, ev.velocity_limits
+    # one argument type per loop (each further type is another compile and another cache load):
+    # W read-only (a constant object's is cached read-only), the hands' positions contiguous
     W, _, _, moving = ev._object_terms(t.positions)
     W = np.ascontiguousarray(W)
+    W.flags.writeable = False
+    positions = np.ascontiguousarray(t.positions)
     Jh, X, C, bound = np.empty((n, k * m, S.shape[1])), np.empty((n, k * m, m)), np.empty((n, m, m)), np.empty(n)
     try:
         kernel.kinematic_shape(t.frames, rows, S, vlim, W, Jh, X, C, bound)
@@ -263,7 +267,7 @@ def _kinematic_chunk(ev, tree: TreeAdjoint, qs: np.ndarray, passes: list | None)
     else:
         p_bar = np.zeros((n, k, 3))
     grad = np.empty((n, nv))
-    kernel.frame_term(t.xi, t.positions, t.frames, tree.supports, tree.suffix, J_bar6, p_bar, grad)
+    kernel.frame_term(t.xi, positions, t.frames, tree.supports, tree.suffix, J_bar6, p_bar, grad)
     if passes is not None:
         passes.append(t)
     return np.asarray(value, dtype=float), grad, np.ones(n, dtype=bool)

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArgumentError, SpecError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
+from ..sets.lifted import Witness
 from ..terms.constraints.floor import LEVEL_ROWS, Floor
 from ..terms.grasp import GRAVITY
 from .ground import floor_wrench
@@ -238,7 +239,7 @@ class HeldReach:
     hold: Hold | None
     instant_hold: Hold
     fraction: float
-    witness: object | None
+    witness: Witness | None
 
 
 def held_reach(
@@ -305,7 +306,7 @@ def held_reach(
     witness, instant_hold = run(top)
     if instant_hold.holds:
         return HeldReach(d, top, instant, float(duration), instant_hold, instant_hold, fraction, witness)
-    best: tuple[float, Hold, object] | None = None
+    best: tuple[float, Hold, Witness] | None = None
     low, high = 0.0, top
     while high - low > tolerance * instant:
         middle = 0.5 * (low + high)

@@ -16,8 +16,8 @@ between greenlets costs about a microsecond; the threads this used before paid t
 microseconds per hand-over, more when the two threads sat on different cores.
 
 An interrupt (``KeyboardInterrupt``, or any exception that is not an ``Exception``) raised inside
-a run ends every run at once and is raised in the caller; an ``Exception`` ends every run too, and
-the first run's (in run order) is raised once every run has been unwound.
+a run ends every run at once and is raised in the caller; so does an ``Exception``, raised once
+the other runs have been unwound where they wait. No batch is evaluated after either.
 """
 
 from __future__ import annotations
@@ -62,8 +62,8 @@ class Lockstep(Generic[T]):
         return slot.ask(request)
 
     def run(self, runs: Sequence[Callable[[], T]]) -> list[T]:
-        """Every run's return value, in order. The first exception a run raises (in run order) is
-        raised here once every run has ended."""
+        """Every run's return value, in order. An exception in a run (or in the batched
+        evaluation) ends every run: it is raised here once the others have been unwound."""
         slots = [_Slot(self, run) for run in runs]
         try:
             for slot in slots:
