@@ -240,9 +240,10 @@ def test_hold_adds_the_reach_that_holds_per_axis(tmp_path):
         assert 0.0 < held["straight_line"] <= r["straight_line"] + 1e-12
         e = np.zeros(P.dim)
         e[k // 2] = 1.0 if k % 2 == 0 else -1.0
-        tau = np.array(held["efforts"])  # what the JSON says achieves it: a point of the set ...
-        assert P.witness_at(held["straight_line"] * e, least="xdot").variables["tau"] == pytest.approx(tau, abs=1e-9)
-        kept = replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5))  # ... that holds 20 ms
+        tau = np.array(held["efforts"])  # what the JSON says achieves it: efforts within limits ...
+        assert np.all(np.abs(tau) <= robot.effort_limits * (1.0 + 1e-9))
+        assert P.contains(held["straight_line"] * e)[0]
+        kept = replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5))  # ... that reach it and hold 20 ms
         assert kept.holds and kept.object_acceleration[0] == pytest.approx(held["straight_line"] * e, abs=1e-9)
         weight = (float(pin.computeTotalMass(robot.model)) + 2.0) * 9.81
         normals = held["normal_forces"]

@@ -19,7 +19,9 @@ applied from rest, to a referee whose supports are equally stiff (``equal_suppor
   instantaneous property; a replay of constant efforts leaves the state it was computed for.
   mobmanip's own replay (:mod:`mobmanip.motion.hold`) predicts that drift: it follows MuJoCo's
   normal forces and accelerations while every contact is loaded, and the reach it holds for 20 ms
-  holds for 20 ms in MuJoCo on every axis, TIAGo++ -x included (the last test).
+  (with the efforts that hold it, not the calm ones) holds for 20 ms in MuJoCo on every axis,
+  TIAGo++ -x included, where it is 81 % of the maximum; 97 % of that maximum holds for about
+  7.5 ms with the best efforts found, in mobmanip's replay and in MuJoCo (the last two tests).
 
 The sharing matters: with ``load="any"`` (every sharing that balances the robot: exact for
 tip-over, optimistic for traction) the predicted normal forces differ from MuJoCo's by up to 43 %
@@ -174,7 +176,9 @@ def test_the_replay_predicts_mujoco_and_held_reaches_hold_for_20_ms(name):
     within 1 % of its norm (measured: 0.33 % and 0.18 %). The held reach (the largest
     straight-line reach whose efforts the replay holds for 20 ms) then holds for 20 ms in MuJoCo
     on every axis, under the criteria of the test above, TIAGo++ -x included (its instantaneous
-    maximum gives way after 2-7 ms: the replay predicts its back caster unloading at 2.25 ms).
+    maximum's calm efforts give way after 2-7 ms: the replay predicts its back caster unloading
+    at 2.25 ms). Every held reach is at least 80 % of its maximum (measured: 81 % on TIAGo++ -x,
+    96-99.5 % elsewhere).
     """
     robot, q, task, casters, base = _case(name)
     grounded = mobmanip.analyze(
@@ -203,9 +207,35 @@ def test_the_replay_predicts_mujoco_and_held_reaches_hold_for_20_ms(name):
         assert compared >= 8  # 2 ms at least
         found = held_reach(robot, q, grounded, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
         gave_way += not found.instant_hold.holds
-        assert found.reach > 0.25 * found.instant, (name, e)
+        assert found.reach > 0.8 * found.instant, (name, e)  # measured: at least 81 % (TIAGo++ -x)
         run = referee.rollout(found.witness.variables["tau"], duration=0.02)
         assert -run.penetration.min() <= 1e-4, (name, e, -run.penetration.min(axis=0))
         assert np.abs(run.base_rpy[:, :2]).max() <= 5e-4, (name, e)
         assert _slip(run) <= 1e-3, (name, e, _slip(run))
     assert gave_way >= 1  # on every case some instantaneous maximum does not hold for 20 ms
+
+
+def test_how_long_a_maximum_holds_is_predicted():
+    """TIAGo++ -x, the axis whose maximum does not hold for 20 ms: the efforts mobmanip finds to
+    hold the largest reach for 10 ms (95 % of the instantaneous maximum) hold 10 ms in MuJoCo too,
+    and by 20 ms both give way (mobmanip's replay: a back caster unloads after 10 ms; MuJoCo,
+    where the load then moves off that caster: a wheel slides faster than 0.1 m/s, measured
+    0.33 m/s). The reach held for 20 ms is 81 % of the maximum: no
+    efforts the held reach's program finds hold 97 % of it that long (its bound, 82 %, is the
+    largest reach its linearised rows allow around its own replay)."""
+    robot, q, task, casters, _ = _case("tiago_dual")
+    grounded = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=MU),)
+    ).measures["dynamic_polytope"]
+    referee = build(robot, q, support_points=casters, object=_object(robot, q, task), mu=MU)
+    e = -np.eye(6)[0]
+    found = held_reach(robot, q, grounded, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.01)
+    assert found.reach > 0.94 * found.instant
+    tau = found.witness.variables["tau"]
+    run = referee.rollout(tau, duration=0.01)
+    assert -run.penetration.min() <= 1e-4 and np.abs(run.base_rpy[:, :2]).max() <= 5e-4 and _slip(run) <= 1e-3
+    assert _slip(referee.rollout(tau, duration=0.02)) > 0.1
+    ours = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
+    assert not ours.holds and 0.01 <= ours.held < 0.02
+    longer = held_reach(robot, q, grounded, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
+    assert longer.reach <= longer.bound < 0.9 * longer.instant

@@ -208,7 +208,7 @@ def _describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str
             text += f"\n          held {ms:g} ms: straight line {held['straight_line']:.4g}"
             if held["instant_gives_way"] is not None:
                 text += (
-                    f" (at {100 * held['instant_fraction']:g} % of the maximum the efforts give way after "
+                    f" (at {100 * held['instant_fraction']:g} % of the maximum its calm efforts give way after "
                     f"{1e3 * held['instant_holds_for']:.3g} ms: {held['instant_gives_way']})"
                 )
         lines.append(text)

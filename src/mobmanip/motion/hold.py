@@ -39,7 +39,8 @@ from ..errors import ArgumentError, SpecError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.lifted import Witness
-from ..terms.constraints.floor import LEVEL_ROWS, Floor
+from ..sets.linear_programs import LinearProgram
+from ..terms.constraints.floor import LEVEL_ROWS, Floor, compliant_sharing
 from ..terms.grasp import GRAVITY
 from .ground import floor_wrench
 from .in_motion import motion_terms
@@ -59,6 +60,7 @@ class Hold:
         binds: what gave way first, e.g. ``"caster_back_left lifts off the floor"`` (None: nothing).
         time: the samples' times (s), (N,).
         q: the configuration at each sample, (N, nq).
+        velocity: the reduced velocity at each sample, (N, nx).
         object_acceleration: the object's acceleration in the task's rows per sample, (N, m).
         normal: every contact's normal force per sample (N), (N, n).
         use: every driven wheel's traction use per sample, (N, d).
@@ -71,6 +73,7 @@ class Hold:
     binds: str | None
     time: np.ndarray
     q: np.ndarray
+    velocity: np.ndarray
     object_acceleration: np.ndarray
     normal: np.ndarray
     use: np.ndarray
@@ -87,6 +90,14 @@ def forward_accelerations(terms, tau: np.ndarray) -> tuple[np.ndarray, np.ndarra
     """(xdot (nx,), hands' wrench h (m k,), object acceleration a_o (m,)) under efforts tau, from
     the three equations of the module's docstring (least squares where the grasp leaves internal
     wrenches undetermined)."""
+    nx, mk = terms.P.shape[0], terms.J_u.shape[0]
+    b = np.concatenate([terms.Q @ tau + terms.xi, terms.grasp_drift - terms.drift, terms.c_o + terms.g_o])
+    solution = np.linalg.lstsq(_chain(terms), b, rcond=None)[0]
+    return solution[:nx], solution[nx : nx + mk], solution[nx + mk :]
+
+
+def _chain(terms) -> np.ndarray:
+    """The closed chain's matrix over (xdot, h, a_o): the left-hand sides of the module's docstring."""
     nx, mk, m = terms.P.shape[0], terms.J_u.shape[0], terms.W.shape[0]
     A = np.zeros((nx + mk + m, nx + mk + m))
     A[:nx, :nx] = terms.P
@@ -95,9 +106,7 @@ def forward_accelerations(terms, tau: np.ndarray) -> tuple[np.ndarray, np.ndarra
     A[nx : nx + mk, nx + mk :] = -terms.W.T
     A[nx + mk :, nx : nx + mk] = terms.W
     A[nx + mk :, nx + mk :] = -terms.M_o
-    b = np.concatenate([terms.Q @ tau + terms.xi, terms.grasp_drift - terms.drift, terms.c_o + terms.g_o])
-    solution = np.linalg.lstsq(A, b, rcond=None)[0]
-    return solution[:nx], solution[nx : nx + mk], solution[nx + mk :]
+    return A
 
 
 def replay(
@@ -163,7 +172,7 @@ def replay(
     rows = [held_rows.index(r) for r in task_space.rows]
     count = int(math.ceil(duration / step - 1e-9))
     x = np.zeros(robot.nx)
-    times, configurations, accelerations, normals, uses = [], [], [], [], []
+    times, configurations, velocities, accelerations, normals, uses = [], [], [], [], [], []
     binds: str | None = None
     held = duration
     for i in range(count + 1):
@@ -183,6 +192,7 @@ def replay(
         normal, _, use = contact_forces(support.world_points(pose), driven, force, moment, zmp, mu, stiffness)
         times.append(t)
         configurations.append(q)
+        velocities.append(x)
         accelerations.append(a_o[rows])
         normals.append(normal)
         uses.append(use)
@@ -209,11 +219,98 @@ def replay(
         binds=binds,
         time=np.array(times),
         q=np.array(configurations),
+        velocity=np.array(velocities),
         object_acceleration=np.array(accelerations),
         normal=np.array(normals),
         use=np.array(uses),
         contacts=names,
         wheels=wheels,
+    )
+
+
+@dataclass(frozen=True)
+class ContactMaps:
+    """The contacts' forces at one state of a replay as affine functions of the efforts tau (the
+    state fixed; see :func:`contact_maps`).
+
+    Attributes:
+        normal: (N (n, nx), n0 (n,)): every contact's normal force N tau + n0 (N).
+        tangential: (T (2d, nx), t0 (2d,)): the driven wheels' tangential forces (world x, y per
+            wheel) T tau + t0 + F s for any split s (N).
+        split: F (2d, f): the directions in which the wheels may share the load among themselves
+            (for two wheels on one axle, one: the lateral force passed between them).
+    """
+
+    normal: tuple[np.ndarray, np.ndarray]
+    tangential: tuple[np.ndarray, np.ndarray]
+    split: np.ndarray
+
+
+def contact_maps(
+    robot: Robot,
+    q: np.ndarray,
+    x: np.ndarray,
+    task: TaskSpace,
+    object_mass: float,
+    support,
+    stiffness: np.ndarray | None = None,
+) -> ContactMaps:
+    """The replay's contact forces at the state (q, x) as affine functions of the efforts.
+
+    At a fixed state every step of the replay is linear in tau: the closed chain's solution
+    (:func:`forward_accelerations`), the object's acceleration from the hands' motion,
+    ``a_o = (W^T)^+ (J_u xdot + d/dt(J_u) x - Wdot^T v_o)``, the floor's resultant wrench (affine in
+    xdot and a_o; :func:`mobmanip.motion.ground.floor_wrench`), the compliant normal forces (linear
+    in the resultant's normal force and its moments) and the wheels' particular tangential forces.
+
+    Args:
+        robot, q, x: the robot, a configuration (nq,) and a reduced velocity (nx,).
+        task: the rows the hands hold the object in (the replay's: the task's and the level rows).
+        object_mass: the object's mass (kg).
+        support: the contacts (a :class:`mobmanip.robot.support.Support`).
+        stiffness: the contacts' relative stiffness, (n,); default all equal.
+    """
+    terms = motion_terms(robot, q, x, task, object_mass=object_mass)
+    nx, mk, m = terms.P.shape[0], terms.J_u.shape[0], terms.W.shape[0]
+    rhs = np.zeros((nx + mk + m, nx + 1))
+    rhs[:nx, :nx] = terms.Q
+    rhs[:nx, nx] = terms.xi
+    rhs[nx : nx + mk, nx] = terms.grasp_drift - terms.drift
+    rhs[nx + mk :, nx] = terms.c_o + terms.g_o
+    solution = np.linalg.lstsq(_chain(terms), rhs, rcond=None)[0]
+    X, x0 = solution[:nx, :nx], solution[:nx, nx]  # xdot = X tau + x0
+    to_object = np.linalg.pinv(terms.W.T)
+    rows = list(task.rows)
+    rate, offset = np.zeros((6, nx)), np.zeros(6)
+    rate[rows] = to_object @ terms.J_u
+    offset[rows] = to_object @ (terms.drift - terms.grasp_drift)
+    constant, linear = floor_wrench(robot, q, x, object_mass, offset, rate)
+    G, g = linear @ X, constant + linear @ x0  # [force; moment] = G tau + g
+    z = support.floor_z
+    moments = np.zeros((3, 6))  # (f_z, f_z x_zmp, f_z y_zmp) from the wrench
+    moments[0, 2] = 1.0
+    moments[1, 0], moments[1, 4] = z, -1.0
+    moments[2, 3], moments[2, 1] = 1.0, z
+    pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
+    xy = support.world_points(pose)[:, :2]
+    n = len(xy)
+    balance = np.vstack([np.ones(n), xy.T, compliant_sharing(xy, stiffness)])
+    to_normals = np.linalg.solve(balance, np.eye(n)[:, :3]) @ moments
+    driven = np.array([c.driven for c in support.contacts])
+    w = xy[driven]
+    d = len(w)
+    B = np.zeros((3, 2 * d))
+    B[0, 0::2], B[1, 1::2] = 1.0, 1.0
+    B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
+    horizontal = np.zeros((3, 6))  # (f_x, f_y, m_z)
+    horizontal[0, 0], horizontal[1, 1], horizontal[2, 5] = 1.0, 1.0, 1.0
+    _, sigma, vt = np.linalg.svd(B)
+    rank = int(np.sum(sigma > 1e-12 * sigma[0]))
+    to_tangential = np.linalg.pinv(B) @ horizontal
+    return ContactMaps(
+        normal=(to_normals @ G, to_normals @ g),
+        tangential=(to_tangential @ G, to_tangential @ g),
+        split=vt[rank:].T,
     )
 
 
@@ -227,9 +324,12 @@ class HeldReach:
         instant: the instantaneous straight-line reach of the set (task units).
         duration: the duration asked for (s).
         hold: the replay of the held reach's efforts (None when the reach is 0).
-        instant_hold: the replay of the instantaneous maximum's efforts (at ``fraction`` of it).
+        instant_hold: the replay of the instantaneous maximum's calm efforts (at ``fraction`` of it).
         fraction: the share of the instantaneous maximum ``instant_hold`` replayed.
         witness: the solution whose efforts were replayed at the held reach (None when 0).
+        bound: the largest reach the linearised program allows around the held reach's own
+            replay (its last iteration; the held reach is within ``tolerance`` of it when the
+            iterations settled), or None when the reach came from the fallback bisection.
     """
 
     direction: np.ndarray
@@ -240,6 +340,7 @@ class HeldReach:
     instant_hold: Hold
     fraction: float
     witness: Witness | None
+    bound: float | None = None
 
 
 def held_reach(
@@ -255,18 +356,28 @@ def held_reach(
     fraction: float = 0.97,
     tolerance: float = 0.005,
     step: float = STEP,
+    iterations: int = 8,
 ) -> HeldReach:
     """The largest straight-line reach along ``direction`` whose efforts, held constant from rest,
     keep every support loaded and every driven wheel within friction for ``duration`` (this
-    module's replay).
+    module's replay), with the efforts that hold it.
 
-    The efforts at a point s d of a grounded polytope are its calm witness
-    (``witness_at(s d, least="xdot")``: among the solutions with half the most slack, the least
-    reduced acceleration). The instantaneous maximum is replayed at ``fraction`` of it (at the
-    maximum itself some limit is tight and gives way at once); s is then found by bisection to
-    ``tolerance`` times the instantaneous reach, on the assumption that a smaller s holds longer
-    (true of every axis of the built-in robots sampled here; a replay at the result is returned,
-    so the claim is checked where it is reported).
+    Which efforts reach a point matters: a redundant robot reaches it with many, and they drift
+    apart once the robot moves. The reach is found by a sequential linear program over the
+    polytope's own rows (every limit at t = 0) and, at every step of a replay, its contact forces
+    as affine functions of the efforts at that step's state (:func:`contact_maps`): each normal
+    force at least the reserve, each driven wheel's tangential force in the friction pyramid with
+    any split between the wheels. Around the states of the last replay it finds the largest reach
+    s, then, ``tolerance`` times the instantaneous reach below it, the efforts with the most
+    margin at every step; their replay gives the next states. The first states are those of the
+    calm efforts at ``fraction`` of the instantaneous maximum. It stops when the largest reach
+    settles (within a tenth of ``tolerance``) and its efforts hold, after at most ``iterations``
+    rounds, and returns the largest reach whose replay held (every claim is a replay's). Where no
+    round holds, the reach is found by bisection over the calm efforts
+    (``witness_at(s d, least="xdot")``), assuming a smaller reach holds longer.
+
+    The instantaneous maximum is replayed with its calm efforts at ``fraction`` of it (at the
+    maximum itself some limit is tight and gives way at once).
 
     Args:
         robot, q, task, object_mass: as the analysis that produced ``polytope``.
@@ -275,9 +386,10 @@ def held_reach(
         direction: the task direction, (m,) (normalised here).
         floor: the floor the polytope was computed on (its mu and reserve), default ``Floor()``.
         duration: how long the efforts must hold (s).
-        fraction: the share of the instantaneous reach replayed first, in (0, 1].
-        tolerance: the bisection's resolution, as a share of the instantaneous reach.
+        fraction: the share of the instantaneous reach replayed with calm efforts, in (0, 1].
+        tolerance: the resolution, as a share of the instantaneous reach.
         step: the replay's integration step (s).
+        iterations: the most rounds of the sequential program.
 
     Raises:
         TaskError: a polytope without efforts, or a direction not in the task's dimension.
@@ -290,34 +402,138 @@ def held_reach(
         raise TaskError("a held reach replays efforts: the set must be a polytope with the efforts tau as a variable")
     if not (0.0 < fraction <= 1.0 and 0.0 < tolerance < 1.0):
         raise ArgumentError(f"fraction must be in (0, 1] and tolerance in (0, 1), got {fraction!r}, {tolerance!r}")
+    if isinstance(iterations, bool) or not isinstance(iterations, int) or iterations < 1:
+        raise ArgumentError(f"iterations must be a positive integer, got {iterations!r}")
+    floor = Floor() if floor is None else floor
 
-    def run(s: float):
+    def play(tau: np.ndarray) -> Hold:
+        return replay(robot, q, tau, task, object_mass=object_mass, floor=floor, duration=duration, step=step,
+                      stop=False)  # fmt: skip
+
+    def calm(s: float) -> tuple[Witness, Hold]:
         witness = polytope.witness_at(s * d, least="xdot")
-        hold = replay(robot, q, witness.variables["tau"], task, object_mass=object_mass, floor=floor,
-                      duration=duration, step=step)  # fmt: skip
-        return witness, hold
+        return witness, play(witness.variables["tau"])
 
     instant = float(polytope.straight_line_reach(d))
     if instant <= 0.0:
-        witness, hold = run(0.0)
+        witness, hold = calm(0.0)
         return HeldReach(d, 0.0, 0.0, float(duration), hold if hold.holds else None, hold, fraction,
                          witness if hold.holds else None)  # fmt: skip
     top = fraction * instant
-    witness, instant_hold = run(top)
-    if instant_hold.holds:
+    witness, instant_hold = calm(top)
+    if instant_hold.holds and fraction == 1.0:
         return HeldReach(d, top, instant, float(duration), instant_hold, instant_hold, fraction, witness)
-    best: tuple[float, Hold, Witness] | None = None
+    program = _HoldingProgram(robot, q, polytope, d, task, object_mass, floor)
+    best: tuple[float, Hold, Witness] | None = (top, instant_hold, witness) if instant_hold.holds else None
+    hold, last, bound = instant_hold, None, None
+    for _ in range(iterations):
+        found = program.solve(hold, tolerance * instant)
+        if found is None:
+            break
+        bound, witness = found
+        hold = play(witness.variables["tau"])
+        reach = float(witness.point @ d)
+        if hold.holds and (best is None or reach > best[0]):
+            best = (reach, hold, witness)
+        if hold.holds and last is not None and abs(bound - last) <= 0.1 * tolerance * instant:
+            break
+        last = bound
+    if best is not None:
+        return HeldReach(d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], bound)
     low, high = 0.0, top
     while high - low > tolerance * instant:
         middle = 0.5 * (low + high)
-        witness, hold = run(middle)
+        witness, hold = calm(middle)
         if hold.holds:
             low, best = middle, (middle, hold, witness)
         else:
             high = middle
     if best is None:
-        witness, hold = run(0.0)
+        witness, hold = calm(0.0)
         if not hold.holds:
             return HeldReach(d, 0.0, instant, float(duration), None, instant_hold, fraction, None)
         best = (0.0, hold, witness)
     return HeldReach(d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2])
+
+
+class _HoldingProgram:
+    """The linear program of :func:`held_reach` around one replay's states (see its docstring).
+
+    Columns: the polytope's variables z, the wheels' splits per step, the reach s and the margin t.
+    """
+
+    def __init__(self, robot, q, polytope, d, task, object_mass, floor: Floor):
+        self.robot, self.polytope, self.d = robot, polytope, d
+        task_space = get_task(task or robot.spec.default_task)
+        held_rows = tuple(sorted(set(task_space.rows) | set(LEVEL_ROWS)))
+        labels = get_task("spatial").labels
+        self.welded = TaskSpace(f"{task_space.name}_level", held_rows, tuple(labels[r] for r in held_rows))
+        self.mass = float(robot.spec.object_mass if object_mass is None else object_mass)
+        self.support, mu, faces = floor.resolve(robot)
+        if mu is None:
+            raise TaskError("a held reach checks the wheels' traction: the floor needs a friction coefficient mu")
+        self.driven = np.array([c.driven for c in self.support.contacts])
+        self.stiffness = np.array([c.stiffness for c in self.support.contacts], dtype=float)
+        weight = (float(pin.computeTotalMass(robot.model)) + self.mass) * float(-GRAVITY[2])
+        self.least = floor.reserve * weight / len(self.support.contacts)
+        self.tilt = float(mu) * math.cos(math.pi / faces) * (1.0 - floor.reserve)
+        angles = 2.0 * math.pi * np.arange(faces) / faces
+        self.faces = np.column_stack([np.cos(angles), np.sin(angles)])
+        self.rows = polytope.lifted_rows()
+        self.tau = np.arange(len(self.rows.lower))[polytope.variables["tau"]]
+
+    def solve(self, hold: Hold, below: float) -> tuple[float, Witness] | None:
+        """(the largest reach around ``hold``'s states, the efforts with the most margin ``below``
+        under it), or None when even the smallest reach has no margin there."""
+        rows, n = self.rows, len(self.rows.lower)
+        maps = [
+            contact_maps(self.robot, qk, xk, self.welded, self.mass, self.support, self.stiffness)
+            for qk, xk in zip(hold.q, hold.velocity)
+        ]
+        splits = [m.split.shape[1] for m in maps]
+        first = np.concatenate([[0], np.cumsum(splits)]).astype(int)
+        cols = n + int(first[-1]) + 2
+        s_col, t_col = cols - 2, cols - 1
+        fix = np.zeros((len(rows.task), cols))
+        fix[np.arange(len(rows.task)), rows.task] = 1.0
+        fix[:, s_col] = -self.d  # the task point is s d
+        blocks = [np.c_[rows.A_eq, np.zeros((len(rows.A_eq), cols - n))], fix,
+                  np.c_[rows.A_ub, np.zeros((len(rows.A_ub), cols - n))]]  # fmt: skip
+        lo = [rows.b_eq, np.zeros(len(rows.task)), np.full(len(rows.b_ub), -np.inf)]
+        hi = [rows.b_eq, np.zeros(len(rows.task)), rows.b_ub]
+        lean = math.sqrt(1.0 + self.tilt**2)  # a pyramid row's norm over (f_t, f_n): its margin in N
+        for k, m in enumerate(maps):
+            N, n0 = m.normal
+            block = np.zeros((len(N), cols))
+            block[:, self.tau] = -N
+            block[:, t_col] = 1.0  # N tau + n0 >= least + t
+            blocks.append(block)
+            lo.append(np.full(len(N), -np.inf))
+            hi.append(n0 - self.least)
+            T, t0 = m.tangential
+            for j, wheel in enumerate(np.flatnonzero(self.driven)):
+                # faces . (T tau + t0 + F s) <= tilt (N tau + n0) - lean t
+                block = np.zeros((len(self.faces), cols))
+                block[:, self.tau] = self.faces @ T[2 * j : 2 * j + 2] - self.tilt * N[wheel]
+                block[:, n + first[k] : n + first[k + 1]] = self.faces @ m.split[2 * j : 2 * j + 2]
+                block[:, t_col] = lean
+                blocks.append(block)
+                lo.append(np.full(len(self.faces), -np.inf))
+                hi.append(self.tilt * n0[wheel] - self.faces @ t0[2 * j : 2 * j + 2])
+        lower = np.r_[rows.lower, np.full(cols - n - 2, -np.inf), 0.0, 0.0]
+        upper = np.r_[rows.upper, np.full(cols - n - 2, np.inf), np.inf, np.inf]
+        program = LinearProgram(np.vstack(blocks), np.concatenate(lo), np.concatenate(hi), lower, upper)
+        widest = np.zeros(cols)
+        widest[s_col] = 1.0
+        found = program.solve(widest, True, lower, upper)
+        if found is None:
+            return None
+        bound = float(found[0])
+        lower[s_col] = upper[s_col] = max(bound - below, 0.0)
+        lower[t_col] = -np.inf
+        margin = np.zeros(cols)
+        margin[t_col] = 1.0
+        found = program.solve(margin, True, lower, upper)
+        if found is None:  # pragma: no cover - the first program's point is feasible here
+            return None
+        return bound, self.polytope.witness_of(found[1][:n])

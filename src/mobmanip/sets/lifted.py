@@ -326,6 +326,39 @@ class LiftedPolytope(TaskSet):
         b_eq = np.r_[self._b_eq, self.center[fixed]]
         return self._derived(self._task[keep], A_eq, b_eq)
 
+    def lifted_rows(self) -> LiftedRows:
+        """The lifted problem's rows (read-only views), for programs that add their own rows or
+        variables to it (e.g. :func:`mobmanip.motion.hold.held_reach`)."""
+        arrays = [self._task, self._A_eq, self._b_eq, self._A_ub, self._b_ub, self._lower, self._upper]
+        views = []
+        for a in arrays:
+            view = a.view()
+            view.flags.writeable = False
+            views.append(view)
+        return LiftedRows(*views)
+
+    def witness_of(self, z: ArrayLike) -> Witness:
+        """The parts of a solution ``z`` of :meth:`lifted_rows` (e.g. one found with more rows), with
+        the rows tight there as ``binding`` and its task point's norm as ``value``.
+
+        Raises:
+            TaskError: ``z`` is not a solution (an equation or a bound off by more than round-off).
+        """
+        z = np.asarray(z, dtype=float)
+        if z.shape != self._lower.shape or not np.all(np.isfinite(z)):
+            raise TaskError(f"a solution of the lifted rows has {len(self._lower)} finite entries, got shape {z.shape}")
+        scale = 1e-7 * max(1.0, float(np.abs(z).max(initial=0.0)))
+        off = max(
+            float(np.abs(self._A_eq @ z - self._b_eq).max(initial=0.0)),
+            float((self._A_ub @ z - self._b_ub).max(initial=0.0)),
+            float((self._lower - z).max(initial=0.0)),
+            float((z - self._upper).max(initial=0.0)),
+        )
+        largest = max(1.0, float(np.abs(self._A_ub).max(initial=0.0)), float(np.abs(self._A_eq).max(initial=0.0)))
+        if off > scale * largest:
+            raise TaskError(f"z is not a solution of the lifted rows (off by {off:.3g})")
+        return self._witness(float(np.linalg.norm(z[self._task])), z, None)
+
     def _derived(self, task, A_eq, b_eq) -> LiftedPolytope:
         return LiftedPolytope(
             task, A_eq, b_eq, self._A_ub, self._b_ub, self._lower, self._upper, self.variables, self.model, self.labels
@@ -538,6 +571,20 @@ class LiftedPolytope(TaskSet):
     def __repr__(self) -> str:
         state = "empty" if self.empty else ("degenerate" if self.degenerate else "full")
         return f"LiftedPolytope(dim={self.dim}, variables={len(self._lower)}, {state})"
+
+
+@dataclass(frozen=True)
+class LiftedRows:
+    """A lifted polytope's rows: the task point is ``z[task]`` for the variables z with
+    ``A_eq z = b_eq``, ``A_ub z <= b_ub`` and ``lower <= z <= upper``."""
+
+    task: np.ndarray
+    A_eq: np.ndarray
+    b_eq: np.ndarray
+    A_ub: np.ndarray
+    b_ub: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
 
 
 @dataclass(frozen=True)
