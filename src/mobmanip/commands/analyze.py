@@ -7,9 +7,9 @@ axis its straight-line reach (from rest, exactly along the axis) and its support
 components free). ``--ground`` (``--mu``, ``--no-traction``) computes the polytopes on the floor
 and names, for each axis, what stops it: a joint's effort, a wheel's traction or a support
 lifting off, with the zero-moment point and its margin to the support polygon. ``--hold SECONDS``
-(on the floor, with a traction limit) replays each axis maximum's efforts from rest in mobmanip's
-own model and gives, beside it, the largest straight-line reach whose efforts hold that long
-(:func:`mobmanip.motion.hold.held_reach`), and how long the instantaneous maximum holds.
+(on the floor, with a traction limit) gives, beside each axis maximum, the largest straight-line
+reach whose efforts, held constant from rest in mobmanip's own model, hold that long, with those
+efforts (:func:`mobmanip.motion.hold.held_reach`), and how long the maximum's calm efforts hold.
 """
 
 from __future__ import annotations

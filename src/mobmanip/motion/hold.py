@@ -5,7 +5,9 @@ support loaded and every driven wheel within friction at rest. Held constant, th
 moving, the posture changes and velocity terms appear (centrifugal forces of the arms, the
 platform's own), and the contact forces drift: in MuJoCo, TIAGo++'s -x maximum (the arms swing
 the held object) unloads a caster and slips a wheel after 7 ms. This module predicts that time
-and finds the largest reach that holds for a chosen duration.
+and finds the largest reach that holds for a chosen duration, with the efforts that hold it
+(:func:`held_reach`: which of the many efforts that reach a point are used decides how long
+it holds).
 
 The replay integrates the reduced dynamics of the robot holding its object (the hands hold it in
 the task's rows and keep it level, as the floor constraint does: a planar task's object may turn
