@@ -251,6 +251,10 @@ def test_hold_adds_the_reach_that_holds_per_axis(tmp_path):
         if held["instant_gives_way"] is not None:
             gave_way += 1
             assert held["instant_holds_for"] < 0.02
+            tau = np.array(held["instant_efforts"])  # the efforts that hold the maximum longest ...
+            again = replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5))
+            assert again.held == held["instant_holds_for"]  # ... hold it that long
+            assert again.object_acceleration[0] == pytest.approx(held["instant_fraction"] * r["straight_line"] * e)
             assert f"give way after {1e3 * held['instant_holds_for']:.3g} ms" in run.stdout
     assert gave_way >= 1
     assert run.stdout.count("held 20 ms: straight line") == len(reaches)

@@ -206,13 +206,13 @@ def test_the_replay_predicts_mujoco_and_held_reaches_hold_for_20_ms(name):
             compared += 1
         assert compared >= 8  # 2 ms at least
         found = held_reach(robot, q, grounded, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
-        gave_way += not found.instant_hold.holds
+        gave_way += not ours.holds
         assert found.reach > 0.8 * found.instant, (name, e)  # measured: at least 81 % (TIAGo++ -x)
         run = referee.rollout(found.witness.variables["tau"], duration=0.02)
         assert -run.penetration.min() <= 1e-4, (name, e, -run.penetration.min(axis=0))
         assert np.abs(run.base_rpy[:, :2]).max() <= 5e-4, (name, e)
         assert _slip(run) <= 1e-3, (name, e, _slip(run))
-    assert gave_way >= 1  # on every case some instantaneous maximum does not hold for 20 ms
+    assert gave_way >= 1  # on every case the calm efforts of some maximum do not hold for 20 ms
 
 
 def test_how_long_a_maximum_holds_is_predicted():
@@ -222,7 +222,8 @@ def test_how_long_a_maximum_holds_is_predicted():
     where the load then moves off that caster: a wheel slides faster than 0.1 m/s, measured
     0.33 m/s). The reach held for 20 ms is 81 % of the maximum: no
     efforts the held reach's program finds hold 97 % of it that long (its bound, 82 %, is the
-    largest reach its linearised rows allow around its own replay)."""
+    largest reach its linearised rows allow around its own replay); the longest they hold 97 %
+    is 8.25 ms, and about as long in MuJoCo."""
     robot, q, task, casters, _ = _case("tiago_dual")
     grounded = mobmanip.analyze(
         robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=MU),)
@@ -238,4 +239,11 @@ def test_how_long_a_maximum_holds_is_predicted():
     ours = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
     assert not ours.holds and 0.01 <= ours.held < 0.02
     longer = held_reach(robot, q, grounded, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
-    assert longer.reach <= longer.bound < 0.9 * longer.instant
+    assert max(longer.reach, longer.bound) < 0.9 * longer.instant
+    # 97 % of the maximum: the efforts that hold it longest hold 8.25 ms in mobmanip's replay, and
+    # in MuJoCo they hold 7.5 ms and give way by 10 ms (the calm efforts: 2.25 ms)
+    assert 0.008 <= longer.instant_hold.held < 0.0085
+    tau = longer.instant_witness.variables["tau"]
+    run = referee.rollout(tau, duration=0.0075)
+    assert -run.penetration.min() <= 1e-4 and np.abs(run.base_rpy[:, :2]).max() <= 5e-4 and _slip(run) <= 1e-3
+    assert _slip(referee.rollout(tau, duration=0.01)) > 1e-3

@@ -173,17 +173,17 @@ def _calm_reach(robot, q, task, polytope, e, tolerance=0.005):
     return low
 
 
-@pytest.mark.parametrize("axis", [0, 2])
+@pytest.mark.parametrize("axis", [0, 1])
 def test_the_held_reach_holds_and_beats_the_calm_efforts(axis):
     """The held reach's efforts reach it at t = 0 (the closed chain's solve, not the LP, gives the
-    object's acceleration), the replay holds them for 20 ms, the linearised program around that
-    replay allows at most the tolerance more, and the reach is at least the calm efforts' (for
+    object's acceleration), the replay holds them for 20 ms, the linearised program around the
+    last round's replay allows about the tolerance more, and the reach is at least the calm efforts' (for
     TIAGo++ -x, 22.5 against 12.5 m/s^2: the calm efforts swing the arms the most)."""
     robot, q, task = _tiago()
     polytope = _grounded(robot, q, task)
     e = -np.eye(6)[axis] if axis == 0 else np.eye(6)[axis]
     found = held_reach(robot, q, polytope, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
-    assert not found.instant_hold.holds  # these axes need it: the instantaneous maximum gives way
+    assert not found.instant_hold.holds  # these axes need it: 97 % of the maximum gives way
     assert 0.0 < found.reach < found.instant
     tau = found.witness.variables["tau"]
     terms = motion_terms(robot, q, np.zeros(robot.nx), task, object_mass=MASS)
@@ -192,11 +192,20 @@ def test_the_held_reach_holds_and_beats_the_calm_efforts(axis):
     assert polytope.contains(found.reach * e)[0]
     replayed = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU))
     assert replayed.holds and found.hold.holds and found.hold.held == 0.02
-    assert found.reach <= found.bound <= found.reach + 0.005 * found.instant + 1e-9
+    assert abs(found.bound - found.reach) <= 1.1 * 0.005 * found.instant  # the rounds settled
     calm = _calm_reach(robot, q, task, polytope, e)
     assert found.reach >= calm
     if axis == 0:
         assert found.reach >= 1.5 * calm
+    # at 97 % of the maximum: the efforts that hold it longest reach it and hold longer than the calm ones
+    top = 0.97 * found.instant
+    _, _, a_o = forward_accelerations(terms, found.instant_witness.variables["tau"])
+    assert np.abs(a_o - top * e).max() <= 1e-8 * top
+    calm_tau = polytope.witness_at(top * e, least="xdot").variables["tau"]
+    calm_hold = replay(robot, q, calm_tau, task, object_mass=MASS, floor=Floor(mu=MU))
+    assert found.instant_hold.held > calm_hold.held
+    again = replay(robot, q, found.instant_witness.variables["tau"], task, object_mass=MASS, floor=Floor(mu=MU))
+    assert again.held == found.instant_hold.held
 
 
 def test_bad_replays_say_what_is_wrong():

@@ -9,7 +9,8 @@ and names, for each axis, what stops it: a joint's effort, a wheel's traction or
 lifting off, with the zero-moment point and its margin to the support polygon. ``--hold SECONDS``
 (on the floor, with a traction limit) gives, beside each axis maximum, the largest straight-line
 reach whose efforts, held constant from rest in mobmanip's own model, hold that long, with those
-efforts (:func:`mobmanip.motion.hold.held_reach`), and how long the maximum's calm efforts hold.
+efforts (:func:`mobmanip.motion.hold.held_reach`), and how long the efforts that hold the maximum
+longest hold it.
 """
 
 from __future__ import annotations
@@ -93,6 +94,9 @@ def _add_held(robot, q, result, document, duration: float, floor) -> None:
                 "normal_forces": None if held is None else dict(zip(held.contacts, held.normal[0].tolist())),
                 "gives_way": None if held is None else held.binds,
                 "instant_fraction": found.fraction,
+                "instant_efforts": None
+                if found.instant_witness is None
+                else found.instant_witness.variables["tau"].tolist(),
                 "instant_holds_for": found.instant_hold.held,
                 "instant_gives_way": found.instant_hold.binds,
             }
@@ -208,8 +212,8 @@ def _describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str
             text += f"\n          held {ms:g} ms: straight line {held['straight_line']:.4g}"
             if held["instant_gives_way"] is not None:
                 text += (
-                    f" (at {100 * held['instant_fraction']:g} % of the maximum its calm efforts give way after "
-                    f"{1e3 * held['instant_holds_for']:.3g} ms: {held['instant_gives_way']})"
+                    f" (at {100 * held['instant_fraction']:g} % of the maximum the efforts that hold longest give way "
+                    f"after {1e3 * held['instant_holds_for']:.3g} ms: {held['instant_gives_way']})"
                 )
         lines.append(text)
     if floor is not None:

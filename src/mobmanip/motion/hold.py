@@ -326,12 +326,14 @@ class HeldReach:
         instant: the instantaneous straight-line reach of the set (task units).
         duration: the duration asked for (s).
         hold: the replay of the held reach's efforts (None when the reach is 0).
-        instant_hold: the replay of the instantaneous maximum's calm efforts (at ``fraction`` of it).
+        instant_hold: the replay, at ``fraction`` of the instantaneous maximum, of the efforts
+            that hold it longest (found as :func:`held_reach` says; its calm efforts when they hold).
         fraction: the share of the instantaneous maximum ``instant_hold`` replayed.
         witness: the solution whose efforts were replayed at the held reach (None when 0).
-        bound: the largest reach the linearised program allows around the held reach's own
-            replay (its last iteration; the held reach is within ``tolerance`` of it when the
-            iterations settled), or None when the reach came from the fallback bisection.
+        bound: the largest reach the linearised program allows around its last round's replay
+            (the held reach is within about ``tolerance`` of it when the rounds settled), or None
+            when the reach came from the fallback bisection.
+        instant_witness: the solution whose efforts ``instant_hold`` replayed.
     """
 
     direction: np.ndarray
@@ -343,6 +345,7 @@ class HeldReach:
     fraction: float
     witness: Witness | None
     bound: float | None = None
+    instant_witness: Witness | None = None
 
 
 def held_reach(
@@ -378,8 +381,11 @@ def held_reach(
     round holds, the reach is found by bisection over the calm efforts
     (``witness_at(s d, least="xdot")``), assuming a smaller reach holds longer.
 
-    The instantaneous maximum is replayed with its calm efforts at ``fraction`` of it (at the
-    maximum itself some limit is tight and gives way at once).
+    The instantaneous maximum is replayed at ``fraction`` of it (at the maximum itself some limit
+    is tight and gives way at once): with its calm efforts and, where they give way, with the
+    efforts that hold it longest. Those come from the same program at that reach over the
+    longest run of a replay's first steps whose rows it satisfies with a margin (bisection over
+    the run's length), replayed in turn while the hold grows.
 
     Args:
         robot, q, task, object_mass: as the analysis that produced ``polytope``.
@@ -420,16 +426,29 @@ def held_reach(
     if instant <= 0.0:
         witness, hold = calm(0.0)
         return HeldReach(d, 0.0, 0.0, float(duration), hold if hold.holds else None, hold, fraction,
-                         witness if hold.holds else None)  # fmt: skip
+                         witness if hold.holds else None, None, witness)  # fmt: skip
     top = fraction * instant
-    witness, instant_hold = calm(top)
-    if instant_hold.holds and fraction == 1.0:
-        return HeldReach(d, top, instant, float(duration), instant_hold, instant_hold, fraction, witness)
+    witness, calm_hold = calm(top)
+    if calm_hold.holds and fraction == 1.0:
+        return HeldReach(d, top, instant, float(duration), calm_hold, calm_hold, fraction, witness, None, witness)
     program = _HoldingProgram(robot, q, polytope, d, task, object_mass, floor)
-    best: tuple[float, Hold, Witness] | None = (top, instant_hold, witness) if instant_hold.holds else None
-    hold, last, bound = instant_hold, None, None
+    instant_witness, instant_hold = witness, calm_hold
+    if not calm_hold.holds:  # the efforts that hold the maximum longest
+        hold = calm_hold
+        for _ in range(iterations):
+            longer = program.longest(hold, top)
+            if longer is None:
+                break
+            hold = play(longer.variables["tau"])
+            if hold.held <= instant_hold.held:
+                break
+            instant_witness, instant_hold = longer, hold
+            if hold.holds:
+                break
+    best: tuple[float, Hold, Witness] | None = (top, calm_hold, witness) if calm_hold.holds else None
+    hold, last, bound = calm_hold, None, None
     for _ in range(iterations):
-        found = program.solve(hold, tolerance * instant)
+        found = program.widest(hold, tolerance * instant)
         if found is None:
             break
         bound, witness = found
@@ -441,7 +460,9 @@ def held_reach(
             break
         last = bound
     if best is not None:
-        return HeldReach(d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], bound)
+        return HeldReach(
+            d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], bound, instant_witness
+        )
     low, high = 0.0, top
     while high - low > tolerance * instant:
         middle = 0.5 * (low + high)
@@ -453,9 +474,13 @@ def held_reach(
     if best is None:
         witness, hold = calm(0.0)
         if not hold.holds:
-            return HeldReach(d, 0.0, instant, float(duration), None, instant_hold, fraction, None)
+            return HeldReach(
+                d, 0.0, instant, float(duration), None, instant_hold, fraction, None, None, instant_witness
+            )
         best = (0.0, hold, witness)
-    return HeldReach(d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2])
+    return HeldReach(
+        d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], None, instant_witness
+    )
 
 
 class _HoldingProgram:
@@ -484,14 +509,17 @@ class _HoldingProgram:
         self.rows = polytope.lifted_rows()
         self.tau = np.arange(len(self.rows.lower))[polytope.variables["tau"]]
 
-    def solve(self, hold: Hold, below: float) -> tuple[float, Witness] | None:
-        """(the largest reach around ``hold``'s states, the efforts with the most margin ``below``
-        under it), or None when even the smallest reach has no margin there."""
-        rows, n = self.rows, len(self.rows.lower)
-        maps = [
+    def maps(self, hold: Hold) -> list[ContactMaps]:
+        """The contact forces' affine maps at every sample of ``hold``."""
+        return [
             contact_maps(self.robot, qk, xk, self.welded, self.mass, self.support, self.stiffness)
             for qk, xk in zip(hold.q, hold.velocity)
         ]
+
+    def _program(self, maps: list[ContactMaps]) -> tuple[LinearProgram, np.ndarray, np.ndarray]:
+        """The program over the polytope's rows and ``maps``' contact rows, with its column bounds
+        (the reach s >= 0 and the margin t >= 0; the last two columns)."""
+        rows, n = self.rows, len(self.rows.lower)
         splits = [m.split.shape[1] for m in maps]
         first = np.concatenate([[0], np.cumsum(splits)]).astype(int)
         cols = n + int(first[-1]) + 2
@@ -524,18 +552,50 @@ class _HoldingProgram:
                 hi.append(self.tilt * n0[wheel] - self.faces @ t0[2 * j : 2 * j + 2])
         lower = np.r_[rows.lower, np.full(cols - n - 2, -np.inf), 0.0, 0.0]
         upper = np.r_[rows.upper, np.full(cols - n - 2, np.inf), np.inf, np.inf]
-        program = LinearProgram(np.vstack(blocks), np.concatenate(lo), np.concatenate(hi), lower, upper)
-        widest = np.zeros(cols)
-        widest[s_col] = 1.0
+        return LinearProgram(np.vstack(blocks), np.concatenate(lo), np.concatenate(hi), lower, upper), lower, upper
+
+    def _most_margin(self, program, lower, upper, s: float) -> tuple[float, np.ndarray] | None:
+        """(the largest margin t, the solution) at the reach s (the margin may be negative)."""
+        lower, upper = lower.copy(), upper.copy()
+        lower[-2] = upper[-2] = s
+        lower[-1] = -np.inf
+        margin = np.zeros(len(lower))
+        margin[-1] = 1.0
+        return program.solve(margin, True, lower, upper)
+
+    def widest(self, hold: Hold, below: float) -> tuple[float, Witness] | None:
+        """(the largest reach around ``hold``'s states, the efforts with the most margin ``below``
+        under it), or None when even the smallest reach has no margin there."""
+        program, lower, upper = self._program(self.maps(hold))
+        widest = np.zeros(len(lower))
+        widest[-2] = 1.0
         found = program.solve(widest, True, lower, upper)
         if found is None:
             return None
         bound = float(found[0])
-        lower[s_col] = upper[s_col] = max(bound - below, 0.0)
-        lower[t_col] = -np.inf
-        margin = np.zeros(cols)
-        margin[t_col] = 1.0
-        found = program.solve(margin, True, lower, upper)
+        found = self._most_margin(program, lower, upper, max(bound - below, 0.0))
         if found is None:  # pragma: no cover - the first program's point is feasible here
             return None
-        return bound, self.polytope.witness_of(found[1][:n])
+        return bound, self.polytope.witness_of(found[1][: len(self.rows.lower)])
+
+    def longest(self, hold: Hold, s: float) -> Witness | None:
+        """The efforts at the reach s with the most margin over the longest run of ``hold``'s
+        first samples whose rows admit s with a margin >= 0 (found by bisection over the run's
+        length), or None when not even the first sample does."""
+        maps = self.maps(hold)
+
+        def margin(count: int) -> tuple[float, np.ndarray] | None:
+            program, lower, upper = self._program(maps[:count])
+            return self._most_margin(program, lower, upper, s)
+
+        found = margin(len(maps))
+        if found is None or found[0] < 0.0:
+            low, high, found = 0, len(maps), None
+            while high - low > 1:
+                middle = (low + high) // 2
+                attempt = margin(middle)
+                if attempt is not None and attempt[0] >= 0.0:
+                    low, found = middle, attempt
+                else:
+                    high = middle
+        return None if found is None else self.polytope.witness_of(found[1][: len(self.rows.lower)])
