@@ -275,3 +275,17 @@ def test_bad_hold_is_one_line(extra, message):
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1 and run.stderr.startswith("mobmanip: error: ")
     assert message in run.stderr
+
+
+def test_an_empty_set_on_the_floor_says_the_floor_is_why():
+    """The paper robot holding 10 kg at home: its centre of mass (0.223, 0) m is inside the support
+    polygon (+-0.25 m) but outside the core of four equally stiff contacts, so the compliant set is
+    empty although every effort holds the load still (the ideal set is not). The summary must not
+    blame the limits; the warning names the supports the weight would unload."""
+    run = _cli("analyze", "planar_dual_arm", "--ground", "--mu", "0.5", "--object-mass", "10", "--polytope")
+    assert run.returncode == 0, run.stderr
+    assert "dynamic polytope (coupled): EMPTY (on the floor as modelled; the warning below says why)" in run.stdout
+    assert "the limits cannot hold the load still" not in run.stdout
+    assert "would unload caster_2, caster_3 (the centre of mass at (0.223, 0.000) m" in run.stderr
+    ideal = _cli("analyze", "planar_dual_arm", "--object-mass", "10", "--polytope")
+    assert ideal.returncode == 0 and "EMPTY" not in ideal.stdout

@@ -239,6 +239,8 @@ DESCRIBE: dict[str, Callable[..., str]] = {"ellipsoid": _describe_ellipsoid, "po
 
 def _describe(name: str, task_set, unit: str, ellipsoid=None) -> str:
     if task_set.empty:
+        if "floor" in getattr(task_set, "model", {}):
+            return f"{name}: EMPTY (on the floor as modelled; the warning below says why)"
         return f"{name}: EMPTY (the limits cannot hold the load still)"
     describe = DESCRIBE.get(task_set.kind, _describe_set)
     if task_set.kind == "polytope":
