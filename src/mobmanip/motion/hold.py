@@ -141,6 +141,11 @@ def replay(
         SpecError: a platform that is not a differential drive (the floor model's).
         TaskError: a floor without a friction coefficient (the replay checks traction).
     """
+    return _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, False)[0]
+
+
+def _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, keep) -> tuple[Hold, list[ContactMaps]]:
+    """:func:`replay`, and with ``keep`` the contact forces' affine maps at every sample."""
     for value, what in ((duration, "duration"), (step, "step")):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
             raise ArgumentError(f"the replay's {what} must be a positive number of seconds, got {value!r}")
@@ -175,16 +180,17 @@ def replay(
     count = int(math.ceil(duration / step - 1e-9))
     x = np.zeros(robot.nx)
     times, configurations, velocities, accelerations, normals, uses = [], [], [], [], [], []
+    maps: list[ContactMaps] = []
     binds: str | None = None
     held = duration
     for i in range(count + 1):
         t = i * step
-        terms = motion_terms(robot, q, x, welded, object_mass=mass_o)
-        xdot, _, a_o = forward_accelerations(terms, tau)
-        full = np.zeros(6)
-        full[list(held_rows)] = a_o
-        offset, linear = floor_wrench(robot, q, x, mass_o, full, np.zeros((6, robot.nx)))
-        wrench = offset + linear @ xdot
+        state = _affine_state(robot, q, x, welded, mass_o)
+        xdot = state.xdot[0] @ tau + state.xdot[1]
+        a_o = state.a_o[0] @ tau + state.a_o[1]
+        wrench = state.wrench[0] @ tau + state.wrench[1]
+        if keep:
+            maps.append(_contact_maps(state, q, support, stiffness))
         force, moment = wrench[:3], wrench[3:]
         if force[2] <= 0.0:
             raise TaskError(f"at t = {t:.6g} s the efforts lift the whole robot off the floor")
@@ -214,8 +220,8 @@ def replay(
         if i == count:
             break
         x = x + step * xdot
-        q = pin.integrate(robot.model, q, step * (terms.S @ x))
-    return Hold(
+        q = pin.integrate(robot.model, q, step * (state.S @ x))
+    hold = Hold(
         held=held,
         duration=float(duration),
         binds=binds,
@@ -228,6 +234,7 @@ def replay(
         contacts=names,
         wheels=wheels,
     )
+    return hold, maps
 
 
 @dataclass(frozen=True)
@@ -272,6 +279,22 @@ def contact_maps(
         support: the contacts (a :class:`mobmanip.robot.support.Support`).
         stiffness: the contacts' relative stiffness, (n,); default all equal.
     """
+    return _contact_maps(_affine_state(robot, q, x, task, object_mass), q, support, stiffness)
+
+
+@dataclass(frozen=True)
+class _AffineState:
+    """One state's replay quantities as affine maps (M, m0) of the efforts: value = M tau + m0."""
+
+    S: np.ndarray
+    xdot: tuple[np.ndarray, np.ndarray]
+    a_o: tuple[np.ndarray, np.ndarray]
+    wrench: tuple[np.ndarray, np.ndarray]
+
+
+def _affine_state(robot: Robot, q: np.ndarray, x: np.ndarray, task: TaskSpace, object_mass: float) -> _AffineState:
+    """The closed chain's accelerations (the module's docstring), the object's and the floor's
+    resultant wrench [force; moment about the world origin] at (q, x), affine in the efforts."""
     terms = motion_terms(robot, q, x, task, object_mass=object_mass)
     nx, mk, m = terms.P.shape[0], terms.J_u.shape[0], terms.W.shape[0]
     rhs = np.zeros((nx + mk + m, nx + 1))
@@ -281,13 +304,24 @@ def contact_maps(
     rhs[nx + mk :, nx] = terms.c_o + terms.g_o
     solution = np.linalg.lstsq(_chain(terms), rhs, rcond=None)[0]
     X, x0 = solution[:nx, :nx], solution[:nx, nx]  # xdot = X tau + x0
+    # the object's acceleration from the hands' motion: a_o = (W^T)^+ (J_u xdot + d/dt(J_u) x - Wdot^T v_o)
     to_object = np.linalg.pinv(terms.W.T)
     rows = list(task.rows)
     rate, offset = np.zeros((6, nx)), np.zeros(6)
     rate[rows] = to_object @ terms.J_u
     offset[rows] = to_object @ (terms.drift - terms.grasp_drift)
     constant, linear = floor_wrench(robot, q, x, object_mass, offset, rate)
-    G, g = linear @ X, constant + linear @ x0  # [force; moment] = G tau + g
+    return _AffineState(
+        S=terms.S,
+        xdot=(X, x0),
+        a_o=(solution[nx + mk :, :nx], solution[nx + mk :, nx]),
+        wrench=(linear @ X, constant + linear @ x0),
+    )
+
+
+def _contact_maps(state: _AffineState, q: np.ndarray, support, stiffness: np.ndarray | None) -> ContactMaps:
+    """The contact forces of :func:`contact_maps` from one state's affine wrench."""
+    G, g = state.wrench
     z = support.floor_z
     moments = np.zeros((3, 6))  # (f_z, f_z x_zmp, f_z y_zmp) from the wrench
     moments[0, 2] = 1.0
@@ -414,13 +448,12 @@ def held_reach(
         raise ArgumentError(f"iterations must be a positive integer, got {iterations!r}")
     floor = Floor() if floor is None else floor
 
-    def play(tau: np.ndarray) -> Hold:
-        return replay(robot, q, tau, task, object_mass=object_mass, floor=floor, duration=duration, step=step,
-                      stop=False)  # fmt: skip
+    def play(tau: np.ndarray) -> tuple[Hold, list[ContactMaps]]:
+        return _replay(robot, q, tau, task, object_mass, floor, duration, step, False, True)
 
     def calm(s: float) -> tuple[Witness, Hold]:
         witness = polytope.witness_at(s * d, least="xdot")
-        return witness, play(witness.variables["tau"])
+        return witness, play(witness.variables["tau"])[0]
 
     instant = float(polytope.straight_line_reach(d))
     if instant <= 0.0:
@@ -428,31 +461,32 @@ def held_reach(
         return HeldReach(d, 0.0, 0.0, float(duration), hold if hold.holds else None, hold, fraction,
                          witness if hold.holds else None, None, witness)  # fmt: skip
     top = fraction * instant
-    witness, calm_hold = calm(top)
+    witness = polytope.witness_at(top * d, least="xdot")
+    calm_hold, calm_maps = play(witness.variables["tau"])
     if calm_hold.holds and fraction == 1.0:
         return HeldReach(d, top, instant, float(duration), calm_hold, calm_hold, fraction, witness, None, witness)
-    program = _HoldingProgram(robot, q, polytope, d, task, object_mass, floor)
+    program = _HoldingProgram(robot, polytope, d, object_mass, floor)
     instant_witness, instant_hold = witness, calm_hold
     if not calm_hold.holds:  # the efforts that hold the maximum longest
-        hold = calm_hold
+        maps = calm_maps
         for _ in range(iterations):
-            longer = program.longest(hold, top)
+            longer = program.longest(maps, top)
             if longer is None:
                 break
-            hold = play(longer.variables["tau"])
+            hold, maps = play(longer.variables["tau"])
             if hold.held <= instant_hold.held:
                 break
             instant_witness, instant_hold = longer, hold
             if hold.holds:
                 break
     best: tuple[float, Hold, Witness] | None = (top, calm_hold, witness) if calm_hold.holds else None
-    hold, last, bound = calm_hold, None, None
+    maps, last, bound = calm_maps, None, None
     for _ in range(iterations):
-        found = program.widest(hold, tolerance * instant)
+        found = program.widest(maps, tolerance * instant)
         if found is None:
             break
         bound, witness = found
-        hold = play(witness.variables["tau"])
+        hold, maps = play(witness.variables["tau"])
         reach = float(witness.point @ d)
         if hold.holds and (best is None or reach > best[0]):
             best = (reach, hold, witness)
@@ -489,32 +523,20 @@ class _HoldingProgram:
     Columns: the polytope's variables z, the wheels' splits per step, the reach s and the margin t.
     """
 
-    def __init__(self, robot, q, polytope, d, task, object_mass, floor: Floor):
-        self.robot, self.polytope, self.d = robot, polytope, d
-        task_space = get_task(task or robot.spec.default_task)
-        held_rows = tuple(sorted(set(task_space.rows) | set(LEVEL_ROWS)))
-        labels = get_task("spatial").labels
-        self.welded = TaskSpace(f"{task_space.name}_level", held_rows, tuple(labels[r] for r in held_rows))
-        self.mass = float(robot.spec.object_mass if object_mass is None else object_mass)
+    def __init__(self, robot, polytope, d, object_mass, floor: Floor):
+        self.polytope, self.d = polytope, d
+        mass = float(robot.spec.object_mass if object_mass is None else object_mass)
         self.support, mu, faces = floor.resolve(robot)
         if mu is None:
             raise TaskError("a held reach checks the wheels' traction: the floor needs a friction coefficient mu")
         self.driven = np.array([c.driven for c in self.support.contacts])
-        self.stiffness = np.array([c.stiffness for c in self.support.contacts], dtype=float)
-        weight = (float(pin.computeTotalMass(robot.model)) + self.mass) * float(-GRAVITY[2])
+        weight = (float(pin.computeTotalMass(robot.model)) + mass) * float(-GRAVITY[2])
         self.least = floor.reserve * weight / len(self.support.contacts)
         self.tilt = float(mu) * math.cos(math.pi / faces) * (1.0 - floor.reserve)
         angles = 2.0 * math.pi * np.arange(faces) / faces
         self.faces = np.column_stack([np.cos(angles), np.sin(angles)])
         self.rows = polytope.lifted_rows()
         self.tau = np.arange(len(self.rows.lower))[polytope.variables["tau"]]
-
-    def maps(self, hold: Hold) -> list[ContactMaps]:
-        """The contact forces' affine maps at every sample of ``hold``."""
-        return [
-            contact_maps(self.robot, qk, xk, self.welded, self.mass, self.support, self.stiffness)
-            for qk, xk in zip(hold.q, hold.velocity)
-        ]
 
     def _program(self, maps: list[ContactMaps]) -> tuple[LinearProgram, np.ndarray, np.ndarray]:
         """The program over the polytope's rows and ``maps``' contact rows, with its column bounds
@@ -563,10 +585,10 @@ class _HoldingProgram:
         margin[-1] = 1.0
         return program.solve(margin, True, lower, upper)
 
-    def widest(self, hold: Hold, below: float) -> tuple[float, Witness] | None:
-        """(the largest reach around ``hold``'s states, the efforts with the most margin ``below``
-        under it), or None when even the smallest reach has no margin there."""
-        program, lower, upper = self._program(self.maps(hold))
+    def widest(self, maps: list[ContactMaps], below: float) -> tuple[float, Witness] | None:
+        """(the largest reach around a replay's states (its contact ``maps``), the efforts with the
+        most margin ``below`` under it), or None when even the smallest reach has no margin there."""
+        program, lower, upper = self._program(maps)
         widest = np.zeros(len(lower))
         widest[-2] = 1.0
         found = program.solve(widest, True, lower, upper)
@@ -578,11 +600,10 @@ class _HoldingProgram:
             return None
         return bound, self.polytope.witness_of(found[1][: len(self.rows.lower)])
 
-    def longest(self, hold: Hold, s: float) -> Witness | None:
-        """The efforts at the reach s with the most margin over the longest run of ``hold``'s
-        first samples whose rows admit s with a margin >= 0 (found by bisection over the run's
-        length), or None when not even the first sample does."""
-        maps = self.maps(hold)
+    def longest(self, maps: list[ContactMaps], s: float) -> Witness | None:
+        """The efforts at the reach s with the most margin over the longest run of a replay's
+        first samples (their contact ``maps``) whose rows admit s with a margin >= 0 (found by
+        bisection over the run's length), or None when not even the first sample does."""
 
         def margin(count: int) -> tuple[float, np.ndarray] | None:
             program, lower, upper = self._program(maps[:count])
