@@ -428,7 +428,7 @@ def held_reach(
         direction: the task direction, (m,) (normalised here).
         floor: the floor the polytope was computed on (its mu and reserve), default ``Floor()``.
         duration: how long the efforts must hold (s).
-        fraction: the share of the instantaneous reach replayed with calm efforts, in (0, 1].
+        fraction: the share of the instantaneous reach replayed as the maximum, in (0, 1].
         tolerance: the resolution, as a share of the instantaneous reach.
         step: the replay's integration step (s).
         iterations: the most rounds of the sequential program.
