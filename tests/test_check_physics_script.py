@@ -68,3 +68,32 @@ def test_bad_input_is_one_line_and_exit_2(args, words):
     run = _run(*args)
     assert run.returncode == 2 and run.stderr.count("\n") == 1 and words in run.stderr, run.stderr
     assert "Traceback" not in run.stderr
+
+
+def test_longest_compares_the_predicted_hold_with_mujocos():
+    """``--longest``: per axis, the efforts that hold 97 % of the maximum longest (analyze --hold's
+    instant_efforts), mobmanip's predicted hold time (equal to :func:`held_reach`'s) beside
+    MuJoCo's; every axis of TIAGo++ holds at least 90 % of the prediction (-x: 8.25 ms predicted,
+    9.9 ms in MuJoCo)."""
+    from mobmanip.motion.hold import held_reach
+
+    run = _run("tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
+               "--longest")  # fmt: skip
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "with the efforts that hold it longest" in run.stdout
+    rows = {line.split()[0]: line.split() for line in run.stdout.splitlines()[2:]}
+    assert len(rows) == 12 and run.stdout.count("as predicted") == 12
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    P = mobmanip.analyze(robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",),
+                         constraints=(Floor(mu=0.5),)).measures["dynamic_polytope"]  # fmt: skip
+    found = held_reach(robot, q, P, -np.eye(6)[0], "spatial", object_mass=2.0, floor=Floor(mu=0.5))
+    predicted, measured = float(rows["-x"][6]), float(rows["-x"][7])
+    assert predicted == pytest.approx(1e3 * found.instant_hold.held, abs=0.006) and predicted < 20.0
+    assert 0.9 * predicted <= measured < 20.0  # MuJoCo gives way too, a little later
+
+
+@pytest.mark.parametrize("args", [("tiago_dual", "--held", "--longest"), ("tiago_dual", "--no-such-option")])
+def test_a_wrong_option_is_one_line_too(args):
+    run = _run(*args)
+    assert run.returncode == 2 and run.stderr.count("\n") == 1 and run.stderr.startswith("check_physics.py: error: ")
