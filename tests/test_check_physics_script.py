@@ -44,21 +44,26 @@ def test_the_script_replays_every_axis_and_reports_the_grounded_reaches():
     assert run.returncode == 0 and run.stdout.count("holds") == 12  # 5 ms: every axis holds
 
 
+def _tiago_minus_x():
+    """TIAGo++ holding 2 kg, mu = 0.5: its grounded polytope and the held reach along -x."""
+    from mobmanip.motion.hold import held_reach
+
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    P = mobmanip.analyze(robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",),
+                         constraints=(Floor(mu=0.5),)).measures["dynamic_polytope"]  # fmt: skip
+    return P, held_reach(robot, q, P, -np.eye(6)[0], "spatial", object_mass=2.0, floor=Floor(mu=0.5))
+
+
 def test_held_replays_the_reach_mobmanip_holds_and_mujoco_holds_it():
     """``--held`` (TIAGo++ -x's instantaneous maximum gives way in MuJoCo after about 7 ms): per
     axis the reach mobmanip's replay holds for 20 ms, equal to :func:`held_reach`, held in MuJoCo."""
-    from mobmanip.motion.hold import held_reach
-
     run = _run("tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5", "--held")
     assert run.returncode == 0, run.stdout + run.stderr
     assert "the reach mobmanip predicts to last held 20 ms in MuJoCo" in run.stdout
     rows = {line.split()[0]: line.split() for line in run.stdout.splitlines()[2:]}
     assert len(rows) == 12 and run.stdout.count("holds") == 12
-    robot = mobmanip.load_robot("tiago_dual")
-    q = named_configuration(robot, "hold")
-    P = mobmanip.analyze(robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",),
-                         constraints=(Floor(mu=0.5),)).measures["dynamic_polytope"]  # fmt: skip
-    found = held_reach(robot, q, P, -np.eye(6)[0], "spatial", object_mass=2.0, floor=Floor(mu=0.5))
+    P, found = _tiago_minus_x()
     assert float(rows["-x"][1]) == pytest.approx(found.reach, abs=6e-4)
     assert found.reach < 0.9 * P.straight_line_reach(-np.eye(6)[0])  # an axis that needs it (81 %)
 
@@ -75,19 +80,13 @@ def test_longest_compares_the_predicted_hold_with_mujocos():
     instant_efforts), mobmanip's predicted hold time (equal to :func:`held_reach`'s) beside
     MuJoCo's; every axis of TIAGo++ holds at least 90 % of the prediction (-x: 8.25 ms predicted,
     9.9 ms in MuJoCo)."""
-    from mobmanip.motion.hold import held_reach
-
     run = _run("tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
                "--longest")  # fmt: skip
     assert run.returncode == 0, run.stdout + run.stderr
     assert "with the efforts that hold it longest" in run.stdout
     rows = {line.split()[0]: line.split() for line in run.stdout.splitlines()[2:]}
     assert len(rows) == 12 and run.stdout.count("as predicted") == 12
-    robot = mobmanip.load_robot("tiago_dual")
-    q = named_configuration(robot, "hold")
-    P = mobmanip.analyze(robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",),
-                         constraints=(Floor(mu=0.5),)).measures["dynamic_polytope"]  # fmt: skip
-    found = held_reach(robot, q, P, -np.eye(6)[0], "spatial", object_mass=2.0, floor=Floor(mu=0.5))
+    P, found = _tiago_minus_x()
     predicted, measured = float(rows["-x"][6]), float(rows["-x"][7])
     assert predicted == pytest.approx(1e3 * found.instant_hold.held, abs=0.006) and predicted < 20.0
     assert 0.9 * predicted <= measured < 20.0  # MuJoCo gives way too, a little later
