@@ -55,6 +55,8 @@ def _case(name):
         robot = mobmanip.load_robot("tiago_dual")
         return robot, named_configuration(robot, "hold"), "spatial", urdf_casters(robot), np.eye(6)
     robot = mobmanip.load_robot("planar_dual_arm")
+    if name == "paper home":  # arms straight: near a singularity, the posture moves fast
+        return robot, named_configuration(robot, "home"), "planar", PAPER_CASTERS, np.eye(2)
     angle = float(name.split()[-1])
     return robot, configuration_at(robot, optimal_posture(robot), angle), "planar", PAPER_CASTERS, np.eye(2)
 
@@ -250,14 +252,16 @@ def test_how_long_a_maximum_holds_is_predicted():
     assert _slip(referee.rollout(tau, duration=0.01)) > 1e-3
 
 
-@pytest.mark.parametrize("name", ["tiago_dual", "paper 0", "paper 90"])
+@pytest.mark.parametrize("name", ["tiago_dual", "paper 0", "paper 90", "paper home"])
 def test_the_efforts_reported_for_each_maximum_hold_in_mujoco_as_long_as_predicted(name):
     """What ``analyze --hold 0.02`` reports on every task axis (TIAGo++'s six, turning ones
     included), replayed in MuJoCo: the held reach's efforts hold 20 ms, and for 97 % of the
     maximum the efforts that hold it longest (``instant_efforts``) hold for at least 90 % of the
     predicted time (``instant_holds_for``): 20 ms where mobmanip predicts 20 ms; TIAGo++ -x
     8.25 ms predicted, 9.9 ms in MuJoCo; +-y and yaw 17-19 ms predicted, 20 ms in MuJoCo,
-    whose friction test is a little looser than mobmanip's."""
+    whose friction test is a little looser than mobmanip's. The paper robot with its arms
+    straight (its home posture), where the posture moves fast: +-y held 20 ms at 84 % of the
+    maximum, and 97 % of it for 10.5 ms (its calm efforts: 1.5 ms)."""
     robot, q, task, casters, _ = _case(name)
     grounded = mobmanip.analyze(
         robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=MU),)
@@ -272,8 +276,9 @@ def test_the_efforts_reported_for_each_maximum_hold_in_mujoco_as_long_as_predict
     for e in _axes(np.eye(grounded.dim)):
         found = held_reach(robot, q, grounded, e, task, object_mass=MASS, floor=Floor(mu=MU), duration=0.02)
         assert holds(found.witness.variables["tau"], 0.02), (name, e)
+        assert found.reach >= 0.8 * found.instant, (name, e, found.reach / found.instant)
         predicted = found.instant_hold.held
         assert predicted >= 0.008, (name, e, predicted)
         short += predicted < 0.02
         assert holds(found.instant_witness.variables["tau"], 0.9 * predicted), (name, e, predicted)
-    assert short == (5 if name == "tiago_dual" else 0)  # TIAGo++ -x, +-y and +-yaw
+    assert short == {"tiago_dual": 5, "paper home": 2}.get(name, 0)  # TIAGo++ -x, +-y, +-yaw; home +-y

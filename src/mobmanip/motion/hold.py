@@ -365,8 +365,8 @@ class HeldReach:
         fraction: the share of the instantaneous maximum ``instant_hold`` replayed.
         witness: the solution whose efforts were replayed at the held reach (None when 0).
         bound: the largest reach the linearised program allows around its last round's replay
-            (the held reach is within about ``tolerance`` of it when the rounds settled), or None
-            when the reach came from the fallback bisection.
+            (the held reach is within about ``tolerance`` of it), or None when the rounds did not
+            settle (the reach then comes from the trust-region rounds).
         instant_witness: the solution whose efforts ``instant_hold`` replayed.
     """
 
@@ -411,15 +411,18 @@ def held_reach(
     margin at every step; their replay gives the next states. The first states are those of the
     calm efforts at ``fraction`` of the instantaneous maximum. It stops when the largest reach
     settles (within a tenth of ``tolerance``) and its efforts hold, after at most ``iterations``
-    rounds, and returns the largest reach whose replay held (every claim is a replay's). Where no
-    round holds, the reach is found by bisection over the calm efforts
-    (``witness_at(s d, least="xdot")``), assuming a smaller reach holds longer.
+    rounds, and returns the largest reach whose replay held (every claim is a replay's). Where the
+    rounds do not settle (near a singularity the posture moves so fast that the linearisation
+    misleads them), the reach starts from the best that held, else from a bisection over the calm
+    efforts (``witness_at(s d, least="xdot")``), and grows by rounds that keep the efforts within
+    a trust region around the last that held (20 % of the effort limits, grown by half after a
+    round that holds a larger reach, halved after one that does not).
 
     The instantaneous maximum is replayed at ``fraction`` of it (at the maximum itself some limit
     is tight and gives way at once): with its calm efforts and, where they give way, with the
     efforts that hold it longest. Those come from the same program at that reach over the
     longest run of a replay's first steps whose rows it satisfies with a margin (bisection over
-    the run's length), replayed in turn while the hold grows.
+    the run's length), replayed in turn while the hold grows (then within a trust region).
 
     Args:
         robot, q, task, object_mass: as the analysis that produced ``polytope``.
@@ -451,13 +454,10 @@ def held_reach(
     def play(tau: np.ndarray) -> tuple[Hold, list[ContactMaps]]:
         return _replay(robot, q, tau, task, object_mass, floor, duration, step, False, True)
 
-    def calm(s: float) -> tuple[Witness, Hold]:
-        witness = polytope.witness_at(s * d, least="xdot")
-        return witness, play(witness.variables["tau"])[0]
-
     instant = float(polytope.straight_line_reach(d))
     if instant <= 0.0:
-        witness, hold = calm(0.0)
+        witness = polytope.witness_at(np.zeros_like(d), least="xdot")
+        hold = play(witness.variables["tau"])[0]
         return HeldReach(d, 0.0, 0.0, float(duration), hold if hold.holds else None, hold, fraction,
                          witness if hold.holds else None, None, witness)  # fmt: skip
     top = fraction * instant
@@ -466,21 +466,11 @@ def held_reach(
     if calm_hold.holds and fraction == 1.0:
         return HeldReach(d, top, instant, float(duration), calm_hold, calm_hold, fraction, witness, None, witness)
     program = _HoldingProgram(robot, polytope, d, object_mass, floor)
-    instant_witness, instant_hold = witness, calm_hold
-    if not calm_hold.holds:  # the efforts that hold the maximum longest
-        maps = calm_maps
-        for _ in range(iterations):
-            longer = program.longest(maps, top)
-            if longer is None:
-                break
-            hold, maps = play(longer.variables["tau"])
-            if hold.held <= instant_hold.held:
-                break
-            instant_witness, instant_hold = longer, hold
-            if hold.holds:
-                break
-    best: tuple[float, Hold, Witness] | None = (top, calm_hold, witness) if calm_hold.holds else None
-    maps, last, bound = calm_maps, None, None
+    calm_witness = witness
+    # a held reach: (reach, its replay, its efforts, the replay's contact maps)
+    Held = tuple[float, Hold, Witness, list[ContactMaps]]
+    best: Held | None = (top, calm_hold, witness, calm_maps) if calm_hold.holds else None
+    maps, last, bound, settled = calm_maps, None, None, False
     for _ in range(iterations):
         found = program.widest(maps, tolerance * instant)
         if found is None:
@@ -489,32 +479,85 @@ def held_reach(
         hold, maps = play(witness.variables["tau"])
         reach = float(witness.point @ d)
         if hold.holds and (best is None or reach > best[0]):
-            best = (reach, hold, witness)
+            best = (reach, hold, witness, maps)
         if hold.holds and last is not None and abs(bound - last) <= 0.1 * tolerance * instant:
+            settled = True
             break
         last = bound
-    if best is not None:
-        return HeldReach(
-            d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], bound, instant_witness
-        )
-    low, high = 0.0, top
-    while high - low > tolerance * instant:
-        middle = 0.5 * (low + high)
-        witness, hold = calm(middle)
-        if hold.holds:
-            low, best = middle, (middle, hold, witness)
-        else:
-            high = middle
+    if not settled:
+        if best is None:  # the calm efforts, by bisection
+            low, high = 0.0, top
+            while high - low > tolerance * instant:
+                middle = 0.5 * (low + high)
+                witness = polytope.witness_at(middle * d, least="xdot")
+                hold, maps = play(witness.variables["tau"])
+                if hold.holds:
+                    low, best = middle, (middle, hold, witness, maps)
+                else:
+                    high = middle
+        if best is None:
+            witness = polytope.witness_at(np.zeros_like(d), least="xdot")
+            hold, maps = play(witness.variables["tau"])
+            if hold.holds:
+                best = (0.0, hold, witness, maps)
+        # rounds that trust the linearisation only near efforts that held: where it changed too
+        # fast for the rounds above (e.g. the paper robot's arms stretched, near a singularity)
+        radius = 0.2
+        for _ in range(iterations if best is not None else 0):
+            assert best is not None
+            around = (best[2].variables["tau"], radius * robot.effort_limits)
+            found = program.widest(best[3], tolerance * instant, around)
+            if found is not None:
+                witness = found[1]
+                hold, maps = play(witness.variables["tau"])
+                reach = float(witness.point @ d)
+                if hold.holds and reach > best[0]:
+                    gain, best = reach - best[0], (reach, hold, witness, maps)
+                    if gain <= 0.1 * tolerance * instant:
+                        break
+                    radius = min(1.5 * radius, 1.0)
+                    continue
+            radius *= 0.5
+        bound = None
+    instant_witness, instant_hold = calm_witness, calm_hold
+    if not calm_hold.holds:  # the efforts that hold the maximum longest
+        instant_witness, instant_hold = _longest(program, play, top, calm_witness, calm_hold, calm_maps, best,
+                                                 robot.effort_limits, iterations)  # fmt: skip
     if best is None:
-        witness, hold = calm(0.0)
-        if not hold.holds:
-            return HeldReach(
-                d, 0.0, instant, float(duration), None, instant_hold, fraction, None, None, instant_witness
-            )
-        best = (0.0, hold, witness)
+        return HeldReach(d, 0.0, instant, float(duration), None, instant_hold, fraction, None, None, instant_witness)
     return HeldReach(
-        d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], None, instant_witness
+        d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], bound, instant_witness
     )
+
+
+def _longest(program, play, top, witness, hold, maps, held, limits, iterations) -> tuple[Witness, Hold]:
+    """The efforts at the reach ``top`` that hold longest (see :func:`held_reach`), starting from
+    the calm ones (``witness``, its replay ``hold`` and contact ``maps``) or, when the held reach
+    ``held`` (reach, replay, efforts, maps) is at least ``top``, from the held reach's replay. A
+    round whose replay does not hold longer shrinks a trust region around the best efforts (first
+    none, then 20 % of the effort limits, halved each time); two such rounds in a row end it."""
+    best_witness, best_hold, best_maps = witness, hold, maps
+    if held is not None and held[0] >= top:
+        best_maps = held[3]  # linearise around efforts that hold, beyond top
+    around, radius = (held[2] if held is not None and held[0] >= top else witness).variables["tau"], None
+    failed = 0
+    for _ in range(iterations):
+        box = None if radius is None else (around, radius * limits)
+        longer = program.longest(best_maps, top, box)
+        if longer is not None:
+            replayed, replayed_maps = play(longer.variables["tau"])
+            if replayed.held > best_hold.held:
+                best_witness, best_hold, best_maps = longer, replayed, replayed_maps
+                around, failed = longer.variables["tau"], 0
+                if replayed.holds:
+                    break
+                radius = None if radius is None else min(1.5 * radius, 1.0)
+                continue
+        failed += 1
+        if failed == 2:  # unconstrained, then a trust region: no longer hold
+            break
+        radius = 0.2 if radius is None else 0.5 * radius
+    return best_witness, best_hold
 
 
 class _HoldingProgram:
@@ -576,6 +619,12 @@ class _HoldingProgram:
         upper = np.r_[rows.upper, np.full(cols - n - 2, np.inf), np.inf, np.inf]
         return LinearProgram(np.vstack(blocks), np.concatenate(lo), np.concatenate(hi), lower, upper), lower, upper
 
+    def _box(self, lower: np.ndarray, upper: np.ndarray, around: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """Narrow the efforts' column bounds to ``around`` (efforts, radii), in place."""
+        if around is not None:
+            lower[self.tau] = np.maximum(lower[self.tau], around[0] - around[1])
+            upper[self.tau] = np.minimum(upper[self.tau], around[0] + around[1])
+
     def _most_margin(self, program, lower, upper, s: float) -> tuple[float, np.ndarray] | None:
         """(the largest margin t, the solution) at the reach s (the margin may be negative)."""
         lower, upper = lower.copy(), upper.copy()
@@ -585,10 +634,14 @@ class _HoldingProgram:
         margin[-1] = 1.0
         return program.solve(margin, True, lower, upper)
 
-    def widest(self, maps: list[ContactMaps], below: float) -> tuple[float, Witness] | None:
+    def widest(
+        self, maps: list[ContactMaps], below: float, around: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> tuple[float, Witness] | None:
         """(the largest reach around a replay's states (its contact ``maps``), the efforts with the
-        most margin ``below`` under it), or None when even the smallest reach has no margin there."""
+        most margin ``below`` under it), or None when even the smallest reach has no margin there.
+        ``around``: (efforts, radii): only efforts within the radii of those."""
         program, lower, upper = self._program(maps)
+        self._box(lower, upper, around)
         widest = np.zeros(len(lower))
         widest[-2] = 1.0
         found = program.solve(widest, True, lower, upper)
@@ -600,13 +653,17 @@ class _HoldingProgram:
             return None
         return bound, self.polytope.witness_of(found[1][: len(self.rows.lower)])
 
-    def longest(self, maps: list[ContactMaps], s: float) -> Witness | None:
+    def longest(
+        self, maps: list[ContactMaps], s: float, around: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> Witness | None:
         """The efforts at the reach s with the most margin over the longest run of a replay's
         first samples (their contact ``maps``) whose rows admit s with a margin >= 0 (found by
-        bisection over the run's length), or None when not even the first sample does."""
+        bisection over the run's length), or None when not even the first sample does.
+        ``around``: (efforts, radii): only efforts within the radii of those."""
 
         def margin(count: int) -> tuple[float, np.ndarray] | None:
             program, lower, upper = self._program(maps[:count])
+            self._box(lower, upper, around)
             return self._most_margin(program, lower, upper, s)
 
         found = margin(len(maps))
