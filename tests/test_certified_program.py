@@ -79,3 +79,32 @@ def test_grounded_polygons_have_highs_supports_and_no_straight_vertices(angle, f
     turns = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
     scale = np.abs(V).max() ** 2
     assert turns.min() > 1e-9 * scale  # counter-clockwise, every vertex a corner
+
+
+def test_changed_row_bounds_equal_a_program_built_with_them():
+    """LinearProgram.solve(..., row_lo, row_hi): rows switched off (+-inf) or moved in place give
+    the optimum of a program built afresh with those bounds, and the bounds stay for the next call
+    (the held reach's program switches the samples after a run off this way)."""
+    rng = np.random.default_rng(11)
+    for _ in range(10):
+        A, lo, hi, cl, ch = _random_program(rng)
+        program = LinearProgram(A, lo, hi, cl, ch)
+        built_lo, built_hi = program.row_bounds()
+        assert np.array_equal(built_lo, lo) and np.array_equal(built_hi, hi)
+        built_lo[0] = 5.0  # a copy: the program's own bounds do not move
+        assert program.row_bounds()[0][0] == lo[0]
+        c = rng.normal(size=A.shape[1])
+        new_lo, new_hi = lo.copy(), hi.copy()
+        new_lo[-8:], new_hi[-8:] = -np.inf, np.inf  # eight inequalities switched off
+        new_hi[4:8] += 0.5  # four moved
+        changed = program.solve(c, True, cl, ch, new_lo, new_hi)
+        fresh = LinearProgram(A, new_lo, new_hi, cl, ch).solve(c)
+        assert changed is not None and fresh is not None
+        assert changed[0] == pytest.approx(fresh[0], rel=1e-9, abs=1e-9)
+        again = program.solve(c)  # the changed bounds stay
+        assert again is not None and again[0] == pytest.approx(fresh[0], rel=1e-9, abs=1e-9)
+        restored = program.solve(c, True, cl, ch, lo, hi)
+        original = LinearProgram(A, lo, hi, cl, ch).solve(c)
+        assert restored is not None and original is not None
+        assert restored[0] == pytest.approx(original[0], rel=1e-9, abs=1e-9)
+        assert fresh[0] >= original[0] - 1e-9  # fewer and looser rows: no lower optimum

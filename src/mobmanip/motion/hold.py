@@ -581,9 +581,10 @@ class _HoldingProgram:
         self.rows = polytope.lifted_rows()
         self.tau = np.arange(len(self.rows.lower))[polytope.variables["tau"]]
 
-    def _program(self, maps: list[ContactMaps]) -> tuple[LinearProgram, np.ndarray, np.ndarray]:
+    def _program(self, maps: list[ContactMaps]) -> tuple[LinearProgram, np.ndarray, np.ndarray, list[int]]:
         """The program over the polytope's rows and ``maps``' contact rows, with its column bounds
-        (the reach s >= 0 and the margin t >= 0; the last two columns)."""
+        (the reach s >= 0 and the margin t >= 0; the last two columns) and the first row of each
+        sample's contact rows (they run to the end, sample after sample)."""
         rows, n = self.rows, len(self.rows.lower)
         splits = [m.split.shape[1] for m in maps]
         first = np.concatenate([[0], np.cumsum(splits)]).astype(int)
@@ -597,7 +598,9 @@ class _HoldingProgram:
         lo = [rows.b_eq, np.zeros(len(rows.task)), np.full(len(rows.b_ub), -np.inf)]
         hi = [rows.b_eq, np.zeros(len(rows.task)), rows.b_ub]
         lean = math.sqrt(1.0 + self.tilt**2)  # a pyramid row's norm over (f_t, f_n): its margin in N
+        first_row = []
         for k, m in enumerate(maps):
+            first_row.append(sum(len(b) for b in blocks))
             N, n0 = m.normal
             block = np.zeros((len(N), cols))
             block[:, self.tau] = -N
@@ -617,7 +620,8 @@ class _HoldingProgram:
                 hi.append(self.tilt * n0[wheel] - self.faces @ t0[2 * j : 2 * j + 2])
         lower = np.r_[rows.lower, np.full(cols - n - 2, -np.inf), 0.0, 0.0]
         upper = np.r_[rows.upper, np.full(cols - n - 2, np.inf), np.inf, np.inf]
-        return LinearProgram(np.vstack(blocks), np.concatenate(lo), np.concatenate(hi), lower, upper), lower, upper
+        program = LinearProgram(np.vstack(blocks), np.concatenate(lo), np.concatenate(hi), lower, upper)
+        return program, lower, upper, first_row
 
     def _box(self, lower: np.ndarray, upper: np.ndarray, around: tuple[np.ndarray, np.ndarray] | None) -> None:
         """Narrow the efforts' column bounds to ``around`` (efforts, radii), in place."""
@@ -625,14 +629,17 @@ class _HoldingProgram:
             lower[self.tau] = np.maximum(lower[self.tau], around[0] - around[1])
             upper[self.tau] = np.minimum(upper[self.tau], around[0] + around[1])
 
-    def _most_margin(self, program, lower, upper, s: float) -> tuple[float, np.ndarray] | None:
-        """(the largest margin t, the solution) at the reach s (the margin may be negative)."""
+    def _most_margin(
+        self, program, lower, upper, s: float, row_lo=None, row_hi=None
+    ) -> tuple[float, np.ndarray] | None:
+        """(the largest margin t, the solution) at the reach s (the margin may be negative), with
+        the rows' bounds ``row_lo``, ``row_hi`` when given."""
         lower, upper = lower.copy(), upper.copy()
         lower[-2] = upper[-2] = s
         lower[-1] = -np.inf
         margin = np.zeros(len(lower))
         margin[-1] = 1.0
-        return program.solve(margin, True, lower, upper)
+        return program.solve(margin, True, lower, upper, row_lo, row_hi)
 
     def widest(
         self, maps: list[ContactMaps], below: float, around: tuple[np.ndarray, np.ndarray] | None = None
@@ -640,7 +647,7 @@ class _HoldingProgram:
         """(the largest reach around a replay's states (its contact ``maps``), the efforts with the
         most margin ``below`` under it), or None when even the smallest reach has no margin there.
         ``around``: (efforts, radii): only efforts within the radii of those."""
-        program, lower, upper = self._program(maps)
+        program, lower, upper, _ = self._program(maps)
         self._box(lower, upper, around)
         widest = np.zeros(len(lower))
         widest[-2] = 1.0
@@ -661,10 +668,15 @@ class _HoldingProgram:
         bisection over the run's length), or None when not even the first sample does.
         ``around``: (efforts, radii): only efforts within the radii of those."""
 
+        program, lower, upper, first_row = self._program(maps)
+        self._box(lower, upper, around)
+        row_lo, row_hi = program.row_bounds()
+
         def margin(count: int) -> tuple[float, np.ndarray] | None:
-            program, lower, upper = self._program(maps[:count])
-            self._box(lower, upper, around)
-            return self._most_margin(program, lower, upper, s)
+            lo, hi = row_lo.copy(), row_hi.copy()
+            if count < len(maps):  # the samples after the first count ones: rows that bind nothing
+                lo[first_row[count] :], hi[first_row[count] :] = -np.inf, np.inf
+            return self._most_margin(program, lower, upper, s, lo, hi)
 
         found = margin(len(maps))
         if found is None or found[0] < 0.0:

@@ -74,9 +74,20 @@ class LinearProgram:
         #: The rows' dual values (multipliers) at the last optimum: a row whose multiplier is not
         #: zero limits the optimum (its sensitivity to that row's bound).
         self.row_duals = np.zeros(self.n_rows)
+        self._row_bounds = (
+            np.broadcast_to(np.asarray(row_lo, dtype=float), (self.n_rows,)).copy(),
+            np.broadcast_to(np.asarray(row_hi, dtype=float), (self.n_rows,)).copy(),
+        )
 
-    def solve(self, cost, maximize: bool = True, col_lo=None, col_hi=None) -> tuple[float, np.ndarray] | None:
-        """The optimum (value, x), or None when infeasible.
+    def row_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The rows' bounds the program was built with (copies; +-inf where unbounded)."""
+        return self._row_bounds[0].copy(), self._row_bounds[1].copy()
+
+    def solve(
+        self, cost, maximize: bool = True, col_lo=None, col_hi=None, row_lo=None, row_hi=None
+    ) -> tuple[float, np.ndarray] | None:
+        """The optimum (value, x), or None when infeasible. New column or row bounds, when given,
+        stay for the calls after this one.
 
         Raises:
             ModelError: HiGHS reports neither an optimum nor infeasibility (e.g. unbounded:
@@ -89,6 +100,11 @@ class LinearProgram:
             if col_lo is not None:
                 h.changeColsBounds(
                     self.n_cols, self._all, self._finite(col_lo, self.n_cols), self._finite(col_hi, self.n_cols)
+                )
+            if row_lo is not None:
+                rows = np.arange(self.n_rows, dtype=np.int32)
+                h.changeRowsBounds(
+                    self.n_rows, rows, self._finite(row_lo, self.n_rows), self._finite(row_hi, self.n_rows)
                 )
             h.run()
             status = h.getModelStatus()
