@@ -289,3 +289,26 @@ def test_an_empty_set_on_the_floor_says_the_floor_is_why():
     assert "would unload caster_2, caster_3 (the centre of mass at (0.223, 0.000) m" in run.stderr
     ideal = _cli("analyze", "planar_dual_arm", "--object-mass", "10", "--polytope")
     assert ideal.returncode == 0 and "EMPTY" not in ideal.stdout
+
+
+def test_a_six_dimensional_grounded_set_beside_an_empty_ellipsoid_is_described_by_its_reaches():
+    """TIAGo++ at home on the floor (the command's defaults): its dynamic ellipsoid is empty, so the
+    grounded polytope is described along the task axes, and a polytope of six task dimensions has
+    no vertices, hence no isotropy. The command stopped there with 'vertices are enumerated up to
+    3 task dimensions'; it must print the reaches and say the isotropy is not available. Each
+    axis' printed width (its two reaches from the centre) is the independent whole-robot LP's."""
+    from floor_reference import build_problem, support
+
+    run = _cli("analyze", "tiago_dual", "--ground")
+    assert run.returncode == 0, run.stderr
+    line = next(s for s in run.stdout.splitlines() if s.startswith("dynamic polytope (coupled) reach along the task"))
+    assert "; isotropy n/a;" in line
+    robot = mobmanip.load_robot("tiago_dual")
+    analysis = mobmanip.analyze(robot, named_configuration(robot, "home"), "spatial", measures=("kinematic",))
+    problem = build_problem(robot, analysis.q, "spatial", analysis.held_object)
+    printed = line.split(": ", 1)[1].split("; isotropy")[0].split("; ")
+    assert len(printed) == 6
+    for e, text in zip(np.eye(6), printed):
+        low, high = (float(v) for v in text.split(" .. "))  # "-a .. +b" from the centre
+        width = sum(support(problem, d, mode="friction", mu=0.5, springs=True).value for d in (e, -e))
+        assert high - low == pytest.approx(width, abs=2e-4)  # printed to 4 decimals

@@ -116,7 +116,9 @@ def _describe_set(name: str, task_set, unit: str) -> str:
     """Any task-space set: its reach from its centre along each task axis, both ways."""
     m = task_set.dim
     reach = [f"-{task_set.radius_along(-e):.4f} .. +{task_set.radius_along(e):.4f}" for e in np.eye(m)]
-    text = f"{name} reach along the task axes ({unit}): {'; '.join(reach)}; isotropy {task_set.isotropy:.3f}"
+    # a polytope of more than 3 task dimensions has no vertices, so no isotropy (its reaches are LPs)
+    isotropy = f"isotropy {task_set.isotropy:.3f}" if _available(lambda: task_set.isotropy) else "isotropy n/a"
+    text = f"{name} reach along the task axes ({unit}): {'; '.join(reach)}; {isotropy}"
     if np.any(task_set.center != 0.0):
         text += f"; centre {np.array2string(task_set.center, precision=4)}"
     if task_set.degenerate:
