@@ -110,6 +110,25 @@ def test_the_least_motion_witness_reaches_the_point_with_less_motion():
         P.witness_at(target, least="nothing")
 
 
+def test_the_efforts_of_a_maximum_itself_are_found_on_every_axis():
+    """witness_at at the straight-line maximum itself, where no row has slack: the efforts it
+    returns (the least-motion ones) drive the closed chain, solved on its own, to that point.
+    With a reserve of 0.1, TIAGo++'s -pitch maximum once left HiGHS at 'Unknown'."""
+    from mobmanip.motion.hold import forward_accelerations
+    from mobmanip.motion.in_motion import motion_terms
+
+    robot, q, task, _ = CASES["tiago_dual hold"]
+    P = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, reserve=0.1),)
+    ).measures["dynamic_polytope"]
+    terms = motion_terms(robot, q, np.zeros(robot.nx), task, object_mass=MASS)
+    for e in np.vstack([np.eye(6), -np.eye(6)]):
+        top = P.straight_line_reach(e) * e
+        tau = P.witness_at(top, least="xdot").variables["tau"]
+        assert np.all(np.abs(tau) <= robot.effort_limits * (1 + 1e-9))
+        np.testing.assert_allclose(forward_accelerations(terms, tau)[2], top, atol=1e-7 * np.abs(top).max())
+
+
 def test_compliant_normals_are_an_affine_function_of_the_contacts_positions():
     """At every compliant maximum the normal forces lie on a plane over the contacts' floor
     positions (equally stiff springs under a rigid base), and the sharing 'any' leaves it."""

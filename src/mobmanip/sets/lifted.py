@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import TaskError
+from ..errors import ModelError, TaskError
 from .linear_programs import CertifiedProgram, LinearProgram
 from .taskset import TaskSet, check_dims, check_direction, check_points
 
@@ -226,7 +226,9 @@ class LiftedPolytope(TaskSet):
                 small: among the solutions with at least half that greatest slack, the one with
                 the least 1-norm of that variable. The greatest slack alone may use large
                 internal motions (self-motions of redundant arms) to gain a little margin; a
-                replay of such a solution drifts away from it within milliseconds.
+                replay of such a solution drifts away from it within milliseconds. At a point
+                on the boundary, where HiGHS may not settle that second program (no slack to
+                halve), the greatest-slack solution is returned.
 
         Raises:
             TaskError: the point is not in the set, or ``least`` is not one of its variables.
@@ -267,7 +269,10 @@ class LiftedPolytope(TaskSet):
         lo2 = np.r_[self._b_eq, p, np.full(len(self._b_ub) + 2 * k, -np.inf)]
         hi2 = np.r_[self._b_eq, p, self._b_ub - half, np.zeros(2 * k)]
         calm = LinearProgram(A2, lo2, hi2, np.r_[self._lower, np.zeros(k)], np.r_[self._upper, np.full(k, np.inf)])
-        second = calm.solve(np.r_[np.zeros(n), -np.ones(k)])
+        try:
+            second = calm.solve(np.r_[np.zeros(n), -np.ones(k)])
+        except ModelError:  # at a point on the boundary (no slack to halve) HiGHS may not settle
+            second = None  # the degenerate program: the greatest-slack solution stands
         z = result[1][:-1] if second is None else second[1][:n]
         return self._witness(float(result[0]), z, None)
 
