@@ -97,3 +97,16 @@ def test_estimates_read_for_people():
     with pytest.raises(ArgumentError, match=r"5,000,000 QP steps \(path 1e5 s\), about 3.5 h"):
         check_work(estimate, 200_000)
     assert check_work(estimate, 10**7) is estimate
+
+
+def test_a_grounded_placement_search_is_announced_only_when_long(capfd):
+    """A polytope objective's search: 300 evaluations (the default) take a few seconds, so nothing
+    is announced; more than the bound is refused naming the estimate (it once announced 'about
+    75 s' for a search that took 4 s)."""
+    argv = ("place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "dynamic_polytope:reach:+x",
+            "--ground", "--no-progress")  # fmt: skip
+    code, _, err = run_cli(capfd, *argv)
+    assert code == 0, err
+    assert "about" not in err
+    line = _refused_quickly(capfd, *argv, "--budget", "20001")
+    assert "20,001 search evaluations, about 7 min" in line
