@@ -129,6 +129,21 @@ def test_the_efforts_of_a_maximum_itself_are_found_on_every_axis():
         np.testing.assert_allclose(forward_accelerations(terms, tau)[2], top, atol=1e-7 * np.abs(top).max())
 
 
+def test_an_empty_grounded_set_has_no_witness():
+    """The paper robot holding 10 kg at home: its compliant set is empty (the centre of mass is
+    outside the four casters' core), so no efforts reach even rest: witness_at says the point is
+    not in the set (it raised an AttributeError: an empty set had no size for its tolerance)."""
+    robot = mobmanip.load_robot("planar_dual_arm")
+    P = mobmanip.analyze(
+        robot, named_configuration(robot, "home"), "planar", object_mass=10.0, measures=("dynamic_polytope",),
+        constraints=(Floor(mu=0.5),),
+    ).measures["dynamic_polytope"]  # fmt: skip
+    assert P.empty
+    for least in (None, "xdot"):
+        with pytest.raises(MobmanipError, match=r"the point \[0.0, 0.0\] is not in the set"):
+            P.witness_at(np.zeros(2), least=least)
+
+
 def test_compliant_normals_are_an_affine_function_of_the_contacts_positions():
     """At every compliant maximum the normal forces lie on a plane over the contacts' floor
     positions (equally stiff springs under a rigid base), and the sharing 'any' leaves it."""

@@ -99,6 +99,7 @@ class LiftedPolytope(TaskSet):
         if self.empty:
             self.center = np.zeros(self.dim)
             self.degenerate = True
+            self._size = 1.0  # the scale of the programs' tolerances
             return
         if self.dim <= 3:  # the vertices give the bounding box (and are wanted anyway)
             self._size = 1.0  # the refinement's tolerance scale until the box is known
