@@ -70,27 +70,32 @@ def test_grounded_reaches_equal_the_independent_lp(case, floor, load):
             assert grounded.support(e) == pytest.approx(ref_support, rel=1e-6, abs=1e-9), (name, e)
 
 
-@pytest.mark.parametrize("case", ["tiago_dual hold", "paper 90 deg"])
-def test_a_reserve_equals_the_independent_lp_and_keeps_its_margins(case):
+@pytest.mark.parametrize(
+    "case, reserve",
+    [("tiago_dual hold", 0.1), ("paper 90 deg", 0.1), ("tiago_dual hold", 0.3), ("paper 0 deg", 0.3),
+     ("paper 90 deg", 0.3)],
+)  # fmt: skip
+def test_a_reserve_equals_the_independent_lp_and_keeps_its_margins(case, reserve):
     """With a reserve r every support keeps r of its equal share of the weight and every wheel
     uses at most 1 - r of its pyramid: the reaches equal the reference's with the same margins
-    (1e-6), and at each maximum the contact forces keep them."""
+    (1e-6), and at each maximum the contact forces keep them. (0.3: the reserve whose maxima hold
+    for 20 ms in MuJoCo on every axis, tests/test_floor_physics.py.)"""
     robot, q, task, casters = CASES[case]
     analysis = mobmanip.analyze(
-        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, reserve=0.1),)
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, reserve=reserve),)
     )
     problem = build_problem(robot, q, task, analysis.held_object, casters=casters)
     P = analysis.measures["dynamic_polytope"]
     weight = problem.total_mass * 9.81
-    for e in _directions(P.dim)[:4]:
+    for e in _directions(P.dim)[:4] if reserve == 0.1 else _directions(P.dim):
         e = e / np.linalg.norm(e)
-        ref = straight_line(problem, e, mode="friction", mu=0.5, springs=True, reserve=0.1).value
+        ref = straight_line(problem, e, mode="friction", mu=0.5, springs=True, reserve=reserve).value
         assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6), e
         floor = ground_reaction(P.model["floor"], P.straight_line_witness(e).variables[CONTACT_FORCES])
         normals = [c["normal"] for c in floor["contacts"].values()]
-        assert min(normals) >= 0.1 * weight / len(normals) * (1 - 1e-7)
+        assert min(normals) >= reserve * weight / len(normals) * (1 - 1e-7)
         uses = [c["traction_use"] for c in floor["contacts"].values() if c.get("traction_use") is not None]
-        assert max(uses) <= 0.9 * (1 + 1e-7)  # the pyramid's faces are inside 0.9 of the cone
+        assert max(uses) <= (1 - reserve) * (1 + 1e-7)  # the pyramid's faces are inside 1 - r of the cone
 
 
 def test_the_least_motion_witness_reaches_the_point_with_less_motion():
