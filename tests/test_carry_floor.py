@@ -119,3 +119,29 @@ def test_carry_ground_from_the_command_line_checked_by_trajectory_ground(tmp_pat
         run = _cli("carry", "planar_dual_arm", "--path", str(fast), *bad)
         lines = run.stderr.strip().splitlines()
         assert run.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"mobmanip: error: {message}")
+
+
+@pytest.mark.parametrize("name", ["planar_dual_arm", "tiago_dual"])
+def test_a_zmp_margin_the_support_polygon_cannot_give_is_refused_up_front(name):
+    """No point of the support polygon is farther from its edges than the largest circle inside it
+    (its radius found here on a 1 mm grid, independently of the LP): a margin beyond it is one
+    clear error naming the margin, the largest possible one and the contacts, not a QP that fails
+    at step 0 saying that slowing down likely helps."""
+    from mobmanip.errors import ArgumentError
+    from mobmanip.robot.support import deepest_margin, polygon_margin
+
+    robot = mobmanip.load_robot(name)
+    support, _, _ = CarryFloor().resolve(robot)
+    polygon = support.polygon((0.0, 0.0, 0.0))
+    lo, hi = polygon.min(axis=0), polygon.max(axis=0)
+    grid = np.stack(np.meshgrid(*(np.arange(a, b, 1e-3) for a, b in zip(lo, hi))), axis=-1).reshape(-1, 2)
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]  # outward (ccw)
+    margins = np.min(np.einsum("ij,ij->i", normals, polygon) - grid @ normals.T, axis=1)
+    best = float(margins.max())
+    assert best == pytest.approx(polygon_margin(polygon, grid[np.argmax(margins)]), abs=1e-12)
+    deepest = deepest_margin(polygon)
+    assert best <= deepest + 1e-12 and deepest - best < 1e-3
+    CarryFloor(zmp_margin=0.99 * deepest).resolve(robot)
+    with pytest.raises(ArgumentError, match=rf"margin {1.01 * deepest:g} m is more than {name}'s support polygon"):
+        CarryFloor(zmp_margin=1.01 * deepest).resolve(robot)

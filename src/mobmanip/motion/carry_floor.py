@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import ArgumentError, SpecError
 from ..robot.model import Robot
-from ..robot.support import Support, check_faces, check_mu, robot_support
+from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
 from ..terms.constraints.floor import compliant_sharing
 from ..terms.grasp import GRAVITY
@@ -84,6 +84,13 @@ class CarryFloor:
                 "platform"
             )
         support = self.support if self.support is not None else robot_support(robot)
+        deepest = deepest_margin(support.polygon((0.0, 0.0, 0.0)))
+        if self.zmp_margin >= deepest:
+            raise ArgumentError(
+                f"the zero-moment point's margin {self.zmp_margin:g} m is more than {robot.name}'s support polygon "
+                f"gives (no point of it is farther than {deepest:.4g} m from its edges; contacts "
+                f"{', '.join(support.names)})"
+            )
         mu = support.mu if self.mu == "spec" else self.mu
         faces = support.faces if self.faces is None else self.faces
         return support, (None if mu is None else float(mu)), int(faces)

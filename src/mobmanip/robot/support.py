@@ -152,6 +152,20 @@ class Support:
         }
 
 
+def deepest_margin(polygon: np.ndarray) -> float:
+    """The largest margin (m) any point of a convex polygon keeps to its boundary: the radius of
+    the largest circle inside it (an LP over the centre and the radius)."""
+    from scipy.optimize import linprog
+
+    P = np.asarray(polygon, dtype=float)
+    edges = np.roll(P, -1, axis=0) - P
+    normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]  # outward (ccw)
+    # max r: n_i . c + r <= n_i . p_i
+    found = linprog([0.0, 0.0, -1.0], A_ub=np.c_[normals, np.ones(len(P))],
+                    b_ub=np.einsum("ij,ij->i", normals, P), bounds=[(None, None)] * 3, method="highs")  # fmt: skip
+    return float(-found.fun) if found.status == 0 else 0.0
+
+
 def polygon_margin(polygon: np.ndarray, point: np.ndarray) -> float:
     """Signed distance (m) from a point to a convex polygon's boundary, positive inside."""
     P = np.asarray(polygon, dtype=float)
