@@ -75,6 +75,7 @@ def test_the_default_load_sharing_is_compliant_with_traction_and_any_without(tmp
     "args, message",
     [
         (["--mu", "-0.5"], "mu must be a finite friction coefficient >= 0, got -0.5"),
+        (["--mu", "1e9"], "mu 1000000000.0 is above 10, more than any floor gives"),  # HiGHS: 'Unknown'
         (["--reserve", "1.5"], "--reserve must be a fraction in [0, 1), got 1.5"),
         (["--reserve", "nan"], "--reserve must be a fraction in [0, 1), got nan"),
         (["--mu", "0.5", "--no-traction"], "--mu and --no-traction contradict each other"),

@@ -30,6 +30,9 @@ from ..errors import SpecError
 
 #: Friction coefficient of driven wheels when the spec gives none.
 DEFAULT_MU = 0.5
+#: The largest friction coefficient accepted: beyond it the friction rows, scaled by mu, leave
+#: the linear programs badly scaled (HiGHS stops undecided near 1e9) for no physical meaning.
+MAX_MU = 10.0
 #: Faces of the pyramid inscribed in each friction cone (conservative by 1 - cos(pi / faces): 7.6 %).
 DEFAULT_FACES = 8
 
@@ -98,11 +101,16 @@ def support_spec_from_table(table: object, where: str) -> SupportSpec:
 
 
 def check_mu(mu: object, what: str = "mu") -> None:
-    """A friction coefficient: a finite number >= 0 (or ``None``)."""
+    """A friction coefficient: a finite number from 0 to :data:`MAX_MU` (or ``None``)."""
     if mu is None:
         return
     if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not math.isfinite(mu) or mu < 0:
         raise SpecError(f"{what} must be a finite friction coefficient >= 0, got {mu!r}")
+    if mu > MAX_MU:
+        raise SpecError(
+            f"{what} {mu!r} is above {MAX_MU:g}, more than any floor gives (a tyre on dry concrete: about 1); "
+            "for traction without a limit, give no friction coefficient (--no-traction)"
+        )
 
 
 def check_faces(faces: object, what: str = "faces") -> None:
