@@ -313,3 +313,17 @@ def test_a_six_dimensional_grounded_set_beside_an_empty_ellipsoid_is_described_b
         low, high = (float(v) for v in text.split(" .. "))  # "-a .. +b" from the centre
         width = sum(support(problem, d, mode="friction", mu=0.5, springs=True).value for d in (e, -e))
         assert high - low == pytest.approx(width, abs=2e-4)  # printed to 4 decimals
+
+
+def test_without_friction_the_force_capacity_along_the_floor_is_nothing_and_says_why():
+    """mu = 0: at rest the floor's horizontal force is zero, so whatever the object pushes along
+    the floor nothing pushes back: the planar force polytope is the point at zero, and the
+    warning names the friction, not the minimum-norm policy of a translational task."""
+    run = _cli("analyze", "planar_dual_arm", "--ground", "--mu", "0", "--measure", "force_polytope")
+    assert run.returncode == 0, run.stderr
+    assert "straight line 0, support 0" in run.stdout
+    assert (
+        "force_polytope on the floor has collapsed (no extent along some direction; its widths along the task "
+        "axes 0, 0): with mu = 0 the wheels can neither push nor hold along the floor"
+    ) in run.stderr
+    assert "minimum-norm" not in run.stderr

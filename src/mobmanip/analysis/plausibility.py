@@ -138,10 +138,16 @@ def floor_warnings(analysis) -> list[str]:
             continue
         if not task_set.empty and getattr(task_set, "degenerate", False):
             widths = [task_set.support(e) + task_set.support(-e) for e in np.eye(task_set.dim)]
+            if model["floor"].get("mu") == 0.0:
+                why = "with mu = 0 the wheels can neither push nor hold along the floor"
+            else:
+                why = (
+                    "the floor's rows and the set's own policy leave almost no motion (e.g. the minimum-norm "
+                    "policy cannot keep the object level in a translational task)"
+                )
             out.append(
                 f"{name} on the floor has collapsed (no extent along some direction; its widths along the task "
-                f"axes {', '.join(f'{w:.3g}' for w in widths)}): the floor's rows and the set's own policy leave "
-                "almost no motion (e.g. the minimum-norm policy cannot keep the object level in a translational task)"
+                f"axes {', '.join(f'{w:.3g}' for w in widths)}): {why}"
             )
             continue
         if not task_set.empty:
