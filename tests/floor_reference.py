@@ -486,18 +486,7 @@ def _solve(
                 A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
     cost = np.zeros(n)
     cost[A], cost[S_] = objective[:m], objective[m]
-    result = linprog(
-        cost,
-        A_ub=np.array(A_ub) if A_ub else None,
-        b_ub=np.zeros(len(A_ub)) if A_ub else None,
-        A_eq=np.vstack(rows),
-        b_eq=np.concatenate(rhs),
-        bounds=bounds,
-        method="highs",
-        options=_HIGHS,
-    )
-    if result.status != 0:
-        raise RuntimeError(f"floor LP ({mode}) failed: {result.message}")
+    result = _linprog(cost, A_ub, rows, rhs, bounds, f"floor LP ({mode})")
     z = result.x
     forces = np.zeros((len(P.contacts), 3))
     for i, sl in enumerate(slices):
@@ -512,3 +501,87 @@ def _solve(
         forces=forces,
         zmp=zero_moment_point(P.points, forces),
     )
+
+
+def team_straight_line(
+    problems: list[FloorProblem], e, mode="ideal", mu=None, faces=8, springs=False, reserve=0.0
+) -> float:
+    """max s such that the object's acceleration s e is reachable by a team: several robots, each on
+    its own floor with its own efforts and contact forces (one :func:`build_problem` per robot,
+    all with the one object), holding one object. Each robot's whole-body equation and grasp
+    kinematics are its own; the object's equations sum the wrenches of every robot's hands (task
+    rows and omitted level rows alike). ``mode``, ``mu``, ``faces``, ``springs`` (``True``:
+    equally stiff) and ``reserve`` as in :func:`support`, for every robot."""
+    e = np.asarray(e, dtype=float)
+    m = problems[0].W.shape[0]
+    blocks = []  # per robot: (xdot, tau, lambda, h, h_level, springs) slices
+    start = 0
+    for P in problems:
+        nx = P.S.shape[1]
+        C, slices = contact_force_columns(P)
+        sizes = [nx, nx, C.shape[1], P.W.shape[1], P.level_jacobian.shape[0], 0 if springs is False else 3]
+        at = np.cumsum([start, *sizes])
+        blocks.append((C, slices, [slice(at[i], at[i + 1]) for i in range(6)]))
+        start = int(at[-1])
+    A, S_ = slice(start, start + m), slice(start + m, start + m + 1)
+    n = start + m + 1
+    rows, rhs = [], []
+
+    def equation(parts, value):
+        row = np.zeros((len(value), n))
+        for where, block in parts:
+            row[:, where] += block
+        rows.append(row)
+        rhs.append(np.asarray(value, dtype=float))
+
+    bounds = [(None, None)] * n
+    A_ub: list[np.ndarray] = []
+    cone = (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
+    for P, (C, slices, (X, T, L, H, V, D)) in zip(problems, blocks):
+        equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
+        equation([(X, P.hand_jacobian @ P.S), (A, -P.W.T)], np.zeros(P.W.shape[1]))  # its hands move with it
+        if springs is not False:
+            for sl, p in zip(slices, P.points):
+                row = np.zeros((1, n))
+                row[0, L.start + sl.stop - 1] = 1.0
+                row[0, D] = -1.0, -p[0], -p[1]
+                rows.append(row)
+                rhs.append(np.zeros(1))
+        bounds[T] = [(-limit, limit) for limit in P.tau_max]
+        least = reserve * P.total_mass * GRAVITY / len(P.contacts)
+        for contact, sl in zip(P.contacts, slices):
+            if mode != "ideal":
+                bounds[L.start + sl.stop - 1] = (least, None)
+            if contact.driven and mode == "friction":
+                for angle in 2.0 * math.pi * np.arange(faces) / faces:
+                    A_ub.append(np.zeros(n))
+                    A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
+    first = problems[0]
+    # the one object: every robot's hands together, on the task rows and on the level rows
+    equation([(H, P.W) for P, (_, _, (_, _, _, H, _, _)) in zip(problems, blocks)] + [(A, -first.M_o)], first.g_o)
+    equation(
+        [(H, P.level_grasp[0]) for P, (_, _, (_, _, _, H, _, _)) in zip(problems, blocks)]
+        + [(V, P.level_grasp[1]) for P, (_, _, (_, _, _, _, V, _)) in zip(problems, blocks)],
+        first.level_load,
+    )
+    equation([(A, np.eye(m)), (S_, -e[:, None])], np.zeros(m))
+    cost = np.zeros(n)
+    cost[S_] = -1.0
+    return float(-_linprog(cost, A_ub, rows, rhs, bounds, f"team floor LP ({mode})").fun)
+
+
+def _linprog(cost, A_ub: list, rows: list, rhs: list, bounds: list, what: str):
+    """HiGHS on min cost.z, A_ub z <= 0 (the pyramids' rows), the stacked equations, the bounds."""
+    result = linprog(
+        cost,
+        A_ub=np.array(A_ub) if A_ub else None,
+        b_ub=np.zeros(len(A_ub)) if A_ub else None,
+        A_eq=np.vstack(rows),
+        b_eq=np.concatenate(rhs),
+        bounds=bounds,
+        method="highs",
+        options=_HIGHS,
+    )
+    if result.status != 0:
+        raise RuntimeError(f"{what} failed: {result.message}")
+    return result

@@ -29,8 +29,8 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
     Returns:
         One dict per axis and sense (``axis``, ``straight_line``, ``support`` and, for a set of
         linear programs, ``binding`` at the straight-line maximum, plus ``floor`` (ZMP, margin,
-        contact forces) on the floor); ``None`` for an ellipsoid, a set without straight-line
-        reach or an empty set.
+        contact forces) on the floor, or for a team ``floors``, robot name -> its floor's);
+        ``None`` for an ellipsoid, a set without straight-line reach or an empty set.
     """
     # an ellipsoid has a straight-line reach too (sweeps record it) but the paper's ellipsoids
     # are summarised by their axes here: the per-axis readings are the polytopes'
@@ -60,9 +60,17 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                     w = None
                 if w is not None:
                     entry["binding"] = sorted(set(w.binding))
-                    floor = getattr(task_set, "model", {}).get("floor")
+                    model = getattr(task_set, "model", {})
+                    floor = model.get("floor")
                     if floor is not None and CONTACT_FORCES in w.variables:
                         entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
+                    floors = {  # a team: each robot on its own floor, its forces under its name
+                        name: ground_reaction(info["floor"], w.variables[f"{name}.{CONTACT_FORCES}"])
+                        for name, info in model.items()
+                        if isinstance(info, dict) and "floor" in info and f"{name}.{CONTACT_FORCES}" in w.variables
+                    }
+                    if floors:
+                        entry["floors"] = floors
             out.append(entry)
     return out
 

@@ -26,6 +26,7 @@ from .common import (
     add_floor_options,
     add_robot_options,
     apply_analysis_options,
+    describe_reaches,
     floor_constraints,
     format_matrix,
     load_robot_and_configuration,
@@ -184,47 +185,6 @@ def _describe_blocks(blocks: dict, units: str) -> str:
     return "  per block: " + "; ".join(parts)
 
 
-_KIND = (("lifts off", "support lifting off"), ("slips", "wheel traction"), ("limit", "joint effort"))
-
-
-def _binding_summary(binding: list[str]) -> str:
-    """What stops a maximum, grouped: joint efforts, wheel traction, supports lifting off."""
-    groups: dict[str, list[str]] = {}
-    for label in binding:
-        kind = next((what for key, what in _KIND if key in label), "other")
-        groups.setdefault(kind, []).append(label.split(" ", 1)[0])
-    return "; ".join(f"{kind}: {', '.join(sorted(set(names)))}" for kind, names in groups.items())
-
-
-def _describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
-    """Per task axis: straight-line reach and support, with what binds and where the ZMP is."""
-    head = "  along the task axes, straight-line reach (from rest, exactly along it) and support (others free)"
-    lines = [f"{head} ({unit}):"]
-    for r in reaches:
-        text = f"    {r['axis']:>4}: straight line {r['straight_line']:.4g}, support {r['support']:.4g}"
-        if r.get("binding"):
-            text += f"; stops it: {_binding_summary(r['binding'])}"
-        ground = r.get("floor")
-        if ground and ground.get("zmp") is not None:
-            zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
-            text += f"; ZMP ({zmp}) m, margin {round(ground['margin'], 3) + 0.0:.3f} m"
-        held = r.get("held")
-        if held is not None:
-            ms = 1e3 * held["duration"]
-            text += f"\n          held {ms:g} ms: straight line {held['straight_line']:.4g}"
-            if held["instant_gives_way"] is not None:
-                text += (
-                    f" (at {100 * held['instant_fraction']:g} % of the maximum the efforts that hold longest give way "
-                    f"after {1e3 * held['instant_holds_for']:.3g} ms: {held['instant_gives_way']})"
-                )
-        lines.append(text)
-    if floor is not None:
-        mu = "no traction limit" if floor.get("mu") is None else f"mu = {floor['mu']:g}"
-        names = ", ".join(c["name"] for c in floor["contacts"])
-        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid): contacts {names}")
-    return "\n".join(lines)
-
-
 def _available(get) -> bool:
     from ..errors import MobmanipError
 
@@ -311,7 +271,7 @@ def run(args) -> int:
         reaches = document[measure.json_key].get("reaches")
         if reaches:
             floor = document[measure.json_key].get("model", {}).get("floor")
-            print(_describe_reaches(reaches, units, floor))
+            print(describe_reaches(reaches, units, floor))
     if blocks is not None:
         print(
             f"(task {result.task} mixes linear and angular rows: its volumes and isotropies multiply metres by "

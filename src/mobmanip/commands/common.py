@@ -376,3 +376,53 @@ def show_progress(args) -> bool:
     from ..support.progress import on_terminal
 
     return not getattr(args, "no_progress", False) and on_terminal()
+
+
+_BINDING_KINDS = (("lifts off", "support lifting off"), ("slips", "wheel traction"), ("limit", "joint effort"))
+
+
+def binding_summary(binding: list[str]) -> str:
+    """What stops a maximum, grouped: joint efforts, wheel traction, supports lifting off (a
+    team's labels, ``"ROBOT: what"``, name the robot: ``ROBOT/joint``)."""
+    groups: dict[str, list[str]] = {}
+    for label in binding:
+        kind = next((what for key, what in _BINDING_KINDS if key in label), "other")
+        robot, sep, rest = label.partition(": ")
+        if not sep or " " in robot:
+            robot, rest = "", label
+        name = rest.split(" ", 1)[0]
+        groups.setdefault(kind, []).append(f"{robot}/{name}" if robot else name)
+    return "; ".join(f"{kind}: {', '.join(sorted(set(names)))}" for kind, names in groups.items())
+
+
+def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
+    """Per task axis: straight-line reach and support, with what binds and where the ZMP is."""
+    head = "  along the task axes, straight-line reach (from rest, exactly along it) and support (others free)"
+    lines = [f"{head} ({unit}):"]
+    for r in reaches:
+        text = f"    {r['axis']:>4}: straight line {r['straight_line']:.4g}, support {r['support']:.4g}"
+        if r.get("binding"):
+            text += f"; stops it: {binding_summary(r['binding'])}"
+        ground = r.get("floor")
+        if ground and ground.get("zmp") is not None:
+            zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
+            text += f"; ZMP ({zmp}) m, margin {round(ground['margin'], 3) + 0.0:.3f} m"
+        for robot, ground in (r.get("floors") or {}).items():  # a team: each robot's own floor
+            if ground.get("zmp") is not None:
+                zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
+                text += f"; {robot} ZMP ({zmp}) m, margin {round(ground['margin'], 3) + 0.0:.3f} m"
+        held = r.get("held")
+        if held is not None:
+            ms = 1e3 * held["duration"]
+            text += f"\n          held {ms:g} ms: straight line {held['straight_line']:.4g}"
+            if held["instant_gives_way"] is not None:
+                text += (
+                    f" (at {100 * held['instant_fraction']:g} % of the maximum the efforts that hold longest give way "
+                    f"after {1e3 * held['instant_holds_for']:.3g} ms: {held['instant_gives_way']})"
+                )
+        lines.append(text)
+    if floor is not None:
+        mu = "no traction limit" if floor.get("mu") is None else f"mu = {floor['mu']:g}"
+        names = ", ".join(c["name"] for c in floor["contacts"])
+        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid): contacts {names}")
+    return "\n".join(lines)

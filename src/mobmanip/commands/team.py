@@ -17,10 +17,13 @@ import numpy as np
 
 from .common import (
     add_dask_option,
+    add_floor_options,
     add_measure_option,
     add_progress_option,
     add_work_option,
     cluster_executor,
+    describe_reaches,
+    floor_constraints,
     requested_measures,
     show_progress,
 )
@@ -37,9 +40,15 @@ analyse the team at each heading from them; the files equal a run without --dask
 whose worker is lost is run again by Dask. The joints are still solved one heading after the
 other, so the cluster pays off for heavy measures (--polytope), hardly for ellipsoids alone.
 
+--ground (or --mu, --no-traction, --load, --reserve) stands every robot on its own wheels and
+casters (see `mobmanip analyze --help`): the polytopes honour each robot's floor, with the object
+one for all (its weight shared by every robot's hands), and each reach names the robot and the
+contact or joint that stops it.
+
 examples:
   mobmanip team examples/beam_team.toml
   mobmanip team examples/beam_team.toml --polytope --json beam.json --plot beam.png
+  mobmanip team examples/beam_team.toml --polytope --mu 0.5
   mobmanip team examples/beam_team.toml --sweep-heading=-60:60:13 --export beam.html
   mobmanip team examples/beam_team.toml --polytope --sweep-heading=-60:60:61 --json beam.json --dask local:2
 """
@@ -62,6 +71,7 @@ def register(sub) -> None:
     )
     parser.add_argument("description", metavar="TEAM.toml", help="the team description (robots, grasps, object)")
     add_measure_option(parser)
+    add_floor_options(parser)
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.add_argument("--plot", metavar="FILE", help="write a figure (top view; with a sweep, its curves too)")
     parser.add_argument(
@@ -107,22 +117,24 @@ def _read_checked(args, offsets):
 
 
 def run(args) -> int:
+    from ..errors import UsageError
     from ..support.files import check_output
     from ..sweep.runner import parse_grid
 
     if args.dask is not None and not args.sweep_heading:
-        from ..errors import UsageError
-
         raise UsageError("--dask runs a heading sweep on a cluster: give --sweep-heading GRID too")
+    constraints = floor_constraints(args)
+    if constraints and args.sweep_heading:
+        raise UsageError("--sweep-heading analyses the team without its floor: leave out --ground (and its options)")
     if args.plot:
         check_output(args.plot)
     offsets = parse_grid(args.sweep_heading, "--sweep-heading") if args.sweep_heading else None
     data = _read_checked(args, offsets)
     with cluster_executor(args) as executor:  # connected (or refused) before any work
-        return _run(args, offsets, data, executor)
+        return _run(args, offsets, data, executor, constraints)
 
 
-def _run(args, offsets, data, executor) -> int:
+def _run(args, offsets, data, executor, constraints=()) -> int:
     from pathlib import Path
 
     from ..measures import get_measure
@@ -133,7 +145,7 @@ def _run(args, offsets, data, executor) -> int:
 
     team = load_team(args.description)
     measures = requested_measures(args)
-    analysis = analyze_team(team, measures)
+    analysis = analyze_team(team, measures, constraints=constraints)
     document = analysis.to_dict()
     task = get_task(team.task)
     print(f"team {team.name}: {len(team.members)} robots, {len(team.hands)} hands, task {task.name}")
@@ -150,10 +162,17 @@ def _run(args, offsets, data, executor) -> int:
     names = [m.name for m in team.members]
     for name, task_set in analysis.measures.items():
         measure = get_measure(name)
+        model = getattr(task_set, "model", None) or {}
+        floors = [v["floor"] for v in model.values() if isinstance(v, dict) and "floor" in v]
+        grounded = bool(floors)
+        label = measure.label
+        if constraints and not measure.honours_constraints and measure.quantity.limits == "effort":
+            label += " [ignores floor: an ellipsoid cannot honour it]"
         if task_set.empty:
-            print(f"{measure.label}: EMPTY (the limits cannot hold the load still)")
+            why = "on the floor as modelled: some robot cannot stand still" if grounded else "the limits cannot hold"
+            print(f"{label}: EMPTY ({why} the load still)" if not grounded else f"{label}: EMPTY ({why})")
             continue
-        print(f"{measure.label} ({measure.quantity.units}): reach from its centre along each task axis, both ways")
+        print(f"{label} ({measure.quantity.units}): reach from its centre along each task axis, both ways")
         if np.any(task_set.center != 0.0):
             held = bool(task_set.contains(np.zeros(task.dim))[0])
             print(
@@ -169,9 +188,16 @@ def _run(args, offsets, data, executor) -> int:
                 shares = table[f"{sign}{label}"]
                 best = round(max(shares.values()), 2)  # ties as printed
                 top = "+".join(n for n in names if round(shares[n], 2) >= best) if best > 0 else "-"
+                if top == "-" and grounded and ray_radius(task_set, e) > 0.0:
+                    top = "the floor"  # no robot's limits move it (see what stops it below)
                 parts = ", ".join(f"{n} {shares[n]:.2f}" for n in names)
                 cells.append(f"{sign}{ray_radius(task_set, e):.4f} limited by {top} ({parts})")
             print(f"  {label}: " + "; ".join(cells))
+        reaches = document[measure.json_key].get("reaches")
+        if reaches and grounded:
+            mu = "no traction limit" if floors[0].get("mu") is None else f"mu {floors[0]['mu']:g}"
+            print(f"  on the floor ({mu}), every robot on its own contacts:")
+            print(describe_reaches(reaches, measure.quantity.units_for(team.task), None))
     sharing = analysis.load_sharing()
     state = "OVERLOAD: no internal forces hold it within the limits" if sharing.empty else "within the limits"
     print(f"load sharing at rest: worst normalised torque {sharing.worst:.4f} ({state})")

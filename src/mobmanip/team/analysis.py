@@ -140,6 +140,8 @@ def stack_terms(
         velocity_limits=np.concatenate(velocity),
         effort_limits=np.concatenate(effort),
         decoupled=team.decoupled,
+        # "robot: joint", so that a limit that binds names its robot
+        reduced_names=tuple(f"{m.name}: {n}" for m in team.members for n in m.robot.reduced_velocity_names),
     )
 
 
@@ -260,8 +262,14 @@ class TeamAnalysis:
         r0 = reach(self.measure(name))
         out = np.zeros((len(d), len(self.parts)))
         for i in range(len(self.parts)):
-            r_up, r_down = (
-                reach(measure.compute(stack_terms(self.team, self.parts, {i: s}, quantity=measure.quantity)))
+            r_up, r_down = (  # the same constraints (the floor's rows do not depend on the limits)
+                reach(
+                    measure.compute(
+                        stack_terms(self.team, self.parts, {i: s}, quantity=measure.quantity).with_constraints(
+                            self.terms.constraints
+                        )
+                    )
+                )
                 for s in (1.0 + step, 1.0 - step)
             )
             ok = (r0 > 0) & (r_up > 0) & (r_down > 0)
@@ -331,10 +339,23 @@ class TeamAnalysis:
             "bias": self.terms.xi.tolist(),
             "velocity_limits": self.terms.velocity_limits.tolist(),
             "effort_limits": self.terms.effort_limits.tolist(),
-            **{get_measure(name).json_key: s.to_dict() for name, s in self.measures.items()},
+            **{get_measure(name).json_key: self._set_dict(name, s) for name, s in self.measures.items()},
             "limiting_robot": self._limiting_table(),
             "load_sharing": sharing.to_dict([m.name for m in team.members], team.hand_names),
         }
+
+    def _set_dict(self, name: str, task_set: TaskSet) -> dict:
+        """A set's JSON; on the floor, its readings along each task axis and what stops them
+        (:func:`mobmanip.analysis.reaches.axis_reaches`)."""
+        from ..analysis.reaches import axis_reaches
+
+        out = task_set.to_dict()
+        model = getattr(task_set, "model", None) or {}
+        if any(isinstance(v, dict) and "floor" in v for v in model.values()):
+            reaches = axis_reaches(task_set, self.team.task)
+            if reaches is not None:
+                out["reaches"] = reaches
+        return out
 
     def _limiting_table(self) -> dict:
         """Per measure, per task axis both ways: the contributions of each robot."""
@@ -356,7 +377,8 @@ def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
     with ``c + t d / |d|`` in the set (0 when the set is empty or flat across d).
 
     Ellipsoids: 1 / sqrt(u^T A u) for the unit u, u in the span of the positive semi-axes.
-    Polytopes: :meth:`mobmanip.sets.polytope.Polytope.ray_radius` (one linear program).
+    Polytopes: their own ``ray_radius`` (one linear program; :meth:`mobmanip.sets.polytope.Polytope.ray_radius`,
+    :meth:`mobmanip.sets.lifted.LiftedPolytope.ray_radius`).
 
     Raises:
         SetQueryError: a zero or non-finite direction; ArgumentError: a kind of set without a
@@ -372,8 +394,8 @@ def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
         if np.any(np.abs(coords[~positive]) > 1e-12):
             return 0.0
         return float(1.0 / np.linalg.norm(coords[positive] / task_set.semi_axes[positive]))
-    if isinstance(task_set, Polytope):
-        return task_set.ray_radius(u)
+    if isinstance(task_set, Polytope) or callable(getattr(task_set, "ray_radius", None)):
+        return float(task_set.ray_radius(u))  # a polytope's, or one of linear programs (on the floor)
     raise ArgumentError(f"ray_radius knows ellipsoids and polytopes, not {task_set.kind!r} sets")
 
 
@@ -565,6 +587,19 @@ def _stack_rows(
                     blocks[key] = np.zeros((at[-1], full.shape[1]))
                 blocks[key][at[i] : at[i + 1]] += full
         couplings[equation] = blocks
+    # the object's own rows: one object, so every robot's hands share them (their blocks add up)
+    object_E: dict[str, np.ndarray] = {}
+    shared = [(i, r) for i, r in enumerate(rows) if len(r.object_e)]
+    object_e = shared[0][1].object_e if shared else np.zeros(0)
+    for i, r in shared:
+        if r.object_e.shape != object_e.shape or not np.allclose(r.object_e, object_e, rtol=1e-12, atol=1e-12):
+            raise ArgumentError(
+                f"constraint {r.name!r}: the object's own rows differ between {team.members[0].name} and "
+                f"{team.members[i].name} ({object_e.tolist()} against {np.asarray(r.object_e).tolist()})"
+            )
+        for name, block in r.object_E.items():
+            key, full = place(name, i, block)
+            object_E[key] = object_E[key] + full if key in object_E else full
     labels = tuple(
         f"{team.members[i].name}: {label}" for i, r in enumerate(rows) for label in (r.labels or (r.name,) * len(r.h))
     )
@@ -577,6 +612,8 @@ def _stack_rows(
         E=stack([(r.E, len(r.e)) for r in rows]),
         e=np.concatenate([r.e for r in rows]),
         couplings=couplings,
+        object_E=object_E,
+        object_e=np.asarray(object_e, dtype=float),
         labels=labels,
         info={f"{team.members[i].name}": dict(r.info) for i, r in enumerate(rows) if r.info},
     )

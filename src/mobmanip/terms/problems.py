@@ -91,6 +91,7 @@ def capacity_polytope(
                 parts[name] = parts[name] + block if name in parts else np.asarray(block, dtype=float)
     equalities = list(own.values())
     equalities += [(dict(r.E), np.asarray(r.e, dtype=float)) for r in rows if len(r.e)]
+    equalities += [(dict(r.object_E), np.asarray(r.object_e, dtype=float)) for r in rows if len(r.object_e)]
     inequalities = [(dict(r.G), np.asarray(r.h, dtype=float)) for r in rows if len(r.h)]
     labels = [label for r in rows if len(r.h) for label in (r.labels or (r.name,) * len(r.h))]
 

@@ -112,6 +112,11 @@ class ConstraintRows:
         couplings: terms it adds to the problem's own equations, equation name -> variable name ->
             block with as many rows as the equation (``"dynamics"``: nx rows, ``"grasp"``: m k,
             ``"object"``: m; see :data:`EQUATIONS`).
+        object_E: equality blocks of the held object's own balance in rows the task leaves out
+            (the floor's: a planar task's object is still held level), by variable name, each
+            (p, size). There is one object: in a team these rows of every robot add up into
+            one set (each robot's hands carry part of the load), where ``E`` is each robot's own.
+        object_e: their right-hand side, (p,): the object's, the same for every robot.
         labels: one label per inequality row (what binds when the row is tight), (r,).
         info: what the constraint wants reported with the set (JSON-ready).
     """
@@ -124,6 +129,8 @@ class ConstraintRows:
     E: Mapping[str, np.ndarray] = field(default_factory=dict)
     e: np.ndarray = field(default_factory=lambda: np.zeros(0))
     couplings: Mapping[str, Mapping[str, np.ndarray]] = field(default_factory=dict)
+    object_E: Mapping[str, np.ndarray] = field(default_factory=dict)
+    object_e: np.ndarray = field(default_factory=lambda: np.zeros(0))
     labels: tuple[str, ...] = ()
     info: Mapping[str, Any] = field(default_factory=dict)
 
@@ -141,7 +148,11 @@ class ConstraintRows:
         clash = set(self.variables) & set(PROBLEMS[self.problem])
         if clash:
             raise ArgumentError(f"constraint {self.name!r} declares variables the problem already has: {sorted(clash)}")
-        for rows, rhs, what in ((self.G, self.h, "G"), (self.E, self.e, "E")):
+        for rows, rhs, what in (
+            (self.G, self.h, "G"),
+            (self.E, self.e, "E"),
+            (self.object_E, self.object_e, "object_E"),
+        ):
             for name, block in rows.items():
                 block = np.asarray(block)
                 if block.ndim != 2 or block.shape[0] != len(rhs):

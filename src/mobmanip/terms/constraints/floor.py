@@ -211,12 +211,15 @@ class Floor(Constraint):
         equations = [({"xdot": A_G @ S, CONTACT_FORCES: -C, "h": np.hstack(H_task)}, _weight(mass))]
         variables = {CONTACT_FORCES: (n_forces, -np.inf, np.inf)}
         couplings = {}
+        object_E: dict[str, np.ndarray] = {}
+        object_e = np.zeros(0)
         if nl:
             variables[LEVEL_WRENCHES] = (k * nl, -np.inf, np.inf)
             equations[0][0][LEVEL_WRENCHES] = np.hstack(H_level)
-            # the object held level: its level rows balance its weight (g_o's convention: +m g up) ...
-            load = np.array([terms.held_object.mass * _G if r == 2 else 0.0 for r in level])
-            equations.append(({"h": np.hstack(grasp_task), LEVEL_WRENCHES: np.hstack(grasp_level)}, load))
+            # the object held level: its level rows balance its weight (g_o's convention: +m g up;
+            # the object's own rows: in a team every robot's hands share them) ...
+            object_e = np.array([terms.held_object.mass * _G if r == 2 else 0.0 for r in level])
+            object_E = {"h": np.hstack(grasp_task), LEVEL_WRENCHES: np.hstack(grasp_level)}
             # ... and the hands do not move it out of level (rows that are not zero)
             kin = np.vstack(level_kin)
             moving = np.abs(kin).max(axis=1) > 1e-12 * max(float(np.abs(kin).max()), 1.0)
@@ -275,7 +278,8 @@ class Floor(Constraint):
         }
         return ConstraintRows(
             self.name, self.problem, variables=variables, G={CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)},
-            h=np.array(h_rows, dtype=float), E=E, e=e, couplings=couplings, labels=tuple(labels), info=info,
+            h=np.array(h_rows, dtype=float), E=E, e=e, couplings=couplings, object_E=object_E, object_e=object_e,
+            labels=tuple(labels), info=info,
         )  # fmt: skip
 
 

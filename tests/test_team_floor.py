@@ -1,0 +1,127 @@
+"""A team on the floor (issue 24: the team polytopes gain the grounded variant): every robot stands
+on its own wheels and casters, and the object is one.
+
+Checked against an independent LP (tests/floor_reference.py, ``team_straight_line``: each robot's
+whole-body equations from Pinocchio with a floating base restricted to its own S, its own contact
+forces, and one object whose task and level rows sum every robot's hands), against a team of one
+(the robot's own grounded analysis), and in what the floor carries.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from floor_reference import GRAVITY, PAPER_CASTERS, build_problem, team_straight_line
+from mobmanip.casestudy import configuration_at, optimal_posture
+from mobmanip.postures.named import named_configuration
+from mobmanip.team import Member, Team, load_team
+from mobmanip.team.analysis import analyze_team
+from mobmanip.terms.constraints.floor import CONTACT_FORCES, LEVEL_WRENCHES, Floor, ground_reaction
+from test_floor_cli import _cli
+
+BEAM = load_team(Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml")
+
+#: the floors checked: the floor constraint, and the reference's mode, mu and load sharing
+FLOORS = {
+    "no tip-over": (Floor(mu=None), ("no_tip", None, False)),
+    "mu 0.5, compliant": (Floor(mu=0.5), ("friction", 0.5, True)),
+    "mu 0.5, any sharing": (Floor(mu=0.5, load="any"), ("friction", 0.5, False)),
+    "mu 1.0, reserve 0.1": (Floor(mu=1.0, reserve=0.1), ("friction", 1.0, True)),
+}
+
+
+def _directions(m):
+    axes = np.eye(m)
+    mixed = np.array([0.6, -0.8, 0.0])[:m] if m == 3 else np.ones(m) / np.sqrt(m)
+    return [*axes, *-axes, mixed / np.linalg.norm(mixed)]
+
+
+@pytest.mark.parametrize("floor", list(FLOORS))
+def test_the_beam_team_on_the_floor_equals_the_independent_lp(floor):
+    """Two paper robots carrying the 1.5 m, 4 kg beam (planar_rigid), each on its own four corner
+    casters and two wheels: every straight-line reach equals the team reference LP to 1e-6."""
+    constraint, (mode, mu, springs) = FLOORS[floor]
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(constraint,)).measure("dynamic_polytope")
+    problems = [build_problem(m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS) for m in BEAM.members]
+    reserve = constraint.reserve
+    for e in _directions(P.dim):
+        ref = team_straight_line(problems, e, mode=mode, mu=mu, springs=springs, reserve=reserve)
+        assert ref > 0.0
+        assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6), (floor, e)
+
+
+def test_the_floor_binds_the_team_and_the_robots_share_the_beam():
+    """With mu = 0.5 the beam's +x reach falls well below the ideal team's (sideways, the paper
+    robots' wheels slip), and at the maximum the two floors carry the whole weight, both robots
+    and the beam once: the hands of both robots together hold the beam's weight (one object: its
+    level rows add up over the team; each robot on its own carried all of it before)."""
+    ideal = analyze_team(BEAM, ("dynamic_polytope",)).measure("dynamic_polytope")
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    e = np.array([1.0, 0.0, 0.0])
+    assert P.straight_line_reach(e) < 0.5 * ideal.straight_line_reach(e)
+    w = P.straight_line_witness(e)
+    total = sum(float(pin.computeTotalMass(m.robot.model)) for m in BEAM.members) + BEAM.held_object.mass
+    normals, beam_share = 0.0, []
+    for member in BEAM.members:
+        info = P.model[member.name]["floor"]
+        floor = ground_reaction(info, w.variables[f"{member.name}.{CONTACT_FORCES}"])
+        normals += sum(c["normal"] for c in floor["contacts"].values())
+        assert floor["margin"] >= -1e-9  # its zero-moment point inside its own support
+        level = w.variables[f"{member.name}.{LEVEL_WRENCHES}"].reshape(len(member.robot.arms), 3)
+        beam_share.append(float(level[:, 0].sum()))  # the hands' vertical forces on the beam
+    assert normals == pytest.approx(total * GRAVITY, rel=1e-9)
+    assert sum(beam_share) == pytest.approx(BEAM.held_object.mass * GRAVITY, rel=1e-9)
+
+
+@pytest.mark.parametrize("case", ["tiago_dual hold", "paper 90 deg"])
+def test_a_team_of_one_on_the_floor_is_the_robots_own_grounded_analysis(case):
+    if case == "tiago_dual hold":
+        robot = mobmanip.load_robot("tiago_dual")
+        q, task = named_configuration(robot, "hold"), "spatial"
+    else:
+        robot = mobmanip.load_robot("planar_dual_arm")
+        q, task = configuration_at(robot, optimal_posture(robot), 90.0), "planar"
+    floor = Floor(mu=0.5)
+    team = Team.holding([Member("solo", robot, q, tuple(range(len(robot.arms))))], 2.0, task=task)
+    got = analyze_team(team, ("dynamic_polytope",), constraints=(floor,)).measure("dynamic_polytope")
+    ref = mobmanip.analyze(robot, q, task, object_mass=2.0, measures=("dynamic_polytope",), constraints=(floor,))
+    ref_set = ref.measures["dynamic_polytope"]
+    for e in _directions(got.dim):
+        assert got.straight_line_reach(e) == pytest.approx(ref_set.straight_line_reach(e), rel=1e-9), e
+        assert got.support(e) == pytest.approx(ref_set.support(e), rel=1e-9), e
+
+
+def test_team_ground_from_the_command_line(tmp_path):
+    """``mobmanip team ... --mu 0.5``: the JSON's reaches are the Python API's, the model names
+    the floor and its mu for each robot, each reach's floor per robot, and the summary names the
+    robot whose contact or joint stops each reach; bad floor options are one line."""
+    import json
+
+    out = tmp_path / "t.json"
+    path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
+    run = _cli("team", str(path), "--polytope", "--mu", "0.5", "--json", str(out))
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(out.read_text())
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    entry = doc["dynamic_polytope"]
+    assert entry["model"]["constraints"][-1]["mu"] == 0.5
+    assert entry["model"]["south"]["floor"]["mu"] == 0.5 and entry["model"]["north"]["floor"]["mu"] == 0.5
+    reaches = {r["axis"]: r for r in entry["reaches"]}
+    assert reaches["+x"]["straight_line"] == pytest.approx(P.straight_line_reach([1, 0, 0]), rel=1e-9)
+    assert reaches["+y"]["support"] == pytest.approx(P.support([0, 1, 0]), rel=1e-9)
+    assert set(reaches["+x"]["floors"]) == {"south", "north"}
+    assert all(b.startswith(("south: ", "north: ")) for b in reaches["+x"]["binding"])
+    assert "on the floor (mu 0.5), every robot on its own contacts:" in run.stdout
+    assert "stops it: wheel traction: north/wheel_left_joint" in run.stdout
+    assert "dynamic ellipsoid [ignores floor: an ellipsoid cannot honour it]" in run.stdout
+    for argv, message in (
+        (("--mu", "-1"), "mu must be a finite friction coefficient >= 0, got -1.0"),
+        (("--ground", "--sweep-heading", "0,10"), "--sweep-heading analyses the team without its floor"),
+    ):
+        bad = _cli("team", str(path), *argv)
+        assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and message in bad.stderr, bad.stderr
