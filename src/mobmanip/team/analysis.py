@@ -50,7 +50,6 @@ from ..errors import ArgumentError, NumericalError, SetQueryError
 from ..measures import MeasureTerms, Quantity, get_measure, resolve_measures
 from ..robot.tasks import get_task
 from ..sets.ellipsoid import Ellipsoid
-from ..sets.polytope import Polytope
 from ..sets.taskset import TaskSet, check_direction
 from ..terms.builder import terms_at
 from ..terms.constraints.base import Constraint, ConstraintRows, Terms
@@ -394,8 +393,9 @@ def ray_radius(task_set: TaskSet, direction: np.ndarray) -> float:
         if np.any(np.abs(coords[~positive]) > 1e-12):
             return 0.0
         return float(1.0 / np.linalg.norm(coords[positive] / task_set.semi_axes[positive]))
-    if isinstance(task_set, Polytope) or callable(getattr(task_set, "ray_radius", None)):
-        return float(task_set.ray_radius(u))  # a polytope's, or one of linear programs (on the floor)
+    own = getattr(task_set, "ray_radius", None)  # a polytope's, or one of linear programs (on the floor)
+    if callable(own):
+        return float(own(u))
     raise ArgumentError(f"ray_radius knows ellipsoids and polytopes, not {task_set.kind!r} sets")
 
 
