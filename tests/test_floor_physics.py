@@ -22,8 +22,8 @@ applied from rest, to a referee whose supports are equally stiff (``equal_suppor
   (with the efforts that hold it, not the calm ones) holds for 20 ms in MuJoCo on every axis,
   TIAGo++ -x included, where it is 81 % of the maximum; 97 % of that maximum holds for 8.25 ms
   with the best efforts found in mobmanip's replay, and 9.9 ms in MuJoCo (the last two tests).
-  With a safety reserve of 0.3 (``Floor(reserve=0.3)``) the maxima themselves, not 97 % of
-  them, hold for 20 ms on all twenty axes, TIAGo++ -x included (with 0.2 it slips).
+  The maxima themselves, not 97 % of them, hold for 20 ms on 19 of the 20 axes; with a safety
+  reserve of 0.3 (``Floor(reserve=0.3)``) on all twenty, TIAGo++ -x included (with 0.2 it slips).
 
 The sharing matters: with ``load="any"`` (every sharing that balances the robot: exact for
 tip-over, optimistic for traction) the predicted normal forces differ from MuJoCo's by up to 43 %
@@ -130,25 +130,26 @@ def test_grounded_maxima_hold_in_mujoco_and_ideal_ones_do_not(name):
     assert tipped_or_slipped >= 1  # every case has an axis where the floor binds
 
 
-RESERVE = 0.3
-
-
+@pytest.mark.parametrize("reserve", [0.0, 0.3])
 @pytest.mark.parametrize("name", ["tiago_dual", "paper 0", "paper 90"])
-def test_with_a_reserve_each_maximum_itself_holds_for_20_ms_in_mujoco(name):
-    """With a safety reserve of 0.3 (every support keeps 30 % of its equal share of the weight,
-    every wheel uses at most 70 % of its friction pyramid; its reaches equal the independent LP's,
-    tests/test_floor.py), the calm efforts of each grounded axis maximum itself, not 97 % of it,
-    replayed from rest: at t = 0 the object's acceleration within 3 % per component and the
-    normal forces within 0.1 % of the weight; for 20 ms no support rises, the base does not
-    rock and no wheel slips (measured on the 20 axes: 0.12 %, 0.019 % of the weight, no rise,
-    the fastest slide 4.8e-6 m/s). TIAGo++ -x included, at 75 % of the maximum without a reserve
-    (the held reach without one: 81 %); with 0.2 its maximum gives way after 16.5 ms."""
+def test_each_maximum_itself_holds_for_20_ms_in_mujoco(name, reserve):
+    """The calm efforts of each grounded axis maximum itself (not 97 % of it), replayed from rest:
+    at t = 0 the object's acceleration within 3 % per component and the normal forces within 0.1 %
+    of the weight; for 20 ms no support rises, the base does not rock and no wheel slips.
+    Without a reserve this holds on 19 of the 20 axes; TIAGo++ -x gives way (a wheel slides at
+    0.62 m/s by 20 ms: the arms swing the object, see the module's docstring). With a safety
+    reserve of 0.3 (every support keeps 30 % of its equal share of the weight, every wheel uses at
+    most 70 % of its friction pyramid; its reaches equal the independent LP's, tests/test_floor.py)
+    it holds on all 20, TIAGo++ -x at 75 % of its maximum without a reserve (the held reach
+    without one: 81 %); with 0.2 it slips (measured on the 20 axes at 0.3: 0.12 %, 0.019 % of the
+    weight, no rise, the fastest slide 4.8e-6 m/s)."""
     robot, q, task, casters, base = _case(name)
     grounded = mobmanip.analyze(
         robot, q, task, object_mass=MASS, measures=("dynamic_polytope",),
-        constraints=(Floor(mu=MU, reserve=RESERVE),),
+        constraints=(Floor(mu=MU, reserve=reserve),),
     ).measures["dynamic_polytope"]  # fmt: skip
     referee = build(robot, q, support_points=casters, object=_object(robot, q, task), mu=MU)
+    gave_way = []
     for e in _axes(base):
         target = grounded.straight_line_reach(e) * e
         assert np.linalg.norm(target) > 0.0, (name, e)
@@ -164,9 +165,12 @@ def test_with_a_reserve_each_maximum_itself_holds_for_20_ms_in_mujoco(name):
         measured = _normals(referee, grounded.model["floor"], contacts)
         assert np.abs(measured - predicted).max() <= 1e-3 * referee.weight, (name, e, measured, predicted)
         run = referee.rollout(w.variables["tau"], duration=0.02)
-        assert -run.penetration.min() <= 1e-4, (name, e, -run.penetration.min(axis=0))
-        assert np.abs(run.base_rpy[:, :2]).max() <= 5e-4, (name, e)
-        assert _slip(run) <= 1e-3, (name, e, _slip(run))
+        held = -run.penetration.min() <= 1e-4 and np.abs(run.base_rpy[:, :2]).max() <= 5e-4 and _slip(run) <= 1e-3
+        if not held:
+            gave_way.append((float(e.sum()), int(np.argmax(np.abs(e)))))
+            assert _slip(run) > 0.1, (name, e, _slip(run))  # a real slide, not a marginal one
+    short = [(s, k) for (n, s, k) in SHORT if n == name]
+    assert gave_way == (short if reserve == 0.0 else []), (name, reserve, gave_way)
 
 
 @pytest.mark.parametrize("name", ["tiago_dual", "paper 0", "paper 90"])
