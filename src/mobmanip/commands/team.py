@@ -43,7 +43,7 @@ other, so the cluster pays off for heavy measures (--polytope), hardly for ellip
 --ground (or --mu, --no-traction, --load, --reserve) stands every robot on its own wheels and
 casters (see `mobmanip analyze --help`): the polytopes honour each robot's floor, with the object
 one for all (its weight shared by every robot's hands), and each reach names the robot and the
-contact or joint that stops it.
+contact or joint that stops it; a heading sweep keeps the floor at every heading.
 
 examples:
   mobmanip team examples/beam_team.toml
@@ -124,8 +124,6 @@ def run(args) -> int:
     if args.dask is not None and not args.sweep_heading:
         raise UsageError("--dask runs a heading sweep on a cluster: give --sweep-heading GRID too")
     constraints = floor_constraints(args)
-    if constraints and args.sweep_heading:
-        raise UsageError("--sweep-heading analyses the team without its floor: leave out --ground (and its options)")
     if args.plot:
         check_output(args.plot)
     offsets = parse_grid(args.sweep_heading, "--sweep-heading") if args.sweep_heading else None
@@ -211,7 +209,8 @@ def _run(args, offsets, data, executor, constraints=()) -> int:
 
         path = Path(args.description)
         names = None if measures is None else tuple(measures)
-        job = HeadingJob(data, tuple(float(v) for v in offsets), str(path.resolve().parent), names, str(path))
+        job = HeadingJob(data, tuple(float(v) for v in offsets), str(path.resolve().parent), names, str(path),
+                         constraints=tuple(constraints))  # fmt: skip
         sweep = run_heading_sweep(job, executor, progress=show_progress(args))
         reachable = int(sweep.reachable.sum())
         print(f"heading sweep: {reachable} of {len(offsets)} headings reachable")

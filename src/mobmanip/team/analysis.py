@@ -58,6 +58,11 @@ from .members import Member, Team
 __all__ = ["LoadSharing", "MemberTerms", "TeamAnalysis", "analyze_team", "member_terms", "ray_radius", "stack_terms"]
 
 
+#: A robot's share (:meth:`TeamAnalysis.contributions`) below this does not limit the team: it
+#: rounds to 0.00 as printed, and the elasticities' finite differences leave noise of about 5e-4.
+NO_SHARE = 0.005
+
+
 @dataclass(frozen=True)
 class MemberTerms:
     """One robot's own terms in a team (robot and object at rest).
@@ -281,13 +286,15 @@ class TeamAnalysis:
     def limiting_robots(self, name: str, directions: np.ndarray, *, along: str = "ray", tie: float = 1e-6) -> list[str]:
         """The robot that limits the team most along each direction: the largest contribution,
         robots within ``tie`` of it joined by ``"+"`` (a shared limit, e.g. in a symmetric
-        team); ``""`` where the set has no reach."""
+        team); ``""`` where the set has no reach or no robot's limits move it (every share
+        below :data:`NO_SHARE`: on the floor, where a wheel's traction binds, the shares are the
+        finite differences' noise, some 5e-4)."""
         shares = self.contributions(name, directions, along=along)
         names = [m.name for m in self.team.members]
         out = []
         for row in shares:
             top = float(row.max()) if row.size else 0.0
-            out.append("+".join(n for n, v in zip(names, row) if v >= top - tie) if top > 0 else "")
+            out.append("+".join(n for n, v in zip(names, row) if v >= top - tie) if top >= NO_SHARE else "")
         return out
 
     def load_sharing(self, acceleration: np.ndarray | None = None) -> LoadSharing:

@@ -61,6 +61,7 @@ class HeadingJob:
         measures: the measures' names, in order (None: the default ones).
         where: the description's name in messages.
         headings_per_task: headings per task handed to the executor.
+        constraints: constraints beyond the joint boxes (e.g. the floor), as :func:`analyze_team`'s.
     """
 
     description: Mapping = field(hash=False)
@@ -69,6 +70,7 @@ class HeadingJob:
     measures: tuple[str, ...] | None = None
     where: str = "team"
     headings_per_task: int = HEADINGS_PER_TASK
+    constraints: tuple = ()
 
 
 def run_headings(job: HeadingJob, items: tuple[tuple[int, dict], ...]) -> list[tuple[int, HeadingPoint]]:
@@ -76,7 +78,10 @@ def run_headings(job: HeadingJob, items: tuple[tuple[int, dict], ...]) -> list[t
     grasping arms' joints solved there: robot name -> joint -> value), with their indices."""
     names = measure_names(job.measures)
     data, base_dir, where = job.description, job.base_dir, job.where
-    return [(k, point_with_joints(data, job.offsets[k], joints, base_dir, names, where)) for k, joints in items]
+    return [
+        (k, point_with_joints(data, job.offsets[k], joints, base_dir, names, where, tuple(job.constraints)))
+        for k, joints in items
+    ]
 
 
 def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, progress: bool = False) -> TeamSweep:
@@ -98,11 +103,11 @@ def run_heading_sweep(job: HeadingJob, executor: cf.Executor | None = None, prog
         raise ArgumentError(f"headings per task must be a positive integer, got {job.headings_per_task!r}")
     if executor is None:
         return sweep_heading(job.description, job.offsets, base_dir=job.base_dir, measures=job.measures,
-                             where=job.where, progress=progress)  # fmt: skip
+                             where=job.where, progress=progress, constraints=job.constraints)  # fmt: skip
     offsets = checked_offsets(job.offsets)
     names = measure_names(job.measures)
     job = HeadingJob(job.description, tuple(float(v) for v in offsets), job.base_dir, names, job.where,
-                     job.headings_per_task)  # fmt: skip
+                     job.headings_per_task, tuple(job.constraints))  # fmt: skip
     task = team_from_dict(job.description, job.base_dir, where=job.where).task  # the description must hold
     points: dict[int, HeadingPoint] = {}
     pending: set[cf.Future] = set()

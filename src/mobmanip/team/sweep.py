@@ -21,6 +21,7 @@ from ..errors import ArgumentError, MobmanipError, TeamError
 from ..measures import resolve_measures
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
+from ..terms.constraints.base import Constraint
 from .analysis import analyze_team, ray_radius
 from .members import Team, team_from_dict
 
@@ -107,6 +108,7 @@ def sweep_heading(
     measures: Iterable[str] | str | None = None,
     where: str = "team",
     progress: bool = False,
+    constraints: Iterable[Constraint] = (),
 ) -> TeamSweep:
     """Turn the object of a team description through ``offsets_deg`` (deg, added to its
     ``yaw_deg``) and analyse the team at each heading.
@@ -118,12 +120,14 @@ def sweep_heading(
         measures: the measures (default: the default ones).
         where: the description's name in messages.
         progress: show a progress bar over the headings on standard error.
+        constraints: constraints beyond the joint boxes (e.g. the floor), as :func:`analyze_team`'s.
 
     Raises:
         ArgumentError: no offsets, or a non-finite one; TeamError: the description is wrong
             (checked at its own heading first).
     """
     offsets = checked_offsets(offsets_deg)
+    constraints = tuple(constraints)
     names = measure_names(measures)
     team_from_dict(data, base_dir, where=where)  # the description itself must hold
     points: dict[int, HeadingPoint] = {}
@@ -131,7 +135,7 @@ def sweep_heading(
 
         def visit(k: int, seed: dict | None) -> dict | None:
             bar.update(1)
-            points[k], solved = _one(data, offsets[k], seed, base_dir, names, where)
+            points[k], solved = _one(data, offsets[k], seed, base_dir, names, where, constraints)
             return solved
 
         walk_headings(offsets, visit)
@@ -218,7 +222,13 @@ def solve_heading(
 
 
 def point_with_joints(
-    data: Mapping, offset: float, joints: Mapping, base_dir: Path | str, names: tuple[str, ...], where: str
+    data: Mapping,
+    offset: float,
+    joints: Mapping,
+    base_dir: Path | str,
+    names: tuple[str, ...],
+    where: str,
+    constraints: tuple[Constraint, ...] = (),
 ) -> HeadingPoint:
     """The point at a reachable heading whose grasping arms' joints ``joints`` were solved (by
     :func:`solve_heading`): the team is built with them in place, no inverse kinematics, the same team
@@ -228,16 +238,16 @@ def point_with_joints(
         TeamError: a hand is not at its grasp point with these joints.
     """
     team = team_from_dict(_moved(data, offset, joints, reach=False), base_dir, where=where)
-    return _analyse(team, offset, names, joints)
+    return _analyse(team, offset, names, joints, constraints)
 
 
-def _one(data, offset, seed, base_dir, names, where) -> tuple[HeadingPoint, dict | None]:
+def _one(data, offset, seed, base_dir, names, where, constraints=()) -> tuple[HeadingPoint, dict | None]:
     """The point at one heading, the hands reaching from ``seed`` (see :func:`walk_headings`),
     and the joints solved there (None where unreachable)."""
     team, joints = solve_heading(data, offset, seed, base_dir, where)
     if team is None:
         return unreachable(offset), None
-    return _analyse(team, offset, names, joints), joints
+    return _analyse(team, offset, names, joints, constraints), joints
 
 
 def unreachable(offset: float) -> HeadingPoint:
@@ -245,9 +255,9 @@ def unreachable(offset: float) -> HeadingPoint:
     return HeadingPoint(float(offset), False, {}, {}, {}, None, None, {})
 
 
-def _analyse(team, offset, names, joints) -> HeadingPoint:
+def _analyse(team, offset, names, joints, constraints=()) -> HeadingPoint:
     """The point of a team at the heading ``offset``, its grasping arms at ``joints``."""
-    analysis = analyze_team(team, names)
+    analysis = analyze_team(team, names, constraints=constraints)
     m = analysis.terms.W.shape[0]
     axes = np.eye(m)
     reach, limiting, volume = {}, {}, {}
