@@ -91,6 +91,8 @@ def test_bad_floor_options_are_one_line(args, message):
 def test_a_fixed_base_has_no_floor():
     run = _cli("analyze", "ur5", "--ground")
     assert run.returncode == 2 and "'ur5' has a fixed platform" in run.stderr
+    run = _cli("analyze", "planar_dual_arm_omni", "--ground")
+    assert run.returncode == 2 and "'planar_dual_arm_omni' has an omnidirectional platform" in run.stderr
 
 
 def test_the_viewer_draws_the_support_and_the_zmp_at_rest(tmp_path):

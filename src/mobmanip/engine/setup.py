@@ -12,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelError, TaskError
+from ..platforms import a_platform
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..support.tolerances import RANK_RTOL
@@ -168,7 +169,7 @@ class BatchSetup:
         """
         if not robot.constant_null_space:
             raise ModelError(
-                f"robot {robot.name!r} has a {robot.platform.kind} platform whose S depends on q; batches and "
+                f"robot {robot.name!r} has {a_platform(robot.platform.kind)} whose S depends on q; batches and "
                 "sweeps freeze S, so analyse its configurations one by one with mobmanip.analyze"
             )
         S = np.ascontiguousarray(robot.S, dtype=float)

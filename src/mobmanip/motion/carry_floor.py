@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, SpecError
+from ..platforms import a_platform
 from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
@@ -80,8 +81,8 @@ class CarryFloor:
         """The support, friction coefficient and faces for ``robot``."""
         if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
             raise SpecError(
-                f"the floor in carry covers differential-drive platforms; {robot.name!r} has a {robot.platform.kind} "
-                "platform"
+                f"the floor in carry covers differential-drive platforms; "
+                f"{robot.name!r} has {a_platform(robot.platform.kind)}"
             )
         support = self.support if self.support is not None else robot_support(robot)
         deepest = deepest_margin(support.polygon((0.0, 0.0, 0.0)))

@@ -39,6 +39,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..errors import ArgumentError, SpecError, TaskError
+from ..platforms import a_platform
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.lifted import Witness
@@ -156,8 +157,8 @@ def _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, keep)
         raise ArgumentError(f"tau must be {robot.nx} finite efforts (wheels, then joints), got shape {tau.shape}")
     if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
         raise SpecError(
-            f"a replay on the floor covers differential-drive platforms; {robot.name!r} has a {robot.platform.kind} "
-            "platform"
+            f"a replay on the floor covers differential-drive platforms; "
+            f"{robot.name!r} has {a_platform(robot.platform.kind)}"
         )
     floor = Floor() if floor is None else floor
     support, mu, _ = floor.resolve(robot)

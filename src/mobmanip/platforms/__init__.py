@@ -41,8 +41,14 @@ def get_kind(name: str) -> PlatformKind:
         raise SpecError(f"unknown platform {name!r}; expected one of {', '.join(KINDS)}") from None
 
 
+def a_platform(kind: str) -> str:
+    """``"a differential_drive platform"``, ``"an omnidirectional platform"``: for messages."""
+    return f"{'an' if kind[:1] in 'aeiou' else 'a'} {kind} platform"
+
+
 __all__ = [
     "BASE_V",
+    "a_platform",
     "KINDS",
     "OMNI_COORDINATES",
     "Detected",

@@ -60,6 +60,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import ArgumentError, SpecError
+from ...platforms import a_platform
 from ...robot.support import Support, check_faces, check_mu, polygon_margin, robot_support
 from ...robot.tasks import get_task
 from ..grasp import GRAVITY
@@ -160,7 +161,7 @@ class Floor(Constraint):
         if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
             raise SpecError(
                 f"the floor model covers differential-drive platforms (wheels that roll without slipping); "
-                f"{robot.name!r} has a {robot.platform.kind} platform"
+                f"{robot.name!r} has {a_platform(robot.platform.kind)}"
             )
         support, mu, faces = self.resolve(robot)
         sharing_model = self.sharing(mu)
