@@ -133,6 +133,16 @@ def scene_objects(page) -> dict[str, dict]:
     return {p: {"type": t, "uuid": u, "visible": v} for p, t, u, v in page.evaluate(_PATHS_JS)}
 
 
+def exported_scene(path, timeout: float = 90.0) -> tuple[set[str], str]:
+    """An exported page opened in Chromium (800 x 600): the scene's object paths and the page's
+    text (its legend and notes), once the scene has settled."""
+    with chromium() as browser:
+        view = browser.new_page(viewport={"width": 800, "height": 600})
+        view.goto(Path(path).as_uri())
+        wait_for_scene(view, timeout=timeout)
+        return set(scene_objects(view)), view.inner_text("body")
+
+
 def world_matrix(page, path: str, node: bool = False) -> np.ndarray | None:
     """The 4x4 world transform (meshcat's z-up world) of the object at a scene path, or with
     ``node`` of the path's own group (the object's matrix adds e.g. a cylinder's y-to-z turn)."""

@@ -112,17 +112,13 @@ def test_the_viewer_draws_the_support_and_the_zmp_at_rest(tmp_path):
     run = _cli("view", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
                "--no-locked", "--export", str(page))  # fmt: skip
     assert run.returncode == 0, run.stderr
-    from browser_util import chromium, missing_browser, scene_objects, wait_for_scene
+    from browser_util import exported_scene, missing_browser
 
     if missing_browser():
         pytest.skip(f"the page's scene needs a browser: {missing_browser()}")
-    with chromium() as browser:
-        view = browser.new_page(viewport={"width": 800, "height": 600})
-        view.goto(page.as_uri())
-        wait_for_scene(view, timeout=90)
-        drawn = scene_objects(view)
-        assert {"meshcat/mobmanip/floor/polygon", "meshcat/mobmanip/floor/zmp"} <= set(drawn)
-        assert f"margin {found['margin']:.3f} m" in view.inner_text("body")
+    drawn, text = exported_scene(page)
+    assert {"meshcat/mobmanip/floor/polygon", "meshcat/mobmanip/floor/zmp"} <= drawn
+    assert f"margin {found['margin']:.3f} m" in text
 
 
 def test_trajectory_ground_reports_the_margin_per_sample(tmp_path):

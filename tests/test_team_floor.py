@@ -172,3 +172,35 @@ def test_a_heading_sweep_on_the_floor_through_an_executor_equals_the_serial_one(
     assert serial.to_dict() == pooled.to_dict()
     ideal = run_heading_sweep(HeadingJob(BEAM_DATA, (0.0,), str(path.parent), ("dynamic_polytope",), str(path)))
     assert serial.points[1].reach["dynamic_polytope"][0] < 0.5 * ideal.points[0].reach["dynamic_polytope"][0]
+
+
+def test_the_team_page_draws_each_robots_support_and_zmp(tmp_path):
+    """``team ... --mu 0.5 --export``: each robot's support polygon is its own support at its pose,
+    its zero-moment point at rest inside it (the margin its polygon gives), and the page draws
+    both per robot and says the margins."""
+    from mobmanip.analysis.reaches import floors_at_rest
+    from mobmanip.robot.support import polygon_margin, robot_support
+
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    found = floors_at_rest(P)
+    assert set(found) == {"south", "north"}
+    for member in BEAM.members:
+        pose = member.robot.configuration_dict(member.q)["platform"]
+        polygon = robot_support(member.robot).polygon(tuple(pose))
+        floor = found[member.name]
+        assert sorted(map(tuple, np.round(floor["polygon"], 12))) == sorted(map(tuple, np.round(polygon, 12)))
+        assert floor["margin"] == pytest.approx(polygon_margin(polygon, floor["zmp"]), abs=1e-12)
+        assert floor["margin"] > 0.0
+    page = tmp_path / "beam.html"
+    path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
+    run = _cli("team", str(path), "--measure", "dynamic_polytope", "--mu", "0.5", "--export", str(page))
+    assert run.returncode == 0, run.stderr
+    from browser_util import exported_scene, missing_browser
+
+    if missing_browser():
+        pytest.skip(f"the page's scene needs a browser: {missing_browser()}")
+    drawn, text = exported_scene(page)
+    for name in ("south", "north"):
+        assert {f"meshcat/mobmanip/team/floor/{name}/polygon", f"meshcat/mobmanip/team/floor/{name}/zmp"} <= drawn
+        assert f"{name}: support polygon (dark line), zero-moment point at rest (dot), margin " in text
+        assert f"margin {found[name]['margin']:.3f} m" in text

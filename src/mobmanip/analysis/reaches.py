@@ -99,5 +99,30 @@ def floor_at_rest(task_set: TaskSet) -> dict | None:
     }
 
 
+def floors_at_rest(task_set: TaskSet) -> dict[str, dict]:
+    """A team's set on the floor: each robot's floor with the object held still, as
+    :func:`floor_at_rest` gives one robot's (its polygon, floor height, ZMP and margin), by robot
+    name, from one solution with the most slack in every limit; empty when the set is not a
+    team's on the floor or rest is outside it."""
+    model = getattr(task_set, "model", {}) if not task_set.empty else {}
+    members = {k: v["floor"] for k, v in model.items() if isinstance(v, dict) and "floor" in v}
+    if not members or not hasattr(task_set, "witness_at"):
+        return {}
+    try:
+        w = task_set.witness_at(np.zeros(task_set.dim))
+    except MobmanipError:
+        return {}
+    out = {}
+    for name, floor in members.items():
+        reaction = ground_reaction(floor, w.variables[f"{name}.{CONTACT_FORCES}"])
+        out[name] = {
+            "polygon": floor["polygon"],
+            "floor_z": float(np.mean([c["point"][2] for c in floor["contacts"]])),
+            "zmp": reaction["zmp"],
+            "margin": reaction["margin"],
+        }
+    return out
+
+
 def _snap(value: float, noise: float) -> float:
     return 0.0 if abs(value) <= noise else value

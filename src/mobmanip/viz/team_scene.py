@@ -46,7 +46,7 @@ from ..team.analysis import TeamAnalysis
 from . import page as _page
 from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
 from .nesting import nested, outlined
-from .scene import DEFAULT_SIZE, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
+from .scene import DEFAULT_SIZE, FLOOR_COLOR, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
 from .server import MeshcatServer, ViewerError
 from .shapes import DRAWINGS, line_material, translation
 
@@ -142,7 +142,8 @@ class TeamViewer:
                 self._draw_robots()
                 self._draw_object()
                 self.scales = self._draw_sets(team_scales([analysis], size) if scales is None else dict(scales))
-                self._legend(self._title())
+                self.floor_notes = self._draw_floors()
+                self._legend(self._title(), self.floor_notes)
                 self.frame_camera([TeamFrame(analysis)])
         except BaseException:
             self._server.stop()
@@ -200,6 +201,31 @@ class TeamViewer:
             scale = scales[get_measure(name).quantity.name]
             drawing.draw(self._vis, path, task_set, task, center, scale, planar_thickness(name))
         return scales
+
+    def _draw_floors(self) -> list[str]:
+        """On the floor: each robot's support polygon (a dark line loop) and its zero-moment point
+        with the object held still (a dot), from the first grounded set drawn; a note per robot."""
+        import meshcat.geometry as mg
+
+        from ..analysis.reaches import floors_at_rest
+
+        found = next((f for f in (floors_at_rest(s) for s in self._sets.values()) if f), {})
+        notes = []
+        for name, floor in found.items():
+            path = f"{TEAM_PATH}/floor/{name}"
+            z = floor["floor_z"] + 0.002  # just above the floor grid
+            ring = np.array([[x, y, z] for x, y in floor["polygon"]] + [[*floor["polygon"][0], z]])
+            self._vis[f"{path}/polygon"].set_object(mg.Line(mg.PointsGeometry(ring.T), line_material(FLOOR_COLOR)))
+            if floor["zmp"] is None:
+                continue
+            self._vis[f"{path}/zmp"].set_object(
+                mg.Sphere(0.015), mg.MeshLambertMaterial(color=FLOOR_COLOR, opacity=1.0)
+            )
+            self._vis[f"{path}/zmp"].set_transform(translation([floor["zmp"][0], floor["zmp"][1], z]))
+            notes.append(
+                f"{name}: support polygon (dark line), zero-moment point at rest (dot), margin {floor['margin']:.3f} m"
+            )
+        return notes
 
     def _set_scale(self, name: str) -> float:
         return self.scales[get_measure(name).quantity.name]
