@@ -204,3 +204,18 @@ def test_the_team_page_draws_each_robots_support_and_zmp(tmp_path):
         assert {f"meshcat/mobmanip/team/floor/{name}/polygon", f"meshcat/mobmanip/team/floor/{name}/zmp"} <= drawn
         assert f"{name}: support polygon (dark line), zero-moment point at rest (dot), margin " in text
         assert f"margin {found[name]['margin']:.3f} m" in text
+
+
+def test_without_friction_no_robot_limits_a_reach_the_floor_forbids():
+    """mu = 0: the floors push nothing along x, so the beam cannot accelerate along x from rest
+    (its reach is zero to the programs' rounding) and no robot's limits change that: every share
+    is 0, where the ratios of two roundings of zero gave shares of -22 to 17. Along y (the robots'
+    headings: their bases recoil, their wheels roll freely) the arms' limits bind as before."""
+    A = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.0),))
+    P = A.measure("dynamic_polytope")
+    ex = np.array([1.0, 0.0, 0.0])
+    assert abs(P.straight_line_reach(ex)) < 1e-9 and abs(ray_radius(P, ex)) < 1e-9
+    shares = A.contributions("dynamic_polytope", np.array([ex, -ex]))
+    np.testing.assert_array_equal(shares, 0.0)
+    assert A.limiting_robots("dynamic_polytope", np.array([ex]))[0] == ""
+    assert A.limiting_robots("dynamic_polytope", np.array([[0.0, 1.0, 0.0]]))[0] == "south"

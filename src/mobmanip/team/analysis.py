@@ -276,7 +276,9 @@ class TeamAnalysis:
                 )
                 for s in (1.0 + step, 1.0 - step)
             )
-            ok = (r0 > 0) & (r_up > 0) & (r_down > 0)
+            # a reach within the linear programs' rounding of zero has no share (its ratios are noise)
+            tiny = 1e-9 * max(1.0, float(r0.max(initial=0.0)))
+            ok = (r0 > tiny) & (r_up > tiny) & (r_down > tiny)
             # the mean of the one-sided differences: exact on each linear piece of a polytope's reach
             up = np.log(r_up[ok] / r0[ok]) / math.log1p(step)
             down = np.log(r0[ok] / r_down[ok]) / -math.log1p(-step)
