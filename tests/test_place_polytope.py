@@ -99,7 +99,10 @@ def _cli(*args):
         (("--objective", "dynamic_polytope:widest:+x"), "the reading must be one of reach, support"),
         (("--objective", "force_polytope:reach:+x"), "placement maximises the polytopes of motion"),
         (("--objective", "dynamic_polytope:reach:+x", "--budget", "0"), "--budget must be at least 1"),
-        (("--objective", "dynamic_polytope:reach:+q"), "direction '+q'"),
+        (
+            ("--objective", "dynamic_polytope:reach:+q"),
+            "direction '+q' is neither a signed axis of the planar task (+x, -x, +y, -y) nor 2 numbers like 1,0",
+        ),
         (("--objective", "dynamic_polytope:reach:+x", "--map", "m"), "--map is not available with a polytope"),
     ],
 )

@@ -179,8 +179,11 @@ def _parse_direction(text: str, task: TaskSpace) -> tuple[float, ...]:
     try:
         return tuple(float(v) for v in text.split(","))
     except ValueError:
+        axes = ", ".join(f"{sign}{label}" for label in task.labels for sign in "+-")
+        example = ",".join(["1"] + ["0"] * (task.dim - 1))
         raise ArgumentError(
-            f"direction {text!r} is neither a signed axis (+{', +'.join(task.labels)}, or -) nor numbers like 1,0,0"
+            f"direction {text!r} is neither a signed axis of the {task.name} task ({axes}) nor {task.dim} numbers "
+            f"like {example}"
         ) from None
 
 
