@@ -259,6 +259,9 @@ def test_support_errors_name_the_contact_and_the_value():
     above = ContactPoint("caster_x", np.array([0.2, 0.0, s.floor_z + 0.01]), False, "spec")
     with pytest.raises(SpecError, match=r"'caster_x' at z = -0.065 m lies 0.01 m above the floor"):
         Support((*wheels, above), s.floor_z)
+    millimetres = ContactPoint("caster_mm", np.array([250.0, 140.0, s.floor_z]), False, "spec")
+    with pytest.raises(SpecError, match=r"'caster_mm' at \(250, 140\) m lies 287 m from the platform's origin"):
+        Support((*wheels, millimetres), s.floor_z)
     with pytest.raises(SpecError, match=r"mu must be a finite friction coefficient >= 0, got -0.2"):
         Floor(mu=-0.2)
     with pytest.raises(SpecError, match="faces must be an integer from 3 to 64, got 2"):

@@ -49,6 +49,9 @@ if TYPE_CHECKING:
     from .model import Robot
 
 _FLOOR_TOL = 1e-6  # m: a contact further than this from the floor plane is an error
+#: m: a contact farther than this from the platform's origin is a slip of units, not a robot
+#: (support points are in metres; [250, 140] is a caster in millimetres)
+MAX_REACH = 10.0
 
 
 @dataclass(frozen=True)
@@ -98,6 +101,12 @@ class Support:
                 raise SpecError(
                     f"support point {c.name!r} at z = {c.point[2]:.6g} m lies {abs(gap):.3g} m {where} the floor "
                     f"(z = {self.floor_z:.6g} m in the root frame, through the driven wheels' contacts)"
+                )
+            far = float(np.hypot(c.point[0], c.point[1]))
+            if far > MAX_REACH:
+                raise SpecError(
+                    f"support point {c.name!r} at ({c.point[0]:.6g}, {c.point[1]:.6g}) m lies {far:.3g} m from the "
+                    f"platform's origin, more than {MAX_REACH:g} m: support points are in metres (millimetres given?)"
                 )
         xy = np.array([c.point[:2] for c in self.contacts]).reshape(-1, 2)
         if len(xy) < 3 or np.linalg.matrix_rank(xy - xy.mean(axis=0), tol=1e-6) < 2:
