@@ -20,7 +20,8 @@ or a grid:
 Each position is solved as `mobmanip place` solves it (same starts: the result does not depend on
 where it runs). OUT_DIR/site.csv has one row per position (object x, y, z, value, platform x, y,
 heading, hold turn, grounded reach, evaluations, the configuration q_0.. and, where a
-position has no placement, the reason); OUT_DIR/site.png shows the positions coloured by value,
+position has no placement or no grounded reach (the robot cannot stand on its floor there), the
+reason); OUT_DIR/site.png shows the positions coloured by value,
 each with its platform position and heading. --dask ADDRESS (tcp://HOST:PORT, or local:N for a
 local cluster) runs the positions on Dask's distributed scheduler; a progress bar counts the
 positions finished across the cluster; a lost worker's positions are run again by Dask.

@@ -21,7 +21,9 @@ A site file (TOML) names the robot, the objective and the object positions::
 Each position is :func:`mobmanip.placement.place`'s problem on its own (the same starts, so
 the result does not depend on the order, the worker or a retry); with ``[grounded]`` the
 optimum is analysed with :class:`mobmanip.terms.constraints.floor.Floor` and the
-``dynamic_polytope`` measure, and the straight-line reach (m/s^2) along ``direction`` is recorded.
+``dynamic_polytope`` measure, and the straight-line reach (m/s^2) along ``direction`` is recorded;
+where that set is empty (the robot cannot stand still with every support loaded, e.g. arms
+stretched far out) the value is left out and the row's reason says which supports would unload.
 Positions run in tasks of ``positions_per_task`` through any :class:`concurrent.futures.Executor`
 (a Dask client's for a cluster) or in this process.
 """
@@ -38,8 +40,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArgumentError, MobmanipError, SpecError
+from ..errors import ArgumentError, MobmanipError, SpecError, TaskError
 from ..robot.model import Robot, load_robot
+from ..robot.support_spec import check_mu
 from .optimize import DEFAULT_STARTS, place
 
 #: Most object positions one site may hold.
@@ -125,6 +128,8 @@ class Site:
             mu = grounded.get("mu", "spec")
             if mu != "spec" and (isinstance(mu, bool) or not isinstance(mu, (int, float)) or not mu > 0):
                 raise SpecError(f'{where}: [grounded] mu must be a positive number or "spec", got {mu!r}')
+            if mu != "spec":
+                check_mu(mu, f"{where}: [grounded] mu")
             direction = grounded.get("direction", "+x")
             if not isinstance(direction, str) or direction[:1] not in "+-" or len(direction) < 2:
                 raise SpecError(f'{where}: [grounded] direction must be a signed task axis like "+x"')
@@ -214,25 +219,37 @@ def _robot(name: str) -> Robot:
 
 
 def _grounded_reach(robot: Robot, q: np.ndarray, site: Site) -> float:
+    from ..analysis.plausibility import floor_warnings
     from ..analysis.single import analyze
     from ..robot.tasks import get_task
     from ..terms.constraints.floor import Floor
 
     task = get_task(site.task or robot.spec.default_task)
-    label = site.direction[1:]
-    if label not in task.labels:
-        raise ArgumentError(
-            f"[grounded] direction {site.direction!r}: task {task.name} has axes {', '.join(task.labels)}"
-        )
-    e = np.zeros(task.dim)
-    e[task.labels.index(label)] = 1.0 if site.direction[0] == "+" else -1.0
+    e = _grounded_direction(site, task)
     analysis = analyze(robot, q, task.name, object_mass=site.mass, constraints=(Floor(mu=site.mu),),
                        measures=("dynamic_polytope",))  # fmt: skip
     polytope = analysis.measure("dynamic_polytope")
     reach = getattr(polytope, "straight_line_reach", None)
     if reach is None:
         raise ArgumentError("the dynamic polytope of this robot has no straight-line reach")
-    return 0.0 if polytope.empty else float(reach(e))
+    if polytope.empty:  # not even rest: no reach to report, and the reason why
+        raise TaskError(" ".join(floor_warnings(analysis)) or "the set on the floor is empty")
+    return float(reach(e))
+
+
+def _grounded_direction(site: Site, task) -> np.ndarray:
+    """The unit task direction of ``[grounded] direction``.
+
+    Raises:
+        ArgumentError: not one of the task's axes.
+    """
+    label = site.direction[1:]
+    if label not in task.labels:
+        axes = ", ".join(f"{sign}{name}" for name in task.labels for sign in "+-")
+        raise ArgumentError(f"[grounded] direction {site.direction!r}: the {task.name} task's axes are {axes}")
+    e = np.zeros(task.dim)
+    e[task.labels.index(label)] = 1.0 if site.direction[0] == "+" else -1.0
+    return e
 
 
 def solve_positions(site: Site, start: int, stop: int) -> tuple[int, np.ndarray, list[str]]:
@@ -285,6 +302,8 @@ def run_site(
     # a malformed objective or task fails here, once, not in every task
     task = get_task(site.task or robot.spec.default_task)
     Objective.parse(site.objective, task)
+    if site.mu is not None:
+        _grounded_direction(site, task)
     n = len(site.positions)
     names = tuple(f"q_{k}" for k in range(robot.model.nq))
     table = np.full((n, len(COLUMNS) + len(names)), np.nan)

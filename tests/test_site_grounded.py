@@ -1,0 +1,65 @@
+"""``mobmanip site`` with ``[grounded]``: the straight-line reach on the floor at each position's
+placement, checked against the independent whole-robot LP (tests/floor_reference.py); where the
+robot cannot stand on its floor the value is left out and the reason says why; a bad ``mu`` or
+direction is one error before any work."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import mobmanip
+from floor_reference import PAPER_CASTERS, build_problem, straight_line
+
+HEAD = 'robot = "planar_dual_arm"\nstarts = 2\npositions = [[1.0, 0.5, 0.35], [0.8, 0.0, 0.35]]\n'
+
+
+def _site(tmp_path, text):
+    path = tmp_path / "s.toml"
+    path.write_text(HEAD + text)
+    run = subprocess.run([sys.executable, "-m", "mobmanip", "site", str(path), "--output", str(tmp_path / "o"),
+                          "--no-progress"], capture_output=True, text=True)  # fmt: skip
+    rows = list(csv.DictReader((tmp_path / "o" / "site.csv").open())) if run.returncode == 0 else []
+    return run, rows
+
+
+def test_the_grounded_reach_at_each_placement_is_the_independent_lps(tmp_path):
+    run, rows = _site(tmp_path, 'objective = "dynamic:capacity:+x"\n[grounded]\nmu = 0.5\ndirection = "+x"\n')
+    assert run.returncode == 0, run.stderr
+    robot = mobmanip.load_robot("planar_dual_arm")
+    for row in rows:
+        q = np.array([float(row[f"q_{k}"]) for k in range(robot.model.nq)])
+        held = mobmanip.analyze(robot, q, "planar", measures=("kinematic",)).held_object
+        problem = build_problem(robot, q, "planar", held, casters=PAPER_CASTERS)
+        ref = straight_line(problem, np.array([1.0, 0.0]), mode="friction", mu=0.5, springs=True).value
+        assert ref > 1.0 and row["reason"] == ""
+        assert float(row["grounded_reach"]) == pytest.approx(ref, rel=1e-6)
+
+
+def test_where_the_robot_cannot_stand_the_reason_says_why(tmp_path):
+    """The kinematic capacity along +x stretches the arms: the centre of mass (robot and 2 kg)
+    leaves the core of the six equally stiff contacts, so the set on the floor is empty. It was
+    reported as a reach of 0 with no reason."""
+    run, rows = _site(tmp_path, 'objective = "kinematic:capacity:+x"\n[grounded]\nmu = 0.5\n')
+    assert run.returncode == 0, run.stderr
+    for row in rows:
+        assert row["grounded_reach"] == "" and float(row["value"]) > 0.0
+        assert row["reason"].startswith("grounded capacity: dynamic_polytope on the floor is empty")
+        assert "would unload wheel_" in row["reason"]
+
+
+@pytest.mark.parametrize(
+    "grounded, message",
+    [
+        ('mu = 50\ndirection = "+x"', "[grounded] mu 50 is above 10"),
+        ('mu = 0.5\ndirection = "+q"', "[grounded] direction '+q': the planar task's axes are +x, -x, +y, -y"),
+    ],
+)
+def test_a_bad_grounded_table_is_one_error_before_any_work(tmp_path, grounded, message):
+    run, _ = _site(tmp_path, f'objective = "dynamic:capacity:+x"\n[grounded]\n{grounded}\n')
+    assert run.returncode == 2 and run.stderr.count("\n") == 1 and message in run.stderr, run.stderr
+    assert not (tmp_path / "o").exists()
