@@ -96,6 +96,7 @@ class FloorProblem:
         level_load: the object's weight on the omitted level rows, (r,).
         tau_max: effort limits of x, (nx,).
         total_mass: robot (free-flyer model) plus object (kg).
+        gravity: gravity in the floor's axes (m/s^2), (3,); leaning on a ramp.
     """
 
     M: np.ndarray
@@ -114,6 +115,7 @@ class FloorProblem:
     level_load: np.ndarray
     tau_max: np.ndarray
     total_mass: float
+    gravity: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -241,7 +243,7 @@ def driven_wheels(robot) -> tuple[SupportPoint, ...]:
     )
 
 
-def build_problem(robot, q, task: str, held_object, casters=None) -> FloorProblem:
+def build_problem(robot, q, task: str, held_object, casters=None, gravity=None) -> FloorProblem:
     """Assemble the floor equations at mobmanip's configuration ``q``, robot and object at rest.
 
     Args:
@@ -251,8 +253,13 @@ def build_problem(robot, q, task: str, held_object, casters=None) -> FloorProble
         held_object: the object; its ``mass`` (kg), ``inertia`` ((3, 3) kg m^2, about its centre,
             world axes) and ``center`` ((3,) m) are read.
         casters: passive supports; default :func:`urdf_casters`.
+        gravity: gravity in the floor's axes (m/s^2), (3,); default straight down (a level floor).
     """
     model = free_flyer_model(robot)
+    gravity = np.array([0.0, 0.0, -GRAVITY]) if gravity is None else np.asarray(gravity, dtype=float)
+    if not np.array_equal(gravity, [0.0, 0.0, -GRAVITY]):
+        model = pin.Model(model)  # a ramp: Pinocchio's own generalized gravity, with gravity leaning
+        model.gravity.linear = gravity
     data = model.createData()
     q_f = free_flyer_configuration(robot, model, q)
     S = free_flyer_null_space(robot, model, q)
@@ -285,7 +292,7 @@ def build_problem(robot, q, task: str, held_object, casters=None) -> FloorProble
     M6 = np.zeros((6, 6))
     M6[:3, :3] = held_object.mass * np.eye(3)
     M6[3:, 3:] = held_object.inertia
-    g6 = np.array([0.0, 0.0, held_object.mass * GRAVITY, 0.0, 0.0, 0.0])
+    g6 = np.r_[-held_object.mass * gravity, 0.0, 0.0, 0.0]  # the wrench that holds the object still
     return FloorProblem(
         M=M,
         g=g,
@@ -306,6 +313,7 @@ def build_problem(robot, q, task: str, held_object, casters=None) -> FloorProble
         level_load=g6[level],
         tau_max=np.asarray(robot.effort_limits, dtype=float),
         total_mass=pin.computeTotalMass(model) + held_object.mass,
+        gravity=gravity,
     )
 
 
@@ -474,7 +482,7 @@ def _solve(
             rhs.append(np.zeros(1))
 
     bounds, cone = [(None, None)] * n, (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
-    least = reserve * P.total_mass * GRAVITY / len(P.contacts)
+    least = reserve * P.total_mass * -P.gravity[2] / len(P.contacts)
     bounds[T] = [(-limit, limit) for limit in P.tau_max]
     A_ub = []
     for contact, sl in zip(P.contacts, slices):
@@ -548,7 +556,7 @@ def team_straight_line(
                 rows.append(row)
                 rhs.append(np.zeros(1))
         bounds[T] = [(-limit, limit) for limit in P.tau_max]
-        least = reserve * P.total_mass * GRAVITY / len(P.contacts)
+        least = reserve * P.total_mass * -P.gravity[2] / len(P.contacts)
         for contact, sl in zip(P.contacts, slices):
             if mode != "ideal":
                 bounds[L.start + sl.stop - 1] = (least, None)

@@ -206,6 +206,7 @@ def build(
     regularisation: float = 1e-2,
     equal_supports: bool = True,
     stiffness: Mapping[str, float] | None = None,
+    gravity: np.ndarray | None = None,
 ) -> Referee:
     """A MuJoCo model of ``robot`` at configuration ``q`` standing on the floor, at rest.
 
@@ -239,6 +240,8 @@ def build(
             scaled, the stiffest at MuJoCo's cap d = 0.9999). Holding still, MuJoCo's contact
             forces minimise sum_c R_c f_c^2 over the balancing ones, i.e. f_c = k_c (a + b x_c +
             c y_c): springs of stiffness k_c under a rigid platform.
+        gravity: gravity in the floor's axes (m/s^2), (3,): a ramp is the level floor with gravity
+            leaning; default straight down.
 
     Raises:
         ValueError: wheels or supports not on one floor, a hand that is not a URDF link, an object
@@ -253,7 +256,8 @@ def build(
             joint.damping, joint.stiffness, joint.frictionloss, joint.armature = np.zeros(3), np.zeros(3), 0.0, 0.0
             joint.limited = joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
     option = spec.option
-    option.timestep, option.impratio, option.gravity = timestep, impratio, [0.0, 0.0, -GRAVITY]
+    down = [0.0, 0.0, -GRAVITY] if gravity is None else [float(v) for v in gravity]
+    option.timestep, option.impratio, option.gravity = timestep, impratio, down
     option.cone, option.solver = mujoco.mjtCone.mjCONE_ELLIPTIC, mujoco.mjtSolver.mjSOL_NEWTON
     option.iterations, option.tolerance, option.ls_iterations = 1000, 1e-12, 100
     soft = {"solref": [2.0 * timestep, 1.0], "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0]}

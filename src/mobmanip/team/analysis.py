@@ -609,6 +609,26 @@ def _stack_rows(
         for name, block in r.object_E.items():
             key, full = place(name, i, block)
             object_E[key] = object_E[key] + full if key in object_E else full
+    # shifts: each robot's own equations at its rows; the object's one for all (added once)
+    shifts: dict[str, np.ndarray] = {}
+    for equation in sorted({e for r in rows for e in r.shifts}):
+        if equation in eq_rows:
+            at = eq_rows[equation]
+            total = np.zeros(int(at[-1]))
+            for i, r in enumerate(rows):
+                if equation in r.shifts:
+                    total[at[i] : at[i + 1]] += r.shifts[equation]
+            shifts[equation] = total
+            continue
+        given = [(i, np.asarray(r.shifts[equation], dtype=float)) for i, r in enumerate(rows) if equation in r.shifts]
+        first = given[0][1]
+        for i, shift in given:
+            if shift.shape != first.shape or not np.allclose(shift, first, rtol=1e-12, atol=1e-12):
+                raise ArgumentError(
+                    f"constraint {rows[i].name!r}: the object's own load differs between "
+                    f"{team.members[given[0][0]].name} and {team.members[i].name}"
+                )
+        shifts[equation] = first
     labels = tuple(
         f"{team.members[i].name}: {label}" for i, r in enumerate(rows) for label in (r.labels or (r.name,) * len(r.h))
     )
@@ -623,6 +643,7 @@ def _stack_rows(
         couplings=couplings,
         object_E=object_E,
         object_e=np.asarray(object_e, dtype=float),
+        shifts=shifts,
         labels=labels,
         info={f"{team.members[i].name}": dict(r.info) for i, r in enumerate(rows) if r.info},
     )

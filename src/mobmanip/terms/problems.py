@@ -83,6 +83,15 @@ def capacity_polytope(
             own["grasp"] = ({"xdot": T.J_u, "a": -T.W.T}, np.zeros(mk))
             own["object"] = ({"h": T.W, "a": -T.M_o}, T.g_o)
     for r in rows:
+        for equation, shift in r.shifts.items():
+            if policy and equation == "grasp":
+                raise ArgumentError(f"constraint {r.name!r} shifts the grasp equation, which the policy fixes")
+            blocks, rhs = own[equation]
+            shift = np.asarray(shift, dtype=float)
+            if shift.shape != rhs.shape and not (policy and equation == "object"):
+                raise ArgumentError(f"constraint {r.name!r}: its {equation} shift has {shift.shape}, not {rhs.shape}")
+            # the policy's object equation is h = W^+ (M_o a + g_o): the object's own load through W^+
+            own[equation] = (blocks, rhs + (W_pinv @ shift if policy and equation == "object" else shift))
         for equation, blocks in r.couplings.items():
             if policy and equation in ("grasp", "object"):
                 raise ArgumentError(f"constraint {r.name!r} adds to the {equation} equation, which the policy fixes")

@@ -117,6 +117,10 @@ class ConstraintRows:
             (p, size). There is one object: in a team these rows of every robot add up into
             one set (each robot's hands carry part of the load), where ``E`` is each robot's own.
         object_e: their right-hand side, (p,): the object's, the same for every robot.
+        shifts: changes to the right-hand sides of the problem's own equations, equation name ->
+            (rows of the equation,): ``"dynamics"`` (nx) a robot's own loads (its weight on a
+            slope), ``"object"`` (m) the object's own (one object: in a team every robot gives
+            the same, and it is added once).
         labels: one label per inequality row (what binds when the row is tight), (r,).
         info: what the constraint wants reported with the set (JSON-ready).
     """
@@ -131,6 +135,7 @@ class ConstraintRows:
     couplings: Mapping[str, Mapping[str, np.ndarray]] = field(default_factory=dict)
     object_E: Mapping[str, np.ndarray] = field(default_factory=dict)
     object_e: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    shifts: Mapping[str, np.ndarray] = field(default_factory=dict)
     labels: tuple[str, ...] = ()
     info: Mapping[str, Any] = field(default_factory=dict)
 
@@ -139,7 +144,7 @@ class ConstraintRows:
             raise ArgumentError(
                 f"constraint {self.name!r}: problem must be one of {sorted(PROBLEMS)}, got {self.problem!r}"
             )
-        unknown = set(self.couplings) - set(EQUATIONS[self.problem])
+        unknown = (set(self.couplings) | set(self.shifts)) - set(EQUATIONS[self.problem])
         if unknown:
             raise ArgumentError(
                 f"constraint {self.name!r} adds to unknown equations {sorted(unknown)}; "
@@ -163,6 +168,9 @@ class ConstraintRows:
                     raise ArgumentError(f"constraint {self.name!r}: {what}[{name!r}] is not finite")
             if not np.all(np.isfinite(rhs)):
                 raise ArgumentError(f"constraint {self.name!r}: its right-hand side is not finite")
+        for equation, shift in self.shifts.items():
+            if np.asarray(shift).ndim != 1 or not np.all(np.isfinite(shift)):
+                raise ArgumentError(f"constraint {self.name!r}: its {equation} shift must be finite and 1-D")
         if self.labels and len(self.labels) != len(self.h):
             raise ArgumentError(f"constraint {self.name!r}: {len(self.labels)} labels for {len(self.h)} rows")
 

@@ -67,6 +67,8 @@ from ..grasp import GRAVITY
 from .base import Constraint, ConstraintRows, Terms
 
 _G = float(-GRAVITY[2])  # m/s^2, the magnitude of gravity (along world -z)
+#: The steepest floor modelled (deg): a ramp, not a wall (wheelchair ramps are under 5 deg).
+MAX_SLOPE = 30.0
 
 #: Rows of a 6-D wrench (force, then moment; world axes) the object is balanced in even when the
 #: task leaves them out: its vertical force and its roll and pitch moments (it is held level).
@@ -105,6 +107,13 @@ class Floor(Constraint):
             97 % of a maximum, a nearly unloaded caster lifts and the load leaves the wheels);
             a reserve keeps the maxima clear of that; :func:`mobmanip.motion.hold.held_reach`
             finds the reach that holds for a given time.
+        slope: the floor's inclination (deg, 0 to :data:`MAX_SLOPE`): a ramp. The platform's
+            plane is the floor's, so the world's x, y and z are the ramp's own axes (z its
+            normal) and gravity leans: g (-sin s cos u, -sin s sin u, -cos s). The robot's and
+            the object's weights change with it (in the reduced dynamics, the whole robot's
+            rows, the object's equation and its level rows); the wheels' traction must hold the
+            weight's share along the ramp.
+        uphill: the direction (deg, in the floor's x, y) in which the ramp rises; 0: along +x.
     """
 
     mu: float | str | None = "spec"
@@ -113,6 +122,8 @@ class Floor(Constraint):
     lift: bool = False
     load: str = "auto"
     reserve: float = 0.0
+    slope: float = 0.0
+    uphill: float = 0.0
     name: str = "floor"
     problem: str = "acceleration"
 
@@ -125,6 +136,18 @@ class Floor(Constraint):
             raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
         if self.load not in LOADS:
             raise ArgumentError(f"the floor's load must be one of {', '.join(LOADS)}, got {self.load!r}")
+        for value, what in ((self.slope, "slope"), (self.uphill, "uphill direction")):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ArgumentError(f"the floor's {what} must be a finite angle in degrees, got {value!r}")
+        if not 0.0 <= self.slope <= MAX_SLOPE:
+            raise ArgumentError(f"the floor's slope must be from 0 to {MAX_SLOPE:g} deg, got {self.slope!r}")
+
+    def gravity(self) -> np.ndarray:
+        """Gravity in the floor's axes (m/s^2), (3,): straight down on a level floor."""
+        if self.slope == 0.0:
+            return np.array([0.0, 0.0, -_G])
+        s, u = math.radians(self.slope), math.radians(self.uphill)
+        return _G * np.array([-math.sin(s) * math.cos(u), -math.sin(s) * math.sin(u), -math.cos(s)])
 
     def resolve(self, robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces this floor uses for ``robot``."""
@@ -152,6 +175,8 @@ class Floor(Constraint):
             out["faces"] = self.faces
         if self.reserve:
             out["reserve"] = self.reserve
+        if self.slope:
+            out["slope"], out["uphill"] = self.slope, self.uphill
         return out
 
     def rows(self, terms: Terms) -> ConstraintRows:
@@ -209,7 +234,8 @@ class Floor(Constraint):
 
         nx = S.shape[1]
         # the whole robot's Newton-Euler rows (6)
-        equations = [({"xdot": A_G @ S, CONTACT_FORCES: -C, "h": np.hstack(H_task)}, _weight(mass))]
+        gravity = self.gravity()
+        equations = [({"xdot": A_G @ S, CONTACT_FORCES: -C, "h": np.hstack(H_task)}, _weight(mass, gravity))]
         variables = {CONTACT_FORCES: (n_forces, -np.inf, np.inf)}
         couplings = {}
         object_E: dict[str, np.ndarray] = {}
@@ -219,7 +245,7 @@ class Floor(Constraint):
             equations[0][0][LEVEL_WRENCHES] = np.hstack(H_level)
             # the object held level: its level rows balance its weight (g_o's convention: +m g up;
             # the object's own rows: in a team every robot's hands share them) ...
-            object_e = np.array([terms.held_object.mass * _G if r == 2 else 0.0 for r in level])
+            object_e = np.array([-terms.held_object.mass * gravity[r] if r < 3 else 0.0 for r in level])
             object_E = {"h": np.hstack(grasp_task), LEVEL_WRENCHES: np.hstack(grasp_level)}
             # ... and the hands do not move it out of level (rows that are not zero)
             kin = np.vstack(level_kin)
@@ -234,9 +260,15 @@ class Floor(Constraint):
                 block[:, normal_col] = sharing
                 equations.append(({CONTACT_FORCES: block}, np.zeros(len(sharing))))
         E, e = _stack(equations, {"xdot": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl})
+        shifts = {}
+        if self.slope:  # the weights lean with the ramp: the reduced dynamics' and the object's own
+            lean = gravity - np.array([0.0, 0.0, -_G])
+            J_c = pin.jacobianCenterOfMass(model, data, q)
+            shifts["dynamics"] = mass * S.T @ (J_c.T @ lean)  # xi = m S^T J_c^T g
+            shifts["object"] = np.r_[-terms.held_object.mass * lean, np.zeros(3)][rows]  # g_o = -m_o g
 
         G_rows, h_rows, labels = [], [], []
-        least = self.reserve * (mass + terms.held_object.mass) * _G / len(support.contacts)
+        least = self.reserve * (mass + terms.held_object.mass) * -gravity[2] / len(support.contacts)
         for contact, col in zip(support.contacts if not self.lift else (), normal_col):
             row = np.zeros(n_forces)
             row[col] = -1.0
@@ -277,9 +309,12 @@ class Floor(Constraint):
                 "polygon": support.polygon(pose).tolist(),
             }
         }
+        if self.slope:
+            info["floor"].update(slope=self.slope, uphill=self.uphill, gravity=gravity.tolist())
         return ConstraintRows(
             self.name, self.problem, variables=variables, G={CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)},
             h=np.array(h_rows, dtype=float), E=E, e=e, couplings=couplings, object_E=object_E, object_e=object_e,
+            shifts=shifts,
             labels=tuple(labels), info=info,
         )  # fmt: skip
 
@@ -324,9 +359,9 @@ def _pose(q: np.ndarray) -> tuple[float, float, float]:
     return float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))
 
 
-def _weight(mass: float) -> np.ndarray:
+def _weight(mass: float, gravity: np.ndarray) -> np.ndarray:
     """The robot's weight as a wrench about its centre of mass, (6,)."""
-    return np.r_[0.0, 0.0, -mass * _G, 0.0, 0.0, 0.0]
+    return np.r_[mass * gravity, 0.0, 0.0, 0.0]
 
 
 def _stack(equations: list[tuple[dict[str, np.ndarray], np.ndarray]], sizes: dict[str, int]):

@@ -1,0 +1,169 @@
+"""The floor as a ramp (``Floor(slope=, uphill=)``): the platform's plane is the ramp's, gravity
+leans in its axes, and the robot's and the object's weights change with it.
+
+Checked three ways: against the independent whole-robot LP (tests/floor_reference.py, its
+generalized gravity from Pinocchio's own model with gravity leaning), against the statics of the
+whole robot at rest (the floor carries the weight, the wheels alone hold it along the ramp), and
+in MuJoCo with gravity leaning (tests/mujoco_referee.py), whose floor is level.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from floor_reference import PAPER_CASTERS, build_problem, force_support, straight_line, support
+from mobmanip.casestudy import configuration_at, optimal_posture
+from mobmanip.errors import MobmanipError
+from mobmanip.postures.named import named_configuration
+from mobmanip.terms.constraints.floor import CONTACT_FORCES, Floor, ground_reaction
+
+MASS = 2.0
+RAMPS = [(5.0, 0.0), (5.0, 120.0), (10.0, -60.0)]  # (slope, uphill direction), deg
+#: the floor, and the reference's mode, mu and load sharing
+FLOORS = {
+    "mu 0.5": (dict(mu=0.5), ("friction", 0.5, True, 0.0)),
+    "no tip-over": (dict(mu=None), ("no_tip", None, False, 0.0)),
+    "mu 1.0, reserve 0.1": (dict(mu=1.0, reserve=0.1), ("friction", 1.0, True, 0.1)),
+}
+
+
+def _case(name):
+    if name == "tiago_dual hold":
+        robot = mobmanip.load_robot("tiago_dual")
+        return robot, named_configuration(robot, "hold"), "spatial", None
+    robot = mobmanip.load_robot("planar_dual_arm")
+    return robot, configuration_at(robot, optimal_posture(robot), 0.0), "planar", PAPER_CASTERS
+
+
+def _axes(m):
+    return [s * e for e in np.eye(m)[: min(m, 3)] for s in (1.0, -1.0)]
+
+
+@pytest.mark.parametrize("floor", list(FLOORS))
+@pytest.mark.parametrize("ramp", RAMPS)
+@pytest.mark.parametrize("case", ["tiago_dual hold", "paper 0 deg"])
+def test_on_a_ramp_the_reaches_equal_the_independent_lp(case, ramp, floor):
+    robot, q, task, casters = _case(case)
+    options, (mode, mu, springs, reserve) = FLOORS[floor]
+    constraint = Floor(**options, slope=ramp[0], uphill=ramp[1])
+    analysis = mobmanip.analyze(robot, q, task, object_mass=MASS, constraints=(constraint,),
+                                measures=("dynamic_polytope", "dynamic_polytope_min_norm"))  # fmt: skip
+    problem = build_problem(robot, q, task, analysis.held_object, casters=casters, gravity=constraint.gravity())
+    P, policy = analysis.measures["dynamic_polytope"], analysis.measures["dynamic_polytope_min_norm"]
+    for e in _axes(P.dim):
+        ref = straight_line(problem, e, mode=mode, mu=mu, springs=springs, reserve=reserve).value
+        assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6), (case, ramp, floor, e)
+    e = np.eye(P.dim)[0]
+    ref = support(problem, e, mode=mode, mu=mu, springs=springs, reserve=reserve, policy=True).value
+    assert policy.support(e) == pytest.approx(ref, rel=1e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("case", ["tiago_dual hold", "paper 0 deg"])
+def test_the_force_capacity_on_a_ramp_equals_the_independent_lp(case):
+    robot, q, task, casters = _case(case)
+    constraint = Floor(mu=0.5, slope=8.0, uphill=30.0)
+    analysis = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("force_polytope",),
+                                constraints=(constraint,))  # fmt: skip
+    F = analysis.measures["force_polytope"]
+    problem = build_problem(robot, q, task, analysis.held_object, casters=casters, gravity=constraint.gravity())
+    for e in _axes(F.dim):
+        ref = force_support(problem, e, mode="friction", mu=0.5, springs=True).value
+        assert F.support(e) == pytest.approx(ref, rel=1e-6, abs=1e-6), (case, e)
+
+
+def test_a_ramp_changes_the_reaches_the_way_gravity_leans():
+    """A ramp rising along +x: accelerating the object uphill (+x) reaches less than on the level
+    floor and downhill (-x) more for the paper robot, whose limit there is its wheels' traction
+    (the weight's share along the ramp adds to what they must push uphill); a level ramp is the
+    level floor exactly."""
+    robot, q, task, _ = _case("paper 0 deg")
+
+    def reach(floor, e):
+        return mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",),
+                                constraints=(floor,)).measures["dynamic_polytope"].straight_line_reach(e)  # fmt: skip
+
+    x = np.array([1.0, 0.0])
+    level, ramp = Floor(mu=0.5), Floor(mu=0.5, slope=5.0)
+    assert reach(Floor(mu=0.5, slope=0.0, uphill=45.0), x) == reach(level, x)
+    assert reach(ramp, x) < reach(level, x) and reach(ramp, -x) > reach(level, -x)
+
+
+@pytest.mark.parametrize("case, ramp", [("tiago_dual hold", (5.0, 0.0)), ("paper 0 deg", (5.0, 120.0))])
+def test_at_rest_on_a_ramp_the_floor_carries_the_weight_and_the_wheels_hold_it(case, ramp):
+    """Robot and object still (the force problem at f = 0: no motion at all) on a ramp: the
+    contact forces sum to the whole weight turned into the ramp's axes (normal m g cos s, along
+    the ramp m g sin s uphill), the frictionless casters carry none of the part along the ramp,
+    and the wheels stay in their pyramids."""
+    robot, q, task, _ = _case(case)
+    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
+    P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("force_polytope",),
+                         constraints=(constraint,)).measures["force_polytope"]  # fmt: skip
+    w = P.witness_at(np.zeros(P.dim))
+    info = P.model["floor"]
+    forces = w.variables[CONTACT_FORCES]
+    total = np.zeros(3)
+    for contact in info["contacts"]:
+        a, b = contact["columns"]
+        f = np.zeros(3)
+        f[3 - (b - a) :] = forces[a:b]
+        total += f
+        if not contact["driven"]:
+            assert b - a == 1  # a caster: its normal only
+    weight = (pin.computeTotalMass(robot.model) + MASS) * constraint.gravity()
+    np.testing.assert_allclose(total, -weight, atol=1e-7 * np.linalg.norm(weight))
+    assert np.hypot(*total[:2]) == pytest.approx(np.linalg.norm(weight) * np.sin(np.radians(ramp[0])), rel=1e-9)
+    reaction = ground_reaction(info, forces)
+    assert all(c.get("traction_use") is None or c["traction_use"] <= 1.0 + 1e-9 for c in reaction["contacts"].values())
+
+
+def test_bad_ramps_are_one_line_errors():
+    for options, message in (
+        (dict(slope=-1.0), "the floor's slope must be from 0 to 30 deg, got -1.0"),
+        (dict(slope=45.0), "the floor's slope must be from 0 to 30 deg, got 45.0"),
+        (dict(slope=float("nan")), "the floor's slope must be a finite angle in degrees, got nan"),
+        (dict(slope=5.0, uphill=float("inf")), "the floor's uphill direction must be a finite angle"),
+    ):
+        with pytest.raises(MobmanipError, match=message.replace("(", r"\(").replace(")", r"\)")):
+            Floor(**options)
+
+
+@pytest.mark.parametrize("ramp, reserve", [((5.0, 0.0), 0.0), ((10.0, -60.0), 0.3)])
+@pytest.mark.parametrize("name", ["tiago_dual", "paper 0", "paper 90"])
+def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
+    """MuJoCo on a level floor with gravity leaning as the ramp's: the calm efforts of each grounded
+    axis maximum (itself) give the predicted object acceleration at t = 0 within 3 % per component
+    and the predicted normal forces within 0.1 % of the weight (measured: 0.21 % and 0.025 %), and
+    hold 20 ms (no support rises, the base does not rock, no wheel slides) on every axis but
+    TIAGo++ -x without a reserve, as on the level floor; with a reserve of 0.3 on all of them."""
+    pytest.importorskip("mujoco")
+    from mujoco_referee import build
+    from test_floor_physics import SHORT, _axes, _normals, _object, _slip
+    from test_floor_physics import _case as physics_case
+
+    robot, q, task, casters, base = physics_case(name)
+    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1], reserve=reserve)
+    P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",),
+                         constraints=(constraint,)).measures["dynamic_polytope"]  # fmt: skip
+    referee = build(robot, q, support_points=casters, object=_object(robot, q, task), mu=0.5,
+                    gravity=constraint.gravity())  # fmt: skip
+    gave_way = []
+    for e in _axes(base):
+        target = P.straight_line_reach(e) * e
+        assert np.linalg.norm(target) > 0.0
+        w = P.witness_at(target, least="xdot")
+        acc, contacts = referee.forward(w.variables["tau"])
+        got = acc[: len(e)] if task == "planar" else acc
+        scale = np.maximum(np.abs(target), 0.03 * np.linalg.norm(target))
+        assert np.all(np.abs(got - target) <= 0.03 * scale), (name, e, got, target)
+        predicted = [
+            c["normal"] for c in ground_reaction(P.model["floor"], w.variables[CONTACT_FORCES])["contacts"].values()
+        ]
+        measured = _normals(referee, P.model["floor"], contacts)
+        assert np.abs(measured - predicted).max() <= 1e-3 * referee.weight, (name, e, measured, predicted)
+        run = referee.rollout(w.variables["tau"], duration=0.02)
+        if not (-run.penetration.min() <= 1e-4 and np.abs(run.base_rpy[:, :2]).max() <= 5e-4 and _slip(run) <= 1e-3):
+            gave_way.append((float(e.sum()), int(np.argmax(np.abs(e)))))
+    assert gave_way == ([(s, k) for (n, s, k) in SHORT if n == name] if reserve == 0.0 else []), gave_way
