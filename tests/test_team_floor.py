@@ -219,3 +219,19 @@ def test_without_friction_no_robot_limits_a_reach_the_floor_forbids():
     np.testing.assert_array_equal(shares, 0.0)
     assert A.limiting_robots("dynamic_polytope", np.array([ex]))[0] == ""
     assert A.limiting_robots("dynamic_polytope", np.array([[0.0, 1.0, 0.0]]))[0] == "south"
+
+
+def test_the_beam_team_on_a_ramp_equals_the_independent_lp():
+    """Both robots on one ramp (6 deg, rising towards 45 deg): each robot's weight and the beam's
+    lean, and the beam's own load is counted once although every robot's floor states it."""
+    constraint = Floor(mu=0.5, slope=6.0, uphill=45.0)
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(constraint,)).measure("dynamic_polytope")
+    problems = [
+        build_problem(m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS, gravity=constraint.gravity())
+        for m in BEAM.members
+    ]
+    level = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    for e in _directions(P.dim):
+        ref = team_straight_line(problems, e, mode="friction", mu=0.5, springs=True)
+        assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6), e
+    assert P.straight_line_reach([1.0, 0.0, 0.0]) < level.straight_line_reach([1.0, 0.0, 0.0])

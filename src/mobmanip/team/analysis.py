@@ -621,14 +621,14 @@ def _stack_rows(
             shifts[equation] = total
             continue
         given = [(i, np.asarray(r.shifts[equation], dtype=float)) for i, r in enumerate(rows) if equation in r.shifts]
-        first = given[0][1]
+        own_load = given[0][1]
         for i, shift in given:
-            if shift.shape != first.shape or not np.allclose(shift, first, rtol=1e-12, atol=1e-12):
+            if shift.shape != own_load.shape or not np.allclose(shift, own_load, rtol=1e-12, atol=1e-12):
                 raise ArgumentError(
                     f"constraint {rows[i].name!r}: the object's own load differs between "
                     f"{team.members[given[0][0]].name} and {team.members[i].name}"
                 )
-        shifts[equation] = first
+        shifts[equation] = own_load
     labels = tuple(
         f"{team.members[i].name}: {label}" for i, r in enumerate(rows) for label in (r.labels or (r.name,) * len(r.h))
     )
