@@ -109,6 +109,8 @@ def main(argv: list[str] | None = None) -> int:
         robot, q = load_robot_and_configuration(args)
         task = args.task or robot.spec.default_task
         floor = floor_constraints(args) or (Floor(),)
+        if (args.held or args.longest) and floor[0].slope:
+            raise MobmanipError("--held and --longest replay mobmanip's own model on a level floor: leave out --slope")
         analysis = mobmanip.analyze(
             robot, q, task, object_mass=args.object_mass, measures=("dynamic_polytope",), constraints=floor
         )
@@ -118,7 +120,8 @@ def main(argv: list[str] | None = None) -> int:
         support = robot_support(robot)
         casters = {c.name: c.point for c in support.contacts if not c.driven}
         mu = floor[0].resolve(robot)[1] or 0.0
-        referee = build(robot, q, support_points=casters, object=analysis.held_object, mu=mu, grasp=args.grasp)
+        referee = build(robot, q, support_points=casters, object=analysis.held_object, mu=mu, grasp=args.grasp,
+                        gravity=floor[0].gravity())  # fmt: skip
     except (MobmanipError, ValueError) as exc:
         print(f"check_physics.py: error: {exc}", file=sys.stderr)
         return 2

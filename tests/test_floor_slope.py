@@ -167,3 +167,91 @@ def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
         if not (-run.penetration.min() <= 1e-4 and np.abs(run.base_rpy[:, :2]).max() <= 5e-4 and _slip(run) <= 1e-3):
             gave_way.append((float(e.sum()), int(np.argmax(np.abs(e)))))
     assert gave_way == ([(s, k) for (n, s, k) in SHORT if n == name] if reserve == 0.0 else []), gave_way
+
+
+@pytest.mark.parametrize("ramp", [(0.0, 0.0), (5.0, 0.0), (5.0, 90.0), (3.0, -135.0)])
+def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_along_gravity(ramp):
+    """Statics in closed form: with no motion at all (the force problem at f = 0), the centre of
+    pressure of the normal forces is where the line through the centre of mass (robot and object)
+    along gravity meets the floor: downhill of the level floor's by h tan s."""
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
+    analysis = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=("force_polytope",),
+                                constraints=(constraint,))  # fmt: skip
+    F = analysis.measures["force_polytope"]
+    reaction = ground_reaction(F.model["floor"], F.witness_at(np.zeros(6)).variables[CONTACT_FORCES])
+    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
+    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
+    c /= m + obj.mass
+    z0 = np.mean([contact["point"][2] for contact in F.model["floor"]["contacts"]])
+    g = constraint.gravity()
+    np.testing.assert_allclose(reaction["zmp"], c[:2] - (c[2] - z0) * g[:2] / g[2], atol=1e-9)
+
+
+def test_a_ramp_from_the_command_line(tmp_path):
+    """``analyze --slope 5 --uphill 90``: the JSON's reaches are the Python API's and its model names
+    the ramp; the summary says it; a ramp where it is not modelled (``--hold``, ``carry``) and an
+    ``--uphill`` without a slope are one-line errors; ``check_physics.py --slope`` replays the
+    maxima in MuJoCo with gravity leaning, and each holds."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "mobmanip", *args], capture_output=True, text=True)
+
+    out = tmp_path / "r.json"
+    run = cli("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--mu", "0.5", "--slope", "5",
+              "--uphill", "90", "--json", str(out))  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "a ramp of 5 deg rising towards 90 deg" in run.stdout
+    doc = json.loads(out.read_text())["dynamic_polytope"]
+    assert doc["model"]["floor"]["slope"] == 5.0 and doc["model"]["floor"]["uphill"] == 90.0
+    robot = mobmanip.load_robot("tiago_dual")
+    P = mobmanip.analyze(robot, named_configuration(robot, "hold"), "spatial", object_mass=2.0,
+                         measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, slope=5.0, uphill=90.0),),
+                         ).measures["dynamic_polytope"]  # fmt: skip
+    reaches = {r["axis"]: r for r in doc["reaches"]}
+    assert reaches["+y"]["straight_line"] == pytest.approx(P.straight_line_reach(np.eye(6)[1]), rel=1e-9)
+    path = tmp_path / "p.csv"
+    path.write_text("t,x,y\n0,0,0\n2,0.5,0\n")
+    for args, message in (
+        (("analyze", "tiago_dual", "--uphill", "30"), "--uphill says where a ramp rises: give its --slope too"),
+        (("analyze", "tiago_dual", "--slope", "45"), "the floor's slope must be from 0 to 30 deg, got 45.0"),
+        (("analyze", "tiago_dual", "--slope", "5", "--hold", "0.02"), "a ramp (--slope) is not modelled there"),
+        (("carry", "planar_dual_arm", "--path", str(path), "--slope", "3"), "carry keeps a level floor"),
+    ):
+        bad = cli(*args)
+        assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and message in bad.stderr, bad.stderr
+    pytest.importorskip("mujoco")
+    script = Path(__file__).resolve().parents[1] / "scripts" / "check_physics.py"
+    run = subprocess.run([sys.executable, str(script), "tiago_dual", "--posture", "hold", "--object-mass", "2",
+                          "--task", "spatial", "--mu", "0.5", "--slope", "5", "--uphill", "30", "--reserve", "0.3",
+                          "--fraction", "1"], capture_output=True, text=True)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    verdicts = [line.split()[-1] for line in run.stdout.splitlines() if line.strip()[:1] in "+-"]
+    assert verdicts == ["holds"] * 12, run.stdout
+
+
+def test_an_empty_set_on_a_ramp_says_where_the_weight_presses():
+    """The paper robot with its arms straight (home), 2 kg, a 30 % reserve, on a 5 deg ramp rising
+    towards 30 deg: the set is empty, and the warning places the centre of mass seen along gravity
+    (downhill of the point straight below it) and says the supports fall below their reserve."""
+    robot = mobmanip.load_robot("planar_dual_arm")
+    q = named_configuration(robot, "home")
+    constraint = Floor(mu=0.5, slope=5.0, uphill=30.0, reserve=0.3)
+    analysis = mobmanip.analyze(robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",),
+                                constraints=(constraint,))  # fmt: skip
+    assert analysis.measures["dynamic_polytope"].empty
+    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
+    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
+    c /= m + obj.mass
+    z0 = np.mean([p["point"][2] for p in analysis.measures["dynamic_polytope"].model["floor"]["contacts"]])
+    g = constraint.gravity()
+    seen = c[:2] - (c[2] - z0) * g[:2] / g[2]
+    warning = next(w for w in analysis.warnings if "on the floor is empty" in w)
+    assert "would bring below its reserve (0.3 of an equal share)" in warning
+    assert f"seen along gravity on the floor at ({seen[0]:.3f}, {seen[1]:.3f}) m" in warning
+    assert np.linalg.norm(seen - c[:2]) > 0.01  # the ramp moves it

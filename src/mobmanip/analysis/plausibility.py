@@ -155,8 +155,13 @@ def floor_warnings(analysis) -> list[str]:
         floor = model["floor"]
         robot, obj = analysis.robot, analysis.held_object
         mass = float(pin.computeTotalMass(robot.model))
-        centre = pin.centerOfMass(robot.model, robot.data, analysis.q)[:2] * mass
-        centre = (centre + obj.mass * np.asarray(obj.center, dtype=float)[:2]) / (mass + obj.mass)
+        com = pin.centerOfMass(robot.model, robot.data, analysis.q) * mass
+        com = (com + obj.mass * np.asarray(obj.center, dtype=float)) / (mass + obj.mass)
+        # standing still, the floor's centre of pressure is below the centre of mass along gravity
+        # (straight below it on a level floor, downhill of it on a ramp)
+        gravity = np.asarray(floor.get("gravity", (0.0, 0.0, -1.0)), dtype=float)
+        floor_z = float(np.mean([c["point"][2] for c in floor["contacts"]]))
+        centre = com[:2] - (com[2] - floor_z) * gravity[:2] / gravity[2]
         points = np.array([c["point"][:2] for c in floor["contacts"]])
         middle = points.mean(axis=0)
         plate = np.column_stack([np.ones(len(points)), points - middle])  # deflections, affine
@@ -164,13 +169,15 @@ def floor_warnings(analysis) -> list[str]:
         springs = "equally stiff contacts" if np.all(k == k[0]) else "the contacts' stiffness"
         # f = K plate theta balancing a unit weight at the centre: plate^T K plate theta = (1, centre)
         normals = k * (plate @ np.linalg.solve(plate.T @ (k[:, None] * plate), np.r_[1.0, centre - middle]))
-        unloaded = [c["name"] for c, f in zip(floor["contacts"], normals) if f <= 0.0]
+        reserve = float(floor.get("reserve") or 0.0)  # each support's least share of the weight
+        unloaded = [c["name"] for c, f in zip(floor["contacts"], normals) if f <= reserve / len(normals)]
         if floor.get("load") == "compliant" and unloaded:
+            below = "unload" if reserve == 0.0 else f"bring below its reserve ({reserve:g} of an equal share)"
             out.append(
                 f"{name} on the floor is empty: standing still, with {springs}, the weight would "
-                f"unload {', '.join(unloaded)} (the centre of mass at ({centre[0]:.3f}, {centre[1]:.3f}) m is outside "
-                "the support's core; compliant sharing keeps every support loaded); --load any gives the "
-                "tip-over limit, with optimistic traction"
+                f"{below} {', '.join(unloaded)} (the centre of mass, seen along gravity on the floor at "
+                f"({centre[0]:.3f}, {centre[1]:.3f}) m, is outside the support's core; compliant sharing keeps every "
+                "support loaded); --load any gives the tip-over limit, with optimistic traction"
             )
         else:
             out.append(

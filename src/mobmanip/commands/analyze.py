@@ -68,6 +68,8 @@ def _check_hold(args, constraints) -> float | None:
         raise ArgumentError(
             "--hold replays efforts on the floor: it needs --ground with a traction limit (not --no-traction)"
         )
+    if constraints[0].slope:
+        raise ArgumentError("--hold replays efforts on a level floor: a ramp (--slope) is not modelled there")
     return float(hold)
 
 

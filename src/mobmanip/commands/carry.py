@@ -161,6 +161,8 @@ def _floor(args):
         raise UsageError(f"carry's floor shares the load as equally stiff contacts (compliant); --load {args.load} "
                          "is for the capacity sets")  # fmt: skip
     chosen = floor_constraints(args)
+    if chosen and chosen[0].slope:
+        raise UsageError("carry keeps a level floor: a ramp (--slope) is modelled in the capacity sets, not in carry")
     if not chosen and margin is None:
         return None
     mu = None if args.no_traction else ("spec" if args.mu is None else args.mu)

@@ -262,6 +262,19 @@ def add_floor_options(parser: argparse.ArgumentParser) -> None:
         help="safety reserve on the floor, a fraction in [0, 1): every support keeps R times its equal "
         "share of the weight, every wheel uses at most 1 - R of its friction (implies --ground; default 0)",
     )
+    parser.add_argument(
+        "--slope",
+        type=decimal,
+        metavar="DEG",
+        help="the floor is a ramp inclined DEG degrees, 0 to 30 (implies --ground; its axes are the "
+        "world's: gravity leans; default 0)",
+    )
+    parser.add_argument(
+        "--uphill",
+        type=decimal,
+        metavar="DEG",
+        help="with --slope: the direction in which the ramp rises, degrees from the world's +x (default 0)",
+    )
 
 
 def floor_constraints(args) -> tuple:
@@ -272,14 +285,18 @@ def floor_constraints(args) -> tuple:
 
     mu, no_traction = getattr(args, "mu", None), getattr(args, "no_traction", False)
     load, reserve = getattr(args, "load", None), getattr(args, "reserve", None)
-    if not (getattr(args, "ground", False) or mu is not None or no_traction or load or reserve is not None):
+    slope, uphill = getattr(args, "slope", None), getattr(args, "uphill", None)
+    if uphill is not None and slope is None:
+        raise ArgumentError("--uphill says where a ramp rises: give its --slope too")
+    if not (getattr(args, "ground", False) or mu is not None or no_traction or load or reserve is not None or slope):
         return ()
     if mu is not None and no_traction:
         raise ArgumentError("--mu and --no-traction contradict each other: choose one")
     if reserve is not None and not (math.isfinite(reserve) and 0.0 <= reserve < 1.0):
         raise ArgumentError(f"--reserve must be a fraction in [0, 1), got {reserve!r}")
     mu_used = None if no_traction else ("spec" if mu is None else mu)
-    return (Floor(mu=mu_used, load=load or "auto", reserve=float(reserve or 0.0)),)
+    ramp = {} if not slope else {"slope": float(slope), "uphill": float(uphill or 0.0)}
+    return (Floor(mu=mu_used, load=load or "auto", reserve=float(reserve or 0.0), **ramp),)
 
 
 def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:
@@ -424,5 +441,8 @@ def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
     if floor is not None:
         mu = "no traction limit" if floor.get("mu") is None else f"mu = {floor['mu']:g}"
         names = ", ".join(c["name"] for c in floor["contacts"])
-        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid): contacts {names}")
+        ramp = (
+            f", a ramp of {floor['slope']:g} deg rising towards {floor['uphill']:g} deg" if floor.get("slope") else ""
+        )
+        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid{ramp}): contacts {names}")
     return "\n".join(lines)

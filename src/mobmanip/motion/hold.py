@@ -161,6 +161,8 @@ def _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, keep)
             f"{robot.name!r} has {a_platform(robot.platform.kind)}"
         )
     floor = Floor() if floor is None else floor
+    if floor.slope:
+        raise ArgumentError("a replay on a ramp is not modelled (its dynamics assume a level floor): slope 0 only")
     support, mu, _ = floor.resolve(robot)
     if mu is None:
         raise TaskError("a replay checks the wheels' traction: the floor needs a friction coefficient mu")
