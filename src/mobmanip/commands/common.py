@@ -295,8 +295,15 @@ def floor_constraints(args) -> tuple:
     if reserve is not None and not (math.isfinite(reserve) and 0.0 <= reserve < 1.0):
         raise ArgumentError(f"--reserve must be a fraction in [0, 1), got {reserve!r}")
     mu_used = None if no_traction else ("spec" if mu is None else mu)
-    ramp = {} if not slope else {"slope": float(slope), "uphill": float(uphill or 0.0)}
-    return (Floor(mu=mu_used, load=load or "auto", reserve=float(reserve or 0.0), **ramp),)
+    return (
+        Floor(
+            mu=mu_used,
+            load=load or "auto",
+            reserve=float(reserve or 0.0),
+            slope=float(slope or 0.0),
+            uphill=float(uphill or 0.0) if slope else 0.0,
+        ),
+    )
 
 
 def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:
