@@ -6,9 +6,10 @@ at mobmanip's planar pose with its root frame at z = 0 and no roll or pitch. Its
 (linear, angular; both in the base frame) is restricted to mobmanip's reduced velocities x by
 S_f, mobmanip's own null space S(q) with the vertical, roll and pitch rows held at zero.
 
-At rest, with gravity 9.81 m/s^2 along -z, the unknowns are the reduced accelerations xdot, the
-reduced efforts tau (one per entry of x: Q = I), the contact forces, the wrenches h the hands
-apply ON the object (task rows) and the object's acceleration a_o, related by::
+At rest, with gravity 9.81 m/s^2 along -z (or leaning, on a ramp: ``build_problem(gravity=)``),
+the unknowns are the reduced accelerations xdot, the reduced efforts tau (one per entry of x: Q
+= I), the contact forces, the wrenches h the hands apply ON the object (task rows) and the
+object's acceleration a_o, related by::
 
     M_f S_f xdot + g_f = B tau + sum_c J_c^T lambda_c - J_hands^T h     (whole robot)
     J_hands S_f xdot = W^T a_o                                           (rigid grasp)
