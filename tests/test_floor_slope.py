@@ -255,3 +255,38 @@ def test_an_empty_set_on_a_ramp_says_where_the_weight_presses():
     assert "would bring below its reserve (0.3 of an equal share)" in warning
     assert f"seen along gravity on the floor at ({seen[0]:.3f}, {seen[1]:.3f}) m" in warning
     assert np.linalg.norm(seen - c[:2]) > 0.01  # the ramp moves it
+
+
+@pytest.mark.parametrize("ramp, still", [((0.0, 0.0), True), ((5.0, 90.0), True), ((8.0, 30.0), False)])
+def test_the_zmp_at_rest_is_the_statics_where_the_robot_can_stand_still(ramp, still):
+    """What the viewer draws as the zero-moment point at rest (``floor_at_rest``): where the robot
+    can stand perfectly still, the statics (the centre of mass seen along gravity); on an 8 deg
+    ramp rising towards 30 deg TIAGo++ cannot hold its posture without moving (not even on an
+    ideal floor), so the point is one of the object held still with the arms accelerating, and
+    says so; asked to hold its joints still there, witness_at refuses."""
+    from mobmanip.analysis.reaches import floor_at_rest
+
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
+    analysis = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=("dynamic_polytope",),
+                                constraints=(constraint,))  # fmt: skip
+    P = analysis.measures["dynamic_polytope"]
+    found = floor_at_rest(P)
+    assert found["still"] is still
+    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
+    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
+    c /= m + obj.mass
+    g = constraint.gravity()
+    statics = c[:2] - (c[2] - found["floor_z"]) * g[:2] / g[2]
+    if still:
+        np.testing.assert_allclose(found["zmp"], statics, atol=1e-9)
+    else:
+        with pytest.raises(MobmanipError, match=r"is not in the set with xdot at zero"):
+            P.witness_at(np.zeros(6), still=("xdot",))
+        ideal = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=("dynamic_polytope",),
+                                 constraints=(Floor(lift=True, slope=8.0, uphill=30.0),))  # fmt: skip
+        with pytest.raises(MobmanipError, match=r"is not in the set with xdot at zero"):
+            ideal.measures["dynamic_polytope"].witness_at(np.zeros(6), still=("xdot",))
+    with pytest.raises(MobmanipError, match="still must name the set's variables"):
+        P.witness_at(np.zeros(6), still=("nothing",))

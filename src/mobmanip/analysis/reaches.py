@@ -75,43 +75,63 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
     return out
 
 
+def _at_rest(task_set: TaskSet):
+    """(a solution with the object still and, where the robot can, nothing moving at all (its
+    reduced accelerations zero); whether nothing moves), with the most slack in every limit; None
+    when the object cannot be held still."""
+    still = ("xdot",) if "xdot" in getattr(task_set, "variables", {}) else ()
+    witness_at = getattr(task_set, "witness_at", None)  # a set of linear programs (LiftedPolytope)
+    if witness_at is None:
+        return None
+    for held in (still, ()) if still else ((),):
+        try:
+            return witness_at(np.zeros(task_set.dim), still=held), bool(held)
+        except MobmanipError:
+            continue  # it holds the object still only with its joints accelerating
+    return None
+
+
 def floor_at_rest(task_set: TaskSet) -> dict | None:
     """The floor under a grounded set with the object held still: the support polygon, the
-    zero-moment point of a solution with the most slack in every limit, and its margin.
+    zero-moment point of a solution with the most slack in every limit and nothing moving
+    (statics: below the centre of mass along gravity) where the robot can stand perfectly still,
+    else with its joints accelerating, and its margin.
 
     Returns:
-        ``{"polygon": (k, 2) world x, y (m), "floor_z": m, "zmp": (x, y) m, "margin": m}``;
-        ``None`` when the set is not on the floor or rest is outside it.
+        ``{"polygon": (k, 2) world x, y (m), "floor_z": m, "zmp": (x, y) m, "margin": m, "still":
+        bool}`` (``still``: nothing moves); ``None`` when the set is not on the floor or rest is
+        outside it.
     """
     floor = getattr(task_set, "model", {}).get("floor") if not task_set.empty else None
     if floor is None or not hasattr(task_set, "witness_at"):
         return None
-    try:
-        w = task_set.witness_at(np.zeros(task_set.dim))
-    except MobmanipError:
+    found = _at_rest(task_set)
+    if found is None:
         return None
+    w, still = found
     reaction = ground_reaction(floor, w.variables[CONTACT_FORCES])
     return {
         "polygon": floor["polygon"],
         "floor_z": float(np.mean([c["point"][2] for c in floor["contacts"]])),
         "zmp": reaction["zmp"],
         "margin": reaction["margin"],
+        "still": still,
     }
 
 
 def floors_at_rest(task_set: TaskSet) -> dict[str, dict]:
     """A team's set on the floor: each robot's floor with the object held still, as
-    :func:`floor_at_rest` gives one robot's (its polygon, floor height, ZMP and margin), by robot
-    name, from one solution with the most slack in every limit; empty when the set is not a
-    team's on the floor or rest is outside it."""
+    :func:`floor_at_rest` gives one robot's (its polygon, floor height, ZMP, margin and whether
+    nothing moves), by robot name, from one solution; empty when the set is not a team's on the
+    floor or rest is outside it."""
     model = getattr(task_set, "model", {}) if not task_set.empty else {}
     members = {k: v["floor"] for k, v in model.items() if isinstance(v, dict) and "floor" in v}
     if not members or not hasattr(task_set, "witness_at"):
         return {}
-    try:
-        w = task_set.witness_at(np.zeros(task_set.dim))
-    except MobmanipError:
+    found = _at_rest(task_set)
+    if found is None:
         return {}
+    w, still = found
     out = {}
     for name, floor in members.items():
         reaction = ground_reaction(floor, w.variables[f"{name}.{CONTACT_FORCES}"])
@@ -120,6 +140,7 @@ def floors_at_rest(task_set: TaskSet) -> dict[str, dict]:
             "floor_z": float(np.mean([c["point"][2] for c in floor["contacts"]])),
             "zmp": reaction["zmp"],
             "margin": reaction["margin"],
+            "still": still,
         }
     return out
 

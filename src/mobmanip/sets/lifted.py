@@ -217,7 +217,7 @@ class LiftedPolytope(TaskSet):
             raise TaskError("the origin is outside the set: no straight line from rest exists")
         return self._witness(found[0], found[1][:-1], found[2])
 
-    def witness_at(self, point: ArrayLike, least: str | None = None) -> Witness:
+    def witness_at(self, point: ArrayLike, least: str | None = None, still: Sequence[str] = ()) -> Witness:
         """A solution that reaches ``point``, as far inside every inequality row as it can be
         (max t with each row's slack >= t |row|): no limit is tight unless ``point`` needs it.
 
@@ -230,26 +230,36 @@ class LiftedPolytope(TaskSet):
                 replay of such a solution drifts away from it within milliseconds. At a point
                 on the boundary, where HiGHS may not settle that second program (no slack to
                 halve), the greatest-slack solution is returned.
+            still: names of variables held at zero (e.g. ``("xdot",)``: the robot does not move
+                at all, not even its joints).
 
         Raises:
-            TaskError: the point is not in the set, or ``least`` is not one of its variables.
+            TaskError: the point is not in the set (with the ``still`` variables at zero), or
+                ``least`` or a ``still`` name is not one of its variables.
         """
         p = check_points(point, self.dim)[0]
         if least is not None and least not in self.variables:
             raise TaskError(f"least must name one of the set's variables {sorted(self.variables)}, got {least!r}")
+        for name in still:
+            if name not in self.variables:
+                raise TaskError(f"still must name the set's variables {sorted(self.variables)}, got {name!r}")
         n = len(self._lower)
+        lower, upper = self._lower.copy(), self._upper.copy()
+        for name in still:
+            lower[self.variables[name]] = upper[self.variables[name]] = 0.0
         fix = np.zeros((self.dim, n + 1))
         fix[np.arange(self.dim), self._task] = 1.0
         norms = np.linalg.norm(self._A_ub, axis=1)
         A = np.vstack([np.c_[self._A_eq, np.zeros(len(self._A_eq))], fix, np.c_[self._A_ub, norms]])
         lo = np.r_[self._b_eq, p, np.full(len(self._b_ub), -np.inf)]
         hi = np.r_[self._b_eq, p, self._b_ub]
-        program = LinearProgram(A, lo, hi, np.r_[self._lower, -np.inf], np.r_[self._upper, np.inf])
+        program = LinearProgram(A, lo, hi, np.r_[lower, -np.inf], np.r_[upper, np.inf])
         cost = np.zeros(n + 1)
         cost[n] = 1.0
         result = program.solve(cost)
         if result is None or result[0] < -1e-9 * max(self._size, 1.0):
-            raise TaskError(f"the point {p.tolist()} is not in the set")
+            held = f" with {', '.join(still)} at zero" if still else ""
+            raise TaskError(f"the point {p.tolist()} is not in the set{held}")
         if least is None:
             return self._witness(float(result[0]), result[1][:-1], None)
         # the same rows with half the slack, and |v| <= u for the chosen variable v: min sum u
@@ -269,7 +279,7 @@ class LiftedPolytope(TaskSet):
         )
         lo2 = np.r_[self._b_eq, p, np.full(len(self._b_ub) + 2 * k, -np.inf)]
         hi2 = np.r_[self._b_eq, p, self._b_ub - half, np.zeros(2 * k)]
-        calm = LinearProgram(A2, lo2, hi2, np.r_[self._lower, np.zeros(k)], np.r_[self._upper, np.full(k, np.inf)])
+        calm = LinearProgram(A2, lo2, hi2, np.r_[lower, np.zeros(k)], np.r_[upper, np.full(k, np.inf)])
         try:
             second = calm.solve(np.r_[np.zeros(n), -np.ones(k)])
         except ModelError:  # at a point on the boundary (no slack to halve) HiGHS may not settle

@@ -575,7 +575,8 @@ class EllipsoidViewer:
                 mg.Sphere(0.015), mg.MeshLambertMaterial(color=FLOOR_COLOR, opacity=1.0)
             )
             self._vis[f"{FLOOR_PATH}/zmp"].set_transform(translation([zmp[0], zmp[1], z]))
-            return [f"support polygon (dark line) and zero-moment point at rest (dot): margin {found['margin']:.3f} m"]
+            rest = "at rest" if found["still"] else "with the object still (the arms accelerating)"
+            return [f"support polygon (dark line) and zero-moment point {rest} (dot): margin {found['margin']:.3f} m"]
         return ["support polygon (dark line)"]
 
     def _set_visible(self, key: tuple[bool, str], visible: bool) -> None:

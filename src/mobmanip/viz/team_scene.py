@@ -223,7 +223,9 @@ class TeamViewer:
             )
             self._vis[f"{path}/zmp"].set_transform(translation([floor["zmp"][0], floor["zmp"][1], z]))
             notes.append(
-                f"{name}: support polygon (dark line), zero-moment point at rest (dot), margin {floor['margin']:.3f} m"
+                f"{name}: support polygon (dark line), zero-moment point "
+                f"{'at rest' if floor['still'] else 'with the object still (the arms accelerating)'} (dot), "
+                f"margin {floor['margin']:.3f} m"
             )
         return notes
 
