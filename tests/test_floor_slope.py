@@ -42,6 +42,14 @@ def _axes(m):
     return [s * e for e in np.eye(m)[: min(m, 3)] for s in (1.0, -1.0)]
 
 
+def _seen_along_gravity(robot, q, analysis, floor_z, gravity):
+    """Statics by hand: the centre of mass of robot and object, seen along gravity on the floor, (2,)."""
+    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
+    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
+    c /= m + obj.mass
+    return c[:2] - (c[2] - floor_z) * gravity[:2] / gravity[2]
+
+
 @pytest.mark.parametrize("floor", list(FLOORS))
 @pytest.mark.parametrize("ramp", RAMPS)
 @pytest.mark.parametrize("case", ["tiago_dual hold", "paper 0 deg"])
@@ -181,12 +189,9 @@ def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_along_
                                 constraints=(constraint,))  # fmt: skip
     F = analysis.measures["force_polytope"]
     reaction = ground_reaction(F.model["floor"], F.witness_at(np.zeros(6)).variables[CONTACT_FORCES])
-    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
-    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
-    c /= m + obj.mass
     z0 = np.mean([contact["point"][2] for contact in F.model["floor"]["contacts"]])
-    g = constraint.gravity()
-    np.testing.assert_allclose(reaction["zmp"], c[:2] - (c[2] - z0) * g[:2] / g[2], atol=1e-9)
+    seen = _seen_along_gravity(robot, q, analysis, z0, constraint.gravity())
+    np.testing.assert_allclose(reaction["zmp"], seen, atol=1e-9)
 
 
 def test_a_ramp_from_the_command_line(tmp_path):
@@ -245,16 +250,13 @@ def test_an_empty_set_on_a_ramp_says_where_the_weight_presses():
     analysis = mobmanip.analyze(robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",),
                                 constraints=(constraint,))  # fmt: skip
     assert analysis.measures["dynamic_polytope"].empty
-    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
-    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
-    c /= m + obj.mass
     z0 = np.mean([p["point"][2] for p in analysis.measures["dynamic_polytope"].model["floor"]["contacts"]])
-    g = constraint.gravity()
-    seen = c[:2] - (c[2] - z0) * g[:2] / g[2]
+    seen = _seen_along_gravity(robot, q, analysis, z0, constraint.gravity())
+    level = _seen_along_gravity(robot, q, analysis, z0, np.array([0.0, 0.0, -9.81]))
     warning = next(w for w in analysis.warnings if "on the floor is empty" in w)
     assert "would bring below its reserve (0.3 of an equal share)" in warning
     assert f"seen along gravity on the floor at ({seen[0]:.3f}, {seen[1]:.3f}) m" in warning
-    assert np.linalg.norm(seen - c[:2]) > 0.01  # the ramp moves it
+    assert np.linalg.norm(seen - level) > 0.01  # the ramp moves it
 
 
 @pytest.mark.parametrize("ramp, still", [((0.0, 0.0), True), ((5.0, 90.0), True), ((8.0, 30.0), False)])
@@ -274,11 +276,7 @@ def test_the_zmp_at_rest_is_the_statics_where_the_robot_can_stand_still(ramp, st
     P = analysis.measures["dynamic_polytope"]
     found = floor_at_rest(P)
     assert found["still"] is still
-    m, obj = pin.computeTotalMass(robot.model), analysis.held_object
-    c = m * pin.centerOfMass(robot.model, robot.model.createData(), q) + obj.mass * np.asarray(obj.center)
-    c /= m + obj.mass
-    g = constraint.gravity()
-    statics = c[:2] - (c[2] - found["floor_z"]) * g[:2] / g[2]
+    statics = _seen_along_gravity(robot, q, analysis, found["floor_z"], constraint.gravity())
     if still:
         np.testing.assert_allclose(found["zmp"], statics, atol=1e-9)
     else:
