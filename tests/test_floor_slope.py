@@ -50,6 +50,15 @@ def _seen_along_gravity(robot, q, analysis, floor_z, gravity):
     return c[:2] - (c[2] - floor_z) * gravity[:2] / gravity[2]
 
 
+def _tiago_on(ramp, measure):
+    """TIAGo++ holding 2 kg in its hold posture on a ramp (mu 0.5): (robot, q, floor, analysis)."""
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
+    analysis = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=(measure,), constraints=(constraint,))
+    return robot, q, constraint, analysis
+
+
 @pytest.mark.parametrize("floor", list(FLOORS))
 @pytest.mark.parametrize("ramp", RAMPS)
 @pytest.mark.parametrize("case", ["tiago_dual hold", "paper 0 deg"])
@@ -148,7 +157,7 @@ def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
     TIAGo++ -x without a reserve, as on the level floor; with a reserve of 0.3 on all of them."""
     pytest.importorskip("mujoco")
     from mujoco_referee import build
-    from test_floor_physics import SHORT, _axes, _normals, _object, _slip
+    from test_floor_physics import SHORT, _at_t0, _axes, _held, _object
     from test_floor_physics import _case as physics_case
 
     robot, q, task, casters, base = physics_case(name)
@@ -161,18 +170,8 @@ def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
     for e in _axes(base):
         target = P.straight_line_reach(e) * e
         assert np.linalg.norm(target) > 0.0
-        w = P.witness_at(target, least="xdot")
-        acc, contacts = referee.forward(w.variables["tau"])
-        got = acc[: len(e)] if task == "planar" else acc
-        scale = np.maximum(np.abs(target), 0.03 * np.linalg.norm(target))
-        assert np.all(np.abs(got - target) <= 0.03 * scale), (name, e, got, target)
-        predicted = [
-            c["normal"] for c in ground_reaction(P.model["floor"], w.variables[CONTACT_FORCES])["contacts"].values()
-        ]
-        measured = _normals(referee, P.model["floor"], contacts)
-        assert np.abs(measured - predicted).max() <= 1e-3 * referee.weight, (name, e, measured, predicted)
-        run = referee.rollout(w.variables["tau"], duration=0.02)
-        if not (-run.penetration.min() <= 1e-4 and np.abs(run.base_rpy[:, :2]).max() <= 5e-4 and _slip(run) <= 1e-3):
+        w = _at_t0(referee, P, target, task, (name, ramp, e))
+        if not _held(referee.rollout(w.variables["tau"], duration=0.02)):
             gave_way.append((float(e.sum()), int(np.argmax(np.abs(e)))))
     assert gave_way == ([(s, k) for (n, s, k) in SHORT if n == name] if reserve == 0.0 else []), gave_way
 
@@ -182,11 +181,7 @@ def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_along_
     """Statics in closed form: with no motion at all (the force problem at f = 0), the centre of
     pressure of the normal forces is where the line through the centre of mass (robot and object)
     along gravity meets the floor: downhill of the level floor's by h tan s."""
-    robot = mobmanip.load_robot("tiago_dual")
-    q = named_configuration(robot, "hold")
-    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
-    analysis = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=("force_polytope",),
-                                constraints=(constraint,))  # fmt: skip
+    robot, q, constraint, analysis = _tiago_on(ramp, "force_polytope")
     F = analysis.measures["force_polytope"]
     reaction = ground_reaction(F.model["floor"], F.witness_at(np.zeros(6)).variables[CONTACT_FORCES])
     z0 = np.mean([contact["point"][2] for contact in F.model["floor"]["contacts"]])
@@ -268,11 +263,7 @@ def test_the_zmp_at_rest_is_the_statics_where_the_robot_can_stand_still(ramp, st
     says so; asked to hold its joints still there, witness_at refuses."""
     from mobmanip.analysis.reaches import floor_at_rest
 
-    robot = mobmanip.load_robot("tiago_dual")
-    q = named_configuration(robot, "hold")
-    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
-    analysis = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=("dynamic_polytope",),
-                                constraints=(constraint,))  # fmt: skip
+    robot, q, constraint, analysis = _tiago_on(ramp, "dynamic_polytope")
     P = analysis.measures["dynamic_polytope"]
     found = floor_at_rest(P)
     assert found["still"] is still
