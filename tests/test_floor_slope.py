@@ -279,3 +279,30 @@ def test_the_zmp_at_rest_is_the_statics_where_the_robot_can_stand_still(ramp, st
             ideal.measures["dynamic_polytope"].witness_at(np.zeros(6), still=("xdot",))
     with pytest.raises(MobmanipError, match="still must name the set's variables"):
         P.witness_at(np.zeros(6), still=("nothing",))
+
+
+def test_a_sweep_on_a_ramp_says_so_and_equals_the_analysis(tmp_path):
+    """``sweep --slope 5``: the file records the ramp with the floor's parameters (it recorded only
+    the name "floor", so a ramp read as the level floor), and its grounded straight-line reach at a
+    point equals the analysis of that configuration on the ramp."""
+    import json
+    import subprocess
+    import sys
+
+    from mobmanip.robot.configurations import configuration_from_dict
+
+    out = tmp_path / "s"
+    argv = ["sweep", "planar_dual_arm", "--slope", "5", "--uphill", "90", "--mu", "0.5", "--angle", "0:90:2",
+            "--distance", "1.0", "--measure", "dynamic_polytope", "--output", str(out), "--no-progress"]  # fmt: skip
+    run = subprocess.run([sys.executable, "-m", "mobmanip", *argv], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    data = np.load(str(out) + ".npz")
+    models = json.loads(str(data["meta_constraint_models"]))
+    assert models[0]["name"] == "floor" and models[0]["slope"] == 5.0 and models[0]["uphill"] == 90.0
+    robot = mobmanip.load_robot("planar_dual_arm")  # the posture the sweep used at angle 0, from its file
+    joints = dict(zip(map(str, data["posture_joint_names"]), data["posture_joints"][0, 0].tolist()))
+    q = configuration_from_dict(robot, {"platform": [0.0, 0.0, 0.0], "joints": joints})
+    P = mobmanip.analyze(robot, q, "planar", measures=("dynamic_polytope",),
+                         constraints=(Floor(mu=0.5, slope=5.0, uphill=90.0),)).measures["dynamic_polytope"]  # fmt: skip
+    reach = data["dynamic_polytope_straight_line_reach"].reshape(-1)[0]
+    assert reach == pytest.approx(P.straight_line_reach(np.array([1.0, 0.0])), rel=1e-9)

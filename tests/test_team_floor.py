@@ -218,7 +218,12 @@ def test_without_friction_no_robot_limits_a_reach_the_floor_forbids():
     shares = A.contributions("dynamic_polytope", np.array([ex, -ex]))
     np.testing.assert_array_equal(shares, 0.0)
     assert A.limiting_robots("dynamic_polytope", np.array([ex]))[0] == ""
-    assert A.limiting_robots("dynamic_polytope", np.array([[0.0, 1.0, 0.0]]))[0] == "south"
+    along_y = A.contributions("dynamic_polytope", np.array([[0.0, 1.0, 0.0]]))[0]
+    assert along_y.sum() > 0.5  # the arms' limits bind there, and the robot with the larger share is named
+    assert (
+        A.limiting_robots("dynamic_polytope", np.array([[0.0, 1.0, 0.0]]))[0]
+        == BEAM.members[int(np.argmax(along_y))].name
+    )
 
 
 def test_the_beam_team_on_a_ramp_equals_the_independent_lp():

@@ -9,6 +9,7 @@ writes a result's files. :mod:`mobmanip.sweep` runs sweeps and re-exports these 
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -156,6 +157,9 @@ class SweepResult:
             "axes": ",".join(AXES),
             "postures": table.method,
             "constraints": ",".join(c.name for c in self.spec.constraints),
+            # each constraint's parameters (a floor's mu, reserve, ramp), JSON: a sweep on a ramp
+            # must not read as one on the level floor
+            "constraint_models": json.dumps([c.describe() for c in self.spec.constraints]),
         }
         arrays.update({f"meta_{k}": np.array(v) for k, v in meta.items()})
         return arrays
