@@ -345,6 +345,9 @@ class RobotDescription:
             (along x, along y, about z, in that order; e.g. an MJCF mobile base), taken out of
             the tree: the platform's own coordinates replace them (an ``omnidirectional``
             platform, with these joints' limits); empty when the file has none.
+        keyframes: the file's own named postures (an MJCF file's ``<keyframe>``), name ->
+            (joint -> position, rad or m) for every one-degree-of-freedom joint the file moves;
+            empty when it has none.
     """
 
     name: str
@@ -358,6 +361,7 @@ class RobotDescription:
     flaws: tuple[Flaw, ...] = field(default=(), compare=False, repr=False)
     notes: tuple[str, ...] = field(default=(), compare=False, repr=False)
     planar_base: tuple[JointDescription, ...] = field(default=(), compare=False, repr=False)
+    keyframes: Mapping[str, Mapping[str, float]] = field(default_factory=dict, compare=False, repr=False)
 
     # ----- the tree -----
 

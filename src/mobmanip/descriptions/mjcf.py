@@ -26,6 +26,11 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   one, ``gear`` times the largest ``ctrlrange`` bound; velocity from a ``velocity`` actuator's
   ``ctrlrange`` (divided by its ``gear``). MJCF has no velocity limit of its own: a joint without
   such an actuator has none (``init-spec`` asks for it);
+- keyframes: each ``<key>``'s ``qpos`` read by the file's own joint layout (a free root joint's
+  seven numbers included) into the description's ``keyframes``, joint name -> position, which
+  ``init-spec`` offers as ``[postures.NAME]``; a key of the wrong size is left out with a note.
+  The ``<keyframe>`` section is never handed to Pinocchio (it is sized for the file's joints,
+  not for mobmanip's model, and Pinocchio refuses a model whose keyframes do not fit it);
 - geometry: geoms are the link's shapes (visual: all of them; collision: those with ``contype``
   or ``conaffinity``); the viewer loads STL and OBJ meshes (Pinocchio's ``buildGeomFromMJCF``).
 
@@ -72,7 +77,6 @@ SKIPPED = {
     "equality": "equality constraints (coupled joints move independently here)",
     "contact": "contact pairs and exclusions",
     "sensor": "sensors",
-    "keyframe": "keyframes",
 }
 
 _DENSITY = 1000.0  # kg/m^3, MuJoCo's default
@@ -602,6 +606,95 @@ class _Tree:
             )
 
 
+def _qpos_layout(
+    reader: _Reader, body: ElementTree.Element, childclass: str
+) -> list[tuple[ElementTree.Element, int, float]]:
+    """The file's joints in MuJoCo's ``qpos`` order, each with its number of positions and, for
+    a hinge or a slide, its ``qpos0`` (its ``ref``: rad or m; 0 for the others).
+
+    MuJoCo lays ``qpos`` out body by body, depth first in file order, a body's joints in file
+    order: 7 numbers for a free joint, 4 for a ball joint, 1 for a hinge or a slide. Read before
+    mobmanip rewrites the tree (it drops the root's free joint and a planar base's joints).
+    """
+    childclass = body.get("childclass", childclass)
+    out: list[tuple[ElementTree.Element, int, float]] = []
+    for element in body:
+        if element.tag == "freejoint":
+            out.append((element, 7, 0.0))
+        elif element.tag == "joint":
+            attrs = reader.attributes(element, "joint", childclass)
+            kind = attrs.get("type", "hinge")
+            ref = float(attrs.get("ref", 0.0))
+            out.append((element, {"free": 7, "ball": 4}.get(kind, 1), reader.angle(ref) if kind == "hinge" else ref))
+    for child in body.findall("body"):
+        out += _qpos_layout(reader, child, childclass)
+    return out
+
+
+def _keyframes(reader: _Reader, layout: list[tuple[ElementTree.Element, int, float]]) -> dict[str, dict[str, float]]:
+    """The file's ``<key>`` elements as postures: name -> (joint -> position, rad or m).
+
+    ``qpos`` is MuJoCo's raw joint positions (radians whatever the compiler's ``angle``), which
+    are Pinocchio's for a hinge or a slide (its MJCF builder turns a joint's ``ref`` into the
+    joint's placement, as MuJoCo does). The rules, each stated in the notes:
+
+    - a key with fewer positions than the file's ``nq``: the others are MuJoCo's ``qpos0`` (a
+      joint's ``ref``), as MuJoCo fills them;
+    - a key with more positions than ``nq`` (MuJoCo refuses such a file), or one that is not
+      numeric or not finite: left out;
+    - a key without ``qpos`` (only controls, say): not a posture, left out;
+    - an unnamed key is called ``keyframe<K>`` (K its index from 0); a name given twice keeps its
+      first key.
+
+    Args:
+        reader: the file.
+        layout: ``(joint element, positions, qpos0)`` in ``qpos`` order (see :func:`_qpos_layout`);
+            the elements carry the names the walk gave them.
+    """
+    nq = sum(size for _, size, _ in layout)
+    keys = [key for section in reader.root.iter("keyframe") for key in section if key.tag == "key"]
+    out: dict[str, dict[str, float]] = {}
+    for k, key in enumerate(keys):
+        name = key.get("name") or f"keyframe{k}"
+        text = key.get("qpos")
+        if text is None:
+            reader.notes.append(f"keyframe {name!r} gives no qpos: not a posture, left out")
+            continue
+        try:
+            qpos = [float(v) for v in text.split()]
+        except ValueError:
+            qpos = [math.nan]
+        if not all(math.isfinite(v) for v in qpos):
+            reader.notes.append(f"keyframe {name!r} has a qpos that is not finite numbers ({text[:40]!r}): left out")
+            continue
+        if len(qpos) > nq:
+            reader.notes.append(
+                f"keyframe {name!r} gives {len(qpos)} positions but the file's joints have {nq} (MuJoCo refuses "
+                "it): left out"
+            )
+            continue
+        if name in out:
+            reader.notes.append(f"keyframe name {name!r} is given twice: the first one is kept")
+            continue
+        if len(qpos) < nq:
+            reader.notes.append(
+                f"keyframe {name!r} gives {len(qpos)} of the file's {nq} positions: the others are their joints' "
+                "qpos0 (ref), as MuJoCo fills them"
+            )
+        values, offset = {}, 0
+        for element, size, qpos0 in layout:
+            if size == 1 and element.get("name"):
+                values[element.get("name", "")] = qpos[offset] if offset < len(qpos) else qpos0
+            offset += size
+        out[name] = values
+    if out:
+        reader.notes.append(
+            f"keyframes read as named postures: {', '.join(out)} (init-spec offers their arm and torso joints as "
+            "[postures.NAME])"
+        )
+    return out
+
+
 def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = None) -> RobotDescription:
     """Read an MJCF file into its checked description (see the module docstring).
 
@@ -634,8 +727,10 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
         names = ", ".join(repr(b.get("name", "?")) for b in bodies) or "none"
         raise reader.fail(f"<worldbody> must hold one robot body (the root link); it holds {names}")
     try:
+        layout = _qpos_layout(reader, bodies[0], "main")
         tree.actuators()
         tree.walk(bodies[0], None, "main", root=True)
+        keyframes = _keyframes(reader, layout)
     except MjcfError as exc:
         raise exc if exc.path else reader.fail(exc.reason) from None
     except ValueError as exc:  # a number attribute that is not one
@@ -646,6 +741,9 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
             "a mesh (Pinocchio gives such a body 1 kg and a unit tensor), so the dynamic measures are not the robot's; "
             "give those bodies an <inertial>"
         )
+    for parent in list(reader.root.iter()):  # keyframes are sized for the file's joints, not mobmanip's model
+        for section in parent.findall("keyframe"):
+            parent.remove(section)
     for element in reader.root.iter("compiler"):  # Pinocchio reads the copy from a temporary folder
         for key in ("meshdir", "assetdir", "texturedir"):
             element.attrib.pop(key, None)
@@ -661,7 +759,9 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     description = assemble(reader.root.get("model") or path.stem, path, "mjcf", tree.links, tree.joints, builder, dirs)
     import dataclasses
 
-    return dataclasses.replace(description, notes=tuple(reader.notes), planar_base=tree.planar_base)
+    return dataclasses.replace(
+        description, notes=tuple(reader.notes), planar_base=tree.planar_base, keyframes=keyframes
+    )
 
 
 def _read(path: Path, *, package_dirs: Iterable[str | Path] | None = None) -> RobotDescription:

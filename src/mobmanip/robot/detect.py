@@ -366,6 +366,7 @@ def detect_spec(
         base = {name: (j.velocity_limit, j.effort_limit) for name, j in zip(OMNI_COORDINATES, description.planar_base)}
         limits = {**base, **(limits or {})}
     given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
+    postures = _keyframe_postures(description, torso_joints + tuple(j for arm in arms for j in arm.joints), notes)
     spec = RobotSpec(
         name=name or description.name or path.stem,
         urdf=path.resolve(),
@@ -375,6 +376,7 @@ def detect_spec(
         default_task=default_task,
         reference=reference,
         torso=torso_joints,
+        postures=postures,
         velocity_limits=given_v,
         effort_limits=given_e,
         package_dirs=(path.resolve().parent,),
@@ -398,6 +400,40 @@ def detect_spec(
         considered=tuple(considered),
         missing=tuple(missing),
     )
+
+
+def _keyframe_postures(
+    description: RobotDescription, joints: Sequence[str], notes: list[str]
+) -> dict[str, dict[str, float]]:
+    """The file's keyframes as the spec's ``[postures.NAME]``: each one's positions of ``joints``
+    (the arm and torso joints, the only ones a posture sets).
+
+    A keyframe named like a posture mobmanip reserves (``home``, ``hold``) is offered as
+    ``keyframe_NAME``; one that sets none of ``joints`` is left out. Each is said in ``notes``.
+    """
+    out: dict[str, dict[str, float]] = {}
+    for name, values in description.keyframes.items():
+        posture = f"keyframe_{name}" if name in ("home", "hold") else name
+        kept = {joint: float(values[joint]) for joint in joints if joint in values}
+        if not kept or posture in out:
+            why = "sets no arm or torso joint" if not kept else f"would be a second [postures.{posture}]"
+            notes.append(f"keyframe {name!r} {why}: not offered as a posture")
+            continue
+        outside = [
+            joint
+            for joint, value in kept.items()
+            if (limit := description.joints[joint].limits) is not None
+            and description.joints[joint].type != "continuous"
+            and (
+                (limit.lower is not None and value < limit.lower - 1e-9)
+                or (limit.upper is not None and value > limit.upper + 1e-9)
+            )
+        ]
+        out[posture] = kept
+        reserved = f" (mobmanip's {name!r} is its own)" if posture != name else ""
+        warn = f"; outside their ranges: {', '.join(outside)}" if outside else ""
+        notes.append(f"keyframe {name!r} is [postures.{posture}]{reserved}: its arm and torso joints{warn}")
+    return out
 
 
 def _given_limits(platform_limits, wheel_limits, limits) -> tuple[dict, dict]:
