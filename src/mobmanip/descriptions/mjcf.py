@@ -15,6 +15,13 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   (a link ``SITE`` on a fixed joint ``SITE_site``): an end effector may be a site;
 - the one body under ``<worldbody>`` is the root link; its ``free`` joint is dropped (mobmanip
   adds the platform's planar joint); a ``ball`` joint or a ``free`` joint elsewhere is refused;
+- a planar base: a slide along x, a slide along y and a hinge about z on the root body, or on a
+  chain of nested bodies below it (``virtual_x``, ``virtual_y``, then the yaw, as Menagerie's
+  mobile FR3 Duo), leaves the tree and becomes the description's ``planar_base`` (an
+  omnidirectional platform with those joints' limits; see ``_Tree.nested_base`` for how the
+  bodies above the yaw are lumped into the platform and the yaw axis put on its origin);
+- armature: Pinocchio's builder reads every joint's ``armature`` into ``model.armature`` (and its
+  mass matrix); the planar base joints' armature goes to the platform joint's three velocities;
 - inertias: ``<inertial>`` (``diaginertia`` in its ``quat`` frame, or ``fullinertia``); a body
   without one gets its geoms' (``mass``, or ``density`` times volume, for spheres, boxes,
   cylinders, capsules and ellipsoids) as Pinocchio computes them. A mesh geom is not integrated,
@@ -298,6 +305,11 @@ class _Tree:
         self.mesh_notes = 0
         self.counter = 0
         self.planar_base: tuple[JointDescription, ...] = ()
+        #: Armature (kg or kg m^2) of the file's planar base joints, by role (x, y, yaw).
+        self.base_armature: dict[str, float] = {}
+        #: Bodies above a nested planar base's yaw joint, lumped into the platform: (name, mass
+        #: kg, slides along x, slides along y), for the notes.
+        self.lumped: list[tuple[str, float, bool, bool]] = []
 
     def name(self, element: ElementTree.Element, prefix: str) -> str:
         name = element.get("name")
@@ -340,6 +352,8 @@ class _Tree:
         if len(anchors) > 1:
             raise r.fail(f"{where} has several joints with different anchors (pos); mobmanip reads one anchor per body")
         shift = np.array(anchors.pop()) if anchors else np.zeros(3)
+        if root and self.nested_base(body, name, described, childclass):
+            described = []
         if root and described:
             self.planar_base = self.base_joints(name, described)
             for element, _, _, _ in described:
@@ -412,6 +426,7 @@ class _Tree:
                     "hinge about z)"
                 )
             found[role] = self.joint(jname, kind, attrs, body, body, Origin())
+            self.base_armature[role] = float(attrs.get("armature", 0.0))
         if set(found) != {"x", "y", "yaw"}:
             raise self.r.fail(
                 f"the root body {body!r} has joints {', '.join(j.name for j in found.values())}: a planar base "
@@ -422,6 +437,141 @@ class _Tree:
             f"{found['yaw'].name}: an omnidirectional platform replaces them (their limits are the base's)"
         )
         return found["x"], found["y"], found["yaw"]
+
+    @staticmethod
+    def role(kind: str, attrs: dict[str, str], name: str) -> str | None:
+        """``"x"``, ``"y"`` or ``"yaw"`` for a slide along x, a slide along y or a hinge about z
+        (axes in the body's frame, either sign), else ``None``."""
+        axis = np.array(_floats(attrs.get("axis"), f"joint {name!r} axis", 3) or (0.0, 0.0, 1.0))
+        norm = float(np.linalg.norm(axis))
+        if norm == 0.0:
+            return None
+        axis = axis / norm
+        if kind == "slide" and abs(abs(axis[0]) - 1.0) < 1e-9:
+            return "x"
+        if kind == "slide" and abs(abs(axis[1]) - 1.0) < 1e-9:
+            return "y"
+        if kind == "hinge" and abs(abs(axis[2]) - 1.0) < 1e-9:
+            return "yaw"
+        return None
+
+    def nested_base(self, root: ElementTree.Element, root_name: str, described, childclass: str) -> bool:
+        """Recognise a planar base whose joints sit on nested bodies below the root (MuJoCo
+        Menagerie's mobile FR3 Duo: a slide along x on ``virtual_x``, a slide along y on its child
+        ``virtual_y``, a hinge about z on the body below), and take it out of the tree.
+
+        The pattern: from the root down, each body with exactly one child body and no rotation
+        (below the root), the joints met are a slide along x and a slide along y (either order),
+        then a hinge about z, and no other joint; the chain spans more than the root (the root's
+        own joints are :meth:`base_joints`'s). Then, as stated in the notes:
+
+        - the three joints leave the tree and become :attr:`planar_base` (an omnidirectional
+          platform with their limits; their armature is the platform's);
+        - mobmanip's platform turns about its root link's origin: when the hinge's axis passes
+          elsewhere (``(cx, cy)`` in the root's frame), the body below the root is moved by
+          ``(-cx, -cy)``, which only renames the platform's position (x = x_file + cx);
+        - the bodies above the hinge slide but do not turn in MuJoCo (the root does not even
+          slide when it has none of the joints): each is lumped into the platform as a point
+          of its mass on the yaw axis at its centre of mass's height, its rotational inertia
+          dropped (MuJoCo never turns it). For a body that slides along x and y this is exact;
+          one that slides along one of them (or neither) is counted along both here.
+
+        Returns:
+            Whether the pattern was found (and the tree rewritten).
+        """
+        r = self.r
+        chain = [(root, root_name, childclass, list(described))]
+        roles: dict[str, tuple] = {}
+        body, cls = root, childclass
+        while True:
+            for element, jname, kind, attrs in chain[-1][3]:
+                role = self.role(kind, attrs, jname)
+                if role is None or role in roles or "yaw" in roles or (role == "yaw" and len(roles) < 2):
+                    return False
+                roles[role] = (element, jname, kind, attrs, len(chain) - 1)
+            if len(roles) == 3:
+                break
+            children = body.findall("body")
+            if len(children) != 1:
+                return False
+            body = children[0]
+            cls = body.get("childclass", cls)
+            bname = self.name(body, "body")
+            if not np.allclose(r.rotation(dict(body.attrib), f"body {bname!r}"), np.eye(3), rtol=0, atol=1e-12):
+                return False
+            joints = []
+            for element in body:
+                if element.tag == "freejoint":
+                    return False
+                if element.tag == "joint":
+                    attrs = r.attributes(element, "joint", cls)
+                    joints.append((element, self.name(element, f"{bname}_joint"), attrs.get("type", "hinge"), attrs))
+            chain.append((body, bname, cls, joints))
+        if len(chain) == 1:
+            return False  # the root's own joints: base_joints reads them
+        # the yaw axis in the root's frame: the bodies' offsets below the root and the hinge's anchor
+        yaw_element, yaw_name, _, yaw_attrs, _ = roles["yaw"]
+        anchor = np.array(_floats(yaw_attrs.get("pos"), f"joint {yaw_name!r} pos", 3) or (0.0, 0.0, 0.0))
+        offsets = [np.array(_floats(b.get("pos"), f"body {n!r} pos", 3) or (0.0, 0.0, 0.0)) for b, n, _, _ in chain]
+        offsets[0] = np.zeros(3)  # the root's placement is mobmanip's platform pose
+        axis = sum(offsets[1:], np.zeros(3)) + anchor
+        axis[2] = 0.0
+        if np.any(axis):
+            first = chain[1][0]
+            first.set("pos", " ".join(repr(float(v)) for v in offsets[1] - axis))
+            offsets[1] = offsets[1] - axis
+            r.notes.append(
+                f"the planar base's hinge {yaw_name!r} turns about ({axis[0]:.6g}, {axis[1]:.6g}) m in the root "
+                f"body {root_name!r}: mobmanip's platform turns about its root's origin, so body {chain[1][1]!r} is "
+                "moved by the opposite (the platform's x and y are the file's plus that offset)"
+            )
+        joints = {}
+        for role, (element, jname, kind, attrs, k) in roles.items():
+            holder = chain[k][0]
+            holder.remove(element)
+            joints[role] = self.joint(jname, kind, attrs, chain[k][1], chain[k][1], Origin())
+            self.base_armature[role] = float(attrs.get("armature", 0.0))
+        self.planar_base = (joints["x"], joints["y"], joints["yaw"])
+        # the bodies above the hinge: point masses on the yaw axis
+        where = np.zeros(3)
+        for k, (holder, bname, cls, _) in enumerate(chain[:-1]):
+            where = where + offsets[k]
+            inertial = self.link(holder, bname, cls, None).inertial
+            for old in holder.findall("inertial"):
+                holder.remove(old)
+            if inertial is None or inertial.mass <= 0.0:
+                continue
+            point = ElementTree.Element(
+                "inertial",
+                {
+                    "pos": f"{-float(where[0])!r} {-float(where[1])!r} {float(inertial.origin.xyz[2])!r}",
+                    "mass": repr(float(inertial.mass)),
+                    "diaginertia": "0 0 0",
+                },
+            )
+            holder.insert(0, point)
+            slides_x, slides_y = roles["x"][4] <= k, roles["y"][4] <= k
+            self.lumped.append((bname, float(inertial.mass), slides_x, slides_y))
+        names = ", ".join(joints[role].name for role in ("x", "y", "yaw"))
+        r.notes.append(
+            f"the root body {root_name!r} moves on planar joints {names} on nested bodies "
+            f"({', '.join(n for _, n, _, _ in chain[1:])}): an omnidirectional platform replaces them (their "
+            "limits and armature are the base's)"
+        )
+        if self.lumped:
+            parts = []
+            for bname, mass, sx, sy in self.lumped:
+                moves = {(True, True): "slides along x and y", (False, False): "does not move"}.get(
+                    (sx, sy), f"slides along {'x' if sx else 'y'} only"
+                )
+                parts.append(f"{bname} ({mass:.6g} kg, {moves} in MuJoCo)")
+            r.notes.append(
+                "bodies above the planar base's yaw joint do not turn in MuJoCo: "
+                + "; ".join(parts)
+                + "; each is lumped into the platform as a point mass on its yaw axis (its rotational inertia "
+                "dropped), counted along x and y"
+            )
+        return True
 
     def split(self, body: ElementTree.Element, described) -> None:
         """Rewrite a body with several joints as nested bodies, one joint each (Pinocchio would
@@ -695,6 +845,26 @@ def _keyframes(reader: _Reader, layout: list[tuple[ElementTree.Element, int, flo
     return out
 
 
+def _platform_armature(reader: _Reader, armature: dict[str, float]) -> tuple[float, float, float] | None:
+    """The platform joint's armature from the file's planar base joints' (x, y: kg; yaw: kg m^2).
+
+    MuJoCo adds a slide's armature along its own axis, fixed in the world; mobmanip's platform
+    velocities are along the platform's turning axes, where a constant armature is the same
+    only when x's and y's are equal. When they differ both get their mean (the mass matrix is
+    then off by half their difference along each axis), said in a note.
+    """
+    if set(armature) != {"x", "y", "yaw"}:
+        return None
+    ax, ay, yaw = armature["x"], armature["y"], armature["yaw"]
+    if ax != ay:
+        reader.notes.append(
+            f"the planar base's armature differs along x ({ax:.6g} kg) and y ({ay:.6g} kg), which a platform "
+            f"that turns cannot keep: both get their mean, {(ax + ay) / 2:.6g} kg"
+        )
+    mean = (ax + ay) / 2
+    return (mean, mean, yaw)
+
+
 def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = None) -> RobotDescription:
     """Read an MJCF file into its checked description (see the module docstring).
 
@@ -754,7 +924,7 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     compiler.set("meshdir", str(reader.meshdir))
     compiler.set("texturedir", str(reader.texturedir))
     text = ElementTree.tostring(reader.root, encoding="unicode")
-    builder = MjcfBuilder(text, tuple(reader.notes))
+    builder = MjcfBuilder(text, tuple(reader.notes), _platform_armature(reader, tree.base_armature))
     dirs = tuple(Path(p) for p in package_dirs) if package_dirs is not None else (path.parent,)
     description = assemble(reader.root.get("model") or path.stem, path, "mjcf", tree.links, tree.joints, builder, dirs)
     import dataclasses

@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from xml.etree import ElementTree
 
+import numpy as np
+
 from ..errors import MjcfError
 from ..support.native_stderr import call_with_large_stack, captured_native_stderr
 from .description import (
@@ -29,13 +31,19 @@ class MjcfBuilder(ModelBuilder):
         text: the MJCF as mobmanip rewrote it: includes expanded, the root's free joint dropped, a
             body with several joints split, unnamed elements named, asset folders absolute.
         notes: what the reader skipped.
+        platform_armature: the armature of the file's own planar base joints (kg, kg, kg m^2),
+            which mobmanip's platform joint replaces: given to a planar root joint's three
+            velocities (Pinocchio reads every other joint's ``armature`` itself).
     """
 
     language = "MJCF"
 
-    def __init__(self, text: str, notes: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self, text: str, notes: tuple[str, ...] = (), platform_armature: tuple[float, float, float] | None = None
+    ) -> None:
         self.text = text
         self.notes = notes
+        self.platform_armature = platform_armature
 
     def error(self, source: str, reason: str) -> MjcfError:
         """A :class:`~mobmanip.errors.MjcfError` naming ``source``."""
@@ -63,7 +71,13 @@ class MjcfBuilder(ModelBuilder):
 
         if root_joint is None:
             return self._call(source, "build a model", pin.buildModelFromMJCF, _FILE)
-        return self._call(source, "build a model", pin.buildModelFromMJCFAndRootJoint, _FILE, root_joint)
+        model = self._call(source, "build a model", pin.buildModelFromMJCFAndRootJoint, _FILE, root_joint)
+        root = model.joints[1] if model.njoints > 1 else None
+        if self.platform_armature is not None and root is not None and root.shortname() == "JointModelPlanar":
+            armature = np.array(model.armature, dtype=float)
+            armature[root.idx_v : root.idx_v + 3] = self.platform_armature
+            model.armature = armature
+        return model
 
     def build_geometry(
         self,

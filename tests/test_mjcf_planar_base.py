@@ -1,0 +1,164 @@
+"""A mobile base whose planar joints sit on nested bodies (issue 38), as MuJoCo Menagerie's mobile
+FR3 Duo writes it: a slide along x on ``virtual_x``, a slide along y on ``virtual_y``, a hinge
+about z on the body below. mobmanip reads it as an omnidirectional platform, and its mass matrix,
+gravity and hand Jacobian are MuJoCo's own, computed by MuJoCo from the same file.
+
+How the two models map. MuJoCo's velocities are (x', y', theta', joints) with x and y along the
+world's axes; mobmanip's platform velocity is (v_x, v_y, omega) in the platform's frame, so
+MuJoCo's = T mobmanip's with T = diag(R(theta), 1, I), and M = T^T M_mujoco T, g = T^T g_mujoco,
+J = J_mujoco T. The one place the models differ by the reader's stated rule: ``virtual_x``
+slides along x only in MuJoCo, and is counted along y too as part of the platform, so its mass
+is added to MuJoCo's y-y entry before the comparison (``virtual_y`` slides along both: exact).
+Armature (item 3) is in both: every joint's, the platform's included.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from mobmanip.descriptions import read_description
+from mobmanip.robot.detect import detect_spec
+from mobmanip.terms.dynamics import mass_matrix
+
+#: The yaw hinge's axis lies at (0.05 + 0.01, 0.02) from the root: mobmanip's platform turns about
+#: its root's origin, so the reader moves the body below the root by the opposite.
+AXIS = np.array([0.06, 0.02, 0.0])
+VIRTUAL_X_MASS = 0.25
+
+NESTED = f"""<mujoco model="nested_base">
+  <compiler angle="radian"/>
+  <default>
+    <default class="robot">
+      <joint damping="0.003" armature="0.195" frictionloss="0.2"/>
+    </default>
+  </default>
+  <worldbody>
+    <body name="base" childclass="robot">
+      <body name="virtual_x" pos="0.05 0 0">
+        <inertial pos="0 0 0.3" mass="{VIRTUAL_X_MASS}" diaginertia="0.01 0.02 0.03"/>
+        <joint name="planar_x" type="slide" axis="1 0 0" range="-10 10"/>
+        <body name="virtual_y">
+          <inertial pos="0.1 -0.2 0" mass="0.5" diaginertia="0.04 0.05 0.06"/>
+          <joint name="planar_y" type="slide" axis="0 1 0" range="-10 10"/>
+          <body name="base_link" pos="0 0.02 0.1">
+            <joint name="planar_theta" axis="0 0 1" range="-3.14159 3.14159" armature="0.05" pos="0.01 0 0"/>
+            <inertial pos="0.02 -0.01 0.2" quat="0.9 0.1 -0.2 0.3" mass="60" diaginertia="4 3 2"/>
+            <body name="column" pos="0.1 0 0.4">
+              <joint name="lift" type="slide" axis="0 0 1" range="0 0.5" armature="0.4"/>
+              <inertial pos="0 0.01 0.1" mass="5" fullinertia="0.2 0.25 0.1 0.01 -0.02 0.005"/>
+              <body name="shoulder" pos="0 0.1 0.2" quat="0.8 0 0.2 0.1">
+                <joint name="j1" axis="0 0 1" range="-3 3"/>
+                <inertial pos="0.03 0 0.05" quat="0.7 0.1 0.1 0.2" mass="2.5" diaginertia="0.03 0.025 0.02"/>
+                <body name="upper" pos="0.1 0 0.1" euler="0.3 0 0.2">
+                  <joint name="j2" axis="0 1 0" range="-2 2" armature="0.02"/>
+                  <inertial pos="0.15 0 0" mass="1.8" diaginertia="0.002 0.02 0.02"/>
+                  <body name="fore" pos="0.3 0 0">
+                    <joint name="j3" axis="0 1 0" range="-2.5 2.5"/>
+                    <inertial pos="0.1 0.01 0" quat="0.9 0 0.3 0" mass="1.1" diaginertia="0.001 0.01 0.01"/>
+                    <site name="hand" pos="0.2 0 0.01"/>
+                  </body>
+                </body>
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+ARM = ("lift", "j1", "j2", "j3")
+
+
+@pytest.fixture(scope="module")
+def models(tmp_path_factory):
+    path = tmp_path_factory.mktemp("nested") / "nested_base.xml"
+    path.write_text(NESTED)
+    limits = dict.fromkeys(("base_x", "base_y", "base_yaw", *ARM), (1.0, 100.0))
+    found = detect_spec(path, ["hand"], limits=limits)
+    robot = mobmanip.load_robot(found.spec)
+    mj_model = mujoco.MjModel.from_xml_path(str(path))
+    return path, found, robot, mj_model
+
+
+def test_the_nested_planar_joints_are_the_platform_not_arm_or_torso_joints(models):
+    path, found, robot, _ = models
+    description = read_description(path)
+    assert [j.name for j in description.planar_base] == ["planar_x", "planar_y", "planar_theta"]
+    assert [j.name for j in description.moving_joints()] == list(ARM)
+    assert found.spec.platform == "omnidirectional" and found.spec.torso == ()
+    assert found.spec.arms[0].joints == ARM
+    assert robot.reduced_velocity_names == ("base_x", "base_y", "base_yaw", *ARM)
+    assert any("virtual_x (0.25 kg, slides along x only in MuJoCo)" in note for note in description.notes)
+    # the platform chosen explicitly, with --torso: the planar joints are in neither
+    explicit = detect_spec(path, ["hand"], platform="omnidirectional", torso=True).spec
+    assert explicit.torso == () and explicit.arms[0].joints == ARM
+
+
+def _mujoco(mj_model, qpos):
+    data = mujoco.MjData(mj_model)
+    data.qpos[:] = qpos
+    mujoco.mj_forward(mj_model, data)
+    M = np.zeros((mj_model.nv, mj_model.nv))
+    mujoco.mj_fullM(mj_model, data, M)
+    jacp, jacr = np.zeros((3, mj_model.nv)), np.zeros((3, mj_model.nv))
+    mujoco.mj_jacSite(mj_model, data, jacp, jacr, mj_model.site("hand").id)
+    return M, data.qfrc_bias.copy(), np.vstack([jacp, jacr]), data.site_xpos[mj_model.site("hand").id].copy()
+
+
+def test_mass_matrix_gravity_and_hand_jacobian_equal_mujocos(models):
+    _, _, robot, mj_model = models
+    assert mj_model.nq == mj_model.nv == 7  # x, y, theta, then the arm
+    rng = np.random.default_rng(38)
+    model, data = robot.model, robot.model.createData()
+    hand = model.getFrameId("hand")
+    largest = 0.0
+    for _ in range(6):
+        x, y, theta = rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-np.pi, np.pi)
+        arm = [rng.uniform(*mj_model.jnt_range[mj_model.joint(name).id]) for name in ARM]
+        M_mj, g_mj, J_mj, hand_mj = _mujoco(mj_model, [x, y, theta, *arm])
+        q = np.array([x + AXIS[0], y + AXIS[1], np.cos(theta), np.sin(theta), *arm])
+        c, s = np.cos(theta), np.sin(theta)
+        T = np.eye(7)
+        T[:2, :2] = [[c, -s], [s, c]]
+        M_mj[1, 1] += VIRTUAL_X_MASS  # the one stated difference (see the module docstring)
+        M = mass_matrix(robot, q)
+        np.testing.assert_allclose(M, T.T @ M_mj @ T, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(pin.computeGeneralizedGravity(model, data, q), T.T @ g_mj, rtol=0, atol=1e-9)
+        J = pin.computeFrameJacobian(model, data, q, hand, pin.LOCAL_WORLD_ALIGNED)
+        np.testing.assert_allclose(J, J_mj @ T, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(data.oMf[hand].translation, hand_mj, rtol=0, atol=1e-12)  # x = x_file + AXIS
+        largest = max(largest, float(np.abs(M).max()))
+    assert largest > 60.0  # the platform's mass is in it
+
+
+def test_the_platforms_armature_is_in_the_mass_matrix(models):
+    _, _, robot, mj_model = models
+    np.testing.assert_allclose(robot.model.armature[:3], [0.195, 0.195, 0.05])
+    np.testing.assert_allclose(robot.model.armature[3:], mj_model.dof_armature[3:])  # Pinocchio's reading
+    assert mj_model.dof_armature.tolist() == pytest.approx([0.195, 0.195, 0.05, 0.4, 0.195, 0.02, 0.195])
+
+
+def test_unequal_armature_along_x_and_y_gets_their_mean_with_a_note(tmp_path):
+    path = tmp_path / "unequal.xml"
+    path.write_text(NESTED.replace('name="planar_y" type="slide"', 'name="planar_y" armature="0.305" type="slide"'))
+    description = read_description(path)
+    model = description.build_model(pin.JointModelPlanar())
+    np.testing.assert_allclose(model.armature[:3], [0.25, 0.25, 0.05])
+    assert any("both get their mean, 0.25 kg" in note for note in description.notes)
+
+
+def test_a_chain_that_is_not_a_planar_base_stays_in_the_tree(tmp_path):
+    """The yaw hinge above the slides (the slides then move along turning axes): not the
+    platform's coordinates, so the joints stay the robot's own."""
+    path = tmp_path / "turret.xml"
+    text = NESTED.replace('name="planar_theta" axis="0 0 1"', 'name="planar_theta" type="slide" axis="0 0 1"')
+    path.write_text(text)
+    description = read_description(path)
+    assert description.planar_base == ()
+    assert [j.name for j in description.moving_joints()][:3] == ["planar_x", "planar_y", "planar_theta"]
