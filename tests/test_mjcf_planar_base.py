@@ -162,3 +162,52 @@ def test_a_chain_that_is_not_a_planar_base_stays_in_the_tree(tmp_path):
     description = read_description(path)
     assert description.planar_base == ()
     assert [j.name for j in description.moving_joints()][:3] == ["planar_x", "planar_y", "planar_theta"]
+
+
+#: The planar joints on the root body itself (as TidyBot), armature from the file-wide default
+#: and from joints, and a body with two joints (which mobmanip splits into a chain of bodies).
+ROOT_BASE = """<mujoco model="root_base">
+  <compiler angle="radian"/>
+  <default><joint armature="0.1"/></default>
+  <worldbody>
+    <body name="base_link">
+      <joint name="joint_x" type="slide" axis="1 0 0"/>
+      <joint name="joint_y" type="slide" axis="0 1 0"/>
+      <joint name="joint_th" axis="0 0 1" armature="0.7"/>
+      <inertial pos="0.05 0.02 0.2" quat="0.9 0.1 0 0.2" mass="40" diaginertia="2 1.5 1"/>
+      <body name="shoulder" pos="0.1 0 0.5">
+        <joint name="pan" axis="0 0 1" range="-3 3" armature="0.3"/>
+        <joint name="pitch" axis="0 1 0" range="-2 2"/>
+        <inertial pos="0.1 0 0.02" quat="0.8 0.2 0.1 0" mass="2" diaginertia="0.01 0.03 0.03"/>
+        <body name="forearm" pos="0.3 0 0">
+          <joint name="elbow" axis="0 1 0" range="-2 2" armature="0.05"/>
+          <inertial pos="0.12 0 0" mass="1" diaginertia="0.001 0.01 0.01"/>
+          <site name="hand" pos="0.25 0 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_armature_of_every_joint_with_the_base_on_the_root_body_equals_mujocos(tmp_path):
+    path = tmp_path / "root_base.xml"
+    path.write_text(ROOT_BASE)
+    limits = dict.fromkeys(("base_x", "base_y", "base_yaw", "pan", "pitch", "elbow"), (1.0, 100.0))
+    robot = mobmanip.load_robot(detect_spec(path, ["hand"], limits=limits).spec)
+    mj_model = mujoco.MjModel.from_xml_path(str(path))
+    np.testing.assert_allclose(robot.model.armature, [0.1, 0.1, 0.7, 0.3, 0.1, 0.05])
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        x, y, theta = rng.uniform(-2, 2, 3)
+        arm = rng.uniform(-1.5, 1.5, 3)
+        data = mujoco.MjData(mj_model)
+        data.qpos[:] = [x, y, theta, *arm]
+        mujoco.mj_forward(mj_model, data)
+        M_mj = np.zeros((6, 6))
+        mujoco.mj_fullM(mj_model, data, M_mj)
+        T = np.eye(6)
+        T[:2, :2] = [[np.cos(theta), -np.sin(theta)], [np.sin(theta), np.cos(theta)]]
+        q = np.array([x, y, np.cos(theta), np.sin(theta), *arm])
+        np.testing.assert_allclose(mass_matrix(robot, q), T.T @ M_mj @ T, rtol=0, atol=1e-9)
