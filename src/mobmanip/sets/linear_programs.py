@@ -34,12 +34,84 @@ def _highspy():
     return highspy
 
 
+#: HiGHS's feasibility tolerances on the equilibrated program (see :func:`equilibrate`): rows,
+#: bounds and variables there are of order one, so these are relative to each row's own size.
+FEASIBILITY = 1e-9
+
+
+def _power_of_two(values: np.ndarray) -> np.ndarray:
+    """2**round(log2(v)) for positive v (1 elsewhere): a scaling that rounds nothing."""
+    out = np.ones_like(values)
+    positive = values > 0.0
+    out[positive] = np.exp2(np.round(np.log2(values[positive])))
+    return out
+
+
+def equilibrate(A: np.ndarray, row_lo, row_hi, col_lo, col_hi, sweeps: int = 12):
+    """Row, column and variable scales that bring a program's rows, bounds and variables to order one.
+
+    A program of this project mixes units in one matrix (newtons of contact force, metres per
+    second squared, radians per second squared, newton-metres of effort), and its bounds span
+    from fractions of a unit to the robot's weight (over 1,000 N). With absolute feasibility
+    tolerances a solver then judges some rows to 1e-13 of their size and others to 1e-6, and
+    its status on a barely infeasible program depends on the machine (HiGHS ended "Unknown").
+    The scaled program ``R A C y``, ``y = s C^-1 x`` is the same program in units where every
+    row's largest entry, right-hand side and every variable's bound is about one.
+
+    The scales are Ruiz's iterative equilibration in the infinity norm of the matrix augmented
+    with its bounds: ``[[A, b_rows], [I_bounded, b_cols]]``, where ``b_rows`` is each row's
+    largest finite bound (0 if none), ``I_bounded`` a row per column with a finite bound, and
+    the last column's scale ``s`` the unit of every variable at once. Scales are powers of two,
+    so scaling rounds nothing.
+
+    Args:
+        A: the constraint matrix, (p, n).
+        row_lo, row_hi: row bounds, (p,) (+-inf where none).
+        col_lo, col_hi: column bounds, (n,).
+        sweeps: Ruiz iterations (each halves the spread of the entries' logarithms).
+
+    Returns:
+        (r, c, s): row scales (p,), column scales (n,) and the variables' unit s (a float).
+    """
+    p, n = A.shape
+    row_lo, row_hi = np.broadcast_to(row_lo, (p,)), np.broadcast_to(row_hi, (p,))
+    col_lo, col_hi = np.broadcast_to(col_lo, (n,)), np.broadcast_to(col_hi, (n,))
+
+    def largest_finite(lo, hi):
+        both = np.abs(np.stack([lo, hi]))
+        return np.where(np.isfinite(both), both, 0.0).max(axis=0)
+
+    b_rows, b_cols = largest_finite(row_lo, row_hi), largest_finite(col_lo, col_hi)
+    bounded = np.flatnonzero(np.isfinite(col_lo) | np.isfinite(col_hi))
+    K = np.zeros((p + len(bounded), n + 1))
+    K[:p, :n] = np.abs(A)
+    K[:p, n] = b_rows
+    K[p + np.arange(len(bounded)), bounded] = 1.0
+    K[p:, n] = b_cols[bounded]
+    rows, cols = np.ones(K.shape[0]), np.ones(n + 1)
+    for _ in range(sweeps):
+        scaled = K * rows[:, None] * cols[None, :]
+        norm = scaled.max(axis=1)
+        rows /= np.sqrt(np.where(norm > 0.0, norm, 1.0))
+        scaled = K * rows[:, None] * cols[None, :]
+        norm = scaled.max(axis=0)
+        cols /= np.sqrt(np.where(norm > 0.0, norm, 1.0))
+    r, c, s = _power_of_two(rows[:p]), _power_of_two(cols[:n]), float(_power_of_two(cols[n:])[0])
+    return r, c, s
+
+
 class LinearProgram:
     """optimise c . x subject to row_lo <= A x <= row_hi and col_lo <= x <= col_hi.
 
     Infinite bounds are written as +-inf. The model is built once; :meth:`solve` changes the
     objective (and optionally the column bounds) and warm-starts from the last basis. Calls are
     serialised by a lock, so one program may be shared between threads.
+
+    HiGHS solves the program equilibrated (:func:`equilibrate`), with feasibility tolerances of
+    :data:`FEASIBILITY` there; values, solutions and multipliers are returned in the caller's
+    units. A solve ends optimal, infeasible or unbounded; any other status of HiGHS is retried
+    from scratch (with presolve, then with the interior-point method) and raises only if none
+    settles.
     """
 
     def __init__(self, A: np.ndarray, row_lo, row_hi, col_lo, col_hi):
@@ -47,33 +119,35 @@ class LinearProgram:
         self.n_rows, self.n_cols = A.shape
         self._lock = threading.Lock()
         highspy = self._highspy = _highspy()
+        self._r, self._c, self._s = equilibrate(A, row_lo, row_hi, col_lo, col_hi)
+        scaled = A * self._r[:, None] * self._c[None, :]
         h = highspy._Highs()  # the bindings' core class: no banner on standard output
         h.setOptionValue("output_flag", False)
         h.setOptionValue("presolve", "off")
-        h.setOptionValue("primal_feasibility_tolerance", 1e-10)
-        h.setOptionValue("dual_feasibility_tolerance", 1e-10)
+        h.setOptionValue("primal_feasibility_tolerance", FEASIBILITY)
+        h.setOptionValue("dual_feasibility_tolerance", FEASIBILITY)
         lp = highspy.HighsLp()
         lp.num_col_ = self.n_cols
         lp.num_row_ = self.n_rows
         lp.col_cost_ = np.zeros(self.n_cols)
         self._inf = highspy.kHighsInf
-        lp.col_lower_ = self._finite(col_lo, self.n_cols)
-        lp.col_upper_ = self._finite(col_hi, self.n_cols)
-        lp.row_lower_ = self._finite(row_lo, self.n_rows)
-        lp.row_upper_ = self._finite(row_hi, self.n_rows)
-        cols, rows = np.nonzero(A.T)  # column-wise order
+        lp.col_lower_, lp.col_upper_ = self._col_bounds(col_lo, col_hi)
+        lp.row_lower_, lp.row_upper_ = self._scaled_row_bounds(row_lo, row_hi)
+        cols, rows = np.nonzero(scaled.T)  # column-wise order
         lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
         lp.a_matrix_.start_ = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.n_cols))]).astype(
             np.int32
         )
         lp.a_matrix_.index_ = rows.astype(np.int32)
-        lp.a_matrix_.value_ = A.T[cols, rows]
+        lp.a_matrix_.value_ = scaled.T[cols, rows]
         h.passModel(lp)
         self._h = h
         self._all = np.arange(self.n_cols, dtype=np.int32)
         #: The rows' dual values (multipliers) at the last optimum: a row whose multiplier is not
         #: zero limits the optimum (its sensitivity to that row's bound).
         self.row_duals = np.zeros(self.n_rows)
+        #: HiGHS's model status of the last solve, by name ("Optimal", "Infeasible", "Unbounded").
+        self.last_status = ""
         self._row_bounds = (
             np.broadcast_to(np.asarray(row_lo, dtype=float), (self.n_rows,)).copy(),
             np.broadcast_to(np.asarray(row_hi, dtype=float), (self.n_rows,)).copy(),
@@ -90,41 +164,66 @@ class LinearProgram:
         stay for the calls after this one.
 
         Raises:
-            ModelError: HiGHS reports neither an optimum nor infeasibility (e.g. unbounded:
-                the polytope's description was not bounded).
+            ModelError: the program is unbounded (the polytope's description was not bounded),
+                or HiGHS settles on no status even from scratch.
         """
         h, highspy = self._h, self._highspy
+        status_of = highspy.HighsModelStatus
         with self._lock:
             h.changeObjectiveSense(highspy.ObjSense.kMaximize if maximize else highspy.ObjSense.kMinimize)
-            h.changeColsCost(self.n_cols, self._all, np.asarray(cost, dtype=float))
+            h.changeColsCost(self.n_cols, self._all, np.asarray(cost, dtype=float) * self._c)
             if col_lo is not None:
-                h.changeColsBounds(
-                    self.n_cols, self._all, self._finite(col_lo, self.n_cols), self._finite(col_hi, self.n_cols)
-                )
+                h.changeColsBounds(self.n_cols, self._all, *self._col_bounds(col_lo, col_hi))
             if row_lo is not None:
                 rows = np.arange(self.n_rows, dtype=np.int32)
-                h.changeRowsBounds(
-                    self.n_rows, rows, self._finite(row_lo, self.n_rows), self._finite(row_hi, self.n_rows)
-                )
-            h.run()
-            status = h.getModelStatus()
-            if status not in (highspy.HighsModelStatus.kOptimal, highspy.HighsModelStatus.kInfeasible):
-                # a warm start from the last basis can stall on a badly scaled program (the floor's
-                # weights beside radians): once more from scratch, with HiGHS's presolve
-                h.clearSolver()
-                h.setOptionValue("presolve", "on")
-                h.run()
-                h.setOptionValue("presolve", "off")
-                status = h.getModelStatus()
-            if status == highspy.HighsModelStatus.kOptimal:
+                h.changeRowsBounds(self.n_rows, rows, *self._scaled_row_bounds(row_lo, row_hi))
+            status = self._run()
+            self.last_status = h.modelStatusToString(status)
+            if status == status_of.kOptimal:
                 solution = h.getSolution()
-                x = np.array(solution.col_value)
-                self.row_duals = np.array(solution.row_dual)
-                return float(h.getInfo().objective_function_value), x
-            if status == highspy.HighsModelStatus.kInfeasible:
+                x = np.array(solution.col_value) * self._c / self._s
+                self.row_duals = np.array(solution.row_dual) * self._r
+                return float(h.getInfo().objective_function_value) / self._s, x
+            if status == status_of.kInfeasible:
                 return None
             h.clearSolver()  # a failed basis must not seed the next call
-            raise ModelError(f"the linear program of a polytope query ended as {h.modelStatusToString(status)}")
+            raise ModelError(f"the linear program of a polytope query ended as {self.last_status}")
+
+    def _run(self):
+        """Run HiGHS until it settles: warm, then from scratch with presolve, then interior point."""
+        h, settled = self._h, self._settled
+        h.run()
+        status = h.getModelStatus()
+        if status in settled():
+            return status
+        h.clearSolver()
+        for option, value, back in (("presolve", "on", "off"), ("solver", "ipm", "choose")):
+            h.setOptionValue(option, value)
+            h.run()
+            h.setOptionValue(option, back)
+            status = h.getModelStatus()
+            if status == self._highspy.HighsModelStatus.kUnboundedOrInfeasible:
+                h.clearSolver()  # presolve cannot tell which: the simplex from scratch can
+                h.run()
+                status = h.getModelStatus()
+            if status in settled():
+                return status
+            h.clearSolver()
+        return status
+
+    def _settled(self):
+        s = self._highspy.HighsModelStatus
+        return (s.kOptimal, s.kInfeasible, s.kUnbounded)
+
+    def _col_bounds(self, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+        """Column bounds in the equilibrated program's units (HiGHS's infinity where none)."""
+        unit = self._s / self._c
+        return self._finite(lo, self.n_cols) * unit, self._finite(hi, self.n_cols) * unit
+
+    def _scaled_row_bounds(self, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+        """Row bounds in the equilibrated program's units (HiGHS's infinity where none)."""
+        unit = self._r * self._s
+        return self._finite(lo, self.n_rows) * unit, self._finite(hi, self.n_rows) * unit
 
     def _finite(self, values, n: int) -> np.ndarray:
         """Bounds with +-inf mapped to HiGHS's infinity, (n,)."""
