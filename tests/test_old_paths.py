@@ -44,3 +44,27 @@ def test_the_old_sweep_module_names_resolve_with_a_warning():
         sweep.plot_sweep  # noqa: B018
     with pytest.raises(AttributeError, match="no attribute 'not_a_name'"):
         sweep.not_a_name  # noqa: B018
+
+
+def test_an_old_module_path_reached_as_an_attribute_gives_its_names_with_a_warning():
+    """``mobmanip.grasp.HeldObject`` worked in the last release without importing the submodule."""
+    code = (
+        "import warnings; warnings.simplefilter('error', DeprecationWarning)\n"
+        "import mobmanip\n"
+        "from mobmanip.terms.grasp import HeldObject\n"
+        "try:\n"
+        "    mobmanip.grasp\n"
+        "except DeprecationWarning as exc:\n"
+        "    print('warned:', exc)\n"
+        "warnings.simplefilter('ignore', DeprecationWarning)\n"
+        "print(mobmanip.grasp.HeldObject is HeldObject, mobmanip.io.read_configuration is not None)\n"
+    )
+    import subprocess
+
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("warned: mobmanip.grasp moved to mobmanip.terms.grasp")
+    assert lines[1] == "True True"
+    with pytest.raises(AttributeError, match="no attribute 'not_a_module'"):
+        mobmanip.not_a_module  # noqa: B018

@@ -90,6 +90,9 @@ def __getattr__(name: str) -> Any:
         return globals()[name]
     module = _EXPORTS.get(name)
     if module is None:
+        moved = old_paths.moved_module(__name__, name)  # a module path of the last release, e.g. mobmanip.grasp
+        if moved is not None:
+            return moved
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     value = getattr(importlib.import_module(module, __name__), name)
     globals()[name] = value

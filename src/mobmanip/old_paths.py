@@ -96,6 +96,35 @@ class _MovedModules:
             module.__spec__ = self._specs.pop(module.__spec__.name)
 
 
+def moved_module(package: str, name: str) -> types.ModuleType | None:
+    """The module an old path stands for when it is reached as an attribute of its package
+    (``mobmanip.grasp.HeldObject`` without ``import mobmanip.grasp``), with the same
+    :class:`DeprecationWarning` as importing it, attributed to the caller's line.
+
+    Args:
+        package: the package's name (``"mobmanip"``).
+        name: the attribute asked for.
+
+    Returns:
+        The module (for a split one, the module holding the names of its successors), or
+        ``None`` when ``package.name`` is no old path.
+    """
+    full = f"{package}.{name}"
+    if full not in MOVED:
+        return None
+    if full in sys.modules:
+        return sys.modules[full]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)  # said below, at the caller's line
+        module = importlib.import_module(full)
+    warnings.warn(
+        f"{full} moved to {' and '.join(MOVED[full])}; the old path will be removed in the next release",
+        DeprecationWarning,
+        stacklevel=3,  # moved_module, the package's __getattr__, the caller
+    )
+    return module
+
+
 def install() -> None:
     """Put the finder on ``sys.meta_path`` (once)."""
     if not any(isinstance(finder, _MovedModules) for finder in sys.meta_path):

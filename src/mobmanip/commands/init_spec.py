@@ -147,6 +147,7 @@ def _write_spec(args, urdf, read_options, mounted=None, final_urdf=None) -> int:
         notes=found.considered + found.notes,
         urdf_limits=found.urdf_limits,
         shared_joints=found.shared_joints,
+        source_format=found.source_format,
     )
     if not args.out:
         print(text, end="")

@@ -78,6 +78,8 @@ class Detection:
             wheel-like joint and what became of it, each wheeled kind's verdict, the choice.
         missing: values the spec still needs (wheel radii, limits), with the flags that give
             them; empty when the spec loads as it is.
+        source_format: how messages name the robot file's format (``"URDF"``, ``"MJCF"``,
+            ``"xacro"``), for :func:`spec_to_toml`'s ``source_format``.
     """
 
     spec: RobotSpec
@@ -86,6 +88,16 @@ class Detection:
     urdf_limits: Mapping[str, tuple[float | None, float | None]]
     considered: tuple[str, ...] = ()
     missing: tuple[Missing, ...] = ()
+    source_format: str = "URDF"
+
+
+#: How messages name a robot file of each format of :mod:`mobmanip.descriptions`.
+FORMAT_NAMES = {"urdf": "URDF", "mjcf": "MJCF", "xacro": "xacro"}
+
+
+def _source(source_format: str) -> str:
+    """``"the URDF"``, ``"the MJCF file"``: the robot file in a message."""
+    return "the URDF" if source_format == "URDF" else f"the {source_format} file"
 
 
 def detect_platform(
@@ -385,12 +397,13 @@ def detect_spec(
         package_paths=tuple(Path(p).resolve() for p in read_options.get("package_paths") or ()),
     )
     missing = _missing(spec, kind, urdf_limits, unmeasured)
+    source_format = FORMAT_NAMES.get(description.format, description.format)
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
     needed += [name for name, pair in kind.description_limits(wheel_spec, description).items() if None in pair]
     if needed:
         notes.append(
             f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "
-            "[limits.effort] (the URDF gives none)"
+            f"[limits.effort] ({_source(source_format)} gives none)"
         )
     return Detection(
         spec=spec,
@@ -399,6 +412,7 @@ def detect_spec(
         urdf_limits=urdf_limits,
         considered=tuple(considered),
         missing=tuple(missing),
+        source_format=source_format,
     )
 
 
@@ -556,6 +570,7 @@ def spec_to_toml(
     notes: Sequence[str] = (),
     urdf_limits: Mapping[str, tuple[float | None, float | None]] | None = None,
     shared_joints: Sequence[str] = (),
+    source_format: str = "URDF",
 ) -> str:
     """A commented TOML text that :func:`mobmanip.robot.spec.load_spec` reads back to an equal spec.
 
@@ -568,6 +583,8 @@ def spec_to_toml(
             under ``[limits.*]`` (a missing one is flagged as required).
         shared_joints: joints shared by several arms; when they are not the torso, a commented
             ``torso = [...]`` line shows how to actuate them.
+        source_format: how the comments name the robot file's format (``"URDF"``, ``"MJCF"``,
+            ``"xacro"``: :attr:`Detection.source_format`).
     """
     head = f"# mobmanip robot spec for {spec.name!r}, inferred from its robot file; check it and edit as needed."
     out = [toml_comment(head)]
@@ -616,7 +633,10 @@ def spec_to_toml(
         ("velocity", spec.velocity_limits, "rad/s or m/s"),
         ("effort", spec.effort_limits, "N m or N"),
     ):
-        out += [f"# Limit overrides by joint name ({unit}); without one, the URDF's value is used.", f"[limits.{kind}]"]
+        out += [
+            f"# Limit overrides by joint name ({unit}); without one, {_source(source_format)}'s value is used.",
+            f"[limits.{kind}]",
+        ]
         for joint in active:
             if joint in table:
                 out.append(f"{_key(joint)} = {_number(table[joint])}")
@@ -625,9 +645,9 @@ def spec_to_toml(
             elif urdf_limits is not None and joint in urdf_limits:
                 value = urdf_limits[joint][0 if kind == "velocity" else 1]
                 if value is None:
-                    out.append(f"# {_key(joint)} = ...  # REQUIRED: the URDF gives none")
+                    out.append(f"# {_key(joint)} = ...  # REQUIRED: {_source(source_format)} gives none")
                 else:
-                    out.append(f"# {_key(joint)} = {_number(value)}  # URDF value")
+                    out.append(f"# {_key(joint)} = {_number(value)}  # {source_format} value")
         out.append("")
     out += [
         "# Positions (rad or m) of the locked joints (others are locked at 0), and home positions",

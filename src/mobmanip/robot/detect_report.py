@@ -18,8 +18,8 @@ from ..errors import WheelError
 from ..platforms import KINDS
 
 #: Words in a link name that mark a tool or end-effector frame (strongly, then weakly).
-TOOL_WORDS = ("tool", "tcp", "ee", "end_effector", "endeffector", "grasp")
-HAND_WORDS = ("gripper", "hand", "flange", "tip", "finger", "wrist")
+TOOL_WORDS = ("tool", "tcp", "ee", "end_effector", "endeffector", "grasp", "pinch")
+HAND_WORDS = ("gripper", "hand", "flange", "tip", "finger", "wrist", "attachment")
 
 
 def _tool_score(link: str) -> int:
@@ -29,6 +29,12 @@ def _tool_score(link: str) -> int:
     if any(p in TOOL_WORDS for p in parts) or any(w in text for w in TOOL_WORDS if len(w) > 3):
         return 2
     return 1 if any(w in text for w in HAND_WORDS) else 0
+
+
+def _is_site(description: RobotDescription, link: str) -> bool:
+    """Whether ``link`` is an MJCF site (its reader hangs a site ``S`` on a fixed joint ``S_site``)."""
+    joint = description.parent_joint(link)
+    return description.format == "mjcf" and joint is not None and joint.type == "fixed" and joint.name == f"{link}_site"
 
 
 def explain_wheels(
@@ -123,8 +129,10 @@ def candidate_frames(description: RobotDescription, exclude: Iterable[str] = ())
 
     Returns:
         ``(link, actuated joints from the root, leaf, tool-like name)`` rows, the most likely
-        first: leaves named like a tool (tool, tcp, ee, grasp), then like a hand (gripper,
-        finger, tip...), then other leaves, then inner links so named; deeper chains first.
+        first: leaves named like a tool (tool, tcp, ee, grasp, pinch), then like a hand
+        (gripper, finger, tip...), then other leaves, then inner links so named; deeper chains
+        first. An MJCF site named like either ranks one step higher: a point the file's author
+        placed (TidyBot's ``pinch_site`` comes before its gripper's deeper links).
     """
     exclude = set(exclude)
     rows = []
@@ -139,6 +147,8 @@ def candidate_frames(description: RobotDescription, exclude: Iterable[str] = ())
             continue
         leaf = description.is_leaf(link)
         score = _tool_score(link)
+        if score and _is_site(description, link):
+            score += 1
         if leaf or score:
             rows.append((link, count, leaf, score))
     rows.sort(key=lambda r: (-(r[3] + 2 * r[2]), -r[1], r[0]))

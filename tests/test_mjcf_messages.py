@@ -1,0 +1,93 @@
+"""Issue 38's small ones for MJCF files: ``init-spec --list-frames`` puts a site named like a
+pinch or tool point (TidyBot's ``pinch_site``) above the gripper's deeper links, and the spec's
+comments and notes name the file's format, not "the URDF"."""
+
+from __future__ import annotations
+
+from hostile_util import run_cli
+from mobmanip.descriptions import read_description
+from mobmanip.robot.detect import spec_to_toml
+from mobmanip.robot.detect_report import candidate_frames
+
+#: An arm ending in a bracelet with a pinch site, and a two-finger gripper below it whose links
+#: are leaves further from the root (more actuated joints) than the site, as in TidyBot.
+GRIPPER = """<mujoco model="pincher">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="base_link">
+      <inertial pos="0 0 0.1" mass="20" diaginertia="0.5 0.5 0.6"/>
+      <body name="shoulder_link" pos="0 0 0.4">
+        <joint name="joint_1" axis="0 0 1" range="-3 3"/>
+        <inertial pos="0 0 0.05" mass="1" diaginertia="0.01 0.01 0.01"/>
+        <body name="bracelet_link" pos="0.3 0 0">
+          <joint name="joint_2" axis="0 1 0" range="-2 2"/>
+          <inertial pos="0.05 0 0" mass="0.5" diaginertia="0.001 0.001 0.001"/>
+          <site name="pinch_site" pos="0.2 0 0"/>
+          <body name="right_driver" pos="0.1 0.02 0">
+            <joint name="right_driver_joint" axis="1 0 0" range="0 0.8"/>
+            <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
+            <body name="right_coupler" pos="0.03 0 0">
+              <joint name="right_coupler_joint" axis="1 0 0" range="-1.57 0"/>
+              <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
+            </body>
+          </body>
+          <body name="left_driver" pos="0.1 -0.02 0">
+            <joint name="left_driver_joint" axis="1 0 0" range="0 0.8"/>
+            <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
+            <body name="left_finger_pad" pos="0.03 0 0">
+              <joint name="left_coupler_joint" axis="1 0 0" range="-1.57 0"/>
+              <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_a_pinch_site_ranks_above_the_grippers_links(tmp_path, capfd):
+    path = tmp_path / "pincher.xml"
+    path.write_text(GRIPPER)
+    rows = candidate_frames(read_description(path))
+    names = [row[0] for row in rows]
+    # a leaf named like a hand (left_finger_pad) and plain leaves are deeper, the site comes first
+    assert names[0] == "pinch_site" and set(names[1:]) == {"left_finger_pad", "right_coupler"}
+    code, out, err = run_cli(capfd, "init-spec", path, "--list-frames")
+    assert code == 0, err
+    assert out.splitlines()[1].split()[0] == "pinch_site"
+
+
+def test_the_spec_names_the_files_format(tmp_path, capfd):
+    path = tmp_path / "pincher.xml"
+    path.write_text(GRIPPER)
+    spec = tmp_path / "pincher.toml"
+    code, out, err = run_cli(capfd, "init-spec", path, "--ee", "pinch_site", "--out", spec)
+    assert code == 0, err
+    text = spec.read_text()
+    assert "REQUIRED: the MJCF file gives none" in text and "the MJCF file's value is used" in text
+    assert "URDF gives none" not in text and "the URDF's value" not in text
+    # the default, for a program that writes a URDF robot's spec by hand, is unchanged
+    assert "the URDF's value is used" in spec_to_toml(_spec_of(spec))
+
+
+def _spec_of(path):
+    from mobmanip.robot.spec import load_spec
+
+    return load_spec(path)
+
+
+def test_the_platform_limits_note_names_the_files_format(tmp_path):
+    from mobmanip.robot.detect import detect_spec
+
+    path = tmp_path / "mobile.xml"
+    planar = (
+        '<joint name="x" type="slide" axis="1 0 0"/><joint name="y" type="slide" axis="0 1 0"/>'
+        '<joint name="th" axis="0 0 1"/>\n      <inertial pos="0 0 0.1"'
+    )
+    path.write_text(GRIPPER.replace('<inertial pos="0 0 0.1"', planar, 1))
+    found = detect_spec(path, ["pinch_site"])
+    assert found.spec.platform == "omnidirectional" and found.source_format == "MJCF"
+    note = next(n for n in found.notes if "needs limits for base_x" in n)
+    assert note.endswith("(the MJCF file gives none)")
