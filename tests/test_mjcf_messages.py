@@ -91,3 +91,18 @@ def test_the_platform_limits_note_names_the_files_format(tmp_path):
     assert found.spec.platform == "omnidirectional" and found.source_format == "MJCF"
     note = next(n for n in found.notes if "needs limits for base_x" in n)
     assert note.endswith("(the MJCF file gives none)")
+
+
+def test_a_missing_joint_limit_is_said_in_mjcfs_terms(tmp_path):
+    import pytest
+
+    import mobmanip
+    from mobmanip.errors import MissingLimitError
+    from mobmanip.robot.detect import detect_spec
+
+    path = tmp_path / "pincher.xml"
+    path.write_text(GRIPPER)
+    spec = detect_spec(path, ["pinch_site"]).spec
+    with pytest.raises(MissingLimitError, match="joint_1.*MJCF has no velocity limit; a velocity actuator") as caught:
+        mobmanip.load_robot(spec)
+    assert "URDF" not in str(caught.value).split("(with")[0]

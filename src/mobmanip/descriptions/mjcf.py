@@ -554,9 +554,9 @@ class _Tree:
             self.lumped.append((bname, float(inertial.mass), slides_x, slides_y))
         names = ", ".join(joints[role].name for role in ("x", "y", "yaw"))
         r.notes.append(
-            f"the root body {root_name!r} moves on planar joints {names} on nested bodies "
-            f"({', '.join(n for _, n, _, _ in chain[1:])}): an omnidirectional platform replaces them (their "
-            "limits and armature are the base's)"
+            f"planar joints {names} on nested bodies below the root body {root_name!r} "
+            f"({', '.join(n for _, n, _, _ in chain[1:])}) move the robot in the plane: an omnidirectional "
+            "platform replaces them (their limits and armature are the base's)"
         )
         if self.lumped:
             parts = []
@@ -843,6 +843,16 @@ def _keyframes(reader: _Reader, layout: list[tuple[ElementTree.Element, int, flo
             "[postures.NAME])"
         )
     return out
+
+
+def missing_limit_reason(kind: str) -> str:
+    """Why an MJCF joint has no ``kind`` (``"velocity"`` or ``"effort"``) limit, and where the
+    file would give one, for a message."""
+    if kind == "velocity":
+        return (
+            "the MJCF file gives the joint none (MJCF has no velocity limit; a velocity actuator's ctrlrange gives one)"
+        )
+    return "the MJCF file gives the joint none (no actuatorfrcrange, and no actuator on it with a forcerange)"
 
 
 def _platform_armature(reader: _Reader, armature: dict[str, float]) -> tuple[float, float, float] | None:

@@ -653,7 +653,12 @@ def load_robot(spec_or_name: RobotSpec | str | Path, *, strict: bool | None = No
                 if name in from_urdf:
                     source, unit = platform.missing_limit_source(name, kind)
                     raise MissingLimitError(name, kind, source, unit)
-                raise MissingLimitError(name, kind, f"the URDF joint has no <limit {kind}=...>")
+                reason = f"the URDF joint has no <limit {kind}=...>"
+                if description.format == "mjcf":
+                    from ..descriptions.mjcf import missing_limit_reason
+
+                    reason = missing_limit_reason(kind)
+                raise MissingLimitError(name, kind, reason)
             table[name] = _positive_limit(name, kind, value)
 
     robot = Robot(
