@@ -5,7 +5,9 @@ Every command that takes a configuration takes ``--posture NAME`` instead of ``-
 * ``home``: the home configuration (:meth:`mobmanip.robot.model.Robot.neutral`: joints at zero or at
   their ``[reference]`` positions);
 * ``hold``: the spec's ``[hold]`` posture, in which the hands hold the default object;
-* any ``[postures.NAME]`` table of the spec: arm and torso joint positions, the others at home.
+* any ``[postures.NAME]`` table of the spec: arm and torso joint positions, the others at home
+  (``init-spec`` writes one for each keyframe of an MJCF file, ``keyframe_home`` and
+  ``keyframe_hold`` for keys named like the two above).
 
 The platform stands at the origin with heading 0 unless a pose is given.
 
