@@ -211,3 +211,16 @@ def test_armature_of_every_joint_with_the_base_on_the_root_body_equals_mujocos(t
         T[:2, :2] = [[np.cos(theta), -np.sin(theta)], [np.sin(theta), np.cos(theta)]]
         q = np.array([x, y, np.cos(theta), np.sin(theta), *arm])
         np.testing.assert_allclose(mass_matrix(robot, q), T.T @ M_mj @ T, rtol=0, atol=1e-9)
+
+
+def test_a_keyframe_of_the_nested_base_reads_every_joint_as_mujoco_lays_it_out(tmp_path):
+    path = tmp_path / "keyed_base.xml"
+    key = '<keyframe><key name="stow" qpos="1.5 -0.5 0.3 0.2 1.1 -0.7 0.9"/></keyframe>\n</mujoco>'
+    path.write_text(NESTED.replace("</mujoco>", key))
+    mj_model = mujoco.MjModel.from_xml_path(str(path))
+    expected = {
+        mj_model.joint(j).name: float(mj_model.key_qpos[0, mj_model.jnt_qposadr[j]]) for j in range(mj_model.njnt)
+    }
+    description = read_description(path)
+    assert dict(description.keyframes["stow"]) == expected
+    assert detect_spec(path, ["hand"]).spec.postures["stow"] == {n: expected[n] for n in ARM}
