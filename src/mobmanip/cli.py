@@ -66,14 +66,22 @@ def main(argv: list[str] | None = None) -> int:
     interrupted program: the shell reports 130, and a shell script running mobmanip in a loop
     stops too (a plain exit code of 130 would let it go on). Ctrl-C or SIGTERM after the
     command has finished, while Python shuts down, is ignored: its outputs are complete.
+
+    The command runs with one thread in each BLAS and OpenMP pool, and so do the worker
+    processes it starts (:func:`mobmanip.support.threads.limit_threads`: its matrices are small,
+    and its parallel work runs in processes); a pool the user sized in the environment
+    (``OMP_NUM_THREADS``, ``OPENBLAS_NUM_THREADS``, ...) keeps that size. Called from Python,
+    ``main`` leaves the environment and the pools already loaded as it found them.
     """
     program = argv is None and threading.current_thread() is threading.main_thread()
     if program:
         sys.excepthook = _quiet_interrupts(sys.excepthook)
         sys.unraisablehook = _redeliver_interrupts(sys.unraisablehook)
     _RECEIVED.clear()
+    from .support.threads import limit_threads
+
     try:
-        with _terminate_as_interrupt():
+        with _terminate_as_interrupt(), limit_threads():
             try:
                 return _main(argv)
             except Exception:
@@ -179,7 +187,9 @@ def _run(args) -> int:
         ):
             warnings.simplefilter("ignore", RuntimeWarning)
             _check_outputs_first(args)
-            return args.func(args)
+            code = args.func(args)
+        _log_thread_pools()
+        return code
     except MobmanipError as exc:
         if _RECEIVED:  # e.g. "install xacro" after the import of xacro was interrupted
             raise _interrupt_received() from None
@@ -241,6 +251,15 @@ def _terminate_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
         if previous_int is signal.default_int_handler:
             signal.signal(signal.SIGINT, previous_int)
+
+
+def _log_thread_pools() -> None:
+    """With ``-vv``: the BLAS and OpenMP pools the command ran with, and their threads."""
+    log = logging.getLogger("mobmanip.cli")
+    if log.isEnabledFor(logging.DEBUG):
+        from .support.threads import describe_pools
+
+        log.debug("thread pools: %s", describe_pools())
 
 
 def _configure_logging(verbosity: int) -> None:
