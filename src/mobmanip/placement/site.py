@@ -34,7 +34,7 @@ import concurrent.futures as cf
 import math
 import time
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -45,8 +45,12 @@ from ..robot.model import Robot, load_robot
 from ..robot.support_spec import check_mu
 from .optimize import DEFAULT_STARTS, place
 
-#: Most object positions one site may hold.
+#: Most object positions one site may hold, whatever the work bound (a list or a grid).
 MAX_POSITIONS = 1_000_000
+
+#: A check of a site's number of positions before they are made: ``(count, how it follows from
+#: the file)``; raises to refuse.
+CountCheck = Callable[[int, str], None]
 
 #: Per-position result columns (besides the joints).
 COLUMNS = ("x", "y", "z", "value", "platform_x", "platform_y", "heading_deg", "hold_turn_deg", "grounded_reach",
@@ -79,11 +83,17 @@ class Site:
     grid_shape: tuple[int, int, int] | None = None
 
     @classmethod
-    def read(cls, path: str | Path) -> Site:
+    def read(cls, path: str | Path, check_count: CountCheck | None = None) -> Site:
         """Read and check a site file.
 
+        Args:
+            path: the site file.
+            check_count: called with the number of positions and how it follows from the file
+                (``"[grid] x 4 x y 2 x z 1"``) before any position is made; it raises to refuse
+                (the ``site`` command's work bound, ``--max-work``).
+
         Raises:
-            SpecError: unreadable, malformed, or with no or too many positions.
+            SpecError: unreadable, malformed, or with no positions or more than :data:`MAX_POSITIONS`.
         """
         from ..support.reading import read_user_text
 
@@ -93,11 +103,13 @@ class Site:
             document = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise SpecError(f"site file {path}: {exc}") from None
-        return cls.from_document(document, path.parent, str(path))
+        return cls.from_document(document, path.parent, str(path), check_count)
 
     @classmethod
-    def from_document(cls, document: Mapping, base: Path = Path("."), where: str = "site") -> Site:
-        """A site from its TOML document (paths relative to ``base``)."""
+    def from_document(
+        cls, document: Mapping, base: Path = Path("."), where: str = "site", check_count: CountCheck | None = None
+    ) -> Site:
+        """A site from its TOML document (paths relative to ``base``; ``check_count`` as :meth:`read`)."""
         known = {"robot", "objective", "mass", "task", "starts", "positions", "grid", "grounded"}
         unknown = sorted(set(document) - known)
         if unknown:
@@ -119,7 +131,7 @@ class Site:
         task = document.get("task")
         if task is not None and not isinstance(task, str):
             raise SpecError(f"{where}: 'task' must be a task space's name, got {task!r}")
-        positions, shape = _positions(document, where)
+        positions, shape = _positions(document, where, check_count)
         grounded = document.get("grounded")
         mu, direction = None, "+x"
         if grounded is not None:
@@ -137,28 +149,43 @@ class Site:
                    shape)  # fmt: skip
 
 
-def _axis(value, name: str, where: str) -> np.ndarray:
+def _axis(value, name: str, where: str) -> tuple[float, float, int]:
+    """``(start, stop, count)`` of one grid axis, checked; nothing is allocated here."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        values = np.array([float(value)])
+        start = stop = float(value)
+        count = 1
     elif isinstance(value, list) and len(value) == 3 and all(isinstance(v, (int, float)) for v in value):
         start, stop, count = value
         if isinstance(count, bool) or not isinstance(count, int) or count < 1 or (count == 1 and start != stop):
             raise SpecError(f"{where}: [grid] {name} = [start, stop, count] needs a whole count >= 1")
-        values = np.linspace(float(start), float(stop), count)
+        start, stop = float(start), float(stop)
     else:
         raise SpecError(f"{where}: [grid] {name} must be a number or [start, stop, count]")
-    if not np.all(np.isfinite(values)):
+    if not (math.isfinite(start) and math.isfinite(stop)):
         raise SpecError(f"{where}: [grid] {name} must be finite")
-    return values
+    return start, stop, count
 
 
-def _positions(document: Mapping, where: str) -> tuple[np.ndarray, tuple[int, int, int] | None]:
+def _check_count(count: int, detail: str, check_count: CountCheck | None) -> None:
+    """Refuse ``count`` positions above :data:`MAX_POSITIONS` or above what ``check_count`` allows,
+    before any of them is made."""
+    if count > MAX_POSITIONS:  # never made, whatever the work bound
+        raise SpecError(f"{detail} gives {count:,} object positions, more than the {MAX_POSITIONS:,} any site may hold")
+    if check_count is not None:
+        check_count(count, detail)
+
+
+def _positions(
+    document: Mapping, where: str, check_count: CountCheck | None = None
+) -> tuple[np.ndarray, tuple[int, int, int] | None]:
     has_list, has_grid = "positions" in document, "grid" in document
     if has_list == has_grid:
         which = "both" if has_list else "neither"
         raise SpecError(f"{where}: give either 'positions' (a list of [x, y, z]) or a [grid], not {which}")
     if has_list:
         raw = document["positions"]
+        if isinstance(raw, list):
+            _check_count(len(raw), f"'positions' in {where}", check_count)
         try:
             positions = np.array(raw, dtype=float)
         except (TypeError, ValueError):
@@ -172,14 +199,14 @@ def _positions(document: Mapping, where: str) -> tuple[np.ndarray, tuple[int, in
         grid = document["grid"]
         if not isinstance(grid, Mapping) or set(grid) != {"x", "y", "z"}:
             raise SpecError(f"{where}: [grid] needs exactly x, y and z")
-        xs, ys, zs = (_axis(grid[k], k, where) for k in "xyz")
-        if xs.size * ys.size * zs.size > MAX_POSITIONS:
-            raise SpecError(f"{where}: the grid has {xs.size * ys.size * zs.size} positions, more than {MAX_POSITIONS}")
+        axes = {k: _axis(grid[k], k, where) for k in "xyz"}
+        counts = [axes[k][2] for k in "xyz"]
+        detail = f"[grid] in {where}: x {counts[0]:,} by y {counts[1]:,} by z {counts[2]:,}"
+        _check_count(math.prod(counts), detail, check_count)  # before any position is made
+        xs, ys, zs = (np.linspace(*axes[k]) for k in "xyz")
         Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
         positions = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
         shape = (xs.size, ys.size, zs.size)
-    if len(positions) > MAX_POSITIONS:
-        raise SpecError(f"{where}: {len(positions)} positions, more than {MAX_POSITIONS}")
     return positions, shape
 
 
