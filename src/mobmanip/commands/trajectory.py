@@ -108,7 +108,8 @@ def _read_bag(robot, args):
     from ..support.notices import notice
 
     odometry = None if args.odom.lower() == "none" else args.odom
-    recording = read_recording(robot, args.bag, args.joint_states, odometry, start=args.start, end=args.end)
+    recording = read_recording(robot, args.bag, args.joint_states, odometry, start=args.start, end=args.end,
+                               work=_sample_bound(args))  # fmt: skip
     for line in recording.report.lines():
         print(line)
     for text in recording.report.warnings:
@@ -116,17 +117,29 @@ def _read_bag(robot, args):
     return recording.trajectory
 
 
-def _check_work(args) -> None:
-    """Count the samples (lines) before the file is parsed, and refuse more than the bound."""
-    from ..support.reading import read_user_bytes
-    from ..support.work import WorkEstimate, check_work
-    from ..support.work import bound as _bound
+def _sample_bound(args):
+    """The bound on the samples analysed (--max-work, else :data:`MAX_SAMPLES`)."""
+    from ..support.work import WorkBound, bound
 
-    if args.trajectory is None:  # a recording: its messages are counted as they are read
+    each = SECONDS_PER_SAMPLE * (10 if args.polytope else 1)
+    return WorkBound("trajectory", "samples", each, bound(args.max_work, MAX_SAMPLES))
+
+
+def _check_work(args) -> None:
+    """Count the samples (lines) before the file is parsed, and refuse more than the bound; a
+    recording's joint-state messages are counted by :func:`_read_bag` before any is decoded."""
+    from pathlib import Path
+
+    from ..errors import UsageError
+    from ..support.reading import read_user_bytes
+
+    work = _sample_bound(args)
+    if work.limit < 1:
+        raise UsageError(f"--max-work must be at least 1, got {work.limit}")
+    if args.trajectory is None:
         return
     lines = read_user_bytes(args.trajectory, "trajectory").count(b"\n")
-    each = SECONDS_PER_SAMPLE * (10 if args.polytope else 1)
-    check_work(WorkEstimate("trajectory", "samples", max(lines - 1, 0), each), _bound(args.max_work, MAX_SAMPLES))
+    work.check(max(lines - 1, 0), f"rows of {Path(args.trajectory).name}")
 
 
 def _report_traction(traction, trajectory) -> None:

@@ -22,7 +22,10 @@ file, or the bag's folder with its ``metadata.yaml``) with ``rosbags`` (no ROS i
 - joint names: a name that is no joint of the robot file is an error naming it (with the
   closest); joints of the file the spec locks are ignored (reported), moving joints the recording
   lacks stay at home, and wheels the recording lacks turn as the platform's motion needs (as for a
-  CSV file).
+  CSV file);
+- **NaN and infinite values**: a joint's non-finite position, or an odometry pose with one, is
+  dropped and reported as a warning (the stream is interpolated across it); a joint with no finite
+  position stays at home (warned); a stream with none at all is an error saying so.
 
 The result is the same :class:`~mobmanip.motion.trajectory.Trajectory` a CSV file gives
 (:func:`mobmanip.motion.trajectory.trajectory_from_samples`), so the analysis is the CSV's.
@@ -39,6 +42,7 @@ import numpy as np
 from ..errors import ArgumentError, JointNotFoundError, RecordingError
 from ..robot.model import Robot, description_of
 from ..support.reading import MAX_RECORDING_BYTES, file_refusal
+from ..support.work import WorkBound
 from .trajectory import Trajectory, trajectory_from_samples
 
 #: A stream's interval longer than this many times its median period is a gap.
@@ -75,6 +79,7 @@ class RecordingReport:
         span: ``(first, last)`` of the time base, seconds from the recording's first message.
         gaps: one line per gap found.
         clock_jumps: one line per clock jump found.
+        dropped: one line per joint (and for the odometry) whose NaN or infinite values were dropped.
         notes: other remarks (joints ignored or missing, the odometry's frame).
     """
 
@@ -85,11 +90,12 @@ class RecordingReport:
     gaps: tuple[str, ...] = ()
     clock_jumps: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
+    dropped: tuple[str, ...] = ()
 
     @property
     def warnings(self) -> tuple[str, ...]:
-        """Gaps and clock jumps: what makes the estimated rates doubtful."""
-        return self.gaps + self.clock_jumps
+        """Gaps, clock jumps and values dropped as NaN or infinite: what makes the trajectory doubtful."""
+        return self.gaps + self.clock_jumps + self.dropped
 
     def lines(self) -> list[str]:
         """The report for the console."""
@@ -228,6 +234,16 @@ def _clean(stream_name: str, stamps: list[int], received: list[int], values: lis
     return np.array(keep_s, dtype=np.int64), np.array(keep_r, dtype=np.int64), keep_v
 
 
+def _dropped(stream_name: str, joint: str, bad: list[tuple[int, float]], all_bad: bool, origin: int) -> str:
+    """The warning for a joint's NaN or infinite positions, dropped."""
+    stamp, value = bad[0]
+    where = f"first {value!r} at {_seconds(stamp - origin):.3f} s of the recording"
+    if all_bad:
+        return (f"every position of {joint} on {stream_name!r} is NaN or infinite ({len(bad)}, {where}): "
+                "it stays at home")  # fmt: skip
+    return f"{len(bad)} non-finite position(s) of {joint} on {stream_name!r} dropped ({where}): interpolated across"
+
+
 def _gaps(stream_name: str, stamps: np.ndarray, origin: int) -> list[str]:
     if stamps.shape[0] < 3:
         return []
@@ -242,6 +258,21 @@ def _gaps(stream_name: str, stamps: np.ndarray, origin: int) -> list[str]:
     return out
 
 
+def _count_messages(reader, connections, low: int | None, high: int | None, limit: int) -> tuple[int, bool]:
+    """How many messages ``connections`` hold in ``[low, high)``: the bag's index count for the
+    whole recording, else counted without decoding, stopping one past ``limit``. Returns the
+    count and whether it is exact."""
+    declared = [int(getattr(c, "msgcount", 0) or 0) for c in connections]
+    if low is None and high is None and all(declared):
+        return sum(declared), True
+    count = 0
+    for _ in reader.messages(connections=connections, start=low, stop=high):
+        count += 1
+        if count > limit:
+            return count, False
+    return count, True
+
+
 def read_recording(
     robot: Robot,
     path: str | Path,
@@ -250,6 +281,7 @@ def read_recording(
     *,
     start: float | None = None,
     end: float | None = None,
+    work: WorkBound | None = None,
 ) -> Recording:
     """The trajectory a ROS bag records (see the module docstring).
 
@@ -260,12 +292,15 @@ def read_recording(
         odometry: the ``nav_msgs/msg/Odometry`` topic; ``None`` for a robot whose platform does
             not move (the platform stays at the origin).
         start, end: seconds from the recording's first message; only what lies between is read.
+        work: the bound on the samples (joint-state messages in the part read), checked before
+            any message is decoded (from the bag's index, or by counting the part read up to
+            one past the bound) and again as they are read.
 
     Raises:
         RecordingError: the bag cannot be read, a topic is missing or of another message type,
             a message cannot be decoded, or too little of the recording is left.
         JointNotFoundError: a joint-state name that is no joint of the robot file.
-        ArgumentError: ``start`` not before ``end``.
+        ArgumentError: ``start`` not before ``end``, or more samples than ``work`` allows.
     """
     path = Path(path)
     if start is not None and end is not None and not start < end:
@@ -280,9 +315,17 @@ def read_recording(
         joints_raw: list = []
         odom_raw: list = []
         frames: set[str] = set()
+        what = f"joint-state messages on {joint_states!r} of {path.name}" + (
+            "" if low is None and high is None else " between --start and --end"
+        )
+        if work is not None:
+            count, exact = _count_messages(reader, js_connections, low, high, work.limit)
+            work.check(count, what if exact else f"{what}, counted up to one past the bound")
         for connection, received, raw in reader.messages(
             connections=js_connections + odom_connections, start=low, stop=high
         ):
+            if connection.msgtype == JOINT_STATE and work is not None and len(joints_raw) >= work.limit:
+                work.check(len(joints_raw) + 1, f"{what}, more than its index declares")  # the index was wrong
             message = _deserialize(reader, path, connection, raw)
             stamp = _stamp(message, received)
             if connection.msgtype == JOINT_STATE:
@@ -307,6 +350,7 @@ def _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_s
     unknown: list[str] = []
     locked: set[str] = set()
     per_joint: dict[str, tuple[list[int], list[float]]] = {}
+    nonfinite: dict[str, list[tuple[int, float]]] = {}  # per joint: (stamp, value) of each NaN or inf position
     jumps: list[str] = []
     if not joints_raw:
         raise RecordingError(str(path), f"no joint-state messages on {joint_states!r} in the part read")
@@ -328,12 +372,22 @@ def _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_s
                 per_joint.setdefault(name, ([], []))
                 per_joint[name][0].append(int(stamp))
                 per_joint[name][1].append(float(value))
+            else:
+                nonfinite.setdefault(name, []).append((int(stamp), float(value)))
     if unknown:
         first = unknown[0]
         where = f"robot {robot.name} (joint states of {path.name})"
         raise JointNotFoundError(first, description.joints, where=where)
+    if not per_joint and nonfinite:
+        count = sum(len(bad) for bad in nonfinite.values())
+        raise RecordingError(
+            str(path),
+            f"every position on {joint_states!r} of the robot's moving joints is NaN or infinite ({count} values of "
+            f"{', '.join(sorted(nonfinite, key=robot.joint_names.index))}): nothing to analyse",
+        )
     if not per_joint:
         raise RecordingError(str(path), f"the joint states on {joint_states!r} name none of the robot's moving joints")
+    dropped = [_dropped(joint_states, name, bad, name not in per_joint, origin) for name, bad in nonfinite.items()]
     gaps = _gaps(joint_states, js_stamps, origin)
     base = js_stamps
     odom = None
@@ -341,6 +395,20 @@ def _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_s
     if odometry is not None:
         if not odom_raw:
             raise RecordingError(str(path), f"no odometry messages on {odometry!r} in the part read")
+        bad_poses = [(s, v) for s, _, v in odom_raw if not all(math.isfinite(c) for c in v)]
+        if len(bad_poses) == len(odom_raw):
+            raise RecordingError(
+                str(path),
+                f"every pose on {odometry!r} is NaN or infinite ({len(odom_raw)} messages): nothing to analyse",
+            )
+        if bad_poses:
+            first_stamp, first_pose = bad_poses[0]
+            shown = ", ".join(map(repr, first_pose))
+            dropped.append(
+                f"{len(bad_poses)} non-finite pose(s) on {odometry!r} dropped (first ({shown}) "
+                f"at {_seconds(first_stamp - origin):.3f} s of the recording): the pose is interpolated across them"
+            )
+            odom_raw = [record for record in odom_raw if all(math.isfinite(c) for c in record[2])]
         o_stamps, _, o_values = _clean(odometry, [s for s, _, _ in odom_raw], [r for _, r, _ in odom_raw],
                                        [v for _, _, v in odom_raw], jumps, origin)  # fmt: skip
         gaps += _gaps(odometry, o_stamps, origin)
@@ -399,5 +467,6 @@ def _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_s
         gaps=tuple(gaps),
         clock_jumps=tuple(dict.fromkeys(jumps)),
         notes=tuple(notes),
+        dropped=tuple(dropped),
     )
     return Recording(trajectory=trajectory, report=report, joints=tuple(joints))

@@ -86,3 +86,29 @@ def check_work(estimate: WorkEstimate, limit: int | None, option: str = "--max-w
     if estimate.seconds > ANNOUNCE_SECONDS:
         print(f"mobmanip: {estimate.command}: {estimate.describe()}", file=sys.stderr, flush=True)
     return estimate
+
+
+@dataclass(frozen=True)
+class WorkBound:
+    """A command's bound on one kind of work, for code that learns the count only as it reads
+    (a recording's messages, a site file's positions): :meth:`check` refuses a count above
+    ``limit`` as :func:`check_work` does, before the work starts.
+
+    Attributes:
+        command: the command (``"trajectory"``).
+        units: what is counted (``"samples"``).
+        seconds_each: measured wall time of one unit (s).
+        limit: the bound in force (see :func:`bound`).
+        option: the option that raises it.
+    """
+
+    command: str
+    units: str
+    seconds_each: float
+    limit: int
+    option: str = "--max-work"
+
+    def check(self, count: float, detail: str = "") -> WorkEstimate:
+        """Refuse ``count`` units above the limit (see :func:`check_work`)."""
+        return check_work(WorkEstimate(self.command, self.units, count, self.seconds_each, detail), self.limit,
+                          self.option)  # fmt: skip
