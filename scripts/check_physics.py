@@ -18,8 +18,9 @@ the largest difference of a contact's normal force (% of the weight), and over `
 (default 20 ms) how far a support rose (mm) and how fast a driven wheel slid (mm/s). A support that
 rises by more than 0.1 mm or a wheel that slides faster than 1 mm/s fails the axis.
 
-Compare like with like: for a robot that is not planar, use the spatial task. A planar task holds
-the object level but leaves the hands free to turn about the vertical, which an object welded or
+Compare like with like: for a robot that is not planar, use the spatial task. MuJoCo's weld holds
+the object level, so the analysis replayed here holds it level too (``Floor(level=True)``, as
+``--level`` asks). A planar task then leaves the hands free to turn about the vertical, which an object welded or
 pinned to the hands in MuJoCo does not (TIAGo++ in its hold: 32 % apart sideways at t = 0, against
 0.00 % with the spatial task).
 
@@ -36,6 +37,7 @@ one does not, 2 for bad input.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -108,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
             )
         robot, q = load_robot_and_configuration(args)
         task = args.task or robot.spec.default_task
-        floor = floor_constraints(args) or (Floor(),)
+        # the object welded to the hands in MuJoCo is held level: so is the analysis replayed
+        floor = (dataclasses.replace((floor_constraints(args) or (Floor(),))[0], level=True),)
         if (args.held or args.longest) and floor[0].slope:
             raise MobmanipError("--held and --longest replay mobmanip's own model on a level floor: leave out --slope")
         analysis = mobmanip.analyze(

@@ -20,10 +20,14 @@ still (xdot = 0, a_o = 0) and ask for the wrench f the object exerts ON the envi
 pushes back with -f: the object's equation becomes ``W h = g_o + f`` (f in the a_o columns).
 
 A driven wheel's contact force is (f_x, f_y, f_z) in world axes; a caster's is a normal force
-only (frictionless). A planar task leaves out the object's vertical, roll and pitch rows, but the
-floor still carries the object: the hands' wrench components on those rows are extra unknowns,
-the object is held level (``sum f_z = m g``, no roll or pitch moment about its centre) and the
-robot feels their reaction. Nothing here uses mobmanip's reduced terms (P, Q, xi), grasp matrix
+only (frictionless). The hands apply the task's wrench rows only (a translational task's hands
+no moments; a planar task's object is not carried vertically), unless the object is held level
+(``build_problem(level=True)``): then the hands' wrench components on the vertical, roll and
+pitch rows the task leaves out are extra unknowns, the object is balanced on them (``sum f_z =
+m g``, no roll or pitch moment about its centre), the robot feels their reaction, and the hands'
+accelerations on those rows lie within ``level_tolerance`` of zero; two hands share that load with
+no squeeze on those rows (their level wrenches orthogonal to the null space of their grasp map).
+Nothing here uses mobmanip's reduced terms (P, Q, xi), grasp matrix
 or polytopes: only its model's joint names, reference values, null space S(q) and limits.
 """
 
@@ -36,18 +40,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import null_space
 from scipy.optimize import linprog
 from scipy.spatial import ConvexHull
 
 GRAVITY = 9.81
 """Magnitude of gravity (m/s^2), along world -z."""
 
-TASK_ROWS = {"planar": (0, 1), "planar_rigid": (0, 1, 5), "spatial": (0, 1, 2, 3, 4, 5)}
-"""Rows of a 6-d twist or wrench (linear then angular, world axes) that each task keeps. Not
-``translational``: its object would need roll and pitch moments that mobmanip's task leaves out."""
+TASK_ROWS = {"planar": (0, 1), "planar_rigid": (0, 1, 5), "translational": (0, 1, 2), "spatial": (0, 1, 2, 3, 4, 5)}
+"""Rows of a 6-d twist or wrench (linear then angular, world axes) that each task keeps."""
 
 LEVEL_ROWS = (2, 3, 4)
-"""The object's vertical force, roll and pitch moment rows: balanced even when the task omits them."""
+"""The object's vertical force, roll and pitch moment rows: balanced when it is held level."""
 
 MODES = ("ideal", "no_tip", "friction")
 
@@ -98,6 +102,9 @@ class FloorProblem:
         tau_max: effort limits of x, (nx,).
         total_mass: robot (free-flyer model) plus object (kg).
         gravity: gravity in the floor's axes (m/s^2), (3,); leaning on a ramp.
+        level_tolerance: held level: |level_jacobian S xdot| <= this (m/s^2, rad/s^2).
+        heading: the base's heading (rad from world +x): a friction pyramid's first face points
+            along it (the pyramid turns with the robot).
     """
 
     M: np.ndarray
@@ -117,6 +124,8 @@ class FloorProblem:
     tau_max: np.ndarray
     total_mass: float
     gravity: np.ndarray
+    level_tolerance: float = 0.0
+    heading: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -244,7 +253,9 @@ def driven_wheels(robot) -> tuple[SupportPoint, ...]:
     )
 
 
-def build_problem(robot, q, task: str, held_object, casters=None, gravity=None) -> FloorProblem:
+def build_problem(
+    robot, q, task: str, held_object, casters=None, gravity=None, level=False, level_tolerance=0.01
+) -> FloorProblem:
     """Assemble the floor equations at mobmanip's configuration ``q``, robot and object at rest.
 
     Args:
@@ -255,6 +266,7 @@ def build_problem(robot, q, task: str, held_object, casters=None, gravity=None) 
             world axes) and ``center`` ((3,) m) are read.
         casters: passive supports; default :func:`urdf_casters`.
         gravity: gravity in the floor's axes (m/s^2), (3,); default straight down (a level floor).
+        level: hold the object level (see the module's docstring); ``level_tolerance`` its band.
     """
     model = free_flyer_model(robot)
     gravity = np.array([0.0, 0.0, -GRAVITY]) if gravity is None else np.asarray(gravity, dtype=float)
@@ -283,7 +295,7 @@ def build_problem(robot, q, task: str, held_object, casters=None, gravity=None) 
         points.append(point)
 
     rows = list(TASK_ROWS[task])
-    level = [r for r in LEVEL_ROWS if r not in rows]
+    level = [r for r in LEVEL_ROWS if r not in rows] if level else []
     center = np.asarray(held_object.center, dtype=float)
     hands, grasps = [], []  # per hand: 6-row Jacobian and 6x6 grasp block (force; moment = r x f + n)
     for arm in robot.arms:
@@ -315,6 +327,8 @@ def build_problem(robot, q, task: str, held_object, casters=None, gravity=None) 
         tau_max=np.asarray(robot.effort_limits, dtype=float),
         total_mass=pin.computeTotalMass(model) + held_object.mass,
         gravity=gravity,
+        level_tolerance=level_tolerance,
+        heading=float(math.atan2(data.oMi[1].rotation[1, 0], data.oMi[1].rotation[0, 0])),
     )
 
 
@@ -456,6 +470,8 @@ def _solve(
 
     equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
     equation([(H, P.level_grasp[0]), (V, P.level_grasp[1])], P.level_load)  # the object held level
+    squeeze = null_space(P.level_grasp[1]).T  # ... by the hands' minimum-norm share (no squeeze)
+    equation([(V, squeeze)], np.zeros(len(squeeze)))
     if force:  # at rest; the environment pushes back with -f
         equation([(X, np.eye(nx))], np.zeros(nx))
         equation([(H, P.W), (A, -np.eye(m))], P.g_o)
@@ -490,12 +506,17 @@ def _solve(
         if mode != "ideal":
             bounds[L.start + sl.stop - 1] = (least, None)  # the normal is the last (z) component
         if contact.driven and mode == "friction":  # face k: (cos, sin) . f_t <= mu cos(pi / N) f_n
-            for angle in 2.0 * math.pi * np.arange(faces) / faces:
+            for angle in P.heading + 2.0 * math.pi * np.arange(faces) / faces:
                 A_ub.append(np.zeros(n))
                 A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
+    b_ub = [0.0] * len(A_ub)
+    for row in np.vstack([P.level_jacobian @ P.S, -P.level_jacobian @ P.S]):  # the level band
+        A_ub.append(np.zeros(n))
+        A_ub[-1][X] = row
+        b_ub.append(P.level_tolerance)
     cost = np.zeros(n)
     cost[A], cost[S_] = objective[:m], objective[m]
-    result = _linprog(cost, A_ub, rows, rhs, bounds, f"floor LP ({mode})")
+    result = _linprog(cost, A_ub, rows, rhs, bounds, f"floor LP ({mode})", b_ub)
     z = result.x
     forces = np.zeros((len(P.contacts), 3))
     for i, sl in enumerate(slices):
@@ -549,6 +570,8 @@ def team_straight_line(
     for P, (C, slices, (X, T, L, H, V, D)) in zip(problems, blocks):
         equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
         equation([(X, P.hand_jacobian @ P.S), (A, -P.W.T)], np.zeros(P.W.shape[1]))  # its hands move with it
+        squeeze = null_space(P.level_grasp[1]).T  # its hands share the level load without a squeeze
+        equation([(V, squeeze)], np.zeros(len(squeeze)))
         if springs is not False:
             for sl, p in zip(slices, P.points):
                 row = np.zeros((1, n))
@@ -562,9 +585,15 @@ def team_straight_line(
             if mode != "ideal":
                 bounds[L.start + sl.stop - 1] = (least, None)
             if contact.driven and mode == "friction":
-                for angle in 2.0 * math.pi * np.arange(faces) / faces:
+                for angle in P.heading + 2.0 * math.pi * np.arange(faces) / faces:
                     A_ub.append(np.zeros(n))
                     A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
+    b_ub = [0.0] * len(A_ub)
+    for P, (_, _, (X, *_)) in zip(problems, blocks):
+        for row in np.vstack([P.level_jacobian @ P.S, -P.level_jacobian @ P.S]):  # the level band
+            A_ub.append(np.zeros(n))
+            A_ub[-1][X] = row
+            b_ub.append(P.level_tolerance)
     first = problems[0]
     # the one object: every robot's hands together, on the task rows and on the level rows
     equation([(H, P.W) for P, (_, _, (_, _, _, H, _, _)) in zip(problems, blocks)] + [(A, -first.M_o)], first.g_o)
@@ -576,15 +605,16 @@ def team_straight_line(
     equation([(A, np.eye(m)), (S_, -e[:, None])], np.zeros(m))
     cost = np.zeros(n)
     cost[S_] = -1.0
-    return float(-_linprog(cost, A_ub, rows, rhs, bounds, f"team floor LP ({mode})").fun)
+    return float(-_linprog(cost, A_ub, rows, rhs, bounds, f"team floor LP ({mode})", b_ub).fun)
 
 
-def _linprog(cost, A_ub: list, rows: list, rhs: list, bounds: list, what: str):
-    """HiGHS on min cost.z, A_ub z <= 0 (the pyramids' rows), the stacked equations, the bounds."""
+def _linprog(cost, A_ub: list, rows: list, rhs: list, bounds: list, what: str, b_ub: list):
+    """HiGHS on min cost.z, A_ub z <= b_ub (the pyramids' and level band's rows), the stacked
+    equations, the bounds."""
     result = linprog(
         cost,
         A_ub=np.array(A_ub) if A_ub else None,
-        b_ub=np.zeros(len(A_ub)) if A_ub else None,
+        b_ub=np.array(b_ub) if A_ub else None,
         A_eq=np.vstack(rows),
         b_eq=np.concatenate(rhs),
         bounds=bounds,

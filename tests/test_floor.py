@@ -141,7 +141,7 @@ def test_an_empty_grounded_set_has_no_witness():
     robot = mobmanip.load_robot("planar_dual_arm")
     P = mobmanip.analyze(
         robot, named_configuration(robot, "home"), "planar", object_mass=10.0, measures=("dynamic_polytope",),
-        constraints=(Floor(mu=0.5),),
+        constraints=(Floor(mu=0.5, level=True),),
     ).measures["dynamic_polytope"]  # fmt: skip
     assert P.empty
     for least in (None, "xdot"):
@@ -170,7 +170,11 @@ def test_the_issue_table_in_numbers():
     printed rounding."""
     robot, q, task, _ = CASES["tiago_dual hold"]
     reach = {}
-    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5, load="any"),))):
+    for label, floor in (
+        ("ideal", ()),
+        ("no_tip", (Floor(mu=None, level=True),)),
+        ("mu=0.5", (Floor(mu=0.5, load="any", level=True),)),
+    ):
         P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=floor)
         e = np.eye(6)[0]
         reach[label] = (
@@ -182,7 +186,11 @@ def test_the_issue_table_in_numbers():
     assert [round(v, 2) for v in reach["mu=0.5"]] == [37.08, 27.87]
     paper, q0, _, _ = CASES["paper 0 deg"]
     policy = {}
-    for label, floor in (("ideal", ()), ("no_tip", (Floor(mu=None),)), ("mu=0.5", (Floor(mu=0.5, load="any"),))):
+    for label, floor in (
+        ("ideal", ()),
+        ("no_tip", (Floor(mu=None, level=True),)),
+        ("mu=0.5", (Floor(mu=0.5, load="any", level=True),)),
+    ):
         P = mobmanip.analyze(
             paper, q0, "planar", object_mass=MASS, measures=("dynamic_polytope_min_norm",), constraints=floor
         )
@@ -294,9 +302,14 @@ def test_a_badly_scaled_posture_still_solves():
         ]
     )  # place's optimum for an object at (1, 0.5, 0.35), +x
     analysis = mobmanip.analyze(
-        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, load="any"),)
+        robot,
+        q,
+        "planar",
+        object_mass=MASS,
+        measures=("dynamic_polytope",),
+        constraints=(Floor(mu=0.5, load="any", level=True),),
     )
-    problem = build_problem(robot, q, "planar", analysis.held_object, casters=PAPER_CASTERS)
+    problem = build_problem(robot, q, "planar", analysis.held_object, casters=PAPER_CASTERS, level=True)
     P = analysis.measures["dynamic_polytope"]
     for e in _directions(2):
         e = e / np.linalg.norm(e)
@@ -306,7 +319,7 @@ def test_a_badly_scaled_posture_still_solves():
     # springs is infeasible, and held still with pulling allowed its springs pull on the contact the
     # warning names.
     compliant = mobmanip.analyze(
-        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+        robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, level=True),)
     )
     assert compliant.measures["dynamic_polytope"].empty
     with pytest.raises(RuntimeError, match="infeasible"):

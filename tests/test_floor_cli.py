@@ -199,18 +199,19 @@ def test_trajectory_ground_gives_each_wheels_traction_and_warns_where_it_slips(t
 
 
 def test_a_collapsed_grounded_set_is_said_so_not_a_qhull_error(tmp_path):
-    """TIAGo++ in a translational task: with the floor, the minimum-norm policy leaves the object no
-    motion (its hands cannot keep it level): the set is the point at rest, and the command says so
-    instead of failing in Qhull (it did)."""
+    """TIAGo++ in a translational task, holding the object level: the minimum-norm policy moves the
+    hands' roll and pitch with the object, so the level band (0.01 rad/s^2) is all the motion it
+    leaves; the command names that limit (it failed in Qhull when the set was a point). With a band
+    of zero width the set is the point at rest."""
     run = _cli("analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "translational",
-               "--ground", "--polytope")  # fmt: skip
+               "--ground", "--polytope", "--level")  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert "Qhull" not in run.stderr and "internal error" not in run.stderr
-    assert "dynamic_polytope_min_norm on the floor has collapsed" in run.stderr
+    assert "object held level" in run.stdout and "stops it: held level: " in run.stdout
     robot = mobmanip.load_robot("tiago_dual")
     P = mobmanip.analyze(
         robot, named_configuration(robot, "hold"), "translational", object_mass=2.0,
-        measures=("dynamic_polytope_min_norm",), constraints=(Floor(),),
+        measures=("dynamic_polytope_min_norm",), constraints=(Floor(level=True, level_tolerance=1e-12),),
     ).measures["dynamic_polytope_min_norm"]  # fmt: skip
     assert P.contains(np.zeros(3))[0]
     assert max(P.support(e) + P.support(-e) for e in np.eye(3)) < 1e-9
@@ -277,11 +278,12 @@ def test_bad_hold_is_one_line(extra, message):
 
 
 def test_an_empty_set_on_the_floor_says_the_floor_is_why():
-    """The paper robot holding 10 kg at home: its centre of mass (0.223, 0) m is inside the support
+    """The paper robot holding 10 kg level at home (a planar task carries no weight unless held
+    level): its centre of mass (0.223, 0) m is inside the support
     polygon (+-0.25 m) but outside the core of four equally stiff contacts, so the compliant set is
     empty although every effort holds the load still (the ideal set is not). The summary must not
     blame the limits; the warning names the supports the weight would unload."""
-    run = _cli("analyze", "planar_dual_arm", "--ground", "--mu", "0.5", "--object-mass", "10", "--polytope")
+    run = _cli("analyze", "planar_dual_arm", "--ground", "--mu", "0.5", "--object-mass", "10", "--polytope", "--level")
     assert run.returncode == 0, run.stderr
     assert "dynamic polytope (coupled): EMPTY (on the floor as modelled; the warning below says why)" in run.stdout
     assert "the limits cannot hold the load still" not in run.stdout

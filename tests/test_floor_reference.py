@@ -31,7 +31,7 @@ class Case:
         self.analysis = mobmanip.analyze(
             robot, q, task=task, object_mass=MASS, measures=("dynamic_polytope", "dynamic_polytope_min_norm")
         )
-        self.problem = fr.build_problem(robot, q, task, self.analysis.held_object, casters=casters)
+        self.problem = fr.build_problem(robot, q, task, self.analysis.held_object, casters=casters, level=True)
 
     def axis(self, k, sign=1.0):
         e = np.zeros(self.problem.W.shape[0])

@@ -5,6 +5,8 @@ Checked three ways: against the independent whole-robot LP (tests/floor_referenc
 generalized gravity from Pinocchio's own model with gravity leaning), against the statics of the
 whole robot at rest (the floor carries the weight, the wheels alone hold it along the ramp), and
 in MuJoCo with gravity leaning (tests/mujoco_referee.py), whose floor is level.
+
+The paper robot's object is held level here (``Floor(level=True)``), as MuJoCo's weld holds it.
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ def _tiago_on(ramp, measure):
     """TIAGo++ holding 2 kg in its hold posture on a ramp (mu 0.5): (robot, q, floor, analysis)."""
     robot = mobmanip.load_robot("tiago_dual")
     q = named_configuration(robot, "hold")
-    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
+    constraint = Floor(level=True, mu=0.5, slope=ramp[0], uphill=ramp[1])
     analysis = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=(measure,), constraints=(constraint,))
     return robot, q, constraint, analysis
 
@@ -65,10 +67,12 @@ def _tiago_on(ramp, measure):
 def test_on_a_ramp_the_reaches_equal_the_independent_lp(case, ramp, floor):
     robot, q, task, casters = _case(case)
     options, (mode, mu, springs, reserve) = FLOORS[floor]
-    constraint = Floor(**options, slope=ramp[0], uphill=ramp[1])
+    constraint = Floor(level=True, **options, slope=ramp[0], uphill=ramp[1])
     analysis = mobmanip.analyze(robot, q, task, object_mass=MASS, constraints=(constraint,),
                                 measures=("dynamic_polytope", "dynamic_polytope_min_norm"))  # fmt: skip
-    problem = build_problem(robot, q, task, analysis.held_object, casters=casters, gravity=constraint.gravity())
+    problem = build_problem(
+        robot, q, task, analysis.held_object, casters=casters, gravity=constraint.gravity(), level=True
+    )
     P, policy = analysis.measures["dynamic_polytope"], analysis.measures["dynamic_polytope_min_norm"]
     for e in _axes(P.dim):
         ref = straight_line(problem, e, mode=mode, mu=mu, springs=springs, reserve=reserve).value
@@ -81,11 +85,13 @@ def test_on_a_ramp_the_reaches_equal_the_independent_lp(case, ramp, floor):
 @pytest.mark.parametrize("case", ["tiago_dual hold", "paper 0 deg"])
 def test_the_force_capacity_on_a_ramp_equals_the_independent_lp(case):
     robot, q, task, casters = _case(case)
-    constraint = Floor(mu=0.5, slope=8.0, uphill=30.0)
+    constraint = Floor(level=True, mu=0.5, slope=8.0, uphill=30.0)
     analysis = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("force_polytope",),
                                 constraints=(constraint,))  # fmt: skip
     F = analysis.measures["force_polytope"]
-    problem = build_problem(robot, q, task, analysis.held_object, casters=casters, gravity=constraint.gravity())
+    problem = build_problem(
+        robot, q, task, analysis.held_object, casters=casters, gravity=constraint.gravity(), level=True
+    )
     for e in _axes(F.dim):
         ref = force_support(problem, e, mode="friction", mu=0.5, springs=True).value
         assert F.support(e) == pytest.approx(ref, rel=1e-6, abs=1e-6), (case, e)
@@ -103,8 +109,8 @@ def test_a_ramp_changes_the_reaches_the_way_gravity_leans():
                                 constraints=(floor,)).measures["dynamic_polytope"].straight_line_reach(e)  # fmt: skip
 
     x = np.array([1.0, 0.0])
-    level, ramp = Floor(mu=0.5), Floor(mu=0.5, slope=5.0)
-    assert reach(Floor(mu=0.5, slope=0.0, uphill=45.0), x) == reach(level, x)
+    level, ramp = Floor(level=True, mu=0.5), Floor(level=True, mu=0.5, slope=5.0)
+    assert reach(Floor(level=True, mu=0.5, slope=0.0, uphill=45.0), x) == reach(level, x)
     assert reach(ramp, x) < reach(level, x) and reach(ramp, -x) > reach(level, -x)
 
 
@@ -115,7 +121,7 @@ def test_at_rest_on_a_ramp_the_floor_carries_the_weight_and_the_wheels_hold_it(c
     the ramp m g sin s uphill), the frictionless casters carry none of the part along the ramp,
     and the wheels stay in their pyramids."""
     robot, q, task, _ = _case(case)
-    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1])
+    constraint = Floor(level=True, mu=0.5, slope=ramp[0], uphill=ramp[1])
     P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("force_polytope",),
                          constraints=(constraint,)).measures["force_polytope"]  # fmt: skip
     w = P.witness_at(np.zeros(P.dim))
@@ -144,7 +150,7 @@ def test_bad_ramps_are_one_line_errors():
         (dict(slope=5.0, uphill=float("inf")), "the floor's uphill direction must be a finite angle"),
     ):
         with pytest.raises(MobmanipError, match=message.replace("(", r"\(").replace(")", r"\)")):
-            Floor(**options)
+            Floor(level=True, **options)
 
 
 @pytest.mark.parametrize("ramp, reserve", [((5.0, 0.0), 0.0), ((10.0, -60.0), 0.3)])
@@ -161,7 +167,7 @@ def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
     from test_floor_physics import _case as physics_case
 
     robot, q, task, casters, base = physics_case(name)
-    constraint = Floor(mu=0.5, slope=ramp[0], uphill=ramp[1], reserve=reserve)
+    constraint = Floor(level=True, mu=0.5, slope=ramp[0], uphill=ramp[1], reserve=reserve)
     P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",),
                          constraints=(constraint,)).measures["dynamic_polytope"]  # fmt: skip
     referee = build(robot, q, support_points=casters, object=_object(robot, q, task), mu=0.5,
@@ -241,7 +247,7 @@ def test_an_empty_set_on_a_ramp_says_where_the_weight_presses():
     (downhill of the point straight below it) and says the supports fall below their reserve."""
     robot = mobmanip.load_robot("planar_dual_arm")
     q = named_configuration(robot, "home")
-    constraint = Floor(mu=0.5, slope=5.0, uphill=30.0, reserve=0.3)
+    constraint = Floor(level=True, mu=0.5, slope=5.0, uphill=30.0, reserve=0.3)
     analysis = mobmanip.analyze(robot, q, "planar", object_mass=MASS, measures=("dynamic_polytope",),
                                 constraints=(constraint,))  # fmt: skip
     assert analysis.measures["dynamic_polytope"].empty
@@ -274,7 +280,7 @@ def test_the_zmp_at_rest_is_the_statics_where_the_robot_can_stand_still(ramp, st
         with pytest.raises(MobmanipError, match=r"is not in the set with xdot at zero"):
             P.witness_at(np.zeros(6), still=("xdot",))
         ideal = mobmanip.analyze(robot, q, "spatial", object_mass=MASS, measures=("dynamic_polytope",),
-                                 constraints=(Floor(lift=True, slope=8.0, uphill=30.0),))  # fmt: skip
+                                 constraints=(Floor(level=True, lift=True, slope=8.0, uphill=30.0),))  # fmt: skip
         with pytest.raises(MobmanipError, match=r"is not in the set with xdot at zero"):
             ideal.measures["dynamic_polytope"].witness_at(np.zeros(6), still=("xdot",))
     with pytest.raises(MobmanipError, match="still must name the set's variables"):

@@ -41,10 +41,10 @@ def test_the_grounded_reach_at_each_placement_is_the_independent_lps(tmp_path):
 
 
 def test_where_the_robot_cannot_stand_the_reason_says_why(tmp_path):
-    """The kinematic capacity along +x stretches the arms: the centre of mass (robot and 2 kg)
-    leaves the core of the six equally stiff contacts, so the set on the floor is empty. It was
-    reported as a reach of 0 with no reason."""
-    run, rows = _site(tmp_path, 'objective = "kinematic:capacity:+x"\n[grounded]\nmu = 0.5\n')
+    """The kinematic capacity along +x stretches the arms: the centre of mass (robot and 2 kg held
+    level) leaves the core of the six equally stiff contacts, so the set on the floor is empty. It
+    was reported as a reach of 0 with no reason."""
+    run, rows = _site(tmp_path, 'objective = "kinematic:capacity:+x"\n[grounded]\nmu = 0.5\nlevel = true\n')
     assert run.returncode == 0, run.stderr
     for row in rows:
         assert row["grounded_reach"] == "" and float(row["value"]) > 0.0

@@ -4,7 +4,8 @@ on its own wheels and casters, and the object is one.
 Checked against an independent LP (tests/floor_reference.py, ``team_straight_line``: each robot's
 whole-body equations from Pinocchio with a floating base restricted to its own S, its own contact
 forces, and one object whose task and level rows sum every robot's hands), against a team of one
-(the robot's own grounded analysis), and in what the floor carries.
+(the robot's own grounded analysis), and in what the floor carries. The beam is held level
+(``Floor(level=True)``): the robots carry its weight (its planar task alone would not).
 """
 
 from __future__ import annotations
@@ -31,10 +32,10 @@ BEAM_DATA = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "b
 
 #: the floors checked: the floor constraint, and the reference's mode, mu and load sharing
 FLOORS = {
-    "no tip-over": (Floor(mu=None), ("no_tip", None, False)),
-    "mu 0.5, compliant": (Floor(mu=0.5), ("friction", 0.5, True)),
-    "mu 0.5, any sharing": (Floor(mu=0.5, load="any"), ("friction", 0.5, False)),
-    "mu 1.0, reserve 0.1": (Floor(mu=1.0, reserve=0.1), ("friction", 1.0, True)),
+    "no tip-over": (Floor(level=True, mu=None), ("no_tip", None, False)),
+    "mu 0.5, compliant": (Floor(level=True, mu=0.5), ("friction", 0.5, True)),
+    "mu 0.5, any sharing": (Floor(level=True, mu=0.5, load="any"), ("friction", 0.5, False)),
+    "mu 1.0, reserve 0.1": (Floor(level=True, mu=1.0, reserve=0.1), ("friction", 1.0, True)),
 }
 
 
@@ -50,7 +51,10 @@ def test_the_beam_team_on_the_floor_equals_the_independent_lp(floor):
     casters and two wheels: every straight-line reach equals the team reference LP to 1e-6."""
     constraint, (mode, mu, springs) = FLOORS[floor]
     P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(constraint,)).measure("dynamic_polytope")
-    problems = [build_problem(m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS) for m in BEAM.members]
+    problems = [
+        build_problem(m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS, level=True)
+        for m in BEAM.members
+    ]
     reserve = constraint.reserve
     for e in _directions(P.dim):
         ref = team_straight_line(problems, e, mode=mode, mu=mu, springs=springs, reserve=reserve)
@@ -64,7 +68,7 @@ def test_the_floor_binds_the_team_and_the_robots_share_the_beam():
     and the beam once: the hands of both robots together hold the beam's weight (one object: its
     level rows add up over the team; each robot on its own carried all of it before)."""
     ideal = analyze_team(BEAM, ("dynamic_polytope",)).measure("dynamic_polytope")
-    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure("dynamic_polytope")
     e = np.array([1.0, 0.0, 0.0])
     assert P.straight_line_reach(e) < 0.5 * ideal.straight_line_reach(e)
     w = P.straight_line_witness(e)
@@ -89,7 +93,7 @@ def test_a_team_of_one_on_the_floor_is_the_robots_own_grounded_analysis(case):
     else:
         robot = mobmanip.load_robot("planar_dual_arm")
         q, task = configuration_at(robot, optimal_posture(robot), 90.0), "planar"
-    floor = Floor(mu=0.5)
+    floor = Floor(level=True, mu=0.5)
     team = Team.holding([Member("solo", robot, q, tuple(range(len(robot.arms))))], 2.0, task=task)
     got = analyze_team(team, ("dynamic_polytope",), constraints=(floor,)).measure("dynamic_polytope")
     ref = mobmanip.analyze(robot, q, task, object_mass=2.0, measures=("dynamic_polytope",), constraints=(floor,))
@@ -107,10 +111,10 @@ def test_team_ground_from_the_command_line(tmp_path):
 
     out = tmp_path / "t.json"
     path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
-    run = _cli("team", str(path), "--polytope", "--mu", "0.5", "--json", str(out))
+    run = _cli("team", str(path), "--polytope", "--mu", "0.5", "--level", "--json", str(out))
     assert run.returncode == 0, run.stderr
     doc = json.loads(out.read_text())
-    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure("dynamic_polytope")
     entry = doc["dynamic_polytope"]
     assert entry["model"]["constraints"][-1]["mu"] == 0.5
     assert entry["model"]["south"]["floor"]["mu"] == 0.5 and entry["model"]["north"]["floor"]["mu"] == 0.5
@@ -136,11 +140,11 @@ def test_a_heading_sweep_on_the_floor(tmp_path):
 
     path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
     out = tmp_path / "s.json"
-    run = _cli("team", str(path), "--measure", "dynamic_polytope", "--mu", "0.5", "--sweep-heading", "0,10",
-               "--json", str(out))  # fmt: skip
+    run = _cli("team", str(path), "--measure", "dynamic_polytope", "--mu", "0.5", "--level", "--sweep-heading",
+               "0,10", "--json", str(out))  # fmt: skip
     assert run.returncode == 0, run.stderr
     points = json.loads(out.read_text())["heading_sweep"]["points"]
-    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure("dynamic_polytope")
     assert points[0]["offset_deg"] == 0.0
     np.testing.assert_allclose(points[0]["reach"]["dynamic_polytope"], [ray_radius(P, e) for e in np.eye(3)], rtol=1e-9)
     assert points[0]["limiting_robot"]["dynamic_polytope"][0] == ""
@@ -149,7 +153,9 @@ def test_a_heading_sweep_on_the_floor(tmp_path):
     for robot in data["robots"]:
         robot["reach"] = False
         robot["joints"] = {**robot["joints"], **points[1]["joints"][robot["name"]]}
-    turned = analyze_team(team_from_dict(data, path.parent), ("dynamic_polytope",), constraints=(Floor(mu=0.5),))
+    turned = analyze_team(
+        team_from_dict(data, path.parent), ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)
+    )
     turned = turned.measure("dynamic_polytope")
     got = points[1]["reach"]["dynamic_polytope"]
     np.testing.assert_allclose(got, [ray_radius(turned, e) for e in np.eye(3)], rtol=1e-9)
@@ -165,7 +171,7 @@ def test_a_heading_sweep_on_the_floor_through_an_executor_equals_the_serial_one(
 
     path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
     job = HeadingJob(BEAM_DATA, (-10.0, 0.0, 10.0), str(path.parent), ("dynamic_polytope",), str(path),
-                     headings_per_task=1, constraints=(Floor(mu=0.5),))  # fmt: skip
+                     headings_per_task=1, constraints=(Floor(level=True, mu=0.5),))  # fmt: skip
     serial = run_heading_sweep(job)
     with ProcessPoolExecutor(2) as pool:
         pooled = run_heading_sweep(job, pool)
@@ -181,7 +187,7 @@ def test_the_team_page_draws_each_robots_support_and_zmp(tmp_path):
     from mobmanip.analysis.reaches import floors_at_rest
     from mobmanip.robot.support import polygon_margin, robot_support
 
-    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure("dynamic_polytope")
     found = floors_at_rest(P)
     assert set(found) == {"south", "north"}
     for member in BEAM.members:
@@ -193,7 +199,7 @@ def test_the_team_page_draws_each_robots_support_and_zmp(tmp_path):
         assert floor["margin"] > 0.0
     page = tmp_path / "beam.html"
     path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
-    run = _cli("team", str(path), "--measure", "dynamic_polytope", "--mu", "0.5", "--export", str(page))
+    run = _cli("team", str(path), "--measure", "dynamic_polytope", "--mu", "0.5", "--level", "--export", str(page))
     assert run.returncode == 0, run.stderr
     from browser_util import exported_scene, missing_browser
 
@@ -211,7 +217,7 @@ def test_without_friction_no_robot_limits_a_reach_the_floor_forbids():
     (its reach is zero to the programs' rounding) and no robot's limits change that: every share
     is 0, where the ratios of two roundings of zero gave shares of -22 to 17. Along y (the robots'
     headings: their bases recoil, their wheels roll freely) the arms' limits bind as before."""
-    A = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.0),))
+    A = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.0),))
     P = A.measure("dynamic_polytope")
     ex = np.array([1.0, 0.0, 0.0])
     assert abs(P.straight_line_reach(ex)) < 1e-9 and abs(ray_radius(P, ex)) < 1e-9
@@ -229,13 +235,17 @@ def test_without_friction_no_robot_limits_a_reach_the_floor_forbids():
 def test_the_beam_team_on_a_ramp_equals_the_independent_lp():
     """Both robots on one ramp (6 deg, rising towards 45 deg): each robot's weight and the beam's
     lean, and the beam's own load is counted once although every robot's floor states it."""
-    constraint = Floor(mu=0.5, slope=6.0, uphill=45.0)
+    constraint = Floor(level=True, mu=0.5, slope=6.0, uphill=45.0)
     P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(constraint,)).measure("dynamic_polytope")
     problems = [
-        build_problem(m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS, gravity=constraint.gravity())
+        build_problem(
+            m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS, gravity=constraint.gravity(), level=True
+        )
         for m in BEAM.members
     ]
-    level = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(mu=0.5),)).measure("dynamic_polytope")
+    level = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure(
+        "dynamic_polytope"
+    )
     for e in _directions(P.dim):
         ref = team_straight_line(problems, e, mode="friction", mu=0.5, springs=True)
         assert P.straight_line_reach(e) == pytest.approx(ref, rel=1e-6), e

@@ -275,6 +275,13 @@ def add_floor_options(parser: argparse.ArgumentParser) -> None:
         metavar="DEG",
         help="with --slope: the direction in which the ramp rises, degrees from the world's +x (default 0)",
     )
+    parser.add_argument(
+        "--level",
+        action="store_true",
+        help="hold the object level on the floor (implies --ground): the hands also carry its weight and "
+        "its roll and pitch moments where the task leaves those rows out, and keep it level within "
+        "0.01 m/s^2 and rad/s^2; off by default: the task is the one analysed without the floor",
+    )
 
 
 def floor_constraints(args) -> tuple:
@@ -288,7 +295,10 @@ def floor_constraints(args) -> tuple:
     slope, uphill = getattr(args, "slope", None), getattr(args, "uphill", None)
     if uphill is not None and slope is None:
         raise ArgumentError("--uphill says where a ramp rises: give its --slope too")
-    if not (getattr(args, "ground", False) or mu is not None or no_traction or load or reserve is not None or slope):
+    level = bool(getattr(args, "level", False))
+    if not (
+        getattr(args, "ground", False) or mu is not None or no_traction or load or reserve is not None or slope or level
+    ):
         return ()
     if mu is not None and no_traction:
         raise ArgumentError("--mu and --no-traction contradict each other: choose one")
@@ -302,6 +312,7 @@ def floor_constraints(args) -> tuple:
             reserve=float(reserve or 0.0),
             slope=float(slope or 0.0),
             uphill=float(uphill or 0.0) if slope else 0.0,
+            level=level,
         ),
     )
 
@@ -402,7 +413,12 @@ def show_progress(args) -> bool:
     return not getattr(args, "no_progress", False) and on_terminal()
 
 
-_BINDING_KINDS = (("lifts off", "support lifting off"), ("slips", "wheel traction"), ("limit", "joint effort"))
+_BINDING_KINDS = (
+    ("level band", "held level"),
+    ("lifts off", "support lifting off"),
+    ("slips", "wheel traction"),
+    ("limit", "joint effort"),
+)
 
 
 def binding_summary(binding: list[str]) -> str:
@@ -451,5 +467,6 @@ def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
         ramp = (
             f", a ramp of {floor['slope']:g} deg rising towards {floor['uphill']:g} deg" if floor.get("slope") else ""
         )
-        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid{ramp}): contacts {names}")
+        level = ", object held level" if floor.get("level") else ""
+        lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid{ramp}{level}): contacts {names}")
     return "\n".join(lines)

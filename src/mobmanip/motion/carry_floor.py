@@ -34,7 +34,7 @@ from ..platforms import a_platform
 from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
-from ..terms.constraints.floor import compliant_sharing
+from ..terms.constraints.floor import compliant_sharing, pyramid_faces
 from ..terms.grasp import GRAVITY
 from .ground import floor_wrench
 
@@ -181,8 +181,7 @@ def floor_rows(
         t1[:, nx] = free[0]  # the lateral split s
         tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
         for i, c in enumerate(driven):
-            for angle in 2.0 * math.pi * np.arange(faces) / faces:
-                u = np.array([math.cos(angle), math.sin(angle)])
+            for u in pyramid_faces(faces, pose[2]):
                 # u . t_i - tilt fn_c <= 0
                 G_rows.append(u @ t1[2 * i : 2 * i + 2] - tilt * fn1[c])
                 g_rows.append(tilt * fn0[c] - float(u @ t0[2 * i : 2 * i + 2]))

@@ -11,8 +11,9 @@ and finds the largest reach that holds for a chosen duration, with the efforts t
 it holds).
 
 The replay integrates the reduced dynamics of the robot holding its object (the hands hold it in
-the task's rows and keep it level, as the floor constraint does: a planar task's object may turn
-about the vertical in the hands) under constant efforts tau: at each state (q, x), with the terms of
+the task's rows and, when the floor holds it level, in the level rows too, as the floor
+constraint does: a planar task's object may then turn about the vertical in the hands) under
+constant efforts tau: at each state (q, x), with the terms of
 :func:`mobmanip.motion.in_motion.motion_terms`, the reduced accelerations xdot, the hands' wrench h
 (m k) and the object's acceleration a_o solve::
 
@@ -44,7 +45,7 @@ from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.lifted import Witness
 from ..sets.linear_programs import LinearProgram
-from ..terms.constraints.floor import LEVEL_ROWS, Floor, compliant_sharing
+from ..terms.constraints.floor import LEVEL_ROWS, Floor, compliant_sharing, pyramid_faces
 from ..terms.grasp import GRAVITY
 from .ground import floor_wrench
 from .in_motion import motion_terms
@@ -175,9 +176,9 @@ def _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, keep)
     names = tuple(c.name for c in support.contacts)
     wheels = tuple(c.name for c in support.contacts if c.driven)
 
-    # the hands hold the object in the task's rows and keep it level (as the floor constraint
-    # does): a planar task's object is held level by the same closed chain that moves it
-    held_rows = tuple(sorted(set(task_space.rows) | set(LEVEL_ROWS)))
+    # the hands hold the object in the task's rows and, held level, in the level rows (as the
+    # floor constraint does): the same closed chain that moves the object keeps it level
+    held_rows = tuple(sorted(set(task_space.rows) | (set(LEVEL_ROWS) if floor.level else set())))
     labels = get_task("spatial").labels
     welded = TaskSpace(f"{task_space.name}_level", held_rows, tuple(labels[r] for r in held_rows))
     rows = [held_rows.index(r) for r in task_space.rows]
@@ -469,7 +470,8 @@ def held_reach(
     calm_hold, calm_maps = play(witness.variables["tau"])
     if calm_hold.holds and fraction == 1.0:
         return HeldReach(d, top, instant, float(duration), calm_hold, calm_hold, fraction, witness, None, witness)
-    program = _HoldingProgram(robot, polytope, d, object_mass, floor)
+    heading = math.atan2(float(q[3]), float(q[2]))
+    program = _HoldingProgram(robot, polytope, d, object_mass, floor, heading)
     calm_witness = witness
     # a held reach: (reach, its replay, its efforts, the replay's contact maps)
     Held = tuple[float, Hold, Witness, list[ContactMaps]]
@@ -570,7 +572,7 @@ class _HoldingProgram:
     Columns: the polytope's variables z, the wheels' splits per step, the reach s and the margin t.
     """
 
-    def __init__(self, robot, polytope, d, object_mass, floor: Floor):
+    def __init__(self, robot, polytope, d, object_mass, floor: Floor, heading: float):
         self.polytope, self.d = polytope, d
         mass = float(robot.spec.object_mass if object_mass is None else object_mass)
         self.support, mu, faces = floor.resolve(robot)
@@ -580,8 +582,7 @@ class _HoldingProgram:
         weight = (float(pin.computeTotalMass(robot.model)) + mass) * float(-GRAVITY[2])
         self.least = floor.reserve * weight / len(self.support.contacts)
         self.tilt = float(mu) * math.cos(math.pi / faces) * (1.0 - floor.reserve)
-        angles = 2.0 * math.pi * np.arange(faces) / faces
-        self.faces = np.column_stack([np.cos(angles), np.sin(angles)])
+        self.faces = pyramid_faces(faces, heading)
         self.rows = polytope.lifted_rows()
         self.tau = np.arange(len(self.rows.lower))[polytope.variables["tau"]]
 

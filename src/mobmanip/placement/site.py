@@ -17,6 +17,7 @@ A site file (TOML) names the robot, the objective and the object positions::
     [grounded]                           # optional: the capacity on the floor at each optimum
     mu = 0.5                             # friction coefficient, or "spec"
     direction = "+x"                     # signed task axis of the straight-line reach
+    level = false                        # hold the object level on the floor (as --level)
 
 Each position is :func:`mobmanip.placement.place`'s problem on its own (the same starts, so
 the result does not depend on the order, the worker or a retry); with ``[grounded]`` the
@@ -70,6 +71,7 @@ class Site:
             None: not computed.
         direction: signed task axis of the grounded straight-line reach (e.g. ``"+x"``).
         grid_shape: (Nx, Ny, Nz) when the positions are a grid (x fastest), else None.
+        level: the grounded capacity holds the object level (``Floor(level=True)``).
     """
 
     robot: str
@@ -81,6 +83,7 @@ class Site:
     mu: float | str | None = None
     direction: str = "+x"
     grid_shape: tuple[int, int, int] | None = None
+    level: bool = False
 
     @classmethod
     def read(cls, path: str | Path, check_count: CountCheck | None = None) -> Site:
@@ -133,10 +136,13 @@ class Site:
             raise SpecError(f"{where}: 'task' must be a task space's name, got {task!r}")
         positions, shape = _positions(document, where, check_count)
         grounded = document.get("grounded")
-        mu, direction = None, "+x"
+        mu, direction, level = None, "+x", False
         if grounded is not None:
-            if not isinstance(grounded, Mapping) or set(grounded) - {"mu", "direction"}:
-                raise SpecError(f"{where}: [grounded] takes mu and direction")
+            if not isinstance(grounded, Mapping) or set(grounded) - {"mu", "direction", "level"}:
+                raise SpecError(f"{where}: [grounded] takes mu, direction and level")
+            level = grounded.get("level", False)
+            if not isinstance(level, bool):
+                raise SpecError(f"{where}: [grounded] level must be true or false, got {level!r}")
             mu = grounded.get("mu", "spec")
             if mu != "spec" and (isinstance(mu, bool) or not isinstance(mu, (int, float)) or not mu > 0):
                 raise SpecError(f'{where}: [grounded] mu must be a positive number or "spec", got {mu!r}')
@@ -146,7 +152,7 @@ class Site:
             if not isinstance(direction, str) or direction[:1] not in "+-" or len(direction) < 2:
                 raise SpecError(f'{where}: [grounded] direction must be a signed task axis like "+x"')
         return cls(robot, objective, positions, None if mass is None else float(mass), task, starts, mu, direction,
-                   shape)  # fmt: skip
+                   shape, level)  # fmt: skip
 
 
 def _axis(value, name: str, where: str) -> tuple[float, float, int]:
@@ -253,7 +259,7 @@ def _grounded_reach(robot: Robot, q: np.ndarray, site: Site) -> float:
 
     task = get_task(site.task or robot.spec.default_task)
     e = _grounded_direction(site, task)
-    analysis = analyze(robot, q, task.name, object_mass=site.mass, constraints=(Floor(mu=site.mu),),
+    analysis = analyze(robot, q, task.name, object_mass=site.mass, constraints=(Floor(mu=site.mu, level=site.level),),
                        measures=("dynamic_polytope",))  # fmt: skip
     polytope = analysis.measure("dynamic_polytope")
     reach = getattr(polytope, "straight_line_reach", None)

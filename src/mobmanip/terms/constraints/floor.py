@@ -12,10 +12,23 @@ A_G is the centroidal momentum matrix (Pinocchio's ``computeCentroidalMap``; at 
 the momentum is A_G qdd), lambda_c the floor's force at contact c, (f_i, n_i) the wrench hand i
 applies to the object. For a differential drive (one reduced velocity per wheel and joint) these
 six rows and the reduced ones together are the whole floating-base dynamics. The unknowns the
-floor adds: each driven wheel's contact force (world x, y, z), each passive support's normal force
-and, when the task leaves out the object's vertical force or its roll or pitch moment (a planar
-task), the hands' wrench components on those rows: the object is held level, so those
-components balance its weight, and the robot feels their reaction.
+floor adds: each driven wheel's contact force (world x, y, z) and each passive support's normal
+force.
+
+The task is the user's. On the floor the hands apply exactly the wrench components of the task
+analysed without the floor: a translational task's hands apply forces and no moments, a planar
+task's object is moved in the plane and its weight is not the hands' (as in the ideal set, where
+g_o has no vertical row). Holding the object level is a requirement the user names
+(``Floor(level=True)``, ``--level``): the hands then also apply the wrench components the task
+leaves out among the object's vertical force and its roll and pitch moments (:data:`LEVEL_ROWS`),
+which balance its weight and tipping moments (the robot feels their reaction), and the hands'
+accelerations on those rows stay within :data:`LEVEL_TOLERANCE` of zero. Two hands share that load
+without squeezing the object on those rows (the minimum-norm share): a squeeze would pass to the
+joints only through the tilt of their axes, so a file's 1e-6 rad of rounding would let an
+unbounded squeeze lend them unbounded torque (reaches four times the true ones). A band, not an equation:
+a robot file that rounds pi/2 to 1.5708 tilts a wrist axis by 4e-6 rad, and an equation would
+freeze that joint outright where the band lets it move as far as its tilt stays inside (a result
+that moves by the tilt's own order, not by half of a reach).
 
 Inequalities: every normal force >= 0 (no contact pulls: the robot does not tip over); with a
 friction coefficient mu, each driven wheel's tangential force lies in the pyramid with
@@ -70,9 +83,14 @@ _G = float(-GRAVITY[2])  # m/s^2, the magnitude of gravity (along world -z)
 #: The steepest floor modelled (deg): a ramp, not a wall (wheelchair ramps are under 5 deg).
 MAX_SLOPE = 30.0
 
-#: Rows of a 6-D wrench (force, then moment; world axes) the object is balanced in even when the
-#: task leaves them out: its vertical force and its roll and pitch moments (it is held level).
+#: Rows of a 6-D wrench (force, then moment; world axes) the object is balanced in, when it is held
+#: level (``Floor(level=True)``), even where the task leaves them out: its vertical force and its
+#: roll and pitch moments.
 LEVEL_ROWS = (2, 3, 4)
+#: How far from zero the hands' accelerations on the level rows a task leaves out may be when the
+#: object is held level (m/s^2 vertically, rad/s^2 in roll and pitch): a tray tilting at this
+#: rate turns by 0.3 deg in a quarter of a second from rest.
+LEVEL_TOLERANCE = 0.01
 #: How the contacts may share the weight (see the module's docstring).
 LOADS = ("auto", "compliant", "any")
 #: The name of the contact force variable (world x, y, z per driven wheel; z per passive support).
@@ -114,6 +132,11 @@ class Floor(Constraint):
             rows, the object's equation and its level rows); the wheels' traction must hold the
             weight's share along the ramp.
         uphill: the direction (deg, in the floor's x, y) in which the ramp rises; 0: along +x.
+        level: hold the object level (see the module's docstring): the hands also carry the
+            object's weight and its roll and pitch moments where the task leaves those rows out,
+            and keep their accelerations there within ``level_tolerance`` of zero. Off by default:
+            the task is the one analysed without the floor.
+        level_tolerance: the band of the level requirement (m/s^2 and rad/s^2, > 0).
     """
 
     mu: float | str | None = "spec"
@@ -124,6 +147,8 @@ class Floor(Constraint):
     reserve: float = 0.0
     slope: float = 0.0
     uphill: float = 0.0
+    level: bool = False
+    level_tolerance: float = LEVEL_TOLERANCE
     name: str = "floor"
     problem: str = "acceleration"
 
@@ -139,6 +164,11 @@ class Floor(Constraint):
         for value, what in ((self.slope, "slope"), (self.uphill, "uphill direction")):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ArgumentError(f"the floor's {what} must be a finite angle in degrees, got {value!r}")
+        if not isinstance(self.level, bool):
+            raise ArgumentError(f"the floor's level must be True or False, got {self.level!r}")
+        tol = self.level_tolerance
+        if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not (math.isfinite(tol) and tol > 0.0):
+            raise ArgumentError(f"the floor's level tolerance must be a positive number (m/s^2, rad/s^2), got {tol!r}")
         if not 0.0 <= self.slope <= MAX_SLOPE:
             raise ArgumentError(f"the floor's slope must be from 0 to {MAX_SLOPE:g} deg, got {self.slope!r}")
 
@@ -177,6 +207,8 @@ class Floor(Constraint):
             out["reserve"] = self.reserve
         if self.slope:
             out["slope"], out["uphill"] = self.slope, self.uphill
+        if self.level:
+            out["level"] = f"object held level (within {self.level_tolerance:g} m/s^2, rad/s^2)"
         return out
 
     def rows(self, terms: Terms) -> ConstraintRows:
@@ -216,7 +248,7 @@ class Floor(Constraint):
         n_forces = C.shape[1]
 
         rows = list(task.rows)
-        level = [r for r in LEVEL_ROWS if r not in rows]
+        level = [r for r in LEVEL_ROWS if r not in rows] if self.level else []
         center = np.asarray(terms.held_object.center, dtype=float)
         H_task, H_level, couple, level_kin, grasp_task, grasp_level = [], [], [], [], [], []
         for arm in robot.arms:
@@ -247,12 +279,12 @@ class Floor(Constraint):
             # the object's own rows: in a team every robot's hands share them) ...
             object_e = np.array([-terms.held_object.mass * gravity[r] if r < 3 else 0.0 for r in level])
             object_E = {"h": np.hstack(grasp_task), LEVEL_WRENCHES: np.hstack(grasp_level)}
-            # ... and the hands do not move it out of level (rows that are not zero)
-            kin = np.vstack(level_kin)
-            moving = np.abs(kin).max(axis=1) > 1e-12 * max(float(np.abs(kin).max()), 1.0)
-            if moving.any():
-                equations.append(({"xdot": kin[moving]}, np.zeros(int(moving.sum()))))
             couplings["dynamics"] = {LEVEL_WRENCHES: np.hstack(couple)}
+            # ... shared by the hands without squeezing it on those rows (the minimum-norm share:
+            # no part in the null space of their grasp map)
+            squeeze = _null_space(np.hstack(grasp_level))
+            if len(squeeze):
+                equations.append(({LEVEL_WRENCHES: squeeze}, np.zeros(len(squeeze))))
         if sharing_model == "compliant":
             sharing = compliant_sharing(points, support.stiffness)
             if len(sharing):
@@ -282,12 +314,26 @@ class Floor(Constraint):
             for contact, (a, b) in zip(support.contacts, slices):
                 if not contact.driven:
                     continue
-                for angle in 2.0 * math.pi * np.arange(faces) / faces:
+                for u in pyramid_faces(faces, pose[2]):
                     row = np.zeros(n_forces)
-                    row[a:b] = (math.cos(angle), math.sin(angle), -tilt)
+                    row[a:b] = (u[0], u[1], -tilt)
                     G_rows.append(row)
                     h_rows.append(0.0)
                     labels.append(f"{contact.name} slips (traction at its friction limit, mu = {mu:g})")
+        G = {CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)}
+        h = np.array(h_rows, dtype=float)
+        if nl:  # the hands keep the object level: their accelerations on the level rows in the band
+            kin = np.vstack(level_kin)
+            G = {CONTACT_FORCES: np.vstack([G[CONTACT_FORCES], np.zeros((2 * len(kin), n_forces))]),
+                 "xdot": np.vstack([np.zeros((len(h), nx)), kin, -kin])}  # fmt: skip
+            h = np.r_[h, np.full(2 * len(kin), self.level_tolerance)]
+            names = ("vertical acceleration", "roll acceleration", "pitch acceleration")
+            labels += [
+                f"{arm.name} hand's {names[r - 2]} at the level band ({sign}{self.level_tolerance:g}; held level)"
+                for sign in "+-"
+                for arm in robot.arms
+                for r in level
+            ]
         info = {
             "floor": {
                 "mu": None if self.lift else mu,
@@ -307,16 +353,27 @@ class Floor(Constraint):
                     for ct, p, s in zip(support.contacts, points, slices)
                 ],
                 "polygon": support.polygon(pose).tolist(),
+                "level": self.level,
             }
         }
         if self.slope:
             info["floor"].update(slope=self.slope, uphill=self.uphill, gravity=gravity.tolist())
         return ConstraintRows(
-            self.name, self.problem, variables=variables, G={CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)},
-            h=np.array(h_rows, dtype=float), E=E, e=e, couplings=couplings, object_E=object_E, object_e=object_e,
-            shifts=shifts,
+            self.name, self.problem, variables=variables, G=G, h=h, E=E, e=e, couplings=couplings,
+            object_E=object_E, object_e=object_e, shifts=shifts,
             labels=tuple(labels), info=info,
         )  # fmt: skip
+
+
+def pyramid_faces(faces: int, heading: float) -> np.ndarray:
+    """The outward directions of a friction pyramid's faces in the floor plane, (faces, 2).
+
+    The pyramid is inscribed in the round cone; its faces turn with the platform (the first one
+    along its heading, ``heading`` rad from the world's +x), so that a robot turned on the floor
+    has the same floor model, and its sets turn with it. Fixed in the world, an 8-face pyramid
+    made reaches depend on the heading by up to 1 - cos(pi / 8) = 7.6 %."""
+    angles = heading + 2.0 * math.pi * np.arange(faces) / faces
+    return np.column_stack([np.cos(angles), np.sin(angles)])
 
 
 def compliant_sharing(points: np.ndarray, stiffness: np.ndarray | None = None) -> np.ndarray:
@@ -338,6 +395,14 @@ def compliant_sharing(points: np.ndarray, stiffness: np.ndarray | None = None) -
     rows = deflections / k[None, :]  # d = f / k
     q, _ = np.linalg.qr(rows.T)
     return q.T
+
+
+def _null_space(A: np.ndarray) -> np.ndarray:
+    """Orthonormal rows spanning the null space of A (p, n), (n - rank, n); A's entries are
+    dimensionless or metres (a grasp map), so its rank is read at 1e-9 of its largest singular value."""
+    _, sigma, vt = np.linalg.svd(A)
+    rank = int(np.sum(sigma > 1e-9 * max(float(sigma[0]) if len(sigma) else 0.0, 1e-300)))
+    return vt[rank:]
 
 
 def _springs(support: Support) -> str:
