@@ -17,12 +17,18 @@ run in a fresh process (``resource.getrusage``: the main process and the largest
 
 BLAS runs single-threaded (set before NumPy loads), so per-configuration numbers use one core.
 
+``--decisions`` also times the two placement decisions as the command a user types (see
+:func:`time_commands`): each in a fresh process of the ``mobmanip`` console script, with the
+environment this script was started with (not the one-thread settings above), beside the same
+work in this warm process, quiet and again beside 4 busy processes.
+
 Usage::
 
     python scripts/benchmark.py            # full run (a few minutes)
     python scripts/benchmark.py --quick    # smoke run (seconds)
     python scripts/benchmark.py --polytopes [--quick]   # the capacity polytopes instead
     python scripts/benchmark.py --decisions [--quick]   # decisions beside the code they replace
+    python scripts/benchmark.py --decisions --as-commands   # only the decisions as a user types them
     python scripts/benchmark.py --sweeps [--quick]      # polytope sweeps, compiled beside one at a time
 """
 
@@ -30,16 +36,22 @@ from __future__ import annotations
 
 import os
 
+#: The environment as the user started this script: the commands timed as a user types them get it.
+USER_ENVIRONMENT = dict(os.environ)
+
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import resource  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
@@ -189,6 +201,199 @@ def memory_child(n_configurations: int) -> None:
     )
 
 
+# ----------------------------------------------------------------------------------------------
+# the decisions as a user types them
+
+#: Busy processes of the parallel load: on a 2-core machine, 4 keep both cores busy twice over.
+LOAD_PROCESSES = 4
+#: Upper bounds: a command's CPU time on the quiet machine (s), and its CPU time loaded over quiet.
+COMMAND_CPU_BOUND = 1.5
+LOAD_RATIO_BOUND = 1.5
+
+
+class CommandCase:
+    """One decision as a command (``argv`` after ``mobmanip``; ``{out}`` is a fresh directory)
+    and as the library call that does its work in this process (``call``)."""
+
+    def __init__(self, name: str, argv: list[str], call):
+        self.name, self.argv, self.call = name, argv, call
+        self.times: dict[tuple[str, str], list[float]] = {}
+
+    def add(self, load: str, column: str, value: float) -> None:
+        self.times.setdefault((load, column), []).append(value)
+
+    def median(self, load: str, column: str) -> float:
+        return float(np.median(self.times[(load, column)]))
+
+    def cell(self, load: str, column: str) -> str:
+        values = self.times[(load, column)]
+        return f"{np.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
+
+
+def command_cases(quick: bool) -> list[CommandCase]:
+    """The two placement decisions of benchmark_decisions.py, as a user types them."""
+    from mobmanip.placement import place
+    from mobmanip.placement.map_jobs import MapJob, run_map
+    from mobmanip.placement.maps import default_extent
+
+    tiago = mobmanip.load_robot("tiago_dual")
+    paper = mobmanip.load_robot("planar_dual_arm")
+    target = (1.0, 0.5, 0.35)
+    cells = 7 if quick else 15
+    x0, x1, y0, y1 = default_extent(paper, target)
+    job = MapJob(robot="planar_dual_arm", target=target, objective="kinematic:capacity:+x",
+                 x=tuple(np.linspace(x0, x1, cells)), y=tuple(np.linspace(y0, y1, cells)))  # fmt: skip
+    return [
+        CommandCase(
+            "place, TIAGo++, 8 starts",
+            "place tiago_dual --object 1.5,0.5,0.85 --mass 1 --objective dynamic:log_volume".split(),
+            lambda: place(tiago, [1.5, 0.5, 0.85], "dynamic:log_volume", object_mass=1.0, starts=8),
+        ),
+        CommandCase(
+            f"place --map, paper robot ({cells} x {cells})",
+            "place planar_dual_arm --object 1,0.5,0.35 --objective kinematic:capacity:+x --map {out}".split()
+            + ["--map-cells", str(cells)],
+            lambda: run_map(job),
+        ),
+    ]
+
+
+def _console_script() -> list[str]:
+    """The ``mobmanip`` command installed beside this Python (else ``python -m mobmanip``)."""
+    script = Path(sys.executable).with_name("mobmanip")
+    return [str(script)] if script.is_file() else [sys.executable, "-m", "mobmanip"]
+
+
+def _argv(case: CommandCase, out: str) -> list[str]:
+    return [str(Path(out) / "map") if part == "{out}" else part for part in case.argv]
+
+
+def time_command(case: CommandCase) -> tuple[float, float]:
+    """(CPU, wall) seconds of the command in a fresh process with the user's environment; the
+    CPU time is the child's, from this process's RUSAGE_CHILDREN before and after."""
+    with tempfile.TemporaryDirectory() as out:
+        argv = _console_script() + _argv(case, out)
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        child = subprocess.run(argv, env=USER_ENVIRONMENT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        wall = time.perf_counter() - start
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if child.returncode != 0:
+        raise RuntimeError(f"mobmanip {' '.join(case.argv)} failed: {child.stderr.strip()}")
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), wall
+
+
+def time_main(case: CommandCase) -> float:
+    """CPU seconds of the same command run by ``mobmanip.cli.main`` in this warm process."""
+    import contextlib
+    import io
+
+    from mobmanip.cli import main as cli_main
+
+    with tempfile.TemporaryDirectory() as out:
+        sink = io.StringIO()
+        start = time.process_time()
+        with contextlib.redirect_stdout(sink), contextlib.redirect_stderr(sink):
+            code = cli_main(_argv(case, out))
+        cpu = time.process_time() - start
+    if code != 0:
+        raise RuntimeError(f"mobmanip {' '.join(case.argv)} failed in-process: {sink.getvalue().strip()}")
+    return cpu
+
+
+def time_call(case: CommandCase) -> float:
+    """CPU seconds of the decision's library call in this warm process."""
+    start = time.process_time()
+    case.call()
+    return time.process_time() - start
+
+
+@contextlib.contextmanager
+def busy_load(processes: int):
+    """``processes`` Python processes spinning while the block runs (killed and reaped after it,
+    so their CPU time never enters a command's RUSAGE_CHILDREN difference)."""
+    spinners = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(processes)]
+    try:
+        time.sleep(0.5)  # until they run
+        yield
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+        for spinner in spinners:
+            spinner.wait()
+
+
+COMMAND_COLUMNS = (
+    ("call", "in-process call, CPU"),
+    ("main", "in-process cli.main, CPU"),
+    ("cpu", "command, CPU"),
+    ("wall", "command, wall"),
+)
+
+
+def time_commands(quick: bool = False, rounds: int | None = None, only: str | None = None) -> int:
+    """Each placement decision as the command a user types, beside it in this warm process.
+
+    Columns, each a median (min-max) over ``rounds`` interleaved rounds (default 5; quick 2)
+    after one warm-up run of each (Numba's disk cache, the robots' caches, the files read): the
+    decision's library call (what the decisions table times), the command run by
+    ``mobmanip.cli.main`` in this process (the call plus parsing, checks and output files), and
+    the command in a fresh process as a user types it (plus the interpreter's start and the
+    imports), CPU time of the child and wall time. Then all of it again beside
+    :data:`LOAD_PROCESSES` busy processes, and the loaded figures over the quiet ones.
+    """
+    rounds = rounds or (2 if quick else 5)
+    cases = [case for case in command_cases(quick) if only is None or only in case.name]
+    if not cases:
+        return 0
+    print(f"as a user types it: load average {os.getloadavg()[0]:.2f} before, {os.cpu_count()} cores; thread "
+          f"variables passed on: {_thread_variables(USER_ENVIRONMENT) or 'none'}", flush=True)  # fmt: skip
+    if os.getloadavg()[0] >= 1.0:
+        print("  note: the machine is busy already (load average >= 1): the quiet figures are not quiet", flush=True)
+    for case in cases:  # warm-up, not counted
+        time_call(case), time_main(case), time_command(case)
+    loads = (("quiet", contextlib.nullcontext), (f"{LOAD_PROCESSES} busy", lambda: busy_load(LOAD_PROCESSES)))
+    for load, context in loads:
+        with context():
+            for _ in range(rounds):
+                for case in cases:
+                    case.add(load, "call", time_call(case))
+                    case.add(load, "main", time_main(case))
+                    cpu, wall = time_command(case)
+                    case.add(load, "cpu", cpu)
+                    case.add(load, "wall", wall)
+        print(f"  {load}: done, load average {os.getloadavg()[0]:.2f}", flush=True)
+
+    quiet, loaded = (name for name, _ in loads)
+    header = f"{'seconds, median (min-max) of ' + str(rounds):<40}{'load':<10}" + "".join(
+        f"{label:>26}" for _, label in COMMAND_COLUMNS
+    )
+    print()
+    print(header)
+    print("-" * len(header))
+    for case in cases:
+        for k, load in enumerate((quiet, loaded)):
+            print(f"{case.name if k == 0 else '':<40}{load:<10}" + "".join(
+                f"{case.cell(load, key):>26}" for key, _ in COMMAND_COLUMNS))  # fmt: skip
+        ratios = [case.median(loaded, key) / case.median(quiet, key) for key, _ in COMMAND_COLUMNS]
+        print(f"{'':<40}{'ratio':<10}" + "".join(f"{ratio:>26.2f}" for ratio in ratios))
+    print()
+    for case in cases:
+        cpu, ratio = case.median(quiet, "cpu"), case.median(loaded, "cpu") / case.median(quiet, "cpu")
+        start_up = case.median(quiet, "cpu") - case.median(quiet, "main")
+        print(
+            f"{case.name}: command {cpu:.2f} s CPU quiet (<= {COMMAND_CPU_BOUND:g}: "
+            f"{verdict(cpu, COMMAND_CPU_BOUND)}), {ratio:.2f}x loaded (<= {LOAD_RATIO_BOUND:g}: "
+            f"{verdict(ratio, LOAD_RATIO_BOUND)}); a fresh process adds {start_up:.2f} s CPU to cli.main"
+        )
+    return 0
+
+
+def _thread_variables(environ) -> str:
+    names = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+    return ", ".join(f"{name}={environ[name]}" for name in names if name in environ)
+
+
 def verdict(value: float, bound: float, below: bool = True) -> str:
     return "met" if (value <= bound if below else value >= bound) else "NOT met"
 
@@ -207,6 +412,11 @@ def main(argv=None) -> int:
         action="store_true",
         help="decisions beside the code they replace, on one run (scripts/benchmark_decisions.py)",
     )
+    parser.add_argument(
+        "--as-commands",
+        action="store_true",
+        help="with --decisions: only the placement decisions as the commands a user types (fresh processes)",
+    )
     parser.add_argument("--only", metavar="TEXT", help="with --decisions: only the decisions whose name contains TEXT")
     parser.add_argument(
         "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
@@ -220,9 +430,12 @@ def main(argv=None) -> int:
 
         return run(quick=args.quick)
     if args.decisions:
-        from benchmark_decisions import run as run_decisions
+        if not args.as_commands:
+            from benchmark_decisions import run as run_decisions
 
-        return run_decisions(quick=args.quick, rounds=args.rounds, only=args.only)
+            run_decisions(quick=args.quick, rounds=args.rounds, only=args.only)
+            print()
+        return time_commands(quick=args.quick, rounds=args.rounds, only=args.only)
     if args.floor:
         from benchmark_floor import run as run_floor
 
