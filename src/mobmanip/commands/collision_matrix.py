@@ -8,9 +8,15 @@ import time
 
 from ..support.reading import decimal
 
+#: Configurations sampled without being asked (--max-work raises it): ten times the default.
+MAX_SAMPLES = 100_000
+#: Wall time of one sampled configuration on the paper's robot (s), rounded up (TIAGo++: 3.5e-3 s).
+SECONDS_PER_SAMPLE = 2e-4
+
 
 def register(sub) -> None:
     from ..robot.collision_matrix import DEFAULT_NEVER_CLOSER_THAN, DEFAULT_SAMPLES, DEFAULT_SEED
+    from .common import add_work_option
 
     parser = sub.add_parser(
         "collision-matrix",
@@ -39,7 +45,23 @@ def register(sub) -> None:
         help="shapes: collision, visual, or collision and visual ones for links without (default auto)",
     )
     parser.add_argument("--out", metavar="FILE.json", help="write here (default: NAME.collision.json beside the spec)")
+    add_work_option(parser, f"sampled configurations (default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
+
+
+def _check_work(args, robot) -> None:
+    """Refuse a sample count above the bound (--max-work) or above what fits in memory, before
+    any sample is drawn (the estimate is announced only for work that will run)."""
+    from ..robot.collision_matrix import check_samples
+    from ..support.work import WorkEstimate, bound, check_work
+
+    work = WorkEstimate("collision-matrix", "sampled configurations", args.samples, SECONDS_PER_SAMPLE,
+                        f"--samples {args.samples}")  # fmt: skip
+    limit = bound(args.max_work, MAX_SAMPLES)
+    if args.samples > limit:
+        check_work(work, limit)  # refuses, naming the bound and --max-work
+    check_samples(robot, args.samples, "--samples")
+    check_work(work, limit)
 
 
 def run(args) -> int:
@@ -49,7 +71,12 @@ def run(args) -> int:
     from ..robot.spec import find_spec
     from ..support.files import check_output, write_text
 
+    if args.samples < 1:
+        raise UsageError(f"--samples must be at least 1, got {args.samples}")
+    if not 0.0 < args.never_closer_than < 1.0:  # refused before the work is announced
+        raise UsageError(f"--never-closer-than must be between 0 and 1 m, got {args.never_closer_than!r}")
     robot = load_robot(find_spec(args.robot))
+    _check_work(args, robot)
     out = args.out if args.out else matrix_path(robot)
     if out is None:
         raise UsageError(f"robot {robot.name!r} has no spec file to store the matrix beside; give --out")

@@ -58,6 +58,10 @@ DEFAULT_SAMPLES = 10000
 DEFAULT_SEED = 0
 DEFAULT_NEVER_CLOSER_THAN = 0.10
 
+#: Most bytes the sampled configurations may take together (they are drawn at once, so that a
+#: seed gives the same samples whatever the count's chunking).
+MAX_SAMPLE_BYTES = 1 << 30
+
 Pairs = tuple[tuple[int, int], ...]
 
 
@@ -183,6 +187,23 @@ def sample_configurations(robot: Robot, count: int, seed: int) -> np.ndarray:
     return out
 
 
+def check_samples(robot: Robot, samples: int, name: str = "collision matrix samples") -> None:
+    """Refuse a sample count below 1, or one whose configurations do not fit in
+    :data:`MAX_SAMPLE_BYTES` (``name``: what the message calls the count).
+
+    Raises:
+        ArgumentError: naming the count and the most that fit.
+    """
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        raise ArgumentError(f"{name} must be a positive integer, got {samples!r}")
+    most = MAX_SAMPLE_BYTES // (8 * robot.model.nq)
+    if samples > most:
+        raise ArgumentError(
+            f"{name}: {samples:,} configurations of {robot.name} ({robot.model.nq} numbers each) "
+            f"are more than the {most:,} that fit in {MAX_SAMPLE_BYTES >> 20} MiB"
+        )
+
+
 def compute_collision_matrix(
     robot: Robot,
     samples: int = DEFAULT_SAMPLES,
@@ -193,10 +214,10 @@ def compute_collision_matrix(
     """Sample the robot and classify every pair that may meet (see the module's rule).
 
     Raises:
-        ArgumentError: fewer than 1 sample, or a distance outside (0, 1) m.
+        ArgumentError: fewer than 1 sample or more than fit in :data:`MAX_SAMPLE_BYTES`, or a
+            distance outside (0, 1) m.
     """
-    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
-        raise ArgumentError(f"collision matrix samples must be a positive integer, got {samples!r}")
+    check_samples(robot, samples)
     if not isinstance(never_closer_than, (int, float)) or not 0.0 < never_closer_than < 1.0:
         raise ArgumentError(f"never-closer-than distance must be between 0 and 1 m, got {never_closer_than!r}")
     geometry = robot_geometry(robot, source)
