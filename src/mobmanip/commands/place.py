@@ -101,9 +101,9 @@ def register(sub) -> None:
     parser.add_argument(
         "--budget",
         type=int,
-        default=DEFAULT_BUDGET,
         metavar="N",
-        help=f"with a polytope objective: evaluations of the derivative-free search (default {DEFAULT_BUDGET})",
+        help=f"with a polytope objective: evaluations of the derivative-free search (default {DEFAULT_BUDGET}; "
+        "refused with an ellipsoid objective, which gradient ascent maximises)",
     )
     add_dask_option(parser)
     add_work_option(
@@ -135,6 +135,14 @@ def _check_work(args) -> None:
     if args.starts < 1:
         raise UsageError(f"--starts must be at least 1, got {args.starts}")
     check_work(WorkEstimate("place", "starts", args.starts, SECONDS_PER_START), _bound(args.max_work, MAX_STARTS))
+    if args.budget is not None and not _polytope_objective(args):
+        raise UsageError(
+            f"--budget {args.budget} sets the derivative-free search of a polytope objective (e.g. "
+            f"dynamic_polytope:reach:+x); the objective {args.objective!r} is not one (an ellipsoid objective is "
+            "maximised by gradient ascent from --starts starts)"
+        )
+    if args.budget is None:
+        args.budget = DEFAULT_BUDGET
     if args.budget < 1:
         raise UsageError(f"--budget must be at least 1 evaluation, got {args.budget}")
     if _polytope_objective(args):
