@@ -22,15 +22,21 @@ is captured and folded into the error message when the expansion fails.
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import errno
 import io
+import math
 import os
+import re
+import sys
 import threading
+import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree
+from xml.parsers.expat import ExpatError
 
 from ..errors import XacroError
 from ..support.reading import MAX_ROBOT_FILE_BYTES, file_refusal
@@ -42,6 +48,299 @@ from .urdf import urdf_description
 SEARCH_DEPTH = 4
 
 _LOCK = threading.Lock()
+
+#: Bounds on what a xacro file expands to (the bytes it reads are bounded apart, by
+#: :data:`~mobmanip.support.reading.MAX_ROBOT_FILE_BYTES`): a few kilobytes can otherwise ask for
+#: gigabytes (a property doubled forty times, macros calling the next twice) or hours (an
+#: integer of a hundred million digits). A real robot stays far below each: TIAGo++'s files
+#: expand some hundreds of macros into a few thousand elements in about a second.
+MAX_MACRO_EXPANSIONS = 20_000
+#: Elements xacro evaluates (each macro body and inserted block counts again).
+MAX_ELEMENTS = 100_000
+#: Characters of one evaluated text (an attribute, a property, a text node).
+MAX_VALUE_CHARS = 1 << 24
+#: Characters of all evaluated texts together.
+MAX_EXPANDED_CHARS = 1 << 28
+#: Bits of an integer an expression may make (about 19,700 decimal digits).
+MAX_INT_BITS = 1 << 16
+#: Items of a sequence an expression may make (``range``, ``[0] * n``, ``"x" * n``), and the
+#: largest whole-number argument of a call (a width, a count).
+MAX_ITEMS = 1 << 24
+#: Nodes of a YAML file ``xacro.load_yaml`` reads, its aliases expanded.
+MAX_YAML_NODES = 1_000_000
+#: Seconds an expansion may take.
+MAX_SECONDS = 60.0
+
+#: The guard's name inside expressions (names with two leading underscores are refused in a
+#: file's expressions, so a file cannot reach or replace it).
+_GUARD = "__mobmanip_guard"
+_CALL = "__mobmanip_call"
+
+
+class _Refused(BaseException):
+    """Raised through xacro (which wraps every Exception) when an expansion exceeds a bound."""
+
+
+class _Guard:
+    """The bounds of one expansion, put around xacro's own functions while it runs: the number
+    of macro expansions and elements, the size of evaluated texts, the size of integers and
+    sequences an expression makes, the nodes of loaded YAML, and the time (checked between
+    xacro's steps and on every loop iteration of an expression)."""
+
+    def __init__(self, module, top: Path) -> None:
+        self.module = module
+        self.top = top
+        self.started = time.monotonic()
+        self.deadline = self.started + MAX_SECONDS
+        self.macros = 0
+        self.elements = 0
+        self.chars = 0
+        self.refused: str | None = None
+        self._saved: list[tuple[Any, str, Any]] = []
+
+    # -- refusing -------------------------------------------------------------------------
+    def refuse(self, reason: str) -> None:
+        stack = getattr(self.module, "filestack", None) or []
+        current = next((f for f in reversed(stack) if f), None)
+        where = f" (in {current}, which it includes)" if current is not None and Path(current) != self.top else ""
+        self.refused = f"refused: {reason}{where}"
+        raise _Refused(self.refused)
+
+    def tick(self) -> None:
+        if self.refused is not None:
+            raise _Refused(self.refused)
+        if time.monotonic() > self.deadline:
+            self.refuse(f"expanding it takes more than {MAX_SECONDS:g} s")
+
+    # -- installing -----------------------------------------------------------------------
+    def _replace(self, owner, name: str, value) -> None:
+        self._saved.append((owner, name, owner[name] if isinstance(owner, dict) else getattr(owner, name)))
+        if isinstance(owner, dict):
+            dict.__setitem__(owner, name, value)
+        else:
+            setattr(owner, name, value)
+
+    def install(self) -> None:
+        module = self.module
+        for name in ("eval_all", "handle_macro_call", "eval_text", "safe_eval", "parse"):
+            self._replace(module, name, getattr(self, f"_{name}")(getattr(module, name)))
+        symbols = module._global_symbols
+        guarded = {
+            "range": self._range,  # also xacro's deprecated direct range(), a wrapper of the built-in
+            "factorial": self._count_argument(math.factorial, "math.factorial"),
+            "comb": self._count_argument(math.comb, "math.comb"),
+            "perm": self._count_argument(math.perm, "math.perm"),
+        }
+        originals = {"range": range, "factorial": math.factorial, "comb": math.comb, "perm": math.perm}
+        tables = [symbols] + [v for v in symbols.values() if isinstance(v, dict)]
+        for table in tables:
+            for key, value in list(dict.items(table)):
+                if key == "load_yaml":
+                    self._replace(table, key, self._load_yaml(value))
+                elif key in guarded and (value is originals[key] or getattr(value, "__closure__", None)):
+                    self._replace(table, key, guarded[key])
+
+    def restore(self) -> None:
+        for owner, name, value in reversed(self._saved):
+            if isinstance(owner, dict):
+                dict.__setitem__(owner, name, value)
+            else:
+                setattr(owner, name, value)
+        self._saved.clear()
+
+    # -- xacro's steps ---------------------------------------------------------------------
+    def _eval_all(self, original):
+        def eval_all(node, macros, symbols):
+            self.tick()
+            self.elements += 1
+            if self.elements > MAX_ELEMENTS:
+                self.refuse(f"it expands to more than {MAX_ELEMENTS:,} elements")
+            return original(node, macros, symbols)
+
+        return eval_all
+
+    def _handle_macro_call(self, original):
+        def handle_macro_call(node, macros, symbols):
+            if node.tagName.startswith("xacro:") and node.tagName != "xacro:call":
+                self.macros += 1
+                if self.macros > MAX_MACRO_EXPANSIONS:
+                    self.refuse(f"it expands more than {MAX_MACRO_EXPANSIONS:,} macro calls (at {node.tagName})")
+            return original(node, macros, symbols)
+
+        return handle_macro_call
+
+    def _eval_text(self, original):
+        def eval_text(text, symbols):
+            self.tick()
+            value = original(text, symbols)
+            if isinstance(value, str):
+                if len(value) > MAX_VALUE_CHARS:
+                    shown = " ".join(str(text).split())[:60]
+                    self.refuse(f"{shown!r} evaluates to {len(value):,} characters, more than the {MAX_VALUE_CHARS:,} "
+                                "one value may take")  # fmt: skip
+                self.chars += len(value)
+                if self.chars > MAX_EXPANDED_CHARS:
+                    self.refuse(f"its evaluated texts come to more than {MAX_EXPANDED_CHARS:,} characters")
+            return value
+
+        return eval_text
+
+    def _parse(self, original):
+        def parse(inp, filename=None):
+            try:
+                return original(inp, filename)
+            except ExpatError as exc:
+                if filename is None or len(getattr(self.module, "filestack", None) or ()) < 2:
+                    raise  # the file itself: xacro's message names it
+                self.refused = f"the file {filename} it includes is not XML ({exc})"
+                raise _Refused(self.refused) from None
+
+        return parse
+
+    def _safe_eval(self, original):
+        guard = self
+
+        def safe_eval(expr, globals, locals=None):
+            self.tick()
+            text = expr.strip()
+            code = compile(text, "<expression>", "eval")
+            invalid = [n for n in code.co_names if n.startswith("__")]
+            if invalid:
+                return original(expr, globals, locals)  # xacro's own refusal, in its words
+            tree = _Guarded().visit(ast.parse(text, "<expression>", "eval"))
+            code = compile(ast.fix_missing_locations(tree), "<expression>", "eval")
+            globals.update(__builtins__={_GUARD: guard._operation, _CALL: guard._call})
+
+            def trace(frame, event, arg):  # every call and loop iteration inside the expression
+                guard.tick()
+                return trace
+
+            previous = sys.gettrace()
+            sys.settrace(trace)
+            try:
+                return eval(code, globals, locals)
+            finally:
+                sys.settrace(previous)
+
+        return safe_eval
+
+    # -- what an expression may make ------------------------------------------------------
+    def _operation(self, op: str, a, b):
+        """``a op b`` for ``**``, ``<<`` and ``*``, refused when the result would be too large."""
+        if op == "**":
+            if _whole(a) and _whole(b) and b > 0 and abs(a) > 1 and b * (abs(a).bit_length() - 1) > MAX_INT_BITS:
+                self.refuse(f"an expression raises {_short(a)} to the power {_short(b)}, an integer of more than "
+                            f"{MAX_INT_BITS:,} bits")  # fmt: skip
+            return a**b
+        if op == "<<":
+            if _whole(a) and _whole(b) and a != 0 and b + abs(a).bit_length() > MAX_INT_BITS:
+                self.refuse(f"an expression shifts {_short(a)} left by {_short(b)}, an integer of more than "
+                            f"{MAX_INT_BITS:,} bits")  # fmt: skip
+            return a << b
+        if op == "%":
+            if isinstance(a, (str, bytes)):
+                self._check_widths(a if isinstance(a, str) else a.decode("latin-1"), "%")
+            return a % b
+        for seq, n in ((a, b), (b, a)):
+            if isinstance(seq, (str, bytes, list, tuple)) and _whole(n) and len(seq) * n > MAX_ITEMS:
+                self.refuse(f"an expression repeats a sequence of {len(seq):,} items {_short(n)} times, more than "
+                            f"{MAX_ITEMS:,} items")  # fmt: skip
+        if _whole(a) and _whole(b) and abs(a).bit_length() + abs(b).bit_length() > MAX_INT_BITS:
+            self.refuse(f"an expression multiplies integers into more than {MAX_INT_BITS:,} bits")
+        return a * b
+
+    def _call(self, function, *args, **kwargs):
+        """``function(*args, **kwargs)``; a method of a text or a sequence (``"x".center(n)``,
+        ``"{:>n}".format``) is refused a count or a width above :data:`MAX_ITEMS`."""
+        owner = getattr(function, "__self__", None)
+        if isinstance(owner, (str, bytes, list, tuple)):
+            name = getattr(function, "__name__", "a method")
+            for value in (*args, *kwargs.values()):
+                if _whole(value) and abs(value) > MAX_ITEMS:
+                    self.refuse(f"an expression calls {name}({_short(value)}) on a text or sequence, more than "
+                                f"{MAX_ITEMS:,} items")  # fmt: skip
+            if name in ("format", "format_map") and isinstance(owner, str):
+                self._check_widths(owner, "{")
+        return function(*args, **kwargs)
+
+    def _check_widths(self, text: str, style: str) -> None:
+        """Refuse a format (``{:>N}``, ``%Nd``) whose width or precision exceeds :data:`MAX_ITEMS`."""
+        pattern = r"%[-+ #0*]*(\d*)(?:\.(\d*))?" if style == "%" else r"\{[^{}]*:([^{}]*)\}"
+        for match in re.finditer(pattern, text):
+            for digits in re.findall(r"\d+", " ".join(g or "" for g in match.groups())):
+                if len(digits) > 9 or int(digits) > MAX_ITEMS:
+                    self.refuse(f"an expression formats with a width or precision of {_short(int(digits[:30]))}"
+                                f"{'...' if len(digits) > 30 else ''}, more than {MAX_ITEMS:,} characters")  # fmt: skip
+
+    def _range(self, *args):
+        made = range(*args)
+        if len(made) > MAX_ITEMS:
+            self.refuse(f"an expression makes range({', '.join(map(_short, args))}) of {len(made):,} items, more than "
+                        f"{MAX_ITEMS:,}")  # fmt: skip
+        return made
+
+    def _count_argument(self, function, name: str):
+        def guarded(*args):
+            if any(_whole(a) and abs(a) > 100_000 for a in args):
+                self.refuse(f"an expression asks for {name}({', '.join(map(_short, args))}), more than 100,000 terms")
+            return function(*args)
+
+        guarded.__wrapped__ = function
+        return guarded
+
+    def _load_yaml(self, original):
+        def load_yaml(filename):
+            self.tick()
+            data = original(filename)
+            nodes, stack = 0, [data]
+            while stack:  # aliases expanded: a shared list counts once per reference
+                item = stack.pop()
+                nodes += 1
+                if nodes > MAX_YAML_NODES:
+                    self.refuse(f"the YAML file {filename} holds more than {MAX_YAML_NODES:,} values with its "
+                                "aliases expanded")  # fmt: skip
+                if isinstance(item, dict):
+                    stack.extend(item.values())
+                elif isinstance(item, (list, tuple)):
+                    stack.extend(item)
+            return data
+
+        return load_yaml
+
+
+def _whole(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _short(value) -> str:
+    """A number for a message, never thousands of digits."""
+    if _whole(value) and abs(value).bit_length() > 64:
+        return f"an integer of {abs(value).bit_length():,} bits"
+    return repr(value)[:40]
+
+
+class _Guarded(ast.NodeTransformer):
+    """``a ** b``, ``a << b``, ``a * b`` and ``a % b`` in an expression become calls of the
+    guard, every call ``f(...)`` a call of the guard with ``f`` (xacro's lexer ends an expression
+    at its first ``}``, so an f-string or a format written out cannot occur; one built from
+    pieces is checked when called)."""
+
+    OPERATIONS = {ast.Pow: "**", ast.LShift: "<<", ast.Mult: "*", ast.Mod: "%"}
+
+    def visit_Call(self, node: ast.Call):
+        self.generic_visit(node)
+        call = ast.Name(id=_CALL, ctx=ast.Load())
+        return ast.copy_location(ast.Call(func=call, args=[node.func, *node.args], keywords=node.keywords), node)
+
+    def visit_BinOp(self, node: ast.BinOp):
+        self.generic_visit(node)
+        op = self.OPERATIONS.get(type(node.op))
+        if op is None:
+            return node
+        guard = ast.Name(id=_GUARD, ctx=ast.Load())
+        return ast.copy_location(
+            ast.Call(func=guard, args=[ast.Constant(op), node.left, node.right], keywords=[]), node
+        )
 
 
 def split_paths(text: str | None) -> list[Path]:
@@ -169,14 +468,21 @@ def expand_xacro(
         substitution_args._eval_dict["find"] = packages
         bounded = _BoundedOpen()
         xacro.open = bounded  # found before the built-in by xacro's own calls to open()
+        guard = _Guard(xacro, path.resolve())
+        guard.install()
         try:
             document = xacro.process_file(str(path.resolve()), mappings=mappings, verbosity=0)
             text = document.toxml()
+        except _Refused:
+            raise XacroError(str(path), guard.refused or "refused") from None
         except Exception as exc:  # xacro raises its own and Python's exceptions alike
             if bounded.refused is not None:
                 raise XacroError(str(path), bounded.refused) from None
+            if guard.refused is not None:  # refused inside, then wrapped by xacro
+                raise XacroError(str(path), guard.refused) from None
             raise _failure(path, exc, packages, roots, mappings, printed.getvalue()) from None
         finally:
+            guard.restore()
             del xacro.open
             substitution_args._eval_find, substitution_args._eval_dict["find"] = saved
             xacro.all_includes.clear()
