@@ -35,7 +35,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("measures",),
     ("gradients",),
     ("analysis",),
-    ("sweep", "team", "motion", "casestudy"),
+    ("sweep", "team", "motion", "casestudy", "referee"),  # referee: MuJoCo replays the grounded sets
     ("coordination",),  # teams that move: the team's terms with carry's machinery
     ("placement",),
     ("viz",),

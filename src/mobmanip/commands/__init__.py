@@ -1,5 +1,33 @@
 """Subcommands of the ``mobmanip`` command, one module each with a ``register(subparsers)``."""
 
-from . import analyze, carry, collision_matrix, init_spec, paper, place, site, sweep, team, team_carry, trajectory, view
+from . import (
+    analyze,
+    carry,
+    collision_matrix,
+    init_spec,
+    paper,
+    place,
+    referee,
+    site,
+    sweep,
+    team,
+    team_carry,
+    trajectory,
+    view,
+)
 
-COMMANDS = (analyze, paper, init_spec, view, sweep, place, collision_matrix, site, trajectory, carry, team, team_carry)
+COMMANDS = (
+    analyze,
+    paper,
+    init_spec,
+    view,
+    sweep,
+    place,
+    collision_matrix,
+    site,
+    trajectory,
+    carry,
+    team,
+    team_carry,
+    referee,
+)

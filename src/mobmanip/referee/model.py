@@ -1,0 +1,655 @@
+"""MuJoCo's model of a loaded robot standing on the floor at rest (the referee's builder).
+
+:func:`build` reads the robot's own file with MuJoCo's parser (a URDF, or the URDF a xacro file
+expands to), keeps links and joints only (no meshes), fixes the joints mobmanip locks at its
+values, repairs the inertias MuJoCo refuses (each listed in :attr:`Referee.repairs`), puts a free
+joint at the root link at mobmanip's planar pose and spheres at the floor contacts, and holds the
+object to the hands. The model is edited through ``mujoco.MjSpec``, never through MJCF text
+(``to_xml`` prints 6 digits); every inertial frame is the file's (``ipos``/``iquat``), and the
+object's is set explicitly (left unset, MuJoCo would put its centre of mass at its ``pos``).
+
+Contacts. A contact named after a wheel joint of the platform is a sphere of the wheel's radius
+on the wheel's body, centred on its axle: it rolls, and the floor's tangential force at it (within
+friction ``mu`` when the contact is driven) is what the wheel's torque and the platform's
+constraint make it. Any other contact (a caster, a point of the spec's ``[support]``) is a
+frictionless 2 cm sphere on the root body touching the floor at its point: a normal force only.
+
+Efforts. Reduced efforts ``tau`` act on the joints through mobmanip's actuation matrix B
+(``Q = B tau``, joint by joint, matched by name): a wheel's torque in mobmanip's sense (positive
+drives forward whatever the file's axis), a skid-steer side's torque shared by its wheels, which
+are geared together (one MuJoCo joint equality per wheel, in the ratio of their rates in S). An
+effort on the platform's planar coordinates themselves (an omnidirectional base, whose reduced
+velocities are the base's own x, y and yaw) has no joint to act on in MuJoCo: MuJoCo's sphere
+contacts have round friction, so neither a mecanum or omni wheel's free rollers nor a planar
+base's drive can be represented without modelling every roller; :func:`build` refuses it with
+:class:`NotRepresentable`.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+
+from ..errors import MobmanipError
+
+GRAVITY = 9.81  # m/s^2, along -z
+#: How the object is held (see :func:`build`).
+GRASPS = ("weld", "point", "level")
+#: Mass (kg) and radius of gyration (m) of each grip of a ``"level"`` grasp.
+GRIP_MASS, GRIP_RADIUS = 1e-3, 0.01
+#: Radius of a passive support's contact sphere (m).
+SUPPORT_RADIUS = 0.02
+
+
+class NotRepresentable(MobmanipError):
+    """A robot (or a part of it) that the referee cannot build in MuJoCo; the message says why."""
+
+
+@dataclass(frozen=True)
+class Support:
+    """One contact with the floor.
+
+    Attributes:
+        name: the driven wheel's joint name, or the passive support's name.
+        driven: a driven wheel (friction ``mu``), or a passive support (caster).
+        body: the MuJoCo body carrying the contact sphere.
+        point: contact point in the root link frame (m), (3,).
+        mu: friction coefficient (0: normal force only).
+    """
+
+    name: str
+    driven: bool
+    body: str
+    point: np.ndarray
+    mu: float
+
+
+class ContactForce(NamedTuple):
+    """The floor's force on the robot at one support.
+
+    Attributes:
+        normal: along +z (N), >= 0; 0 when the support has no contact.
+        tangential: its world x, y components (N), (2,).
+    """
+
+    normal: float
+    tangential: np.ndarray
+
+
+@dataclass
+class Rollout:
+    """What happened while the torques were held; one row per step (N), one column per support (n).
+
+    Attributes:
+        supports: the supports, in column order.
+        time: (N,) s. normal: (N, n) normal force (N), 0 when lifted.
+        tangential: (N, n, 2) world x, y tangential force (N).
+        friction_use: (N, n) |tangential| / (mu normal); 0 for frictionless supports.
+        slip_speed: (N, n) speed along the floor of the sphere's material point at its lowest
+            point (m/s): a driven wheel's slip, a caster's sliding.
+        penetration: (N, n) depth of the sphere in the floor (m); negative when lifted.
+        base_position: (N, 3) root link origin (m). base_rpy: (N, 3) its roll, pitch, yaw (rad).
+        acceleration: (N, 6) the object's (without object: first hand's) linear, angular
+            acceleration, world axes (m/s^2, rad/s^2).
+        in_contact: per support: normal force > 0 at every step and penetration bounded.
+        slipped: per driven wheel: slip speed or friction use over its threshold at some step.
+    """
+
+    supports: tuple[Support, ...]
+    time: np.ndarray
+    normal: np.ndarray
+    tangential: np.ndarray
+    friction_use: np.ndarray
+    slip_speed: np.ndarray
+    penetration: np.ndarray
+    base_position: np.ndarray
+    base_rpy: np.ndarray
+    acceleration: np.ndarray
+    in_contact: dict[str, bool] = field(default_factory=dict)
+    slipped: dict[str, bool] = field(default_factory=dict)
+
+    @property
+    def lifted(self) -> list[str]:
+        """Supports that lost contact at some step."""
+        return [name for name, kept in self.in_contact.items() if not kept]
+
+    @property
+    def slipping(self) -> list[str]:
+        """Driven wheels that slipped at some step."""
+        return [name for name, slid in self.slipped.items() if slid]
+
+
+def _floats(text: str | None, default: str) -> np.ndarray:
+    return np.array([float(v) for v in (text or default).split()])
+
+
+def _lock(joint: ET.Element, value: float) -> None:
+    """Make a moving URDF joint ``fixed`` at ``value`` (rad or m), folded into its origin."""
+    if value != 0.0:
+        origin = joint.find("origin")
+        origin = ET.SubElement(joint, "origin") if origin is None else origin
+        p, R = _floats(origin.get("xyz"), "0 0 0"), pin.rpy.rpyToMatrix(_floats(origin.get("rpy"), "0 0 0"))
+        axis_element = joint.find("axis")
+        axis = _floats(None if axis_element is None else axis_element.get("xyz"), "1 0 0")
+        axis /= np.linalg.norm(axis)
+        if joint.get("type") == "prismatic":
+            p = p + R @ axis * value
+        elif joint.get("type") in ("revolute", "continuous"):
+            R = R @ pin.exp3(axis * value)
+        else:
+            raise NotImplementedError(f"cannot lock {joint.get('type')} joint {joint.get('name')!r} at {value}")
+        origin.set("xyz", " ".join(repr(float(c)) for c in p))
+        origin.set("rpy", " ".join(repr(float(c)) for c in pin.rpy.matrixToRpy(R)))
+    joint.set("type", "fixed")
+
+
+def _repair_inertia(link: ET.Element) -> tuple[np.ndarray, np.ndarray] | None:
+    """Replace an inertia MuJoCo refuses by its diagonal (all three at their mean if that breaks
+    the triangle inequality, as MuJoCo's ``balanceinertia``); ``(old, new)`` (3, 3) kg m^2."""
+    element = link.find("inertial/inertia")
+    if element is None:
+        return None
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    xx, xy, xz, yy, yz, zz = (float(element.get(k, 0.0)) for k in keys)
+    old = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    e = np.linalg.eigvalsh(old)
+    if not (any((xy, xz, yz)) and e[0] <= 0.0) and e[0] + e[1] >= e[2] * (1 - 1e-9):
+        return None
+    diagonal = np.diag(old).copy()
+    if 2.0 * diagonal.max() > diagonal.sum():
+        diagonal[:] = diagonal.mean()
+    for key, value in zip(keys, (diagonal[0], 0.0, 0.0, diagonal[1], 0.0, diagonal[2])):
+        element.set(key, repr(float(value)))
+    return old, np.diag(diagonal)
+
+
+def check_representable(robot) -> None:
+    """Refuse, before any work, a robot whose MuJoCo model :func:`build` cannot make (see the
+    module's docstring): efforts on the platform's planar coordinates, a file that is not URDF
+    or xacro.
+
+    Raises:
+        NotRepresentable: naming what and why, in one line.
+    """
+    _actuation(robot)
+    _check_format(robot)
+
+
+def _check_format(robot) -> None:
+    path = robot.spec.urdf
+    if not str(path).lower().endswith((".urdf", ".xacro")):
+        raise NotRepresentable(
+            f"the referee builds MuJoCo's model from a URDF or xacro file; {robot.name}'s is {path.name}"
+        )
+
+
+def robot_file_text(robot) -> str:
+    """The URDF text of the robot's file: the file itself, or what its xacro file expands to.
+
+    Raises:
+        NotRepresentable: a file of another format (MJCF: MuJoCo's own, but the referee strips and
+            edits a URDF tree).
+    """
+    from ..descriptions.xacro import expand_xacro
+
+    _check_format(robot)
+    path = robot.spec.urdf
+    if str(path).lower().endswith(".xacro"):
+        return expand_xacro(path, robot.spec.xacro_args, robot.spec.package_paths)[0]
+    return path.read_text()
+
+
+def stripped_urdf(robot) -> tuple[str, dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """The robot's URDF for MuJoCo and its inertia repairs (link -> (old, new) (3, 3) kg m^2):
+    links and joints only, no visuals or collisions, mobmanip's locked joints fixed."""
+    root = ET.fromstring(robot_file_text(robot))
+    for child in list(root):
+        if child.tag not in ("link", "joint"):
+            root.remove(child)
+    repairs = {}
+    for link in root.findall("link"):
+        for element in link.findall("visual") + link.findall("collision"):
+            link.remove(element)
+        if (repair := _repair_inertia(link)) is not None:
+            repairs[str(link.get("name"))] = repair
+    keep = set(robot.model.names)
+    for joint in root.findall("joint"):
+        if joint.get("type") != "fixed" and joint.get("name") not in keep:
+            _lock(joint, float(robot.spec.reference.get(joint.get("name"), 0.0)))
+    options = {"fusestatic": "false", "inertiafromgeom": "false", "discardvisual": "false"}
+    ET.SubElement(ET.SubElement(root, "mujoco"), "compiler", options)
+    return ET.tostring(root, encoding="unicode"), repairs
+
+
+def urdf_casters(robot) -> dict[str, np.ndarray]:
+    """Passive supports of the URDF: every link named ``caster*`` with a sphere collision, by link
+    name without ``_link``: the sphere's lowest point in the root link frame (m), (3,)."""
+    model, data = robot.model, robot.model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))  # casters are locked: any q
+    out = {}
+    for link in ET.fromstring(robot_file_text(robot)).findall("link"):
+        name, sphere = str(link.get("name")), link.find("collision/geometry/sphere")
+        if "caster" in name and sphere is not None and model.existFrame(name):
+            origin = link.find("collision/origin")
+            centre = data.oMf[model.getFrameId(name)].act(
+                _floats(None if origin is None else origin.get("xyz"), "0 0 0")
+            )
+            out[name.removesuffix("_link")] = centre - [0.0, 0.0, float(sphere.get("radius", "0"))]
+    return out
+
+
+def contacts_of_floor(info: Mapping) -> list[tuple[str, np.ndarray, bool]]:
+    """The floor constraint's contacts (``set.model["floor"]``: its ``pose`` and its
+    ``contacts``' name, world point and driven flag) as ``(name, point in the root frame (3,) m,
+    driven)``, the form :func:`build` takes: whatever contacts the floor models for a platform
+    kind, the referee puts a sphere at each."""
+    x, y, yaw = info["pose"]
+    c, s = math.cos(yaw), math.sin(yaw)
+    out = []
+    for contact in info["contacts"]:
+        dx, dy, z = np.asarray(contact["point"], dtype=float) - [x, y, 0.0]
+        out.append((str(contact["name"]), np.array([c * dx + s * dy, -s * dx + c * dy, z]), bool(contact["driven"])))
+    return out
+
+
+def build(
+    robot,
+    q: np.ndarray,
+    *,
+    support_points: Mapping[str, np.ndarray] | None = None,
+    contacts: Sequence[tuple[str, np.ndarray, bool]] | None = None,
+    object=None,
+    grasp: str | None = None,
+    mu: float | Mapping[str, float] = 0.5,
+    timestep: float = 1e-4,
+    impratio: float = 100.0,
+    penetration: float = 1e-12,
+    regularisation: float = 1e-2,
+    equal_supports: bool = True,
+    stiffness: Mapping[str, float] | None = None,
+    gravity: np.ndarray | None = None,
+) -> Referee:
+    """A MuJoCo model of ``robot`` at configuration ``q`` standing on the floor, at rest.
+
+    Args:
+        robot: a loaded mobmanip robot on wheels.
+        q: mobmanip configuration, (nq,).
+        support_points: passive supports beside the platform's wheels (every wheel of
+            ``robot.platform.wheels()`` then a driven contact): name -> point on the floor in the
+            root link frame (m), (3,); e.g. :func:`urdf_casters`. Not with ``contacts``.
+        contacts: every contact instead, as ``(name, point in the root link frame (3,) m,
+            driven)``; e.g. :func:`contacts_of_floor` of the floor constraint's report. A name
+            that is a wheel joint of the platform is a rolling wheel (its point must be below
+            its axle by its radius); any other a passive point.
+        object: the held object (an ``Analysis.held_object``: mass kg, inertia (3, 3) kg m^2 in
+            world axes, center (3,) m, offsets (k, 3) m from the centre to the hands), or ``None``.
+            Its inertia must be positive definite (MuJoCo refuses a point mass; see
+            :func:`mobmanip.referee.check.object_for_referee`).
+        grasp: ``"weld"`` (hands fixed to the object), ``"point"`` (each hand pinned to the
+            object's centre) or ``"level"``: the object of a task without rotations held level
+            (``Floor(level=True)``): it moves along the world's axes, tilts only as the hands
+            tilt it (each hand welded to a grip that turns about the vertical on the object, so
+            the hands carry its weight and its roll and pitch moments and turn freely about the
+            vertical), and never turns about the vertical (mobmanip balances no turning moment of
+            the object in such a task: MuJoCo's world takes it). Default ``"point"`` for the
+            spec's planar and translational tasks, else weld.
+        mu: friction coefficient of the driven contacts, or one per contact name (missing: 0.5
+            for driven contacts, 0 for passive ones: normal force only).
+        timestep: integration step (s); contacts and grasps have time constant 2 timesteps.
+        impratio: ratio of frictional to normal stiffness (elliptic cones).
+        penetration: initial depth of every contact sphere in the floor (m). MuJoCo drops a
+            contact at distance 0 exactly; this one pushes with ~ penetration / (2 timestep)^2
+            (2.5e-5 m/s^2).
+        regularisation: factor on each constraint's softness R = (1 - d) / d * A_approx, d = 0.9999
+            (MuJoCo's cap), through the bodies' ``invweight0`` (A_approx). At 1 the paper robot's
+            2 kg object sags at 0.015 m/s^2 at rest, at 1e-2 at 1.3e-4 m/s^2.
+        equal_supports: make every support equally stiff. A robot on more than three contacts
+            shares its weight by their compliance; MuJoCo's soft contacts are stiffer, in
+            proportion, on bodies that are easier to move (R scales with each body's invweight0),
+            an artefact of its regularisation, not of a floor: the wheel bodies' weights are set
+            to the root's, so that each contact's force is the same function of its depth (the
+            model mobmanip's compliant floor assumes). Off: MuJoCo's own sharing.
+        stiffness: relative stiffness per contact name (missing: 1), with ``equal_supports``:
+            each contact's softness R is divided by it (through its pair's solimp d, (1 - d) / d
+            scaled, the stiffest at MuJoCo's cap d = 0.9999). Holding still, MuJoCo's contact
+            forces minimise sum_c R_c f_c^2 over the balancing ones, i.e. f_c = k_c (a + b x_c +
+            c y_c): springs of stiffness k_c under a rigid platform.
+        gravity: gravity in the floor's axes (m/s^2), (3,): a ramp is the level floor with gravity
+            leaning; default straight down.
+
+    Raises:
+        ValueError: contacts not on one floor, a wheel contact not below its axle, a hand that is
+            not a link of the file, an object whose grasp points are not at the hands.
+        NotRepresentable: efforts that act on the platform's planar coordinates themselves, a
+            robot file MuJoCo's model is not built from (see the module's docstring).
+    """
+    actuation, gears = _actuation(robot)  # refuses what MuJoCo cannot drive, before any work
+    text, repairs = stripped_urdf(robot)
+    spec = mujoco.MjSpec.from_string(text)
+    base = spec.worldbody.first_body()
+    base.add_freejoint(name="floating_base")
+    for joint in spec.joints:
+        if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+            joint.damping, joint.stiffness, joint.frictionloss, joint.armature = np.zeros(3), np.zeros(3), 0.0, 0.0
+            joint.limited = joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    option = spec.option
+    down = [0.0, 0.0, -GRAVITY] if gravity is None else [float(v) for v in gravity]
+    option.timestep, option.impratio, option.gravity = timestep, impratio, down
+    option.cone, option.solver = mujoco.mjtCone.mjCONE_ELLIPTIC, mujoco.mjtSolver.mjSOL_NEWTON
+    option.iterations, option.tolerance, option.ls_iterations = 1000, 1e-12, 100
+    soft = {"solref": [2.0 * timestep, 1.0], "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0]}
+
+    # The wheels' axles at the platform's origin (mobmanip's model) give each wheel's contact.
+    q = np.asarray(q, dtype=float)
+    home, data = q.copy(), robot.model.createData()
+    home[:4] = (0.0, 0.0, 1.0, 0.0)
+    pin.forwardKinematics(robot.model, data, home)
+    radius = dict(robot.platform.wheels()) if robot.wheel_platform is not None else {}
+    axles = {name: data.oMi[robot.model.getJointId(name)].translation.copy() for name in radius}
+    if contacts is None:
+        contacts = [(name, axles[name] - [0.0, 0.0, radius[name]], True) for name in radius]
+        contacts += [(name, point, False) for name, point in (support_points or {}).items()]
+    elif support_points:
+        raise ValueError("give the contacts or the passive support points, not both")
+    contacts = [(str(name), np.asarray(point, dtype=float), bool(driven)) for name, point, driven in contacts]
+    wheels = [name for name, _, _ in contacts if name in radius]
+    for name, point, _ in contacts:
+        if name in radius and np.linalg.norm(point - axles[name] + [0.0, 0.0, radius[name]]) > 1e-6:
+            raise ValueError(f"contact {name!r} at {point} m is not below its wheel's axle by its radius")
+    if not contacts:
+        raise ValueError(f"{robot.name} has no contacts with the floor")
+    # the floor's height in the root frame: the wheels' contacts (else the first contact)
+    heights = [-point[2] for name, point, _ in contacts if name in wheels] or [-contacts[0][1][2]]
+    if max(heights) - min(heights) > 1e-6:
+        raise ValueError(f"wheels {wheels} do not stand on one floor (root heights {heights} m)")
+    lift = heights[0]
+
+    def friction(name: str, driven: bool) -> float:
+        default = 0.5 if driven else 0.0
+        return float(mu.get(name, default) if isinstance(mu, Mapping) else (mu if driven else 0.0))
+
+    sphere, free = mujoco.mjtGeom.mjGEOM_SPHERE, {"contype": 0, "conaffinity": 0}
+    spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.1], **free)
+    supports = []
+    for name, point, driven in sorted(contacts, key=lambda c: c[0] not in wheels):  # wheels first
+        if name in wheels:  # the wheel link's frame is its joint's: the sphere at its origin
+            body = spec.joint(name).parent
+            body.add_geom(name=f"contact_{name}", type=sphere, size=[radius[name] + penetration, 0, 0], **free)
+            supports.append(Support(name, driven, body.name, point, friction(name, driven)))
+            continue
+        if abs(point[2] + lift) > 1e-6:
+            raise ValueError(f"support {name!r} at z = {point[2]:.6g} m is not on the floor (z = {-lift:.6g} m)")
+        centre = [point[0], point[1], -lift + SUPPORT_RADIUS - penetration]
+        base.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], pos=centre, **free)
+        supports.append(Support(name, driven, base.name, point, friction(name, driven)))
+    k = {s.name: float((stiffness or {}).get(s.name, 1.0)) for s in supports}
+    stiffest = max(k.values())
+    for s in supports:
+        friction_5 = [s.mu, s.mu, 0.0, 0.0, 0.0]
+        condim = 3 if s.mu > 0 else 1
+        pair = dict(soft)
+        if k[s.name] != stiffest:  # (1 - d) / d grows as the contact is softer
+            ratio = (1.0 - soft["solimp"][0]) / soft["solimp"][0] * stiffest / k[s.name]
+            d = 1.0 / (1.0 + ratio)
+            pair["solimp"] = [d, d, *soft["solimp"][2:]]
+        spec.add_pair(geomname1="floor", geomname2=f"contact_{s.name}", condim=condim, friction=friction_5, **pair)
+    for follower, leader, ratio in gears:  # wheels one effort drives together turn together
+        gear = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=follower, name2=leader, **soft)
+        gear.data[:5] = [0.0, ratio, 0.0, 0.0, 0.0]  # follower - its qpos0 = ratio (leader - its qpos0)
+    (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), {}
+    for j in range(2, robot.model.njoints):
+        joint = robot.model.joints[j]
+        value = math.atan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
+        joints[robot.model.names[j]] = float(value)
+
+    def configuration(model) -> np.ndarray:
+        qpos = model.qpos0.copy()
+        qpos[model.joint("floating_base").qposadr[0] :][:7] = [x, y, lift, math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+        for name, value in joints.items():
+            qpos[model.joint(name).qposadr[0]] = value
+        return qpos
+
+    model = spec.compile()
+    qpos0, hands = configuration(model), [arm.end_effector for arm in robot.arms]
+    if object is not None:
+        grasp = grasp or ("point" if robot.spec.default_task in ("planar", "translational") else "weld")
+        if grasp not in GRASPS:
+            raise ValueError(f"grasp must be one of {', '.join(GRASPS)}, got {grasp!r}")
+        placed = mujoco.MjData(model)
+        placed.qpos[:] = qpos0
+        mujoco.mj_kinematics(model, placed)
+        centre, inertia = np.asarray(object.center, dtype=float) + [0.0, 0.0, lift], np.asarray(object.inertia)
+        body = spec.worldbody.add_body(name="object", pos=centre, mass=float(object.mass), explicitinertial=True)
+        body.ipos, body.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # the centre of mass at the centre
+        body.fullinertia = [*np.diag(inertia), inertia[0, 1], inertia[0, 2], inertia[1, 2]]
+        if grasp == "level":  # it moves, tilts as the hands tilt it, never turns about the vertical
+            for axis, name in zip(np.eye(3), ("x", "y", "z")):
+                body.add_joint(name=f"object_{name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis)
+            for axis, name in zip(np.eye(3)[:2], ("roll", "pitch")):
+                body.add_joint(name=f"object_{name}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis)
+        else:
+            body.add_freejoint(name="object_free")
+        for k, hand in enumerate(hands):
+            if spec.body(hand) is None:
+                raise ValueError(f"end effector {hand!r} is not a link of the URDF")
+            p, R = placed.body(hand).xpos.copy(), placed.body(hand).xmat.reshape(3, 3).copy()
+            if np.linalg.norm(p - centre - np.asarray(object.offsets[k])) > 1e-6:
+                raise ValueError(f"grasp point {k} of the object is not at hand {hand!r} (hand - centre {p - centre})")
+            if grasp == "weld":  # a site at the hand frame on both
+                quat = np.zeros(4)
+                mujoco.mju_mat2Quat(quat, R.ravel())
+                body.add_site(name=f"grasp_{k}", pos=p - centre, quat=quat)
+                spec.body(hand).add_site(name=f"hand_{k}")
+            elif grasp == "point":  # a site at the object's centre on both
+                body.add_site(name=f"grasp_{k}")
+                spec.body(hand).add_site(name=f"hand_{k}", pos=R.T @ (centre - p))
+            else:  # welded to a grip that turns about the vertical on the object, at the hand's origin
+                grip = body.add_body(name=f"grip_{k}", pos=p - centre, mass=GRIP_MASS, explicitinertial=True)
+                grip.ipos, grip.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+                grip.fullinertia = [GRIP_MASS * GRIP_RADIUS**2] * 3 + [0.0, 0.0, 0.0]
+                grip.add_joint(name=f"grip_{k}_yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0])
+                quat = np.zeros(4)
+                mujoco.mju_mat2Quat(quat, R.ravel())
+                grip.add_site(name=f"grasp_{k}", quat=quat)
+                spec.body(hand).add_site(name=f"hand_{k}")
+            kind = mujoco.mjtEq.mjEQ_CONNECT if grasp == "point" else mujoco.mjtEq.mjEQ_WELD
+            site = mujoco.mjtObj.mjOBJ_SITE
+            spec.add_equality(type=kind, objtype=site, name1=f"grasp_{k}", name2=f"hand_{k}", **soft)
+        model = spec.compile()
+        qpos0 = configuration(model)
+        if grasp != "level":  # (its slides start at 0: the body's own position)
+            qpos0[model.joint("object_free").qposadr[0] :][:7] = [*centre, 1.0, 0.0, 0.0, 0.0]
+    if object is not None and grasp == "level":  # as stiff as the object's own constraints
+        for k in range(len(hands)):
+            model.body_invweight0[model.body(f"grip_{k}").id] = model.body_invweight0[model.body("object").id]
+    model.body_invweight0[:] *= regularisation
+    if equal_supports:
+        root = model.body(base.name).id
+        for s in supports:
+            model.body_invweight0[model.body(s.body).id, 0] = model.body_invweight0[root, 0]
+    return Referee(robot, model, qpos0, tuple(supports), hands, object is not None, repairs, lift, actuation)
+
+
+def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str, float]]]:
+    """Where the reduced efforts act, joint by joint: ``(joint name, its row of B (nx,))`` for
+    every joint B drives (``Q = B tau``: a joint's generalized force is its row times ``tau``),
+    and the gears: ``(follower, leader, ratio)`` for each wheel one effort drives together with
+    another (a skid-steer side), the follower's rate ``ratio`` times the leader's (from S).
+
+    Raises:
+        NotRepresentable: an effort on the platform's planar coordinates themselves.
+    """
+    model, B, S = robot.model, np.asarray(robot.B), np.asarray(robot.S)
+    rows: list[tuple[str, np.ndarray]] = []
+    driven_by: dict[int, list[tuple[str, int]]] = {}
+    for j in range(1, model.njoints):
+        joint = model.joints[j]
+        for v in range(joint.idx_v, joint.idx_v + joint.nv):
+            if not np.any(B[v]):
+                continue
+            if j == 1:  # the planar root joint: no body of MuJoCo's model carries that effort
+                names = ", ".join(robot.platform.reduced_names)
+                raise NotRepresentable(
+                    f"MuJoCo cannot referee {robot.name}'s {robot.platform.kind} platform: its efforts ({names}) "
+                    "act on the base itself, not through wheel joints, and MuJoCo's sphere contacts have round "
+                    "friction, so mecanum or omni-wheel rollers (free along one direction) would each need a body "
+                    "of their own"
+                )
+            rows.append((model.names[j], B[v].copy()))
+            for k in np.flatnonzero(B[v]):
+                driven_by.setdefault(int(k), []).append((model.names[j], v))
+    gears = []
+    for k, joints in driven_by.items():
+        (leader, v0), *others = joints
+        for name, v in others:
+            if S[v0, k] != 0.0:
+                gears.append((name, leader, float(S[v, k] / S[v0, k])))
+    return rows, gears
+
+
+class Referee:
+    """A MuJoCo model of a mobmanip robot on the floor; build it with :func:`build`.
+
+    Attributes:
+        model: MuJoCo's model. data: its data (the state of the last replay).
+        supports: the floor contacts, driven wheels first.
+        qpos0: the configuration every replay starts from, at rest, (model.nq,).
+        repairs: link name -> (old, new) inertia (3, 3) kg m^2 of each link repaired for MuJoCo.
+        lift: height of the root link's origin above the floor (m).
+    """
+
+    def __init__(self, robot, model, qpos0, supports, hands, has_object, repairs, lift, actuation=None):
+        self.robot, self.model, self.data, self.qpos0 = robot, model, mujoco.MjData(model), qpos0
+        self.supports, self.hands, self.has_object, self.repairs, self.lift = supports, hands, has_object, repairs, lift
+        self._body = model.body("object" if has_object else hands[0]).id
+        self._base = int(model.joint("floating_base").bodyid[0])
+        self._geoms = {model.geom(f"contact_{s.name}").id: k for k, s in enumerate(supports)}
+        # (MuJoCo dof, row of B: the joint's generalized force per reduced effort) per driven joint
+        pairs = _actuation(robot)[0] if actuation is None else actuation
+        self._nx = robot.nx
+        self._actuation = [(int(model.joint(name).dofadr[0]), row) for name, row in pairs]
+        self.reset()
+
+    @property
+    def weight(self) -> float:
+        """Total weight of the robot and the object (N)."""
+        return float(self.model.body_subtreemass[0]) * GRAVITY
+
+    def generalized_force(self, tau: np.ndarray) -> np.ndarray:
+        """MuJoCo joint forces (nv,) of reduced efforts ``tau`` (nx,) N m or N."""
+        tau = np.asarray(tau, dtype=float)
+        if tau.shape != (self._nx,):
+            raise ValueError(f"tau must have shape ({self._nx},), got {tau.shape}")
+        out = np.zeros(self.model.nv)
+        for dof, row in self._actuation:
+            out[dof] += float(row @ tau)
+        return out
+
+    def reset(self) -> None:
+        """Back to the built configuration, at rest, no applied force."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[:] = self.qpos0
+        mujoco.mj_forward(self.model, self.data)
+
+    def _body_acceleration(self, body: int) -> np.ndarray:
+        """Linear (of the body frame's origin) then angular acceleration, world axes, (6,)."""
+        m, d = self.model, self.data
+        jac, jac_dot = np.zeros((6, m.nv)), np.zeros((6, m.nv))
+        mujoco.mj_jac(m, d, jac[:3], jac[3:], d.xpos[body], body)
+        mujoco.mj_jacDot(m, d, jac_dot[:3], jac_dot[3:], d.xpos[body], body)
+        return jac @ d.qacc + jac_dot @ d.qvel
+
+    def acceleration(self) -> np.ndarray:
+        """Linear (at its centre) then angular acceleration of the object (without object: of the
+        first hand frame), world axes, (6,) m/s^2 and rad/s^2, at the current state."""
+        return self._body_acceleration(self._body)
+
+    def hand_accelerations(self) -> np.ndarray:
+        """Linear then angular acceleration of every hand frame, world axes, (k, 6)."""
+        return np.array([self._body_acceleration(self.model.body(hand).id) for hand in self.hands])
+
+    def contact_forces(self) -> dict[str, ContactForce]:
+        """The floor's force on the robot at each support, by name, at the current state."""
+        forces = {s.name: np.zeros(3) for s in self.supports}
+        wrench = np.zeros(6)
+        for i in range(self.data.ncon):
+            contact = self.data.contact[i]
+            geom, sign = (contact.geom2, 1.0) if contact.geom2 in self._geoms else (contact.geom1, -1.0)
+            mujoco.mj_contactForce(self.model, self.data, i, wrench)  # on geom2, in the contact frame
+            forces[self.supports[self._geoms[geom]].name] += sign * contact.frame.reshape(3, 3).T @ wrench[:3]
+        return {name: ContactForce(float(f[2]), f[:2]) for name, f in forces.items()}
+
+    def forward(self, tau: np.ndarray) -> tuple[np.ndarray, dict[str, ContactForce]]:
+        """Apply reduced efforts ``tau`` (nx,) from rest at the built configuration (t = 0).
+
+        Args:
+            tau: in ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N).
+
+        Returns:
+            ``(acceleration, contacts)``: the object's linear (at its centre) and angular
+            acceleration, world axes, (6,) m/s^2 and rad/s^2 (without object: each hand's,
+            (k, 6)); the floor's force on the robot at each support, by name.
+        """
+        self.reset()
+        self.data.qfrc_applied[:] = self.generalized_force(tau)
+        mujoco.mj_forward(self.model, self.data)
+        return (self.acceleration() if self.has_object else self.hand_accelerations()), self.contact_forces()
+
+    def rollout(
+        self,
+        tau: np.ndarray,
+        duration: float = 0.02,
+        *,
+        slip_speed: float = 1e-3,
+        at_limit: float = 0.999,
+        max_penetration: float = 1e-3,
+    ) -> Rollout:
+        """Hold reduced efforts ``tau`` (nx,) for ``duration`` (s) from rest (semi-implicit Euler).
+
+        Args:
+            tau: in ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N).
+            duration: how long (s).
+            slip_speed: contact-point speed along the floor above which a driven wheel slips (m/s).
+            at_limit: friction use at or above which a driven wheel slides.
+            max_penetration: depth in the floor beyond which a support is not kept (m).
+        """
+        m, d = self.model, self.data
+        self.reset()
+        d.qfrc_applied[:] = self.generalized_force(tau)
+        geoms = [m.geom(f"contact_{s.name}").id for s in self.supports]
+        rows: dict[str, list] = {k: [] for k in ("t", "f", "slip", "pen", "pos", "rpy", "acc")}
+        jacp = np.zeros((3, m.nv))
+        for _ in range(int(round(duration / m.opt.timestep)) + 1):
+            mujoco.mj_forward(m, d)
+            slip, pen = [], []
+            for geom in geoms:
+                lowest = d.geom_xpos[geom] - [0.0, 0.0, m.geom_size[geom, 0]]
+                mujoco.mj_jac(m, d, jacp, None, lowest, m.geom_bodyid[geom])
+                slip.append(np.linalg.norm((jacp @ d.qvel)[:2]))
+                pen.append(-lowest[2])
+            rows["t"].append(d.time)
+            rows["f"].append([[*c.tangential, c.normal] for c in self.contact_forces().values()])
+            rows["slip"].append(slip)
+            rows["pen"].append(pen)
+            rows["pos"].append(d.xpos[self._base].copy())
+            rows["rpy"].append(pin.rpy.matrixToRpy(d.xmat[self._base].reshape(3, 3)))
+            rows["acc"].append(self.acceleration())
+            mujoco.mj_Euler(m, d)
+        f = np.array(rows["f"])
+        fn, ft, mu = f[:, :, 2], f[:, :, :2], np.array([s.mu for s in self.supports])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            use = np.nan_to_num(np.where(mu > 0, np.linalg.norm(ft, axis=2) / (mu * fn), 0.0), nan=0.0)
+        slip, pen, pos, rpy, acc = (np.array(rows[k]) for k in ("slip", "pen", "pos", "rpy", "acc"))
+        out = Rollout(self.supports, np.array(rows["t"]), fn, ft, use, slip, pen, pos, rpy, acc)
+        for k, s in enumerate(self.supports):
+            out.in_contact[s.name] = bool(fn[:, k].min() > 0.0 and pen[:, k].max() <= max_penetration)
+            if s.driven:
+                out.slipped[s.name] = bool(slip[:, k].max() > slip_speed or use[:, k].max() >= at_limit)
+        return out
