@@ -124,6 +124,20 @@ def test_a_yaml_alias_bomb_is_refused(tmp_path):
         ("'x'.center(3000000000)", "calls center(3000000000)"),
         ("'%2000000000d' % 1", "width or precision of 2000000000"),
         ("(str(dict())[0] + ':>2000000000' + str(dict())[1]).format(1)", "width or precision of 2000000000"),
+        ("[[0] * 2**20] * 2**20", "makes a value of more than 1,048,576 items"),
+        ("str([[0] * 2**20] * 2**20)", "passes str() a value of more than 1,048,576 items"),
+        ("len(python.sum([[0] * 2**20] * 2**20, []))", "passes sum() a value"),
+        (
+            "'x'.join(['y' * 2**20] * 2**20)",
+            "passes join() a value of more than 1,048,576 items or 16,777,216 characters",
+        ),
+        ("('x' * 2**20).replace('x', 'y' * 2**20)", "calls replace() making 1,099,511,627,776 characters"),
+        ("('\\t' * 2**20).expandtabs(2**20)", "calls expandtabs() making 1,099,512,676,352 characters"),
+        (" + ".join(["('x' * 2**20)"] * 17), "joins texts into more than 16,777,216 characters"),
+        (
+            "math.prod(python.range(1, 10**5))",
+            f"math.prod of integers of {sum(k.bit_length() for k in range(1, 10**5)):,} bits together",
+        ),
     ],
 )
 def test_expressions_that_make_huge_values_are_refused(tmp_path, expression, needle):
@@ -133,6 +147,11 @@ def test_expressions_that_make_huge_values_are_refused(tmp_path, expression, nee
 def test_an_expression_that_loops_for_hours_meets_the_time_bound(tmp_path):
     path = _expression(tmp_path, "len([1 for i in range(10**6) for j in range(10**6)])")
     _refused(path, "expanding it takes more than 1 s", overrides={"MAX_SECONDS": 1.0}, seconds=6.0)
+
+
+def test_an_expression_that_loops_long_meets_the_step_bound(tmp_path):
+    path = _expression(tmp_path, "len([1 for i in range(1000) for j in range(1000)])")
+    _refused(path, "its expressions take more than 100,000 steps", overrides={"MAX_STEPS": 100_000}, seconds=6.0)
 
 
 def test_many_elements_meet_their_bound(tmp_path):

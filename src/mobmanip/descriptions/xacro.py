@@ -64,8 +64,10 @@ MAX_EXPANDED_CHARS = 1 << 28
 #: Bits of an integer an expression may make (about 19,700 decimal digits).
 MAX_INT_BITS = 1 << 16
 #: Items of a sequence an expression may make (``range``, ``[0] * n``, ``"x" * n``), and the
-#: largest whole-number argument of a call (a width, a count).
-MAX_ITEMS = 1 << 24
+#: largest whole-number argument of a text's method or width of a format (a count, a width).
+MAX_ITEMS = 1 << 20
+#: Steps of expressions (calls and loop iterations) in one expansion.
+MAX_STEPS = 10_000_000
 #: Nodes of a YAML file ``xacro.load_yaml`` reads, its aliases expanded.
 MAX_YAML_NODES = 1_000_000
 #: Seconds an expansion may take.
@@ -95,6 +97,7 @@ class _Guard:
         self.macros = 0
         self.elements = 0
         self.chars = 0
+        self.steps = 0
         self.refused: str | None = None
         self._saved: list[tuple[Any, str, Any]] = []
 
@@ -130,8 +133,11 @@ class _Guard:
             "factorial": self._count_argument(math.factorial, "math.factorial"),
             "comb": self._count_argument(math.comb, "math.comb"),
             "perm": self._count_argument(math.perm, "math.perm"),
+            "prod": self._product(math.prod, "math.prod"),
+            "lcm": self._product(math.lcm, "math.lcm"),
         }
-        originals = {"range": range, "factorial": math.factorial, "comb": math.comb, "perm": math.perm}
+        originals = {"range": range, "factorial": math.factorial, "comb": math.comb, "perm": math.perm,
+                     "prod": math.prod, "lcm": math.lcm}  # fmt: skip
         tables = [symbols] + [v for v in symbols.values() if isinstance(v, dict)]
         for table in tables:
             for key, value in list(dict.items(table)):
@@ -173,6 +179,9 @@ class _Guard:
         def eval_text(text, symbols):
             self.tick()
             value = original(text, symbols)
+            if not isinstance(value, (str, int, float, bool)) and _too_big(value):
+                shown = " ".join(str(text).split())[:60]
+                self.refuse(f"{shown!r} evaluates to more than {MAX_ITEMS:,} items or {MAX_VALUE_CHARS:,} characters")
             if isinstance(value, str):
                 if len(value) > MAX_VALUE_CHARS:
                     shown = " ".join(str(text).split())[:60]
@@ -211,22 +220,31 @@ class _Guard:
             code = compile(ast.fix_missing_locations(tree), "<expression>", "eval")
             globals.update(__builtins__={_GUARD: guard._operation, _CALL: guard._call})
 
-            def trace(frame, event, arg):  # every call and loop iteration inside the expression
+            def trace(frame, event, arg):  # every line and loop iteration of the expression's own code
+                if frame.f_code.co_filename != "<expression>":
+                    return None  # the guard's and xacro's functions: not traced inside
+                guard.steps += 1
+                if guard.steps > MAX_STEPS:
+                    guard.refuse(f"its expressions take more than {MAX_STEPS:,} steps")
                 guard.tick()
                 return trace
 
             previous = sys.gettrace()
             sys.settrace(trace)
             try:
-                return eval(code, globals, locals)
+                value = eval(code, globals, locals)
             finally:
                 sys.settrace(previous)
+            if isinstance(value, (list, tuple, dict, set, frozenset)) and _too_big(value):
+                guard.refuse(f"the expression {text[:60]!r} makes a value of more than {MAX_ITEMS:,} items or "
+                             f"{MAX_VALUE_CHARS:,} characters")  # fmt: skip
+            return value
 
         return safe_eval
 
     # -- what an expression may make ------------------------------------------------------
     def _operation(self, op: str, a, b):
-        """``a op b`` for ``**``, ``<<`` and ``*``, refused when the result would be too large."""
+        """``a op b`` for ``**``, ``<<``, ``*``, ``%`` and ``+``, refused when the result would be too large."""
         if op == "**":
             if _whole(a) and _whole(b) and b > 0 and abs(a) > 1 and b * (abs(a).bit_length() - 1) > MAX_INT_BITS:
                 self.refuse(f"an expression raises {_short(a)} to the power {_short(b)}, an integer of more than "
@@ -237,6 +255,12 @@ class _Guard:
                 self.refuse(f"an expression shifts {_short(a)} left by {_short(b)}, an integer of more than "
                             f"{MAX_INT_BITS:,} bits")  # fmt: skip
             return a << b
+        if op == "+":
+            if isinstance(a, (str, bytes)) and isinstance(b, (str, bytes)) and len(a) + len(b) > MAX_VALUE_CHARS:
+                self.refuse(f"an expression joins texts into more than {MAX_VALUE_CHARS:,} characters")
+            if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)) and len(a) + len(b) > MAX_ITEMS:
+                self.refuse(f"an expression joins sequences into more than {MAX_ITEMS:,} items")
+            return a + b
         if op == "%":
             if isinstance(a, (str, bytes)):
                 self._check_widths(a if isinstance(a, str) else a.decode("latin-1"), "%")
@@ -250,17 +274,34 @@ class _Guard:
         return a * b
 
     def _call(self, function, *args, **kwargs):
-        """``function(*args, **kwargs)``; a method of a text or a sequence (``"x".center(n)``,
-        ``"{:>n}".format``) is refused a count or a width above :data:`MAX_ITEMS`."""
+        """``function(*args, **kwargs)``, refused when an argument holds more than
+        :data:`MAX_ITEMS` items or :data:`MAX_VALUE_CHARS` characters (shared lists counted at each reference: what
+        ``str`` or ``sum`` would walk), or when a method of a text or a sequence would make more
+        (``"x".center(n)``, ``"{:>n}".format``, ``replace``, ``expandtabs``)."""
+        name = getattr(function, "__name__", "a function")
+        for value in (*args, *kwargs.values()):
+            if isinstance(value, (list, tuple, dict, set, frozenset)) and _too_big(value):
+                self.refuse(f"an expression passes {name}() a value of more than {MAX_ITEMS:,} items or "
+                            f"{MAX_VALUE_CHARS:,} characters")  # fmt: skip
         owner = getattr(function, "__self__", None)
         if isinstance(owner, (str, bytes, list, tuple)):
-            name = getattr(function, "__name__", "a method")
             for value in (*args, *kwargs.values()):
                 if _whole(value) and abs(value) > MAX_ITEMS:
                     self.refuse(f"an expression calls {name}({_short(value)}) on a text or sequence, more than "
                                 f"{MAX_ITEMS:,} items")  # fmt: skip
             if name in ("format", "format_map") and isinstance(owner, str):
                 self._check_widths(owner, "{")
+            if isinstance(owner, str) and name in ("replace", "expandtabs"):
+                if name == "replace" and len(args) >= 2 and isinstance(args[0], str) and isinstance(args[1], str):
+                    old, new = args[0], args[1]
+                    count = len(owner) + 1 if not old else owner.count(old)
+                    made = len(owner) + count * (len(new) - len(old))
+                else:
+                    tab = args[0] if args and _whole(args[0]) else kwargs.get("tabsize", 8)
+                    made = len(owner) + owner.count("\t") * (tab if _whole(tab) else 8)
+                if made > MAX_VALUE_CHARS:
+                    self.refuse(f"an expression calls {name}() making {made:,} characters, more than "
+                                f"{MAX_VALUE_CHARS:,}")  # fmt: skip
         return function(*args, **kwargs)
 
     def _check_widths(self, text: str, style: str) -> None:
@@ -288,6 +329,20 @@ class _Guard:
         guarded.__wrapped__ = function
         return guarded
 
+    def _product(self, function, name: str):
+        """``math.prod`` or ``math.lcm``, refused when the integers' bits add up past :data:`MAX_INT_BITS`."""
+
+        def guarded(*args, **kwargs):
+            items = list(args[0]) if name == "math.prod" and args else list(args)
+            bits = sum(abs(v).bit_length() for v in items if _whole(v))
+            if bits > MAX_INT_BITS:
+                self.refuse(f"an expression asks for {name} of integers of {bits:,} bits together, more than "
+                            f"{MAX_INT_BITS:,}")  # fmt: skip
+            return function(*([items] if name == "math.prod" and args else items), *args[1:], **kwargs)
+
+        guarded.__wrapped__ = function
+        return guarded
+
     def _load_yaml(self, original):
         def load_yaml(filename):
             self.tick()
@@ -308,6 +363,26 @@ class _Guard:
         return load_yaml
 
 
+def _too_big(value) -> bool:
+    """Whether ``value`` holds more than :data:`MAX_ITEMS` items or :data:`MAX_VALUE_CHARS`
+    characters, nested containers walked (a shared one at each reference, as ``str`` or ``sum``
+    would walk it). A container's items are counted before they are walked, so the walk stops
+    after at most :data:`MAX_ITEMS` of them."""
+    items, chars, stack = 0, 0, [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, (str, bytes)):
+            chars += len(item)
+            if chars > MAX_VALUE_CHARS:
+                return True
+        elif isinstance(item, (dict, list, tuple, set, frozenset)):
+            items += len(item)
+            if items > MAX_ITEMS:
+                return True
+            stack.extend(item.items() if isinstance(item, dict) else item)
+    return False
+
+
 def _whole(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
@@ -320,12 +395,12 @@ def _short(value) -> str:
 
 
 class _Guarded(ast.NodeTransformer):
-    """``a ** b``, ``a << b``, ``a * b`` and ``a % b`` in an expression become calls of the
+    """``a ** b``, ``a << b``, ``a * b``, ``a % b`` and ``a + b`` in an expression become calls of the
     guard, every call ``f(...)`` a call of the guard with ``f`` (xacro's lexer ends an expression
     at its first ``}``, so an f-string or a format written out cannot occur; one built from
     pieces is checked when called)."""
 
-    OPERATIONS = {ast.Pow: "**", ast.LShift: "<<", ast.Mult: "*", ast.Mod: "%"}
+    OPERATIONS = {ast.Pow: "**", ast.LShift: "<<", ast.Mult: "*", ast.Mod: "%", ast.Add: "+"}
 
     def visit_Call(self, node: ast.Call):
         self.generic_visit(node)
