@@ -30,6 +30,7 @@ COMMANDS = {
     "team --sweep-heading": ["team", str(ROOT / "examples" / "beam_team.toml"), "--sweep-heading=-10:10:3",
                              "--no-progress"],
     "sweep": ["sweep", "planar_dual_arm", "--angle", "0:90:2", "--distance", "1", "--no-progress"],
+    "site": ["site", str(ROOT / "examples" / "site_planar.toml"), "-o", "SITE", "--no-progress"],
 }  # fmt: skip
 
 

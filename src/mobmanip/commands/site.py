@@ -37,8 +37,8 @@ examples:
 #: Object positions site runs without being asked (--max-work raises it up to the site's own
 #: ceiling, :data:`mobmanip.placement.site.MAX_POSITIONS`).
 MAX_SITE_POSITIONS = 10_000
-#: Wall time of one position on the paper's robot (s): place's 8 starts at 0.25 s each.
-SECONDS_PER_POSITION = 2.0
+#: Wall time of one position on the paper's robot (s), rounded up (the example's 16 in 2.5 s).
+SECONDS_PER_POSITION = 0.25
 
 
 def register(sub) -> None:
