@@ -14,11 +14,12 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from mobmanip.errors import ArgumentError
-from mobmanip.support.threads import VARIABLES, limit_threads, user_governed
+from mobmanip.support.threads import VARIABLES, LimitedExecutor, limit_threads, user_governed
 
 #: Every variable that sizes a pool, as the module reads them.
 ALL_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "MKL_NUM_THREADS",
@@ -80,8 +81,10 @@ def _environment(**user) -> dict[str, str]:
     return environ
 
 
-def _run(script: str, environ: dict[str, str], *args: str, cwd=None) -> tuple[object, str]:
-    child = subprocess.run([sys.executable, "-c", script, *args], env=environ, capture_output=True, text=True,
+def _run(script: str | Path, environ: dict[str, str], *args: str, cwd=None) -> tuple[object, str]:
+    """Run ``script`` (source, or a file) in a child Python; its last line read as JSON, and its stderr."""
+    source = [str(script)] if isinstance(script, Path) else ["-c", script]
+    child = subprocess.run([sys.executable, *source, *args], env=environ, capture_output=True, text=True,
                            cwd=cwd, timeout=300)  # fmt: skip
     assert child.returncode == 0, child.stderr
     return json.loads(child.stdout.strip().splitlines()[-1]), child.stderr
@@ -241,3 +244,50 @@ def test_libraries_loaded_before_main_are_limited_and_restored(tmp_path):
     assert {path: threads for path, threads in after.items() if path not in before} == dict.fromkeys(
         set(after) - set(before), 1
     )
+
+
+# ------------------------------------------------------------------------------------------------
+# workers this process did not start: LimitedExecutor
+
+#: One spawned worker with NumPy loaded and the environment of this script's process; prints, as
+#: JSON, the worker's BLAS threads for a plain task, for a task through LimitedExecutor, and for a
+#: plain task after it (the worker keeps its limit), and LimitedExecutor.map's results.
+WORKER = r"""
+import concurrent.futures as cf, importlib, json, multiprocessing
+from threadpoolctl import threadpool_info
+from mobmanip.support.threads import LimitedExecutor
+
+def blas(info):
+    return sorted({i["num_threads"] for i in info if i["user_api"] == "blas"})
+
+if __name__ == "__main__":
+    context = multiprocessing.get_context("spawn")
+    with cf.ProcessPoolExecutor(1, mp_context=context, initializer=importlib.import_module,
+                                initargs=("numpy",)) as pool:
+        plain = blas(pool.submit(threadpool_info).result())
+        limited = LimitedExecutor(pool)
+        inside = blas(limited.submit(threadpool_info).result())
+        after = blas(pool.submit(threadpool_info).result())
+        mapped = list(limited.map(pow, [2, 3], [3, 2]))
+    print(json.dumps({"plain": plain, "inside": inside, "after": after, "mapped": mapped}))
+"""
+
+
+def test_a_limited_executor_limits_the_workers_it_did_not_start(tmp_path):
+    script = tmp_path / "worker.py"  # spawn imports the parent's __main__: a file, not -c
+    script.write_text(WORKER)
+    seen, _ = _run(script, _environment())  # the worker inherits no limit from its parent
+    default = _blas_default(_environment())
+    assert seen == {"plain": [default], "inside": [1], "after": [1], "mapped": [8, 9]}
+
+    environ = _environment(OPENBLAS_NUM_THREADS="2")  # the worker's user sized its BLAS: it stays
+    seen, _ = _run(script, environ)
+    expected = _blas_default(environ)
+    assert seen == {"plain": [expected], "inside": [expected], "after": [expected], "mapped": [8, 9]}
+
+
+def test_a_limited_executor_refuses_a_bad_limit():
+    import concurrent.futures as cf
+
+    with cf.ThreadPoolExecutor(1) as pool, pytest.raises(ArgumentError, match="positive integer"):
+        LimitedExecutor(pool, 0)

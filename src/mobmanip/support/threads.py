@@ -16,7 +16,11 @@ dynamic:log_volume`` used 2 to 4 times the CPU time with OpenBLAS's default pool
         result = mobmanip.placement.place(robot, target, "dynamic:log_volume", object_mass=1.0)
 
 The ``mobmanip`` command runs inside it (:func:`mobmanip.cli.main`), so every command, and every
-worker process a command starts, works with one BLAS thread and one OpenMP thread.
+worker process a command starts (a sweep's process pool, a ``local:N`` Dask cluster), works with
+one BLAS thread and one OpenMP thread. Workers started by someone else (``dask worker`` on other
+machines) are reached through :class:`LimitedExecutor`, which limits the pools of the process
+each task runs in: the same thread settings in the command and its workers give the same results
+bit for bit (a BLAS may round differently when it splits a product over threads).
 
 A thread count the user set in the environment wins: with ``OMP_NUM_THREADS`` set, no pool is
 touched (every BLAS falls back on it); with a BLAS's own variable set (``OPENBLAS_NUM_THREADS``,
@@ -27,10 +31,12 @@ threads (``NUMBA_NUM_THREADS``) are not touched: mobmanip's compiled kernels do 
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import contextlib
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 from ..errors import ArgumentError
 
@@ -79,21 +85,10 @@ def limit_threads(limit: int = 1) -> Iterator[frozenset[str]]:
     Raises:
         ArgumentError: ``limit`` is not a positive integer.
     """
-    if isinstance(limit, bool) or not isinstance(limit, int) or limit < 1:
-        raise ArgumentError(f"a thread limit must be a positive integer, got {limit!r}")
-    kinds = frozenset(kind for kind in VARIABLES if kind not in user_governed())
+    kinds = _kinds_to_limit(limit)
     value = str(limit)
     before = {name: (os.environ.get(name), _SET_HERE.get(name)) for kind in kinds for name in VARIABLES[kind]}
-    for name in before:
-        os.environ[name] = _SET_HERE[name] = value
-    limiter = None
-    # Every BLAS and OpenMP runtime this stack loads comes with NumPy (NumPy's own BLAS, SciPy's,
-    # Pinocchio's); before NumPy has loaded the variables are enough, and threadpoolctl's import
-    # is left out of a command's start.
-    if kinds and "numpy" in sys.modules:
-        from threadpoolctl import threadpool_limits
-
-        limiter = threadpool_limits(limits=dict.fromkeys(kinds, limit))
+    limiter = _apply(kinds, limit)
     try:
         yield kinds
     finally:
@@ -111,6 +106,73 @@ def limit_threads(limit: int = 1) -> Iterator[frozenset[str]]:
                 _SET_HERE.pop(name, None)
             else:
                 _SET_HERE[name] = ours
+
+
+def limit_process_threads(limit: int = 1) -> frozenset[str]:
+    """Limit this process's pools for the rest of its life, as :func:`limit_threads` does for a
+    block (the pools the user sized in the environment are left alone); returns the kinds of
+    pool limited. For a worker process: calling it again is harmless.
+
+    Raises:
+        ArgumentError: ``limit`` is not a positive integer.
+    """
+    kinds = _kinds_to_limit(limit)
+    _apply(kinds, limit)
+    return kinds
+
+
+def _kinds_to_limit(limit: int) -> frozenset[str]:
+    if isinstance(limit, bool) or not isinstance(limit, int) or limit < 1:
+        raise ArgumentError(f"a thread limit must be a positive integer, got {limit!r}")
+    return frozenset(kind for kind in VARIABLES if kind not in user_governed())
+
+
+def _apply(kinds: frozenset[str], limit: int):
+    """Set the variables of ``kinds`` and limit their pools already loaded; threadpoolctl's
+    limiter (which can restore them), or None when nothing was loaded."""
+    for kind in kinds:
+        for name in VARIABLES[kind]:
+            os.environ[name] = _SET_HERE[name] = str(limit)
+    # Every BLAS and OpenMP runtime this stack loads comes with NumPy (NumPy's own BLAS, SciPy's,
+    # Pinocchio's); before NumPy has loaded the variables are enough, and threadpoolctl's import
+    # is left out of a command's start.
+    if not kinds or "numpy" not in sys.modules:
+        return None
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=dict.fromkeys(kinds, limit))
+
+
+class _Limited:
+    """``fn`` called in a process whose pools are limited first (it travels to a worker, pickled,
+    with its task: the worker must be able to import mobmanip)."""
+
+    def __init__(self, fn: Callable[..., Any], limit: int):
+        self.fn, self.limit = fn, limit
+
+    def __call__(self, *args, **kwargs):
+        limit_process_threads(self.limit)
+        return self.fn(*args, **kwargs)
+
+
+class LimitedExecutor(cf.Executor):
+    """Another executor's tasks, each run in a worker whose BLAS and OpenMP pools are limited
+    (:func:`limit_process_threads`) before it starts: for workers that this process did not start
+    and that therefore do not inherit its limit, such as a remote Dask cluster's
+    (``LimitedExecutor(client.get_executor())``). Futures are the wrapped executor's own."""
+
+    def __init__(self, executor: cf.Executor, limit: int = 1):
+        _kinds_to_limit(limit)  # checks the limit
+        self.executor, self.limit = executor, limit
+
+    def submit(self, fn, /, *args, **kwargs):
+        return self.executor.submit(_Limited(fn, self.limit), *args, **kwargs)
+
+    def map(self, fn, *iterables, **kwargs):
+        return self.executor.map(_Limited(fn, self.limit), *iterables, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self.executor.shutdown(wait=wait, cancel_futures=cancel_futures)
 
 
 def describe_pools() -> str:
