@@ -35,8 +35,10 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -67,13 +69,16 @@ class SupportPoint:
         joint: the joint of the body the point belongs to: the wheel's joint for a driven wheel
             (the rim's material point), the root joint for a caster (its swivel is not modelled).
         point: the contact point in the platform's root frame (m), (3,).
-        driven: a driven wheel (3 force components) or a caster (normal force only).
+        driven: a wheel (3 force components) or a caster (normal force only).
+        free: a roller's free-rolling direction in the platform's root frame (unit (2,)): the
+            contact pushes nothing along it; ``None``: none.
     """
 
     name: str
     joint: str
     point: np.ndarray
     driven: bool
+    free: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -105,6 +110,10 @@ class FloorProblem:
         level_tolerance: held level: |level_jacobian S xdot| <= this (m/s^2, rad/s^2).
         heading: the base's heading (rad from world +x): a friction pyramid's first face points
             along it (the pyramid turns with the robot).
+        floor_efforts: the entries of tau that are the floor's traction (an omnidirectional
+            base's): S^T sum_c J_c^T lambda_c equals them, and is zero on every other entry (the
+            floor's forces do no work along the platform's motions: a rolling wheel's do none
+            by themselves, a skid-steer's sideways forces are held to none at rest).
     """
 
     M: np.ndarray
@@ -126,6 +135,7 @@ class FloorProblem:
     gravity: np.ndarray
     level_tolerance: float = 0.0
     heading: float = 0.0
+    floor_efforts: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -163,9 +173,11 @@ def free_flyer_model(robot) -> pin.Model:
     """The robot's URDF with a free-flyer root, locked to exactly mobmanip's joints (shared: read only).
 
     Joints absent from ``robot.model`` are locked at the spec's ``[reference]`` values (zero if
-    unlisted), as mobmanip locks them; the result has the same joints in the same order.
+    unlisted), as mobmanip locks them; the result has the same joints in the same order. Leftovers
+    of xacro's ``$(optenv NAME DEFAULT)`` (Clearpath's Husky has one) are read as their default.
     """
-    full = pin.buildModelFromUrdf(str(robot.spec.urdf), pin.JointModelFreeFlyer())
+    text = re.sub(r"\$\(optenv\s+\S+\s+([^)]*)\)", r"\1", Path(robot.spec.urdf).read_text())
+    full = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
     q_ref = pin.neutral(full)
     for j in range(2, full.njoints):
         joint, value = full.joints[j], robot.spec.reference.get(full.names[j], 0.0)
@@ -244,13 +256,32 @@ PAPER_CASTERS = corner_casters(0.25, 0.14, -0.075)
 
 
 def driven_wheels(robot) -> tuple[SupportPoint, ...]:
-    """One contact per driven wheel, below the wheel centre by the platform's wheel radius."""
+    """One contact per wheel of the platform (driven or free-rolling: each has a force along the
+    floor), below the wheel's centre by its radius."""
     model, data = _reference_frames(robot)
-    down = np.array([0.0, 0.0, robot.platform.radius])
     return tuple(
-        SupportPoint(name, name, data.oMi[model.getJointId(name)].translation - down, driven=True)
-        for name in robot.platform.wheel_names
+        SupportPoint(name, name, data.oMi[model.getJointId(name)].translation - np.array([0.0, 0.0, r]), driven=True)
+        for name, r in robot.platform.wheels()
     )
+
+
+def actuated_joints(robot) -> list[list[str]]:
+    """Per reduced velocity, the joints its effort turns, by the platform kind's own mechanism:
+    a differential drive's wheel; a skid-steer side's wheels (sharing its effort equally); a
+    steered base's drive wheel, then its steering joint (the rear wheels roll free); nothing for an
+    omnidirectional base (the floor's traction moves it); an arm or torso joint itself."""
+    kind, wheels = robot.platform.kind, robot.spec.wheels
+    if kind == "differential_drive":
+        platform = [[wheels.right], [wheels.left]]
+    elif kind == "skid_steer":
+        platform = [list(wheels.right), list(wheels.left)]
+    elif kind == "steered":
+        platform = [[wheels.drive], [wheels.steer]]
+    elif kind == "omnidirectional":
+        platform = [[], [], []]
+    else:
+        raise ValueError(f"no floor reference for a {kind} platform")
+    return platform + [[name] for name in robot.reduced_velocity_names[len(platform) :]]
 
 
 def build_problem(
@@ -276,10 +307,17 @@ def build_problem(
     data = model.createData()
     q_f = free_flyer_configuration(robot, model, q)
     S = free_flyer_null_space(robot, model, q)
-    # Entry k of tau is the torque of joint reduced_velocity_names[k] with the sign of its row of S
-    # (a positive wheel effort drives forward, as a positive wheel rate does): S^T B = I.
-    B = S.copy()
-    B[:6] = 0.0
+    # Entry k of tau turns the joints actuated_joints gives, with the sign of their rows of S (a
+    # positive wheel effort drives forward, as a positive wheel rate does), shared so that
+    # S^T B = I; an omnidirectional base's efforts are the floor's traction (floor_efforts).
+    B = np.zeros_like(S)
+    floor_efforts = []
+    for k, joints in enumerate(actuated_joints(robot)):
+        rows = [model.joints[model.getJointId(name)].idx_v for name in joints]
+        if not rows:
+            floor_efforts.append(k)
+            continue
+        B[rows, k] = S[rows, k] / float(np.sum(S[rows, k] ** 2))
     M = pin.crba(model, data, q_f)
     M = np.triu(M) + np.triu(M, 1).T
     g = pin.computeGeneralizedGravity(model, data, q_f).copy()
@@ -329,6 +367,7 @@ def build_problem(
         gravity=gravity,
         level_tolerance=level_tolerance,
         heading=float(math.atan2(data.oMi[1].rotation[1, 0], data.oMi[1].rotation[0, 0])),
+        floor_efforts=tuple(floor_efforts),
     )
 
 
@@ -345,6 +384,21 @@ def contact_force_columns(problem: FloorProblem) -> tuple[np.ndarray, list[slice
     return np.hstack(columns), slices
 
 
+def _floor_work(P: FloorProblem, C: np.ndarray, slices: list[slice], equation) -> None:
+    """The floor's forces along the platform's motions: S^T C lambda = tau on the floor's own
+    efforts, 0 elsewhere; and a roller pushes nothing along its free direction."""
+    select = np.zeros((P.S.shape[1], P.S.shape[1]))
+    select[list(P.floor_efforts), list(P.floor_efforts)] = 1.0
+    equation([("lambda", P.S.T @ C), ("tau", -select)], np.zeros(P.S.shape[1]))
+    c, s = math.cos(P.heading), math.sin(P.heading)
+    for contact, sl in zip(P.contacts, slices):
+        if contact.free is not None:
+            row = np.zeros((1, C.shape[1]))
+            fx, fy = contact.free
+            row[0, sl.start : sl.start + 2] = (c * fx - s * fy, s * fx + c * fy)
+            equation([("lambda", row)], np.zeros(1))
+
+
 def zero_moment_point(points: np.ndarray, forces: np.ndarray) -> np.ndarray:
     """Where the contact forces' resultant has no horizontal moment, on the floor plane.
 
@@ -359,6 +413,8 @@ def zero_moment_point(points: np.ndarray, forces: np.ndarray) -> np.ndarray:
     if np.ptp(points[:, 2]) > 1e-9:
         raise ValueError(f"contact points are not on one floor plane: heights {points[:, 2]}")
     F, Mo = forces.sum(axis=0), np.cross(points, forces).sum(axis=0)  # moment about the world origin
+    if F[2] <= 0.0:  # nothing presses on the floor: the robot is lifting off, no point has it
+        return np.full(3, np.nan)
     return np.array([(z0 * F[0] - Mo[1]) / F[2], (Mo[0] + z0 * F[1]) / F[2], z0])
 
 
@@ -469,6 +525,7 @@ def _solve(
         rhs.append(np.asarray(value, dtype=float))
 
     equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
+    _floor_work(P, C, slices, lambda parts, value: equation([(T if w == "tau" else L, b) for w, b in parts], value))
     equation([(H, P.level_grasp[0]), (V, P.level_grasp[1])], P.level_load)  # the object held level
     squeeze = null_space(P.level_grasp[1]).T  # ... by the hands' minimum-norm share (no squeeze)
     equation([(V, squeeze)], np.zeros(len(squeeze)))
@@ -569,6 +626,8 @@ def team_straight_line(
     cone = (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
     for P, (C, slices, (X, T, L, H, V, D)) in zip(problems, blocks):
         equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
+        _floor_work(P, C, slices, lambda parts, value, T=T, L=L: equation(
+            [(T if w == "tau" else L, b) for w, b in parts], value))  # fmt: skip
         equation([(X, P.hand_jacobian @ P.S), (A, -P.W.T)], np.zeros(P.W.shape[1]))  # its hands move with it
         squeeze = null_space(P.level_grasp[1]).T  # its hands share the level load without a squeeze
         equation([(V, squeeze)], np.zeros(len(squeeze)))

@@ -275,7 +275,7 @@ def test_support_errors_name_the_contact_and_the_value():
     with pytest.raises(SpecError, match="faces must be an integer from 3 to 64, got 2"):
         Floor(mu=0.5, faces=2)
     fixed = mobmanip.load_robot("ur5")
-    with pytest.raises(MobmanipError, match="differential-drive"):
+    with pytest.raises(MobmanipError, match="covers platforms that move on the floor .*'ur5' has a fixed platform"):
         mobmanip.analyze(fixed, fixed.neutral(), measures=("dynamic_polytope",), constraints=(Floor(),))
 
 

@@ -141,12 +141,32 @@ def test_the_level_band_is_stated_and_checked():
 
 
 # ------------------------------------------------------------------------------------------------
-# The invariants, over the wheeled robots this project ships and every task each analyses
+# The invariants, over the wheeled robots this project ships and every task each analyses (the
+# foreign skid-steer, steered and omnidirectional robots: tests/test_floor_kinds.py)
 
 
 def _paper_case():
     robot = mobmanip.load_robot("planar_dual_arm")
     return robot, configuration_at(robot, optimal_posture(robot), 45.0)
+
+
+def _paper_omni_case():
+    """The paper's arms on the omnidirectional base, in the differential drive's posture above."""
+    paper, q_paper = _paper_case()
+    robot = mobmanip.load_robot("planar_dual_arm_omni")
+    joints = {n: v for n, v in paper.configuration_dict(q_paper)["joints"].items() if robot.model.existJointName(n)}
+    return robot, robot.configuration(platform=(0.0, 0.0, 0.0), joints=joints)
+
+
+def _tiago_pro_case():
+    """TIAGo Pro (skid-steer) with its arms bent in front (at home they hang straight down: a
+    singular posture, where the exact set itself jumps under a 1e-8 tilt)."""
+    robot = mobmanip.load_robot("tiago_pro")
+    q = named_configuration(robot, "home")
+    for side in ("right", "left"):
+        for k, value in enumerate((0.3, 0.5, -0.4, 1.2, 0.2, 0.5, 0.1), start=1):
+            q[robot.model.joints[robot.model.getJointId(f"arm_{side}_{k}_joint")].idx_q] = value
+    return robot, q
 
 
 def _named_case(name, posture):
@@ -173,6 +193,8 @@ ZOO = {
     "tiago_dual": (_named_case("tiago_dual", "hold"), ("planar", "translational", "spatial"), 2.0),
     "tiago": (_tiago_case, ("planar", "translational", "spatial"), 0.5),
     "stretch": (_named_case("stretch", "home"), ("planar", "translational"), 0.5),
+    "tiago_pro": (_tiago_pro_case, ("planar",), 1.0),  # skid-steer
+    "planar_dual_arm_omni": (_paper_omni_case, ("planar",), 2.0),  # mecanum wheels
 }
 CASES = [(name, task) for name, (_, tasks, _) in ZOO.items() for task in tasks]
 

@@ -470,6 +470,7 @@ def held_reach(
     calm_hold, calm_maps = play(witness.variables["tau"])
     if calm_hold.holds and fraction == 1.0:
         return HeldReach(d, top, instant, float(duration), calm_hold, calm_hold, fraction, witness, None, witness)
+    q = np.asarray(q, dtype=float)
     heading = math.atan2(float(q[3]), float(q[2]))
     program = _HoldingProgram(robot, polytope, d, object_mass, floor, heading)
     calm_witness = witness

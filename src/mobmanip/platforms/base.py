@@ -91,6 +91,10 @@ class Platform(ABC):
 
     #: Whether S depends on the configuration (then Sdot is not zero along a motion).
     varies_with_q: ClassVar[bool] = False
+    #: Whether its wheels' contacts slide sideways along its own motions (a skid-steer's off-axle
+    #: wheels scrub when it turns): on the floor their forces are then held to no work along the
+    #: platform's reduced velocities at rest; rolling wheels do no work by themselves.
+    scrubs: ClassVar[bool] = False
 
     @property
     @abstractmethod

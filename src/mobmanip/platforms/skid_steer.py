@@ -93,6 +93,7 @@ class SkidSteer(Platform):
     extent: tuple[float, float]
 
     kind = "skid_steer"
+    scrubs = True
 
     @property
     def reduced_names(self) -> tuple[str, ...]:

@@ -3,6 +3,10 @@
 A *support* is a set of contact points in the platform's root frame, all on the floor plane:
 
 - one per driven wheel, below the wheel's centre by its radius (from the platform's wheels);
+- one per driven contact the spec's ``[support] wheels`` gives, for a base whose wheels are not
+  joints of the file (an omnidirectional base: its planar joint's efforts are their traction),
+  optionally with its rollers' free direction (``[support] rollers``, deg), along which it pushes
+  nothing (mecanum and omni wheels);
 - one per passive support: the URDF's caster wheels (links named ``*caster*`` with a sphere or
   cylinder collision shape: the contact is below the shape's centre, on the floor) and the
   points the spec's ``[support]`` table gives.
@@ -62,10 +66,13 @@ class ContactPoint:
         name: the wheel's joint, the caster's link, or ``caster_<k>`` for a spec row.
         point: where it touches the floor, in the platform's root frame (m), (3,).
         driven: a driven wheel (normal and tangential force) or a passive support (normal only).
-        source: where it came from: ``"wheel"``, ``"urdf"`` or ``"spec"``.
+        source: where it came from: ``"wheel"`` (a wheel joint), ``"urdf"``, ``"spec"`` (a
+            caster of ``[support] casters``) or ``"spec_wheel"`` (``[support] wheels``).
         stiffness: its vertical stiffness relative to the other contacts' (the spec's
             ``[support.stiffness]``; 1 by default): how it shares the weight when the sharing is
             compliant.
+        free: the free-rolling direction of a wheel's rollers in the root frame's floor plane
+            (unit (2,)): the contact pushes nothing along it; ``None``: no such direction.
     """
 
     name: str
@@ -73,6 +80,7 @@ class ContactPoint:
     driven: bool
     source: str
     stiffness: float = 1.0
+    free: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -196,10 +204,17 @@ def robot_support(robot: Robot, mu: float | None = None, faces: int | None = Non
     """
     spec: SupportSpec = getattr(robot.spec, "support", None) or SupportSpec()
     wheels = robot.platform.wheels() if robot.wheel_platform is not None else ()
-    if not wheels:
+    if not wheels and not (spec.wheels and robot.wheel_platform is not None):
+        hint = (
+            "give its driven contacts in the spec's [support] wheels = [[x, y], ...] (m, root frame)"
+            if robot.wheel_platform is not None
+            else "the floor model needs a platform that moves on the floor"
+        )
+        raise SpecError(f"robot {robot.name!r} has no wheels on the floor ({robot.platform.kind} platform): {hint}")
+    if wheels and spec.wheels:
         raise SpecError(
-            f"robot {robot.name!r} has no wheels on the floor ({robot.platform.kind} platform): "
-            "the floor model needs a wheeled platform"
+            f"[support] wheels are the driven contacts of a base without wheel joints; {robot.name!r}'s "
+            f"{robot.platform.kind} platform has its own ({', '.join(name for name, _ in wheels)})"
         )
     model = robot.model
     data = model.createData()
@@ -208,6 +223,14 @@ def robot_support(robot: Robot, mu: float | None = None, faces: int | None = Non
     for joint, radius in wheels:
         center = data.oMi[model.getJointId(joint)].translation
         contacts.append(ContactPoint(joint, center - np.array([0.0, 0.0, radius]), True, "wheel"))
+    for k, row in enumerate(spec.wheels):
+        free = None
+        if spec.rollers:
+            angle = math.radians(spec.rollers[k])
+            free = (math.cos(angle), math.sin(angle))
+        z = row[2] if len(row) == 3 else 0.0
+        point = np.array([row[0], row[1], z], dtype=float)
+        contacts.append(ContactPoint(f"wheel_{k}", point, True, "spec_wheel", free=free))
     floor_z = float(np.mean([c.point[2] for c in contacts]))
     if spec.urdf_casters:
         for name, xy in _urdf_casters(robot, data):

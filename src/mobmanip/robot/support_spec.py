@@ -9,6 +9,10 @@ The table (all keys optional)::
     faces = 8                     # faces of the pyramid inscribed in each wheel's friction cone
     casters = [[0.25, 0.14], ...] # passive supports, [x, y] (on the floor) or [x, y, z] (m, root frame)
     urdf_casters = true           # also take the URDF's caster wheels
+    wheels = [[0.2, 0.2], ...]    # driven contacts of a base without wheel joints (omnidirectional:
+                                  # a planar joint driven by wheels the file does not model), rows as casters
+    rollers = [45.0, -45.0, ...]  # optional, one per row of wheels: the free-rolling direction of its
+                                  # rollers (deg from the root frame's +x; mecanum, omni wheels): no force along it
 
     [support.stiffness]           # relative vertical stiffness per contact (default 1 each)
     caster_0 = 0.4                # e.g. a sprung caster: only the ratios matter
@@ -23,7 +27,7 @@ its floor position.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 from ..errors import SpecError
@@ -47,6 +51,12 @@ class SupportSpec:
         faces: faces of the inscribed friction pyramid.
         urdf_casters: also take the URDF's caster wheels.
         stiffness: relative vertical stiffness by contact name (> 0); contacts not named have 1.
+        wheels: driven contacts of a base whose wheels are not joints of the file (an
+            omnidirectional base), (x, y) or (x, y, z) rows (m); their traction is the base's
+            effort.
+        rollers: per row of ``wheels``, the free-rolling direction of its rollers (deg from the
+            root frame's +x), along which it can push nothing; empty: none (traction in every
+            direction within friction).
     """
 
     casters: tuple[tuple[float, ...], ...] = ()
@@ -54,19 +64,22 @@ class SupportSpec:
     faces: int = DEFAULT_FACES
     urdf_casters: bool = True
     stiffness: Mapping[str, float] = field(default_factory=dict)
+    wheels: tuple[tuple[float, ...], ...] = ()
+    rollers: tuple[float, ...] = ()
 
     def __post_init__(self):
-        rows = []
-        for k, row in enumerate(self.casters):
-            if not isinstance(row, (list, tuple)) or len(row) not in (2, 3):
-                raise SpecError(f"[support] casters row {k} must be [x, y] or [x, y, z] in metres, got {row!r}")
-            values = []
-            for value in row:
-                if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                    raise SpecError(f"[support] casters row {k} must hold finite metres, got {row!r}")
-                values.append(float(value))
-            rows.append(tuple(values))
-        object.__setattr__(self, "casters", tuple(rows))
+        object.__setattr__(self, "casters", _points(self.casters, "casters"))
+        object.__setattr__(self, "wheels", _points(self.wheels, "wheels"))
+        rollers = []
+        for k, value in enumerate(self.rollers):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise SpecError(f"[support] rollers entry {k} must be an angle in degrees, got {value!r}")
+            rollers.append(float(value))
+        if rollers and len(rollers) != len(self.wheels):
+            raise SpecError(
+                f"[support] rollers gives {len(rollers)} angles for {len(self.wheels)} wheels: one per row of wheels"
+            )
+        object.__setattr__(self, "rollers", tuple(rollers))
         check_mu(self.mu, "[support] mu")
         check_faces(self.faces, "[support] faces")
         if not isinstance(self.urdf_casters, bool):
@@ -80,23 +93,47 @@ class SupportSpec:
         object.__setattr__(self, "stiffness", {str(k): float(v) for k, v in self.stiffness.items()})
 
 
+def _points(rows: Iterable[object], key: str) -> tuple[tuple[float, ...], ...]:
+    """Rows of [x, y] or [x, y, z] metres, checked."""
+    out = []
+    row: object
+    for k, row in enumerate(rows):
+        if not isinstance(row, (list, tuple)) or len(row) not in (2, 3):
+            raise SpecError(f"[support] {key} row {k} must be [x, y] or [x, y, z] in metres, got {row!r}")
+        values = []
+        value: object
+        for value in row:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise SpecError(f"[support] {key} row {k} must hold finite metres, got {row!r}")
+            values.append(float(value))
+        out.append(tuple(values))
+    return tuple(out)
+
+
 def support_spec_from_table(table: object, where: str) -> SupportSpec:
     """A :class:`SupportSpec` from the spec's ``[support]`` TOML table."""
     if not isinstance(table, Mapping):
         raise SpecError(f"{where}: [support] must be a table, got {table!r}")
-    known = {"casters", "mu", "faces", "urdf_casters", "stiffness"}
+    known = {"casters", "mu", "faces", "urdf_casters", "stiffness", "wheels", "rollers"}
     extra = sorted(set(table) - known)
     if extra:
         raise SpecError(f"{where}: unknown keys in [support]: {extra}; expected some of {sorted(known)}")
     casters = table.get("casters", [])
     if not isinstance(casters, list):
         raise SpecError(f"{where}: [support] casters must be a list of [x, y] rows, got {casters!r}")
+    wheels, rollers = table.get("wheels", []), table.get("rollers", [])
+    if not isinstance(wheels, list):
+        raise SpecError(f"{where}: [support] wheels must be a list of [x, y] rows, got {wheels!r}")
+    if not isinstance(rollers, list):
+        raise SpecError(f"{where}: [support] rollers must be a list of angles (deg), got {rollers!r}")
     return SupportSpec(
         casters=tuple(casters),
         mu=table.get("mu"),
         faces=table.get("faces", DEFAULT_FACES),
         urdf_casters=table.get("urdf_casters", True),
         stiffness=table.get("stiffness", {}),
+        wheels=tuple(wheels),
+        rollers=tuple(rollers),
     )
 
 

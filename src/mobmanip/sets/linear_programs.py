@@ -190,28 +190,34 @@ class LinearProgram:
             raise ModelError(f"the linear program of a polytope query ended as {self.last_status}")
 
     def _run(self):
-        """Run HiGHS until it settles: warm, then from scratch with presolve, then interior point."""
-        h, settled = self._h, self._settled
-        h.run()
-        status = h.getModelStatus()
-        if status in settled():
-            return status
-        h.clearSolver()
-        for option, value, back in (("presolve", "on", "off"), ("solver", "ipm", "choose")):
-            h.setOptionValue(option, value)
+        """Run HiGHS until it settles: warm; from scratch; with presolve; at HiGHS's own tolerances
+        (1e-7: its postsolve can leave a dual infeasibility of some 1e-8 it cannot clean up at
+        1e-9); with the interior-point method. Each attempt after the first starts from scratch."""
+        h, settled = self._h, self._settled()
+        looser = {"primal_feasibility_tolerance": 1e-7, "dual_feasibility_tolerance": 1e-7}
+        attempts = ({}, {}, {"presolve": "on"}, looser, {"solver": "ipm"})
+        defaults = {"presolve": "off", "primal_feasibility_tolerance": FEASIBILITY,
+                    "dual_feasibility_tolerance": FEASIBILITY, "solver": "choose"}  # fmt: skip
+        status = None
+        for k, options in enumerate(attempts):
+            if k:
+                h.clearSolver()
+            for option, value in options.items():
+                h.setOptionValue(option, value)
             h.run()
-            h.setOptionValue(option, back)
             status = h.getModelStatus()
             if status == self._highspy.HighsModelStatus.kUnboundedOrInfeasible:
                 h.clearSolver()  # presolve cannot tell which: the simplex from scratch can
+                h.setOptionValue("presolve", "off")
                 h.run()
                 status = h.getModelStatus()
-            if status in settled():
+            for option in options:
+                h.setOptionValue(option, defaults[option])
+            if status in settled:
                 return status
-            h.clearSolver()
         return status
 
-    def _settled(self):
+    def _settled(self) -> tuple:
         s = self._highspy.HighsModelStatus
         return (s.kOptimal, s.kInfeasible, s.kUnbounded)
 

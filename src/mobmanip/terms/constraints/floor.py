@@ -12,8 +12,22 @@ A_G is the centroidal momentum matrix (Pinocchio's ``computeCentroidalMap``; at 
 the momentum is A_G qdd), lambda_c the floor's force at contact c, (f_i, n_i) the wrench hand i
 applies to the object. For a differential drive (one reduced velocity per wheel and joint) these
 six rows and the reduced ones together are the whole floating-base dynamics. The unknowns the
-floor adds: each driven wheel's contact force (world x, y, z) and each passive support's normal
-force.
+floor adds: each wheel's contact force (world x, y, z) and each passive support's normal force.
+
+Every platform kind that moves on the floor (:data:`FLOOR_KINDS`) stands on it; what each kind's
+wheels add (:func:`_wheel_equations`):
+
+- differential drive: nothing more; a wheel's force along its rolling direction is its torque
+  over its radius less its spin, its sideways force a constraint force within friction;
+- skid-steer: each side's wheels turn at one rate and share its torque equally; the second wheel
+  of a side keeps its own row of the dynamics (its force along the floor is what its share
+  leaves), and the sideways forces that a turn scrubs against do no net work along the turn at
+  rest (the instantaneous model: nothing has slid yet, so no sliding friction resists it);
+- steered (tricycle): the drive wheel as a differential drive's, the free rear wheels' rows of
+  the dynamics with no effort (they push along the floor only what their spin asks);
+- omnidirectional (a planar joint driven by wheels the file does not model, ``[support] wheels``):
+  the base's efforts are the floor's traction, ``S^T sum_c J_c^T lambda_c = tau_base``, each
+  wheel's within friction, none along its rollers' free direction (``[support] rollers``).
 
 The task is the user's. On the floor the hands apply exactly the wrench components of the task
 analysed without the floor: a translational task's hands apply forces and no moments, a planar
@@ -93,6 +107,8 @@ LEVEL_ROWS = (2, 3, 4)
 LEVEL_TOLERANCE = 0.01
 #: How the contacts may share the weight (see the module's docstring).
 LOADS = ("auto", "compliant", "any")
+#: The platform kinds the floor covers (each with its contacts; see the module's docstring).
+FLOOR_KINDS = ("differential_drive", "skid_steer", "steered", "omnidirectional")
 #: The name of the contact force variable (world x, y, z per driven wheel; z per passive support).
 CONTACT_FORCES = "contact_forces"
 #: The name of the hands' wrench components on the level rows a task leaves out.
@@ -215,9 +231,10 @@ class Floor(Constraint):
         robot, q = terms.robot, terms.q
         if robot is None or q is None or terms.held_object is None:
             raise ArgumentError("the floor needs the robot, its configuration and the object (terms from terms_at)")
-        if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
+        if robot.wheel_platform is None or robot.platform.kind not in FLOOR_KINDS:
             raise SpecError(
-                f"the floor model covers differential-drive platforms (wheels that roll without slipping); "
+                f"the floor model covers platforms that move on the floor "
+                f"({', '.join(kind.replace('_', ' ') for kind in FLOOR_KINDS)}); "
                 f"{robot.name!r} has {a_platform(robot.platform.kind)}"
             )
         support, mu, faces = self.resolve(robot)
@@ -285,13 +302,15 @@ class Floor(Constraint):
             squeeze = _null_space(np.hstack(grasp_level))
             if len(squeeze):
                 equations.append(({LEVEL_WRENCHES: squeeze}, np.zeros(len(squeeze))))
+        equations += _wheel_equations(robot, q, S, support, points, slices, n_forces, gravity, mass, rows)
         if sharing_model == "compliant":
             sharing = compliant_sharing(points, support.stiffness)
             if len(sharing):
                 block = np.zeros((len(sharing), n_forces))
                 block[:, normal_col] = sharing
                 equations.append(({CONTACT_FORCES: block}, np.zeros(len(sharing))))
-        E, e = _stack(equations, {"xdot": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl})
+        sizes = {"xdot": nx, "tau": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl}
+        E, e = _stack(equations, sizes)
         shifts = {}
         if self.slope:  # the weights lean with the ramp: the reduced dynamics' and the object's own
             lean = gravity - np.array([0.0, 0.0, -_G])
@@ -395,6 +414,90 @@ def compliant_sharing(points: np.ndarray, stiffness: np.ndarray | None = None) -
     rows = deflections / k[None, :]  # d = f / k
     q, _ = np.linalg.qr(rows.T)
     return q.T
+
+
+def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: int, gravity, mass: float, rows):
+    """What each platform kind adds to the whole robot's balance: the equations of its wheels that
+    the reduced and whole-robot rows leave out, the efforts that are the floor's own traction,
+    and the rollers' free directions (see the module's docstring). Empty for a differential drive.
+
+    - Wheels whose rates are not reduced velocities of their own (a skid-steer side's second
+      wheel, a steered base's free rear wheels) keep their own row of the dynamics,
+      ``M_j S xdot + g_j = B_j tau + (J_c^T lambda)_j``: their contact's force along the rolling
+      direction is what their share of the effort and their spin leave (zero effort: a free
+      wheel).
+    - The reduced dynamics have no contact force: they hold when the contact forces do no work
+      along S, which rolling contacts do by themselves and a platform whose wheels scrub
+      (:attr:`~mobmanip.platforms.base.Platform.scrubs`, a skid-steer's) are held to along its
+      own reduced velocities: at rest, the sideways forces that turning would scrub against are
+      constraint forces within friction, with no net work along the platform's turn (the
+      instantaneous model: nothing has slid yet, so no sliding friction resists the turn). Held
+      by the kind, not by testing the rows for zero: a file's rounding that tilts a wheel's axis
+      by 1e-8 must not add a constraint.
+    - Platform efforts that act on the base itself (an omnidirectional base's planar joint) are
+      the floor's traction: ``S_k^T sum_c J_c^T lambda_c = tau_k``.
+    - A contact with rollers pushes nothing along their free direction.
+    """
+    model = robot.model
+    base = [0, 1, 2]
+    platform_joints = [v for v in np.flatnonzero(np.abs(S).sum(axis=1) > 0.0) if v >= 3]
+    joint_rows = S.T[:, 3:]
+    dependent, rank = [], int(np.linalg.matrix_rank(joint_rows))
+    for v in platform_joints:  # the wheels whose own rows the system still lacks
+        unit = np.zeros((1, model.nv - 3))
+        unit[0, v - 3] = 1.0
+        grown = int(np.linalg.matrix_rank(np.vstack([joint_rows, unit])))
+        if grown > rank:
+            dependent.append(v)
+            joint_rows, rank = np.vstack([joint_rows, unit]), grown
+    traction = [k for k in range(S.shape[1]) if np.abs(robot.B[base, k]).max() > 0.0]
+    rolled = [c for c, contact in enumerate(support.contacts) if contact.free is not None]
+    out: list[tuple[dict[str, np.ndarray], np.ndarray]] = []
+    if not (dependent or traction or rolled):
+        return out
+    data = robot.data
+    pin.computeJointJacobians(model, data, q)
+    jacobians = np.zeros((n_forces, model.nv))  # each force column's generalized force
+    wheel_ids = {name: model.getJointId(name) for name, _ in robot.platform.wheels()}
+    for contact, p, (a, b) in zip(support.contacts, points, slices):
+        jid = wheel_ids.get(contact.name, 1) if contact.source == "wheel" else 1
+        J = pin.getJointJacobian(model, data, jid, pin.LOCAL_WORLD_ALIGNED)
+        J_point = J[:3] - _skew(p - data.oMi[jid].translation) @ J[3:]
+        jacobians[a:b] = J_point[3 - (b - a) :]
+    if dependent:
+        M = pin.crba(model, data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        g = -mass * pin.jacobianCenterOfMass(model, data, q).T @ gravity
+        hands = np.vstack(
+            [pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)[rows] for arm in robot.arms]
+        )
+        out.append(
+            (
+                {"xdot": M[dependent] @ S, "tau": -robot.B[dependent], CONTACT_FORCES: -jacobians[:, dependent].T,
+                 "h": hands[:, dependent].T},
+                -g[dependent],
+            )
+        )  # fmt: skip
+    work = (jacobians @ S).T  # the contact forces' work along each reduced velocity, (nx, n_forces)
+    if traction:
+        out.append(({CONTACT_FORCES: work[traction], "tau": -np.eye(S.shape[1])[traction]}, np.zeros(len(traction))))
+    if robot.platform.scrubs:  # no work along the platform's own motions (rolling wheels do none by themselves)
+        scrubbed = [k for k in range(robot.platform.n_reduced) if k not in traction]
+        # one row per independent scrubbing motion (a skid-steer scrubs only as it turns: its two
+        # sides' rows are opposite); directions below 1e-6 of the largest are the same motion
+        _, sigma, vt = np.linalg.svd(work[scrubbed], full_matrices=False)
+        keep = sigma > 1e-6 * sigma[0] if len(sigma) and sigma[0] > 0.0 else np.zeros(len(sigma), dtype=bool)
+        if keep.any():
+            out.append(({CONTACT_FORCES: vt[keep]}, np.zeros(int(keep.sum()))))
+    if rolled:
+        yaw = math.atan2(float(q[3]), float(q[2]))
+        block = np.zeros((len(rolled), n_forces))
+        for i, c in enumerate(rolled):
+            fx, fy = support.contacts[c].free or (0.0, 0.0)
+            a = slices[c][0]
+            block[i, a : a + 2] = (math.cos(yaw) * fx - math.sin(yaw) * fy, math.sin(yaw) * fx + math.cos(yaw) * fy)
+        out.append(({CONTACT_FORCES: block}, np.zeros(len(rolled))))
+    return out
 
 
 def _null_space(A: np.ndarray) -> np.ndarray:
