@@ -209,15 +209,18 @@ class _Guard:
     def _safe_eval(self, original):
         guard = self
 
+        compiled: dict[str, Any] = {}  # an expression's guarded code, once per text
+
         def safe_eval(expr, globals, locals=None):
             self.tick()
             text = expr.strip()
-            code = compile(text, "<expression>", "eval")
-            invalid = [n for n in code.co_names if n.startswith("__")]
-            if invalid:
-                return original(expr, globals, locals)  # xacro's own refusal, in its words
-            tree = _Guarded().visit(ast.parse(text, "<expression>", "eval"))
-            code = compile(ast.fix_missing_locations(tree), "<expression>", "eval")
+            code = compiled.get(text)
+            if code is None:
+                plain = compile(text, "<expression>", "eval")
+                if any(n.startswith("__") for n in plain.co_names):
+                    return original(expr, globals, locals)  # xacro's own refusal, in its words
+                tree = _Guarded().visit(ast.parse(text, "<expression>", "eval"))
+                code = compiled[text] = compile(ast.fix_missing_locations(tree), "<expression>", "eval")
             globals.update(__builtins__={_GUARD: guard._operation, _CALL: guard._call})
 
             def trace(frame, event, arg):  # every line and loop iteration of the expression's own code
