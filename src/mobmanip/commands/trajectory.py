@@ -26,8 +26,9 @@ samples; `slip` reports motion the platform cannot make (lateral sliding).
 --bag RUN reads a ROS recording instead (ROS 1 .bag, ROS 2 .mcap / .db3 or a ROS 2 bag folder;
 no ROS install needed): the joint states (sensor_msgs/JointState) and the odometry
 (nav_msgs/Odometry, the pose of the robot's root link) are resampled onto the joint states'
-stamps, the odometry interpolated; --start / --end (s from the recording's start) cut it. Gaps and
-clock jumps are reported as warnings.
+stamps, the odometry interpolated; --start / --end (s from the recording's start) cut it. Gaps,
+clock jumps and NaN or infinite values (dropped) are reported as warnings. The joint-state
+messages are counted before any is decoded and held to --max-work like a file's rows.
 
 time-scaling margin: the largest factor k by which the whole motion can be sped up with every
 wheel and joint within its velocity and effort limits (efforts: RNEA in motion, the object
@@ -98,7 +99,7 @@ def register(sub) -> None:
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
     add_progress_option(parser)
-    add_work_option(parser, f"samples (rows of TRAJ.csv; default {MAX_SAMPLES:,})")
+    add_work_option(parser, f"samples (rows of TRAJ.csv, or joint-state messages of --bag; default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
 
 
