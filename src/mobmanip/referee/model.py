@@ -28,6 +28,7 @@ base's drive can be represented without modelling every roller; :func:`build` re
 from __future__ import annotations
 
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -190,6 +191,10 @@ def _check_format(robot) -> None:
         )
 
 
+#: xacro's ``$(optenv NAME DEFAULT...)``, the default captured.
+_OPTENV = re.compile(r"\$\(optenv\s+\S+\s+([^)]*)\)")
+
+
 def robot_file_text(robot) -> str:
     """The URDF text of the robot's file: the file itself, or what its xacro file expands to.
 
@@ -203,7 +208,8 @@ def robot_file_text(robot) -> str:
     path = robot.spec.urdf
     if str(path).lower().endswith(".xacro"):
         return expand_xacro(path, robot.spec.xacro_args, robot.spec.package_paths)[0]
-    return path.read_text()
+    # xacro's $(optenv NAME DEFAULT) leftovers read as their defaults, as mobmanip's reader does
+    return _OPTENV.sub(lambda match: match.group(1).strip(), path.read_text())
 
 
 def stripped_urdf(robot) -> tuple[str, dict[str, tuple[np.ndarray, np.ndarray]]]:
