@@ -193,3 +193,26 @@ def test_without_mujoco_the_command_says_how_to_install_it():
     run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert run.returncode == 2 and run.stdout == ""
     assert run.stderr == "mobmanip: error: the referee needs MuJoCo: pip install 'mobmanip[referee]'\n"
+
+
+def test_a_skid_steer_side_drives_its_wheels_geared_together():
+    """TIAGo Pro's right side's torque is shared by its two wheels (B: half each, in each joint's
+    own sense), which MuJoCo gears together: from rest they accelerate at one rate."""
+    from mobmanip.referee import build
+
+    robot = mobmanip.load_robot("tiago_pro")
+    referee = build(robot, named_configuration(robot, "home"))
+    tau = np.zeros(robot.nx)
+    tau[list(robot.reduced_velocity_names).index("right_side")] = 4.0
+    force, model = referee.generalized_force(tau), referee.model
+    right = robot.platform.side_wheels("right_side")
+    left = robot.platform.side_wheels("left_side")
+    dofs = {name: int(model.joint(name).dofadr[0]) for name in right + left}
+    S = robot.S
+    for name in right:
+        v = robot.model.joints[robot.model.getJointId(name)].idx_v
+        assert force[dofs[name]] == pytest.approx(4.0 * S[v, 0] / len(right), rel=1e-12)
+    assert all(force[dofs[name]] == 0.0 for name in left)
+    referee.forward(tau)
+    rates = [referee.data.qacc[dofs[name]] for name in right]
+    assert abs(rates[0]) > 1.0 and rates[1] == pytest.approx(rates[0], rel=1e-9)
