@@ -284,3 +284,25 @@ def test_grounded_reaches_are_continuous_in_the_robot_files_numbers(zoo, name, t
         before = _reaches(robot, q, task, mass, floor)
         after = _reaches(shaken, q, task, mass, floor)
         np.testing.assert_allclose(after, before, rtol=1e-4, atol=1e-4 * np.abs(before).max())
+
+
+def test_a_ramp_leans_gravity_as_written_here():
+    """TIAGo++ holding 2 kg on a 5 deg ramp rising towards 30 deg: its grounded reaches equal the
+    independent LP's with gravity written here, g (-sin s cos u, -sin s sin u, -cos s), not taken
+    from the floor under test (a gravity leaning the wrong way passed 20 ramp tests that took it
+    from ``Floor.gravity()``); uphill it reaches less than on the level floor, downhill more."""
+    robot = mobmanip.load_robot("tiago_dual")
+    q = _turned(robot, named_configuration(robot, "hold"), 0.0, 0.0, 1.0)
+    s, u = math.radians(5.0), math.radians(30.0)
+    gravity = 9.81 * np.array([-math.sin(s) * math.cos(u), -math.sin(s) * math.sin(u), -math.cos(s)])
+    ramp = _grounded(robot, q, "translational", 2.0, Floor(mu=0.5, slope=5.0, uphill=30.0))
+    problem = fr.build_problem(robot, q, "translational", ramp.held_object, gravity=gravity)
+    polytope = ramp.measures["dynamic_polytope"]
+    for e in _axes(3):
+        ours = polytope.straight_line_reach(e)
+        ref = fr.straight_line(problem, e, mode="friction", mu=0.5, springs=True).value
+        assert abs(ours - ref) <= _reach_tol(ours, ref), (e, ours, ref)
+    uphill = np.array([math.cos(u), math.sin(u), 0.0])
+    level = _grounded(robot, q, "translational", 2.0, Floor(mu=0.5)).measures["dynamic_polytope"]
+    assert polytope.straight_line_reach(uphill) < level.straight_line_reach(uphill)
+    assert polytope.straight_line_reach(-uphill) > level.straight_line_reach(-uphill)
