@@ -24,6 +24,13 @@ from .common import add_floor_options, add_robot_options
 
 #: MuJoCo's friction coefficient of the driven wheels when the floor does not limit traction.
 UNLIMITED_FRICTION = 10.0
+#: What a skid-steer's replay can and cannot say (printed with its table).
+SKID_STEER_NOTE = (
+    "a skid-steer turns only by sliding its wheels sideways; MuJoCo's contacts stick until their friction "
+    "limit, so from rest its geared wheels and rolling contacts over-constrain any motion that turns the "
+    "base, and MuJoCo's answer there comes from its contacts' softness: on axes that turn the base the "
+    "replay is no verdict on the floor model, whose sideways forces do not resist a turn at rest"
+)
 #: --longest: MuJoCo holds the efforts at least this share of mobmanip's predicted time.
 HOLD_SHARE = 0.9
 
@@ -209,6 +216,8 @@ def _print(robot, task, info, axes, args, referee_package) -> None:
         f"{1e3 * referee_package.SLIDE:g} mm/s"
     )
     print(tolerance)
+    if robot.platform.kind == "skid_steer":
+        print(f"note: {SKID_STEER_NOTE}")
     if any(a.replayed and not a.judge_normals for a in axes):
         print("* not judged: with load sharing 'any' the predicted normal forces are one balancing share among many")
 
