@@ -213,3 +213,10 @@ def test_a_real_handshake_passes_the_probe():
     finally:
         done.set()
         thread.join(timeout=5)
+
+
+@pytest.mark.parametrize("address", ["tcp://scheduler", "tls://127.0.0.1:8786", "local:2", "tcp://[::1]"])
+def test_addresses_dask_resolves_itself_are_not_probed(address):
+    """No port (Dask's default applies), another scheme or a local cluster: left to Dask."""
+    assert cluster._tcp_host_port(address) is None
+    cluster.probe_scheduler(address, timeout=0.1)  # returns at once, opening nothing

@@ -66,6 +66,8 @@ MAX_INT_BITS = 1 << 16
 #: Items of a sequence an expression may make (``range``, ``[0] * n``, ``"x" * n``), and the
 #: largest whole-number argument of a text's method or width of a format (a count, a width).
 MAX_ITEMS = 1 << 20
+#: Terms of ``math.factorial``, ``comb`` and ``perm`` (10,000! has about 118,000 bits).
+MAX_TERMS = 10_000
 #: Steps of expressions (calls and loop iterations) in one expansion.
 MAX_STEPS = 10_000_000
 #: Nodes of a YAML file ``xacro.load_yaml`` reads, its aliases expanded.
@@ -325,8 +327,9 @@ class _Guard:
 
     def _count_argument(self, function, name: str):
         def guarded(*args):
-            if any(_whole(a) and abs(a) > 100_000 for a in args):
-                self.refuse(f"an expression asks for {name}({', '.join(map(_short, args))}), more than 100,000 terms")
+            if any(_whole(a) and abs(a) > MAX_TERMS for a in args):
+                self.refuse(f"an expression asks for {name}({', '.join(map(_short, args))}), more than {MAX_TERMS:,} "
+                            "terms")  # fmt: skip
             return function(*args)
 
         guarded.__wrapped__ = function

@@ -77,7 +77,7 @@ def check_address(address: str) -> None:
 
 def _tcp_host_port(address: str) -> tuple[str, int] | None:
     """``(host, port)`` of a ``tcp://HOST:PORT`` (or ``HOST:PORT``) address; None for other
-    schemes (left to Dask) or a local cluster.
+    schemes, an address without a port (left to Dask) or a local cluster.
 
     Raises:
         ClusterError: a tcp address without a valid port.
@@ -87,7 +87,9 @@ def _tcp_host_port(address: str) -> tuple[str, int] | None:
     scheme, _, location = address.rpartition("://")
     if scheme not in ("", "tcp"):
         return None
-    host, _, port = location.rpartition(":")
+    host, colon, port = location.rpartition(":")
+    if not colon or location.endswith("]"):
+        return None  # no port: Dask's own default applies, and Dask connects as before
     host = host.strip("[]")
     try:
         number = int(port)
