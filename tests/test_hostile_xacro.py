@@ -240,3 +240,32 @@ def test_xacro_is_left_as_it_was_after_a_refusal(tmp_path, capfd):
     (tmp_path / "table.yaml").write_text(TABLE)
     text, _ = expand_xacro(_write(tmp_path / "ordinary.urdf.xacro", ORDINARY))
     assert 'name="a_1024_' in text
+
+
+def test_an_include_cycle_is_named(tmp_path, capfd):
+    include = '<xacro:include filename="{}"/>\n'
+    a = _write(tmp_path / "a.urdf.xacro", include.format("b.xacro"))
+    _write(tmp_path / "b.xacro", include.format("a.urdf.xacro"))
+    code, _, err = run_cli(capfd, "init-spec", a, "--list-frames")
+    assert_one_line_error(code, err, f"xacro {a}: refused: it includes {a} inside itself",
+                          "(a.urdf.xacro -> b.xacro -> a.urdf.xacro)")  # fmt: skip
+    itself = _write(tmp_path / "self.urdf.xacro", include.format("self.urdf.xacro"))
+    code, _, err = run_cli(capfd, "init-spec", itself, "--list-frames")
+    assert_one_line_error(code, err, "(self.urdf.xacro -> self.urdf.xacro)")
+
+
+def test_a_file_included_twice_in_a_row_is_no_cycle(tmp_path):
+    (tmp_path / "part.xacro").write_text(
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="p${1 + 1}"/></robot>'
+    )
+    top = _write(tmp_path / "top.urdf.xacro", '<xacro:include filename="part.xacro"/>' * 2 + "\n")
+    text, _ = expand_xacro(top)
+    assert text.count('<link name="p2"/>') == 2
+
+
+def test_a_yaml_file_beyond_its_bound_is_refused_before_it_is_read(tmp_path):
+    (tmp_path / "big.yaml").write_text("a: [" + ", ".join(["1"] * (guarded.MAX_YAML_BYTES // 3 + 1)) + "]\n")
+    size = (tmp_path / "big.yaml").stat().st_size
+    body = '<xacro:property name="y" value="${xacro.load_yaml(\'big.yaml\')}"/>\n<link name="l${len(y[\'a\'])}"/>\n'
+    _refused(_write(tmp_path / "yaml.urdf.xacro", body), f"the YAML file big.yaml has {size:,} bytes",
+             f"more than the {guarded.MAX_YAML_BYTES:,}", seconds=5.0)  # fmt: skip

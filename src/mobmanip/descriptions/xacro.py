@@ -70,8 +70,10 @@ MAX_ITEMS = 1 << 20
 MAX_TERMS = 10_000
 #: Steps of expressions (calls and loop iterations) in one expansion.
 MAX_STEPS = 10_000_000
-#: Nodes of a YAML file ``xacro.load_yaml`` reads, its aliases expanded.
+#: Nodes of a YAML file ``xacro.load_yaml`` reads, its aliases expanded, and its bytes (the
+#: pure-Python YAML reader takes about a second a megabyte).
 MAX_YAML_NODES = 1_000_000
+MAX_YAML_BYTES = 8 << 20
 #: Seconds an expansion may take.
 MAX_SECONDS = 60.0
 
@@ -198,6 +200,10 @@ class _Guard:
 
     def _parse(self, original):
         def parse(inp, filename=None):
+            chain = [str(f) for f in (getattr(self.module, "filestack", None) or ()) if f]
+            if filename is not None and inp is None and str(filename) in chain[:-1]:
+                cycle = " -> ".join(Path(f).name for f in chain[chain.index(str(filename)) :])
+                self.refuse(f"it includes {filename} inside itself ({cycle})")
             try:
                 return original(inp, filename)
             except ExpatError as exc:
@@ -227,7 +233,8 @@ class _Guard:
 
             def trace(frame, event, arg):  # every line and loop iteration of the expression's own code
                 if frame.f_code.co_filename != "<expression>":
-                    return None  # the guard's and xacro's functions: not traced inside
+                    guard.tick()  # a function the expression calls (YAML's loader, xacro's lookups): the time
+                    return None  # not traced inside
                 guard.steps += 1
                 if guard.steps > MAX_STEPS:
                     guard.refuse(f"its expressions take more than {MAX_STEPS:,} steps")
@@ -352,6 +359,13 @@ class _Guard:
     def _load_yaml(self, original):
         def load_yaml(filename):
             self.tick()
+            try:
+                size = os.stat(self.module.abs_filename_spec(filename)).st_size
+            except (OSError, TypeError, ValueError):
+                size = 0  # missing or odd: xacro's own error follows
+            if size > MAX_YAML_BYTES:
+                self.refuse(f"the YAML file {filename} has {size:,} bytes, more than the {MAX_YAML_BYTES:,} "
+                            "xacro.load_yaml reads")  # fmt: skip
             data = original(filename)
             nodes, stack = 0, [data]
             while stack:  # aliases expanded: a shared list counts once per reference
