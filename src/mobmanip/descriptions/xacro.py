@@ -18,6 +18,16 @@ keeps the ``.xacro`` file as its source.
 
 xacro keeps its state in module globals, so expansions are serialised (a lock); what it prints
 is captured and folded into the error message when the expansion fails.
+
+What a file expands to is bounded, not only the bytes it reads (:data:`MAX_MACRO_EXPANSIONS`,
+:data:`MAX_ELEMENTS`, :data:`MAX_VALUE_CHARS` and :data:`MAX_EXPANDED_CHARS` for the texts,
+:data:`MAX_INT_BITS`, :data:`MAX_ITEMS`, :data:`MAX_TERMS` and :data:`MAX_STEPS` for what an
+expression makes and does, :data:`MAX_YAML_BYTES` and :data:`MAX_YAML_NODES` for
+``xacro.load_yaml``, :data:`MAX_SECONDS` for the whole): xacro's own functions are wrapped while
+it runs, an expression's ``**``, ``<<``, ``*``, ``%``, ``+`` and calls go through a check of the
+sizes they would make, and its loops are counted. A file past a bound, an include cycle or an
+included file that is not XML is one :class:`~mobmanip.errors.XacroError` naming the file (and
+the included one where it was met).
 """
 
 from __future__ import annotations
