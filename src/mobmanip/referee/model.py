@@ -92,7 +92,7 @@ class Rollout:
         supports: the supports, in column order.
         time: (N,) s. normal: (N, n) normal force (N), 0 when lifted.
         tangential: (N, n, 2) world x, y tangential force (N).
-        friction_use: (N, n) |tangential| / (mu normal); 0 for frictionless supports.
+        friction_use: (N, n) ``|tangential| / (mu normal)``; 0 for frictionless supports.
         slip_speed: (N, n) speed along the floor of the sphere's material point at its lowest
             point (m/s): a driven wheel's slip, a caster's sliding.
         penetration: (N, n) depth of the sphere in the floor (m); negative when lifted.
