@@ -47,7 +47,7 @@ def _power_of_two(values: np.ndarray) -> np.ndarray:
     return out
 
 
-def equilibrate(A: np.ndarray, row_lo, row_hi, col_lo, col_hi, sweeps: int = 12):
+def equilibrate(A: np.ndarray, row_lo, row_hi, col_lo, col_hi, sweeps: int = 6):
     """Row, column and variable scales that bring a program's rows, bounds and variables to order one.
 
     A program of this project mixes units in one matrix (newtons of contact force, metres per
@@ -90,11 +90,9 @@ def equilibrate(A: np.ndarray, row_lo, row_hi, col_lo, col_hi, sweeps: int = 12)
     K[p:, n] = b_cols[bounded]
     rows, cols = np.ones(K.shape[0]), np.ones(n + 1)
     for _ in range(sweeps):
-        scaled = K * rows[:, None] * cols[None, :]
-        norm = scaled.max(axis=1)
+        norm = (K * cols).max(axis=1) * rows
         rows /= np.sqrt(np.where(norm > 0.0, norm, 1.0))
-        scaled = K * rows[:, None] * cols[None, :]
-        norm = scaled.max(axis=0)
+        norm = (K * rows[:, None]).max(axis=0) * cols
         cols /= np.sqrt(np.where(norm > 0.0, norm, 1.0))
     r, c, s = _power_of_two(rows[:p]), _power_of_two(cols[:n]), float(_power_of_two(cols[n:])[0])
     return r, c, s

@@ -442,8 +442,10 @@ def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: in
     base = [0, 1, 2]
     platform_joints = [v for v in np.flatnonzero(np.abs(S).sum(axis=1) > 0.0) if v >= 3]
     joint_rows = S.T[:, 3:]
-    dependent, rank = [], int(np.linalg.matrix_rank(joint_rows))
-    for v in platform_joints:  # the wheels whose own rows the system still lacks
+    dependent: list[int] = []
+    # one reduced velocity per joint (a differential drive): the rows are complete already
+    rank = S.shape[1] if S.shape[1] == model.nv - 3 else int(np.linalg.matrix_rank(joint_rows))
+    for v in platform_joints if rank < model.nv - 3 else ():  # the wheels whose own rows the system lacks
         unit = np.zeros((1, model.nv - 3))
         unit[0, v - 3] = 1.0
         grown = int(np.linalg.matrix_rank(np.vstack([joint_rows, unit])))
