@@ -37,6 +37,10 @@ def _highspy():
 #: HiGHS's feasibility tolerances on the equilibrated program (see :func:`equilibrate`): rows,
 #: bounds and variables there are of order one, so these are relative to each row's own size.
 FEASIBILITY = 1e-9
+#: Entries below this, in the caller's units, are rounding (HiGHS drops them, ``small_matrix_value``):
+#: they are dropped before the equilibration, which would otherwise scale a column of rounding
+#: (a pseudo-inverse's at a singular posture) up to entries of order one.
+ROUNDING = 1e-9
 
 
 def _power_of_two(values: np.ndarray) -> np.ndarray:
@@ -117,6 +121,7 @@ class LinearProgram:
         self.n_rows, self.n_cols = A.shape
         self._lock = threading.Lock()
         highspy = self._highspy = _highspy()
+        A = np.where(np.abs(A) < ROUNDING, 0.0, A)
         self._r, self._c, self._s = equilibrate(A, row_lo, row_hi, col_lo, col_hi)
         scaled = A * self._r[:, None] * self._c[None, :]
         h = highspy._Highs()  # the bindings' core class: no banner on standard output
@@ -124,6 +129,7 @@ class LinearProgram:
         h.setOptionValue("presolve", "off")
         h.setOptionValue("primal_feasibility_tolerance", FEASIBILITY)
         h.setOptionValue("dual_feasibility_tolerance", FEASIBILITY)
+        h.setOptionValue("small_matrix_value", 1e-15)  # rounding is dropped above, in the caller's units
         lp = highspy.HighsLp()
         lp.num_col_ = self.n_cols
         lp.num_row_ = self.n_rows
