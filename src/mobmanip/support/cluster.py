@@ -30,6 +30,7 @@ import time
 from collections.abc import Iterator
 
 from ..errors import ClusterError
+from .threads import LimitedExecutor
 
 _log = logging.getLogger(__name__)
 
@@ -217,4 +218,7 @@ def dask_executor(address: str, timeout: float | None = None) -> Iterator[cf.Exe
                 reason = f"cannot reach the Dask scheduler within {timeout:g} s ({reason})"
                 raise ClusterError(address, reason) from None
         _log.info("dask: %s, %d worker(s)", client.scheduler.address, len(client.scheduler_info()["workers"]))
-        yield client.get_executor()
+        # workers this process did not start run each task with one BLAS thread, as here: the same
+        # numbers whichever process computes them (a remote worker's default pools differ in the
+        # last bits, and a map's file would not equal the serial one's)
+        yield LimitedExecutor(client.get_executor())
