@@ -166,3 +166,18 @@ def test_non_finite_odometry_is_dropped_with_a_warning_or_refused(robot, tmp_pat
     bag = write_bag(tmp_path / "all", "mcap", records)
     with pytest.raises(RecordingError, match=r"every pose on '/odom' is NaN or infinite \(60 messages\)"):
         read_recording(robot, bag)
+
+
+@pytest.mark.parametrize(
+    ("argv", "needles"),
+    [
+        (["--start", "nan"], ("--start must be a finite number of seconds", "got nan")),
+        (["--start", "inf"], ("--start must be a finite number of seconds", "got inf")),
+        (["--end=-inf"], ("--end must be a finite number of seconds", "got -inf")),
+        (["--start", "1e300"], ("no joint-state messages on '/joint_states' in the part read",)),
+        (["--end=-1e300"], ("no joint-state messages on '/joint_states' in the part read",)),
+    ],
+)
+def test_a_cut_that_is_not_finite_or_far_off_is_one_line(capfd, long_bags, argv, needles):
+    code, out, err = run_cli(capfd, "trajectory", ROBOT, "--bag", long_bags["ros1"], *argv)
+    assert_one_line_error(code, err, *needles)

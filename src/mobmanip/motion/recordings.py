@@ -119,6 +119,11 @@ class Recording:
     joints: tuple[str, ...] = field(default=())
 
 
+def _within_years(seconds: float) -> float:
+    """``seconds`` clipped to +-1e9 s (about 30 years)."""
+    return min(max(seconds, -1e9), 1e9)
+
+
 def _seconds(ns: int | float) -> float:
     return float(ns) * 1e-9
 
@@ -303,6 +308,11 @@ def read_recording(
         ArgumentError: ``start`` not before ``end``, or more samples than ``work`` allows.
     """
     path = Path(path)
+    for option, value in (("--start", start), ("--end", end)):
+        if value is not None and not math.isfinite(value):
+            raise ArgumentError(
+                f"{option} must be a finite number of seconds from the recording's start, got {value!r}"
+            )
     if start is not None and end is not None and not start < end:
         raise ArgumentError(f"--start {start:g} must come before --end {end:g}")
     reader = _open(path)
@@ -310,8 +320,9 @@ def read_recording(
         js_connections = _connections(reader, path, joint_states, JOINT_STATE, "--joint-states")
         odom_connections = [] if odometry is None else _connections(reader, path, odometry, ODOMETRY, "--odom")
         origin = int(reader.start_time)
-        low = None if start is None else origin + int(round(start * 1e9))
-        high = None if end is None else origin + int(round(end * 1e9)) + 1
+        # a cut further than 30 years from the start cuts as the 30 years do (and stays in int64 ns)
+        low = None if start is None else origin + int(round(_within_years(start) * 1e9))
+        high = None if end is None else origin + int(round(_within_years(end) * 1e9)) + 1
         joints_raw: list = []
         odom_raw: list = []
         frames: set[str] = set()
