@@ -499,14 +499,14 @@ class _Tree:
             bname = self.name(body, "body")
             if not np.allclose(r.rotation(dict(body.attrib), f"body {bname!r}"), np.eye(3), rtol=0, atol=1e-12):
                 return False
-            joints = []
+            own: list = []
             for element in body:
                 if element.tag == "freejoint":
                     return False
                 if element.tag == "joint":
                     attrs = r.attributes(element, "joint", cls)
-                    joints.append((element, self.name(element, f"{bname}_joint"), attrs.get("type", "hinge"), attrs))
-            chain.append((body, bname, cls, joints))
+                    own.append((element, self.name(element, f"{bname}_joint"), attrs.get("type", "hinge"), attrs))
+            chain.append((body, bname, cls, own))
         if len(chain) == 1:
             return False  # the root's own joints: base_joints reads them
         # the yaw axis in the root's frame: the bodies' offsets below the root and the hinge's anchor

@@ -450,7 +450,7 @@ def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: in
         unit[0, v - 3] = 1.0
         grown = int(np.linalg.matrix_rank(np.vstack([joint_rows, unit])))
         if grown > rank:
-            dependent.append(v)
+            dependent.append(int(v))
             joint_rows, rank = np.vstack([joint_rows, unit]), grown
     traction = [k for k in range(S.shape[1]) if np.abs(robot.B[base, k]).max() > 0.0]
     rolled = [c for c, contact in enumerate(support.contacts) if contact.free is not None]
