@@ -115,3 +115,10 @@ def test_the_bound_counts_before_the_grid_is_made():
     assert site.grid_shape == (3, 2, 1)
     assert site.positions.tolist() == [[0.0, 0.0, 0.35], [0.5, 0.0, 0.35], [1.0, 0.0, 0.35],
                                        [0.0, 1.0, 0.35], [0.5, 1.0, 0.35], [1.0, 1.0, 0.35]]  # fmt: skip
+
+
+@pytest.mark.parametrize("axis", ["[-1e308, 1e308, 3]", "[1.7e308, -1.7e308, 5]"])
+def test_a_grid_whose_step_overflows_is_one_line(capfd, tmp_path, axis):
+    site = _site(tmp_path, f"[grid]\nx = {axis}\ny = 0.0\nz = 0.35\n")
+    code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out")
+    assert_one_line_error(code, err, site.name, "[grid] x must be finite")

@@ -209,7 +209,11 @@ def _positions(
         counts = [axes[k][2] for k in "xyz"]
         detail = f"[grid] in {where}: x {counts[0]:,} by y {counts[1]:,} by z {counts[2]:,}"
         _check_count(math.prod(counts), detail, check_count)  # before any position is made
-        xs, ys, zs = (np.linspace(*axes[k]) for k in "xyz")
+        with np.errstate(all="ignore"):  # an overflowing step is refused below, not warned about
+            xs, ys, zs = (np.linspace(*axes[k]) for k in "xyz")
+        for name, values in zip("xyz", (xs, ys, zs)):
+            if not np.all(np.isfinite(values)):  # e.g. [-1e308, 1e308, 3]: the step overflows
+                raise SpecError(f"{where}: [grid] {name} must be finite")
         Z, Y, X = np.meshgrid(zs, ys, xs, indexing="ij")
         positions = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
         shape = (xs.size, ys.size, zs.size)
