@@ -191,3 +191,25 @@ def test_a_mecanum_roller_pushes_nothing_along_its_free_direction(kinds):
         a, b = contact["columns"]
         free = np.array([math.cos(yaw + math.radians(angle)), math.sin(yaw + math.radians(angle))])
         assert abs(free @ forces[a : a + 2]) <= 1e-6 * max(1.0, np.abs(forces[a:b]).max())
+
+
+def test_a_robot_described_twice_stands_the_same(kinds, tmp_path):
+    """The Husky carrying the iiwa, composed by ``init-spec --mount`` and merged by hand into one
+    URDF (tests/test_skid_steer.py): the same robot, so the same grounded reaches on every floor
+    (its casters, wheels and every inertia come from two different files)."""
+    from test_skid_steer import husky_with_arm, spec_text
+
+    mounted, q, task, mass, _ = kinds["husky_iiwa"]
+    (tmp_path / "husky_iiwa.toml").write_text(spec_text(husky_with_arm(tmp_path)))
+    by_hand = mobmanip.load_robot(tmp_path / "husky_iiwa.toml")
+    assert list(by_hand.model.names) == list(mounted.model.names)
+    for floor in (Floor(mu=None), Floor(mu=0.5), Floor(mu=0.5, reserve=0.2)):
+        sets = [
+            mobmanip.analyze(
+                r, q, task, object_mass=mass, measures=("dynamic_polytope",), constraints=(floor,)
+            ).measures["dynamic_polytope"]
+            for r in (mounted, by_hand)
+        ]
+        for e in [s * e for e in np.eye(3) for s in (1.0, -1.0)]:
+            a, b = (p.straight_line_reach(e) for p in sets)
+            assert abs(a - b) <= REL * max(abs(a), 1.0), (floor, e, a, b)
