@@ -96,3 +96,11 @@ def test_budget_still_bounds_a_polytope_search(capfd):
     assert_one_line_error(code, err, "--budget must be at least 1 evaluation, got 0")
     code, out, err = run_cli(capfd, *PLACE, "--objective", "dynamic_polytope:reach:+x", "--budget", "30000")
     assert_one_line_error(code, err, "30,000 search evaluations", "--max-work")
+
+
+def test_collision_matrix_refuses_a_negative_seed(capfd, tmp_path, no_sampling):
+    code, out, err = run_cli(capfd, "collision-matrix", "planar_dual_arm", "--seed", "-1", "--out", tmp_path / "m.json")
+    assert_one_line_error(code, err, "--seed must be a whole number of at least 0, got -1")
+    robot = mobmanip.load_robot("planar_dual_arm")
+    with pytest.raises(ArgumentError, match="seed must be a whole number of at least 0, got -7"):
+        collision_matrix.compute_collision_matrix(robot, samples=3, seed=-7)

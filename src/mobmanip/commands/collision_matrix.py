@@ -73,6 +73,8 @@ def run(args) -> int:
 
     if args.samples < 1:
         raise UsageError(f"--samples must be at least 1, got {args.samples}")
+    if args.seed < 0:
+        raise UsageError(f"--seed must be a whole number of at least 0, got {args.seed}")
     if not 0.0 < args.never_closer_than < 1.0:  # refused before the work is announced
         raise UsageError(f"--never-closer-than must be between 0 and 1 m, got {args.never_closer_than!r}")
     robot = load_robot(find_spec(args.robot))

@@ -214,10 +214,12 @@ def compute_collision_matrix(
     """Sample the robot and classify every pair that may meet (see the module's rule).
 
     Raises:
-        ArgumentError: fewer than 1 sample or more than fit in :data:`MAX_SAMPLE_BYTES`, or a
-            distance outside (0, 1) m.
+        ArgumentError: fewer than 1 sample or more than fit in :data:`MAX_SAMPLE_BYTES`, a
+            negative seed, or a distance outside (0, 1) m.
     """
     check_samples(robot, samples)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ArgumentError(f"collision matrix seed must be a whole number of at least 0, got {seed!r}")
     if not isinstance(never_closer_than, (int, float)) or not 0.0 < never_closer_than < 1.0:
         raise ArgumentError(f"never-closer-than distance must be between 0 and 1 m, got {never_closer_than!r}")
     geometry = robot_geometry(robot, source)
