@@ -6,6 +6,7 @@ servers are sockets of this test, on localhost."""
 
 from __future__ import annotations
 
+import signal
 import socket
 import struct
 import threading
@@ -93,6 +94,21 @@ HOSTILE = {
 @pytest.fixture(autouse=True)
 def short_timeout(monkeypatch):
     monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", TIMEOUT)
+
+
+@pytest.fixture(autouse=True)
+def no_hang():
+    """A test that still waits after 10 s fails (SIGALRM interrupts the wait) instead of hanging
+    the run, which is what an unbounded wait for a scheduler did."""
+
+    def hung(signum, frame):
+        raise TimeoutError("still waiting after 10 s: the wait for the scheduler is not bounded")
+
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.setitimer(signal.ITIMER_REAL, 10.0)
+    yield
+    signal.setitimer(signal.ITIMER_REAL, 0)
+    signal.signal(signal.SIGALRM, previous)
 
 
 @pytest.mark.parametrize("command", list(COMMANDS))
