@@ -10,12 +10,14 @@ fast path when nothing else constrains the set.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import ArgumentError, TaskError
-from ..sets.lifted import LiftedPolytope
+from ..sets.lifted import LiftedPolytope, LiftedRows
 from .builder import MeasureTerms
 from .constraints.base import PROBLEMS, ConstraintRows
 
@@ -47,6 +49,42 @@ def capacity_polytope(
     Raises:
         TaskError: the policy at a posture where J_u or W loses row rank.
     """
+    stacked = capacity_rows(terms, problem, policy=policy, task=task, extra=extra)
+    r = stacked.rows
+    return LiftedPolytope(
+        r.task, r.A_eq, r.b_eq, r.A_ub, r.b_ub, r.lower, r.upper, stacked.columns, stacked.model, labels=stacked.labels
+    )
+
+
+@dataclass(frozen=True)
+class CapacityRows:
+    """The stacked rows of a capacity problem, before its set is built (see :func:`capacity_rows`).
+
+    Attributes:
+        rows: the equalities, inequalities and bounds over z, with the task's columns.
+        columns: the named slices of z (``"xdot"``, ``"tau"``, ``"h"``, ``"a"``, and every
+            variable a constraint declares), in column order.
+        model: what produced the rows (JSON-ready), as the set's ``model``.
+        labels: one label per inequality row (what binds when it is tight), (r,).
+    """
+
+    rows: LiftedRows
+    columns: Mapping[str, slice]
+    model: Mapping[str, Any]
+    labels: tuple[str, ...]
+
+
+def capacity_rows(
+    terms: MeasureTerms,
+    problem: str,
+    *,
+    policy: bool = False,
+    task: str | None = None,
+    extra: Sequence[ConstraintRows] = (),
+) -> CapacityRows:
+    """The rows :func:`capacity_polytope` projects, stacked (its arguments and errors): for
+    programs that add rows or variables of their own to the problem (the payload's object mass)
+    without building the set."""
     if problem not in PROBLEMS:
         raise ArgumentError(f"problem must be one of {sorted(PROBLEMS)}, got {problem!r}")
     rows = terms.rows(problem) + tuple(extra)
@@ -130,7 +168,7 @@ def capacity_polytope(
         "constraints": [c.describe() for c in (T.all_constraints) if c.problem == problem],
         **{key: value for r in rows for key, value in r.info.items()},
     }
-    return LiftedPolytope(task_columns, A_eq, b_eq, A_ub, b_ub, lo, hi, columns, model, labels=labels)
+    return CapacityRows(LiftedRows(task_columns, A_eq, b_eq, A_ub, b_ub, lo, hi), columns, model, tuple(labels))
 
 
 def _policy_inverses(J_u: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
