@@ -6,6 +6,7 @@ from . import (
     collision_matrix,
     init_spec,
     paper,
+    payload,
     place,
     referee,
     site,
@@ -30,4 +31,5 @@ COMMANDS = (
     team,
     team_carry,
     referee,
+    payload,
 )
