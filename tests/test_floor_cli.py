@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -88,11 +89,25 @@ def test_bad_floor_options_are_one_line(args, message):
     assert message in run.stderr
 
 
-def test_a_fixed_base_has_no_floor():
+def test_a_fixed_base_has_no_floor(tmp_path):
+    """A fixed base has no floor; an omnidirectional base stands on the wheels its spec gives (the
+    built-in one on four mecanum wheels) and, given none, is told where to give them."""
     run = _cli("analyze", "ur5", "--ground")
     assert run.returncode == 2 and "'ur5' has a fixed platform" in run.stderr
     run = _cli("analyze", "planar_dual_arm_omni", "--ground")
-    assert run.returncode == 2 and "'planar_dual_arm_omni' has an omnidirectional platform" in run.stderr
+    assert run.returncode == 0 and "contacts wheel_0, wheel_1, wheel_2, wheel_3" in run.stdout
+    root = Path(__file__).resolve().parents[1] / "robots"
+    text = (root / "planar_dual_arm_omni.toml").read_text()
+    spec = tmp_path / "omni.toml"
+    spec.write_text(
+        text[: text.index("[support]")].replace('"planar_dual_arm.urdf"', f'"{root / "planar_dual_arm.urdf"}"')
+    )
+    run = _cli("analyze", str(spec), "--ground")
+    assert run.returncode == 2 and run.stderr.count("\n") == 1
+    assert (
+        "no wheels on the floor (omnidirectional platform): give its driven contacts in the spec's [support] wheels"
+        in run.stderr
+    )
 
 
 def test_the_viewer_draws_the_support_and_the_zmp_at_rest(tmp_path):

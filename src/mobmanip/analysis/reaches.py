@@ -64,6 +64,7 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                     floor = model.get("floor")
                     if floor is not None and CONTACT_FORCES in w.variables:
                         entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
+                        entry["binding"] = _tip_over(entry["binding"], floor, entry["floor"])
                     floors = {  # a team: each robot on its own floor, its forces under its name
                         name: ground_reaction(info["floor"], w.variables[f"{name}.{CONTACT_FORCES}"])
                         for name, info in model.items()
@@ -73,6 +74,55 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                         entry["floors"] = floors
             out.append(entry)
     return out
+
+
+#: A zero-moment point this close to the support polygon's edge (m) is on it; a contact whose normal
+#: force is below this share of all of them (robot and object weight) carries nothing.
+_ON_EDGE, _UNLOADED = 1e-6, 1e-6
+
+
+def _tip_over(binding: list[str], info: dict, reaction: dict) -> list[str]:
+    """What stops a maximum on the floor, with tip-over named as such: where the zero-moment point
+    is on the support polygon's edge and contacts carry nothing, the robot is about to tip about
+    that edge (the unloaded contacts lift), whatever else the program's multipliers say: an
+    unloaded wheel's friction rows are all tight at zero force, which read as "slips"."""
+    margin = reaction.get("margin")
+    contacts = reaction.get("contacts", {})
+    total = sum(max(c["normal"], 0.0) for c in contacts.values())
+    if margin is None or total <= 0.0 or abs(margin) > _ON_EDGE:
+        return binding
+    unloaded = [name for name, c in contacts.items() if c["normal"] <= _UNLOADED * total]
+    if not unloaded:
+        return binding
+    loaded = [name for name in contacts if name not in unloaded]
+    edge = _edge_of(info, reaction["zmp"]) if len(loaded) != 1 else None
+    # an unloaded wheel's friction rows and its lifting row are that same tip-over
+    kept = [label for label in binding if not any(label.startswith(f"{name} ") for name in unloaded)]
+    if len(loaded) == 1:  # every weight on one contact: the zero-moment point at that corner
+        about = f"about {loaded[0]}, the one contact still loaded"
+    else:
+        about = f"about the edge {edge[0]} to {edge[1]}" if edge else "about the support's edge"
+    return sorted({*kept, f"the robot tips over {about} ({', '.join(unloaded)} lifting off)"})
+
+
+def _edge_of(info: dict, zmp) -> tuple[str, str] | None:
+    """The two contacts at the ends of the support polygon's edge nearest ``zmp`` (m, floor)."""
+    points = {c["name"]: np.asarray(c["point"][:2], dtype=float) for c in info["contacts"]}
+    polygon = np.asarray(info["polygon"], dtype=float)
+    if len(polygon) < 2:
+        return None
+
+    def name_of(vertex: np.ndarray) -> str:
+        return min(points, key=lambda n: float(np.linalg.norm(points[n] - vertex)))
+
+    p = np.asarray(zmp, dtype=float)[:2]
+    best, edge = np.inf, None
+    for a, b in zip(polygon, np.roll(polygon, -1, axis=0)):
+        t = float(np.clip(np.dot(p - a, b - a) / max(float(np.dot(b - a, b - a)), 1e-300), 0.0, 1.0))
+        distance = float(np.linalg.norm(p - a - t * (b - a)))
+        if distance < best:
+            best, edge = distance, (name_of(a), name_of(b))
+    return edge
 
 
 def _at_rest(task_set: TaskSet):

@@ -415,6 +415,7 @@ def show_progress(args) -> bool:
 
 _BINDING_KINDS = (
     ("level band", "held level"),
+    ("tips over about", "tip-over"),
     ("lifts off", "support lifting off"),
     ("slips", "wheel traction"),
     ("limit", "joint effort"),
@@ -430,7 +431,7 @@ def binding_summary(binding: list[str]) -> str:
         robot, sep, rest = label.partition(": ")
         if not sep or " " in robot:
             robot, rest = "", label
-        name = rest.split(" ", 1)[0]
+        name = rest.split(" ", 1)[0] if kind != "tip-over" else rest.split("tips over ", 1)[-1]
         groups.setdefault(kind, []).append(f"{robot}/{name}" if robot else name)
     return "; ".join(f"{kind}: {', '.join(sorted(set(names)))}" for kind, names in groups.items())
 
