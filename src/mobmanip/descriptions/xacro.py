@@ -349,7 +349,7 @@ class _Guard:
                             "terms")  # fmt: skip
             return function(*args)
 
-        guarded.__wrapped__ = function
+        guarded.__wrapped__ = function  # type: ignore[attr-defined]
         return guarded
 
     def _product(self, function, name: str):
@@ -363,7 +363,7 @@ class _Guard:
                             f"{MAX_INT_BITS:,}")  # fmt: skip
             return function(*([items] if name == "math.prod" and args else items), *args[1:], **kwargs)
 
-        guarded.__wrapped__ = function
+        guarded.__wrapped__ = function  # type: ignore[attr-defined]
         return guarded
 
     def _load_yaml(self, original):
