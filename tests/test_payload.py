@@ -20,8 +20,10 @@ import pytest
 from mobmanip import cli
 from mobmanip.analysis.payload import payload
 from mobmanip.analysis.single import analyze
+from mobmanip.errors import ArgumentError, TaskError
 from mobmanip.postures.named import named_configuration
 from mobmanip.robot.model import load_robot
+from mobmanip.robot.tasks import get_task
 from mobmanip.sets.linear_programs import LinearProgram
 from mobmanip.terms.constraints.floor import Floor
 from mobmanip.terms.problems import capacity_polytope
@@ -126,9 +128,12 @@ def lifted_set(robot, q, mass, floor):
     return capacity_polytope(result.terms, "acceleration")
 
 
-def reaches(rows, keep, a) -> bool:
-    """Whether the rows (with only the inequality rows ``keep``) have a solution whose task point is a."""
+def reaches(rows, keep, a, still=None) -> bool:
+    """Whether the rows (with only the inequality rows ``keep``) have a solution whose task point
+    is a (with the columns ``still``, a slice, at zero)."""
     lower, upper = rows.lower.copy(), rows.upper.copy()
+    if still is not None:
+        lower[still] = upper[still] = 0.0
     lower[rows.task] = upper[rows.task] = a
     A = np.vstack([rows.A_eq, rows.A_ub[keep]])
     lo = np.r_[rows.b_eq, np.full(int(keep.sum()), -np.inf)]
@@ -167,6 +172,73 @@ def test_the_efforts_at_the_optimum_solve_the_set_at_that_mass(robots, compared,
     solution = at_mass.witness_of(z)
     np.testing.assert_allclose(solution.point, acceleration_of(key, still), atol=1e-12)
     np.testing.assert_array_equal(solution.variables["tau"], found.efforts)
+
+
+#: (robot, floor or None) cases of the static payload: the object still and the robot too.
+STATIC_CASES = [
+    ("tiago_dual", None),
+    ("tiago_dual", Floor(mu=0.5)),
+    ("tiago_dual", Floor(mu=0.5, reserve=0.3)),
+    ("stretch", Floor(mu=0.5)),
+    ("planar_dual_arm", Floor(mu=0.5, level=True)),
+]
+
+
+def static_bisection(robot, q, floor) -> tuple[float, float]:
+    """The heaviest mass whose set holds the object still with every reduced acceleration zero
+    (:meth:`LiftedPolytope.witness_at` with ``still=("xdot",)``), bracketed to RTOL / 10."""
+    a = np.zeros(get_task(robot.spec.default_task).dim)
+
+    def holds(m):
+        try:
+            lifted_set(robot, q, m, floor).witness_at(a, still=("xdot",))
+        except TaskError:
+            return False
+        return True
+
+    assert holds(0.0)
+    lo, hi = 0.0, 1.0
+    while holds(hi):
+        lo, hi = hi, 2.0 * hi
+        assert hi < 1e5
+    while hi - lo > 0.1 * RTOL * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if holds(mid) else (lo, mid)
+    return lo, hi
+
+
+def static_id(case):
+    key, floor = case
+    return case_id((key, floor, True)) + ("-reserve" if floor is not None and floor.reserve else "")
+
+
+@pytest.mark.parametrize("case", STATIC_CASES, ids=static_id)
+def test_the_static_payload_equals_a_bisection_with_the_robot_still(robots, case):
+    """``static=True``: the robot does not move at all, the statics (what holds for a while); the
+    named rows alone stop the mass with the reduced accelerations at zero."""
+    key, floor = case
+    robot, q = robots[key]
+    constraints = () if floor is None else (floor,)
+    found = payload(robot, q, constraints=constraints, static=True)
+    instant = payload(robot, q, constraints=constraints)
+    lo, hi = static_bisection(robot, q, floor)
+    assert found.status == "bounded", found.summary()
+    assert found.mass == pytest.approx(0.5 * (lo + hi), rel=RTOL)
+    assert found.mass <= instant.mass * (1 + RTOL)
+    np.testing.assert_array_equal(found.variables["xdot"], 0.0)
+    heavier = lifted_set(robot, q, hi * (1 + 1e-5), floor)
+    rows = heavier.lifted_rows()
+    named = np.array([label in found.binding for label in heavier.labels])
+    still = heavier.variables["xdot"]
+    a = np.zeros(heavier.dim)
+    assert not reaches(rows, named, a, still)
+    assert reaches(rows, ~named, a, still)
+
+
+def test_static_with_an_acceleration_is_refused(robots):
+    robot, q = robots["stretch"]
+    with pytest.raises(ArgumentError, match="static"):
+        payload(robot, q, acceleration=(0.1, 0.0, 0.0), static=True)
 
 
 def test_tiago_on_the_floor_is_stopped_by_a_support_and_its_arms(compared):
@@ -238,6 +310,18 @@ def test_the_command_writes_the_functions_result(robots, tmp_path, capsys):
     assert written["status"] == "bounded"
     assert f"{expected.mass:.6g} kg" in out
     assert "stops it" in out
+
+
+def test_the_static_command_writes_the_functions_result(robots, tmp_path, capsys):
+    robot, q = robots["tiago_dual"]
+    target = tmp_path / "static.json"
+    argv = ["payload", "tiago_dual", "--posture", "hold", "--mu", "0.5", "--reserve", "0.3", "--static"]
+    code, out, err = run_cli([*argv, "--json", str(target)], capsys)
+    assert code == 0, err
+    expected = payload(robot, q, constraints=(Floor(mu=0.5, reserve=0.3),), static=True)
+    written = json.loads(target.read_text())
+    assert written == json.loads(json.dumps(expected.to_dict()))
+    assert "with the robot static" in out and f"{expected.mass:.6g} kg" in out
 
 
 def test_the_command_says_unbounded_in_words(capsys):

@@ -16,8 +16,10 @@ column of m. A third mass is checked to lie on that line, so a constraint whose 
 affine in the mass (or that multiplies a variable by it) is refused, not silently linearised.
 
 With a = 0 ("held still"), the object is still; the robot is at rest, and its joints may
-accelerate where the object does not feel it (as in every capacity set: the set at mass m
-contains a exactly when m is at most this program's optimum).
+accelerate where the object does not feel it (its platform against its arm, an arm's
+self-motion), as in every capacity set: the set at mass m contains a exactly when m is at most
+this program's optimum. That is a capacity of one instant. ``static=True`` holds every reduced
+acceleration at zero as well (statics: nothing moves), the payload that can be held for a while.
 """
 
 from __future__ import annotations
@@ -70,6 +72,7 @@ class Payload:
             object, ``"contact_forces"`` on the floor, in N); empty unless bounded.
         reduced_names: the reduced velocities' names, in the order of ``tau`` and ``xdot``.
         constraints: the constraints beyond the joint boxes, as described in JSON.
+        static: whether the robot was held static too (every reduced acceleration zero).
     """
 
     robot: str
@@ -81,6 +84,7 @@ class Payload:
     variables: Mapping[str, np.ndarray] = field(default_factory=dict)
     reduced_names: tuple[str, ...] = ()
     constraints: tuple[dict, ...] = ()
+    static: bool = False
 
     @property
     def held_still(self) -> bool:
@@ -100,7 +104,11 @@ class Payload:
 
     def summary(self) -> str:
         """One sentence: the mass and what stops it (never an infinity)."""
-        what = "hold still" if self.held_still else "give the acceleration (" + _numbers(self.acceleration) + ")"
+        what = (
+            ("hold still with the robot static" if self.static else "hold still")
+            if self.held_still
+            else "give the acceleration (" + _numbers(self.acceleration) + ")"
+        )
         where = "on the floor" if self.constraints else "on the ideal model (no floor)"
         if self.status == "unbounded":
             return f"no limit stops the mass of an object {self.robot} can {what} {where}: the payload is unbounded"
@@ -117,6 +125,7 @@ class Payload:
             "task_axes": list(get_task(self.task).labels),
             "acceleration": self.acceleration.tolist(),
             "held_still": self.held_still,
+            "static": self.static,
             "status": self.status,
             "mass": self.mass,
             "binding": list(self.binding),
@@ -136,6 +145,7 @@ def payload(
     constraints: Iterable[Constraint] = (),
     object: HeldObject | None = None,  # noqa: A002 - the object held, as the issue names it
     decoupled: bool = False,
+    static: bool = False,
 ) -> Payload:
     """The heaviest object the robot can hold still, or give ``acceleration``, at configuration q.
 
@@ -151,26 +161,30 @@ def payload(
             :func:`mobmanip.analysis.single.default_object` places between the hands (a sphere
             reaching the farthest grasp point), as :func:`mobmanip.analysis.single.analyze` does.
         decoupled: the decoupled P (no platform-arm interaction).
+        static: the robot static too: every reduced acceleration zero (statics; the object held
+            still). Off: the object still, the robot's joints free to accelerate where the
+            object does not feel it (an instant's capacity, as the sets').
 
     Raises:
         ArgumentError: an acceleration of the wrong length or not finite; an object of zero mass
             with an inertia (no shape per kilogram); a constraint whose rows are not affine in
-            the object's mass.
+            the object's mass; ``static`` with an acceleration.
     """
     q = robot.check_configuration(q)
     task_space = get_task(task or robot.spec.default_task)
     a = _checked_acceleration(acceleration, task_space.dim, task_space.name)
     constraints = tuple(constraints)
+    if static and np.any(a):
+        raise ArgumentError("a static robot holds the object still: give no acceleration with static")
     shape = _unit_object(robot, q, object)
     stacks, terms = [], []
     for m in _MASSES:
-        t = terms_at(
-            robot, q, task_space.name, held_object=_scaled(shape, m), decoupled=decoupled,
-            constraints=constraints, check=False,
-        )  # fmt: skip
+        t = _terms(robot, q, task_space.name, shape, m, decoupled, constraints)
         terms.append(t)
         stacks.append(capacity_rows(t, "acceleration"))
     A, lo_rows, hi_rows, lo, hi = _program_rows(stacks, terms, a)
+    if static:
+        lo[stacks[0].columns["xdot"]] = hi[stacks[0].columns["xdot"]] = 0.0
     program = LinearProgram(A, lo_rows, hi_rows, lo, hi)
     cost = np.zeros(A.shape[1])
     cost[-1] = 1.0
@@ -180,6 +194,7 @@ def payload(
         acceleration=a,
         reduced_names=tuple(robot.reduced_velocity_names),
         constraints=tuple(c.describe() for c in constraints),
+        static=static,
     )
     try:
         result = program.solve(cost)
@@ -190,14 +205,45 @@ def payload(
     if result is None:
         return Payload(status="infeasible", mass=None, **common)
     value, z = result
+    mass = max(float(value), 0.0)
     first = stacks[0]
-    n_eq = len(first.rows.b_eq)
-    duals = program.row_duals[n_eq : n_eq + len(first.rows.b_ub)]
+    n_eq, n_ub = len(first.rows.b_eq), len(first.rows.b_ub)
+    duals = program.row_duals[n_eq : n_eq + n_ub]
     scale = float(np.abs(duals).max(initial=0.0))
     chosen = np.abs(duals) > _DUAL_RTOL * max(scale, 1e-300)
-    binding = tuple(dict.fromkeys(label for label, c in zip(first.labels, chosen) if c))
+    labels = first.labels
+    if labels != stacks[1].labels:  # a label that states a mass-dependent bound (a reserve): at the optimum's
+        labels = capacity_rows(
+            _terms(robot, q, task_space.name, shape, mass, decoupled, constraints), "acceleration"
+        ).labels
+    slack = hi_rows[n_eq:] - A[n_eq:] @ z
+    tight = slack <= 1e-7 * (np.abs(hi_rows[n_eq:]) + np.abs(A[n_eq:]) @ np.abs(z) + 1e-12)
+    chosen |= _unloaded_wheels(labels, chosen, tight, first.model)
+    binding = tuple(dict.fromkeys(label for label, c in zip(labels, chosen) if c))
     variables = {name: z[where].copy() for name, where in first.columns.items()}
-    return Payload(status="bounded", mass=max(float(value), 0.0), binding=binding, variables=variables, **common)
+    return Payload(status="bounded", mass=mass, binding=binding, variables=variables, **common)
+
+
+def _terms(robot, q, task, shape, mass, decoupled, constraints) -> MeasureTerms:
+    return terms_at(
+        robot, q, task, held_object=_scaled(shape, mass), decoupled=decoupled, constraints=constraints, check=False
+    )
+
+
+def _unloaded_wheels(labels: tuple[str, ...], chosen: np.ndarray, tight: np.ndarray, model: Mapping) -> np.ndarray:
+    """The rows to name beside the multipliers' (a bool per inequality row): a wheel whose
+    friction rows bind while its normal force is at its least (zero, or its reserve) can push
+    nothing more along the floor because it carries no more load; its friction and lift-off rows
+    are then one limit (the pyramid holds only a loaded wheel) and the multipliers may land on
+    either, so both are named."""
+    out = np.zeros(len(labels), dtype=bool)
+    for contact in model.get("floor", {}).get("contacts", ()):
+        name = contact["name"]
+        slips = [i for i, label in enumerate(labels) if label.startswith(f"{name} slips")]
+        lifts = [i for i, label in enumerate(labels) if label.startswith(f"{name} lifts off")]
+        if any(chosen[i] for i in slips) and all(tight[i] for i in lifts):
+            out[lifts] = True
+    return out
 
 
 def _checked_acceleration(acceleration: Iterable[float] | None, dim: int, task: str) -> np.ndarray:

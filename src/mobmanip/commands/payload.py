@@ -1,5 +1,6 @@
-"""``mobmanip payload ROBOT``: the heaviest object the robot can hold still (or give ``--accel``)
-at one posture, on the ideal model or on the floor, and what stops it
+"""``mobmanip payload ROBOT``: the heaviest object the robot can hold still (``--static``: with the
+robot static too) or give ``--accel`` at one posture, on the ideal model or on the floor, and what
+stops it
 (:func:`mobmanip.analysis.payload.payload`: one linear program with the mass as a variable).
 """
 
@@ -24,6 +25,12 @@ def register(sub) -> None:
         metavar="A1,A2,...",
         help="the object's acceleration in the task's coordinates (m/s^2, rad/s^2), one number per task axis "
         "(default: held still)",
+    )
+    parser.add_argument(
+        "--static",
+        action="store_true",
+        help="the robot static too: every wheel and joint at zero acceleration (statics, what can be held for a "
+        "while); by default only the object is still and the joints may accelerate, an instant's capacity",
     )
     add_floor_options(parser)
     parser.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
@@ -57,7 +64,7 @@ def run(args) -> int:
     robot, q = load_robot_and_configuration(args)
     acceleration = parse_acceleration(args.accel)
     constraints = floor_constraints(args)
-    found = payload(robot, q, args.task, acceleration=acceleration, constraints=constraints)
+    found = payload(robot, q, args.task, acceleration=acceleration, constraints=constraints, static=args.static)
     document = found.to_dict()
     require_finite(document)  # never a NaN or an infinity printed as a result
     print(f"robot {robot.name} ({robot.platform.kind}), task {found.task} ({', '.join(document['task_axes'])})")
