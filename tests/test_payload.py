@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from mobmanip import cli
@@ -233,6 +234,21 @@ def test_the_static_payload_equals_a_bisection_with_the_robot_still(robots, case
     a = np.zeros(heavier.dim)
     assert not reaches(rows, named, a, still)
     assert reaches(rows, ~named, a, still)
+
+
+def test_a_stretch_about_to_tip_reads_as_tip_over(robots):
+    """Stretch held static on the floor: the payload leaves its left wheel unloaded and the
+    zero-moment point on the support's edge (from the optimum's own contact forces), and the
+    reading says tip-over where the program's rows name the wheel's lift and friction rows."""
+    robot, q = robots["stretch"]
+    found = payload(robot, q, constraints=(Floor(mu=0.5),), static=True)
+    normals = {name: c["normal"] for name, c in found.floor["contacts"].items()}
+    total = sum(normals.values())
+    assert total == pytest.approx(9.81 * (pin.computeTotalMass(robot.model) + found.mass), rel=1e-6)
+    assert abs(normals["joint_left_wheel"]) <= 1e-6 * total
+    assert abs(found.floor["margin"]) <= 1e-6
+    assert any(label.startswith("joint_left_wheel lifts off") for label in found.binding)
+    assert any("tips over" in label and "joint_left_wheel lifting off" in label for label in found.reading)
 
 
 def test_static_with_an_acceleration_is_refused(robots):

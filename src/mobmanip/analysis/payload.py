@@ -37,8 +37,10 @@ from ..robot.tasks import get_task
 from ..sets.linear_programs import LinearProgram
 from ..terms.builder import MeasureTerms, terms_at
 from ..terms.constraints.base import Constraint, ConstraintRows
+from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
 from ..terms.grasp import HeldObject
 from ..terms.problems import CapacityRows, capacity_rows
+from .reaches import _tip_over
 from .single import default_object
 
 #: The masses (kg) the rows are stacked at: the first two give the line, the third checks it.
@@ -73,6 +75,13 @@ class Payload:
         reduced_names: the reduced velocities' names, in the order of ``tau`` and ``xdot``.
         constraints: the constraints beyond the joint boxes, as described in JSON.
         static: whether the robot was held static too (every reduced acceleration zero).
+        floor: on the floor and bounded, what the floor does at the optimum
+            (:func:`mobmanip.terms.constraints.floor.ground_reaction`: each contact's normal and
+            tangential force in N, the zero-moment point and its margin to the support polygon
+            in m); else ``None``.
+        reading: what stops it in words: ``binding``, with a robot about to tip (its zero-moment
+            point on the support's edge, contacts unloaded) named as tip-over about that edge in
+            place of the unloaded contacts' rows (as the floor's reaches read).
     """
 
     robot: str
@@ -85,6 +94,8 @@ class Payload:
     reduced_names: tuple[str, ...] = ()
     constraints: tuple[dict, ...] = ()
     static: bool = False
+    floor: Mapping[str, Any] | None = None
+    reading: tuple[str, ...] = ()
 
     @property
     def held_still(self) -> bool:
@@ -126,6 +137,8 @@ class Payload:
             "acceleration": self.acceleration.tolist(),
             "held_still": self.held_still,
             "static": self.static,
+            "reading": list(self.reading),
+            "floor": self.floor,
             "status": self.status,
             "mass": self.mass,
             "binding": list(self.binding),
@@ -221,7 +234,14 @@ def payload(
     chosen |= _unloaded_wheels(labels, chosen, tight, first.model)
     binding = tuple(dict.fromkeys(label for label, c in zip(labels, chosen) if c))
     variables = {name: z[where].copy() for name, where in first.columns.items()}
-    return Payload(status="bounded", mass=mass, binding=binding, variables=variables, **common)
+    info = first.model.get("floor")
+    floor, reading = None, binding
+    if info is not None and CONTACT_FORCES in variables:
+        floor = ground_reaction(info, variables[CONTACT_FORCES])
+        reading = tuple(_tip_over(list(binding), info, floor))
+    return Payload(
+        status="bounded", mass=mass, binding=binding, variables=variables, floor=floor, reading=reading, **common
+    )
 
 
 def _terms(robot, q, task, shape, mass, decoupled, constraints) -> MeasureTerms:

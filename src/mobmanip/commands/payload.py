@@ -70,10 +70,23 @@ def run(args) -> int:
     print(f"robot {robot.name} ({robot.platform.kind}), task {found.task} ({', '.join(document['task_axes'])})")
     print(found.summary())
     if found.status == "bounded":
-        print(f"what stops it: {binding_summary(list(found.binding))}")
+        print(f"what stops it: {binding_summary(list(found.reading))}")
+        print("  the program's binding rows:")
         for label in found.binding:
-            print(f"  {label}")
+            print(f"    {label}")
+        if found.floor is not None:
+            contacts = ", ".join(f"{name} {_force(c['normal'])}" for name, c in found.floor["contacts"].items())
+            print(f"  normal forces (N): {contacts}")
+            if found.floor["zmp"] is not None:
+                zmp = ", ".join(f"{v:.4f}" for v in found.floor["zmp"])
+                print(f"  zero-moment point ({zmp}) m, {found.floor['margin']:.4f} m inside the support polygon")
     if args.json:
         write_json(args.json, document)
         print(f"wrote {args.json}")
     return 0
+
+
+def _force(value: float) -> str:
+    """A force for the summary, N (no "-0" for a contact unloaded to rounding)."""
+    text = f"{value:.4g}"
+    return "0" if float(text) == 0.0 else text
