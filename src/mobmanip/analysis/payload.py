@@ -35,7 +35,7 @@ from ..errors import ArgumentError, ModelError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..sets.linear_programs import LinearProgram
-from ..terms.builder import MeasureTerms, terms_at
+from ..terms.builder import MeasureTerms, assemble_terms, terms_at
 from ..terms.constraints.base import Constraint, ConstraintRows
 from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
 from ..terms.grasp import HeldObject
@@ -190,9 +190,15 @@ def payload(
     if static and np.any(a):
         raise ArgumentError("a static robot holds the object still: give no acceleration with static")
     shape = _unit_object(robot, q, object)
-    stacks, terms = [], []
+    stacks: list[CapacityRows] = []
+    terms: list[MeasureTerms] = []
     for m in _MASSES:
-        t = _terms(robot, q, task_space.name, shape, m, decoupled, constraints)
+        # the robot's terms once; only the object (and the constraints' rows) change with the mass
+        t = (
+            _terms(robot, q, task_space.name, shape, m, decoupled, constraints)
+            if not terms
+            else _with_object(terms[0], _scaled(shape, m), constraints)
+        )
         terms.append(t)
         stacks.append(capacity_rows(t, "acceleration"))
     A, lo_rows, hi_rows, lo, hi = _program_rows(stacks, terms, a)
@@ -248,6 +254,16 @@ def _terms(robot, q, task, shape, mass, decoupled, constraints) -> MeasureTerms:
     return terms_at(
         robot, q, task, held_object=_scaled(shape, mass), decoupled=decoupled, constraints=constraints, check=False
     )
+
+
+def _with_object(terms: MeasureTerms, held: HeldObject, constraints: tuple[Constraint, ...]) -> MeasureTerms:
+    """The same robot's terms holding another object."""
+    assert terms.q is not None and terms.positions is not None  # terms_at's
+    P = terms.P if terms.P_coupled is None else terms.P_coupled
+    return assemble_terms(
+        terms.robot, terms.q, terms.task, terms.decoupled, terms.J_u, P, terms.xi, terms.positions, held,
+        constraints=constraints,
+    )  # fmt: skip
 
 
 def _unloaded_wheels(labels: tuple[str, ...], chosen: np.ndarray, tight: np.ndarray, model: Mapping) -> np.ndarray:
