@@ -2,7 +2,7 @@
 
 For a task axis e and a sense, the grounded straight-line maximum's efforts (or those of a
 fraction of it: the calm ones, :meth:`witness_at` with ``least="xdot"``) are applied from rest to
-MuJoCo's model of the robot standing on the floor with the object held (:mod:`.model`). At
+MuJoCo's model of the robot standing on the floor with the object held (:mod:`mobmanip.referee.model`). At
 t = 0 MuJoCo's object acceleration, on the task's rows only, is compared with the target the
 efforts reach in mobmanip, and every contact's normal force with the floor's prediction; over the
 horizon (constant efforts, 20 ms by default) the replay records how far a support rose off the
