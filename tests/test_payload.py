@@ -279,6 +279,15 @@ def test_a_planar_task_carries_no_weight_unless_held_level(robots):
     assert grounded_set(robot, q, 1e4, None).contains(np.zeros(2))[0]
 
 
+def test_an_acceleration_beyond_the_robot_with_no_object_is_infeasible_in_words(robots):
+    robot, q = robots["stretch"]
+    a = np.array([100.0, 0.0, 0.0])
+    assert not grounded_set(robot, q, 0.0, None).contains(a)[0]  # the set without an object says so
+    found = payload(robot, q, acceleration=a)
+    assert found.status == "infeasible" and found.mass is None
+    assert "even with no object" in found.summary()
+
+
 def test_an_explicit_object_keeps_its_inertia_per_kilogram(robots):
     """An object given with 2 kg is the default one's shape: the same payload."""
     from mobmanip.analysis.single import default_object

@@ -35,6 +35,7 @@ from ..errors import ArgumentError, ModelError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..sets.linear_programs import LinearProgram
+from ..support.ranges import OBJECT_MASS
 from ..terms.builder import MeasureTerms, assemble_terms, terms_at
 from ..terms.constraints.base import Constraint, ConstraintRows
 from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
@@ -231,7 +232,8 @@ def payload(
     scale = float(np.abs(duals).max(initial=0.0))
     chosen = np.abs(duals) > _DUAL_RTOL * max(scale, 1e-300)
     labels = first.labels
-    if labels != stacks[1].labels:  # a label that states a mass-dependent bound (a reserve): at the optimum's
+    # a label that states a bound depending on the mass (a reserve's share): read at the optimum's mass
+    if labels != stacks[1].labels and mass <= OBJECT_MASS[1]:
         labels = capacity_rows(
             _terms(robot, q, task_space.name, shape, mass, decoupled, constraints), "acceleration"
         ).labels
