@@ -13,6 +13,7 @@ contact forces solve the set's rows at its mass.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -26,6 +27,7 @@ from mobmanip.postures.named import named_configuration
 from mobmanip.robot.model import load_robot
 from mobmanip.robot.tasks import get_task
 from mobmanip.sets.linear_programs import LinearProgram
+from mobmanip.terms.constraints.base import Constraint, ConstraintRows
 from mobmanip.terms.constraints.floor import Floor
 from mobmanip.terms.problems import capacity_polytope
 
@@ -286,6 +288,31 @@ def test_an_acceleration_beyond_the_robot_with_no_object_is_infeasible_in_words(
     found = payload(robot, q, acceleration=a)
     assert found.status == "infeasible" and found.mass is None
     assert "even with no object" in found.summary()
+
+
+@dataclass(frozen=True)
+class MassLimit(Constraint):
+    """A made-up limit on the first effort that depends on the object's mass: as m^2
+    (``square``) or as m times the effort (``scaled``)."""
+
+    how: str = "square"
+    name: str = "made_up"
+    problem: str = "acceleration"
+
+    def rows(self, terms):
+        m, n = terms.held_object.mass, len(terms.effort_limits)
+        row = np.zeros((1, n))
+        row[0, 0] = 1.0 + (m if self.how == "scaled" else 0.0)
+        bound = 1e3 + (m * m if self.how == "square" else 0.0)
+        return ConstraintRows(self.name, self.problem, G={"tau": row}, h=np.array([bound]), labels=("made up",))
+
+
+@pytest.mark.parametrize("how, what", [("square", "not affine"), ("scaled", "multiplies a variable")])
+def test_a_constraint_not_linear_in_the_mass_is_refused_by_name(robots, how, what):
+    robot, q = robots["stretch"]
+    with pytest.raises(ArgumentError, match=what) as caught:
+        payload(robot, q, constraints=(MassLimit(how),))
+    assert "made_up" in str(caught.value)
 
 
 def test_an_explicit_object_keeps_its_inertia_per_kilogram(robots):

@@ -25,7 +25,7 @@ acceleration at zero as well (statics: nothing moves), the payload that can be h
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -345,7 +345,7 @@ def _program_rows(
         if np.abs((x1 - x0)[:, others]).max(initial=0.0) > _AFFINE_RTOL * scale:
             raise ArgumentError(
                 "the object's mass multiplies a variable other than its acceleration (the program would not "
-                "be linear): " + _culprit(terms)
+                "be linear): " + _culprit(terms, _scales_a_variable)
             )
     # row(m) z = rhs(m) with z[task] = a: row0 z + m (d_row[:, task] a - d_rhs) = rhs0
     # (the rows at mass 0 are the first stack's: _MASSES starts at 0; the change per kilogram is the second's less it)
@@ -360,11 +360,35 @@ def _program_rows(
     return A, lo_rows, hi_rows, np.r_[lo, 0.0], np.r_[hi, math.inf]
 
 
-def _culprit(terms: list[MeasureTerms]) -> str:
-    """The constraints whose rows at the three masses are not on one line (for messages)."""
+def _culprit(terms: list[MeasureTerms], wrong: Callable[[list[ConstraintRows | None]], bool] | None = None) -> str:
+    """The constraints whose rows at the three masses are ``wrong`` (default: not on one line),
+    for messages."""
     rows = [{r.name: r for r in t.rows("acceleration")} for t in terms]
-    found = [name for name in rows[0] if not _affine_rows([r.get(name) for r in rows])]
+    test = wrong or (lambda found: not _affine_rows(found))
+    found = [name for name in rows[0] if test([r.get(name) for r in rows])]
     return ", ".join(f"constraint {name!r}" for name in found) or "the object's own equations"
+
+
+def _scales_a_variable(rows: list[ConstraintRows | None]) -> bool:
+    """Whether a constraint's coefficients of a variable other than the object's acceleration
+    change with the mass (between the first two masses)."""
+    first, second = rows[0], rows[1]
+    if first is None or second is None:
+        return True
+    for one, two in ((first.G, second.G), (first.E, second.E), (first.object_E, second.object_E)):
+        for name in set(one) | set(two):
+            if name == "a":
+                continue
+            if name not in one or name not in two or np.shape(one[name]) != np.shape(two[name]):
+                return True
+            if not np.allclose(one[name], two[name], rtol=_AFFINE_RTOL, atol=0.0):
+                return True
+    for equation in set(first.couplings) | set(second.couplings):
+        one, two = first.couplings.get(equation, {}), second.couplings.get(equation, {})
+        for name in set(one) | set(two):
+            if name != "a" and (name not in one or name not in two or not np.array_equal(one[name], two[name])):
+                return True
+    return False
 
 
 def _affine_rows(rows: list[ConstraintRows | None]) -> bool:
