@@ -20,6 +20,12 @@ def _sources():
     return sorted(p for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts)
 
 
+#: Not errors but signals: classes derived from BaseException to pass through a library's own
+#: ``except Exception`` (xacro wraps every Exception it meets) and caught in the same module, where
+#: they become one of ``mobmanip.errors``'. Each named with its module.
+SIGNALS = {"descriptions/xacro.py _Refused"}
+
+
 def test_every_exception_class_is_defined_in_the_errors_module():
     outside = []
     for path in _sources():
@@ -28,6 +34,9 @@ def test_every_exception_class_is_defined_in_the_errors_module():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ClassDef):
                 bases = {getattr(b, "id", getattr(b, "attr", "")) for b in node.bases}
+                where = f"{path.relative_to(PACKAGE)} {node.name}"
+                if bases == {"BaseException"} and where in SIGNALS:
+                    continue
                 if any(b.endswith(("Error", "Exception")) for b in bases):
                     outside.append(f"{path.relative_to(PACKAGE)}:{node.lineno} {node.name}")
     assert outside == []

@@ -370,5 +370,5 @@ def test_gentle_wheel_torque_rolls(paper, mu):
 def test_support_off_the_floor_is_refused(paper):
     """A passive support that is not on the floor (here at the axle's height) is an error naming it."""
     robot, q, _ = paper
-    with pytest.raises(ValueError, match="caster_high.*not on the floor"):
+    with pytest.raises(mobmanip.MobmanipError, match="caster_high.*not on the floor"):
         build(robot, q, support_points={**PAPER_CASTERS, "caster_high": (0.25, 0.0, 0.0)})

@@ -277,6 +277,11 @@ class TeamError(SpecError):
     unknown robot or arm, a duplicate name, a hand too far from its grasp point, ..."""
 
 
+class NotRepresentable(ModelError):
+    """A robot (or a part of it) that the physics referee cannot build in MuJoCo; the message
+    says why (:mod:`mobmanip.referee`)."""
+
+
 class ClusterError(MobmanipError):
     """``--dask`` is malformed, its scheduler cannot be reached, or Dask is missing.
 

@@ -38,7 +38,7 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from ..errors import MobmanipError
+from ..errors import ArgumentError, NotRepresentable
 
 GRAVITY = 9.81  # m/s^2, along -z
 #: How the object is held (see :func:`build`).
@@ -47,10 +47,6 @@ GRASPS = ("weld", "point", "level")
 GRIP_MASS, GRIP_RADIUS = 1e-3, 0.01
 #: Radius of a passive support's contact sphere (m).
 SUPPORT_RADIUS = 0.02
-
-
-class NotRepresentable(MobmanipError):
-    """A robot (or a part of it) that the referee cannot build in MuJoCo; the message says why."""
 
 
 @dataclass(frozen=True)
@@ -363,18 +359,18 @@ def build(
         contacts = [(name, axles[name] - [0.0, 0.0, radius[name]], True) for name in radius]
         contacts += [(name, point, False) for name, point in (support_points or {}).items()]
     elif support_points:
-        raise ValueError("give the contacts or the passive support points, not both")
+        raise ArgumentError("give the contacts or the passive support points, not both")
     contacts = [(str(name), np.asarray(point, dtype=float), bool(driven)) for name, point, driven in contacts]
     wheels = [name for name, _, _ in contacts if name in radius]
     for name, point, _ in contacts:
         if name in radius and np.linalg.norm(point - axles[name] + [0.0, 0.0, radius[name]]) > 1e-6:
-            raise ValueError(f"contact {name!r} at {point} m is not below its wheel's axle by its radius")
+            raise ArgumentError(f"contact {name!r} at {point} m is not below its wheel's axle by its radius")
     if not contacts:
-        raise ValueError(f"{robot.name} has no contacts with the floor")
+        raise ArgumentError(f"{robot.name} has no contacts with the floor")
     # the floor's height in the root frame: the wheels' contacts (else the first contact)
     heights = [-point[2] for name, point, _ in contacts if name in wheels] or [-contacts[0][1][2]]
     if max(heights) - min(heights) > 1e-6:
-        raise ValueError(f"wheels {wheels} do not stand on one floor (root heights {heights} m)")
+        raise ArgumentError(f"wheels {wheels} do not stand on one floor (root heights {heights} m)")
     lift = heights[0]
 
     def friction(name: str, driven: bool) -> float:
@@ -391,7 +387,7 @@ def build(
             supports.append(Support(name, driven, body.name, point, friction(name, driven)))
             continue
         if abs(point[2] + lift) > 1e-6:
-            raise ValueError(f"support {name!r} at z = {point[2]:.6g} m is not on the floor (z = {-lift:.6g} m)")
+            raise ArgumentError(f"support {name!r} at z = {point[2]:.6g} m is not on the floor (z = {-lift:.6g} m)")
         centre = [point[0], point[1], -lift + SUPPORT_RADIUS - penetration]
         base.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], pos=centre, **free)
         supports.append(Support(name, driven, base.name, point, friction(name, driven)))
@@ -427,7 +423,7 @@ def build(
     if object is not None:
         grasp = grasp or ("point" if robot.spec.default_task in ("planar", "translational") else "weld")
         if grasp not in GRASPS:
-            raise ValueError(f"grasp must be one of {', '.join(GRASPS)}, got {grasp!r}")
+            raise ArgumentError(f"grasp must be one of {', '.join(GRASPS)}, got {grasp!r}")
         placed = mujoco.MjData(model)
         placed.qpos[:] = qpos0
         mujoco.mj_kinematics(model, placed)
@@ -444,10 +440,12 @@ def build(
             body.add_freejoint(name="object_free")
         for k, hand in enumerate(hands):
             if spec.body(hand) is None:
-                raise ValueError(f"end effector {hand!r} is not a link of the URDF")
+                raise ArgumentError(f"end effector {hand!r} is not a link of the URDF")
             p, R = placed.body(hand).xpos.copy(), placed.body(hand).xmat.reshape(3, 3).copy()
             if np.linalg.norm(p - centre - np.asarray(object.offsets[k])) > 1e-6:
-                raise ValueError(f"grasp point {k} of the object is not at hand {hand!r} (hand - centre {p - centre})")
+                raise ArgumentError(
+                    f"grasp point {k} of the object is not at hand {hand!r} (hand - centre {p - centre})"
+                )
             if grasp == "weld":  # a site at the hand frame on both
                 quat = np.zeros(4)
                 mujoco.mju_mat2Quat(quat, R.ravel())
@@ -552,7 +550,7 @@ class Referee:
         """MuJoCo joint forces (nv,) of reduced efforts ``tau`` (nx,) N m or N."""
         tau = np.asarray(tau, dtype=float)
         if tau.shape != (self._nx,):
-            raise ValueError(f"tau must have shape ({self._nx},), got {tau.shape}")
+            raise ArgumentError(f"tau must have shape ({self._nx},), got {tau.shape}")
         out = np.zeros(self.model.nv)
         for dof, row in self._actuation:
             out[dof] += float(row @ tau)
