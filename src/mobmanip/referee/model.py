@@ -22,7 +22,7 @@ effort on the platform's planar coordinates themselves (an omnidirectional base,
 velocities are the base's own x, y and yaw) has no joint to act on in MuJoCo: MuJoCo's sphere
 contacts have round friction, so neither a mecanum or omni wheel's free rollers nor a planar
 base's drive can be represented without modelling every roller; :func:`build` refuses it with
-:class:`NotRepresentable`.
+:class:`~mobmanip.errors.NotRepresentable`.
 """
 
 from __future__ import annotations
@@ -173,7 +173,7 @@ def check_representable(robot) -> None:
     or xacro.
 
     Raises:
-        NotRepresentable: naming what and why, in one line.
+        mobmanip.errors.NotRepresentable: naming what and why, in one line.
     """
     _actuation(robot)
     _check_format(robot)
@@ -195,7 +195,7 @@ def robot_file_text(robot) -> str:
     """The URDF text of the robot's file: the file itself, or what its xacro file expands to.
 
     Raises:
-        NotRepresentable: a file of another format (MJCF: MuJoCo's own, but the referee strips and
+        mobmanip.errors.NotRepresentable: a file of another format (MJCF: MuJoCo's own, but the referee strips and
             edits a URDF tree).
     """
     from ..descriptions.xacro import expand_xacro
@@ -329,7 +329,7 @@ def build(
     Raises:
         ValueError: contacts not on one floor, a wheel contact not below its axle, a hand that is
             not a link of the file, an object whose grasp points are not at the hands.
-        NotRepresentable: efforts that act on the platform's planar coordinates themselves, a
+        mobmanip.errors.NotRepresentable: efforts that act on the platform's planar coordinates themselves, a
             robot file MuJoCo's model is not built from (see the module's docstring).
     """
     actuation, gears = _actuation(robot)  # refuses what MuJoCo cannot drive, before any work
@@ -488,7 +488,7 @@ def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str
     another (a skid-steer side), the follower's rate ``ratio`` times the leader's (from S).
 
     Raises:
-        NotRepresentable: an effort on the platform's planar coordinates themselves.
+        mobmanip.errors.NotRepresentable: an effort on the platform's planar coordinates themselves.
     """
     model, B, S = robot.model, np.asarray(robot.B), np.asarray(robot.S)
     rows: list[tuple[str, np.ndarray]] = []
