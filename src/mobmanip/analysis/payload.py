@@ -41,7 +41,7 @@ from ..terms.constraints.base import Constraint, ConstraintRows
 from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
 from ..terms.grasp import HeldObject
 from ..terms.problems import CapacityRows, capacity_rows
-from .reaches import _tip_over
+from .reaches import tip_over_reading
 from .single import default_object
 
 #: The masses (kg) the rows are stacked at: the first two give the line, the third checks it.
@@ -246,7 +246,7 @@ def payload(
     floor, reading = None, binding
     if info is not None and CONTACT_FORCES in variables:
         floor = ground_reaction(info, variables[CONTACT_FORCES])
-        reading = tuple(_tip_over(list(binding), info, floor))
+        reading = tuple(tip_over_reading(list(binding), info, floor))
     return Payload(
         status="bounded", mass=mass, binding=binding, variables=variables, floor=floor, reading=reading, **common
     )

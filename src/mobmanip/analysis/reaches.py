@@ -64,7 +64,7 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                     floor = model.get("floor")
                     if floor is not None and CONTACT_FORCES in w.variables:
                         entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
-                        entry["binding"] = _tip_over(entry["binding"], floor, entry["floor"])
+                        entry["binding"] = tip_over_reading(entry["binding"], floor, entry["floor"])
                     floors = {  # a team: each robot on its own floor, its forces under its name
                         name: ground_reaction(info["floor"], w.variables[f"{name}.{CONTACT_FORCES}"])
                         for name, info in model.items()
@@ -81,7 +81,7 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
 _ON_EDGE, _UNLOADED = 1e-6, 1e-6
 
 
-def _tip_over(binding: list[str], info: dict, reaction: dict) -> list[str]:
+def tip_over_reading(binding: list[str], info: dict, reaction: dict) -> list[str]:
     """What stops a maximum on the floor, with tip-over named as such: where the zero-moment point
     is on the support polygon's edge and contacts carry nothing, the robot is about to tip about
     that edge (the unloaded contacts lift), whatever else the program's multipliers say: an
