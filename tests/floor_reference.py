@@ -113,7 +113,13 @@ class FloorProblem:
         floor_efforts: the entries of tau that are the floor's traction (an omnidirectional
             base's): S^T sum_c J_c^T lambda_c equals them, and is zero on every other entry (the
             floor's forces do no work along the platform's motions: a rolling wheel's do none
-            by themselves, a skid-steer's sideways forces are held to none at rest).
+            by themselves; a skid-steer's sideways forces do none along its turn in the ideal
+            mode, and on the floor hold it from turning, see :func:`_floor_work`).
+        wheel_joints: the joints whose contacts are wheels in the model (they roll, and on the
+            floor do not slide).
+        parallel_wheels: the wheels all roll along the platform's x (a differential drive's or
+            skid-steer's): with springs, their sideways forces are those of equal tyres under a
+            rigid platform, k (s + theta x_c) (x_c along the heading).
     """
 
     M: np.ndarray
@@ -136,6 +142,8 @@ class FloorProblem:
     level_tolerance: float = 0.0
     heading: float = 0.0
     floor_efforts: tuple[int, ...] = ()
+    wheel_joints: tuple[str, ...] = ()
+    parallel_wheels: bool = False
 
 
 @dataclass(frozen=True)
@@ -368,6 +376,8 @@ def build_problem(
         level_tolerance=level_tolerance,
         heading=float(math.atan2(data.oMi[1].rotation[1, 0], data.oMi[1].rotation[0, 0])),
         floor_efforts=tuple(floor_efforts),
+        wheel_joints=tuple(c.joint for c in contacts if c.joint != model.names[1]),
+        parallel_wheels=robot.platform.kind in ("differential_drive", "skid_steer"),
     )
 
 
@@ -384,12 +394,34 @@ def contact_force_columns(problem: FloorProblem) -> tuple[np.ndarray, list[slice
     return np.hstack(columns), slices
 
 
-def _floor_work(P: FloorProblem, C: np.ndarray, slices: list[slice], equation) -> None:
+def _floor_work(P: FloorProblem, C: np.ndarray, slices: list[slice], equation, slide: bool = True) -> None:
     """The floor's forces along the platform's motions: S^T C lambda = tau on the floor's own
-    efforts, 0 elsewhere; and a roller pushes nothing along its free direction."""
-    select = np.zeros((P.S.shape[1], P.S.shape[1]))
+    efforts, 0 elsewhere; and a roller pushes nothing along its free direction.
+
+    ``slide=False`` (on the floor, where no wheel slides): the contacts on wheel joints do not
+    slide along the floor, C_t^T S xdot = 0 (for a rolling wheel that holds for every xdot; a
+    skid-steer's turn slides its wheels sideways, so it is held at zero), and the forces that
+    hold them do work along those motions: the work rows hold only on the motions left free,
+    N^T (S^T C lambda - tau_floor) = 0 with N spanning {xdot : C_t^T S xdot = 0}."""
+    nx = P.S.shape[1]
+    select = np.zeros((nx, nx))
     select[list(P.floor_efforts), list(P.floor_efforts)] = 1.0
-    equation([("lambda", P.S.T @ C), ("tau", -select)], np.zeros(P.S.shape[1]))
+    free = np.eye(nx)
+    if not slide:
+        wheel_rows = [
+            C[:, sl.start + i]
+            for contact, sl in zip(P.contacts, slices)
+            if contact.driven and contact.joint in P.wheel_joints
+            for i in (0, 1)
+        ]
+        if wheel_rows:
+            A = np.array(wheel_rows) @ P.S  # the wheels' contact points' velocities along the floor
+            _, sigma, vt = np.linalg.svd(A)
+            rank = int(np.sum(sigma > 1e-9))  # m/s per unit reduced velocity: exactly 0 when rolling
+            if rank:
+                equation([("xdot", vt[:rank])], np.zeros(rank))
+                free = vt[rank:].T
+    equation([("lambda", free.T @ P.S.T @ C), ("tau", -free.T @ select)], np.zeros(free.shape[1]))
     c, s = math.cos(P.heading), math.sin(P.heading)
     for contact, sl in zip(P.contacts, slices):
         if contact.free is not None:
@@ -397,6 +429,29 @@ def _floor_work(P: FloorProblem, C: np.ndarray, slices: list[slice], equation) -
             fx, fy = contact.free
             row[0, sl.start : sl.start + 2] = (c * fx - s * fy, s * fx + c * fy)
             equation([("lambda", row)], np.zeros(1))
+
+
+def _spring_rows(
+    P: FloorProblem, slices: list[slice], stiffness, forces: int, springs: int, n: int
+) -> list[np.ndarray]:
+    """Contacts as springs under a rigid platform, rows over the LP's n variables (forces start at
+    column ``forces``, the spring variables (a, b, c, s, theta) at ``springs``): each normal force
+    is k_c (a + b x_c + c y_c) (the platform sinks and tilts); with parallel wheels, each wheel's
+    sideways force (across the heading) is k_c (s + theta x_c), x_c along the heading (the
+    platform shifts sideways and turns on its tyres)."""
+    c, s = math.cos(P.heading), math.sin(P.heading)
+    out = []
+    for contact, sl, p, k in zip(P.contacts, slices, P.points, stiffness):
+        row = np.zeros(n)
+        row[forces + sl.stop - 1] = 1.0
+        row[springs : springs + 3] = -k, -k * p[0], -k * p[1]
+        out.append(row)
+        if P.parallel_wheels and contact.driven and contact.joint in P.wheel_joints:
+            row = np.zeros(n)
+            row[forces + sl.start : forces + sl.start + 2] = -s, c
+            row[springs + 3 : springs + 5] = -k, -k * (c * p[0] + s * p[1])
+            out.append(row)
+    return out
 
 
 def zero_moment_point(points: np.ndarray, forces: np.ndarray) -> np.ndarray:
@@ -452,7 +507,8 @@ def support(
         springs: the contacts share the weight as springs under a rigid base: each normal force
             is k (a + b x + c y) at the contact's floor position (x, y), with a, b, c three more
             unknowns and k the contact's stiffness: 1 for ``True``, else the array's entries (in
-            the problem's contact order). ``False``: any sharing that balances the robot.
+            the problem's contact order); with parallel wheels their sideways forces too (see
+            :func:`_spring_rows`). ``False``: any sharing that balances the robot.
         reserve: a fraction r: every normal force at least r (robot + object weight) / (number of
             contacts), every driven wheel's pyramid shrunk to 1 - r of its size.
     """
@@ -512,7 +568,7 @@ def _solve(
     nx = P.S.shape[1]
     C, slices = contact_force_columns(P)
     m, km = P.W.shape
-    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1, 0 if springs is False else 3])
+    offsets = np.cumsum([0, nx, nx, C.shape[1], km, P.level_jacobian.shape[0], m, 1, 0 if springs is False else 5])
     X, T, L, H, V, A, S_, D = (slice(offsets[i], offsets[i + 1]) for i in range(8))
     n = int(offsets[-1])
     rows, rhs = [], []
@@ -525,7 +581,13 @@ def _solve(
         rhs.append(np.asarray(value, dtype=float))
 
     equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
-    _floor_work(P, C, slices, lambda parts, value: equation([(T if w == "tau" else L, b) for w, b in parts], value))
+    _floor_work(
+        P,
+        C,
+        slices,
+        lambda parts, value: equation([({"tau": T, "lambda": L, "xdot": X}[w], b) for w, b in parts], value),
+        slide=mode == "ideal",
+    )
     equation([(H, P.level_grasp[0]), (V, P.level_grasp[1])], P.level_load)  # the object held level
     squeeze = null_space(P.level_grasp[1]).T  # ... by the hands' minimum-norm share (no squeeze)
     equation([(V, squeeze)], np.zeros(len(squeeze)))
@@ -546,13 +608,10 @@ def _solve(
     if still:
         equation([(X, np.eye(nx))], np.zeros(nx))
         equation([(A, np.eye(m))], np.zeros(m))
-    if springs is not False:  # normal_c - k_c (a + b x_c + c y_c) = 0
+    if springs is not False:  # normal_c - k_c (a + b x_c + c y_c) = 0; sideways_c - k_c (s + theta x_c) = 0
         stiffness = np.ones(len(P.points)) if springs is True else np.asarray(springs, dtype=float)
-        for sl, p, k in zip(slices, P.points, stiffness):
-            row = np.zeros((1, n))
-            row[0, L.start + sl.stop - 1] = 1.0
-            row[0, D] = -k, -k * p[0], -k * p[1]
-            rows.append(row)
+        for row in _spring_rows(P, slices, stiffness, L.start, D.start, n):
+            rows.append(row[None, :])
             rhs.append(np.zeros(1))
 
     bounds, cone = [(None, None)] * n, (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
@@ -606,7 +665,7 @@ def team_straight_line(
     for P in problems:
         nx = P.S.shape[1]
         C, slices = contact_force_columns(P)
-        sizes = [nx, nx, C.shape[1], P.W.shape[1], P.level_jacobian.shape[0], 0 if springs is False else 3]
+        sizes = [nx, nx, C.shape[1], P.W.shape[1], P.level_jacobian.shape[0], 0 if springs is False else 5]
         at = np.cumsum([start, *sizes])
         blocks.append((C, slices, [slice(at[i], at[i + 1]) for i in range(6)]))
         start = int(at[-1])
@@ -626,17 +685,14 @@ def team_straight_line(
     cone = (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
     for P, (C, slices, (X, T, L, H, V, D)) in zip(problems, blocks):
         equation([(X, P.M @ P.S), (T, -P.B), (L, -C), (H, P.hand_jacobian.T), (V, P.level_jacobian.T)], -P.g)
-        _floor_work(P, C, slices, lambda parts, value, T=T, L=L: equation(
-            [(T if w == "tau" else L, b) for w, b in parts], value))  # fmt: skip
+        _floor_work(P, C, slices, lambda parts, value, X=X, T=T, L=L: equation(
+            [({"tau": T, "lambda": L, "xdot": X}[w], b) for w, b in parts], value), slide=mode == "ideal")  # fmt: skip
         equation([(X, P.hand_jacobian @ P.S), (A, -P.W.T)], np.zeros(P.W.shape[1]))  # its hands move with it
         squeeze = null_space(P.level_grasp[1]).T  # its hands share the level load without a squeeze
         equation([(V, squeeze)], np.zeros(len(squeeze)))
         if springs is not False:
-            for sl, p in zip(slices, P.points):
-                row = np.zeros((1, n))
-                row[0, L.start + sl.stop - 1] = 1.0
-                row[0, D] = -1.0, -p[0], -p[1]
-                rows.append(row)
+            for row in _spring_rows(P, slices, np.ones(len(P.points)), L.start, D.start, n):
+                rows.append(row[None, :])
                 rhs.append(np.zeros(1))
         bounds[T] = [(-limit, limit) for limit in P.tau_max]
         least = reserve * P.total_mass * -P.gravity[2] / len(P.contacts)

@@ -29,8 +29,9 @@ The sharing matters: with ``load="any"`` (every sharing that balances the robot:
 tip-over, optimistic for traction) the predicted normal forces differ from MuJoCo's by up to 43 %
 of the weight (more than 5 % on some axis of every case) and wheels slip on eight of the twenty
 axes (TIAGo++'s twelve, the paper robot's four at 0 and at 90 deg). The ideal model's maximum
-efforts, on every axis where they reach more than 5 % beyond the grounded maximum over the
-friction pyramid's own conservatism (1 / cos(pi / faces): MuJoCo's cone is round), tip the robot
+efforts, on every axis where they reach more than 5 % beyond the grounded maximum with every
+sharing (``load="any"``, which contains MuJoCo's, whatever it is) over the friction pyramid's own
+conservatism (1 / cos(pi / faces): MuJoCo's cone is round), tip the robot
 (a support rises by more than 0.3 mm, or the base turns by more than 1e-3 rad) or slip a wheel
 (faster than 0.1 m/s at the contact).
 
@@ -123,6 +124,12 @@ def test_grounded_maxima_hold_in_mujoco_and_ideal_ones_do_not(name):
     )
     referee = build(robot, q, support_points=casters, object=free.held_object, mu=MU)
     ideal = free.measures["dynamic_polytope"]
+    # every sharing of the load and of the sideways forces (MuJoCo's own among them): beyond it,
+    # no sharing holds the ideal maximum
+    bound = mobmanip.analyze(
+        robot, q, task, object_mass=MASS, measures=("dynamic_polytope",),
+        constraints=(Floor(level=True, mu=MU, load="any"),),
+    ).measures["dynamic_polytope"]  # fmt: skip
     tipped_or_slipped = 0
     for e in _axes(base):
         reach = grounded.straight_line_reach(e)
@@ -137,12 +144,16 @@ def test_grounded_maxima_hold_in_mujoco_and_ideal_ones_do_not(name):
         if short:  # and it does not hold for 20 ms: the case is a real limit, not a slack test
             assert _slip(referee.rollout(w.variables["tau"], duration=0.02)) > 0.1
         ideal_reach = ideal.straight_line_reach(e)
-        if ideal_reach > 1.05 * reach / np.cos(np.pi / grounded.model["floor"]["faces"]):
+        pyramid = np.cos(np.pi / grounded.model["floor"]["faces"])
+        if ideal_reach > 1.05 * reach / pyramid:
             run = referee.rollout(ideal.straight_line_witness(e).variables["tau"], duration=0.02)
             tips = -run.penetration.min() > 3e-4 or np.abs(run.base_rpy[:, :2]).max() > 1e-3
-            assert tips or _slip(run) > 0.1, (name, e, ideal_reach, reach)
-            tipped_or_slipped += 1
-    assert tipped_or_slipped >= 1  # every case has an axis where the floor binds
+            # beyond every sharing it must fail; beyond the compliant one only, MuJoCo's own
+            # sharing may still hold it (TIAGo++ +y: 27.4 held where the springs give 23.6)
+            beyond_any = ideal_reach > 1.05 * bound.straight_line_reach(e) / pyramid
+            assert tips or _slip(run) > 0.1 or not beyond_any, (name, e, ideal_reach, reach)
+            tipped_or_slipped += tips or _slip(run) > 0.1
+    assert tipped_or_slipped >= 1  # every case has an axis where the floor binds in MuJoCo
 
 
 @pytest.mark.parametrize("reserve", [0.0, 0.3])
@@ -337,6 +348,7 @@ def test_the_efforts_reported_for_each_maximum_hold_in_mujoco_as_long_as_predict
         assert predicted >= calm_held and predicted > 0.0, (name, e, predicted, calm_held)
         short += predicted < 0.02
         assert holds(found.instant_witness.variables["tau"], 0.9 * predicted), (name, e, predicted)
-    # the path where 97 % gives way is exercised (TIAGo++: -x, +-y, +-yaw; home: +-y), and on the
-    # case-study postures 97 % of every maximum holds 20 ms (held 18 ms in MuJoCo, above)
-    assert short >= 1 if name in ("tiago_dual", "paper home") else short == 0
+    # the path where 97 % gives way is exercised (TIAGo++: -x, +-y, +-yaw; home: +-y; at 90 deg +x,
+    # 14.25 ms, where each wheel carries half of the sideways force), and at 0 deg 97 % of every
+    # maximum holds 20 ms (held 18 ms in MuJoCo, above)
+    assert short >= 1 if name in ("tiago_dual", "paper home", "paper 90") else short == 0

@@ -21,8 +21,11 @@ wheels add (:func:`_wheel_equations`):
   over its radius less its spin, its sideways force a constraint force within friction;
 - skid-steer: each side's wheels turn at one rate and share its torque equally; the second wheel
   of a side keeps its own row of the dynamics (its force along the floor is what its share
-  leaves), and the sideways forces that a turn scrubs against do no net work along the turn at
-  rest (the instantaneous model: nothing has slid yet, so no sliding friction resists it);
+  leaves). It turns only by sliding its wheels sideways, and on the floor no wheel slides: at
+  rest its base does not start a turn, and the sideways forces that hold it are constraint
+  forces within friction (a difference of the sides' torques pushes against them). With every
+  contact free to pull (``lift``: the ideal set) the turn is the kinematic model's, whose
+  sideways forces do no net work along it;
 - steered (tricycle): the drive wheel as a differential drive's, the free rear wheels' rows of
   the dynamics with no effort (they push along the floor only what their spin asks);
 - omnidirectional (a planar joint driven by wheels the file does not model, ``[support] wheels``):
@@ -302,13 +305,28 @@ class Floor(Constraint):
             squeeze = _null_space(np.hstack(grasp_level))
             if len(squeeze):
                 equations.append(({LEVEL_WRENCHES: squeeze}, np.zeros(len(squeeze))))
-        equations += _wheel_equations(robot, q, S, support, points, slices, n_forces, gravity, mass, rows)
+        wheels, turning = _wheel_equations(
+            robot, q, S, support, points, slices, n_forces, gravity, mass, rows, self.lift
+        )
+        equations += wheels
+        if turning is not None:  # the sideways forces that hold a skid-steer from turning do work along S
+            couplings.setdefault("dynamics", {})[CONTACT_FORCES] = turning
         if sharing_model == "compliant":
             sharing = compliant_sharing(points, support.stiffness)
             if len(sharing):
                 block = np.zeros((len(sharing), n_forces))
                 block[:, normal_col] = sharing
                 equations.append(({CONTACT_FORCES: block}, np.zeros(len(sharing))))
+            if robot.platform.kind in PARALLEL_WHEELS:  # and the sideways forces as the tyres share them
+                wheels = [i for i, ct in enumerate(support.contacts) if ct.driven and ct.source == "wheel"]
+                sideways = lateral_sharing(support.root_points()[wheels, 0], support.stiffness[wheels])
+                if len(sideways):
+                    lateral = (-math.sin(pose[2]), math.cos(pose[2]))
+                    block = np.zeros((len(sideways), n_forces))
+                    for column, i in enumerate(wheels):
+                        a = slices[i][0]
+                        block[:, a : a + 2] = np.outer(sideways[:, column], lateral)
+                    equations.append(({CONTACT_FORCES: block}, np.zeros(len(sideways))))
         sizes = {"xdot": nx, "tau": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl}
         E, e = _stack(equations, sizes)
         shifts = {}
@@ -416,10 +434,45 @@ def compliant_sharing(points: np.ndarray, stiffness: np.ndarray | None = None) -
     return q.T
 
 
-def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: int, gravity, mass: float, rows):
+#: Platform kinds whose wheels all roll along the platform's x (their sideways direction is its y).
+PARALLEL_WHEELS = ("differential_drive", "skid_steer")
+#: Wheels whose contacts lie within this distance (m) along the platform's x share one axle.
+AXLE_TOLERANCE = 1e-3
+
+
+def lateral_sharing(x: np.ndarray, stiffness: np.ndarray | None = None) -> np.ndarray:
+    """The equations that make the sideways forces of wheels rolling along the platform's x,
+    at platform-frame positions ``x`` (n,) m along it, those of tyres as springs under a rigid
+    platform: a sideways shift s and a turn theta of the platform deflect wheel i by s + theta x_i,
+    so f_i = k_i (s + theta x_i) (``stiffness`` k, (n,), relative; default all equal). Wheels
+    within :data:`AXLE_TOLERANCE` of each other along x are on one axle (one x for all of them):
+    a file's rounding must not let two wheels of one axle squeeze the platform between them.
+    Returns N (n - r, n) with orthonormal rows, N f = 0 for those f (r: 1 for one axle, 2 for
+    more); empty when every wheel's force is free."""
+    x = np.asarray(x, dtype=float)
+    order = np.argsort(x)
+    axle = np.zeros(len(x), dtype=int)
+    for previous, current in zip(order[:-1], order[1:]):
+        axle[current] = axle[previous] + int(x[current] - x[previous] > AXLE_TOLERANCE)
+    n_axles = int(axle.max()) + 1 if len(x) else 0
+    snapped = np.array([x[axle == axle[i]].mean() for i in range(len(x))])
+    affine = np.column_stack([np.ones(len(x)), snapped - snapped.mean()])
+    u, _, _ = np.linalg.svd(affine, full_matrices=True)
+    deflections = u[:, min(n_axles, 2) :].T  # N0 d = 0 for the deflections s + theta x
+    if stiffness is None or len(deflections) == 0 or np.all(stiffness == stiffness[0]):
+        return deflections
+    q, _ = np.linalg.qr((deflections / np.asarray(stiffness, dtype=float)[None, :]).T)
+    return q.T
+
+
+def _wheel_equations(
+    robot, q, S, support: Support, points, slices, n_forces: int, gravity, mass: float, rows, lift: bool = False
+) -> tuple[list[tuple[dict[str, np.ndarray], np.ndarray]], np.ndarray | None]:
     """What each platform kind adds to the whole robot's balance: the equations of its wheels that
     the reduced and whole-robot rows leave out, the efforts that are the floor's own traction,
-    and the rollers' free directions (see the module's docstring). Empty for a differential drive.
+    and the rollers' free directions (see the module's docstring); and, for a platform whose
+    wheels scrub when it turns, the contact forces' term in the reduced dynamics,
+    ``-(J_c S)^T`` (nx, n_forces), else ``None``. No equations for a differential drive.
 
     - Wheels whose rates are not reduced velocities of their own (a skid-steer side's second
       wheel, a steered base's free rear wheels) keep their own row of the dynamics,
@@ -427,13 +480,16 @@ def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: in
       direction is what their share of the effort and their spin leave (zero effort: a free
       wheel).
     - The reduced dynamics have no contact force: they hold when the contact forces do no work
-      along S, which rolling contacts do by themselves and a platform whose wheels scrub
-      (:attr:`~mobmanip.platforms.base.Platform.scrubs`, a skid-steer's) are held to along its
-      own reduced velocities: at rest, the sideways forces that turning would scrub against are
-      constraint forces within friction, with no net work along the platform's turn (the
-      instantaneous model: nothing has slid yet, so no sliding friction resists the turn). Held
-      by the kind, not by testing the rows for zero: a file's rounding that tilts a wheel's axis
-      by 1e-8 must not add a constraint.
+      along S, which rolling contacts do by themselves. A platform whose wheels scrub when it
+      turns (:attr:`~mobmanip.platforms.base.Platform.scrubs`, a skid-steer's) cannot turn on
+      the floor without sliding them sideways, and on the floor no wheel slides: at rest its
+      base does not start a turn (its yaw acceleration, S's yaw row, is zero), and the sideways
+      forces that hold it are constraint forces within friction, which do work along S (they
+      join the reduced dynamics). A difference of the sides' torques is then held by the
+      wheels' sideways friction. With contacts free to pull (``lift``, the ideal set) the turn
+      is the kinematic model's: the sideways forces do no net work along it (reduced by SVD,
+      the sides' opposite rows count once). Held by the kind, not by testing the rows for zero:
+      a file's rounding that tilts a wheel's axis by 1e-8 must not add a constraint.
     - Platform efforts that act on the base itself (an omnidirectional base's planar joint) are
       the floor's traction: ``S_k^T sum_c J_c^T lambda_c = tau_k``.
     - A contact with rollers pushes nothing along their free direction.
@@ -455,8 +511,8 @@ def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: in
     traction = [k for k in range(S.shape[1]) if np.abs(robot.B[base, k]).max() > 0.0]
     rolled = [c for c, contact in enumerate(support.contacts) if contact.free is not None]
     out: list[tuple[dict[str, np.ndarray], np.ndarray]] = []
-    if not (dependent or traction or rolled):
-        return out
+    if not (dependent or traction or rolled or robot.platform.scrubs):
+        return out, None
     data = robot.data
     pin.computeJointJacobians(model, data, q)
     jacobians = np.zeros((n_forces, model.nv))  # each force column's generalized force
@@ -483,7 +539,12 @@ def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: in
     work = (jacobians @ S).T  # the contact forces' work along each reduced velocity, (nx, n_forces)
     if traction:
         out.append(({CONTACT_FORCES: work[traction], "tau": -np.eye(S.shape[1])[traction]}, np.zeros(len(traction))))
-    if robot.platform.scrubs:  # no work along the platform's own motions (rolling wheels do none by themselves)
+    turning = None
+    if robot.platform.scrubs and not lift:  # no wheel slides: the base does not start a turn
+        yaw_row = S[2:3] / np.linalg.norm(S[2])
+        out.append(({"xdot": yaw_row}, np.zeros(1)))
+        turning = -work
+    elif robot.platform.scrubs:  # no work along the platform's own motions (rolling wheels do none by themselves)
         scrubbed = [k for k in range(robot.platform.n_reduced) if k not in traction]
         # one row per independent scrubbing motion (a skid-steer scrubs only as it turns: its two
         # sides' rows are opposite); directions below 1e-6 of the largest are the same motion
@@ -499,7 +560,7 @@ def _wheel_equations(robot, q, S, support: Support, points, slices, n_forces: in
             a = slices[c][0]
             block[i, a : a + 2] = (math.cos(yaw) * fx - math.sin(yaw) * fy, math.sin(yaw) * fx + math.cos(yaw) * fy)
         out.append(({CONTACT_FORCES: block}, np.zeros(len(rolled))))
-    return out
+    return out, turning
 
 
 def _null_space(A: np.ndarray) -> np.ndarray:
