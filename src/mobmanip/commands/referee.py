@@ -24,13 +24,6 @@ from .common import add_floor_options, add_robot_options
 
 #: MuJoCo's friction coefficient of the driven wheels when the floor does not limit traction.
 UNLIMITED_FRICTION = 10.0
-#: What a skid-steer's replay can and cannot say (printed with its table).
-SKID_STEER_NOTE = (
-    "a skid-steer turns only by sliding its wheels sideways; MuJoCo's contacts stick until their friction "
-    "limit, so from rest its geared wheels and rolling contacts over-constrain any motion that turns the "
-    "base, and MuJoCo's answer there comes from its contacts' softness: on axes that turn the base the "
-    "replay is no verdict on the floor model, whose sideways forces do not resist a turn at rest"
-)
 #: --longest: MuJoCo holds the efforts at least this share of mobmanip's predicted time.
 HOLD_SHARE = 0.9
 
@@ -216,8 +209,9 @@ def _print(robot, task, info, axes, args, referee_package) -> None:
         f"{1e3 * referee_package.SLIDE:g} mm/s"
     )
     print(tolerance)
-    if robot.platform.kind == "skid_steer":
-        print(f"note: {SKID_STEER_NOTE}")
+    for a in axes:
+        if a.replayed and a.first_failure is not None and not _passed(a, args):
+            print(f"{a.axis}: {_mechanism(a)}")
     if any(a.replayed and not a.judge_normals for a in axes):
         print("* not judged: with load sharing 'any' the predicted normal forces are one balancing share among many")
 
@@ -236,6 +230,19 @@ def _verdict(axis, args) -> str:
     if axis.slide > 1e-3:
         reasons.append("a wheel SLID")
     return ", ".join(reasons)
+
+
+def _mechanism(axis) -> str:
+    """What made an axis fail during its replay, in one line."""
+    f = axis.first_failure
+    what = "a support" if f["event"] == "rises" else "a wheel"
+    line = f"{what}, {f['support']}, {f['event']} first, at {1e3 * f['time']:.1f} ms; its normal force went from "
+    line += f"{f['normal'][0]:.4g} to {f['normal'][1]:.4g} N"
+    if "traction_use" in f:
+        line += f" and its traction use from {f['traction_use'][0]:.2f} to {f['traction_use'][1]:.2f} of its friction"
+    if axis.agrees:
+        line += ": MuJoCo agreed at t = 0, so the maximum of that instant drifted off as the robot moved"
+    return line
 
 
 def _document(robot, task, info, referee, axes, args, held_object) -> dict:

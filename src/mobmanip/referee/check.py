@@ -82,6 +82,9 @@ class AxisReplay:
         slide: the fastest slide of a driven wheel's contact point (m/s).
         weight: the weight of the robot and the object (N).
         judge_normals: whether the normal forces take part in the verdict.
+        first_failure: the first support to rise or driven wheel to slide during the replay,
+            ``None`` if none did: its name, ``"rises"`` or ``"slides"``, when (s), and its
+            normal force and traction use at t = 0 and then (what moved it to its limit).
         extra: what the caller adds to the JSON (e.g. a predicted hold time).
     """
 
@@ -97,6 +100,7 @@ class AxisReplay:
     slide: float = 0.0
     weight: float = 1.0
     judge_normals: bool = True
+    first_failure: dict | None = None
     extra: dict = field(default_factory=dict)
 
     @property
@@ -137,6 +141,7 @@ class AxisReplay:
             slide=self.slide,
             agrees=self.agrees,
             holds=self.holds,
+            first_failure=self.first_failure,
             passed=self.passed,
         )
         return {**out, **self.extra}
@@ -187,7 +192,34 @@ def replay_axis(referee, grounded, task: str, axis: str, direction, reach: float
     found.rise = max(float(-run.penetration.min()), 0.0)
     driven = [k for k, s in enumerate(run.supports) if s.driven]
     found.slide = max((float(run.slip_speed[:, k].max()) for k in driven), default=0.0)
+    found.first_failure = first_failure(run)
     return found
+
+
+def first_failure(run) -> dict | None:
+    """The first support of a rollout to rise more than :data:`RISE` or driven wheel to slide
+    faster than :data:`SLIDE`: ``{"support", "event", "time" (s), "normal" (N, at t = 0 and
+    then), "traction_use" (at t = 0 and then; driven wheels)}``, or ``None``."""
+    events = []
+    for k, support in enumerate(run.supports):
+        risen = np.flatnonzero(-run.penetration[:, k] > RISE)
+        if len(risen):
+            events.append((int(risen[0]), k, "rises"))
+        slid = np.flatnonzero(run.slip_speed[:, k] > SLIDE)
+        if support.driven and len(slid):
+            events.append((int(slid[0]), k, "slides"))
+    if not events:
+        return None
+    step, k, event = min(events)
+    out = {
+        "support": run.supports[k].name,
+        "event": event,
+        "time": float(run.time[step]),
+        "normal": [float(run.normal[0, k]), float(run.normal[step, k])],
+    }
+    if run.supports[k].driven:
+        out["traction_use"] = [float(run.friction_use[0, k]), float(run.friction_use[step, k])]
+    return out
 
 
 def replay_maxima(referee, grounded, task: str, *, fraction: float = 1.0, duration: float = 0.02) -> list[AxisReplay]:
