@@ -137,8 +137,8 @@ def _one_step(robot, q, x, tau, task, support):
 def test_the_contact_maps_are_the_replays_contact_forces(case):
     """At a state of a replay, :func:`contact_maps` assembles the contact forces as affine
     functions of the efforts; the replay's own step computes them for one tau. Equal for efforts
-    other than the ones that made the state, and the least-use split of the tangential forces is
-    the best point of the map's split line (a fine grid over it)."""
+    other than the ones that made the state; the tangential forces too (the compliant floor leaves
+    the wheels no split: each tyre of the axle carries half of its lateral force)."""
     robot, q, task = case()
     polytope = _grounded(robot, q, task)
     support = Floor(mu=MU).resolve(robot)[0]
@@ -146,7 +146,6 @@ def test_the_contact_maps_are_the_replays_contact_forces(case):
     tau = polytope.witness_at(0.9 * polytope.straight_line_reach(e) * e, least="xdot").variables["tau"]
     hold = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU), stop=False)
     rng = np.random.default_rng(5)
-    driven = np.array([c.driven for c in support.contacts])
     for k in (0, 40, 80):
         other = polytope.witness_at(rng.uniform(-0.5, 0.5) * polytope.straight_line_reach(e) * e).variables["tau"]
         for effort in (tau, other):
@@ -155,10 +154,8 @@ def test_the_contact_maps_are_the_replays_contact_forces(case):
             N, n0 = maps.normal
             assert np.abs(N @ effort + n0 - normal).max() <= 1e-9 * np.abs(normal).sum()
             T, t0 = maps.tangential
-            line = (T @ effort + t0)[:, None] + maps.split[:, 0][:, None] * np.linspace(-400.0, 400.0, 160001)[None]
-            uses = np.linalg.norm(line.reshape(-1, 2, line.shape[1]), axis=1) / (MU * normal[driven][:, None])
-            assert abs(uses.max(axis=0).min() - use.max()) <= 1e-4 * use.max()
-            assert np.abs(tangential.ravel() - line[:, np.argmin(uses.max(axis=0))]).max() <= 0.02
+            assert maps.split.shape[1] == 0
+            np.testing.assert_allclose((T @ effort + t0).reshape(-1, 2), tangential, rtol=1e-9, atol=1e-9)
 
 
 def _calm_reach(robot, q, task, polytope, e, tolerance=0.005):
@@ -173,7 +170,7 @@ def _calm_reach(robot, q, task, polytope, e, tolerance=0.005):
     return low
 
 
-@pytest.mark.parametrize("axis", [0, 1])
+@pytest.mark.parametrize("axis", [0, 5])
 def test_the_held_reach_holds_and_beats_the_calm_efforts(axis):
     """The held reach's efforts reach it at t = 0 (the closed chain's solve, not the LP, gives the
     object's acceleration), the replay holds them for 20 ms, the linearised program around the

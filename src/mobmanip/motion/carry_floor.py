@@ -14,9 +14,10 @@ N(x) = (z_f F_x - M_y, M_x + z_f F_y), also affine. So, exactly for that wrench:
   as the floor constraint's :func:`~mobmanip.terms.constraints.floor.compliant_sharing`) are a
   linear map of (F_z, N), each >= the reserve's share of the weight;
 - traction: the casters are frictionless, so the driven wheels carry (F_x, F_y, M_z); a
-  differential drive's two wheels leave the split of their lateral force open: one more QP
-  variable s (the tangential forces are t = P (F_x, F_y, M_z) + k s), and each wheel's tangential
-  force lies in the pyramid with ``faces`` faces inscribed in its cone, scaled by 1 - reserve.
+  differential drive's two wheels share their lateral force as the floor constraint's compliant
+  sharing does, half each (equal tyres: t = P (F_x, F_y, M_z), P the pseudo-inverse; the QP keeps
+  a split variable s for the rows' shape, which nothing moves), and each wheel's tangential force
+  lies in the pyramid with ``faces`` faces inscribed in its cone, scaled by 1 - reserve.
 
 The rows are over (x, s); :func:`floor_rows` gives them with a label per row naming what it
 keeps (the zero-moment point, a support, a wheel's traction) for the diagnosis.
@@ -178,7 +179,7 @@ def floor_rows(
         H1 = np.vstack([wrench1[0], wrench1[1], wrench1[5]])
         t0 = P @ H0
         t1 = P @ H1
-        t1[:, nx] = free[0]  # the lateral split s
+        t1[:, nx] = 0.0  # the lateral split s: the compliant floor's is fixed, half per tyre
         tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
         for i, c in enumerate(driven):
             for u in pyramid_faces(faces, pose[2]):

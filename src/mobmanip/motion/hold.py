@@ -251,8 +251,9 @@ class ContactMaps:
         normal: (N (n, nx), n0 (n,)): every contact's normal force N tau + n0 (N).
         tangential: (T (2d, nx), t0 (2d,)): the driven wheels' tangential forces (world x, y per
             wheel) T tau + t0 + F s for any split s (N).
-        split: F (2d, f): the directions in which the wheels may share the load among themselves
-            (for two wheels on one axle, one: the lateral force passed between them).
+        split: F (2d, f): the directions in which the wheels may share the load among themselves;
+            none under the floor's compliant sharing, which gives each tyre of an axle half of
+            its lateral force (the least-squares share of ``tangential``).
     """
 
     normal: tuple[np.ndarray, np.ndarray]
@@ -345,13 +346,11 @@ def _contact_maps(state: _AffineState, q: np.ndarray, support, stiffness: np.nda
     B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
     horizontal = np.zeros((3, 6))  # (f_x, f_y, m_z)
     horizontal[0, 0], horizontal[1, 1], horizontal[2, 5] = 1.0, 1.0, 1.0
-    _, sigma, vt = np.linalg.svd(B)
-    rank = int(np.sum(sigma > 1e-12 * sigma[0]))
     to_tangential = np.linalg.pinv(B) @ horizontal
     return ContactMaps(
         normal=(to_normals @ G, to_normals @ g),
         tangential=(to_tangential @ G, to_tangential @ g),
-        split=vt[rank:].T,
+        split=np.zeros((2 * d, 0)),
     )
 
 

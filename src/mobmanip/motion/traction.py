@@ -15,9 +15,9 @@ as the floor constraint (:class:`mobmanip.terms.constraints.floor.Floor`) shares
   horizontal force and its moment about the vertical: three equations over two components per
   wheel. For a differential drive (two wheels on one axle) the longitudinal forces are fixed;
   the split of the lateral force between the two wheels is not (both act along the axle's
-  line). The floor constraint admits any split; so does this reading: it takes the split that
-  uses the least friction (the smallest largest use). Exact: the minimum over one variable of
-  the largest of convex functions lies at one function's minimum or where two are equal.
+  line): the floor constraint's compliant sharing gives each tyre half (equal tyres under a
+  rigid platform, :func:`~mobmanip.terms.constraints.floor.lateral_sharing`), and so does this
+  reading (the least-squares share, which splits an axle's lateral force equally).
 
 A wheel's *traction use* is ``|f_t| / (mu f_n)`` (the friction cone itself; the floor constraint's
 inscribed pyramid is conservative by 1 - cos(pi / faces)): above 1 the wheel slips; an unloaded
@@ -26,7 +26,6 @@ wheel (f_n <= 0) has use +inf.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 
@@ -118,42 +117,14 @@ def contact_forces(
     rank = int(np.sum(sigma > 1e-12 * sigma[0]))
     if np.linalg.norm(B @ particular - target) > 1e-9 * max(1.0, float(np.linalg.norm(target))):
         raise SpecError("the driven wheels cannot carry the floor's horizontal force and moment (one wheel?)")
-    free = vt[rank:].T  # (2d, k)
+    if 2 * d - rank > 1:
+        raise SpecError(f"traction along a motion covers two driven wheels on one axle; this support has {d}")
     weight = mu * normal[driven]
     loaded = weight > mu * UNLOADED
-    a = particular.reshape(d, 2)
-    if free.shape[1] == 0:
-        tangential = a
-    elif free.shape[1] == 1:
-        k = free[:, 0].reshape(d, 2)
-        s = _least_largest_use(a[loaded], k[loaded], weight[loaded]) if loaded.any() else 0.0
-        tangential = a + s * k
-    else:
-        raise SpecError(f"traction along a motion covers two driven wheels on one axle; this support has {d}")
+    tangential = particular.reshape(d, 2)  # each tyre of the axle half of its lateral force
     use = np.full(d, math.inf)
     use[loaded] = np.linalg.norm(tangential[loaded], axis=1) / weight[loaded]
     return normal, tangential, use
-
-
-def _least_largest_use(a: np.ndarray, k: np.ndarray, w: np.ndarray) -> float:
-    """The s minimising max_i |a_i + s k_i| / w_i (exactly: at one term's minimum or where two
-    terms are equal)."""
-    kk, ak, aa = (k * k).sum(axis=1), (a * k).sum(axis=1), (a * a).sum(axis=1)
-    candidates = [0.0] + [float(-ak[i] / kk[i]) for i in range(len(a)) if kk[i] > 0.0]
-    w2 = w**2
-    for i, j in itertools.combinations(range(len(a)), 2):
-        coefficients = (
-            kk[i] / w2[i] - kk[j] / w2[j],
-            2.0 * (ak[i] / w2[i] - ak[j] / w2[j]),
-            aa[i] / w2[i] - aa[j] / w2[j],
-        )
-        if abs(coefficients[0]) > 0.0 or abs(coefficients[1]) > 0.0:
-            candidates += [float(r.real) for r in np.roots(coefficients) if abs(r.imag) <= 1e-12 * max(1.0, abs(r))]
-
-    def largest(s: float) -> float:
-        return float(np.max(np.linalg.norm(a + s * k, axis=1) / w))
-
-    return min(candidates, key=largest)
 
 
 def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None = None) -> TractionAlong:

@@ -285,7 +285,23 @@ class LiftedPolytope(TaskSet):
         except ModelError:  # at a point on the boundary (no slack to halve) HiGHS may not settle
             second = None  # the degenerate program: the greatest-slack solution stands
         z = result[1][:-1] if second is None else second[1][:n]
-        return self._witness(float(result[0]), z, None)
+        return self._witness(float(result[0]), self._polished(z, p, lower, upper), None)
+
+    def _polished(self, z: np.ndarray, point: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """An interior solution reaching ``point`` with its equations made exact: the program holds them to its
+        feasibility tolerance (1e-9 on scaled rows), which a poorly conditioned reduced inertia
+        turns into accelerations 1e-6 off those its efforts give; the least-norm correction moves
+        z by about that much, far less than the slack every inequality keeps, and is kept when z
+        stays within its bounds."""
+        if not len(self._A_eq):
+            return z
+        fix = np.zeros((self.dim, len(z)))  # the point stays where it is asked to be
+        fix[np.arange(self.dim), self._task] = 1.0
+        A, b = np.vstack([self._A_eq, fix]), np.r_[self._b_eq, point]
+        correction = np.linalg.lstsq(A, A @ z - b, rcond=None)[0]
+        polished = z - correction
+        inside = np.all(polished >= lower - 1e-12 * np.abs(lower)) and np.all(polished <= upper + 1e-12 * np.abs(upper))
+        return polished if inside else z
 
     def _ray(self, direction: ArrayLike, origin: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
         d = check_direction(direction, self.dim)

@@ -317,16 +317,19 @@ class Floor(Constraint):
                 block = np.zeros((len(sharing), n_forces))
                 block[:, normal_col] = sharing
                 equations.append(({CONTACT_FORCES: block}, np.zeros(len(sharing))))
-            if robot.platform.kind in PARALLEL_WHEELS:  # and the sideways forces as the tyres share them
-                wheels = [i for i, ct in enumerate(support.contacts) if ct.driven and ct.source == "wheel"]
-                sideways = lateral_sharing(support.root_points()[wheels, 0], support.stiffness[wheels])
-                if len(sideways):
-                    lateral = (-math.sin(pose[2]), math.cos(pose[2]))
-                    block = np.zeros((len(sideways), n_forces))
-                    for column, i in enumerate(wheels):
-                        a = slices[i][0]
-                        block[:, a : a + 2] = np.outer(sideways[:, column], lateral)
-                    equations.append(({CONTACT_FORCES: block}, np.zeros(len(sideways))))
+        # the sideways forces as tyres share them: under the compliant sharing, and wherever
+        # friction does not bound them (an axle's squeeze would be unbounded, and a file's 1e-8
+        # tilt of a wheel axis would turn it into torque: reaches 3 % apart)
+        if robot.platform.kind in PARALLEL_WHEELS and (sharing_model == "compliant" or (mu is None and not self.lift)):
+            wheels = [i for i, ct in enumerate(support.contacts) if ct.driven and ct.source == "wheel"]
+            sideways = lateral_sharing(support.root_points()[wheels, 0], support.stiffness[wheels])
+            if len(sideways):
+                lateral = (-math.sin(pose[2]), math.cos(pose[2]))
+                block = np.zeros((len(sideways), n_forces))
+                for column, i in enumerate(wheels):
+                    a = slices[i][0]
+                    block[:, a : a + 2] = np.outer(sideways[:, column], lateral)
+                equations.append(({CONTACT_FORCES: block}, np.zeros(len(sideways))))
         sizes = {"xdot": nx, "tau": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl}
         E, e = _stack(equations, sizes)
         shifts = {}
@@ -386,6 +389,7 @@ class Floor(Constraint):
                         "driven": ct.driven,
                         "columns": list(s),
                         "stiffness": ct.stiffness,
+                        "free": None if ct.free is None else list(ct.free),
                     }
                     for ct, p, s in zip(support.contacts, points, slices)
                 ],
