@@ -240,8 +240,11 @@ def _mechanism(axis) -> str:
     line += f"{f['normal'][0]:.4g} to {f['normal'][1]:.4g} N"
     if "traction_use" in f:
         line += f" and its traction use from {f['traction_use'][0]:.2f} to {f['traction_use'][1]:.2f} of its friction"
-    if axis.agrees:
+    at_limit = f["normal"][1] <= 0.0 or f.get("traction_use", [0.0, 1.0])[1] >= 0.99
+    if axis.agrees and at_limit:
         line += ": MuJoCo agreed at t = 0, so the maximum of that instant drifted off as the robot moved"
+    elif axis.agrees:
+        line += " (below its friction limit: MuJoCo's contact gave way, not the floor model's limits)"
     return line
 
 

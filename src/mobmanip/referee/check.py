@@ -178,7 +178,9 @@ def replay_axis(referee, grounded, task: str, axis: str, direction, reach: float
     found = AxisReplay(axis, np.asarray(direction, dtype=float), float(reach), goal)
     found.weight = referee.weight
     found.judge_normals = info.get("load") == "compliant"
-    acceleration, contacts = referee.forward(tau)
+    forces = np.asarray(witness.variables[CONTACT_FORCES], dtype=float)
+    traction = {c["name"]: forces[c["columns"][0] : c["columns"][0] + 2] for c in info["contacts"] if c["driven"]}
+    acceleration, contacts = referee.forward(tau, traction)
     if acceleration.ndim == 2:  # no object: the first hand's
         acceleration = acceleration[0]
     found.acceleration = acceleration[list(get_task(task).rows)]
@@ -188,7 +190,7 @@ def replay_axis(referee, grounded, task: str, axis: str, direction, reach: float
     for name, entry in predicted.items():
         found.normals[name] = (float(entry["normal"]), float(contacts[name].normal))
     found.normal_error = max((abs(p - m) for p, m in found.normals.values()), default=0.0)
-    run = referee.rollout(tau, duration=duration)
+    run = referee.rollout(tau, duration=duration, traction=traction)
     found.rise = max(float(-run.penetration.min()), 0.0)
     driven = [k for k, s in enumerate(run.supports) if s.driven]
     found.slide = max((float(run.slip_speed[:, k].max()) for k in driven), default=0.0)

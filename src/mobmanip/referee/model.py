@@ -1,12 +1,13 @@
 """MuJoCo's model of a loaded robot standing on the floor at rest (the referee's builder).
 
 :func:`build` reads the robot's own file with MuJoCo's parser (a URDF, or the URDF a xacro file
-expands to), keeps links and joints only (no meshes), fixes the joints mobmanip locks at its
-values, repairs the inertias MuJoCo refuses (each listed in :attr:`Referee.repairs`), puts a free
-joint at the root link at mobmanip's planar pose and spheres at the floor contacts, and holds the
-object to the hands. The model is edited through ``mujoco.MjSpec``, never through MJCF text
-(``to_xml`` prints 6 digits); every inertial frame is the file's (``ipos``/``iquat``), and the
-object's is set explicitly (left unset, MuJoCo would put its centre of mass at its ``pos``).
+expands to: links and joints only, no meshes; or an MJCF file, :func:`mjcf_spec`), fixes the
+joints mobmanip locks at its values, repairs the inertias MuJoCo refuses (each listed in
+:attr:`Referee.repairs`), puts a free joint at the root link at mobmanip's planar pose and
+spheres at the floor contacts, and holds the object to the hands. The model is edited through
+``mujoco.MjSpec``, never through MJCF text (``to_xml`` prints 6 digits); every inertial frame
+is the file's (``ipos``/``iquat``), and the object's is set explicitly (left unset, MuJoCo would
+put its centre of mass at its ``pos``).
 
 Contacts. A contact named after a wheel joint of the platform is a sphere of the wheel's radius
 on the wheel's body, centred on its axle: it rolls, and the floor's tangential force at it (within
@@ -17,12 +18,18 @@ frictionless 2 cm sphere on the root body touching the floor at its point: a nor
 Efforts. Reduced efforts ``tau`` act on the joints through mobmanip's actuation matrix B
 (``Q = B tau``, joint by joint, matched by name): a wheel's torque in mobmanip's sense (positive
 drives forward whatever the file's axis), a skid-steer side's torque shared by its wheels, which
-are geared together (one MuJoCo joint equality per wheel, in the ratio of their rates in S). An
-effort on the platform's planar coordinates themselves (an omnidirectional base, whose reduced
-velocities are the base's own x, y and yaw) has no joint to act on in MuJoCo: MuJoCo's sphere
-contacts have round friction, so neither a mecanum or omni wheel's free rollers nor a planar
-base's drive can be represented without modelling every roller; :func:`build` refuses it with
-:class:`~mobmanip.errors.NotRepresentable`.
+are geared together (one MuJoCo joint equality per wheel, in the ratio of their rates in S).
+
+Omnidirectional bases. Their efforts act on the base's own x, y and yaw, and are the floor's
+traction: each wheel of the spec's ``[support] wheels`` pushes the base with the force its motor
+gives it. MuJoCo's sphere contacts have round friction, so a wheel is a hub: a small body under
+the root at the wheel's contact, on two slide joints along the floor, carrying a sphere with the
+wheel's friction. Along the rollers' free direction its joint is free (the contact pushes nothing
+that way: the rollers turn); along the other its joint carries the wheel's traction (the motor's
+torque over the radius) from the hub to the base, so the floor holds the hub by friction while the
+base feels the traction. A wheel without rollers carries both components. The traction of each
+wheel is not in ``tau`` (three efforts, more wheels): the replay takes it from the floor's
+solution (:meth:`Referee.forward`'s ``traction``).
 """
 
 from __future__ import annotations
@@ -45,8 +52,10 @@ GRAVITY = 9.81  # m/s^2, along -z
 GRASPS = ("weld", "point", "level")
 #: Mass (kg) and radius of gyration (m) of each grip of a ``"level"`` grasp.
 GRIP_MASS, GRIP_RADIUS = 1e-3, 0.01
-#: Radius of a passive support's contact sphere (m).
+#: Radius of a passive support's contact sphere (m), and of an omnidirectional wheel's hub.
 SUPPORT_RADIUS = 0.02
+#: Mass (kg) and radius of gyration (m) of an omnidirectional wheel's hub.
+HUB_MASS, HUB_RADIUS = 0.01, 0.01
 
 
 @dataclass(frozen=True)
@@ -169,22 +178,33 @@ def _repair_inertia(link: ET.Element) -> tuple[np.ndarray, np.ndarray] | None:
 
 def check_representable(robot) -> None:
     """Refuse, before any work, a robot whose MuJoCo model :func:`build` cannot make (see the
-    module's docstring): efforts on the platform's planar coordinates, a file that is not URDF
-    or xacro.
+    module's docstring): a file that is not URDF, xacro or MJCF.
 
     Raises:
         mobmanip.errors.NotRepresentable: naming what and why, in one line.
     """
     _actuation(robot)
-    _check_format(robot)
+    _file_kind(robot)
+
+
+def _file_kind(robot) -> str:
+    """``"urdf"`` (a URDF or a xacro file) or ``"mjcf"`` (MuJoCo's own, read by its parser)."""
+    path = robot.spec.urdf
+    name = str(path).lower()
+    if name.endswith((".urdf", ".xacro")):
+        return "urdf"
+    if name.endswith((".xml", ".mjcf")):
+        with open(path, "rb") as handle:
+            head = handle.read(4096)
+        return "urdf" if re.search(rb"<robot[\s>]", head) and not re.search(rb"<mujoco[\s>]", head) else "mjcf"
+    raise NotRepresentable(
+        f"the referee builds MuJoCo's model from a URDF, xacro or MJCF file; {robot.name}'s is {path.name}"
+    )
 
 
 def _check_format(robot) -> None:
-    path = robot.spec.urdf
-    if not str(path).lower().endswith((".urdf", ".xacro")):
-        raise NotRepresentable(
-            f"the referee builds MuJoCo's model from a URDF or xacro file; {robot.name}'s is {path.name}"
-        )
+    if _file_kind(robot) != "urdf":
+        raise NotRepresentable(f"{robot.name}'s file is MJCF, not URDF: MuJoCo reads it itself (mjcf_spec)")
 
 
 #: xacro's ``$(optenv NAME DEFAULT...)``, the default captured.
@@ -230,6 +250,63 @@ def stripped_urdf(robot) -> tuple[str, dict[str, tuple[np.ndarray, np.ndarray]]]
     return ET.tostring(root, encoding="unicode"), repairs
 
 
+def mjcf_spec(robot) -> tuple[mujoco.MjSpec, dict[str, float]]:
+    """The robot's MJCF file as MuJoCo's own parser reads it, for the referee: its geoms kept for
+    the inertias MuJoCo derives from them but touching nothing; actuators, sensors, tendons,
+    equalities, keyframes and contact pairs and exclusions dropped (mobmanip models none of
+    them); the root body's joints removed (:func:`build` puts a free joint there); and the joints
+    mobmanip's model does not have, returned with the values they are locked at (the spec's
+    ``[reference]``, else 0), which :func:`build` holds with joint equalities.
+
+    Raises:
+        ValueError: MuJoCo cannot parse the file.
+    """
+    spec = mujoco.MjSpec.from_file(str(robot.spec.urdf))
+    for geom in spec.geoms:
+        geom.contype = geom.conaffinity = 0
+    for group in (spec.actuators, spec.sensors, spec.tendons, spec.equalities, spec.keys, spec.pairs, spec.excludes):
+        for element in list(group):
+            spec.delete(element)
+    root = spec.worldbody.first_body()
+    for joint in list(root.joints):
+        spec.delete(joint)
+    keep = set(robot.model.names)
+    locks: dict[str, float] = {}
+    for joint in list(spec.joints):
+        if joint.name in keep or joint.type not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+            continue
+        value = float(robot.spec.reference.get(joint.name, 0.0))
+        if _fold(spec, joint, value - float(joint.ref)):
+            continue
+        if not joint.name:
+            joint.name = f"locked_{len(locks)}"
+        locks[joint.name] = value
+    return spec, locks
+
+
+def _fold(spec: mujoco.MjSpec, joint, turn: float) -> bool:
+    """Lock an MJCF joint by folding ``turn`` (rad or m, from its ``ref``) into its body's pose and
+    removing it: rigid, where an equality would be a stiff spring. False (nothing done) for a body
+    with other joints or an orientation not given as a quaternion."""
+    body = joint.parent
+    if len(body.joints) != 1 or (turn != 0.0 and body.alt.type != mujoco.mjtOrientation.mjORIENTATION_QUAT):
+        return False
+    if turn != 0.0:
+        quat = np.asarray(body.quat, dtype=float)
+        R = pin.Quaternion(quat[0], quat[1], quat[2], quat[3]).normalized().matrix()
+        axis = np.asarray(joint.axis, dtype=float) / np.linalg.norm(joint.axis)
+        anchor = np.asarray(joint.pos, dtype=float)
+        if joint.type == mujoco.mjtJoint.mjJNT_SLIDE:
+            body.pos = np.asarray(body.pos, dtype=float) + R @ axis * turn
+        else:  # a turn about the axis through the anchor
+            Rj = pin.exp3(axis * turn)
+            body.pos = np.asarray(body.pos, dtype=float) + R @ (anchor - Rj @ anchor)
+            turned = pin.Quaternion(R @ Rj)
+            body.quat = [turned.w, turned.x, turned.y, turned.z]
+    spec.delete(joint)
+    return True
+
+
 def urdf_casters(robot) -> dict[str, np.ndarray]:
     """Passive supports of the URDF: every link named ``caster*`` with a sphere collision, by link
     name without ``_link``: the sphere's lowest point in the root link frame (m), (3,)."""
@@ -247,17 +324,22 @@ def urdf_casters(robot) -> dict[str, np.ndarray]:
     return out
 
 
-def contacts_of_floor(info: Mapping) -> list[tuple[str, np.ndarray, bool]]:
+def contacts_of_floor(info: Mapping) -> list[tuple[str, np.ndarray, bool, tuple[float, float] | None]]:
     """The floor constraint's contacts (``set.model["floor"]``: its ``pose`` and its
-    ``contacts``' name, world point and driven flag) as ``(name, point in the root frame (3,) m,
-    driven)``, the form :func:`build` takes: whatever contacts the floor models for a platform
-    kind, the referee puts a sphere at each."""
+    ``contacts``' name, world point, driven flag and rollers' free direction) as ``(name, point
+    in the root frame (3,) m, driven, free direction in the root frame (2,) or None)``, the form
+    :func:`build` takes: whatever contacts the floor models for a platform kind, the referee puts
+    a sphere at each."""
     x, y, yaw = info["pose"]
     c, s = math.cos(yaw), math.sin(yaw)
     out = []
     for contact in info["contacts"]:
         dx, dy, z = np.asarray(contact["point"], dtype=float) - [x, y, 0.0]
-        out.append((str(contact["name"]), np.array([c * dx + s * dy, -s * dx + c * dy, z]), bool(contact["driven"])))
+        free = contact.get("free")
+        out.append((
+            str(contact["name"]), np.array([c * dx + s * dy, -s * dx + c * dy, z]), bool(contact["driven"]),
+            None if free is None else (float(free[0]), float(free[1])),
+        ))  # fmt: skip
     return out
 
 
@@ -266,7 +348,7 @@ def build(
     q: np.ndarray,
     *,
     support_points: Mapping[str, np.ndarray] | None = None,
-    contacts: Sequence[tuple[str, np.ndarray, bool]] | None = None,
+    contacts: Sequence[tuple] | None = None,
     object=None,
     grasp: str | None = None,
     mu: float | Mapping[str, float] = 0.5,
@@ -287,9 +369,11 @@ def build(
             ``robot.platform.wheels()`` then a driven contact): name -> point on the floor in the
             root link frame (m), (3,); e.g. :func:`urdf_casters`. Not with ``contacts``.
         contacts: every contact instead, as ``(name, point in the root link frame (3,) m,
-            driven)``; e.g. :func:`contacts_of_floor` of the floor constraint's report. A name
-            that is a wheel joint of the platform is a rolling wheel (its point must be below
-            its axle by its radius); any other a passive point.
+            driven)`` or ``(name, point, driven, rollers' free direction (2,) or None)``; e.g.
+            :func:`contacts_of_floor` of the floor constraint's report. A name that is a wheel
+            joint of the platform is a rolling wheel (its point must be below its axle by its
+            radius); any other driven contact an omnidirectional base's wheel (a hub: see the
+            module's docstring); any other a passive point.
         object: the held object (an ``Analysis.held_object``: mass kg, inertia (3, 3) kg m^2 in
             world axes, center (3,) m, offsets (k, 3) m from the centre to the hands), or ``None``.
             Its inertia must be positive definite (MuJoCo refuses a point mass; see
@@ -329,17 +413,25 @@ def build(
     Raises:
         ValueError: contacts not on one floor, a wheel contact not below its axle, a hand that is
             not a link of the file, an object whose grasp points are not at the hands.
-        mobmanip.errors.NotRepresentable: efforts that act on the platform's planar coordinates themselves, a
-            robot file MuJoCo's model is not built from (see the module's docstring).
+        mobmanip.errors.NotRepresentable: a robot file MuJoCo's model is not built from (see the module's
+            docstring).
     """
     actuation, gears = _actuation(robot)  # refuses what MuJoCo cannot drive, before any work
-    text, repairs = stripped_urdf(robot)
-    spec = mujoco.MjSpec.from_string(text)
+    mjcf = _file_kind(robot) == "mjcf"
+    if mjcf:  # MuJoCo's own format: its parser reads the file itself
+        spec, locks = mjcf_spec(robot)
+        repairs: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    else:
+        text, repairs = stripped_urdf(robot)
+        spec, locks = mujoco.MjSpec.from_string(text), {}
     base = spec.worldbody.first_body()
     base.add_freejoint(name="floating_base")
     for joint in spec.joints:
         if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
-            joint.damping, joint.stiffness, joint.frictionloss, joint.armature = np.zeros(3), np.zeros(3), 0.0, 0.0
+            # an MJCF joint's armature is in mobmanip's mass matrix too (Pinocchio's MJCF builder reads it)
+            armature = float(joint.armature) if mjcf and joint.name not in locks else 0.0
+            joint.damping, joint.stiffness, joint.frictionloss = np.zeros(3), np.zeros(3), 0.0
+            joint.armature = armature
             joint.limited = joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
     option = spec.option
     down = [0.0, 0.0, -GRAVITY] if gravity is None else [float(v) for v in gravity]
@@ -360,15 +452,15 @@ def build(
         contacts += [(name, point, False) for name, point in (support_points or {}).items()]
     elif support_points:
         raise ArgumentError("give the contacts or the passive support points, not both")
-    contacts = [(str(name), np.asarray(point, dtype=float), bool(driven)) for name, point, driven in contacts]
-    wheels = [name for name, _, _ in contacts if name in radius]
-    for name, point, _ in contacts:
+    contacts = [(str(c[0]), np.asarray(c[1], dtype=float), bool(c[2]), c[3] if len(c) > 3 else None) for c in contacts]
+    wheels = [name for name, _, _, _ in contacts if name in radius]
+    for name, point, _, _ in contacts:
         if name in radius and np.linalg.norm(point - axles[name] + [0.0, 0.0, radius[name]]) > 1e-6:
             raise ArgumentError(f"contact {name!r} at {point} m is not below its wheel's axle by its radius")
     if not contacts:
         raise ArgumentError(f"{robot.name} has no contacts with the floor")
     # the floor's height in the root frame: the wheels' contacts (else the first contact)
-    heights = [-point[2] for name, point, _ in contacts if name in wheels] or [-contacts[0][1][2]]
+    heights = [-point[2] for name, point, _, _ in contacts if name in wheels] or [-contacts[0][1][2]]
     if max(heights) - min(heights) > 1e-6:
         raise ArgumentError(f"wheels {wheels} do not stand on one floor (root heights {heights} m)")
     lift = heights[0]
@@ -379,16 +471,34 @@ def build(
 
     sphere, free = mujoco.mjtGeom.mjGEOM_SPHERE, {"contype": 0, "conaffinity": 0}
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.1], **free)
-    supports = []
-    for name, point, driven in sorted(contacts, key=lambda c: c[0] not in wheels):  # wheels first
+    supports, drives = [], []
+    for name, point, driven, rollers in sorted(contacts, key=lambda c: c[0] not in wheels):  # wheels first
         if name in wheels:  # the wheel link's frame is its joint's: the sphere at its origin
-            body = spec.joint(name).parent
-            body.add_geom(name=f"contact_{name}", type=sphere, size=[radius[name] + penetration, 0, 0], **free)
+            body, anchor = (
+                spec.joint(name).parent,
+                spec.joint(name).pos,
+            )  # (an MJCF joint may sit off its body's origin)
+            size = [radius[name] + penetration, 0, 0]
+            body.add_geom(name=f"contact_{name}", type=sphere, size=size, pos=anchor, **free)
             supports.append(Support(name, driven, body.name, point, friction(name, driven)))
             continue
         if abs(point[2] + lift) > 1e-6:
             raise ArgumentError(f"support {name!r} at z = {point[2]:.6g} m is not on the floor (z = {-lift:.6g} m)")
         centre = [point[0], point[1], -lift + SUPPORT_RADIUS - penetration]
+        if driven:  # an omnidirectional base's wheel: a hub on two slides (see the module's docstring)
+            hub = base.add_body(name=f"hub_{name}", pos=centre, mass=HUB_MASS, explicitinertial=True)
+            hub.ipos, hub.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+            hub.fullinertia = [HUB_MASS * HUB_RADIUS**2] * 3 + [0.0, 0.0, 0.0]
+            along = np.array([1.0, 0.0]) if rollers is None else np.asarray(rollers, dtype=float)
+            along = along / np.linalg.norm(along)
+            for k, axis in enumerate((along, np.array([-along[1], along[0]]))):
+                joint = f"hub_{name}_{k}"
+                hub.add_joint(name=joint, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[axis[0], axis[1], 0.0])
+                if k == 1 or rollers is None:  # the rollers' free direction carries nothing
+                    drives.append((name, joint, axis))
+            hub.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], **free)
+            supports.append(Support(name, driven, hub.name, point, friction(name, driven)))
+            continue
         base.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], pos=centre, **free)
         supports.append(Support(name, driven, base.name, point, friction(name, driven)))
     k = {s.name: float((stiffness or {}).get(s.name, 1.0)) for s in supports}
@@ -402,6 +512,9 @@ def build(
             d = 1.0 / (1.0 + ratio)
             pair["solimp"] = [d, d, *soft["solimp"][2:]]
         spec.add_pair(geomname1="floor", geomname2=f"contact_{s.name}", condim=condim, friction=friction_5, **pair)
+    for name, value in locks.items():  # the joints mobmanip locks, held at their values
+        lock = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=name, **soft)
+        lock.data[:5] = [value - float(spec.joint(name).ref), 0.0, 0.0, 0.0, 0.0]  # from its qpos0 (its ref)
     for follower, leader, ratio in gears:  # wheels one effort drives together turn together
         gear = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=follower, name2=leader, **soft)
         gear.data[:5] = [0.0, ratio, 0.0, 0.0, 0.0]  # follower - its qpos0 = ratio (leader - its qpos0)
@@ -410,6 +523,8 @@ def build(
         joint = robot.model.joints[j]
         value = math.atan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
         joints[robot.model.names[j]] = float(value)
+
+    joints.update(locks)
 
     def configuration(model) -> np.ndarray:
         qpos = model.qpos0.copy()
@@ -478,7 +593,9 @@ def build(
         root = model.body(base.name).id
         for s in supports:
             model.body_invweight0[model.body(s.body).id, 0] = model.body_invweight0[root, 0]
-    return Referee(robot, model, qpos0, tuple(supports), hands, object is not None, repairs, lift, actuation)
+    referee = Referee(robot, model, qpos0, tuple(supports), hands, object is not None, repairs, lift, actuation)
+    referee.drives = tuple((name, int(model.joint(joint).dofadr[0]), axis) for name, joint, axis in drives)
+    return referee
 
 
 def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str, float]]]:
@@ -486,10 +603,8 @@ def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str
     every joint B drives (``Q = B tau``: a joint's generalized force is its row times ``tau``),
     and the gears: ``(follower, leader, ratio)`` for each wheel one effort drives together with
     another (a skid-steer side), the follower's rate ``ratio`` times the leader's (from S).
-
-    Raises:
-        mobmanip.errors.NotRepresentable: an effort on the platform's planar coordinates themselves.
-    """
+    Efforts on the platform's planar coordinates themselves (an omnidirectional base's) are the
+    floor's traction: they act through the wheels' hubs (:meth:`Referee.forward`)."""
     model, B, S = robot.model, np.asarray(robot.B), np.asarray(robot.S)
     rows: list[tuple[str, np.ndarray]] = []
     driven_by: dict[int, list[tuple[str, int]]] = {}
@@ -498,14 +613,8 @@ def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str
         for v in range(joint.idx_v, joint.idx_v + joint.nv):
             if not np.any(B[v]):
                 continue
-            if j == 1:  # the planar root joint: no body of MuJoCo's model carries that effort
-                names = ", ".join(robot.platform.reduced_names)
-                raise NotRepresentable(
-                    f"MuJoCo cannot referee {robot.name}'s {robot.platform.kind} platform: its efforts ({names}) "
-                    "act on the base itself, not through wheel joints, and MuJoCo's sphere contacts have round "
-                    "friction, so mecanum or omni-wheel rollers (free along one direction) would each need a body "
-                    "of their own"
-                )
+            if j == 1:  # the planar root joint: the floor's traction, replayed at the wheels' hubs
+                continue
             rows.append((model.names[j], B[v].copy()))
             for k in np.flatnonzero(B[v]):
                 driven_by.setdefault(int(k), []).append((model.names[j], v))
@@ -534,6 +643,7 @@ class Referee:
         self.supports, self.hands, self.has_object, self.repairs, self.lift = supports, hands, has_object, repairs, lift
         self._body = model.body("object" if has_object else hands[0]).id
         self._base = int(model.joint("floating_base").bodyid[0])
+        self._root_qpos = int(model.joint("floating_base").qposadr[0])
         self._geoms = {model.geom(f"contact_{s.name}").id: k for k, s in enumerate(supports)}
         # (MuJoCo dof, row of B: the joint's generalized force per reduced effort) per driven joint
         pairs = _actuation(robot)[0] if actuation is None else actuation
@@ -541,19 +651,44 @@ class Referee:
         self._actuation = [(int(model.joint(name).dofadr[0]), row) for name, row in pairs]
         self.reset()
 
+    #: Per omnidirectional wheel's driven slide: (contact name, MuJoCo dof, axis in the root frame (2,)).
+    drives: tuple[tuple[str, int, np.ndarray], ...] = ()
+
     @property
     def weight(self) -> float:
         """Total weight of the robot and the object (N)."""
         return float(self.model.body_subtreemass[0]) * GRAVITY
 
-    def generalized_force(self, tau: np.ndarray) -> np.ndarray:
-        """MuJoCo joint forces (nv,) of reduced efforts ``tau`` (nx,) N m or N."""
+    def generalized_force(self, tau: np.ndarray, traction: Mapping[str, np.ndarray] | None = None) -> np.ndarray:
+        """MuJoCo joint forces (nv,) of reduced efforts ``tau`` (nx,) N m or N, and of an
+        omnidirectional base's wheels' ``traction`` (contact name -> the floor's force on the
+        wheel along the floor, world x, y (2,) N, at the built pose): each hub's driven slide
+        passes it to the base.
+
+        Raises:
+            ArgumentError: ``tau`` of the wrong shape; efforts on an omnidirectional base's own
+                coordinates without the traction that is theirs.
+        """
         tau = np.asarray(tau, dtype=float)
         if tau.shape != (self._nx,):
             raise ArgumentError(f"tau must have shape ({self._nx},), got {tau.shape}")
         out = np.zeros(self.model.nv)
         for dof, row in self._actuation:
             out[dof] += float(row @ tau)
+        if self.drives and traction is None and np.any(np.asarray(self.robot.B)[:3] @ tau):
+            raise ArgumentError(
+                f"{self.robot.name}'s base efforts are its wheels' traction: give each wheel's (traction=)"
+            )
+        yaw = math.atan2(self.qpos0[self._root_qpos + 6], self.qpos0[self._root_qpos + 3]) * 2.0
+        c, s = math.cos(yaw), math.sin(yaw)
+        if traction is None:
+            return out
+        if missing := sorted({name for name, _, _ in self.drives} - set(traction)):
+            raise ArgumentError(f"no traction given for wheel(s) {', '.join(missing)}")
+        for name, dof, axis in self.drives:
+            force = np.asarray(traction[name], dtype=float)[:2]
+            # the floor holds the hub against the slide's push: the push is minus the traction
+            out[dof] -= float(force @ [c * axis[0] - s * axis[1], s * axis[0] + c * axis[1]])
         return out
 
     def reset(self) -> None:
@@ -590,11 +725,14 @@ class Referee:
             forces[self.supports[self._geoms[geom]].name] += sign * contact.frame.reshape(3, 3).T @ wrench[:3]
         return {name: ContactForce(float(f[2]), f[:2]) for name, f in forces.items()}
 
-    def forward(self, tau: np.ndarray) -> tuple[np.ndarray, dict[str, ContactForce]]:
+    def forward(
+        self, tau: np.ndarray, traction: Mapping[str, np.ndarray] | None = None
+    ) -> tuple[np.ndarray, dict[str, ContactForce]]:
         """Apply reduced efforts ``tau`` (nx,) from rest at the built configuration (t = 0).
 
         Args:
             tau: in ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N).
+            traction: an omnidirectional base's wheels' traction (see :meth:`generalized_force`).
 
         Returns:
             ``(acceleration, contacts)``: the object's linear (at its centre) and angular
@@ -602,7 +740,7 @@ class Referee:
             (k, 6)); the floor's force on the robot at each support, by name.
         """
         self.reset()
-        self.data.qfrc_applied[:] = self.generalized_force(tau)
+        self.data.qfrc_applied[:] = self.generalized_force(tau, traction)
         mujoco.mj_forward(self.model, self.data)
         return (self.acceleration() if self.has_object else self.hand_accelerations()), self.contact_forces()
 
@@ -614,11 +752,14 @@ class Referee:
         slip_speed: float = 1e-3,
         at_limit: float = 0.999,
         max_penetration: float = 1e-3,
+        traction: Mapping[str, np.ndarray] | None = None,
     ) -> Rollout:
         """Hold reduced efforts ``tau`` (nx,) for ``duration`` (s) from rest (semi-implicit Euler).
 
         Args:
             tau: in ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N).
+            traction: an omnidirectional base's wheels' traction (see :meth:`generalized_force`),
+                held in each wheel's own axes as its motor holds it.
             duration: how long (s).
             slip_speed: contact-point speed along the floor above which a driven wheel slips (m/s).
             at_limit: friction use at or above which a driven wheel slides.
@@ -626,7 +767,7 @@ class Referee:
         """
         m, d = self.model, self.data
         self.reset()
-        d.qfrc_applied[:] = self.generalized_force(tau)
+        d.qfrc_applied[:] = self.generalized_force(tau, traction)
         geoms = [m.geom(f"contact_{s.name}").id for s in self.supports]
         rows: dict[str, list] = {k: [] for k in ("t", "f", "slip", "pen", "pos", "rpy", "acc")}
         jacp = np.zeros((3, m.nv))
