@@ -117,6 +117,7 @@ class FloorProblem:
             mode, and on the floor hold it from turning, see :func:`_floor_work`).
         wheel_joints: the joints whose contacts are wheels in the model (they roll, and on the
             floor do not slide).
+        level_rows: the rows of (f, n) held level (of 2, 3, 4: vertical, roll, pitch).
         parallel_wheels: the wheels all roll along the platform's x (a differential drive's or
             skid-steer's): with springs, their sideways forces are those of equal tyres under a
             rigid platform, k (s + theta x_c) (x_c along the heading).
@@ -144,6 +145,7 @@ class FloorProblem:
     floor_efforts: tuple[int, ...] = ()
     wheel_joints: tuple[str, ...] = ()
     parallel_wheels: bool = False
+    level_rows: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -378,6 +380,7 @@ def build_problem(
         floor_efforts=tuple(floor_efforts),
         wheel_joints=tuple(c.joint for c in contacts if c.joint != model.names[1]),
         parallel_wheels=robot.platform.kind in ("differential_drive", "skid_steer"),
+        level_rows=tuple(level),
     )
 
 
@@ -429,6 +432,20 @@ def _floor_work(P: FloorProblem, C: np.ndarray, slices: list[slice], equation, s
             fx, fy = contact.free
             row[0, sl.start : sl.start + 2] = (c * fx - s * fy, s * fx + c * fy)
             equation([("lambda", row)], np.zeros(1))
+
+
+def _band(P: FloorProblem) -> np.ndarray:
+    """The hands' level-band rows over xdot: vertical as they are, roll and pitch about the
+    platform's forward and left axes (the band is a square in those; in the world's axes it would
+    not turn with the robot)."""
+    rows = P.level_jacobian @ P.S
+    level = list(P.level_rows)
+    if 3 in level and 4 in level:
+        c, s = math.cos(P.heading), math.sin(P.heading)
+        for start in range(0, len(rows), len(level)):
+            roll, pitch = start + level.index(3), start + level.index(4)
+            rows[[roll, pitch]] = c * rows[roll] + s * rows[pitch], -s * rows[roll] + c * rows[pitch]
+    return rows
 
 
 def _spring_rows(
@@ -626,7 +643,7 @@ def _solve(
                 A_ub.append(np.zeros(n))
                 A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
     b_ub = [0.0] * len(A_ub)
-    for row in np.vstack([P.level_jacobian @ P.S, -P.level_jacobian @ P.S]):  # the level band
+    for row in np.vstack([_band(P), -_band(P)]):  # the level band
         A_ub.append(np.zeros(n))
         A_ub[-1][X] = row
         b_ub.append(P.level_tolerance)
@@ -705,7 +722,7 @@ def team_straight_line(
                     A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
     b_ub = [0.0] * len(A_ub)
     for P, (_, _, (X, *_)) in zip(problems, blocks):
-        for row in np.vstack([P.level_jacobian @ P.S, -P.level_jacobian @ P.S]):  # the level band
+        for row in np.vstack([_band(P), -_band(P)]):  # the level band
             A_ub.append(np.zeros(n))
             A_ub[-1][X] = row
             b_ub.append(P.level_tolerance)

@@ -315,11 +315,17 @@ def test_relaxed_floor_equals_the_ideal_set_and_the_floor_lies_inside(zoo, name,
     ideal = _reaches(robot, q, task, mass, None)
     relaxed = _reaches(robot, q, task, mass, Floor(lift=True))
     np.testing.assert_allclose(relaxed, ideal, rtol=REL, atol=REL)
+    # A skid-steer turns only by sliding its wheels, so on the floor its base does not start a turn:
+    # friction holds it, and the arms may push against it where the ideal (kinematic) model lets the
+    # base turn away (TIAGo Pro spatial: +2.2 % on one reading). Its floors lie inside the weakest
+    # one, contacts unable to pull and nothing else (held to the independent LP with the turn held
+    # in tests/test_floor_kinds.py); every other kind's lie inside the ideal set.
+    outer = _reaches(robot, q, task, mass, Floor(mu=None, load="any")) if robot.platform.scrubs else ideal
     below = 0.0
     for floor in (Floor(mu=None), Floor(mu=0.5), Floor(mu=0.5, load="any")):
         grounded = _reaches(robot, q, task, mass, floor)
-        assert np.all(grounded[:, 0] <= ideal[:, 0] + REL * (1.0 + ideal[:, 0])), (floor, grounded, ideal)
-        assert np.all(grounded[:, 1] <= ideal[:, 1] + REL * (1.0 + np.abs(ideal[:, 1]))), (floor, grounded, ideal)
+        assert np.all(grounded[:, 0] <= outer[:, 0] + REL * (1.0 + outer[:, 0])), (floor, grounded, outer)
+        assert np.all(grounded[:, 1] <= outer[:, 1] + REL * (1.0 + np.abs(outer[:, 1]))), (floor, grounded, outer)
         if floor.mu == 0.5 and floor.load == "auto":
             below = np.max((ideal - grounded) / np.maximum(np.abs(ideal), 1.0))
     # the floor of the turning test below binds (by 4 % to 88 % of a reading over the zoo): the
@@ -348,10 +354,12 @@ def _rotation(task: str, yaw: float) -> np.ndarray:
 @pytest.mark.parametrize(("name", "task"), CASES)
 def test_moving_and_turning_the_whole_robot_moves_and_turns_its_grounded_set(zoo, name, task):
     """At headings of 1 and 2.5 rad from its own and 3 m away, the set along the turned axes is
-    the set along the axes (a transposed platform rotation was off by 6.5 % at 1 rad)."""
+    the set along the axes (a transposed platform rotation was off by 6.5 % at 1 rad), with the
+    object held level too where the task leaves that out (the level band, a square on roll and
+    pitch in the world's axes, made it depend on the heading by 7e-6)."""
     robot, q = zoo[name]
     mass = ZOO[name][2]
-    floor = Floor(mu=0.5)
+    floor = Floor(mu=0.5, level=task != "spatial" and name in ("tiago_dual", "husky_iiwa", "stretch"))
     here = _grounded(robot, q, task, mass, floor).measures["dynamic_polytope"]
     for yaw in (1.0, 2.5):
         there = _grounded(robot, _turned(robot, q, 3.0, -2.0, yaw), task, mass, floor).measures["dynamic_polytope"]
@@ -393,11 +401,13 @@ def _perturbed(robot, seed: int, size: float):
 @pytest.mark.parametrize(("name", "task"), [c for c in CASES if c[1] != "planar_rigid"])
 def test_grounded_reaches_are_continuous_in_the_robot_files_numbers(zoo, name, task):
     """Perturbing every joint axis and origin by 1e-6 moves every reach by less than 1e-4 of it,
-    with the object held level too (a frozen joint moved them by up to half)."""
+    with the object held level too (a frozen joint moved them by up to half), and without a
+    traction limit (an axle's unbounded squeeze, turned into torque by a 1e-8 wheel tilt, moved
+    TIAGo Pro's by 3 %)."""
     robot, q = zoo[name]
     mass = ZOO[name][2]
     shaken = _perturbed(robot, seed=3, size=1e-6)
-    for floor in (Floor(mu=0.5), Floor(mu=0.5, level=True)):
+    for floor in (Floor(mu=0.5), Floor(mu=0.5, level=True), Floor(mu=None)):
         before = _reaches(robot, q, task, mass, floor)
         after = _reaches(shaken, q, task, mass, floor)
         np.testing.assert_allclose(after, before, rtol=1e-4, atol=1e-4 * np.abs(before).max())

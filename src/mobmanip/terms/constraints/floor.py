@@ -363,7 +363,9 @@ class Floor(Constraint):
         G = {CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)}
         h = np.array(h_rows, dtype=float)
         if nl:  # the hands keep the object level: their accelerations on the level rows in the band
-            kin = np.vstack(level_kin)
+            # the band on roll and pitch about the platform's own axes: a square in the world's
+            # would make the set depend on the heading (by 7e-6 of a reach)
+            kin = np.vstack([_platform_axes(block, level, pose[2]) for block in level_kin])
             G = {CONTACT_FORCES: np.vstack([G[CONTACT_FORCES], np.zeros((2 * len(kin), n_forces))]),
                  "xdot": np.vstack([np.zeros((len(h), nx)), kin, -kin])}  # fmt: skip
             h = np.r_[h, np.full(2 * len(kin), self.level_tolerance)]
@@ -565,6 +567,17 @@ def _wheel_equations(
             block[i, a : a + 2] = (math.cos(yaw) * fx - math.sin(yaw) * fy, math.sin(yaw) * fx + math.cos(yaw) * fy)
         out.append(({CONTACT_FORCES: block}, np.zeros(len(rolled))))
     return out, turning
+
+
+def _platform_axes(rows: np.ndarray, level: list[int], heading: float) -> np.ndarray:
+    """A hand's rows on the level rows ``level`` with its roll and pitch rows (3 and 4, about the
+    world's x and y) turned to the platform's forward and left axes at ``heading`` (rad)."""
+    out = rows.copy()
+    if 3 in level and 4 in level:
+        i, j = level.index(3), level.index(4)
+        c, s = math.cos(heading), math.sin(heading)
+        out[i], out[j] = c * rows[i] + s * rows[j], -s * rows[i] + c * rows[j]
+    return out
 
 
 def _null_space(A: np.ndarray) -> np.ndarray:
