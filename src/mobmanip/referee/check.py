@@ -38,6 +38,9 @@ from ..terms.grasp import HeldObject
 RISE = 1e-4
 #: A driven wheel whose contact point slid faster than this did not hold (m/s).
 SLIDE = 1e-3
+#: A driven wheel using this share of its friction or more is at its limit (MuJoCo's cone caps
+#: the use at 1; the rollout's own slip test uses the same).
+AT_LIMIT = 0.999
 #: MuJoCo's acceleration at t = 0 agrees when its largest error on the task's rows is within this
 #: share of the predicted acceleration's norm.
 ACCELERATION_TOLERANCE = 0.03
@@ -199,20 +202,25 @@ def replay_axis(referee, grounded, task: str, axis: str, direction, reach: float
 
 
 def first_failure(run) -> dict | None:
-    """The first support of a rollout to rise more than :data:`RISE` or driven wheel to slide
-    faster than :data:`SLIDE`: ``{"support", "event", "time" (s), "normal" (N, at t = 0 and
-    then), "traction_use" (at t = 0 and then; driven wheels)}``, or ``None``."""
-    events = []
+    """What gave way first in a rollout where a support rose more than :data:`RISE` or a driven
+    wheel slid faster than :data:`SLIDE`: the earliest of a support rising, a support losing its
+    load, a driven wheel reaching its friction limit (the cause of a slide, which follows) and a
+    wheel sliding: ``{"support", "event", "time" (s), "normal" (N, at t = 0 and then),
+    "traction_use" (at t = 0 and then; driven wheels)}``, or ``None`` when nothing rose or slid."""
+    order = ("rises", "unloads", "reaches its friction limit", "slides")
+    failed, events = False, []
     for k, support in enumerate(run.supports):
-        risen = np.flatnonzero(-run.penetration[:, k] > RISE)
-        if len(risen):
-            events.append((int(risen[0]), k, "rises"))
-        slid = np.flatnonzero(run.slip_speed[:, k] > SLIDE)
-        if support.driven and len(slid):
-            events.append((int(slid[0]), k, "slides"))
-    if not events:
+        found = {"rises": -run.penetration[:, k] > RISE, "unloads": run.normal[:, k] <= 0.0}
+        if support.driven:
+            found["reaches its friction limit"] = run.friction_use[:, k] >= AT_LIMIT
+            found["slides"] = run.slip_speed[:, k] > SLIDE
+        failed |= bool(found["rises"].any()) or bool(found.get("slides", np.zeros(1, bool)).any())
+        for event, steps in found.items():
+            if steps.any():
+                events.append((int(np.argmax(steps)), order.index(event), k, event))
+    if not failed:
         return None
-    step, k, event = min(events)
+    step, _, k, event = min(events)
     out = {
         "support": run.supports[k].name,
         "event": event,
