@@ -170,3 +170,30 @@ def test_the_policy_at_a_singular_posture_keeps_only_what_the_hands_can_follow()
     closed = min_norm_dynamic_polytope(T.J_u, T.W, T.P, T.Q, T.xi, T.M_o, T.g_o, T.effort_limits)
     scale = np.abs(closed.supports(DIRECTIONS)).max()
     np.testing.assert_allclose(lifted.supports(DIRECTIONS), closed.supports(DIRECTIONS), atol=1e-9 * scale)
+
+
+def test_the_constraint_types_are_at_the_top_level_and_an_ignored_constraint_is_a_warning(capfd):
+    """``mobmanip.Floor``, ``mobmanip.named_configuration`` and the constraint types are the ones
+    their modules define. An analysis asked for a floor returns ellipsoids that cannot honour it:
+    its warnings say so, per measure, and name the measures that do; an analysis of polytopes only
+    has no such warning. The command line marks it in the summary and does not repeat it."""
+    from hostile_util import run_cli
+    from mobmanip.postures.named import named_configuration
+    from mobmanip.terms.constraints import Constraint, ConstraintRows, EffortBox, VelocityBox
+    from mobmanip.terms.constraints.floor import Floor
+
+    assert (mobmanip.Floor, mobmanip.named_configuration) == (Floor, named_configuration)
+    assert (mobmanip.Constraint, mobmanip.ConstraintRows) == (Constraint, ConstraintRows)
+    assert (mobmanip.EffortBox, mobmanip.VelocityBox) == (EffortBox, VelocityBox)
+    robot = mobmanip.load_robot("tiago_dual")
+    q = mobmanip.named_configuration(robot, "hold")
+    both = mobmanip.analyze(robot, q, measures=("dynamic", "dynamic_polytope"), constraints=(mobmanip.Floor(mu=0.5),))
+    said = [w for w in both.warnings if "ignores" in w]
+    assert said == [
+        "the dynamic measure ignores the floor constraint(s) asked for: an ellipsoid cannot honour them; the "
+        "polytopes do (dynamic_polytope, kinematic_polytope)"
+    ]
+    polytopes = mobmanip.analyze(robot, q, measures=("dynamic_polytope",), constraints=(mobmanip.Floor(mu=0.5),))
+    assert not [w for w in polytopes.warnings if "ignores" in w]
+    code, out, err = run_cli(capfd, "analyze", "tiago_dual", "--posture", "hold", "--ground")
+    assert code == 0 and "[ignores floor" in out and "ignores the floor" not in err

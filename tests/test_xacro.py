@@ -228,3 +228,18 @@ def test_a_malformed_xacro_is_one_line(tmp_path, capfd):
     truncated.write_text(ROBOT[: len(ROBOT) // 2])
     code, _, err = run_cli(capfd, "init-spec", truncated, "--list-frames")
     assert_one_line_error(code, err, "truncated.urdf.xacro")
+
+
+def test_a_misspelt_argument_is_one_error_naming_it_and_the_files_arguments(xbot, capfd):
+    """A --xacro-arg that no file of the expansion declares or uses (here ``tool_nam``, meant for
+    ``tool_name``) would be dropped, and the robot built with the default it meant to change: it is
+    refused, naming the argument and the ones the files have (the macro package's included)."""
+    robot, workspace, _ = xbot
+    code, _, err = run_cli(
+        capfd, "analyze", "--urdf", robot, "--ee", "gripper", "--package-path", workspace, *ARGS, "--xacro-arg",
+        "tool_nam=gripper",
+    )  # fmt: skip
+    assert_one_line_error(code, err, "--xacro-arg tool_nam=gripper", "'tool_nam'", "tool_name", "upper_length")
+    # every argument the files declare or use is accepted (the ones above, and nothing else added)
+    code, _, err = run_cli(capfd, "analyze", "--urdf", robot, "--ee", "gripper", "--package-path", workspace, *ARGS)
+    assert code == 0, err

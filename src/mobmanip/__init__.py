@@ -53,6 +53,9 @@ _EXPORTS: dict[str, str] = {
     "TaskSetBatch": ".sets.taskset",
     **dict.fromkeys(("SweepGrid", "SweepResult", "SweepSpec", "run_sweep"), ".sweep.runner"),
     **dict.fromkeys(("ReducedDynamics", "reduced_dynamics", "unified_jacobian"), ".terms.dynamics"),
+    **dict.fromkeys(("Constraint", "ConstraintRows", "EffortBox", "VelocityBox"), ".terms.constraints"),
+    "Floor": ".terms.constraints.floor",
+    "named_configuration": ".postures.named",
 }
 
 if TYPE_CHECKING:
@@ -72,12 +75,15 @@ if TYPE_CHECKING:
         register_measure,
         unregister_measure,
     )
+    from .postures.named import named_configuration
     from .robot.model import Robot, load_robot
     from .robot.spec import RobotSpec, load_spec
     from .sets.ellipsoid import Ellipsoid
     from .sets.polytope import Polytope
     from .sets.taskset import TaskSet, TaskSetBatch
     from .sweep.runner import SweepGrid, SweepResult, SweepSpec, run_sweep
+    from .terms.constraints import Constraint, ConstraintRows, EffortBox, VelocityBox
+    from .terms.constraints.floor import Floor
     from .terms.dynamics import ReducedDynamics, reduced_dynamics, unified_jacobian
 
 
@@ -109,8 +115,12 @@ __all__ = [
     "Analysis",
     "BatchAnalysis",
     "BatchRequest",
+    "Constraint",
+    "ConstraintRows",
+    "EffortBox",
     "Ellipsoid",
     "EllipsoidBatch",
+    "Floor",
     "Measure",
     "MeasureTerms",
     "MobmanipError",
@@ -124,6 +134,7 @@ __all__ = [
     "SweepSpec",
     "TaskSet",
     "TaskSetBatch",
+    "VelocityBox",
     "analyze",
     "analyze_batch",
     "default_measures",
@@ -131,6 +142,7 @@ __all__ = [
     "load_robot",
     "load_spec",
     "measure_names",
+    "named_configuration",
     "reduced_dynamics",
     "register_measure",
     "run_sweep",

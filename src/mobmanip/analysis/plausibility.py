@@ -122,7 +122,25 @@ def rest_warnings(analysis) -> list[str]:
                 "load' where each joint can; the dynamic polytopes (--polytope) bound each effort on its own"
             )
     out.extend(floor_warnings(analysis))
+    out.extend(ignored_warnings(analysis))
     return out
+
+
+def ignored_warnings(analysis) -> list[str]:
+    """The constraints asked for that a computed measure cannot honour (an ellipsoid: a quadratic
+    form has no room for a floor's rows), by measure, and the measures that do."""
+    from ..measures import get_measure
+
+    ignored = {name: analysis.ignored_constraints(name) for name in analysis.measures}
+    ignored = {name: which for name, which in ignored.items() if which}
+    if not ignored:
+        return []
+    honour = sorted(n for n in ("kinematic_polytope", "dynamic_polytope") if get_measure(n).honours_constraints)
+    return [
+        f"the {name} measure ignores the {', '.join(which)} constraint(s) asked for: an ellipsoid cannot honour "
+        f"them; the polytopes do ({', '.join(honour)})"
+        for name, which in ignored.items()
+    ]
 
 
 def floor_warnings(analysis) -> list[str]:

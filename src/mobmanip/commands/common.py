@@ -183,13 +183,17 @@ def configuration_from_args(robot, args):
 
 def print_warnings(analysis, stream=None) -> None:
     """The analysis's warnings, one line each, on standard error (each once per command: a
-    repair already reported when the robot was loaded is not repeated)."""
+    repair already reported when the robot was loaded is not repeated). A measure that ignores a
+    constraint is marked in the summary itself ("[ignores floor: ...]"), not here again."""
     import sys
 
+    from ..analysis.plausibility import ignored_warnings
     from ..support.notices import notice
 
+    inline = set(ignored_warnings(analysis))
     for text in analysis.warnings:
-        notice(text, stream=stream or sys.stderr)
+        if text not in inline:
+            notice(text, stream=stream or sys.stderr)
 
 
 def format_matrix(matrix: np.ndarray, indent: str = "  ") -> str:

@@ -578,6 +578,7 @@ def expand_xacro(
         try:
             document = xacro.process_file(str(path.resolve()), mappings=mappings, verbosity=0)
             text = document.toxml()
+            files = [path.resolve(), *(Path(f) for f in xacro.all_includes)]
         except _Refused:
             raise XacroError(str(path), guard.refused or "refused") from None
         except Exception as exc:  # xacro raises its own and Python's exceptions alike
@@ -591,7 +592,33 @@ def expand_xacro(
             del xacro.open
             substitution_args._eval_find, substitution_args._eval_dict["find"] = saved
             xacro.all_includes.clear()
+    _check_arguments(path, mappings, files)
     return text, list(packages.found.values())
+
+
+_DECLARED = re.compile(r"<xacro:arg\b[^>]*\bname\s*=\s*[\"']([^\"']+)[\"']")
+_USED = re.compile(r"\$\(arg\s+([^)\s]+)\s*\)")
+
+
+def _check_arguments(path: Path, mappings: Mapping[str, str], files: list[Path]) -> None:
+    """Refuse a given argument that no file of the expansion declares (``<xacro:arg>``) or uses
+    (``$(arg NAME)``): a misspelt name would otherwise be dropped and the robot built with the
+    default it meant to change."""
+    if not mappings:
+        return
+    known: set[str] = set()
+    for file in files:
+        with contextlib.suppress(OSError, UnicodeDecodeError):
+            text = file.read_text()
+            known |= set(_DECLARED.findall(text)) | set(_USED.findall(text))
+    unknown = sorted(set(mappings) - known)
+    if unknown:
+        has = ", ".join(sorted(known)) or "none"
+        raise XacroError(
+            str(path),
+            f"--xacro-arg {unknown[0]}={mappings[unknown[0]]}: the file neither declares nor uses an argument "
+            f"{unknown[0]!r} (its arguments: {has})",
+        )
 
 
 def _failure(path: Path, exc: Exception, packages: _Packages, roots: list[Path], mappings, printed: str) -> XacroError:

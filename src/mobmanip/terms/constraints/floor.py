@@ -85,6 +85,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -94,6 +95,9 @@ from ...platforms import a_platform
 from ...robot.support import Support, check_faces, check_mu, polygon_margin, robot_support
 from ...robot.tasks import get_task
 from ..grasp import GRAVITY
+
+if TYPE_CHECKING:
+    from ...robot.model import Robot
 from .base import Constraint, ConstraintRows, Terms
 
 _G = float(-GRAVITY[2])  # m/s^2, the magnitude of gravity (along world -z)
@@ -198,7 +202,7 @@ class Floor(Constraint):
         s, u = math.radians(self.slope), math.radians(self.uphill)
         return _G * np.array([-math.sin(s) * math.cos(u), -math.sin(s) * math.sin(u), -math.cos(s)])
 
-    def resolve(self, robot) -> tuple[Support, float | None, int]:
+    def resolve(self, robot: Robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces this floor uses for ``robot``."""
         support = self.support if self.support is not None else _robot_support(robot)
         mu = support.mu if self.mu == "spec" else self.mu
