@@ -2,6 +2,7 @@
 
 from . import (
     analyze,
+    brake,
     carry,
     collision_matrix,
     init_spec,
@@ -32,4 +33,5 @@ COMMANDS = (
     team_carry,
     referee,
     payload,
+    brake,
 )

@@ -106,6 +106,7 @@ class Rollout:
             acceleration, world axes (m/s^2, rad/s^2).
         in_contact: per support: normal force > 0 at every step and penetration bounded.
         slipped: per driven wheel: slip speed or friction use over its threshold at some step.
+        feedback: the largest tracking feedback torque applied (N m or N; 0 without feedback).
     """
 
     supports: tuple[Support, ...]
@@ -120,6 +121,7 @@ class Rollout:
     acceleration: np.ndarray
     in_contact: dict[str, bool] = field(default_factory=dict)
     slipped: dict[str, bool] = field(default_factory=dict)
+    feedback: float = 0.0
 
     @property
     def lifted(self) -> list[str]:
@@ -691,6 +693,45 @@ class Referee:
             out[dof] -= float(force @ [c * axis[0] - s * axis[1], s * axis[0] + c * axis[1]])
         return out
 
+    def _held_joints(self) -> np.ndarray:
+        """The MuJoCo dofs of mobmanip's joints that are not the platform's (its arms, torso)."""
+        platform = {name for name, _ in self.robot.platform.wheels()} if self.robot.wheel_platform else set()
+        model = self.robot.model
+        names = [model.names[j] for j in range(2, model.njoints) if model.names[j] not in platform]
+        return np.array([int(self.model.joint(name).dofadr[0]) for name in names], dtype=int)
+
+    def _set_run(self, x: np.ndarray) -> None:
+        """Start from reduced velocity ``x`` (nx,) of a translating robot (see :meth:`rollout`)."""
+        robot, m, d = self.robot, self.model, self.data
+        if x.shape != (robot.nx,) or not np.all(np.isfinite(x)):
+            raise ArgumentError(f"the run's velocity must be {robot.nx} finite reduced velocities, got {x.shape}")
+        q = robot.neutral()
+        yaw = math.atan2(self.qpos0[self._root_qpos + 6], self.qpos0[self._root_qpos + 3]) * 2.0
+        q[2:4] = (math.cos(yaw), math.sin(yaw))
+        for j in range(2, robot.model.njoints):  # the built configuration's joints
+            joint = robot.model.joints[j]
+            value = float(self.qpos0[m.joint(robot.model.names[j]).qposadr[0]])
+            q[joint.idx_q : joint.idx_q + joint.nq] = (math.cos(value), math.sin(value)) if joint.nq == 2 else value
+        v = robot.null_space(q) @ x
+        c, s = math.cos(yaw), math.sin(yaw)
+        if abs(v[2]) > 1e-12 * max(1.0, float(np.abs(v).max())):
+            raise ArgumentError("a run from a velocity covers a translating robot: its base must not turn")
+        linear = np.array([c * v[0] - s * v[1], s * v[0] + c * v[1], 0.0])
+        d.qvel[m.joint("floating_base").dofadr[0] :][:3] = linear
+        for j in range(2, robot.model.njoints):
+            joint = robot.model.joints[j]
+            d.qvel[m.joint(robot.model.names[j]).dofadr[0]] = v[joint.idx_v]
+        if self.has_object:  # the object moves with the base
+            for name in ("object_free", "object_x"):
+                if name in [m.joint(i).name for i in range(m.njnt)]:
+                    start = m.joint(name).dofadr[0]
+                    d.qvel[start : start + (3 if name == "object_free" else 1)] = (
+                        linear if name == "object_free" else linear[0]
+                    )
+            if "object_y" in [m.joint(i).name for i in range(m.njnt)]:
+                d.qvel[m.joint("object_y").dofadr[0]] = linear[1]
+        mujoco.mj_forward(m, d)
+
     def reset(self) -> None:
         """Back to the built configuration, at rest, no applied force."""
         mujoco.mj_resetData(self.model, self.data)
@@ -753,6 +794,8 @@ class Referee:
         at_limit: float = 0.999,
         max_penetration: float = 1e-3,
         traction: Mapping[str, np.ndarray] | None = None,
+        velocity: np.ndarray | None = None,
+        feedback: tuple[float, float] | None = None,
     ) -> Rollout:
         """Hold reduced efforts ``tau`` (nx,) for ``duration`` (s) from rest (semi-implicit Euler).
 
@@ -760,6 +803,12 @@ class Referee:
             tau: in ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N).
             traction: an omnidirectional base's wheels' traction (see :meth:`generalized_force`),
                 held in each wheel's own axes as its motor holds it.
+            velocity: start from this reduced velocity (nx,) instead of rest: a run in which the
+                whole robot translates (no joint of the arms moving, the base not turning; the
+                object moves as the base does). Its wheels turn at the rates S gives.
+            feedback: ``(kp, kd)``: a joint-space tracking feedback on every joint but the
+                platform's, ``-kp (q - q_0) - kd qdot`` (N m/rad, N m s/rad), added to the efforts;
+                its largest torque is :attr:`Rollout.feedback`.
             duration: how long (s).
             slip_speed: contact-point speed along the floor above which a driven wheel slips (m/s).
             at_limit: friction use at or above which a driven wheel slides.
@@ -767,11 +816,23 @@ class Referee:
         """
         m, d = self.model, self.data
         self.reset()
-        d.qfrc_applied[:] = self.generalized_force(tau, traction)
+        if velocity is not None:
+            self._set_run(np.asarray(velocity, dtype=float))
+        applied = self.generalized_force(tau, traction)
+        held = self._held_joints() if feedback is not None else np.zeros(0, dtype=int)
+        kp, kd = feedback if feedback is not None else (0.0, 0.0)
+        q_held = np.array([d.qpos[m.jnt_qposadr[m.dof_jntid[dof]]] for dof in held])
+        largest = 0.0
         geoms = [m.geom(f"contact_{s.name}").id for s in self.supports]
         rows: dict[str, list] = {k: [] for k in ("t", "f", "slip", "pen", "pos", "rpy", "acc")}
         jacp = np.zeros((3, m.nv))
         for _ in range(int(round(duration / m.opt.timestep)) + 1):
+            d.qfrc_applied[:] = applied
+            if len(held):
+                positions = np.array([d.qpos[m.jnt_qposadr[m.dof_jntid[dof]]] for dof in held])
+                push = -kp * (positions - q_held) - kd * d.qvel[held]
+                d.qfrc_applied[held] += push
+                largest = max(largest, float(np.abs(push).max()))
             mujoco.mj_forward(m, d)
             slip, pen = [], []
             for geom in geoms:
@@ -792,7 +853,7 @@ class Referee:
         with np.errstate(divide="ignore", invalid="ignore"):
             use = np.nan_to_num(np.where(mu > 0, np.linalg.norm(ft, axis=2) / (mu * fn), 0.0), nan=0.0)
         slip, pen, pos, rpy, acc = (np.array(rows[k]) for k in ("slip", "pen", "pos", "rpy", "acc"))
-        out = Rollout(self.supports, np.array(rows["t"]), fn, ft, use, slip, pen, pos, rpy, acc)
+        out = Rollout(self.supports, np.array(rows["t"]), fn, ft, use, slip, pen, pos, rpy, acc, feedback=largest)
         for k, s in enumerate(self.supports):
             out.in_contact[s.name] = bool(fn[:, k].min() > 0.0 and pen[:, k].max() <= max_penetration)
             if s.driven:

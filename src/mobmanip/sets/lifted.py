@@ -195,6 +195,29 @@ class LiftedPolytope(TaskSet):
         value, z = self._maximise(d)
         return self._witness(value, z, self._ub_duals(self._program(), len(self._b_eq)))
 
+    def restricted(self, name: str, rows: ArrayLike, values: ArrayLike | None = None) -> LiftedPolytope:
+        """This set with the equations ``rows @ z[name] = values`` added (default values 0): a new
+        set over the same task coordinates, e.g. with some reduced accelerations held at zero.
+
+        Raises:
+            TaskError: ``name`` is not one of the set's variables, or ``rows`` do not fit it.
+        """
+        if name not in self.variables:
+            raise TaskError(f"restricted: {name!r} is not one of the set's variables {sorted(self.variables)}")
+        where = np.arange(len(self._lower))[self.variables[name]]
+        block = np.atleast_2d(np.asarray(rows, dtype=float))
+        if block.shape[1] != len(where) or not np.all(np.isfinite(block)):
+            raise TaskError(f"restricted: rows on {name!r} need {len(where)} finite columns, got shape {block.shape}")
+        rhs = np.zeros(len(block)) if values is None else np.asarray(values, dtype=float).reshape(-1)
+        if rhs.shape != (len(block),):
+            raise TaskError(f"restricted: {len(block)} rows need {len(block)} values, got {rhs.shape[0]}")
+        A = np.zeros((len(block), len(self._lower)))
+        A[:, where] = block
+        return LiftedPolytope(
+            self._task, np.vstack([self._A_eq, A]), np.r_[self._b_eq, rhs], self._A_ub, self._b_ub,
+            self._lower, self._upper, self.variables, self.model, self.labels,
+        )  # fmt: skip
+
     def straight_line_reach(self, direction: ArrayLike) -> float:
         """The largest s >= 0 with s d/|d| in the set: how far along d from rest, exactly along d
         (0 when no point of that ray is in the set, or the set is empty)."""
