@@ -187,7 +187,12 @@ def free_flyer_model(robot) -> pin.Model:
     of xacro's ``$(optenv NAME DEFAULT)`` (Clearpath's Husky has one) are read as their default.
     """
     text = re.sub(r"\$\(optenv\s+\S+\s+([^)]*)\)", r"\1", Path(robot.spec.urdf).read_text())
-    full = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    return locked_to(robot, pin.buildModelFromXML(text, pin.JointModelFreeFlyer()))
+
+
+def locked_to(robot, full: pin.Model) -> pin.Model:
+    """``full`` (a free-flyer model of the robot's file) with the joints ``robot.model`` lacks
+    locked at the spec's ``[reference]`` values (zero if unlisted)."""
     q_ref = pin.neutral(full)
     for j in range(2, full.njoints):
         joint, value = full.joints[j], robot.spec.reference.get(full.names[j], 0.0)

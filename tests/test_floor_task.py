@@ -443,15 +443,7 @@ def _reference_model(robot, original=fr.free_flyer_model):
         return original(robot)
     full = pin.buildModelFromMJCF(str(robot.spec.urdf))
     assert full.joints[1].shortname() == "JointModelFreeFlyer"
-    q_ref = pin.neutral(full)
-    for j in range(2, full.njoints):
-        joint, value = full.joints[j], robot.spec.reference.get(full.names[j], 0.0)
-        if joint.nq == 2:  # continuous joint: (cos, sin)
-            q_ref[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
-        else:
-            q_ref[joint.idx_q] = value
-    locked = [j for j in range(2, full.njoints) if full.names[j] not in set(robot.model.names[2:])]
-    return pin.buildReducedModel(full, locked, q_ref) if locked else full
+    return fr.locked_to(robot, full)
 
 
 @pytest.mark.parametrize("name", list(ZOO))
