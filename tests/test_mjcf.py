@@ -300,3 +300,59 @@ def test_a_base_on_planar_joints_is_an_omnidirectional_platform(tmp_path, capfd)
     np.testing.assert_array_equal(robot.velocity_limits, [1.0, 0.8, 1.5, 2.0, 2.5])
     code, out, err = run_cli(capfd, "analyze", spec)
     assert code == 0, err
+
+
+FULL_INERTIA = """<mujoco model="full">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="base">
+      <freejoint/>
+      <inertial pos="0 0 0.1" mass="10" diaginertia="0.1 0.2 0.25"/>
+      <body name="upper" pos="0 0 0.3" quat="0.9238795 0 0.3826834 0">
+        <joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
+        <inertial pos="0.12 0.02 -0.01" mass="1.3" fullinertia="0.02 0.03 0.04 0.001 0.004 -0.006"/>
+        <body name="lower" pos="0.3 0 0">
+          <joint name="elbow" axis="0 0 1" range="-2 2"/>
+          <inertial pos="0.1 0 0" mass="0.7" fullinertia="0.003 0.004 0.005 0.0002 -0.0003 0.0004"/>
+          <site name="tool" pos="0.25 0 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <motor joint="shoulder" gear="40" ctrlrange="-1 1"/>
+    <motor joint="elbow" gear="3" ctrlrange="-2 2"/>
+    <velocity joint="shoulder" kv="10" ctrlrange="-6 6" gear="4"/>
+    <velocity joint="elbow" kv="10" ctrlrange="-3 3" gear="0.5"/>
+  </actuator>
+</mujoco>
+"""
+
+
+def test_full_inertias_and_geared_velocity_actuators_read_as_mujoco_reads_them(tmp_path):
+    """A body's ``fullinertia`` (off-diagonal xy, xz, yz all different) and a velocity actuator's ``gear``, read by mobmanip and by MuJoCo's own parser:
+    every link's mass, centre of mass and inertia tensor in its frame agree to 1e-9 (swapping xz
+    and yz is 0.01 kg m^2 off), on a body turned in its parent, and each joint's velocity limit is the actuator's largest command
+    over its gear, as MuJoCo's compiled gear and ctrlrange give it (multiplying by the gear is 16x
+    off on the shoulder)."""
+    mujoco = pytest.importorskip("mujoco")
+    path = tmp_path / "full.xml"
+    path.write_text(FULL_INERTIA)
+    description = read_description(path)
+    model = description.build_model(pin.JointModelPlanar())
+    theirs = mujoco.MjModel.from_xml_path(str(path))
+    for joint, body in (("shoulder", "upper"), ("elbow", "lower")):
+        b = theirs.body(body)
+        w, x, y, z = b.iquat
+        R = pin.Quaternion(w, x, y, z).normalized().matrix()
+        # the description's reading (checks, repairs, the viewer) and Pinocchio's model alike
+        for inertia in (_inertia_of(description.links[body]), model.inertias[model.getJointId(joint)]):
+            assert inertia.mass == pytest.approx(float(b.mass[0]), rel=1e-12)
+            np.testing.assert_allclose(inertia.lever, b.ipos, atol=1e-12)
+            np.testing.assert_allclose(inertia.inertia, R @ np.diag(b.inertia) @ R.T, atol=1e-9)
+    for joint in ("shoulder", "elbow"):
+        velocity = [a for a in range(theirs.nu) if theirs.actuator(a).trntype == 0
+                    and theirs.actuator(a).trnid[0] == theirs.joint(joint).id and theirs.actuator(a).biastype == 1]  # fmt: skip
+        (a,) = velocity  # the velocity actuator (its bias is affine in the joint's velocity)
+        expected = np.abs(theirs.actuator_ctrlrange[a]).max() / abs(theirs.actuator_gear[a, 0])
+        assert description.limits(joint)[0] == pytest.approx(expected, rel=1e-12)

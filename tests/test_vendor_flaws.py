@@ -300,3 +300,46 @@ def test_kinematic_results_do_not_depend_on_the_repair(tmp_path):
     )
     np.testing.assert_array_equal(a.semi_axes, b.semi_axes)
     np.testing.assert_array_equal(a.axes, b.axes)
+
+
+TURNED_FLAW = """<?xml version="1.0"?>
+<robot name="turned">
+  <link name="base"><inertial><mass value="5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="arm">
+    <inertial>
+      <origin xyz="0.1 -0.03 0.02" rpy="0.4 -0.7 1.1"/>
+      <mass value="1.2"/>
+      <inertia ixx="0.03" ixy="0.002" ixz="-0.001" iyy="0.004" iyz="0.0015" izz="0.002"/>
+    </inertial>
+  </link>
+  <link name="tool"/>
+  <joint name="shoulder" type="revolute">
+    <parent link="base"/><child link="arm"/><origin xyz="0 0 0.3" rpy="0 0.2 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" velocity="2" effort="50"/>
+  </joint>
+  <joint name="tool_joint" type="fixed"><parent link="arm"/><child link="tool"/><origin xyz="0.4 0 0"/></joint>
+</robot>
+"""
+
+
+def test_a_repaired_inertia_in_a_turned_inertial_frame_is_mujocos(tmp_path):
+    """A link whose ``<inertial>`` frame is turned (rpy 0.4, -0.7, 1.1) and whose tensor breaks the
+    triangle inequality (0.03 against 0.004 + 0.002 and the off-diagonals): mobmanip's repaired
+    body equals MuJoCo's own compile of the same file with ``balanceinertia`` (its principal
+    moments, frame and centre of mass) to 1e-12; turned the wrong way, the repair is 1e-3 off."""
+    mujoco = pytest.importorskip("mujoco")
+    path = tmp_path / "turned.urdf"
+    path.write_text(TURNED_FLAW)
+    robot = mobmanip.load_robot(spec_from_urdf(path, ["tool"], platform="fixed"))
+    inertia = robot.model.inertias[robot.model.getJointId("shoulder")]
+    text = TURNED_FLAW.replace(
+        "</robot>",
+        '<mujoco><compiler balanceinertia="true" fusestatic="false" discardvisual="false"/></mujoco></robot>',
+    )
+    theirs = mujoco.MjModel.from_xml_string(text)
+    body = theirs.body("arm")
+    w, x, y, z = body.iquat
+    R = pin.Quaternion(w, x, y, z).normalized().matrix()
+    assert inertia.mass == pytest.approx(float(body.mass[0]), rel=1e-12)
+    np.testing.assert_allclose(inertia.lever, body.ipos, atol=1e-12)
+    np.testing.assert_allclose(inertia.inertia, R @ np.diag(body.inertia) @ R.T, atol=1e-12)
