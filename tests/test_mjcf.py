@@ -330,11 +330,12 @@ FULL_INERTIA = """<mujoco model="full">
 
 
 def test_full_inertias_and_geared_velocity_actuators_read_as_mujoco_reads_them(tmp_path):
-    """A body's ``fullinertia`` (off-diagonal xy, xz, yz all different) and a velocity actuator's ``gear``, read by mobmanip and by MuJoCo's own parser:
-    every link's mass, centre of mass and inertia tensor in its frame agree to 1e-9 (swapping xz
-    and yz is 0.01 kg m^2 off), on a body turned in its parent, and each joint's velocity limit is the actuator's largest command
-    over its gear, as MuJoCo's compiled gear and ctrlrange give it (multiplying by the gear is 16x
-    off on the shoulder)."""
+    """A body's ``fullinertia`` (off-diagonal xy, xz, yz all different) and a velocity actuator's
+    ``gear``, read by mobmanip and by MuJoCo's own parser: every link's mass, centre of mass and
+    inertia tensor in its frame agree to 1e-9 (swapping xz and yz is 0.01 kg m^2 off), on a body
+    turned in its parent, and each joint's velocity limit is the actuator's largest command over
+    its gear, as MuJoCo's compiled gear and ctrlrange give it (multiplying by the gear is 16x off
+    on the shoulder)."""
     mujoco = pytest.importorskip("mujoco")
     path = tmp_path / "full.xml"
     path.write_text(FULL_INERTIA)
@@ -351,8 +352,7 @@ def test_full_inertias_and_geared_velocity_actuators_read_as_mujoco_reads_them(t
             np.testing.assert_allclose(inertia.lever, b.ipos, atol=1e-12)
             np.testing.assert_allclose(inertia.inertia, R @ np.diag(b.inertia) @ R.T, atol=1e-9)
     for joint in ("shoulder", "elbow"):
-        velocity = [a for a in range(theirs.nu) if theirs.actuator(a).trntype == 0
-                    and theirs.actuator(a).trnid[0] == theirs.joint(joint).id and theirs.actuator(a).biastype == 1]  # fmt: skip
-        (a,) = velocity  # the velocity actuator (its bias is affine in the joint's velocity)
+        on_joint = [a for a in range(theirs.nu) if theirs.actuator_trnid[a, 0] == theirs.joint(joint).id]
+        (a,) = [a for a in on_joint if theirs.actuator_biastype[a] == 1]  # the velocity actuator (affine bias)
         expected = np.abs(theirs.actuator_ctrlrange[a]).max() / abs(theirs.actuator_gear[a, 0])
         assert description.limits(joint)[0] == pytest.approx(expected, rel=1e-12)

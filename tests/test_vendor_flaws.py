@@ -304,7 +304,9 @@ def test_kinematic_results_do_not_depend_on_the_repair(tmp_path):
 
 TURNED_FLAW = """<?xml version="1.0"?>
 <robot name="turned">
-  <link name="base"><inertial><mass value="5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="base">
+    <inertial><mass value="5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+  </link>
   <link name="arm">
     <inertial>
       <origin xyz="0.1 -0.03 0.02" rpy="0.4 -0.7 1.1"/>
