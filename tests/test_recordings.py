@@ -262,3 +262,26 @@ def test_a_bag_and_a_csv_together_or_neither_is_a_usage_error(tmp_path, capfd):
     assert_one_line_error(code, err, "TRAJ.csv", "--bag")
     code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", tmp_path / "none.mcap")
     assert_one_line_error(code, err, "none.mcap", "not found")
+
+
+def test_a_heading_that_crosses_pi_is_interpolated_across_it(robot, tmp_path):
+    """The platform turns at a constant rate through +-pi (odometry's quaternions give yaw in
+    (-pi, pi], so it jumps by 2 pi there), odometry at 20 Hz offset from the joint states at 40 Hz:
+    the heading at every joint-state stamp is the true one to 1e-9 (a yaw interpolated without
+    unwrapping it passes through 0: 3.14 rad off between the two messages astride the jump)."""
+    t = 0.1 + np.arange(81) * 0.025
+    rate, start = 0.8, math.pi - 0.6  # crosses pi at t = 0.75 s
+    values = motion(t)
+    values.update({"platform_x": 0.0 * t, "platform_y": 0.0 * t, "platform_yaw": start + rate * t})
+    values["wheel_right_joint"] = HALF_TRACK * rate * t / WHEEL_RADIUS
+    values["wheel_left_joint"] = -HALF_TRACK * rate * t / WHEEL_RADIUS
+    odom_t = np.arange(35) * 0.05 + 0.313
+    wrapped = np.angle(np.exp(1j * (start + rate * odom_t)))
+    odom_values = {"platform_x": 0.0 * odom_t, "platform_y": 0.0 * odom_t, "platform_yaw": wrapped}
+    assert np.abs(np.diff(wrapped)).max() > 6.0  # the messages jump by 2 pi
+    records, _ = motion_records("mcap", t, values, odom_t=odom_t, odom_values=odom_values)
+    trajectory = read_recording(robot, write_bag(tmp_path / "run", "mcap", records)).trajectory
+    stamps = trajectory.t - trajectory.t[0] + t[t >= odom_t[0]][0]
+    truth = start + rate * stamps
+    np.testing.assert_allclose(trajectory.q[:, 2], np.cos(truth), atol=1e-9)
+    np.testing.assert_allclose(trajectory.q[:, 3], np.sin(truth), atol=1e-9)
