@@ -172,3 +172,22 @@ def test_carry_step_and_prepare_out_of_range_name_the_option(capfd, step, prepar
                            "--step", step, "--prepare", prepare)  # fmt: skip
     line = assert_one_line_error(code, err)
     assert "--step" in line or "--prepare" in line, line
+
+
+def test_a_file_larger_than_its_reported_size_is_refused_not_cut_short():
+    """A regular file whose reported size is below the limit but whose content is above it (the
+    kernel's own files report 0 bytes; a file may also grow between the check and the read): the
+    bounded reader reads one byte past the limit and refuses the file, naming the limit, where
+    reading only up to the limit would cut it short without a word."""
+    import os
+    import stat as stat_module
+
+    from mobmanip.errors import ArgumentError
+    from mobmanip.support.reading import read_bounded
+
+    path = "/proc/self/status"
+    if not os.path.exists(path) or not stat_module.S_ISREG(os.stat(path).st_mode) or os.stat(path).st_size != 0:
+        pytest.skip("needs a regular file whose reported size is 0 (Linux procfs)")
+    with pytest.raises(ArgumentError, match="grew to more than the 16 bytes"):
+        read_bounded(path, limit=16, refuse=ArgumentError)
+    assert len(read_bounded(path, limit=1 << 20, refuse=ArgumentError)) > 16  # within the limit: read whole
