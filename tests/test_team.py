@@ -7,6 +7,7 @@ rigid-body blocks, the robots' equations of motion), never from mobmanip's team 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import highspy
 import numpy as np
@@ -505,3 +506,26 @@ def test_ray_radius_is_the_nearest_facet_and_the_ellipsoid_quadratic(side_by_sid
     for u in unit_directions(rng, 20, 3):
         r = ray_radius(ellipsoid, 2.0 * u)
         assert (r * u) @ ellipsoid.matrix @ (r * u) == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "inertia, words",
+    [
+        ("[1e308, 1.0, 1.0]", ["at most 1e+06 kg m^2", "1e+308"]),
+        ("[1.0, -2.0, 1.0]", ["positive semi-definite"]),
+        ("[1.0, 2.0]", ["3 principal moments or a 3 x 3 matrix"]),
+    ],
+)
+def test_a_team_objects_inertia_out_of_range_is_one_error_naming_it(tmp_path, capfd, inertia, words):
+    """The beam's inertia given in the team file instead of its size: 1e308 kg m^2 used to give "an
+    object acceleration needs no joint torque" (its inverse rounds to zero); it is refused with
+    the supported range, as are a negative moment and a wrong shape."""
+    from hostile_util import assert_one_line_error, run_cli
+
+    text = (Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml").read_text()
+    text = text.replace("size = [1.5, 0.08, 0.08]", f"inertia = {inertia}")
+    assert f"inertia = {inertia}" in text
+    path = tmp_path / "team.toml"
+    path.write_text(text)
+    code, _, err = run_cli(capfd, "team", path)
+    assert_one_line_error(code, err, *words)

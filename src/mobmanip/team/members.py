@@ -456,6 +456,12 @@ def _inertia(obj: Mapping, mass: float, R: np.ndarray, here: str) -> np.ndarray 
         array = np.diag(array)
     if array is None or array.shape != (3, 3) or not np.all(np.isfinite(array)):
         raise TeamError(f"{here}: inertia must be 3 principal moments or a 3 x 3 matrix (kg m^2), got {value!r}")
+    from ..support.ranges import LINK_INERTIA
+
+    if np.abs(array).max() > LINK_INERTIA:
+        raise TeamError(
+            f"{here}: inertia entries must be at most {LINK_INERTIA:g} kg m^2 (the supported range), got {value!r}"
+        )
     if not np.allclose(array, array.T, rtol=0, atol=1e-12 * max(1.0, float(np.abs(array).max()))):
         raise TeamError(f"{here}: inertia must be symmetric, got {value!r}")
     if np.linalg.eigvalsh(array)[0] < -1e-12 * max(1.0, float(np.abs(array).max())):
