@@ -99,3 +99,28 @@ def test_the_summary_names_the_tip_over_and_its_edge(capfd):
     assert "tip-over: about the edge caster_link to joint_right_wheel (joint_left_wheel lifting off)" in lines["+y"]
     assert "tip-over: about joint_left_wheel, the one contact still loaded" in lines["-z"]
     assert "wheel traction" not in lines["-y"]
+
+
+def test_each_grounded_reach_is_printed_beside_the_ideal_one(tmp_path, capfd):
+    """``analyze --ground`` gives, per axis, the ideal set's straight-line reach beside the grounded
+    one (JSON ``ideal_straight_line``) and the drop in percent; the ideal reach is the one of the
+    analysis without the floor, and never below the grounded one (a differential drive)."""
+    import json
+
+    from hostile_util import run_cli
+
+    out = tmp_path / "a.json"
+    code, printed, err = run_cli(capfd, "analyze", "tiago_dual", "--posture", "hold", "--ground", "--json", out)
+    assert code == 0, err
+    reaches = json.loads(out.read_text())["dynamic_polytope"]["reaches"]
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    ideal = mobmanip.analyze(robot, q, measures=("dynamic_polytope",)).measures["dynamic_polytope"]
+    labels = list(mobmanip.robot.tasks.get_task("spatial").labels)
+    for r in reaches:
+        e = np.zeros(6)
+        e[labels.index(r["axis"][1:])] = 1.0 if r["axis"][0] == "+" else -1.0
+        assert r["ideal_straight_line"] == pytest.approx(ideal.straight_line_reach(e), rel=1e-9)
+        assert r["straight_line"] <= r["ideal_straight_line"] * (1 + 1e-9)
+        drop = 100.0 * (r["straight_line"] - r["ideal_straight_line"]) / r["ideal_straight_line"]
+        assert f"(ideal straight line {r['ideal_straight_line']:.4g}: {drop:+.1f} %)" in printed

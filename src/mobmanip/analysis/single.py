@@ -215,8 +215,20 @@ class Analysis:
             out["ignored_constraints"] = list(self.ignored_constraints(name))
         reaches = axis_reaches(task_set, self.task)
         if reaches is not None:
+            ideal = self._ideal_reaches(name) if self.constraints and get_measure(name).honours_constraints else None
+            for entry, free in zip(reaches, ideal or ()):  # the same reading without the constraints
+                entry["ideal_straight_line"] = free["straight_line"]
             out["reaches"] = reaches
         return out
+
+    def _ideal_reaches(self, name: str) -> list[dict] | None:
+        """The per-axis readings of measure ``name`` without the constraints (the ideal set)."""
+        from .reaches import axis_reaches
+
+        free = analyze(
+            self.robot, self.q, self.task, held_object=self.held_object, decoupled=self.decoupled, measures=(name,)
+        )
+        return axis_reaches(free.measures[name], self.task)
 
     def block_indices(self) -> dict | None:
         """Unit-consistent indices per block (linear, angular) of each set, for a task that mixes

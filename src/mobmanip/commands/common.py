@@ -446,6 +446,9 @@ def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
     lines = [f"{head} ({unit}):"]
     for r in reaches:
         text = f"    {r['axis']:>4}: straight line {r['straight_line']:.4g}, support {r['support']:.4g}"
+        if r.get("ideal_straight_line"):  # beside the ideal set's, with what the constraints take
+            ideal = r["ideal_straight_line"]
+            text += f" (ideal straight line {ideal:.4g}: {100.0 * (r['straight_line'] - ideal) / ideal:+.1f} %)"
         if r.get("binding"):
             text += f"; stops it: {binding_summary(r['binding'])}"
         ground = r.get("floor")
