@@ -159,3 +159,29 @@ def test_tiago_stops_in_mujoco_as_predicted(sense, slope):
     driven = [k for k, s in enumerate(run.supports) if s.driven]
     assert -run.penetration.min() <= 1e-6 and run.slip_speed[:, driven].max() <= 1e-6
     assert run.friction_use[:, driven].max() < 1.0 and run.feedback < 0.01
+
+
+def test_a_steered_base_brakes_from_a_straight_run_only(tmp_path, capfd):
+    """The steered tricycle with its steering at 0.4 rad turns as it drives: a straight run does
+    not exist, and the command says so in one line; steering at 0, it brakes both ways, within its
+    grounded set (its drive wheel's traction stops a harder stop)."""
+    from hostile_util import assert_one_line_error, run_cli
+    from test_steered import write_tricycle
+
+    spec = write_tricycle(tmp_path)
+    robot = mobmanip.load_robot(spec)
+    q = mobmanip.named_configuration(robot, "home")
+    steer = robot.model.joints[robot.model.getJointId("steer_joint")].idx_q
+    q[steer] = 0.4
+    configuration = tmp_path / "q.json"
+    configuration.write_text(json.dumps(robot.configuration_dict(q)))
+    code, _, err = run_cli(capfd, "brake", spec, "--q", configuration, "--object-mass", "1")
+    assert_one_line_error(code, err, "cannot drive straight", "steering")
+    q[steer] = 0.0
+    grounded = mobmanip.analyze(
+        robot, q, "planar", object_mass=1.0, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5, level=True),)
+    ).measures["dynamic_polytope"]
+    for sense in (1, -1):
+        stop = hardest_stop(robot, q, sense, 1.0, 1.0, Floor(mu=0.5))
+        assert 0.0 < stop.deceleration <= grounded.straight_line_reach([-sense, 0.0]) * (1 + 1e-9)
+        assert any("drive_wheel slips" in b for b in stop.binding), stop.binding

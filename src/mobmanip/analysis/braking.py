@@ -122,13 +122,19 @@ def hardest_stop(
         raise ArgumentError(f"the sense of the run must be +1 (forward) or -1 (backward), got {sense!r}")
     if isinstance(speed, bool) or not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed >= 0.0):
         raise ArgumentError(f"the speed braked from must be a finite number of m/s >= 0, got {speed!r}")
+    S = robot.null_space(q)[:3, : robot.platform.n_reduced]
+    run = np.linalg.lstsq(S, [1.0, 0.0, 0.0], rcond=None)[0]
+    if np.linalg.norm(S @ run - [1.0, 0.0, 0.0]) > 1e-9:
+        raise ArgumentError(
+            f"{robot.name}'s {robot.platform.kind.replace('_', ' ')} base cannot drive straight in this configuration "
+            "(a steered base turns as it drives unless its steering is at 0): the stop is for a straight run"
+        )
     braking = braking_set(robot, q, object_mass, floor)
     heading = math.atan2(float(q[3]), float(q[2]))
     against = -sense * np.array([math.cos(heading), math.sin(heading)])  # the deceleration's direction
     deceleration = 0.0 if braking.empty else float(braking.straight_line_reach(against))
     if deceleration <= 0.0:
-        return Stop(sense, float(speed), 0.0, math.inf, math.inf, ("the robot cannot brake at all",),
-                    np.zeros(robot.nx), {}, None)  # fmt: skip
+        return Stop(sense, float(speed), 0.0, math.inf, math.inf, (), np.zeros(robot.nx), {}, None)
     witness = braking.straight_line_witness(against)
     info = braking.model["floor"]
     reaction = ground_reaction(info, witness.variables[CONTACT_FORCES])

@@ -59,7 +59,7 @@ def run(args) -> int:
     for stop in stops:
         sense = "forward " if stop.sense > 0 else "backward"
         if stop.deceleration <= 0.0:
-            print(f"  {sense}: it cannot brake at all ({'; '.join(stop.binding)})")
+            print(f"  {sense}: it cannot brake at all (no efforts within the limits decelerate it on this floor)")
         else:
             line = (f"  {sense}: {stop.deceleration:.4g} m/s^2, stops in {stop.distance:.4g} m and {stop.time:.4g} s; "
                     f"stops it: {binding_summary(list(stop.binding))}")  # fmt: skip
