@@ -124,3 +124,24 @@ def test_each_grounded_reach_is_printed_beside_the_ideal_one(tmp_path, capfd):
         assert r["straight_line"] <= r["ideal_straight_line"] * (1 + 1e-9)
         drop = 100.0 * (r["straight_line"] - r["ideal_straight_line"]) / r["ideal_straight_line"]
         assert f"(ideal straight line {r['ideal_straight_line']:.4g}: {drop:+.1f} %)" in printed
+
+
+def test_a_grounded_sets_halfspaces_list_each_facet_once():
+    """TIAGo++ on the floor, translational (a 3-D set with square and larger facets, which Qhull
+    lists once per triangle: 1,758 rows for 856 facets): every row of ``halfspaces`` is a facet of
+    the vertices' hull (every vertex inside it, at least three on it), and no two rows are the
+    same plane."""
+    robot = mobmanip.load_robot("tiago_dual")
+    q = named_configuration(robot, "hold")
+    P = mobmanip.analyze(
+        robot, q, "translational", object_mass=2.0, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
+    ).measures["dynamic_polytope"]
+    A, b = P.halfspaces
+    V = P.vertices
+    slack = b[:, None] - A @ V.T
+    scale = float(np.abs(V).max())
+    assert slack.min() >= -1e-9 * scale
+    assert (np.abs(slack) <= 1e-9 * scale).sum(axis=1).min() >= 3
+    gaps = np.abs(A[:, None, :] - A[None, :, :]).max(axis=2) + np.abs(b[:, None] - b[None, :]) / scale
+    np.fill_diagonal(gaps, np.inf)
+    assert gaps.min() > 1e-9
