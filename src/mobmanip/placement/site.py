@@ -342,7 +342,7 @@ def run_site(
     if site.mu is not None:
         _grounded_direction(site, task)
     n = len(site.positions)
-    names = tuple(f"q_{k}" for k in range(robot.model.nq))
+    names = robot.coordinate_names  # the configuration's columns, named (not q_0..)
     table = np.full((n, len(COLUMNS) + len(names)), np.nan)
     reasons = [""] * n
     bounds = [(s, min(s + positions_per_task, n)) for s in range(0, n, positions_per_task)]

@@ -354,6 +354,17 @@ class Robot:
             joints[self.model.names[j]] = value
         return {"platform": [float(q[0]), float(q[1]), math.atan2(q[3], q[2])], "joints": joints}
 
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        """A name for each entry of q, (nq,): ``platform_x``, ``platform_y``, ``platform_cos_yaw``,
+        ``platform_sin_yaw``, then each joint's name (``NAME_cos``, ``NAME_sin`` for a continuous
+        joint, which Pinocchio stores as a cosine and a sine)."""
+        names = ["platform_x", "platform_y", "platform_cos_yaw", "platform_sin_yaw"]
+        for j in range(2, self.model.njoints):
+            joint, name = self.model.joints[j], self.model.names[j]
+            names += [f"{name}_cos", f"{name}_sin"] if joint.nq == 2 else [name]
+        return tuple(names)
+
     def check_configuration(self, q: ArrayLike) -> np.ndarray:
         """Return q as a float array after checking its size and finiteness.
 
