@@ -695,12 +695,12 @@ def _facets(V: np.ndarray, tol: float) -> tuple[np.ndarray | None, np.ndarray | 
     scale = np.linalg.norm(normals, axis=1)
     normals, offsets = normals / scale[:, None], offsets / scale
     # Qhull lists a facet once per simplex of it (a square facet twice): one row per facet
-    keep: list[int] = []
+    facets: list[int] = []
     for i in range(len(normals)):
-        same = np.abs(normals[keep] - normals[i]).max(axis=1) <= 1e-9 if keep else np.zeros(0, dtype=bool)
-        if not np.any(same & (np.abs(offsets[keep] - offsets[i]) <= max(tol, 1e-12))):
-            keep.append(i)
-    return normals[keep], offsets[keep]
+        same = np.abs(normals[facets] - normals[i]).max(axis=1) <= 1e-9 if facets else np.zeros(0, dtype=bool)
+        if not np.any(same & (np.abs(offsets[facets] - offsets[i]) <= max(tol, 1e-12))):
+            facets.append(i)
+    return normals[facets], offsets[facets]
 
 
 def _ordered(V: np.ndarray) -> np.ndarray:
