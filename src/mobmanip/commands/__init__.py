@@ -10,6 +10,7 @@ from . import (
     payload,
     place,
     referee,
+    retime,
     site,
     sweep,
     team,
@@ -34,4 +35,5 @@ COMMANDS = (
     referee,
     payload,
     brake,
+    retime,
 )

@@ -7,7 +7,7 @@ import sys
 
 from ..robot.tasks import TASKS
 from ..support.reading import decimal
-from .common import add_progress_option, add_work_option, show_progress
+from .common import add_motion_floor_options, add_progress_option, add_work_option, motion_floor, show_progress
 
 CARRY_HELP = """\
 PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
@@ -75,16 +75,7 @@ def register(sub) -> None:
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
     add_progress_option(parser)
-    from .common import add_floor_options
-
-    add_floor_options(parser)
-    parser.add_argument(
-        "--zmp-margin",
-        type=decimal,
-        metavar="M",
-        help="with --ground: how far the zero-moment point stays inside the support polygon (m; implies --ground; "
-        "default 0.02)",
-    )
+    add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps ((path duration + --prepare) / --step; default {MAX_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -146,30 +137,6 @@ def objective_unit_text(result) -> str:
     return f" ({quantity.units} mixed)"
 
 
-def _floor(args):
-    """The floor --ground, --mu, --no-traction, --reserve and --zmp-margin ask for, or ``None``."""
-    import math
-
-    from ..errors import UsageError
-    from ..motion.carry_floor import DEFAULT_ZMP_MARGIN, CarryFloor
-    from .common import floor_constraints
-
-    margin = args.zmp_margin
-    if margin is not None and not (math.isfinite(margin) and margin >= 0.0):
-        raise UsageError(f"--zmp-margin must be a distance >= 0 m, got {margin!r}")
-    if args.load not in (None, "auto", "compliant"):
-        raise UsageError(f"carry's floor shares the load as equally stiff contacts (compliant); --load {args.load} "
-                         "is for the capacity sets")  # fmt: skip
-    chosen = floor_constraints(args)
-    if chosen and chosen[0].slope:
-        raise UsageError("carry keeps a level floor: a ramp (--slope) is modelled in the capacity sets, not in carry")
-    if not chosen and margin is None:
-        return None
-    mu = None if args.no_traction else ("spec" if args.mu is None else args.mu)
-    return CarryFloor(mu=mu, zmp_margin=DEFAULT_ZMP_MARGIN if margin is None else margin,
-                      reserve=float(args.reserve or 0.0))  # fmt: skip
-
-
 def run(args) -> int:
 
     from ..errors import CarryFailed
@@ -185,7 +152,7 @@ def run(args) -> int:
     path = read_path(args.path)
     _check_work(args, path)
     start = read_configuration(robot, args.start) if args.start else None
-    floor = _floor(args)
+    floor = motion_floor(args, "carry")
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
         for name in CARRY_FILES:

@@ -321,6 +321,54 @@ def floor_constraints(args) -> tuple:
     )
 
 
+def add_motion_floor_options(parser: argparse.ArgumentParser) -> None:
+    """The floor options of a motion (``carry``, ``retime``): :func:`add_floor_options` and
+    ``--zmp-margin``."""
+    add_floor_options(parser)
+    parser.add_argument(
+        "--zmp-margin",
+        type=decimal,
+        metavar="M",
+        help="with --ground: how far the zero-moment point stays inside the support polygon (m; implies --ground; "
+        "default 0.02)",
+    )
+
+
+def motion_floor(args, command: str):
+    """The floor of a motion (:class:`mobmanip.motion.carry_floor.CarryFloor`) that --ground, --mu,
+    --no-traction, --reserve and --zmp-margin ask for, or ``None``. The options a motion's floor
+    does not model (a ramp, the object held level, a load shared any way) are refused, naming
+    ``command``, never dropped.
+
+    Raises:
+        UsageError: a bad --zmp-margin or an option the motion's floor does not model.
+    """
+    from ..errors import UsageError
+    from ..motion.carry_floor import DEFAULT_ZMP_MARGIN, CarryFloor
+
+    margin = args.zmp_margin
+    if margin is not None and not (math.isfinite(margin) and margin >= 0.0):
+        raise UsageError(f"--zmp-margin must be a distance >= 0 m, got {margin!r}")
+    if args.load not in (None, "auto", "compliant"):
+        raise UsageError(f"{command}'s floor shares the load as equally stiff contacts (compliant); --load {args.load} "
+                         "is for the capacity sets")  # fmt: skip
+    chosen = floor_constraints(args)
+    if chosen and chosen[0].slope:
+        raise UsageError(
+            f"{command} keeps a level floor: a ramp (--slope) is modelled in the capacity sets, not in {command}"
+        )
+    if chosen and chosen[0].level:
+        raise UsageError(
+            f"{command} keeps the object as its task holds it: --level (the object held level on the floor) is "
+            f"modelled in the capacity sets, not in {command}"
+        )
+    if not chosen and margin is None:
+        return None
+    mu = None if args.no_traction else ("spec" if args.mu is None else args.mu)
+    return CarryFloor(mu=mu, zmp_margin=DEFAULT_ZMP_MARGIN if margin is None else margin,
+                      reserve=float(args.reserve or 0.0))  # fmt: skip
+
+
 def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:
     """What ``--polytope`` adds: the registered polytopes of the default measures' quantities (the
     capacity polytopes of motion) and of the quantities of the measures ``wanted``."""

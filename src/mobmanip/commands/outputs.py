@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
     from ..motion.ground import GroundAlong
+    from ..motion.retime import Retiming
     from ..motion.traction import TractionAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
@@ -286,6 +287,30 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
         save_figure(fig, paths[3], dpi=100, bbox_inches="tight")
     finally:
         _close(fig)
+    return [str(p) for p in paths]
+
+
+RETIME_FILES = ("retimed.csv", "retime.json", "retime.png", "profile.csv")
+
+
+def retime_outputs(robot: Robot, result: Retiming, out_dir: str | Path) -> list[str]:
+    """retimed.csv (the path at its fastest timing, readable by ``mobmanip trajectory``),
+    retime.json (:meth:`mobmanip.motion.retime.Retiming.to_dict`), retime.png
+    (:func:`mobmanip.viz.motion_figures.retime_figure`) and profile.csv (s, t, s', s'', the limit
+    curve and the controllable bound per grid point) in ``out_dir``; returns the paths."""
+    from ..viz.motion_figures import retime_figure
+
+    out = Path(out_dir)
+    paths = [out / name for name in RETIME_FILES]
+    write_trajectory_csv(robot, paths[0], result.t, result.trajectory.q)
+    write_json(paths[1], result.to_dict())
+    fig = retime_figure(result)
+    try:
+        save_figure(fig, paths[2], dpi=100, bbox_inches="tight")
+    finally:
+        _close(fig)
+    header, values = result.table()
+    write_table_csv(paths[3], header, values)
     return [str(p) for p in paths]
 
 

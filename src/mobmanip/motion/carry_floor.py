@@ -118,7 +118,7 @@ def floor_rows(
     """
     from .in_motion import motion_terms
 
-    support, mu, faces = floor.resolve(robot) if resolved is None else resolved
+    resolved = floor.resolve(robot) if resolved is None else resolved
     mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
     terms = motion_terms(robot, q, x_prev, task, object_mass=mass_o)
     to_object = np.linalg.pinv(terms.W.T)  # a_o = (W^T)^+ (J_u xdot + drift - grasp drift)
@@ -130,38 +130,62 @@ def floor_rows(
     # over x: wrench = w0 + w1 x (xdot = (x - x_prev) / h)
     w1 = linear / h
     w0 = offset - w1 @ x_prev
-    nx = robot.nx
+    R, r, labels, _ = wrench_rows(robot, q, mass_o, floor, resolved)
+    # over (x, s): the lateral split s is the compliant floor's own, half per tyre; no row moves it
+    G = np.hstack([R @ w1, np.zeros((len(R), 1))])
+    return G, r - R @ w0, labels
+
+
+def wrench_rows(
+    robot: Robot,
+    q: np.ndarray,
+    object_mass: float,
+    floor: CarryFloor,
+    resolved: tuple[Support, float | None, int],
+) -> tuple[np.ndarray, np.ndarray, list[str], list[str]]:
+    """The floor's rows over the floor's resultant wrench on the robot and its object
+    (:func:`mobmanip.motion.ground.floor_wrench`: force, then moment about the world origin;
+    world axes): ``R @ wrench <= r`` keeps the zero-moment point ``floor.zmp_margin`` inside the
+    support polygon, every support loaded (its compliant share at least the reserve's part of the
+    weight) and each driven wheel's traction within its friction pyramid scaled by 1 - reserve.
+
+    Returns:
+        (R (r, 6), r (r,), one label per row, one kind per row: ``"tip-over"``, ``"contact"`` or
+        ``"traction"``).
+    """
+    support, mu, faces = resolved
     z = support.floor_z
-    # affine maps over (x, s): value = c0 + c1 @ [x; s]
-    wrench0, wrench1 = w0, np.hstack([w1, np.zeros((6, 1))])
-    Fz0, Fz1 = wrench0[2], wrench1[2]
-    N0 = np.array([z * wrench0[0] - wrench0[4], wrench0[3] + z * wrench0[1]])
-    N1 = np.vstack([z * wrench1[0] - wrench1[4], wrench1[3] + z * wrench1[1]])
+    # the moment about the floor point under the origin, times F_z: N = (z F_x - M_y, M_x + z F_y)
+    N = np.zeros((2, 6))
+    N[0, 0], N[0, 4] = z, -1.0
+    N[1, 3], N[1, 1] = 1.0, z
+    Fz = np.zeros(6)
+    Fz[2] = 1.0
 
     pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
     points = support.world_points(pose)[:, :2]
-    G_rows, g_rows, labels = [], [], []
+    R_rows, r_rows, labels, kinds = [], [], [], []
     polygon = support.polygon(pose)
     edges = np.roll(polygon, -1, axis=0) - polygon
     normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]
     for n_e, p_e in zip(normals, polygon):
         # n_e . N <= (n_e . p_e - margin) F_z
         reach = float(n_e @ p_e) - floor.zmp_margin
-        G_rows.append(n_e @ N1 - reach * Fz1)
-        g_rows.append(reach * Fz0 - float(n_e @ N0))
+        R_rows.append(n_e @ N - reach * Fz)
+        r_rows.append(0.0)
         labels.append(f"the zero-moment point {floor.zmp_margin:g} m inside the support polygon")
+        kinds.append("tip-over")
 
     # compliant normal forces: [balance; sharing] fn = [F_z, N_x, N_y, 0...]
     n = len(points)
     system = np.vstack([np.ones(n), points.T, compliant_sharing(points, support.stiffness)])
-    L = np.linalg.inv(system)[:, :3]  # fn = L @ (F_z, N_x, N_y)
-    fn0 = L @ np.r_[Fz0, N0]
-    fn1 = L @ np.vstack([Fz1, N1])
-    least = floor.reserve * (float(robot_mass(robot)) + mass_o) * float(-GRAVITY[2]) / n
+    fn = np.linalg.inv(system)[:, :3] @ np.vstack([Fz, N])  # fn = fn @ wrench
+    least = floor.reserve * (float(robot_mass(robot)) + object_mass) * float(-GRAVITY[2]) / n
     for c, contact in enumerate(support.contacts):
-        G_rows.append(-fn1[c])
-        g_rows.append(fn0[c] - least)
+        R_rows.append(-fn[c])
+        r_rows.append(-least)
         labels.append(f"support {contact.name} loaded")
+        kinds.append("contact")
 
     if mu is not None:
         driven = [c for c, contact in enumerate(support.contacts) if contact.driven]
@@ -174,20 +198,18 @@ def floor_rows(
         free = vt[int(np.sum(sigma > 1e-12 * sigma[0])) :]
         if len(free) != 1:
             raise SpecError(f"the floor in carry covers two driven wheels on one axle; this support has {d}")
-        P = np.linalg.pinv(B)
-        H0 = np.array([wrench0[0], wrench0[1], wrench0[5]])
-        H1 = np.vstack([wrench1[0], wrench1[1], wrench1[5]])
-        t0 = P @ H0
-        t1 = P @ H1
-        t1[:, nx] = 0.0  # the lateral split s: the compliant floor's is fixed, half per tyre
+        H = np.zeros((3, 6))
+        H[0, 0], H[1, 1], H[2, 5] = 1.0, 1.0, 1.0
+        traction = np.linalg.pinv(B) @ H  # equal tyres: the minimum-norm split, half per tyre
         tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
         for i, c in enumerate(driven):
             for u in pyramid_faces(faces, pose[2]):
                 # u . t_i - tilt fn_c <= 0
-                G_rows.append(u @ t1[2 * i : 2 * i + 2] - tilt * fn1[c])
-                g_rows.append(tilt * fn0[c] - float(u @ t0[2 * i : 2 * i + 2]))
+                R_rows.append(u @ traction[2 * i : 2 * i + 2] - tilt * fn[c])
+                r_rows.append(0.0)
                 labels.append(f"traction of {support.contacts[c].name} within friction (mu = {mu:g})")
-    return np.array(G_rows), np.array(g_rows, dtype=float), labels
+                kinds.append("traction")
+    return np.array(R_rows), np.array(r_rows, dtype=float), labels, kinds
 
 
 def robot_mass(robot: Robot) -> float:

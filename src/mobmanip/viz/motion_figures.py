@@ -1,6 +1,7 @@
 """Figures of motions over time: a trajectory's demands against its capacity
 (``mobmanip trajectory --out``), the capacity profiles of a carried path (``mobmanip carry
---out``, ``mobmanip team-carry --out``) and the top view of a team's carried path.
+--out``, ``mobmanip team-carry --out``), the top view of a team's carried path and the fastest
+timing of a path with its limit curve (``mobmanip retime --out``).
 
 Each function returns a matplotlib ``Figure``; the caller saves it
 (:func:`mobmanip.support.files.save_figure`) and closes it.
@@ -17,6 +18,7 @@ if TYPE_CHECKING:
 
     from ..coordination.carry import TeamCarryResult
     from ..motion.carry import CarryResult
+    from ..motion.retime import Retiming
     from ..motion.trajectory_analysis import TrajectoryAnalysis
 
 
@@ -129,4 +131,49 @@ def team_carry_figure(result: TeamCarryResult, poses: int = 7) -> Figure:
     ax.grid(True, lw=0.3)
     fig.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
     ax.set_title(f"team {result.team.name}: platforms and object, top view", fontsize=10)
+    return fig
+
+
+#: Colours of the binding rows' kinds in the retiming figure.
+KIND_COLOURS = {
+    "velocity": "tab:blue",
+    "effort": "tab:orange",
+    "tip-over": "tab:red",
+    "contact": "tab:purple",
+    "traction": "tab:green",
+}
+
+
+def retime_figure(result: Retiming) -> Figure:
+    """Two panels over the path parameter s (the input's time): the fastest speed s' with the
+    largest each grid point allows (the limit curve) and the largest from which the end is still
+    reached at rest, the binding row's kind marked under it; and the new time against s."""
+    plt = _pyplot()
+    s = result.s
+    fig, axes = plt.subplots(2, 1, figsize=(9.5, 6.5), sharex=True, layout="constrained", height_ratios=(2, 1))
+    ax = axes[0]
+    top = float(np.max(result.controllable)) * 1.15 or 1.0
+    ax.plot(s, np.minimum(result.limit, 10.0 * top), color="0.6", lw=1.0, label="limit curve (each point alone)")
+    ax.plot(s, result.controllable, "--", color="0.3", lw=1.0, label="largest s' that still stops at the end")
+    ax.plot(s, result.speed, color="k", lw=1.6, label="fastest timing")
+    ax.axhline(1.0, color="0.5", lw=0.8, ls=":", label="the input's timing (s' = 1)")
+    kinds = np.asarray(result.binding_kind)
+    for kind, colour in KIND_COLOURS.items():
+        where = kinds == kind
+        if where.any():
+            marks = np.full(int(where.sum()), -0.04 * top)
+            ax.scatter(s[where], marks, marker="|", color=colour, s=40, label=f"binds: {kind}")
+    ax.set_ylim(-0.08 * top, top)
+    ax.set_ylabel("speed along the path, s' (1)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    ax = axes[1]
+    ax.plot(s, result.t - result.t[0], color="k", label="fastest timing")
+    ax.plot(s, s - s[0], color="0.5", ls=":", label="the input's timing")
+    ax.set_xlabel("path parameter $s$: the input's time (s)")
+    ax.set_ylabel("time (s)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    floor = "on the floor" if result.floor is not None else "joint limits only"
+    fig.suptitle(
+        f"{result.robot_name}, {result.task} task, {floor}: {float(s[-1] - s[0]):.3g} s -> {result.duration:.3g} s"
+    )
     return fig

@@ -1,0 +1,109 @@
+"""``mobmanip retime ROBOT TRAJ.csv``: the fastest timing of a whole-body path, from rest to rest,
+within the wheels' and joints' limits and, with ``--ground``, on the floor
+(:func:`mobmanip.motion.retime.retime`)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..robot.tasks import TASKS
+from ..support.reading import decimal
+from .common import add_motion_floor_options, add_progress_option, add_work_option, motion_floor, show_progress
+
+RETIME_HELP = """\
+TRAJ.csv is a whole-body trajectory as `mobmanip trajectory` reads it (`carry --out` writes
+one); its configurations are the path and its time stamps the path parameter s. The fastest
+timing s(t) starts and ends at rest and keeps, at every sample, every wheel and joint within its
+velocity and effort limits (efforts of the motion with the object held between the hands, the
+paper's policy) and, with --ground, the floor of `carry --ground`: the zero-moment point
+--zmp-margin inside the support polygon, every support loaded (with --reserve R: at least R of
+its equal share), each driven wheel within friction (mu; --no-traction: no traction rows). The
+floor covers differential-drive platforms. Solved exactly on the samples by reachability
+analysis (as TOPP-RA): a constant s'' between samples.
+
+--out DIR writes retimed.csv (the path at its fastest timing, an input of `mobmanip trajectory`),
+retime.json (duration, what binds where, the profile), retime.png (s' with its limit curve) and
+profile.csv.
+
+example:
+  mobmanip carry tiago_dual --path examples/carry_turn.csv --object-mass 2 --ground --out carried
+  mobmanip retime tiago_dual carried/trajectory.csv --object-mass 2 --ground --reserve 0.3 --out fastest
+"""
+
+#: Samples a retiming takes without being asked (each: the dynamics in motion and the floor's rows).
+MAX_SAMPLES = 200_000
+#: Wall time of one sample on TIAGo++ with the floor (s), rounded up.
+SECONDS_PER_SAMPLE = 5e-3
+
+
+def register(sub) -> None:
+    parser = sub.add_parser(
+        "retime",
+        help="the fastest timing of a whole-body path, within limits and on the floor",
+        description="The time-optimal timing of a whole-body path from rest to rest: every wheel and joint within "
+        "its velocity and effort limits and, with --ground, the robot on its floor (no tip-over, every support "
+        "loaded, traction within friction).",
+        epilog=RETIME_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("trajectory", metavar="TRAJ.csv", help="the path: a whole-body trajectory (see below)")
+    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument("--out", metavar="DIR", help="write retimed.csv, retime.json, retime.png, profile.csv")
+    add_motion_floor_options(parser)
+    add_progress_option(parser)
+    add_work_option(parser, f"samples (default {MAX_SAMPLES:,})")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..motion.retime import retime
+    from ..motion.trajectory import read_trajectory
+    from ..robot.model import load_robot
+    from ..robot.spec import find_spec
+    from ..support.files import check_output, note_input, output_directory
+    from ..support.reading import read_user_bytes
+    from ..support.work import WorkBound, bound
+    from .outputs import RETIME_FILES, retime_outputs
+
+    note_input(args.trajectory)
+    work = WorkBound("retime", "samples", SECONDS_PER_SAMPLE, bound(args.max_work, MAX_SAMPLES))
+    # counted before the file is parsed
+    work.check(max(read_user_bytes(args.trajectory, "trajectory").count(b"\n") - 1, 0), "rows of the trajectory")
+    robot = load_robot(find_spec(args.robot))
+    floor = motion_floor(args, "retime")
+    trajectory = read_trajectory(robot, args.trajectory)
+    if args.out:  # refuse an unwritable output before the timing is computed
+        out = output_directory(args.out)
+        for name in RETIME_FILES:
+            check_output(out / name)
+    result = retime(
+        robot, trajectory, args.task, object_mass=args.object_mass, floor=floor, progress=show_progress(args)
+    )
+    before = float(result.s[-1] - result.s[0])
+    floor_text = "joint limits only" if floor is None else _floor_text(floor)
+    print(f"robot {robot.name}, task {result.task}, {len(result.s)} samples; {floor_text}")
+    print(f"fastest timing from rest to rest: {result.duration:.4g} s (the input takes {before:.4g} s)")
+    print(f"what limits it: {_shares(result)}")
+    if args.out:
+        for written in retime_outputs(robot, result, args.out):
+            print(f"wrote {written}")
+    return 0
+
+
+def _floor_text(floor) -> str:
+    traction = "no traction limit" if floor.mu is None else f"traction mu {floor.mu}"
+    return f"on the floor (zero-moment point {floor.zmp_margin:g} m inside, {traction}, reserve {floor.reserve:g})"
+
+
+def _shares(result) -> str:
+    """The binding rows by the share of the path's samples where each binds, largest first."""
+    from collections import Counter
+
+    counts = Counter(result.binding).most_common()
+    n = len(result.binding)
+    parts = [f"{label} ({100.0 * k / n:.0f} % of the samples)" for label, k in counts[:4]]
+    if len(counts) > 4:
+        parts.append(f"{len(counts) - 4} more")
+    return "; ".join(parts)

@@ -1,0 +1,388 @@
+"""The fastest timing of a path: time-optimal path parameterisation by reachability analysis.
+
+A whole-body path is the configurations of a trajectory, q(s), with s its original time
+stamps. Running it with a new timing s(t) gives reduced velocities and accelerations
+
+    x = x_s s',    xdot = x_s s'' + x_ss s'^2,
+
+where x_s and x_ss are the trajectory's own reduced velocities and accelerations (the timing
+s' = 1 gives the trajectory back). Every velocity term of the dynamics (Coriolis, centrifugal,
+the hands' drift, the moving grasp) is quadratic in x, so with a = s'' and b = s'^2, at each
+grid point s_i:
+
+- a wheel or joint velocity limit is ``x_s,j^2 b <= xdot_max,j^2``;
+- an effort is ``tau = T_a a + T_b b + T_0`` (the paper's policy with the held object, as
+  :meth:`mobmanip.motion.in_motion.MotionTerms.torques`), kept in ``|tau_j| <= tau_max,j``;
+- the floor's resultant wrench on the robot and its object is affine in (a, b) the same way
+  (:func:`mobmanip.motion.ground.floor_wrench`), and the floor's rows are linear in that wrench
+  (:func:`mobmanip.motion.carry_floor.wrench_rows`: the zero-moment point a margin inside the
+  support polygon, every support loaded, each driven wheel within friction, with a reserve).
+
+Each grid point therefore gives a convex polygon of (a, b). With b_{i+1} = b_i + 2 (s_{i+1} -
+s_i) a_i (a constant on each interval), reachability analysis (TOPP-RA: Pham and Pham, IEEE
+T-RO 2018) gives the time-optimal profile exactly on the grid: a backward pass computes each
+point's controllable set K_i, the values of b from which the end can still be reached at rest,
+and a forward pass from rest takes at each point the largest a that keeps the next b in
+K_{i+1}. The polygons are two-dimensional, so each of those linear programs is solved exactly
+by clipping the polygon (no LP solver, no tolerance of one).
+
+The new time stamps follow from ``t_{i+1} - t_i = 2 (s_{i+1} - s_i) / (s'_i + s'_{i+1})``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ArgumentError, NumericalError
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from ..support.progress import progress_bar
+from .carry_floor import CarryFloor, wrench_rows
+from .ground import floor_wrench
+from .in_motion import motion_terms
+from .trajectory import Trajectory
+
+#: The largest speed-up of the path parameter the solver looks at, s' <= this (the original
+#: timing is s' = 1): a path nothing limits runs into it and is refused.
+SPEED_CAP = 1e3
+#: The largest |s''| it looks at (1/s^2 in units of the original timing).
+ACCELERATION_CAP = 1e8
+#: A polygon's vertex keeps a row when it breaks it by less than this, relative to the row's scale.
+ROW_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class PathRows:
+    """The rows of one grid point over (a, b) = (s'', s'^2): ``ca a + cb b <= d``.
+
+    Attributes:
+        ca, cb, d: (r,) each.
+        labels: what each row keeps (``"velocity NAME"``, ``"effort NAME"`` or the floor's), (r,).
+        kinds: each row's kind: ``"velocity"``, ``"effort"``, ``"tip-over"``, ``"contact"`` or
+            ``"traction"``, (r,).
+    """
+
+    ca: np.ndarray
+    cb: np.ndarray
+    d: np.ndarray
+    labels: tuple[str, ...]
+    kinds: tuple[str, ...]
+
+
+def path_rows(
+    robot: Robot,
+    trajectory: Trajectory,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    floor: CarryFloor | None = None,
+    progress: bool = False,
+) -> list[PathRows]:
+    """Every grid point's rows over (s'', s'^2) (see the module's docstring).
+
+    Args:
+        robot: the loaded robot.
+        trajectory: the path, its time stamps the path parameter s.
+        task, object_mass: the task space and the object held between the hands (default: the
+            spec's), as :func:`mobmanip.motion.trajectory_analysis.analyze_trajectory`.
+        floor: also keep the robot on its floor (differential drives, as ``carry``'s floor).
+        progress: a progress bar over the grid points on standard error.
+    """
+    task_space = get_task(task or robot.spec.default_task)
+    mass = float(robot.spec.object_mass if object_mass is None else object_mass)
+    resolved = floor.resolve(robot) if floor is not None else None
+    vlim = np.asarray(robot.velocity_limits, dtype=float)
+    elim = np.asarray(robot.effort_limits, dtype=float)
+    names = robot.reduced_velocity_names
+    nx = robot.nx
+    rows_task = list(task_space.rows)
+    out = []
+    with progress_bar(len(trajectory), desc=f"retime {robot.name}", unit="point", show=progress) as bar:
+        for i in range(len(trajectory)):
+            bar.update(1)
+            q, x_s, x_ss = trajectory.q[i], trajectory.x[i], trajectory.xdot[i]
+            terms = motion_terms(robot, q, x_s, task_space, object_mass=mass)
+            static = terms.static_torques()
+            moving = terms.torques(np.zeros(nx))  # gravity and the velocity terms at s' = 1
+            T_a = terms.torques(x_s) - moving
+            T_b = terms.torques(x_ss) - static
+            moves = np.flatnonzero(x_s != 0.0)
+            ca = [np.zeros(len(moves)), T_a, -T_a]
+            cb = [x_s[moves] ** 2, T_b, -T_b]
+            d = [vlim[moves] ** 2, elim - static, elim + static]
+            labels = [f"velocity {names[j]}" for j in moves] + [f"effort {n}" for n in names] * 2
+            kinds = ["velocity"] * len(moves) + ["effort"] * (2 * nx)
+            if floor is not None and resolved is not None:
+                to_object = np.linalg.pinv(terms.W.T)
+                a0, a1 = np.zeros(6), np.zeros((6, nx))
+                a0[rows_task] = to_object @ (terms.drift - terms.grasp_drift)
+                a1[rows_task] = to_object @ terms.J_u
+                offset, linear = floor_wrench(robot, q, x_s, mass, a0, a1)
+                resting, _ = floor_wrench(robot, q, np.zeros(nx), mass, np.zeros(6), a1)
+                R, r, floor_labels, floor_kinds = wrench_rows(robot, q, mass, floor, resolved)
+                ca.append(R @ (linear @ x_s))
+                cb.append(R @ (linear @ x_ss + offset - resting))
+                d.append(r - R @ resting)
+                labels += floor_labels
+                kinds += floor_kinds
+            out.append(PathRows(np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels), tuple(kinds)))
+    return out
+
+
+# ----- exact two-dimensional programs -----
+
+
+def _clip(polygon: list[tuple[float, float]], ca: float, cb: float, d: float) -> list[tuple[float, float]]:
+    """A convex polygon (vertices in order) cut by the half-plane ``ca a + cb b <= d``."""
+    scale = math.hypot(ca, cb)
+    if scale == 0.0:
+        return polygon if d >= -ROW_TOLERANCE * max(1.0, abs(d)) else []
+    ca, cb, d = ca / scale, cb / scale, d / scale
+    tol = ROW_TOLERANCE * (1.0 + abs(d))
+    values = [ca * a + cb * b - d for a, b in polygon]
+    if all(v <= tol for v in values):
+        return polygon
+    out: list[tuple[float, float]] = []
+    n = len(polygon)
+    for k in range(n):
+        p, vp = polygon[k], values[k]
+        nxt, vn = polygon[(k + 1) % n], values[(k + 1) % n]
+        if vp <= tol:
+            out.append(p)
+        if (vp <= tol) != (vn <= tol) and n > 1:
+            w = vp / (vp - vn)
+            out.append((p[0] + w * (nxt[0] - p[0]), p[1] + w * (nxt[1] - p[1])))
+    return out
+
+
+def _polygon(rows: PathRows) -> list[tuple[float, float]]:
+    """The grid point's feasible (a, b), within the solver's caps."""
+    top = SPEED_CAP**2
+    polygon = [(-ACCELERATION_CAP, 0.0), (ACCELERATION_CAP, 0.0), (ACCELERATION_CAP, top), (-ACCELERATION_CAP, top)]
+    # the bounds on b alone first: they shrink the box without loss
+    order = np.argsort(rows.ca != 0.0, kind="stable")
+    for k in order:
+        polygon = _clip(polygon, float(rows.ca[k]), float(rows.cb[k]), float(rows.d[k]))
+        if not polygon:
+            return []
+    return polygon
+
+
+def _strip(polygon, step: float, lo: float, hi: float) -> list[tuple[float, float]]:
+    """The part of the polygon whose next b, ``b + 2 step a``, lies in [lo, hi]."""
+    out = _clip(polygon, 2.0 * step, 1.0, hi)
+    return _clip(out, -2.0 * step, -1.0, -lo) if out else []
+
+
+def _b_range(polygon) -> tuple[float, float] | None:
+    if not polygon:
+        return None
+    bs = [b for _, b in polygon]
+    return max(min(bs), 0.0), max(bs)
+
+
+def _a_range(rows: PathRows, b: float) -> tuple[float, float]:
+    """The feasible s'' at s'^2 = b: [lo, hi] (lo > hi: none)."""
+    rhs = rows.d - rows.cb * b
+    scale = np.hypot(rows.ca, rows.cb)
+    slack = ROW_TOLERANCE * (scale + np.abs(rows.d))
+    up, down = rows.ca > 0.0, rows.ca < 0.0
+    hi = min(ACCELERATION_CAP, float(np.min(rhs[up] / rows.ca[up]))) if up.any() else ACCELERATION_CAP
+    lo = max(-ACCELERATION_CAP, float(np.max(rhs[down] / rows.ca[down]))) if down.any() else -ACCELERATION_CAP
+    flat = ~(up | down)
+    if np.any(rhs[flat] < -slack[flat]):
+        return 1.0, 0.0
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class Retiming:
+    """The time-optimal timing of a path.
+
+    Attributes:
+        robot_name, task: what was retimed.
+        s: the path parameter at the grid points, the input's time stamps (s), (N,).
+        t: the new time stamps, starting where the input starts (s), (N,).
+        speed: s' at each grid point (1: the input's own speed there), (N,).
+        acceleration: s'' on each interval, repeated at the last point, (N,).
+        limit: the largest s' each grid point allows alone (the maximum velocity curve), (N,).
+        controllable: the largest s' from which the end is still reached at rest, (N,).
+        binding: per grid point, the row nearest to binding at the chosen (s'', s'^2), (N,).
+        binding_kind: its kind, (N,).
+        trajectory: the retimed motion (its x and xdot exact on the grid).
+        floor: the floor kept (its description), or ``None``.
+    """
+
+    robot_name: str
+    task: str
+    s: np.ndarray
+    t: np.ndarray
+    speed: np.ndarray
+    acceleration: np.ndarray
+    limit: np.ndarray
+    controllable: np.ndarray
+    binding: tuple[str, ...]
+    binding_kind: tuple[str, ...]
+    trajectory: Trajectory = field(repr=False)
+    floor: dict | None = None
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def binding_runs(self) -> list[tuple[float, float, str]]:
+        """The path cut where the binding row changes: (from s, to s, label) per run."""
+        runs: list[tuple[float, float, str]] = []
+        start = 0
+        for i in range(1, len(self.binding) + 1):
+            if i == len(self.binding) or self.binding[i] != self.binding[start]:
+                runs.append((float(self.s[start]), float(self.s[i - 1]), self.binding[start]))
+                start = i
+        return runs
+
+    def table(self) -> tuple[list[str], np.ndarray]:
+        """Per grid point: s, t, s', s'', the limit curve and the controllable bound."""
+        header = ["s", "t", "speed", "acceleration", "limit", "controllable"]
+        values = np.c_[self.s, self.t, self.speed, self.acceleration, self.limit, self.controllable]
+        return header, values
+
+    def to_dict(self) -> dict:
+        header, values = self.table()
+        return {
+            "robot": self.robot_name,
+            "task": self.task,
+            "samples": len(self.s),
+            "input_duration": float(self.s[-1] - self.s[0]),
+            "duration": self.duration,
+            "floor": self.floor,
+            "binding": [{"from_s": a, "to_s": b, "row": label} for a, b, label in self.binding_runs()],
+            "columns": {name: values[:, k].tolist() for k, name in enumerate(header)}
+            | {"binding": list(self.binding), "binding_kind": list(self.binding_kind)},
+        }
+
+
+def retime(
+    robot: Robot,
+    trajectory: Trajectory,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    floor: CarryFloor | None = None,
+    progress: bool = False,
+) -> Retiming:
+    """The fastest timing of ``trajectory``'s path, from rest to rest, with every wheel and joint
+    within its velocity and effort limits and, with ``floor``, the robot on its floor (see the
+    module's docstring).
+
+    Args:
+        robot, trajectory, task, object_mass, floor, progress: as :func:`path_rows`.
+
+    Raises:
+        ArgumentError: not a trajectory.
+        NumericalError: no timing keeps the rows (named: the grid point and, where one row alone
+            decides, the row), or nothing limits the speed.
+    """
+    if not isinstance(trajectory, Trajectory):
+        raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
+    rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor, progress=progress)
+    s = trajectory.t
+    n = len(s)
+    steps = np.diff(s)
+    polygons = [_polygon(r) for r in rows]
+    for i, polygon in enumerate(polygons):
+        if not polygon:
+            raise NumericalError(f"no timing of the path keeps {_blocking(rows[i])} at sample {i} (s = {s[i]:.6g} s)")
+    limit = np.array([math.sqrt(_b_range(p)[1]) for p in polygons])  # type: ignore[index]
+
+    # backward: the controllable sets, ending at rest
+    K = np.zeros((n, 2))
+    for i, where in ((0, "first"), (n - 1, "last")):  # from rest to rest: both ends held still
+        still = _still_breaks(rows[i])
+        if still:
+            raise NumericalError(f"the path's {where} sample cannot be held still: {still}")
+    for i in range(n - 2, -1, -1):
+        found = _b_range(_strip(polygons[i], float(steps[i]), K[i + 1, 0], K[i + 1, 1]))
+        if found is None:
+            raise NumericalError(
+                f"no timing of the path reaches its end at rest from sample {i} (s = {s[i]:.6g} s): "
+                f"{_blocking(rows[i])} there"
+            )
+        K[i] = found
+    if K[0, 0] > 0.0:
+        raise NumericalError(f"the path cannot start from rest: {_blocking(rows[0])}")
+
+    # forward: the greatest acceleration that stays controllable
+    b = np.zeros(n)
+    a = np.zeros(n)
+    for i in range(n - 1):
+        lo, hi = _a_range(rows[i], b[i])
+        step = float(steps[i])
+        hi = min(hi, (K[i + 1, 1] - b[i]) / (2.0 * step))
+        lo = max(lo, (K[i + 1, 0] - b[i]) / (2.0 * step))
+        a[i] = hi if hi >= lo else lo  # equal up to rounding where the set is one point
+        b[i + 1] = min(max(b[i] + 2.0 * step * a[i], K[i + 1, 0]), K[i + 1, 1])
+        a[i] = (b[i + 1] - b[i]) / (2.0 * step)
+    a[-1] = a[-2]
+    if np.any(b >= (1.0 - 1e-9) * SPEED_CAP**2):
+        raise NumericalError(
+            f"nothing limits the path's speed (s' reached the solver's cap {SPEED_CAP:g} times the input's): "
+            "give the robot velocity or effort limits"
+        )
+    speed = np.sqrt(b)
+    dt = np.zeros(n - 1)
+    both = speed[:-1] + speed[1:]
+    dt[both > 0.0] = 2.0 * steps[both > 0.0] / both[both > 0.0]
+    t = s[0] + np.r_[0.0, np.cumsum(dt)]
+    if np.any(np.diff(t) <= 0.0):
+        k = int(np.flatnonzero(np.diff(t) <= 0.0)[0])
+        raise NumericalError(
+            f"the retimed path passes samples {k} and {k + 1} in no time (a part of the path where nothing moves); "
+            "remove the repeated samples"
+        )
+    x = trajectory.x * speed[:, None]
+    xdot = trajectory.x * a[:, None] + trajectory.xdot * b[:, None]
+    retimed = Trajectory(t, trajectory.q, x, xdot, trajectory.slip * speed)
+    binding, kinds = zip(*(_binding(r, a[i], b[i]) for i, r in enumerate(rows)))
+    return Retiming(
+        robot_name=robot.name,
+        task=get_task(task or robot.spec.default_task).name,
+        s=s.copy(),
+        t=t,
+        speed=speed,
+        acceleration=a,
+        limit=limit,
+        controllable=np.sqrt(K[:, 1]),
+        binding=tuple(binding),
+        binding_kind=tuple(kinds),
+        trajectory=retimed,
+        floor=None if floor is None else floor.describe(),
+    )
+
+
+def _binding(rows: PathRows, a: float, b: float) -> tuple[str, str]:
+    """The row nearest to binding at (a, b), relative to its scale."""
+    value = rows.ca * a + rows.cb * b
+    scale = np.abs(rows.ca * a) + np.abs(rows.cb * b) + np.abs(rows.d)
+    scale[scale == 0.0] = 1.0
+    k = int(np.argmin((rows.d - value) / scale))
+    return rows.labels[k], rows.kinds[k]
+
+
+def _still_breaks(rows: PathRows) -> str:
+    """The rows that standing still (s' = s'' = 0) breaks, by label, or ""."""
+    broken = rows.d < -ROW_TOLERANCE * (1.0 + np.abs(rows.d))
+    return ", ".join(dict.fromkeys(label for label, bad in zip(rows.labels, broken) if bad))
+
+
+def _blocking(rows: PathRows) -> str:
+    """What leaves the grid point no (s'', s'^2): the first row (by label) without which it has
+    some, or "its limits together" naming their kinds."""
+    labels = np.asarray(rows.labels)
+    for label in dict.fromkeys(rows.labels):
+        keep = labels != label
+        if _polygon(PathRows(rows.ca[keep], rows.cb[keep], rows.d[keep], (), ())):
+            return label
+    return "its limits together (" + ", ".join(dict.fromkeys(rows.kinds)) + ")"

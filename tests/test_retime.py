@@ -1,0 +1,315 @@
+"""The fastest timing of a path (``mobmanip.motion.retime``, ``mobmanip retime``).
+
+References: TOPP-RA's own implementation (``toppra``) on the same path and limits, with its
+inverse dynamics from Pinocchio's RNEA on the robot's URDF read directly; the bang-coast-bang
+closed form of one joint turning about a vertical axis; the floor checked at every grid point
+through the zero-moment point and the contact loads assembled here from the floor's resultant
+wrench; invariance under the input's own timing.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from hostile_util import assert_one_line_error, run_cli
+from mobmanip import load_robot
+from mobmanip.errors import MobmanipError, NumericalError
+from mobmanip.motion.carry_floor import CarryFloor
+from mobmanip.motion.ground import ground_along
+from mobmanip.motion.retime import retime
+from mobmanip.motion.trajectory import read_trajectory, trajectory_from_samples
+from mobmanip.motion.trajectory_analysis import analyze_trajectory
+from mobmanip.robot.support import robot_support
+
+GRAVITY_Z = 9.81
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot("panda")
+
+
+def _arm_indices(robot):
+    model = robot.model
+    ids = [model.getJointId(name) for name in robot.reduced_velocity_names]
+    return [model.joints[j].idx_q for j in ids], [model.joints[j].idx_v for j in ids]
+
+
+AMPLITUDE = np.array([0.8, 0.5, 0.6, 0.5, 0.9, 0.6, 1.0])
+
+
+def _sine_path(robot, n):
+    """q(s) = home + A sin(pi s) on the arm's joints, s in [0, 1], with its exact derivatives."""
+    iq, _ = _arm_indices(robot)
+    home = robot.hold_configuration()
+    s = np.linspace(0.0, 1.0, n)
+    w = math.pi
+    q = np.tile(home, (n, 1))
+    q[:, iq] = home[iq] + AMPLITUDE * np.sin(w * s)[:, None]
+    x_s = AMPLITUDE * (w * np.cos(w * s))[:, None]
+    x_ss = AMPLITUDE * (-w * w * np.sin(w * s))[:, None]
+    return s, q, x_s, x_ss
+
+
+def test_equals_toppra_with_joint_velocity_and_effort_limits(panda):
+    toppra = pytest.importorskip("toppra")
+    from toppra import algorithm, constraint
+
+    from mobmanip.descriptions.resources import example_robot_data_share
+
+    toppra.setup_logging("WARNING")
+    n = 201
+    s, q, x_s, x_ss = _sine_path(panda, n)
+    ours = retime(panda, trajectory_from_samples(panda, s, q, x_s, x_ss), object_mass=0.0)
+
+    # the reference: the Panda's URDF read by Pinocchio itself, fingers locked at zero
+    robots = example_robot_data_share() / "example-robot-data" / "robots"
+    full = pin.buildModelFromUrdf(str(robots / "panda_description" / "urdf" / "panda.urdf"))
+    fingers = [full.getJointId(name) for name in ("panda_finger_joint1", "panda_finger_joint2")]
+    model = pin.buildReducedModel(full, fingers, pin.neutral(full))
+    data = model.createData()
+    iq, _ = _arm_indices(panda)
+    home = q[0, iq]
+
+    class SinePath(toppra.interpolator.AbstractGeometricPath):
+        def __call__(self, ss, order=0):
+            ss = np.atleast_1d(np.asarray(ss, dtype=float))
+            w = math.pi
+            if order == 0:
+                return home + AMPLITUDE * np.sin(w * ss)[:, None]
+            if order == 1:
+                return AMPLITUDE * (w * np.cos(w * ss))[:, None]
+            return AMPLITUDE * (-w * w * np.sin(w * ss))[:, None]
+
+        @property
+        def dof(self):
+            return 7
+
+        @property
+        def path_interval(self):
+            return np.array([0.0, 1.0])
+
+        @property
+        def waypoints(self):
+            return None
+
+    def inverse_dynamics(qq, qd, qdd):
+        return pin.rnea(model, data, qq, qd, qdd)
+
+    velocity = model.velocityLimit
+    effort = model.effortLimit
+    assert np.allclose(velocity, panda.velocity_limits) and np.allclose(effort, panda.effort_limits)
+    limits = [
+        constraint.JointVelocityConstraint(np.c_[-velocity, velocity]),
+        constraint.JointTorqueConstraint(inverse_dynamics, np.c_[-effort, effort], np.zeros(7)),
+    ]
+    reference = algorithm.TOPPRA(limits, SinePath(), gridpoints=s, parametrizer="ParametrizeConstAccel")
+    duration = reference.compute_trajectory(0, 0).duration
+    assert ours.duration == pytest.approx(duration, rel=1e-4)
+    assert ours.duration < 0.9 * (s[-1] - s[0])  # the input's timing is far from its limits here
+
+
+def test_one_joint_turning_about_the_vertical_is_bang_coast_bang(panda):
+    """Joint 1 alone, its axis vertical: tau = I qdd with I constant (Pinocchio's CRBA here), no
+    gravity and no velocity term on it. The fastest turn by D within |qd| <= v, |tau| <= T is
+    D / v + v / alpha (alpha = T / I) when it reaches v, else 2 sqrt(D / alpha)."""
+    robot = panda.with_limits(effort={name: 1e6 for name in panda.reduced_velocity_names[1:]})
+    iq, iv = _arm_indices(robot)
+    home = robot.hold_configuration()
+    model = robot.model
+    data = model.createData()
+    inertia = pin.crba(model, data, home)[iv[0], iv[0]]
+    v, T = float(robot.velocity_limits[0]), float(robot.effort_limits[0])
+    alpha = T / inertia
+    for turn in (3.0, 0.2):
+        n = 2001
+        s = np.linspace(0.0, 1.0, n)
+        q = np.tile(home, (n, 1))
+        q[:, iq[0]] = home[iq[0]] + turn * s
+        x_s, x_ss = np.zeros((n, 7)), np.zeros((n, 7))
+        x_s[:, 0] = turn
+        found = retime(robot, trajectory_from_samples(robot, s, q, x_s, x_ss), object_mass=0.0)
+        closed = turn / v + v / alpha if turn >= v * v / alpha else 2.0 * math.sqrt(turn / alpha)
+        # one grid interval at each switch: O(1 / n)
+        assert found.duration == pytest.approx(closed, rel=2e-3), turn
+        assert set(found.binding_kind) <= {"velocity", "effort"}
+
+
+def test_the_inputs_own_timing_does_not_matter(panda):
+    n = 101
+    s, q, x_s, x_ss = _sine_path(panda, n)
+    first = retime(panda, trajectory_from_samples(panda, s, q, x_s, x_ss), object_mass=0.5)
+    for k in (0.4, 3.0):  # the same path run k times faster: s -> s / k
+        again = retime(panda, trajectory_from_samples(panda, s / k, q, x_s * k, x_ss * k * k), object_mass=0.5)
+        assert again.duration == pytest.approx(first.duration, rel=1e-9)
+        assert np.allclose(again.speed, first.speed / k, rtol=1e-7, atol=1e-9)  # s' counts the new parameter
+
+
+def test_profile_properties(panda):
+    n = 101
+    s, q, x_s, x_ss = _sine_path(panda, n)
+    result = retime(panda, trajectory_from_samples(panda, s, q, x_s, x_ss), object_mass=0.5)
+    assert result.speed[0] == 0.0 and result.speed[-1] == 0.0
+    assert np.all(np.diff(result.t) > 0.0)
+    assert np.all(result.speed <= result.controllable * (1 + 1e-9) + 1e-12)
+    assert np.all(result.controllable <= result.limit * (1 + 1e-9) + 1e-12)
+    # the retimed motion: x = x_s s', xdot = x_s s'' + x_ss s'^2, and within every limit
+    motion = result.trajectory
+    assert np.allclose(motion.x, x_s * result.speed[:, None])
+    analysis = analyze_trajectory(panda, motion, object_mass=0.5)
+    assert analysis.velocity_use.max() <= 1.0 + 1e-9
+    assert analysis.effort_use.max() <= 1.0 + 1e-9
+    # time optimal: some limit is tight at nearly every sample
+    tight = np.maximum(analysis.velocity_use.max(axis=1), analysis.effort_use.max(axis=1))
+    assert np.mean(tight > 1.0 - 1e-6) > 0.9
+
+
+# ----- on the floor -----
+
+
+@pytest.fixture(scope="module")
+def tiago():
+    return load_robot("tiago_dual")
+
+
+def _drive_and_reach(robot, n=121):
+    """TIAGo++ driving 1.2 m along an arc while its arms move: a smooth whole-body path."""
+    home = robot.hold_configuration()
+    s = np.linspace(0.0, 6.0, n)
+    u = 0.5 - 0.5 * np.cos(math.pi * s / 6.0)
+    yaw = 0.4 * u
+    q = np.tile(home, (n, 1))
+    q[:, 0] = 3.0 * np.sin(yaw)  # an arc of radius 3 m, 1.2 m long: the wheels roll without sliding
+    q[:, 1] = 3.0 * (1.0 - np.cos(yaw))
+    q[:, 2], q[:, 3] = np.cos(yaw), np.sin(yaw)
+    model = robot.model
+    for name, change in (("arm_left_2_joint", 0.3), ("arm_right_2_joint", 0.3), ("arm_left_4_joint", -0.4)):
+        j = model.getJointId(name)
+        q[:, model.joints[j].idx_q] += change * u
+    known = [name for name in robot.joint_names if "wheel" not in name]
+    return trajectory_from_samples(robot, s, q, known_joints=known)
+
+
+def _contact_loads(support, pose, force, moment):
+    """Equally stiff contacts under a rigid platform: normal forces f_c = k0 + k1 x_c + k2 y_c
+    (a plane of compressions), balancing the resultant's vertical force and its moments about
+    the floor (assembled here, by least squares over the plane's three numbers)."""
+    points = support.world_points(pose)
+    z = support.floor_z
+    A = np.c_[np.ones(len(points)), points[:, 0], points[:, 1]]  # f = A k
+    # sum f = F_z; sum y f = M_x + z F_y; sum -x f = M_y - z F_x
+    balance = np.vstack([np.ones(len(points)), points[:, 1], -points[:, 0]])
+    target = np.array([force[2], moment[0] + z * force[1], moment[1] - z * force[0]])
+    k = np.linalg.solve(balance @ A, target)
+    return A @ k
+
+
+def _wheel_forces(support, pose, force, moment):
+    """The driven wheels' tangential forces (world x, y), the casters rolling freely: they carry
+    the resultant's F_x, F_y and its yaw moment about the world origin, split as equal tyres (the
+    least-squares split), (wheels, 2)."""
+    driven = [c for c, contact in enumerate(support.contacts) if contact.driven]
+    points = support.world_points(pose)[driven]
+    B = np.zeros((3, 2 * len(driven)))
+    B[0, 0::2], B[1, 1::2] = 1.0, 1.0
+    B[2, 0::2], B[2, 1::2] = -points[:, 1], points[:, 0]
+    split = np.linalg.lstsq(B, np.array([force[0], force[1], moment[2]]), rcond=None)[0]
+    return driven, split.reshape(-1, 2)
+
+
+def test_the_floor_holds_at_every_grid_point(tiago):
+    path = _drive_and_reach(tiago)
+    free = retime(tiago, path, object_mass=2.0)
+    floor = CarryFloor(mu=0.5, zmp_margin=0.05, reserve=0.2)
+    grounded = retime(tiago, path, object_mass=2.0, floor=floor)
+    assert grounded.duration > free.duration * 1.2  # 3.93 s against 2.25 s when measured
+    assert "contact" in grounded.binding_kind
+
+    motion = grounded.trajectory
+    analysis = analyze_trajectory(tiago, motion, object_mass=2.0)
+    assert analysis.velocity_use.max() <= 1.0 + 1e-9
+    assert analysis.effort_use.max() <= 1.0 + 1e-9
+    along = ground_along(tiago, motion, analysis.object_acceleration, object_mass=2.0)
+    assert along.margin.min() >= 0.05 - 1e-7
+    support = robot_support(tiago)
+    total = (pin.computeTotalMass(tiago.model) + 2.0) * GRAVITY_Z
+    least = 0.2 * total / len(support.contacts)
+    lowest, traction = np.inf, 0.0
+    for i in range(len(motion)):
+        pose = (motion.q[i, 0], motion.q[i, 1], math.atan2(motion.q[i, 3], motion.q[i, 2]))
+        loads = _contact_loads(support, pose, along.force[i], along.moment[i])
+        assert loads.sum() == pytest.approx(along.force[i][2], rel=1e-9)
+        lowest = min(lowest, float(loads.min() - least))
+        driven, tangential = _wheel_forces(support, pose, along.force[i], along.moment[i])
+        # the pyramid inscribed in the cone: within the cone, with the reserve's share kept
+        use = np.linalg.norm(tangential, axis=1) / (0.5 * (1 - 0.2) * loads[driven])
+        traction = max(traction, float(use.max()))
+    assert lowest >= -1e-6 * total
+    assert lowest <= 1e-6 * total  # some support is at its reserve: the floor binds
+    assert traction <= 1.0 + 1e-9
+
+
+def test_the_floor_refuses_what_it_does_not_model():
+    omni = load_robot("planar_dual_arm_omni")
+    path = _planar_path(omni)
+    with pytest.raises(MobmanipError, match="differential-drive"):
+        retime(omni, path, floor=CarryFloor())
+
+
+def _planar_path(robot, n=21):
+    home = robot.hold_configuration()
+    s = np.linspace(0.0, 1.0, n)
+    q = np.tile(home, (n, 1))
+    q[:, 0] = 0.3 * s
+    return trajectory_from_samples(robot, s, q)
+
+
+def test_a_posture_that_cannot_be_held_is_named(panda):
+    weak = panda.with_limits(effort={"panda_joint2": 1e-3})
+    n = 21
+    s, q, x_s, x_ss = _sine_path(weak, n)
+    with pytest.raises(NumericalError, match="panda_joint2"):
+        retime(weak, trajectory_from_samples(weak, s, q, x_s, x_ss), object_mass=0.0)
+
+
+# ----- the command -----
+
+
+def test_command_writes_a_trajectory_that_trajectory_reads(tiago, tmp_path, capfd):
+    from mobmanip.commands.outputs import write_trajectory_csv
+
+    path = _drive_and_reach(tiago, n=41)
+    source = write_trajectory_csv(tiago, tmp_path / "path.csv", path.t, path.q)
+    out = tmp_path / "out"
+    code, stdout, stderr = run_cli(
+        capfd, "retime", "tiago_dual", source, "--object-mass", "1.5", "--ground", "--reserve", "0.2", "--out", out
+    )
+    assert code == 0, stderr
+    assert "fastest timing from rest to rest" in stdout and "what limits it:" in stdout
+    document = json.loads((out / "retime.json").read_text())
+    retimed = read_trajectory(tiago, out / "retimed.csv")
+    assert retimed.t[-1] - retimed.t[0] == pytest.approx(document["duration"], rel=1e-12)
+    assert np.allclose(retimed.q, path.q, atol=1e-9)
+    assert (out / "retime.png").stat().st_size > 0
+    assert document["floor"]["reserve"] == 0.2
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--level"], "--level"),
+        (["--slope", "5"], "--slope"),
+        (["--load", "any"], "--load any"),
+        (["--zmp-margin", "-1"], "--zmp-margin"),
+    ],
+)
+def test_command_refuses_floor_options_it_does_not_model(tmp_path, capfd, options, message):
+    source = tmp_path / "path.csv"
+    source.write_text("t,platform_x,platform_y,platform_yaw\n0,0,0,0\n1,0.1,0,0\n2,0.2,0,0\n")
+    code, _, stderr = run_cli(capfd, "retime", "tiago_dual", source, *options)
+    assert_one_line_error(code, stderr, message)
