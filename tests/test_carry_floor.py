@@ -16,12 +16,13 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from mobmanip import load_robot
 from mobmanip.errors import CarryFailed
 from mobmanip.motion.carry import ObjectPath, carry, read_path
 from mobmanip.motion.carry_floor import CarryFloor, floor_rows
 from mobmanip.motion.ground import ground_along
 from mobmanip.motion.traction import traction_along
-from mobmanip.motion.trajectory import Trajectory, trajectory_from_samples
+from mobmanip.motion.trajectory import Trajectory, read_trajectory, trajectory_from_samples
 from mobmanip.motion.trajectory_analysis import analyze_trajectory
 from mobmanip.robot.tasks import get_task
 
@@ -105,9 +106,16 @@ def test_carry_ground_from_the_command_line_checked_by_trajectory_ground(tmp_pat
     fast.write_text("t,x,y\n" + "".join(f"{t!r},{x!r},{y!r}\n" for t, (x, y) in zip((path.t / 3).tolist(),
                                                                                        path.xy.tolist())))  # fmt: skip
     out = tmp_path / "out"
-    run = _cli("carry", "planar_dual_arm", "--path", str(fast), "--prepare", "0", "--mu", "0.2", "--out", str(out))
+    run = _cli("carry", "planar_dual_arm", "--path", str(fast), "--prepare", "0", "--mu", "0.2", "--fastest",
+               "--out", str(out))  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert json.loads((out / "carry.json").read_text())["floor"]["zmp_margin"] == 0.02
+    # --fastest: the same path at its fastest timing on the same floor, a trajectory file
+    fastest = json.loads((out / "fastest.json").read_text())
+    assert fastest["floor"] == {"mu": 0.2, "zmp_margin": 0.02, "reserve": 0.0, "load": "compliant"}
+    assert f"on the same floor: {fastest['duration']:.4g} s" in run.stdout
+    retimed = read_trajectory(load_robot("planar_dual_arm"), out / "fastest.csv")
+    assert retimed.t[-1] - retimed.t[0] == pytest.approx(fastest["duration"], rel=1e-12)
     check = _cli("trajectory", "planar_dual_arm", str(out / "trajectory.csv"), "--mu", "0.2", "--out",
                  str(tmp_path / "check"))  # fmt: skip
     assert check.returncode == 0, check.stderr
@@ -115,7 +123,8 @@ def test_carry_ground_from_the_command_line_checked_by_trajectory_ground(tmp_pat
     assert doc["traction"]["max_traction_use"] <= 1.0 and doc["min_stability_margin"] > 0.0
     assert "slips" not in check.stderr and "unloads" not in check.stderr
     for bad, message in ((("--zmp-margin", "-1"), "--zmp-margin must be a distance >= 0 m"),
-                         (("--ground", "--load", "any"), "carry's floor shares the load")):  # fmt: skip
+                         (("--ground", "--load", "any"), "carry's floor shares the load"),
+                         (("--level",), "carry keeps the object as its task holds it: --level")):  # fmt: skip
         run = _cli("carry", "planar_dual_arm", "--path", str(fast), *bad)
         lines = run.stderr.strip().splitlines()
         assert run.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"mobmanip: error: {message}")

@@ -254,6 +254,18 @@ def test_the_floor_holds_at_every_grid_point(tiago):
     assert traction <= 1.0 + 1e-9
 
 
+def test_an_end_that_cannot_stand_still_is_named(tiago):
+    """With reserve 0.3 the last posture keeps its back casters above their reserve only while the
+    robot accelerates (measured at rest: 5 N short on the right one): it cannot come to rest there,
+    and the error says so, naming the casters."""
+    path = _drive_and_reach(tiago)
+    with pytest.raises(NumericalError, match="reaches its end at rest") as failure:
+        retime(tiago, path, object_mass=2.0, floor=CarryFloor(mu=0.5, zmp_margin=0.05, reserve=0.3))
+    assert "the last sample cannot be held still (s'' = 0): support caster_back_right_2_link loaded" in str(
+        failure.value
+    )
+
+
 def test_the_floor_refuses_what_it_does_not_model():
     omni = load_robot("planar_dual_arm_omni")
     path = _planar_path(omni)

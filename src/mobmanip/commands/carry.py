@@ -76,6 +76,12 @@ def register(sub) -> None:
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
     add_progress_option(parser)
     add_motion_floor_options(parser)
+    parser.add_argument(
+        "--fastest",
+        action="store_true",
+        help="also the fastest timing of the QP motion's path, rest to rest, within the limits and on the same floor "
+        "(as `mobmanip retime`); with --out it writes fastest.csv, fastest.json, fastest.png, fastest_profile.csv",
+    )
     add_work_option(parser, f"QP steps ((path duration + --prepare) / --step; default {MAX_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -145,7 +151,7 @@ def run(args) -> int:
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
     from ..support.files import check_output, note_input, output_directory
-    from .outputs import CARRY_FILES, carry_outputs, carry_partial_outputs
+    from .outputs import CARRY_FASTEST_FILES, CARRY_FILES, carry_outputs, carry_partial_outputs
 
     note_input(args.path)
     robot = load_robot(find_spec(args.robot))
@@ -155,7 +161,7 @@ def run(args) -> int:
     floor = motion_floor(args, "carry")
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
-        for name in CARRY_FILES:
+        for name in CARRY_FILES + (CARRY_FASTEST_FILES if args.fastest else ()):
             check_output(out / name)
     try:
         result = carry(
@@ -213,7 +219,32 @@ def run(args) -> int:
         print_ratio("  of which the preparation gives (baseline from the prepared start / from the start posture)",
                      parts["preparation"])  # fmt: skip
         print_ratio("  and the motion gives (QP / baseline from the prepared start)", parts["motion"])
+    fastest = _fastest(robot, result, args, floor) if args.fastest else None
     if args.out:
         for written in carry_outputs(robot, result, args.out):
             print(f"wrote {written}")
+        if fastest is not None:
+            from .outputs import retime_outputs
+
+            for written in retime_outputs(robot, fastest, args.out, CARRY_FASTEST_FILES):
+                print(f"wrote {written}")
     return 0
+
+
+def _fastest(robot, result, args, floor):
+    """The QP motion's path at its fastest timing (:func:`mobmanip.motion.retime.retime`), printed."""
+    from ..motion.retime import retime
+    from ..motion.trajectory import trajectory_from_samples
+    from .retime import binding_shares
+
+    motion = result.motion
+    path = trajectory_from_samples(robot, motion.t, motion.q)
+    fastest = retime(robot, path, result.task, object_mass=args.object_mass, floor=floor)
+    where = "on the same floor" if floor is not None else "within the limits (no floor: --ground keeps it)"
+    print(
+        f"fastest timing of the QP motion's path, rest to rest, {where}: {fastest.duration:.4g} s "
+        f"(the QP motion takes {float(motion.t[-1] - motion.t[0]):.4g} s); limited by {binding_shares(fastest)}"
+    )
+    for note in fastest.notes:
+        print(f"note: {note}")
+    return fastest

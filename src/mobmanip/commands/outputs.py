@@ -290,18 +290,23 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
     return [str(p) for p in paths]
 
 
+#: The files ``retime --out DIR`` writes in DIR ...
 RETIME_FILES = ("retimed.csv", "retime.json", "retime.png", "profile.csv")
+#: ... and those ``carry --fastest --out DIR`` adds, in the same roles.
+CARRY_FASTEST_FILES = ("fastest.csv", "fastest.json", "fastest.png", "fastest_profile.csv")
 
 
-def retime_outputs(robot: Robot, result: Retiming, out_dir: str | Path) -> list[str]:
-    """retimed.csv (the path at its fastest timing, readable by ``mobmanip trajectory``),
-    retime.json (:meth:`mobmanip.motion.retime.Retiming.to_dict`), retime.png
-    (:func:`mobmanip.viz.motion_figures.retime_figure`) and profile.csv (s, t, s', s'', the limit
-    curve and the controllable bound per grid point) in ``out_dir``; returns the paths."""
+def retime_outputs(
+    robot: Robot, result: Retiming, out_dir: str | Path, names: tuple[str, ...] = RETIME_FILES
+) -> list[str]:
+    """In ``out_dir``, under ``names``: the path at its fastest timing (readable by ``mobmanip
+    trajectory``), :meth:`mobmanip.motion.retime.Retiming.to_dict` as JSON, the figure
+    (:func:`mobmanip.viz.motion_figures.retime_figure`) and the profile (s, t, s', s'', the limit
+    curve and the controllable bound per grid point) as CSV; returns the paths."""
     from ..viz.motion_figures import retime_figure
 
     out = Path(out_dir)
-    paths = [out / name for name in RETIME_FILES]
+    paths = [out / name for name in names]
     write_trajectory_csv(robot, paths[0], result.t, result.trajectory.q)
     write_json(paths[1], result.to_dict())
     fig = retime_figure(result)

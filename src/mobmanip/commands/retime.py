@@ -85,7 +85,9 @@ def run(args) -> int:
     floor_text = "joint limits only" if floor is None else _floor_text(floor)
     print(f"robot {robot.name}, task {result.task}, {len(result.s)} samples; {floor_text}")
     print(f"fastest timing from rest to rest: {result.duration:.4g} s (the input takes {before:.4g} s)")
-    print(f"what limits it: {_shares(result)}")
+    print(f"what limits it: {binding_shares(result)}")
+    for note in result.notes:
+        print(f"note: {note}")
     if args.out:
         for written in retime_outputs(robot, result, args.out):
             print(f"wrote {written}")
@@ -97,7 +99,7 @@ def _floor_text(floor) -> str:
     return f"on the floor (zero-moment point {floor.zmp_margin:g} m inside, {traction}, reserve {floor.reserve:g})"
 
 
-def _shares(result) -> str:
+def binding_shares(result) -> str:
     """The binding rows by the share of the path's samples where each binds, largest first."""
     from collections import Counter
 

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -177,6 +178,11 @@ def _strip(polygon, step: float, lo: float, hi: float) -> list[tuple[float, floa
     return _clip(out, -2.0 * step, -1.0, -lo) if out else []
 
 
+def _reaches(polygon, *, step: float, lo: float, hi: float) -> bool:
+    """Whether some (a, b) of the polygon has its next b in [lo, hi]."""
+    return bool(_strip(polygon, step, lo, hi))
+
+
 def _b_range(polygon) -> tuple[float, float] | None:
     if not polygon:
         return None
@@ -214,6 +220,8 @@ class Retiming:
         binding_kind: its kind, (N,).
         trajectory: the retimed motion (its x and xdot exact on the grid).
         floor: the floor kept (its description), or ``None``.
+        notes: what the user should know of the result: an end of the path where the robot is at
+            rest only while it accelerates (it cannot stand still there within the rows).
     """
 
     robot_name: str
@@ -228,6 +236,7 @@ class Retiming:
     binding_kind: tuple[str, ...]
     trajectory: Trajectory = field(repr=False)
     floor: dict | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def duration(self) -> float:
@@ -258,6 +267,7 @@ class Retiming:
             "input_duration": float(self.s[-1] - self.s[0]),
             "duration": self.duration,
             "floor": self.floor,
+            "notes": list(self.notes),
             "binding": [{"from_s": a, "to_s": b, "row": label} for a, b, label in self.binding_runs()],
             "columns": {name: values[:, k].tolist() for k, name in enumerate(header)}
             | {"binding": list(self.binding), "binding_kind": list(self.binding_kind)},
@@ -299,16 +309,23 @@ def retime(
 
     # backward: the controllable sets, ending at rest
     K = np.zeros((n, 2))
-    for i, where in ((0, "first"), (n - 1, "last")):  # from rest to rest: both ends held still
+    unsteady = {}  # an end where the robot is at rest only while it accelerates
+    for i, where in ((0, "first"), (n - 1, "last")):  # from rest to rest: s' = 0 at both ends
+        if not _clip(polygons[i], 0.0, 1.0, 0.0):
+            at_rest = _blocking(rows[i], lambda polygon: bool(_clip(polygon, 0.0, 1.0, 0.0)))
+            raise NumericalError(f"the path's {where} sample cannot be passed at rest: {at_rest}")
         still = _still_breaks(rows[i])
         if still:
-            raise NumericalError(f"the path's {where} sample cannot be held still: {still}")
+            unsteady[where] = f"the {where} sample cannot be held still (s'' = 0): {still}"
     for i in range(n - 2, -1, -1):
-        found = _b_range(_strip(polygons[i], float(steps[i]), K[i + 1, 0], K[i + 1, 1]))
+        step, lo, hi = float(steps[i]), K[i + 1, 0], K[i + 1, 1]
+        found = _b_range(_strip(polygons[i], step, lo, hi))
         if found is None:
+            blocking = _blocking(rows[i], partial(_reaches, step=step, lo=lo, hi=hi))
+            ending = f"; {unsteady['last']}" if "last" in unsteady else ""
             raise NumericalError(
                 f"no timing of the path reaches its end at rest from sample {i} (s = {s[i]:.6g} s): "
-                f"{_blocking(rows[i])} there"
+                f"{blocking} there{ending}"
             )
         K[i] = found
     if K[0, 0] > 0.0:
@@ -359,6 +376,7 @@ def retime(
         binding_kind=tuple(kinds),
         trajectory=retimed,
         floor=None if floor is None else floor.describe(),
+        notes=tuple(unsteady.values()),
     )
 
 
@@ -377,12 +395,14 @@ def _still_breaks(rows: PathRows) -> str:
     return ", ".join(dict.fromkeys(label for label, bad in zip(rows.labels, broken) if bad))
 
 
-def _blocking(rows: PathRows) -> str:
-    """What leaves the grid point no (s'', s'^2): the first row (by label) without which it has
-    some, or "its limits together" naming their kinds."""
+def _blocking(rows: PathRows, accept=bool) -> str:
+    """What leaves the grid point no (s'', s'^2) that ``accept`` takes (by default: none at all):
+    the first row (by label) without which it has some, or "its limits together" naming their
+    kinds."""
     labels = np.asarray(rows.labels)
     for label in dict.fromkeys(rows.labels):
         keep = labels != label
-        if _polygon(PathRows(rows.ca[keep], rows.cb[keep], rows.d[keep], (), ())):
+        polygon = _polygon(PathRows(rows.ca[keep], rows.cb[keep], rows.d[keep], (), ()))
+        if polygon and accept(polygon):
             return label
     return "its limits together (" + ", ".join(dict.fromkeys(rows.kinds)) + ")"
