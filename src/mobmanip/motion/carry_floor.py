@@ -136,6 +136,50 @@ def floor_rows(
     return G, r - R @ w0, labels
 
 
+@dataclass(frozen=True)
+class FloorRows:
+    """The floor's rows over its resultant wrench on the robot and its object, ``R @ wrench <= r``:
+    the zero-moment point ``floor.zmp_margin`` inside the support polygon, every support loaded
+    (its compliant share at least the reserve's part of the weight) and each driven wheel's
+    traction within its friction pyramid scaled by 1 - reserve.
+
+    Built once per robot and floor (:meth:`build`) in the platform's frame, where the contacts do
+    not move; :meth:`at` turns them to the world at a configuration.
+
+    Attributes:
+        R: (r, 6) over the wrench in the platform's axes, its moment about the platform's origin.
+        r: (r,).
+        labels: what each row keeps, (r,).
+        kinds: ``"tip-over"``, ``"contact"`` or ``"traction"`` per row, (r,).
+    """
+
+    R: np.ndarray
+    r: np.ndarray
+    labels: tuple[str, ...]
+    kinds: tuple[str, ...]
+
+    @classmethod
+    def build(
+        cls, robot: Robot, object_mass: float, floor: CarryFloor, resolved: tuple[Support, float | None, int]
+    ) -> FloorRows:
+        return cls(*_platform_rows(robot, object_mass, floor, resolved))
+
+    def at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(R, r) over the wrench as :func:`mobmanip.motion.ground.floor_wrench` gives it: force
+        then moment about the world origin, world axes, for the platform at ``q``."""
+        c, s = float(q[2]), float(q[3])
+        norm = math.hypot(c, s)
+        c, s = c / norm, s / norm
+        x, y = float(q[0]), float(q[1])
+        turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world to platform axes
+        origin = np.array([[0.0, 0.0, y], [0.0, 0.0, -x], [-y, x, 0.0]])  # M_p = M_O - p x F
+        T = np.zeros((6, 6))
+        T[:3, :3] = turn
+        T[3:, 3:] = turn
+        T[3:, :3] = -turn @ origin
+        return self.R @ T, self.r
+
+
 def wrench_rows(
     robot: Robot,
     q: np.ndarray,
@@ -143,16 +187,17 @@ def wrench_rows(
     floor: CarryFloor,
     resolved: tuple[Support, float | None, int],
 ) -> tuple[np.ndarray, np.ndarray, list[str], list[str]]:
-    """The floor's rows over the floor's resultant wrench on the robot and its object
-    (:func:`mobmanip.motion.ground.floor_wrench`: force, then moment about the world origin;
-    world axes): ``R @ wrench <= r`` keeps the zero-moment point ``floor.zmp_margin`` inside the
-    support polygon, every support loaded (its compliant share at least the reserve's part of the
-    weight) and each driven wheel's traction within its friction pyramid scaled by 1 - reserve.
+    """:class:`FloorRows` at ``q``: (R (r, 6), r (r,), labels, kinds) over the floor's wrench as
+    :func:`mobmanip.motion.ground.floor_wrench` gives it (world axes, moment about the world origin)."""
+    rows = FloorRows.build(robot, object_mass, floor, resolved)
+    R, r = rows.at(q)
+    return R, r, list(rows.labels), list(rows.kinds)
 
-    Returns:
-        (R (r, 6), r (r,), one label per row, one kind per row: ``"tip-over"``, ``"contact"`` or
-        ``"traction"``).
-    """
+
+def _platform_rows(
+    robot: Robot, object_mass: float, floor: CarryFloor, resolved: tuple[Support, float | None, int]
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    """:class:`FloorRows`' rows in the platform's frame (the platform at the world's origin)."""
     support, mu, faces = resolved
     z = support.floor_z
     # the moment about the floor point under the origin, times F_z: N = (z F_x - M_y, M_x + z F_y)
@@ -162,7 +207,7 @@ def wrench_rows(
     Fz = np.zeros(6)
     Fz[2] = 1.0
 
-    pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
+    pose = (0.0, 0.0, 0.0)
     points = support.world_points(pose)[:, :2]
     R_rows, r_rows, labels, kinds = [], [], [], []
     polygon = support.polygon(pose)
@@ -209,7 +254,7 @@ def wrench_rows(
                 r_rows.append(0.0)
                 labels.append(f"traction of {support.contacts[c].name} within friction (mu = {mu:g})")
                 kinds.append("traction")
-    return np.array(R_rows), np.array(r_rows, dtype=float), labels, kinds
+    return np.array(R_rows), np.array(r_rows, dtype=float), tuple(labels), tuple(kinds)
 
 
 def robot_mass(robot: Robot) -> float:

@@ -74,6 +74,20 @@ def floor_wrench(
         object_acceleration, object_acceleration_rate: the object's 6-D acceleration (linear, then
             angular; world) as ``object_acceleration + object_acceleration_rate @ xdot``, (6,) and (6, nx).
     """
+    offset, linear, _ = floor_wrench_terms(robot, q, x, object_mass, object_acceleration, object_acceleration_rate)
+    return offset, linear
+
+
+def floor_wrench_terms(
+    robot: Robot,
+    q: np.ndarray,
+    x: np.ndarray,
+    object_mass: float,
+    object_acceleration: np.ndarray,
+    object_acceleration_rate: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`floor_wrench`'s (offset, linear) and the offset's weight part alone, (6,): the
+    wrench at rest (the offset less every velocity term and the given object acceleration)."""
     g = np.asarray(GRAVITY, dtype=float)
     model, data = robot.model, robot.data
     mass = float(pin.computeTotalMass(model))
@@ -93,13 +107,16 @@ def floor_wrench(
     offset[:3] = rate0[:3] + object_mass * a0[:3] - (mass + object_mass) * g
     linear[:3] = rate1[:3] + object_mass * a1[:3]
     offset[3:] = rate0[3:] + np.cross(c, rate0[:3]) + object_mass * np.cross(c_o, a0[:3])
-    offset[3:] -= np.cross(c, mass * g) + np.cross(c_o, object_mass * g)
+    weight = np.zeros(6)
+    weight[:3] = -(mass + object_mass) * g
+    weight[3:] = -(np.cross(c, mass * g) + np.cross(c_o, object_mass * g))
+    offset[3:] += weight[3:]
     linear[3:] = rate1[3:] + _skew(c) @ rate1[:3] + object_mass * _skew(c_o) @ a1[:3]
     if object_mass > 0.0:
         inertia = HeldObject.between(hands, object_mass).inertia
         offset[3:] += inertia @ a0[3:]
         linear[3:] += inertia @ a1[3:]
-    return offset, linear
+    return offset, linear, weight
 
 
 def _skew(r: np.ndarray) -> np.ndarray:

@@ -122,6 +122,15 @@ class MotionTerms:
         wrench = self.M_o @ a_o + self.c_o + self.g_o
         return np.linalg.solve(self.Q, self.P @ xdot - self.xi + self.J_u.T @ (self.W_pinv @ wrench))
 
+    def effort_map(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`torques` with the object's acceleration the hands give, as ``L @ xdot + bias``:
+        (L (nx, nx), bias (nx,)), the bias holding gravity and every velocity term."""
+        to_object = np.linalg.pinv(self.W.T)
+        hands_to_joints = self.J_u.T @ self.W_pinv
+        L = np.linalg.solve(self.Q, self.P + hands_to_joints @ (self.M_o @ (to_object @ self.J_u)))
+        wrench = self.M_o @ (to_object @ (self.drift - self.grasp_drift)) + self.c_o + self.g_o
+        return L, np.linalg.solve(self.Q, -self.xi + hands_to_joints @ wrench)
+
     def static_torques(self) -> np.ndarray:
         """The part of :meth:`torques` that does not scale with the speed: gravity, (nx,)."""
         return np.linalg.solve(self.Q, -self.xi_rest + self.J_u.T @ (self.W_pinv @ self.g_o))

@@ -41,8 +41,8 @@ from ..errors import ArgumentError, NumericalError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
-from .carry_floor import CarryFloor, wrench_rows
-from .ground import floor_wrench
+from .carry_floor import CarryFloor, FloorRows
+from .ground import floor_wrench_terms
 from .in_motion import motion_terms
 from .trajectory import Trajectory
 
@@ -94,7 +94,7 @@ def path_rows(
     """
     task_space = get_task(task or robot.spec.default_task)
     mass = float(robot.spec.object_mass if object_mass is None else object_mass)
-    resolved = floor.resolve(robot) if floor is not None else None
+    floor_rows = None if floor is None else FloorRows.build(robot, mass, floor, floor.resolve(robot))
     vlim = np.asarray(robot.velocity_limits, dtype=float)
     elim = np.asarray(robot.effort_limits, dtype=float)
     names = robot.reduced_velocity_names
@@ -107,28 +107,27 @@ def path_rows(
             q, x_s, x_ss = trajectory.q[i], trajectory.x[i], trajectory.xdot[i]
             terms = motion_terms(robot, q, x_s, task_space, object_mass=mass)
             static = terms.static_torques()
-            moving = terms.torques(np.zeros(nx))  # gravity and the velocity terms at s' = 1
-            T_a = terms.torques(x_s) - moving
-            T_b = terms.torques(x_ss) - static
+            L, moving = terms.effort_map()  # moving: gravity and the velocity terms at s' = 1
+            T_a = L @ x_s
+            T_b = L @ x_ss + moving - static
             moves = np.flatnonzero(x_s != 0.0)
             ca = [np.zeros(len(moves)), T_a, -T_a]
             cb = [x_s[moves] ** 2, T_b, -T_b]
             d = [vlim[moves] ** 2, elim - static, elim + static]
             labels = [f"velocity {names[j]}" for j in moves] + [f"effort {n}" for n in names] * 2
             kinds = ["velocity"] * len(moves) + ["effort"] * (2 * nx)
-            if floor is not None and resolved is not None:
+            if floor_rows is not None:
                 to_object = np.linalg.pinv(terms.W.T)
                 a0, a1 = np.zeros(6), np.zeros((6, nx))
                 a0[rows_task] = to_object @ (terms.drift - terms.grasp_drift)
                 a1[rows_task] = to_object @ terms.J_u
-                offset, linear = floor_wrench(robot, q, x_s, mass, a0, a1)
-                resting, _ = floor_wrench(robot, q, np.zeros(nx), mass, np.zeros(6), a1)
-                R, r, floor_labels, floor_kinds = wrench_rows(robot, q, mass, floor, resolved)
+                offset, linear, resting = floor_wrench_terms(robot, q, x_s, mass, a0, a1)
+                R, r = floor_rows.at(q)
                 ca.append(R @ (linear @ x_s))
                 cb.append(R @ (linear @ x_ss + offset - resting))
                 d.append(r - R @ resting)
-                labels += floor_labels
-                kinds += floor_kinds
+                labels += floor_rows.labels
+                kinds += floor_rows.kinds
             out.append(PathRows(np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels), tuple(kinds)))
     return out
 
@@ -160,13 +159,24 @@ def _clip(polygon: list[tuple[float, float]], ca: float, cb: float, d: float) ->
 
 
 def _polygon(rows: PathRows) -> list[tuple[float, float]]:
-    """The grid point's feasible (a, b), within the solver's caps."""
+    """The grid point's feasible (a, b), within the solver's caps. Each cut keeps a polygon
+    inside the last, so a row every vertex keeps stays kept: only the most broken row is cut by,
+    until none is (a few cuts, however many rows)."""
     top = SPEED_CAP**2
     polygon = [(-ACCELERATION_CAP, 0.0), (ACCELERATION_CAP, 0.0), (ACCELERATION_CAP, top), (-ACCELERATION_CAP, top)]
-    # the bounds on b alone first: they shrink the box without loss
-    order = np.argsort(rows.ca != 0.0, kind="stable")
-    for k in order:
-        polygon = _clip(polygon, float(rows.ca[k]), float(rows.cb[k]), float(rows.d[k]))
+    scale = np.hypot(rows.ca, rows.cb)
+    if np.any(rows.d[scale == 0.0] < -ROW_TOLERANCE * np.maximum(1.0, np.abs(rows.d[scale == 0.0]))):
+        return []
+    moving = scale > 0.0
+    ca, cb, d = (v[moving] / scale[moving] for v in (rows.ca, rows.cb, rows.d))
+    tol = ROW_TOLERANCE * (1.0 + np.abs(d))
+    for _ in range(len(d) + 1):
+        vertices = np.asarray(polygon)
+        broken = (np.outer(ca, vertices[:, 0]) + np.outer(cb, vertices[:, 1])).max(axis=1) - d - tol
+        k = int(np.argmax(broken))
+        if broken[k] <= 0.0:
+            return polygon
+        polygon = _clip(polygon, float(ca[k]), float(cb[k]), float(d[k]))
         if not polygon:
             return []
     return polygon
