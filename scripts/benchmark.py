@@ -421,6 +421,11 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
     )
+    parser.add_argument(
+        "--retime",
+        action="store_true",
+        help="only the fastest timing of a path, beside toppra (scripts/benchmark_retime.py)",
+    )
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
@@ -444,6 +449,10 @@ def main(argv=None) -> int:
         from benchmark_sweeps import run as run_sweeps
 
         return run_sweeps(quick=args.quick)
+    if args.retime:
+        from benchmark_retime import run as run_retime
+
+        return run_retime(quick=args.quick, rounds=args.rounds)
     quick = args.quick
     rounds = args.rounds or (2 if quick else 7)
     n_single, n_batch = (200, 2000) if quick else (1000, 10000)

@@ -49,7 +49,7 @@ from .trajectory import Trajectory
 #: The largest speed-up of the path parameter the solver looks at, s' <= this (the original
 #: timing is s' = 1): a path nothing limits runs into it and is refused.
 SPEED_CAP = 1e3
-#: The largest |s''| it looks at (1/s^2 in units of the original timing).
+#: The largest s'' (either sign) it looks at, in units of the input's timing.
 ACCELERATION_CAP = 1e8
 #: A polygon's vertex keeps a row when it breaks it by less than this, relative to the row's scale.
 ROW_TOLERANCE = 1e-9

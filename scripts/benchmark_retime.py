@@ -1,0 +1,181 @@
+"""Time the fastest timing of a path (``mobmanip.motion.retime``), beside TOPP-RA's own implementation.
+
+Run: ``python scripts/benchmark.py --retime [--quick]`` (or this file directly). In one process,
+warm, BLAS and OpenMP limited to one thread as the ``mobmanip`` command runs, medians of
+interleaved rounds:
+
+- TIAGo++ carrying 2 kg along a 200-sample whole-body path (1.2 m along an arc while the arms
+  move), with the floor (zero-moment point 5 cm inside, traction mu 0.5, reserve 0.2) and
+  without it;
+- the Panda on a 200-sample path with joint velocity and effort limits only, beside ``toppra``
+  (the same limits, RNEA in its torque rows): the same problem both ways.
+
+CPU time is the process's (``time.process_time``); wall time beside it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The issue's bound on retiming 200 samples of TIAGo++ with the floor (s of CPU, in process, warm).
+BOUND = 0.100
+
+
+def _tiago_path(robot, n: int):
+    from mobmanip.motion.trajectory import trajectory_from_samples
+
+    home = robot.hold_configuration()
+    s = np.linspace(0.0, 6.0, n)
+    u = 0.5 - 0.5 * np.cos(math.pi * s / 6.0)
+    yaw = 0.4 * u
+    q = np.tile(home, (n, 1))
+    q[:, 0], q[:, 1] = 3.0 * np.sin(yaw), 3.0 * (1.0 - np.cos(yaw))
+    q[:, 2], q[:, 3] = np.cos(yaw), np.sin(yaw)
+    for name, change in (("arm_left_2_joint", 0.3), ("arm_right_2_joint", 0.3), ("arm_left_4_joint", -0.4)):
+        q[:, robot.model.joints[robot.model.getJointId(name)].idx_q] += change * u
+    known = [name for name in robot.joint_names if "wheel" not in name]
+    return trajectory_from_samples(robot, s, q, known_joints=known)
+
+
+def _panda_case(n: int):
+    """(our call, toppra's call) on the same sine path of the Panda's seven joints."""
+    import pinocchio as pin
+
+    from mobmanip import load_robot
+    from mobmanip.motion.retime import retime
+    from mobmanip.motion.trajectory import trajectory_from_samples
+
+    robot = load_robot("panda")
+    model = robot.model
+    iq = [model.joints[model.getJointId(name)].idx_q for name in robot.reduced_velocity_names]
+    iv = [model.joints[model.getJointId(name)].idx_v for name in robot.reduced_velocity_names]
+    home = robot.hold_configuration()
+    amplitude = np.array([0.8, 0.5, 0.6, 0.5, 0.9, 0.6, 1.0])
+    s = np.linspace(0.0, 1.0, n)
+    q = np.tile(home, (n, 1))
+    q[:, iq] += amplitude * np.sin(math.pi * s)[:, None]
+    x_s = amplitude * (math.pi * np.cos(math.pi * s))[:, None]
+    x_ss = amplitude * (-(math.pi**2) * np.sin(math.pi * s))[:, None]
+    path = trajectory_from_samples(robot, s, q, x_s, x_ss)
+
+    def ours():
+        return retime(robot, path, object_mass=0.0).duration
+
+    try:
+        import toppra
+        from toppra import algorithm, constraint
+    except ImportError:
+        return ours, None
+    toppra.setup_logging("WARNING")
+    data = model.createData()
+    arm_home = home[iq]
+
+    class SinePath(toppra.interpolator.AbstractGeometricPath):
+        def __call__(self, ss, order=0):
+            ss = np.atleast_1d(np.asarray(ss, dtype=float))
+            if order == 0:
+                return arm_home + amplitude * np.sin(math.pi * ss)[:, None]
+            if order == 1:
+                return amplitude * (math.pi * np.cos(math.pi * ss))[:, None]
+            return amplitude * (-(math.pi**2) * np.sin(math.pi * ss))[:, None]
+
+        @property
+        def dof(self):
+            return 7
+
+        @property
+        def path_interval(self):
+            return np.array([0.0, 1.0])
+
+        @property
+        def waypoints(self):
+            return None
+
+    def inverse_dynamics(qq, qd, qdd):
+        full, v, a = home.copy(), np.zeros(model.nv), np.zeros(model.nv)
+        full[iq], v[iv], a[iv] = qq, qd, qdd
+        return pin.rnea(model, data, full, v, a)[iv]
+
+    vlim, elim = np.asarray(robot.velocity_limits), np.asarray(robot.effort_limits)
+
+    def theirs():
+        limits = [
+            constraint.JointVelocityConstraint(np.c_[-vlim, vlim]),
+            constraint.JointTorqueConstraint(inverse_dynamics, np.c_[-elim, elim], np.zeros(7)),
+        ]
+        solver = algorithm.TOPPRA(limits, SinePath(), gridpoints=s, parametrizer="ParametrizeConstAccel")
+        return solver.compute_trajectory(0, 0).duration
+
+    return ours, theirs
+
+
+def _timed(call) -> tuple[float, float, float]:
+    wall, cpu = time.perf_counter(), time.process_time()
+    value = call()
+    return time.process_time() - cpu, time.perf_counter() - wall, value
+
+
+def run(quick: bool = False, rounds: int | None = None) -> int:
+    from mobmanip import load_robot
+    from mobmanip.motion.carry_floor import CarryFloor
+    from mobmanip.motion.retime import retime
+    from mobmanip.support.threads import limit_threads
+
+    rounds = rounds or (2 if quick else 7)
+    n = 50 if quick else 200
+    with limit_threads():
+        tiago = load_robot("tiago_dual")
+        path = _tiago_path(tiago, n)
+        floor = CarryFloor(mu=0.5, zmp_margin=0.05, reserve=0.2)
+        cases = {
+            "TIAGo++ 2 kg, floor": lambda: retime(tiago, path, object_mass=2.0, floor=floor).duration,
+            "TIAGo++ 2 kg, limits only": lambda: retime(tiago, path, object_mass=2.0).duration,
+        }
+        ours, theirs = _panda_case(n)
+        cases["Panda, limits only"] = ours
+        if theirs is not None:
+            cases["Panda, limits only (toppra)"] = theirs
+        for call in cases.values():  # warm-up
+            call()
+        times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
+        durations = {}
+        for _ in range(rounds):
+            for name, call in cases.items():
+                cpu, wall, durations[name] = _timed(call)
+                times[name].append((cpu, wall))
+    print(f"retime, {n} samples, medians of {rounds} interleaved rounds (one BLAS thread)")
+    print(f"{'case':32s} {'CPU ms':>8s} {'wall ms':>8s} {'duration s':>11s}")
+    medians = {}
+    for name, pairs in times.items():
+        cpu = statistics.median(p[0] for p in pairs)
+        wall = statistics.median(p[1] for p in pairs)
+        medians[name] = cpu
+        print(f"{name:32s} {1e3 * cpu:8.1f} {1e3 * wall:8.1f} {durations[name]:11.6f}")
+    if "Panda, limits only (toppra)" in medians:
+        ratio = medians["Panda, limits only"] / medians["Panda, limits only (toppra)"]
+        gap = durations["Panda, limits only"] / durations["Panda, limits only (toppra)"] - 1.0
+        print(f"Panda: mobmanip / toppra CPU {ratio:.1f}x; durations apart by {gap:.1e}")
+    if not quick:
+        cpu = medians["TIAGo++ 2 kg, floor"]
+        verdict = "within" if cpu <= BOUND else "ABOVE"
+        print(
+            f"TIAGo++ with the floor, {n} samples: {1e3 * cpu:.0f} ms of CPU, {verdict} the {1e3 * BOUND:.0f} ms bound"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT / "src"))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--rounds", type=int)
+    arguments = parser.parse_args()
+    sys.exit(run(quick=arguments.quick, rounds=arguments.rounds))
