@@ -21,7 +21,7 @@ from mobmanip import load_robot
 from mobmanip.errors import MobmanipError, NumericalError
 from mobmanip.motion.carry_floor import CarryFloor
 from mobmanip.motion.ground import ground_along
-from mobmanip.motion.retime import retime
+from mobmanip.motion.retime import retime, stops_along
 from mobmanip.motion.trajectory import read_trajectory, trajectory_from_samples
 from mobmanip.motion.trajectory_analysis import analyze_trajectory
 from mobmanip.robot.support import robot_support
@@ -302,8 +302,9 @@ def test_command_writes_a_trajectory_that_trajectory_reads(tiago, tmp_path, capf
     source = write_trajectory_csv(tiago, tmp_path / "path.csv", path.t, path.q)
     out = tmp_path / "out"
     code, stdout, stderr = run_cli(
-        capfd, "retime", "tiago_dual", source, "--object-mass", "1.5", "--ground", "--reserve", "0.2", "--out", out
-    )
+        capfd, "retime", "tiago_dual", source, "--object-mass", "1.5", "--ground", "--reserve", "0.2",
+        "--stop-within", "0.2", "--out", out,
+    )  # fmt: skip
     assert code == 0, stderr
     assert "fastest timing from rest to rest" in stdout and "what limits it:" in stdout
     document = json.loads((out / "retime.json").read_text())
@@ -312,6 +313,12 @@ def test_command_writes_a_trajectory_that_trajectory_reads(tiago, tmp_path, capf
     assert np.allclose(retimed.q, path.q, atol=1e-9)
     assert (out / "retime.png").stat().st_size > 0
     assert document["floor"]["reserve"] == 0.2
+    stops = document["stops"]
+    k = stops["lowest_at_sample"]
+    assert f"at most {stops['lowest_base_speed']:.4g} m/s at sample {k}" in stdout
+    columns, driving = stops["columns"], _driving(path, tiago)
+    ahead = [r for r, d in enumerate(columns["distance"]) if columns["distance"][-1] - d >= 0.2 and r in driving]
+    assert stops["lowest_base_speed"] == min(columns["base_speed"][r] for r in ahead) > 0.0
 
 
 @pytest.mark.parametrize(
@@ -342,3 +349,64 @@ def test_effort_map_is_the_efforts_of_the_motion(tiago):
         xdot = rng.normal(size=tiago.nx)
         expected = terms.torques(xdot)
         assert np.allclose(L @ xdot + bias, expected, rtol=1e-10, atol=1e-10 * np.abs(expected).max())
+
+
+# ----- braking along a path -----
+
+
+def _straight(robot, n=81, length=2.0):
+    """The platform driving straight ahead at a constant rate (0.5 m per unit of s), arms still."""
+    home = robot.hold_configuration()
+    s = np.linspace(0.0, length / 0.5, n)
+    q = np.tile(home, (n, 1))
+    q[:, 0] = home[0] + 0.5 * s
+    known = [name for name in robot.joint_names if "wheel" not in name]
+    return trajectory_from_samples(robot, s, q, known_joints=known)
+
+
+def test_the_highest_speed_that_stops_within_a_distance_is_the_closed_form(tiago):
+    """Driving straight with the arms still, nothing depends on the speed, so the hardest stop is a
+    constant deceleration: the largest one every effort allows, a_min = max over joints of the
+    bound of |tau' a + tau_g| <= T, with tau' = S^T M S x_s and tau_g = S^T g assembled here from
+    Pinocchio's CRBA and gravity (no object). From it, v = sqrt(2 |a_min| (s_j - s_i)) in s' and the
+    platform's speed 0.5 v. The one velocity term left out, 3e-7 N m at s' = 1 (checked below: the
+    file's wheels spin against a slightly tilted inertia), moves v by 4e-8 of itself."""
+    path = _straight(tiago)
+    found = stops_along(tiago, path, 0.3, object_mass=0.0)
+    model, data = tiago.model, tiago.model.createData()
+    i = 10
+    q, x_s = path.q[i], path.x[i]
+    S = tiago.null_space(q)
+    per_a = np.linalg.solve(tiago.Q, S.T @ pin.crba(model, data, q) @ S @ x_s)
+    static = np.linalg.solve(tiago.Q, S.T @ pin.computeGeneralizedGravity(model, data, q))
+    T = np.asarray(tiago.effort_limits)
+    moving = np.abs(per_a) > 1e-12
+    lower = np.where(per_a[moving] > 0, (-T - static)[moving] / per_a[moving], (T - static)[moving] / per_a[moving])
+    a_min = float(lower.max())
+    j = int(found.stop_at[i])
+    assert found.distance[j] - found.distance[i] <= 0.3 + 1e-12 < found.distance[j + 1] - found.distance[i]
+    expected = math.sqrt(2.0 * -a_min * (path.t[j] - path.t[i]))
+    assert expected * np.abs(x_s).max() < np.asarray(tiago.velocity_limits)[np.argmax(np.abs(x_s))]  # efforts bind
+    velocity_term = S.T @ (
+        pin.rnea(model, data, q, S @ x_s, np.zeros(model.nv)) - pin.computeGeneralizedGravity(model, data, q)
+    )
+    assert np.abs(velocity_term).max() < 1e-6
+    assert found.speed[i] == pytest.approx(expected, rel=1e-6)
+    assert found.base_speed[i] == pytest.approx(0.5 * expected, rel=1e-6)
+
+
+def test_a_floor_lowers_the_speed_from_which_it_stops(tiago):
+    path = _straight(tiago)
+    free = stops_along(tiago, path, 0.3, object_mass=2.0)
+    grounded = stops_along(tiago, path, 0.3, object_mass=2.0, floor=CarryFloor(mu=0.5, reserve=0.2))
+    inside = free.stop_at > np.arange(len(path))
+    assert np.all(grounded.speed[inside] <= free.speed[inside] * (1 + 1e-9))
+    assert np.any(grounded.speed[inside] < 0.9 * free.speed[inside])
+    with pytest.raises(MobmanipError, match="stopping distance"):
+        stops_along(tiago, path, -1.0)
+
+
+def _driving(path, robot):
+    """The samples where the platform drives at least a tenth of its fastest (the test's own)."""
+    rates = np.array([np.linalg.norm((robot.null_space(q) @ x)[:2]) for q, x in zip(path.q, path.x)])
+    return set(np.flatnonzero(rates >= 0.1 * rates.max()).tolist())

@@ -50,6 +50,13 @@ def register(sub) -> None:
     parser.add_argument("trajectory", metavar="TRAJ.csv", help="the path: a whole-body trajectory (see below)")
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    parser.add_argument(
+        "--stop-within",
+        type=decimal,
+        metavar="D",
+        help="also, at every sample, the highest speed from which the robot still stops within D metres of its "
+        "platform's travel along the path, on the same rows (the lowest is printed; retime.json has them all)",
+    )
     parser.add_argument("--out", metavar="DIR", help="write retimed.csv, retime.json, retime.png, profile.csv")
     add_motion_floor_options(parser)
     add_progress_option(parser)
@@ -58,7 +65,9 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..motion.retime import retime
+    from dataclasses import replace
+
+    from ..motion.retime import path_rows, retime, stops_along
     from ..motion.trajectory import read_trajectory
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
@@ -78,24 +87,44 @@ def run(args) -> int:
         out = output_directory(args.out)
         for name in RETIME_FILES:
             check_output(out / name)
-    result = retime(
+    rows = path_rows(
         robot, trajectory, args.task, object_mass=args.object_mass, floor=floor, progress=show_progress(args)
     )
+    result = retime(robot, trajectory, args.task, object_mass=args.object_mass, floor=floor, rows=rows)
+    stops = None
+    if args.stop_within is not None:
+        stops = stops_along(robot, trajectory, args.stop_within, rows=rows)
+        result = replace(result, stops=stops)
     before = float(result.s[-1] - result.s[0])
-    floor_text = "joint limits only" if floor is None else _floor_text(floor)
+    floor_text = "joint limits only" if floor is None else _floor_text(floor, robot)
     print(f"robot {robot.name}, task {result.task}, {len(result.s)} samples; {floor_text}")
     print(f"fastest timing from rest to rest: {result.duration:.4g} s (the input takes {before:.4g} s)")
     print(f"what limits it: {binding_shares(result)}")
     for note in result.notes:
         print(f"note: {note}")
+    if stops is not None and stops.slowest() < 0:
+        print(f"to stop within {stops.within:g} m of travel: no sample has that much of the path ahead of it")
+    elif stops is not None and stops.base_speed[stops.slowest()] == 0.0:
+        k = stops.slowest()
+        print(
+            f"to stop within {stops.within:g} m of travel: not possible from any speed at sample {k} "
+            f"(s = {stops.s[k]:.4g} s, {stops.distance[k]:.3g} m along): its rows leave no stop there"
+        )
+    elif stops is not None:
+        k = stops.slowest()
+        print(
+            f"to stop within {stops.within:g} m of travel: at most {stops.base_speed[k]:.4g} m/s at sample {k} "
+            f"(s = {stops.s[k]:.4g} s, {stops.distance[k]:.3g} m along), the lowest along the path"
+        )
     if args.out:
         for written in retime_outputs(robot, result, args.out):
             print(f"wrote {written}")
     return 0
 
 
-def _floor_text(floor) -> str:
-    traction = "no traction limit" if floor.mu is None else f"traction mu {floor.mu}"
+def _floor_text(floor, robot) -> str:
+    mu = floor.resolve(robot)[1]
+    traction = "no traction limit" if mu is None else f"traction mu {mu:g}"
     return f"on the floor (zero-moment point {floor.zmp_margin:g} m inside, {traction}, reserve {floor.reserve:g})"
 
 

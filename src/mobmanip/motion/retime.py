@@ -52,7 +52,7 @@ SPEED_CAP = 1e3
 #: The largest s'' (either sign) it looks at, in units of the input's timing.
 ACCELERATION_CAP = 1e8
 #: A polygon's vertex keeps a row when it breaks it by less than this, relative to the row's scale.
-ROW_TOLERANCE = 1e-9
+ROW_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -135,35 +135,61 @@ def path_rows(
 # ----- exact two-dimensional programs -----
 
 
-def _clip(polygon: list[tuple[float, float]], ca: float, cb: float, d: float) -> list[tuple[float, float]]:
-    """A convex polygon (vertices in order) cut by the half-plane ``ca a + cb b <= d``."""
+#: A polygon: its vertices in order, each with the line (ca, cb, d), normalised, of the edge
+#: that leaves it (``ca a + cb b = d``).
+Polygon = list[tuple[float, float, tuple[float, float, float]]]
+
+
+def _meet(first: tuple[float, float, float], second: tuple[float, float, float]) -> tuple[float, float]:
+    """Where two lines cross (Cramer's rule: exact to rounding however far the vertices are)."""
+    det = first[0] * second[1] - first[1] * second[0]
+    return (
+        (first[2] * second[1] - first[1] * second[2]) / det,
+        (first[0] * second[2] - first[2] * second[0]) / det,
+    )
+
+
+def _clip(polygon: Polygon, ca: float, cb: float, d: float) -> Polygon:
+    """A convex polygon cut by the half-plane ``ca a + cb b <= d``. A new vertex is computed as
+    the crossing of the cut with the edge's own line, not along the edge from its ends, so that
+    vertices far away (the solver's caps) cost no precision."""
     scale = math.hypot(ca, cb)
     if scale == 0.0:
         return polygon if d >= -ROW_TOLERANCE * max(1.0, abs(d)) else []
-    ca, cb, d = ca / scale, cb / scale, d / scale
-    tol = ROW_TOLERANCE * (1.0 + abs(d))
-    values = [ca * a + cb * b - d for a, b in polygon]
-    if all(v <= tol for v in values):
+    cut = (ca / scale, cb / scale, d / scale)
+    tol = ROW_TOLERANCE * (1.0 + abs(cut[2]))
+    values = [cut[0] * a + cut[1] * b - cut[2] for a, b, _ in polygon]
+    inside = [v <= tol for v in values]
+    if all(inside):
         return polygon
-    out: list[tuple[float, float]] = []
+    out: Polygon = []
     n = len(polygon)
     for k in range(n):
-        p, vp = polygon[k], values[k]
-        nxt, vn = polygon[(k + 1) % n], values[(k + 1) % n]
-        if vp <= tol:
-            out.append(p)
-        if (vp <= tol) != (vn <= tol) and n > 1:
-            w = vp / (vp - vn)
-            out.append((p[0] + w * (nxt[0] - p[0]), p[1] + w * (nxt[1] - p[1])))
+        a, b, edge = polygon[k]
+        if inside[k]:
+            out.append((a, b, edge))
+        if n > 1 and inside[k] != inside[(k + 1) % n]:
+            if abs(edge[0] * cut[1] - edge[1] * cut[0]) > 1e-12:
+                crossing = _meet(edge, cut)
+            else:  # an edge along the cut, its ends either side of it by rounding: where it is cut
+                nxt, w = polygon[(k + 1) % n], values[k] / (values[k] - values[(k + 1) % n])
+                crossing = (a + w * (nxt[0] - a), b + w * (nxt[1] - b))
+            # leaving the half-plane: the cut is the next edge; entering it: this edge goes on
+            out.append((*crossing, cut if inside[k] else edge))
     return out
 
 
-def _polygon(rows: PathRows) -> list[tuple[float, float]]:
+def _polygon(rows: PathRows) -> Polygon:
     """The grid point's feasible (a, b), within the solver's caps. Each cut keeps a polygon
     inside the last, so a row every vertex keeps stays kept: only the most broken row is cut by,
     until none is (a few cuts, however many rows)."""
-    top = SPEED_CAP**2
-    polygon = [(-ACCELERATION_CAP, 0.0), (ACCELERATION_CAP, 0.0), (ACCELERATION_CAP, top), (-ACCELERATION_CAP, top)]
+    top, cap = SPEED_CAP**2, ACCELERATION_CAP
+    polygon: Polygon = [
+        (-cap, 0.0, (0.0, -1.0, 0.0)),  # along b = 0
+        (cap, 0.0, (1.0, 0.0, cap)),  # up a = cap
+        (cap, top, (0.0, 1.0, top)),  # along b = top
+        (-cap, top, (-1.0, 0.0, cap)),  # down a = -cap
+    ]
     scale = np.hypot(rows.ca, rows.cb)
     if np.any(rows.d[scale == 0.0] < -ROW_TOLERANCE * np.maximum(1.0, np.abs(rows.d[scale == 0.0]))):
         return []
@@ -171,7 +197,7 @@ def _polygon(rows: PathRows) -> list[tuple[float, float]]:
     ca, cb, d = (v[moving] / scale[moving] for v in (rows.ca, rows.cb, rows.d))
     tol = ROW_TOLERANCE * (1.0 + np.abs(d))
     for _ in range(len(d) + 1):
-        vertices = np.asarray(polygon)
+        vertices = np.asarray([(a, b) for a, b, _ in polygon])
         broken = (np.outer(ca, vertices[:, 0]) + np.outer(cb, vertices[:, 1])).max(axis=1) - d - tol
         k = int(np.argmax(broken))
         if broken[k] <= 0.0:
@@ -182,7 +208,7 @@ def _polygon(rows: PathRows) -> list[tuple[float, float]]:
     return polygon
 
 
-def _strip(polygon, step: float, lo: float, hi: float) -> list[tuple[float, float]]:
+def _strip(polygon: Polygon, step: float, lo: float, hi: float) -> Polygon:
     """The part of the polygon whose next b, ``b + 2 step a``, lies in [lo, hi]."""
     out = _clip(polygon, 2.0 * step, 1.0, hi)
     return _clip(out, -2.0 * step, -1.0, -lo) if out else []
@@ -196,7 +222,7 @@ def _reaches(polygon, *, step: float, lo: float, hi: float) -> bool:
 def _b_range(polygon) -> tuple[float, float] | None:
     if not polygon:
         return None
-    bs = [b for _, b in polygon]
+    bs = [b for _, b, _ in polygon]
     return max(min(bs), 0.0), max(bs)
 
 
@@ -232,6 +258,7 @@ class Retiming:
         floor: the floor kept (its description), or ``None``.
         notes: what the user should know of the result: an end of the path where the robot is at
             rest only while it accelerates (it cannot stand still there within the rows).
+        stops: braking along the path (:func:`stops_along`), when asked for.
     """
 
     robot_name: str
@@ -247,6 +274,7 @@ class Retiming:
     trajectory: Trajectory = field(repr=False)
     floor: dict | None = None
     notes: tuple[str, ...] = ()
+    stops: Stops | None = None
 
     @property
     def duration(self) -> float:
@@ -278,6 +306,7 @@ class Retiming:
             "duration": self.duration,
             "floor": self.floor,
             "notes": list(self.notes),
+            "stops": None if self.stops is None else self.stops.to_dict(),
             "binding": [{"from_s": a, "to_s": b, "row": label} for a, b, label in self.binding_runs()],
             "columns": {name: values[:, k].tolist() for k, name in enumerate(header)}
             | {"binding": list(self.binding), "binding_kind": list(self.binding_kind)},
@@ -292,6 +321,7 @@ def retime(
     object_mass: float | None = None,
     floor: CarryFloor | None = None,
     progress: bool = False,
+    rows: list[PathRows] | None = None,
 ) -> Retiming:
     """The fastest timing of ``trajectory``'s path, from rest to rest, with every wheel and joint
     within its velocity and effort limits and, with ``floor``, the robot on its floor (see the
@@ -299,6 +329,7 @@ def retime(
 
     Args:
         robot, trajectory, task, object_mass, floor, progress: as :func:`path_rows`.
+        rows: the path's rows when already computed (:func:`path_rows`), else computed here.
 
     Raises:
         ArgumentError: not a trajectory.
@@ -307,7 +338,8 @@ def retime(
     """
     if not isinstance(trajectory, Trajectory):
         raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
-    rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor, progress=progress)
+    if rows is None:
+        rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor, progress=progress)
     s = trajectory.t
     n = len(s)
     steps = np.diff(s)
@@ -388,6 +420,130 @@ def retime(
         floor=None if floor is None else floor.describe(),
         notes=tuple(unsteady.values()),
     )
+
+
+def _stop_bound(polygons, steps: np.ndarray, start: int, end: int) -> float:
+    """The largest s'^2 at ``start`` from which the robot stops at ``end`` (its controllable set's
+    top, the backward pass from rest at ``end``), or -1 when none does (it cannot rest at ``end``, or
+    some sample between leaves no timing)."""
+    if not _clip(polygons[end], 0.0, 1.0, 0.0):
+        return -1.0
+    lo, hi = 0.0, 0.0
+    for i in range(end - 1, start - 1, -1):
+        found = _b_range(_strip(polygons[i], float(steps[i]), lo, hi))
+        if found is None:
+            return -1.0
+        lo, hi = found
+    return hi
+
+
+def _base_distance(robot: Robot, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """The platform's travelled distance from the first sample (m), (N,), and its speed per unit
+    of the path parameter, |d(x, y)/ds| (m/s at s' = 1), (N,)."""
+    steps = np.linalg.norm(np.diff(trajectory.q[:, :2], axis=0), axis=1)
+    rates = np.array([np.linalg.norm((robot.null_space(q) @ x)[:2]) for q, x in zip(trajectory.q, trajectory.x)])
+    return np.r_[0.0, np.cumsum(steps)], rates
+
+
+#: Where the path drives its platform, for the lowest speed that stops (:meth:`Stops.slowest`): at
+#: least this share of the platform's fastest rate along the path.
+DRIVING = 0.1
+
+
+@dataclass(frozen=True)
+class Stops:
+    """Braking along a path, on the rows :func:`path_rows` gives (see :func:`stops_along`).
+
+    Attributes:
+        s: the path parameter at the samples, (N,).
+        distance: the platform's travelled distance from the first sample (m), (N,).
+        within: the distance a stop must take at most (m).
+        speed: at each sample, the largest s' from which the robot stops within ``within`` metres
+            of the platform's travel (0 where it cannot: a sample it cannot pass at rest), (N,).
+        base_speed: the same as the platform's speed (m/s), (N,).
+        stop_at: the sample where each stop ends: the last within the distance, (N,).
+        platform_rate: the platform's speed per unit of s (m/s at s' = 1), (N,).
+    """
+
+    s: np.ndarray
+    distance: np.ndarray
+    within: float
+    speed: np.ndarray
+    base_speed: np.ndarray
+    stop_at: np.ndarray
+    platform_rate: np.ndarray
+
+    def slowest(self) -> int:
+        """The sample with the lowest such platform speed among those with the whole distance
+        ahead of them where the path drives the platform (at least :data:`DRIVING` of its fastest
+        rate: elsewhere the path's end, or the arms moving while the platform creeps, decides), or
+        -1 when there is none."""
+        ahead = self.distance[-1] - self.distance >= self.within
+        candidates = np.flatnonzero(ahead & (self.platform_rate >= DRIVING * self.platform_rate.max()))
+        return int(candidates[np.argmin(self.base_speed[candidates])]) if candidates.size else -1
+
+    def to_dict(self) -> dict:
+        k = self.slowest()
+        return {
+            "within": self.within,
+            "lowest_base_speed": None if k < 0 else float(self.base_speed[k]),
+            "lowest_at_sample": None if k < 0 else k,
+            "columns": {
+                "s": self.s.tolist(),
+                "distance": self.distance.tolist(),
+                "speed": self.speed.tolist(),
+                "base_speed": self.base_speed.tolist(),
+                "stop_at": self.stop_at.tolist(),
+            },
+        }
+
+
+def stops_along(
+    robot: Robot,
+    trajectory: Trajectory,
+    within: float,
+    task: str | None = None,
+    *,
+    object_mass: float | None = None,
+    floor: CarryFloor | None = None,
+    rows: list[PathRows] | None = None,
+) -> Stops:
+    """At every sample of the path, the highest speed from which the robot can still stop within
+    ``within`` metres of its platform's travel along the path, keeping every row of
+    :func:`path_rows` (its limits and, with ``floor``, its floor) all the way: the question a
+    safety case asks. The stop ends at the last sample within the distance; where the path can
+    stand still, stopping there is as easy as stopping anywhere before it.
+
+    Exact on the samples: each answer is the top of a controllable set, the backward pass of
+    :func:`retime` run from rest at the stop's sample.
+
+    Args:
+        within: the distance (m), > 0.
+        rows: the path's rows when already computed (:func:`path_rows`), else computed here.
+        robot, trajectory, task, object_mass, floor: as :func:`path_rows`.
+
+    Raises:
+        ArgumentError: a distance that is not a finite positive number; a path whose platform does
+            not move.
+    """
+    if isinstance(within, bool) or not (isinstance(within, (int, float)) and math.isfinite(within) and within > 0):
+        raise ArgumentError(f"the stopping distance must be a finite positive number of metres, got {within!r}")
+    distance, rates = _base_distance(robot, trajectory)
+    if distance[-1] <= 0.0:
+        raise ArgumentError("the path's platform does not move: a stopping distance along it means nothing")
+    if rows is None:
+        rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor)
+    polygons = [_polygon(r) for r in rows]
+    steps = np.diff(trajectory.t)
+    n = len(trajectory)
+    stop_at = np.minimum(np.searchsorted(distance, distance + within * (1 + 1e-12), side="right") - 1, n - 1)
+    speed = np.zeros(n)
+    for i in range(n):
+        if not polygons[i] or stop_at[i] <= i:
+            continue
+        top = _stop_bound(polygons, steps, i, int(stop_at[i]))
+        speed[i] = math.sqrt(top) if top > 0.0 else 0.0
+    return Stops(trajectory.t.copy(), distance, float(within), speed, speed * rates, stop_at, rates)
 
 
 def _binding(rows: PathRows, a: float, b: float) -> tuple[str, str]:
