@@ -1,6 +1,6 @@
 """The documentation's pictures are made by the project's own commands when the docs are built
 (``docs/figures.py``, issue 28, item 10), never committed; every picture a page shows is one the
-build makes, and every one the build makes is shown."""
+build makes, and every one the build makes is shown. The README shows one of them."""
 
 from __future__ import annotations
 
@@ -45,6 +45,17 @@ def test_every_picture_shown_is_made_and_every_one_made_is_shown():
     for name, (arguments, produced) in figures.FIGURES.items():
         assert Path(produced).suffix == Path(name).suffix == ".png"
         assert arguments[0] in {"paper", "sweep", "place", "site", "carry", "team"}
+
+
+def test_the_readme_shows_pictures_the_build_makes():
+    """The README's pictures are the docs build's (it commits none of its own)."""
+    figures = _figures_module()
+    made = set(figures.FIGURES) | set(figures.SCREENSHOTS)
+    shown = re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", (ROOT / "README.md").read_text())
+    assert shown, "the README shows a first result"
+    for target in shown:
+        path = (ROOT / target).resolve()
+        assert path.parent == (DOCS / "_generated").resolve() and path.name in made, target
 
 
 @pytest.mark.skipif(shutil.which("git") is None, reason="needs git")

@@ -89,7 +89,8 @@ def _case(command: str, rng, directory):
 
 def _partial_carry(command: str, outputs) -> bool:
     """Whether a failed run is a carry that wrote the part that succeeded: its ``carry.json``
-    says ``"partial": true`` and every number it wrote is finite (README, carry's diagnosis)."""
+    says ``"partial": true`` and every number it wrote is finite (a failed carry keeps the part
+    that succeeded: docs/howto/floor.md, team.md)."""
     summary = outputs[0] / "carry.json"
     if command != "carry" or not summary.is_file():
         return False

@@ -86,7 +86,7 @@ def test_bad_grasp_offsets_are_refused(tmp_path):
             load_spec(path)
 
 
-# ----- the README's TIAGo++ example, by posture -----
+# ----- the TIAGo++ example of docs/howto/posture.md (once the README's), by posture -----
 
 
 def _hands(document):

@@ -1,4 +1,10 @@
-"""The README's promises: its Python example runs, its two commands are the ones CI runs."""
+"""The README's promises, and the examples that moved from it into the docs.
+
+The README's Python examples run and its two Quick start commands are the ones CI runs. Every
+command of the README, and of the docs' blocks marked as run here (examples that once were the
+README's), gives a meaningful result; their Python blocks run too. The docs' ``{doctest}`` blocks
+are Sphinx's to run (``-b doctest`` in .ci/run), not this file's.
+"""
 
 from __future__ import annotations
 
@@ -10,12 +16,51 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
 
+#: The line that marks a docs block (```bash or ```python, on the next line) as run here.
+RUN_MARK = "<!-- run by tests/test_readme.py -->"
 
-def test_python_example_runs():
-    blocks = re.findall(r"```python\n(.*?)```", README, flags=re.S)
-    assert blocks, "the README has a Python example"
-    for block in blocks:
-        exec(compile(block, "README.md", "exec"), {})
+
+def _docs_pages() -> dict[str, str]:
+    """The docs pages with a marked block: path from the repository's root -> text."""
+    pages = {}
+    for page in sorted((ROOT / "docs").rglob("*.md")):
+        text = page.read_text()
+        if RUN_MARK in text:
+            pages[page.relative_to(ROOT).as_posix()] = text
+    return pages
+
+
+DOCS_PAGES = _docs_pages()
+
+
+def example_blocks(language: str) -> list[tuple[str, str]]:
+    """(where, code) of every ```LANGUAGE block of the README and every marked one of the docs."""
+    fence = r"```" + language + r"\n(.*?)```"
+    blocks = [("README.md", block) for block in re.findall(fence, README, flags=re.S)]
+    for page, text in DOCS_PAGES.items():
+        blocks += [(page, block) for block in re.findall(re.escape(RUN_MARK) + r"\n" + fence, text, flags=re.S)]
+    return blocks
+
+
+def test_every_marked_docs_block_is_one_this_file_runs():
+    marks = sum(text.count(RUN_MARK) for text in DOCS_PAGES.values())
+    assert marks >= 22, "the docs hold the examples that moved out of the README"
+    assert marks == len(example_blocks("bash")) + len(example_blocks("python")) - len(
+        re.findall(r"```(?:bash|python)\n", README)
+    ), "a mark stands right above a ```bash or ```python fence"
+
+
+def test_the_readme_has_a_python_example():
+    assert any(where == "README.md" for where, _ in example_blocks("python"))
+
+
+@pytest.mark.parametrize(
+    "where, block",
+    example_blocks("python"),
+    ids=[f"{where}:{i}" for i, (where, _) in enumerate(example_blocks("python"))],
+)
+def test_python_example_runs(where, block):
+    exec(compile(block, where, "exec"), {})
 
 
 def test_quick_start_has_exactly_two_commands_and_ci_runs_the_test_one():
@@ -27,7 +72,7 @@ def test_quick_start_has_exactly_two_commands_and_ci_runs_the_test_one():
     assert test_command in ci.splitlines()
 
 
-# ----- every command of the README, run -----
+# ----- every command of the README and of the docs' marked blocks, run once each -----
 
 PAPER_URDF = ROOT / "robots" / "planar_dual_arm.urdf"
 
@@ -38,7 +83,7 @@ def _stretch_urdf() -> str:
     return str(stretch_urdf_dir() / "SE3" / "stretch_description_SE3_eoa_wrist_dw3_tool_sg3.urdf")
 
 
-#: Placeholder names of the README's examples and what the test puts in their place.
+#: Placeholder names of the examples and what the test puts in their place.
 PLACEHOLDERS = {
     "my_robot.urdf": lambda: str(PAPER_URDF),
     "left_tool": lambda: "arm_left_tool_link",
@@ -47,7 +92,7 @@ PLACEHOLDERS = {
     "stretch.urdf": _stretch_urdf,
 }
 
-#: Commands that are not run as written, and why (each must still appear in the README).
+#: Commands that are not run as written, and why (each must still appear among the examples).
 MAPPED = {
     "python3 -m venv .venv && .venv/bin/pip install -e '.[test]' && .venv/bin/mobmanip paper --out out": (
         "the set-up is CI's own (.ci/run); its last step runs here as `mobmanip paper --out out`"
@@ -56,15 +101,16 @@ MAPPED = {
 }
 
 
-def readme_commands() -> list[str]:
-    """Every command of the README's bash blocks: continuation lines joined, comments removed."""
+def example_commands() -> list[str]:
+    """Every command of the examples' bash blocks, each once (an example the README and a docs
+    page share, or two pages, runs once): continuation lines joined, comments removed."""
     commands = []
-    for block in re.findall(r"```bash\n(.*?)```", README, flags=re.S):
+    for _, block in example_blocks("bash"):
         for command in block.replace("\\\n", " ").splitlines():
             command = re.sub(r"\s+#.*$", "", command).strip()
             if command:
                 commands.append(" ".join(command.split()))
-    return commands
+    return list(dict.fromkeys(commands))
 
 
 def _argv(command: str) -> list[str]:
@@ -73,18 +119,18 @@ def _argv(command: str) -> list[str]:
     words = shlex.split(command)
     if words[:2] == [".venv/bin/mobmanip", "paper"]:
         words[0] = "mobmanip"
-    # the README's own example files are named from the repository's root
+    # the examples' own files are named from the repository's root
     words = [str(ROOT / w) if w.startswith("examples/") else w for w in words]
     return [PLACEHOLDERS[w]() if w in PLACEHOLDERS else w for w in words[1:]]
 
 
-def test_every_readme_command_is_run_or_mapped():
-    commands = readme_commands()
-    assert len(commands) >= 15
+def test_every_example_command_is_run_or_mapped():
+    commands = example_commands()
+    assert len(commands) >= 31
     for command in commands:
         assert command.startswith("mobmanip ") or command in MAPPED, command
     for command in MAPPED:
-        assert command in commands, f"mapped but no longer in the README: {command}"
+        assert command in commands, f"mapped but no longer among the examples: {command}"
 
 
 def _outputs(argv: list[str]) -> list[str]:
@@ -98,9 +144,9 @@ def _outputs(argv: list[str]) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("command", [c for c in readme_commands() if c.startswith("mobmanip ")])
-def test_readme_command_gives_a_meaningful_result(command, tmp_path, monkeypatch, capsys):
-    """Each `mobmanip ...` command of the README, run in a scratch directory (a `view` without
+@pytest.mark.parametrize("command", [c for c in example_commands() if c.startswith("mobmanip ")])
+def test_example_command_gives_a_meaningful_result(command, tmp_path, monkeypatch, capsys):
+    """Each `mobmanip ...` command of the examples, run in a scratch directory (a `view` without
     --export writes its page instead of serving): exit 0, no empty set, and what it writes is
     there with meaningful content (non-empty ellipsoids, reachable sweep points)."""
     import json
@@ -113,7 +159,7 @@ def test_readme_command_gives_a_meaningful_result(command, tmp_path, monkeypatch
     (tmp_path / "q.json").write_text(json.dumps({"platform": [0, 0, 0], "joints": {"arm_right_2_joint": 0.8}}))
     (tmp_path / "out").mkdir()
     argv = _argv(command)
-    if "results/trajectory.csv" in argv:  # the README analyses what its carry example wrote
+    if "results/trajectory.csv" in argv:  # the motion guide analyses what its carry example wrote
         assert (
             main(["carry", "planar_dual_arm", "--path", str(ROOT / "examples" / "carry_turn.csv"), "--out", "results/"])
             == 0

@@ -3,8 +3,8 @@
 Unified kinematic and dynamic task-space ellipsoids for mobile manipulators whose platform is
 subject to nonholonomic constraints, built on Pinocchio.
 
-The public API is what this package exports (below) and the documented modules the README
-names: :mod:`mobmanip.sweep` (grids), :mod:`mobmanip.casestudy` (the paper's Section 4),
+The public API is what this package exports (below) and the documented modules the docs
+name: :mod:`mobmanip.sweep` (grids), :mod:`mobmanip.casestudy` (the paper's Section 4),
 :mod:`mobmanip.measures` (the registry of measures), :mod:`mobmanip.errors` (every exception)
 and :mod:`mobmanip.viz` (the viewer and figures).
 """
