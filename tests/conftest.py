@@ -60,6 +60,32 @@ def random_configurations(robot, rng, count):
     return [random_configuration(robot, rng) for _ in range(count)]
 
 
+def configuration_within_limits(robot, rng, xy_range=2.0, one_turn=True):
+    """A random configuration that respects the joint limits, drawn from ``rng``: the platform
+    anywhere in a square of half-side ``xy_range`` (m) at any heading, each joint uniform between
+    its limits, a full turn [-pi, pi] where it has none (continuous joints included).
+
+    ``one_turn`` also keeps a joint whose range is wider than a turn within [-pi, pi].
+    """
+    model = robot.model
+    q = pin.neutral(model)
+    yaw = rng.uniform(-math.pi, math.pi)
+    q[:4] = (*rng.uniform(-xy_range, xy_range, size=2), math.cos(yaw), math.sin(yaw))
+    for j in range(2, model.njoints):
+        i = model.joints[j].idx_q
+        if model.joints[j].nq == 2:
+            angle = rng.uniform(-math.pi, math.pi)
+            q[i : i + 2] = (math.cos(angle), math.sin(angle))
+            continue
+        lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
+        if one_turn:
+            lo, hi = max(lo, -math.pi), min(hi, math.pi)
+        elif not (np.isfinite(lo) and np.isfinite(hi)):
+            lo, hi = -math.pi, math.pi
+        q[i] = rng.uniform(lo, hi)
+    return q
+
+
 def write_variant(tmp_path: Path, urdf_text: str, spec_edits=(), name="variant") -> Path:
     """Write a URDF and a copy of the paper's spec pointing at it; return the spec path.
 

@@ -12,7 +12,7 @@ import pytest
 from scipy.spatial import ConvexHull
 
 import mobmanip
-from conftest import random_configurations
+from conftest import configuration_within_limits, random_configurations
 from mobmanip.errors import ModelError
 from mobmanip.sets.capacity import polytope_batch, stacked_terms
 from mobmanip.sets.capacity_batch import CompiledPolytopeBatch
@@ -299,12 +299,11 @@ def test_a_planar_sweep_uses_the_compiled_batch_and_keeps_its_indices():
 @pytest.fixture(scope="module")
 def tiago_terms():
     """TIAGo++ holding 2 kg at 200 random joint configurations, translational task (m = 3)."""
-    from polytope_util import random_joint_configuration
 
     robot = mobmanip.load_robot("tiago_dual")
     rng = np.random.default_rng(9)
     return stacked_terms(
-        [terms_at(robot, random_joint_configuration(robot, rng), "translational", object_mass=2.0) for _ in range(200)]
+        [terms_at(robot, configuration_within_limits(robot, rng), "translational", object_mass=2.0) for _ in range(200)]
     )
 
 
@@ -381,11 +380,10 @@ def test_3d_kinematic_sections_stay_on_the_reference_path(tiago_terms):
 def test_one_hand_kinematic_zonotopes(task):
     """One hand (W = I): the kinematic set is the zonotope J_u box, compiled in 2-D and 3-D; its
     volume and support equal the hull of its 2^n corners."""
-    from polytope_util import random_joint_configuration
 
     robot = mobmanip.load_robot("panda")
     rng = np.random.default_rng(12)
-    rows = [terms_at(robot, random_joint_configuration(robot, rng), task) for _ in range(100)]
+    rows = [terms_at(robot, configuration_within_limits(robot, rng), task) for _ in range(100)]
     terms = {"J_u": np.stack([t.J_u for t in rows]), "W": rows[0].W, "velocity_limits": rows[0].velocity_limits}
     fast = polytope_batch("kinematic", **terms)
     ref = polytope_batch("kinematic", compiled=False, **terms)
@@ -443,11 +441,10 @@ def test_stacked_terms_stack_what_changes_and_refuse_rows_of_different_batches()
     import dataclasses
 
     from mobmanip.errors import TaskError
-    from polytope_util import random_joint_configuration
 
     robot = mobmanip.load_robot("planar_dual_arm")
     rng = np.random.default_rng(8)
-    rows = [terms_at(robot, random_joint_configuration(robot, rng), "planar", object_mass=2.0) for _ in range(3)]
+    rows = [terms_at(robot, configuration_within_limits(robot, rng), "planar", object_mass=2.0) for _ in range(3)]
     terms = stacked_terms(rows)
     for i, row in enumerate(rows):
         for name in ("J_u", "P", "xi"):
