@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.optimize import minimize
 
 from ..errors import ArgumentError, UnreachableObjectError
 from ..gradients.evaluator import GradientEvaluator, Objective
@@ -41,7 +40,7 @@ from .optimize import (
     check_target,
     check_turn,
     clip_to_bounds,
-    slsqp_constraints,
+    slsqp_run,
 )
 
 if TYPE_CHECKING:
@@ -309,16 +308,7 @@ def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, s
         z = newton_project(problem, clip_to_bounds(z0, bounds), bounds)
         if z is None:
             continue
-        res = minimize(
-            problem.objective,
-            z,
-            jac=True,
-            method="SLSQP",
-            bounds=bounds,
-            constraints=slsqp_constraints(problem),
-            options={"maxiter": max_iterations, "ftol": tolerance},
-        )
-        z = res.x
+        z = slsqp_run(problem, problem.objective, z, bounds, max_iterations, tolerance)
         if problem.residual(z) > CONSTRAINT_TOLERANCE:
             z = newton_project(problem, z, bounds)
             if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding
