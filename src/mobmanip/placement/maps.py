@@ -31,9 +31,8 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..errors import ArgumentError, UnreachableObjectError
-from ..gradients.evaluator import GradientEvaluator, Objective
+from ..gradients.evaluator import Objective
 from ..robot.model import Robot
-from ..robot.tasks import get_task
 from .optimize import (
     CONSTRAINT_TOLERANCE,
     PlacementProblem,
@@ -203,10 +202,10 @@ def placement_map(
     bands = [(start, min(start + rows_per_band, len(ys))) for start in range(0, len(ys), rows_per_band)]
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to map")
-    task = get_task(task or robot.spec.default_task)
-    evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
-    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = PlacementProblem(robot, evaluator, target, None, q_ref, collision)
+    problem = PlacementProblem.of_objective(
+        robot, objective, task, target, None, reference, collision, object_mass=object_mass, decoupled=decoupled
+    )
+    evaluator, q_ref, task = problem.ev, problem.q_ref, problem.ev.task
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:  # e.g. the height of planar arms' hands
         raise UnreachableObjectError(

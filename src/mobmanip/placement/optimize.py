@@ -140,6 +140,19 @@ class Placement:
 class PlacementProblem:
     """Decision variables, objective and constraints of one placement."""
 
+    @classmethod
+    def of_objective(
+        cls, robot, objective, task, target, region=None, reference=None, collision=None, *,
+        object_mass=None, decoupled=False,
+    ) -> PlacementProblem:  # fmt: skip
+        """The problem of placing ``robot`` to hold the object at ``target``: the objective's
+        :class:`~mobmanip.gradients.GradientEvaluator` on ``task`` (a name or a task; ``None``: the
+        spec's default task), the hold of ``reference`` (``None``: the spec's hold configuration)."""
+        task = get_task(task or robot.spec.default_task)
+        evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
+        q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
+        return cls(robot, evaluator, target, region, q_ref, collision)
+
     def __init__(self, robot, evaluator, target, region, reference, collision=None):
         self.collision = collision
         self.robot = robot
@@ -516,10 +529,10 @@ def place(
         raise ArgumentError(f"starts must be a positive integer, got {starts!r}")
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to choose")
-    task = get_task(task or robot.spec.default_task)
-    evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
-    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = PlacementProblem(robot, evaluator, target, region, q_ref, collision)
+    problem = PlacementProblem.of_objective(
+        robot, objective, task, target, region, reference, collision, object_mass=object_mass, decoupled=decoupled
+    )
+    evaluator = problem.ev
     bounds = problem.bounds()
     if hold_turn is not None:
         hold_turn = check_turn(hold_turn)
