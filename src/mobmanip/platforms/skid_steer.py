@@ -23,7 +23,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
+from .base import (
+    BASE_V,
+    Detected,
+    Platform,
+    PlatformKind,
+    WheelsSpec,
+    length_overrides,
+    positive_length,
+    toml_string,
+    unicycle_rows,
+)
 from .wheels import radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -257,9 +267,7 @@ class SkidSteerKind(PlatformKind):
             f"right = [{', '.join(toml_string(n) for n in wheels.right)}]",
             f"left = [{', '.join(toml_string(n) for n in wheels.left)}]",
         ]
-        for key, value in (("radius", wheels.radius), ("half_track", wheels.half_track)):
-            out.append(f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF")
-        return out
+        return out + length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
 
     limits_by_joint = False
 
