@@ -34,6 +34,15 @@ def rng():
     return np.random.default_rng(20240607)
 
 
+def paper_case(angle_deg):
+    """The paper's robot in its optimal posture holding the object at ``angle_deg`` (its case
+    study): (robot, q)."""
+    from mobmanip.casestudy import configuration_at, optimal_posture
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    return robot, configuration_at(robot, optimal_posture(robot), angle_deg)
+
+
 def random_configuration(robot, rng, xy_range=3.0):
     """A random configuration: platform pose and every joint angle drawn from ``rng``.
 
@@ -47,12 +56,7 @@ def random_configuration(robot, rng, xy_range=3.0):
     yaw = rng.uniform(-math.pi, math.pi)
     q[:4] = (x, y, math.cos(yaw), math.sin(yaw))
     for j in range(2, model.njoints):
-        joint = model.joints[j]
-        angle = rng.uniform(-math.pi, math.pi)
-        if joint.nq == 2:
-            q[joint.idx_q : joint.idx_q + 2] = (math.cos(angle), math.sin(angle))
-        else:
-            q[joint.idx_q] = angle
+        set_joint(q, model.joints[j], rng.uniform(-math.pi, math.pi))
     return q
 
 
@@ -72,18 +76,56 @@ def configuration_within_limits(robot, rng, xy_range=2.0, one_turn=True):
     yaw = rng.uniform(-math.pi, math.pi)
     q[:4] = (*rng.uniform(-xy_range, xy_range, size=2), math.cos(yaw), math.sin(yaw))
     for j in range(2, model.njoints):
-        i = model.joints[j].idx_q
-        if model.joints[j].nq == 2:
-            angle = rng.uniform(-math.pi, math.pi)
-            q[i : i + 2] = (math.cos(angle), math.sin(angle))
-            continue
-        lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
-        if one_turn:
+        joint = model.joints[j]
+        lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+        if joint.nq == 2:  # continuous
+            lo, hi = -math.pi, math.pi
+        elif one_turn:
             lo, hi = max(lo, -math.pi), min(hi, math.pi)
         elif not (np.isfinite(lo) and np.isfinite(hi)):
             lo, hi = -math.pi, math.pi
-        q[i] = rng.uniform(lo, hi)
+        set_joint(q, joint, rng.uniform(lo, hi))
     return q
+
+
+def set_joint(q, joint, value):
+    """Write one joint's value into q (in place), here rather than by mobmanip: a continuous joint
+    (two coordinates) as the cosine and sine of its angle, any other as it is."""
+    if joint.nq == 2:
+        q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
+    else:
+        q[joint.idx_q] = value
+
+
+def central_differences(f, model, q, step):
+    """The derivative of ``f`` (q -> array) along each tangent direction at q, by central
+    differences through ``pin.integrate``: (f's shape, nv), the direction last."""
+    columns = []
+    for k in range(model.nv):
+        e = np.zeros(model.nv)
+        e[k] = step
+        columns.append((f(pin.integrate(model, q, e)) - f(pin.integrate(model, q, -e))) / (2 * step))
+    return np.stack(columns, axis=-1)
+
+
+def set_joints(model, q, values):
+    """Write each named joint's value into q (in place, :func:`set_joint`); returns q."""
+    for name, value in values.items():
+        set_joint(q, model.joints[model.getJointId(name)], value)
+    return q
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium through Playwright (:mod:`browser_util`), one per test module; the
+    module's browser tests are skipped where either is missing."""
+    from browser_util import chromium, missing_browser
+
+    reason = missing_browser()
+    if reason is not None:
+        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
+    with chromium() as b:
+        yield b
 
 
 def write_variant(tmp_path: Path, urdf_text: str, spec_edits=(), name="variant") -> Path:

@@ -26,8 +26,7 @@ import pytest
 
 import floor_reference as fr
 import mobmanip
-from conftest import configuration_within_limits
-from mobmanip.casestudy import configuration_at, optimal_posture
+from conftest import configuration_within_limits, paper_case
 from mobmanip.cli import main
 from mobmanip.errors import TaskError
 from mobmanip.postures.named import named_configuration
@@ -160,14 +159,12 @@ def tiago():
 
 @pytest.fixture(scope="module")
 def paper0():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=0.0)
+    return paper_case(0.0)
 
 
 @pytest.fixture(scope="module")
 def paper90():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=90.0)
+    return paper_case(90.0)
 
 
 def _assert_ellipsoid_inside(ellipsoid, polytope, rng, count=200):

@@ -19,8 +19,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from conftest import configuration_within_limits, random_configuration
-from mobmanip.casestudy import configuration_at, optimal_posture
+from conftest import configuration_within_limits, paper_case, random_configuration
 from mobmanip.sets.capacity import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
 from mobmanip.sets.ellipsoid import dynamic_ellipsoid
 from polytope_util import (
@@ -40,8 +39,7 @@ DIRECTIONS = 1000
 
 @pytest.fixture(scope="module")
 def paper():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=45.0)
+    return paper_case(45.0)
 
 
 @pytest.fixture(scope="module")
