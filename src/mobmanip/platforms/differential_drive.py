@@ -15,17 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import (
-    BASE_V,
-    Detected,
-    Platform,
-    PlatformKind,
-    WheelsSpec,
-    length_overrides,
-    positive_length,
-    toml_string,
-    unicycle_rows,
-)
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
 from .wheels import radius_of, side_by_side_message, wheel_geometry
 
 if TYPE_CHECKING:
@@ -237,7 +227,7 @@ class DifferentialDriveKind(PlatformKind):
             f"right = {toml_string(wheels.right)}",
             f"left = {toml_string(wheels.left)}",
         ]
-        return out + length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
+        return out + self.length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
 
 
 KIND = DifferentialDriveKind()

@@ -23,17 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import (
-    BASE_V,
-    Detected,
-    Platform,
-    PlatformKind,
-    WheelsSpec,
-    length_overrides,
-    positive_length,
-    toml_string,
-    unicycle_rows,
-)
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
 from .wheels import radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -267,7 +257,7 @@ class SkidSteerKind(PlatformKind):
             f"right = [{', '.join(toml_string(n) for n in wheels.right)}]",
             f"left = [{', '.join(toml_string(n) for n in wheels.left)}]",
         ]
-        return out + length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
+        return out + self.length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
 
     limits_by_joint = False
 

@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, length_overrides, positive_length, toml_string
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string
 from .wheels import LATERAL, radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -265,7 +265,7 @@ class SteeredKind(PlatformKind):
             f"steer = {toml_string(wheels.steer)}",
             f"rear = [{', '.join(toml_string(n) for n in wheels.rear)}]",
         ]
-        return out + length_overrides((("radius", wheels.radius), ("rear_radius", wheels.rear_radius)))
+        return out + self.length_overrides((("radius", wheels.radius), ("rear_radius", wheels.rear_radius)))
 
 
 KIND = SteeredKind()
