@@ -28,13 +28,11 @@ Entries:
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 import mobmanip
 
@@ -55,34 +53,16 @@ class Decision:
     prepare: Callable[[bool], tuple[Side, Side]]  # (current, chosen), given quick
 
 
-def _within_limits(robot, count: int, seed: int) -> list[np.ndarray]:
-    model = robot.model
-    rng = np.random.default_rng(seed)
-    out = []
-    for _ in range(count):
-        q = pin.neutral(model)
-        yaw = rng.uniform(-math.pi, math.pi)
-        q[:4] = (*rng.uniform(-3.0, 3.0, 2), math.cos(yaw), math.sin(yaw))
-        for j in range(2, model.njoints):
-            i = model.joints[j].idx_q
-            if model.joints[j].nq == 2:
-                angle = rng.uniform(-math.pi, math.pi)
-                q[i : i + 2] = (math.cos(angle), math.sin(angle))
-            else:
-                lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
-                q[i] = rng.uniform(lo, hi) if np.isfinite(lo) and np.isfinite(hi) else rng.uniform(-math.pi, math.pi)
-        out.append(q)
-    return out
-
-
 def _collision_sides(quick: bool) -> tuple[Side, Side]:
+    from benchmark_polytopes import configurations_within_limits
     from mobmanip.robot.collision import SelfCollision
 
     robot = mobmanip.load_robot("tiago_dual")
     every = SelfCollision(robot, margin=0.02, matrix=None)
     kept = SelfCollision(robot, margin=0.02)  # the matrix stored beside the spec
     assert kept.matrix is not None
-    configurations = _within_limits(robot, 100 if quick else 1000, 11)
+    rng = np.random.default_rng(11)
+    configurations = configurations_within_limits(robot, rng, 100 if quick else 1000, xy_range=3.0, one_turn=False)
 
     def timer(checker):
         def run() -> float:

@@ -37,23 +37,28 @@ SPEEDUP_TARGET = 5.0
 PYCAPACITY_TOL = 1e-6  # tolerance given to pycapacity's iterative convex hull method
 
 
-def _configurations(robot, rng, count):
-    """Platform anywhere, joints uniform within their limits (a full turn if unlimited)."""
+def configurations_within_limits(robot, rng, count, xy_range=2.0, one_turn=True):
+    """``count`` configurations: the platform anywhere in a square of half-side ``xy_range`` (m)
+    at any heading, each joint uniform between its limits, a full turn [-pi, pi] where it has
+    none; ``one_turn`` also keeps a joint whose range is wider than a turn within [-pi, pi]."""
     model = robot.model
     out = []
     for _ in range(count):
         q = robot.neutral()
         yaw = rng.uniform(-math.pi, math.pi)
-        q[:4] = (*rng.uniform(-2.0, 2.0, size=2), math.cos(yaw), math.sin(yaw))
+        q[:4] = (*rng.uniform(-xy_range, xy_range, size=2), math.cos(yaw), math.sin(yaw))
         for j in range(2, model.njoints):
-            joint = model.joints[j]
-            if joint.nq == 2:
+            i = model.joints[j].idx_q
+            if model.joints[j].nq == 2:
                 a = rng.uniform(-math.pi, math.pi)
-                q[joint.idx_q : joint.idx_q + 2] = (math.cos(a), math.sin(a))
-            else:
-                lo = max(model.lowerPositionLimit[joint.idx_q], -math.pi)
-                hi = min(model.upperPositionLimit[joint.idx_q], math.pi)
-                q[joint.idx_q] = rng.uniform(lo, hi)
+                q[i : i + 2] = (math.cos(a), math.sin(a))
+                continue
+            lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
+            if one_turn:
+                lo, hi = max(lo, -math.pi), min(hi, math.pi)
+            elif not (math.isfinite(lo) and math.isfinite(hi)):
+                lo, hi = -math.pi, math.pi
+            q[i] = rng.uniform(lo, hi)
         out.append(q)
     return out
 
@@ -162,14 +167,14 @@ def run(quick: bool = False, timeout: float | None = None) -> int:
 
     # warm-up: compiled facet kernel, HiGHS
     paper = mobmanip.load_robot("planar_dual_arm")
-    q0 = _configurations(paper, rng, 1)[0]
+    q0 = configurations_within_limits(paper, rng, 1)[0]
     kin, dyn = _terms(paper, q0, "planar", None)
     _full(kinematic_polytope(*kin))
     _full(min_norm_dynamic_polytope(*dyn))
 
     for name, task, mass in (("planar_dual_arm", "planar", None), ("tiago_dual", "translational", 1.0)):
         robot = mobmanip.load_robot(name)
-        terms = [_terms(robot, q, task, mass) for q in _configurations(robot, rng, count)]
+        terms = [_terms(robot, q, task, mass) for q in configurations_within_limits(robot, rng, count)]
         t_kin = _median_ms(lambda t: _full(kinematic_polytope(*t[0])), terms)
         t_dyn = _median_ms(lambda t: _full(dynamic_polytope(*t[1])), terms)
         t_min = _median_ms(lambda t: _full(min_norm_dynamic_polytope(*t[1])), terms)
@@ -193,7 +198,7 @@ def run(quick: bool = False, timeout: float | None = None) -> int:
 
     # TIAGo++, spatial (m = 6): build with halfspaces, then one support query (warm)
     robot = mobmanip.load_robot("tiago_dual")
-    terms = [_terms(robot, q, "spatial", 1.0) for q in _configurations(robot, rng, count)]
+    terms = [_terms(robot, q, "spatial", 1.0) for q in configurations_within_limits(robot, rng, count)]
     directions = rng.normal(size=(200, 6))
     for label, build in (
         ("kinematic", lambda t: kinematic_polytope(*t[0])),
@@ -223,7 +228,7 @@ def run(quick: bool = False, timeout: float | None = None) -> int:
     # One fixed-base arm, no object: pycapacity's own use case
     for name in ("ur5", "panda"):
         robot = mobmanip.load_robot(name)
-        terms = [_terms(robot, q, "translational", 0.0) for q in _configurations(robot, rng, count)]
+        terms = [_terms(robot, q, "translational", 0.0) for q in configurations_within_limits(robot, rng, count)]
         t_vel = _median_ms(lambda t: _full(kinematic_polytope(*t[0])), terms)
         t_acc = _median_ms(lambda t: _full(dynamic_polytope(*t[1])), terms)
         vel = [{"J": t[0][0], "lim": t[0][2]} for t in terms]

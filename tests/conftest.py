@@ -34,6 +34,15 @@ def rng():
     return np.random.default_rng(20240607)
 
 
+def paper_case(angle_deg):
+    """The paper's robot in its optimal posture holding the object at ``angle_deg`` (its case
+    study): (robot, q)."""
+    from mobmanip.casestudy import configuration_at, optimal_posture
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    return robot, configuration_at(robot, optimal_posture(robot), angle_deg)
+
+
 def random_configuration(robot, rng, xy_range=3.0):
     """A random configuration: platform pose and every joint angle drawn from ``rng``.
 
@@ -47,17 +56,76 @@ def random_configuration(robot, rng, xy_range=3.0):
     yaw = rng.uniform(-math.pi, math.pi)
     q[:4] = (x, y, math.cos(yaw), math.sin(yaw))
     for j in range(2, model.njoints):
-        joint = model.joints[j]
-        angle = rng.uniform(-math.pi, math.pi)
-        if joint.nq == 2:
-            q[joint.idx_q : joint.idx_q + 2] = (math.cos(angle), math.sin(angle))
-        else:
-            q[joint.idx_q] = angle
+        set_joint(q, model.joints[j], rng.uniform(-math.pi, math.pi))
     return q
 
 
 def random_configurations(robot, rng, count):
     return [random_configuration(robot, rng) for _ in range(count)]
+
+
+def configuration_within_limits(robot, rng, xy_range=2.0, one_turn=True):
+    """A random configuration that respects the joint limits, drawn from ``rng``: the platform
+    anywhere in a square of half-side ``xy_range`` (m) at any heading, each joint uniform between
+    its limits, a full turn [-pi, pi] where it has none (continuous joints included).
+
+    ``one_turn`` also keeps a joint whose range is wider than a turn within [-pi, pi].
+    """
+    model = robot.model
+    q = pin.neutral(model)
+    yaw = rng.uniform(-math.pi, math.pi)
+    q[:4] = (*rng.uniform(-xy_range, xy_range, size=2), math.cos(yaw), math.sin(yaw))
+    for j in range(2, model.njoints):
+        joint = model.joints[j]
+        lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+        if joint.nq == 2:  # continuous
+            lo, hi = -math.pi, math.pi
+        elif one_turn:
+            lo, hi = max(lo, -math.pi), min(hi, math.pi)
+        elif not (np.isfinite(lo) and np.isfinite(hi)):
+            lo, hi = -math.pi, math.pi
+        set_joint(q, joint, rng.uniform(lo, hi))
+    return q
+
+
+def set_joint(q, joint, value):
+    """Write one joint's value into q (in place), here rather than by mobmanip: a continuous joint
+    (two coordinates) as the cosine and sine of its angle, any other as it is."""
+    if joint.nq == 2:
+        q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
+    else:
+        q[joint.idx_q] = value
+
+
+def central_differences(f, model, q, step):
+    """The derivative of ``f`` (q -> array) along each tangent direction at q, by central
+    differences through ``pin.integrate``: (f's shape, nv), the direction last."""
+    columns = []
+    for k in range(model.nv):
+        e = np.zeros(model.nv)
+        e[k] = step
+        columns.append((f(pin.integrate(model, q, e)) - f(pin.integrate(model, q, -e))) / (2 * step))
+    return np.stack(columns, axis=-1)
+
+
+def set_joints(model, q, values):
+    """Write each named joint's value into q (in place, :func:`set_joint`); returns q."""
+    for name, value in values.items():
+        set_joint(q, model.joints[model.getJointId(name)], value)
+    return q
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium through Playwright (:mod:`browser_util`), one per test module; the
+    module's browser tests are skipped where either is missing."""
+    from browser_util import chromium, missing_browser
+
+    reason = missing_browser()
+    if reason is not None:
+        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
+    with chromium() as b:
+        yield b
 
 
 def write_variant(tmp_path: Path, urdf_text: str, spec_edits=(), name="variant") -> Path:

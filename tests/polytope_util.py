@@ -6,8 +6,6 @@ Nothing here calls mobmanip's polytope code.
 
 from __future__ import annotations
 
-import math
-
 import highspy
 import numpy as np
 import pinocchio as pin
@@ -36,24 +34,6 @@ def terms(robot, q, task, mass=None):
 
 def dynamic_terms(t):
     return {k: t[k] for k in ("J_u", "W", "P", "Q", "xi", "M_o", "g_o", "effort_limits")}
-
-
-def random_joint_configuration(robot, rng, xy=2.0):
-    """Platform anywhere, each joint uniform within its URDF range (a full turn if continuous)."""
-    model = robot.model
-    q = robot.neutral()
-    yaw = rng.uniform(-math.pi, math.pi)
-    q[:4] = (*rng.uniform(-xy, xy, size=2), math.cos(yaw), math.sin(yaw))
-    for j in range(2, model.njoints):
-        joint = model.joints[j]
-        if joint.nq == 2:
-            angle = rng.uniform(-math.pi, math.pi)
-            q[joint.idx_q : joint.idx_q + 2] = (math.cos(angle), math.sin(angle))
-        else:
-            lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
-            lo, hi = max(lo, -math.pi), min(hi, math.pi)
-            q[joint.idx_q] = rng.uniform(lo, hi)
-    return q
 
 
 class SupportLP:

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import PAPER_URDF, WHEEL_RADIUS, write_variant
+from conftest import PAPER_URDF, WHEEL_RADIUS, set_joints, write_variant
 from mobmanip.cli import main
 from mobmanip.terms.dynamics import unified_jacobian
 
@@ -43,13 +43,7 @@ def configuration_by_hand(robot, platform, joints):
     q = pin.neutral(model)
     x, y, yaw = platform
     q[:4] = (x, y, math.cos(yaw), math.sin(yaw))
-    for name, value in joints.items():
-        joint = model.joints[model.getJointId(name)]
-        if joint.nq == 2:
-            q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
-        else:
-            q[joint.idx_q] = value
-    return q
+    return set_joints(model, q, joints)
 
 
 def jacobian_by_hand(robot, q, task):

@@ -17,6 +17,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from conftest import central_differences, configuration_within_limits
 from mobmanip.cli import main
 from mobmanip.errors import ModelError
 from mobmanip.robot.collision import SelfCollision
@@ -43,23 +44,8 @@ def shipped(tiago):
 def within_limits(robot, count, seed):
     """Configurations drawn here, not by the module: each joint uniform between its limits (a
     full turn without limits), the platform anywhere in a 6 m square."""
-    model = robot.model
     rng = np.random.default_rng(seed)
-    out = []
-    for _ in range(count):
-        q = pin.neutral(model)
-        yaw = rng.uniform(-math.pi, math.pi)
-        q[:4] = (*rng.uniform(-3.0, 3.0, 2), math.cos(yaw), math.sin(yaw))
-        for j in range(2, model.njoints):
-            i = model.joints[j].idx_q
-            if model.joints[j].nq == 2:
-                angle = rng.uniform(-math.pi, math.pi)
-                q[i : i + 2] = (math.cos(angle), math.sin(angle))
-            else:
-                lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
-                q[i] = rng.uniform(lo, hi) if np.isfinite(lo) and np.isfinite(hi) else rng.uniform(-math.pi, math.pi)
-        out.append(q)
-    return out
+    return [configuration_within_limits(robot, rng, xy_range=3.0, one_turn=False) for _ in range(count)]
 
 
 def exact_distances(robot, pairs, configurations):
@@ -156,12 +142,7 @@ def test_gradients_equal_central_differences_on_tiago(tiago, shipped):
     model, step = tiago.model, 1e-5
     for q in within_limits(tiago, 3, 5):
         d, G = checker.distances(q)
-        fd = np.empty_like(G)
-        for k in range(model.nv):
-            e = np.zeros(model.nv)
-            e[k] = step
-            fd[:, k] = (checker.distances(pin.integrate(model, q, e))[0]
-                        - checker.distances(pin.integrate(model, q, -e))[0]) / (2 * step)  # fmt: skip
+        fd = central_differences(lambda q: checker.distances(q)[0], model, q, step)
         smooth = np.abs(d - checker.activation) > 1e-3
         assert smooth.sum() >= 10
         np.testing.assert_allclose(G[smooth], fd[smooth], atol=1e-5)

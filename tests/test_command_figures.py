@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import mobmanip
+from conftest import paper_case
 from figure_checks import check_paper_ready, is_colorbar
-from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.gradients.evaluator import Objective
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,8 +51,7 @@ def test_every_figure_a_command_writes_is_covered():
 
 @pytest.fixture(scope="module")
 def planar():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), 30.0)
+    return paper_case(30.0)
 
 
 def _placement(robot, q, objective: Objective, value: float, start_q=None, start_value=None):

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from browser_util import VIEWPORT, chromium, missing_browser, scene_objects, screenshot, wait_for_scene, world_matrix
+from browser_util import VIEWPORT, scene_objects, screenshot, wait_for_scene, world_matrix
 from hostile_util import run_cli
 from mobmanip.descriptions.resources import builtin_robot_names
 from mobmanip.viz.compact_page import compact
@@ -104,15 +104,6 @@ def test_the_page_rebuilds_meshcats_commands_with_each_mesh_stored_once(name):
     assert len(json.loads(table)["meshes"]) == len(distinct)  # each distinct mesh file once
     assert "octet-binary;base64" not in page  # no command left in meshcat's form
     assert len(page) < len(original) / 2
-
-
-@pytest.fixture(scope="module")
-def browser():
-    reason = missing_browser()
-    if reason is not None:
-        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
-    with chromium() as b:
-        yield b
 
 
 def test_a_compact_page_draws_the_robot_as_the_live_viewer_does(browser, tmp_path):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from mobmanip.casestudy import configuration_at, optimal_posture
+from conftest import paper_case
 from mobmanip.errors import ArgumentError
 from mobmanip.measures import get_measure
 from mobmanip.sets.capacity import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
@@ -29,8 +29,7 @@ DIRECTIONS = np.array([[np.cos(t), np.sin(t)] for t in np.linspace(0.0, 2.0 * np
 
 @pytest.fixture(scope="module")
 def paper():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), 30.0)
+    return paper_case(30.0)
 
 
 def _scaled(terms, share):

@@ -26,7 +26,7 @@ import pytest
 
 import floor_reference as fr
 import mobmanip
-from mobmanip.casestudy import configuration_at, optimal_posture
+from conftest import configuration_within_limits, paper_case
 from mobmanip.cli import main
 from mobmanip.errors import TaskError
 from mobmanip.postures.named import named_configuration
@@ -36,7 +36,6 @@ from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
 from mobmanip.terms.builder import terms_at
 from mobmanip.terms.constraints.floor import Floor
 from mobmanip.terms.force import force_problem
-from polytope_util import random_joint_configuration
 from toy_constraint import EffortShare
 
 MASS = 2.0  # kg, the object of issue 24's table
@@ -116,7 +115,7 @@ def test_force_polytope_equals_pycapacitys(name, task, rng):
 
     robot = mobmanip.load_robot(name)
     for _ in range(3):
-        q = random_joint_configuration(robot, rng)
+        q = configuration_within_limits(robot, rng)
         arm = Arm(robot, q, task)
         _, _, ours = _force_sets(robot, q, task)
         ref = pycapacity_force_polytope(arm.J, arm.limits, -arm.limits, t_bias=arm.gravity).vertices.T
@@ -135,7 +134,7 @@ def test_each_vertex_is_held_by_efforts_within_their_limits(name, rng):
     hold the arm still: they are the polytope's own, within the box, and at least m of them
     (one per task dimension) are at their limit. This fixes the sign: f acts ON the environment."""
     robot = mobmanip.load_robot(name)
-    q = random_joint_configuration(robot, rng)
+    q = configuration_within_limits(robot, rng)
     arm = Arm(robot, q, "translational")
     _, _, ours = _force_sets(robot, q, "translational")
     for f, tau in zip(ours.vertices, ours.vertex_inputs):
@@ -160,14 +159,12 @@ def tiago():
 
 @pytest.fixture(scope="module")
 def paper0():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=0.0)
+    return paper_case(0.0)
 
 
 @pytest.fixture(scope="module")
 def paper90():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=90.0)
+    return paper_case(90.0)
 
 
 def _assert_ellipsoid_inside(ellipsoid, polytope, rng, count=200):
@@ -184,7 +181,7 @@ def _assert_ellipsoid_inside(ellipsoid, polytope, rng, count=200):
 @pytest.mark.parametrize("task", ["translational", "spatial"])
 def test_force_ellipsoid_lies_inside_the_force_polytope(name, task, rng):
     robot = mobmanip.load_robot(name)
-    q = random_joint_configuration(robot, rng)
+    q = configuration_within_limits(robot, rng)
     _, ellipsoid, polytope = _force_sets(robot, q, task, mass=1.5)
     _assert_ellipsoid_inside(ellipsoid, polytope, rng)
 
@@ -202,7 +199,7 @@ def test_force_ellipsoid_touches_the_polytope_where_one_effort_saturates_alone(r
     asks that joint alone for its whole limit: it lies on the ellipsoid's boundary (||Z tau|| = 1)
     and on a facet of the polytope (|tau_i| = tau_max_i), so both sets touch there."""
     robot = mobmanip.load_robot("ur5")
-    q = random_joint_configuration(robot, rng)
+    q = configuration_within_limits(robot, rng)
     arm = Arm(robot, q, "spatial")
     _, ellipsoid, polytope = _force_sets(robot, q, "spatial")
     for i in range(6):
@@ -335,7 +332,7 @@ def test_a_held_load_moves_the_set_down_by_its_weight(tiago, rng):
     reach from zero force); every support moves by -d . g_o. One fixed arm and two hands."""
     weight = MASS * 9.81
     ur5 = mobmanip.load_robot("ur5")
-    ur5_q = random_joint_configuration(ur5, rng)
+    ur5_q = configuration_within_limits(ur5, rng)
     for (robot, q), task in (((ur5, ur5_q), "translational"), (tiago, "spatial")):
         empty = force_problem(terms_at(robot, q, task, object_mass=0.0))
         loaded = force_problem(terms_at(robot, q, task, object_mass=MASS))
@@ -371,7 +368,7 @@ def test_at_a_singular_posture_the_capacity_is_unbounded_and_said_so():
 
 def test_analyze_prints_and_writes_the_force_sets(tmp_path, capsys, rng):
     robot = mobmanip.load_robot("panda")
-    q = random_joint_configuration(robot, rng)
+    q = configuration_within_limits(robot, rng)
     (tmp_path / "q.json").write_text(json.dumps(robot.configuration_dict(q)))
     out = tmp_path / "a.json"
     argv = ["analyze", "panda", "--task", "translational", "--q", str(tmp_path / "q.json"), "--object-mass", "0"]

@@ -122,19 +122,6 @@ XACRO = """<?xml version="1.0"?>
 """
 
 
-@pytest.mark.parametrize("kind", ["fifo", "zero", "huge"])
-def test_a_xacro_including_a_fifo_dev_zero_or_a_huge_file_is_refused(tmp_path, capfd, fifo, kind):
-    include = {
-        "fifo": lambda: fifo("part.xacro"),
-        "zero": lambda: _zero_link(tmp_path, "part.xacro"),
-        "huge": lambda: _sparse(tmp_path, "part.xacro", ROBOT_BOUND + 1),
-    }[kind]()
-    robot = tmp_path / "robot.urdf.xacro"
-    robot.write_text(XACRO.format(include=include.name))
-    needles = ("part.xacro", str(ROBOT_BOUND)) if kind == "huge" else ("part.xacro", NOT_REGULAR)
-    _refused_at_once(capfd, "analyze", "--urdf", robot, "--ee", "tool", needles=needles)
-
-
 def test_xacro_includes_count_against_the_bound_together(tmp_path, capfd):
     """Two includes of 40 MiB each are each under the bound, together over it (the first is valid
     xacro padded with blanks, so that the second is reached)."""
@@ -153,16 +140,26 @@ MJCF = """<mujoco model="m">
 """
 
 
+#: Per language that includes files: the robot file, the template of its text, the included
+#: file's name and what the message says of a huge one (the MJCF reader also names its size).
+INCLUDING = {
+    "xacro": ("robot.urdf.xacro", XACRO, "part.xacro", (str(ROBOT_BOUND),)),
+    "mjcf": ("robot.xml", MJCF, "part.xml", (str(ROBOT_BOUND + 1), str(ROBOT_BOUND))),
+}
+
+
+@pytest.mark.parametrize("language", INCLUDING)
 @pytest.mark.parametrize("kind", ["fifo", "zero", "huge"])
-def test_an_mjcf_including_a_fifo_dev_zero_or_a_huge_file_is_refused(tmp_path, capfd, fifo, kind):
+def test_a_file_a_robot_file_includes_is_refused_as_a_fifo_dev_zero_or_huge(tmp_path, capfd, fifo, language, kind):
+    name, template, part, huge = INCLUDING[language]
     include = {
-        "fifo": lambda: fifo("part.xml"),
-        "zero": lambda: _zero_link(tmp_path, "part.xml"),
-        "huge": lambda: _sparse(tmp_path, "part.xml", ROBOT_BOUND + 1),
+        "fifo": lambda: fifo(part),
+        "zero": lambda: _zero_link(tmp_path, part),
+        "huge": lambda: _sparse(tmp_path, part, ROBOT_BOUND + 1),
     }[kind]()
-    robot = tmp_path / "robot.xml"
-    robot.write_text(MJCF.format(include=include.name))
-    needles = ("part.xml", str(ROBOT_BOUND + 1), str(ROBOT_BOUND)) if kind == "huge" else ("part.xml", NOT_REGULAR)
+    robot = tmp_path / name
+    robot.write_text(template.format(include=include.name))
+    needles = (part, *huge) if kind == "huge" else (part, NOT_REGULAR)
     _refused_at_once(capfd, "analyze", "--urdf", robot, "--ee", "tool", needles=needles)
 
 

@@ -77,35 +77,28 @@ def _scaled(robot, kind, factor):
     return robot.with_limits(**{kind: {name: factor * value for name, value in table.items()}})
 
 
-@pytest.mark.parametrize("factor", FACTORS)
-def test_velocity_limits_scale_the_kinematic_ellipsoid(paper, q45, factor):
-    base = mobmanip.analyze(paper, q45)
-    try:
-        robot = _scaled(paper, "velocity", factor)
-    except RangeError as exc:
-        assert "supported range" in str(exc)
-        assert factor * paper.velocity_limits.max() > 1e6 or factor * paper.velocity_limits.min() < 1e-6
-        return
-    result = mobmanip.analyze(robot, q45)
-    kin, kin0 = result.kinematic, base.kinematic
-    assert _close(kin.semi_axes, factor * kin0.semi_axes, factor * kin0.semi_axes[0], RTOL)
-    assert _close(kin.axes @ kin0.axes.T, np.diag(np.sign(np.diag(kin.axes @ kin0.axes.T))), 1.0, 1e-8)
-    assert np.allclose(result.dynamic.semi_axes, base.dynamic.semi_axes, rtol=RTOL, atol=0)  # torques only
+#: Per kind of limit scaled: the ellipsoid it scales, the one it leaves alone, and the largest
+#: limit the robot takes (a factor beyond is refused).
+SCALES = {"velocity": ("kinematic", "dynamic", 1e6), "effort": ("dynamic", "kinematic", 1e7)}
 
 
+@pytest.mark.parametrize("kind", SCALES)
 @pytest.mark.parametrize("factor", FACTORS)
-def test_effort_limits_scale_the_dynamic_ellipsoid(paper, q45, factor):
-    base = mobmanip.analyze(paper, q45)  # planar: no gravity, the ellipsoid is centred
+def test_limits_scale_their_ellipsoid_and_leave_the_other(paper, q45, kind, factor):
+    scaled, other, most = SCALES[kind]
+    base = mobmanip.analyze(paper, q45)  # planar: no gravity, the dynamic ellipsoid is centred
+    limits = paper.velocity_limits if kind == "velocity" else paper.effort_limits
     try:
-        robot = _scaled(paper, "effort", factor)
+        robot = _scaled(paper, kind, factor)
     except RangeError as exc:
         assert "supported range" in str(exc)
-        assert factor * paper.effort_limits.max() > 1e7 or factor * paper.effort_limits.min() < 1e-6
+        assert factor * limits.max() > most or factor * limits.min() < 1e-6
         return
     result = mobmanip.analyze(robot, q45)
-    dyn, dyn0 = result.dynamic, base.dynamic
-    assert _close(dyn.semi_axes, factor * dyn0.semi_axes, factor * dyn0.semi_axes[0], RTOL)
-    assert np.allclose(result.kinematic.semi_axes, base.kinematic.semi_axes, rtol=RTOL, atol=0)
+    new, old = result.measures[scaled], base.measures[scaled]
+    assert _close(new.semi_axes, factor * old.semi_axes, factor * old.semi_axes[0], RTOL)
+    assert _close(new.axes @ old.axes.T, np.diag(np.sign(np.diag(new.axes @ old.axes.T))), 1.0, 1e-8)
+    assert np.allclose(result.measures[other].semi_axes, base.measures[other].semi_axes, rtol=RTOL, atol=0)
 
 
 def test_under_gravity_effort_scaling_keeps_the_centre_and_scales_the_free_part():

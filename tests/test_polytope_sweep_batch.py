@@ -12,7 +12,7 @@ import pytest
 from scipy.spatial import ConvexHull
 
 import mobmanip
-from conftest import random_configurations
+from conftest import configuration_within_limits, random_configurations
 from mobmanip.errors import ModelError
 from mobmanip.sets.capacity import polytope_batch, stacked_terms
 from mobmanip.sets.capacity_batch import CompiledPolytopeBatch
@@ -117,9 +117,8 @@ def _kinematic_polygon(J, W, vlim) -> np.ndarray:
     return np.array(points)
 
 
-def _dynamic_polygon(J, W, P, Q, xi, M_o, g_o, tau_max) -> tuple[np.ndarray, np.ndarray]:
-    """The object accelerations at every torque corner (their hull is the exact dynamic set) and
-    at zero torque (its centre), from the three defining equations solved densely:
+def _dynamic_point(J, W, P, Q, xi, M_o, g_o, tau) -> np.ndarray:
+    """The object's acceleration at torque tau from the three defining equations solved densely:
     P qdd - Q tau + J^T h = xi, J qdd = W^T a, W h = M_o a + g_o (unknowns qdd, h, a)."""
     mk, n = J.shape
     m = W.shape[0]
@@ -127,13 +126,28 @@ def _dynamic_polygon(J, W, P, Q, xi, M_o, g_o, tau_max) -> tuple[np.ndarray, np.
     A[:n, :n], A[:n, n : n + mk] = P, J.T
     A[n : n + mk, :n], A[n : n + mk, n + mk :] = J, -W.T
     A[n + mk :, n : n + mk], A[n + mk :, n + mk :] = W, -M_o
+    return np.linalg.solve(A, np.r_[xi + Q @ tau, np.zeros(mk), g_o])[n + mk :]
 
-    def accel(tau):
-        b = np.r_[xi + Q @ tau, np.zeros(mk), g_o]
-        return np.linalg.solve(A, b)[n + mk :]
 
-    corners = np.array([accel(np.array(s) * tau_max) for s in itertools.product((-1.0, 1.0), repeat=n)])
-    return corners, accel(np.zeros(n))
+def _dynamic_polygon(J, W, P, Q, xi, M_o, g_o, tau_max) -> tuple[np.ndarray, np.ndarray]:
+    """The object accelerations at every torque corner (their hull is the exact dynamic set) and
+    at zero torque (its centre), each by :func:`_dynamic_point`."""
+    n = J.shape[1]
+    corners = [
+        _dynamic_point(J, W, P, Q, xi, M_o, g_o, np.array(s) * tau_max)
+        for s in itertools.product((-1.0, 1.0), repeat=n)
+    ]
+    return np.array(corners), _dynamic_point(J, W, P, Q, xi, M_o, g_o, np.zeros(n))
+
+
+def _assert_volume_and_isotropy(batch, r, hull: ConvexHull, centre: np.ndarray) -> None:
+    """Row r's volume (an area in 2-D) and isotropy -- the distance from ``centre`` to the nearest
+    facet over that to the farthest vertex -- are the reference hull's (to 1e-12)."""
+    corners = hull.points[hull.vertices]
+    assert batch.volume[r] == pytest.approx(hull.volume, rel=1e-12)
+    inradius = np.min(-(hull.equations[:, :-1] @ centre + hull.equations[:, -1]))
+    circumradius = np.max(np.linalg.norm(corners - centre, axis=1))
+    assert batch.isotropy[r] == pytest.approx(inradius / circumradius, rel=1e-12)
 
 
 def _reach(hull: ConvexHull, u: np.ndarray) -> float:
@@ -186,11 +200,7 @@ def test_each_index_equals_an_independent_computation(paper_terms, kind):
         hull = ConvexHull(points)
         corners = points[hull.vertices]
         size = np.abs(corners).max()
-        # area and isotropy (distance to the nearest facet over the farthest vertex, from the centre)
-        assert batch.volume[r] == pytest.approx(hull.volume, rel=1e-12)
-        inradius = np.min(-(hull.equations[:, :2] @ centre + hull.equations[:, 2]))
-        circumradius = np.max(np.linalg.norm(corners - centre, axis=1))
-        assert batch.isotropy[r] == pytest.approx(inradius / circumradius, rel=1e-12)
+        _assert_volume_and_isotropy(batch, r, hull, centre)
         for d in directions:
             one = np.broadcast_to(d, (len(rows), 2))
             expected = np.max(corners @ d)
@@ -299,12 +309,11 @@ def test_a_planar_sweep_uses_the_compiled_batch_and_keeps_its_indices():
 @pytest.fixture(scope="module")
 def tiago_terms():
     """TIAGo++ holding 2 kg at 200 random joint configurations, translational task (m = 3)."""
-    from polytope_util import random_joint_configuration
 
     robot = mobmanip.load_robot("tiago_dual")
     rng = np.random.default_rng(9)
     return stacked_terms(
-        [terms_at(robot, random_joint_configuration(robot, rng), "translational", object_mass=2.0) for _ in range(200)]
+        [terms_at(robot, configuration_within_limits(robot, rng), "translational", object_mass=2.0) for _ in range(200)]
     )
 
 
@@ -346,26 +355,12 @@ def test_3d_indices_equal_the_hull_of_the_torque_corners(tiago_terms):
         corners = a0 + (signs * sub["effort_limits"]) @ B.T
         hull = ConvexHull(corners)
         V = corners[hull.vertices]
-        assert batch.volume[r] == pytest.approx(hull.volume, rel=1e-12)
-        inradius = np.min(-(hull.equations[:, :3] @ a0 + hull.equations[:, 3]))
-        circumradius = np.max(np.linalg.norm(V - a0, axis=1))
-        assert batch.isotropy[r] == pytest.approx(inradius / circumradius, rel=1e-12)
+        _assert_volume_and_isotropy(batch, r, hull, a0)
         for direction in d:
             one = np.broadcast_to(direction, (len(rows), 3))
             assert batch.support(one)[r] == pytest.approx(np.max(V @ direction), rel=1e-12)
         for k, e in enumerate(np.eye(3)):
             assert batch.widths[r, k] == pytest.approx(np.max(V @ e) - np.min(V @ e), rel=1e-12)
-
-
-def _dynamic_point(J, W, P, Q, xi, M_o, g_o, tau) -> np.ndarray:
-    """The object's acceleration at torque tau from the three defining equations (unknowns qdd, h, a)."""
-    mk, n = J.shape
-    m = W.shape[0]
-    A = np.zeros((n + mk + m, n + mk + m))
-    A[:n, :n], A[:n, n : n + mk] = P, J.T
-    A[n : n + mk, :n], A[n : n + mk, n + mk :] = J, -W.T
-    A[n + mk :, n : n + mk], A[n + mk :, n + mk :] = W, -M_o
-    return np.linalg.solve(A, np.r_[xi + Q @ tau, np.zeros(mk), g_o])[n + mk :]
 
 
 def test_3d_kinematic_sections_stay_on_the_reference_path(tiago_terms):
@@ -381,11 +376,10 @@ def test_3d_kinematic_sections_stay_on_the_reference_path(tiago_terms):
 def test_one_hand_kinematic_zonotopes(task):
     """One hand (W = I): the kinematic set is the zonotope J_u box, compiled in 2-D and 3-D; its
     volume and support equal the hull of its 2^n corners."""
-    from polytope_util import random_joint_configuration
 
     robot = mobmanip.load_robot("panda")
     rng = np.random.default_rng(12)
-    rows = [terms_at(robot, random_joint_configuration(robot, rng), task) for _ in range(100)]
+    rows = [terms_at(robot, configuration_within_limits(robot, rng), task) for _ in range(100)]
     terms = {"J_u": np.stack([t.J_u for t in rows]), "W": rows[0].W, "velocity_limits": rows[0].velocity_limits}
     fast = polytope_batch("kinematic", **terms)
     ref = polytope_batch("kinematic", compiled=False, **terms)
@@ -443,11 +437,10 @@ def test_stacked_terms_stack_what_changes_and_refuse_rows_of_different_batches()
     import dataclasses
 
     from mobmanip.errors import TaskError
-    from polytope_util import random_joint_configuration
 
     robot = mobmanip.load_robot("planar_dual_arm")
     rng = np.random.default_rng(8)
-    rows = [terms_at(robot, random_joint_configuration(robot, rng), "planar", object_mass=2.0) for _ in range(3)]
+    rows = [terms_at(robot, configuration_within_limits(robot, rng), "planar", object_mass=2.0) for _ in range(3)]
     terms = stacked_terms(rows)
     for i, row in enumerate(rows):
         for name in ("J_u", "P", "xi"):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from browser_util import VIEWPORT, chromium, missing_browser, scene_objects, wait_for_scene, world_matrix
+from browser_util import VIEWPORT, scene_objects, wait_for_scene, world_matrix
 from conftest import random_configurations
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.measures import POLYTOPE_KINDS, get_measure
@@ -106,15 +106,6 @@ def test_viewer_loads_polytopes_at_the_registrys_paths():
                 for name in names
             )
             assert far * viewer.scales[quantity] == pytest.approx(0.5, rel=1e-12)
-
-
-@pytest.fixture(scope="module")
-def browser():
-    reason = missing_browser()
-    if reason is not None:
-        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
-    with chromium() as b:
-        yield b
 
 
 _POSITIONS_JS = """(path) => {

@@ -19,8 +19,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from conftest import random_configuration
-from mobmanip.casestudy import configuration_at, optimal_posture
+from conftest import configuration_within_limits, paper_case, random_configuration
 from mobmanip.sets.capacity import dynamic_polytope, kinematic_polytope, min_norm_dynamic_polytope
 from mobmanip.sets.ellipsoid import dynamic_ellipsoid
 from polytope_util import (
@@ -31,7 +30,6 @@ from polytope_util import (
     kinematic_lp,
     min_norm_lp,
     policy_map,
-    random_joint_configuration,
     terms,
 )
 
@@ -41,8 +39,7 @@ DIRECTIONS = 1000
 
 @pytest.fixture(scope="module")
 def paper():
-    robot = mobmanip.load_robot("planar_dual_arm")
-    return robot, configuration_at(robot, optimal_posture(robot), angle_deg=45.0)
+    return paper_case(45.0)
 
 
 @pytest.fixture(scope="module")
@@ -132,7 +129,7 @@ def test_vertices_agree_with_pycapacity(name, rng):
 
     robot = mobmanip.load_robot(name)
     for _ in range(3):
-        q = random_joint_configuration(robot, rng)
+        q = configuration_within_limits(robot, rng)
         _, t = terms(robot, q, "translational", 0.0)
         J, vlim, tlim = t["J_u"], t["velocity_limits"], t["effort_limits"]
         kin = kinematic_polytope(J, t["W"], vlim)
@@ -149,7 +146,7 @@ def test_square_arm_policy_set_is_the_exact_set(rng):
     """UR5, spatial task, one hand: J is square, so the minimum-norm choice is the only choice
     and the paper's policy set equals the exact dynamic set, built two different ways."""
     robot = mobmanip.load_robot("ur5")
-    q = random_joint_configuration(robot, rng)
+    q = configuration_within_limits(robot, rng)
     _, t = terms(robot, q, "spatial", 2.0)
     exact = dynamic_polytope(**dynamic_terms(t))
     policy = min_norm_dynamic_polytope(**dynamic_terms(t))
@@ -179,7 +176,7 @@ def test_kinematic_ellipsoid_inside_polytope_inside_sqrt_n_ellipsoid(request, rn
     robot, _ = request.getfixturevalue(name)
     ratios = []
     for _ in range(count):
-        q = random_configuration(robot, rng) if name == "paper" else random_joint_configuration(robot, rng)
+        q = random_configuration(robot, rng) if name == "paper" else configuration_within_limits(robot, rng)
         an, t = terms(robot, q, task)
         poly = kinematic_polytope(t["J_u"], t["W"], t["velocity_limits"])
         ell = an.kinematic
@@ -193,7 +190,7 @@ def test_kinematic_ellipsoid_inside_polytope_inside_sqrt_n_ellipsoid(request, rn
 def test_dynamic_ellipsoid_inside_policy_polytope_inside_exact_polytope(request, rng, name, task, count):
     robot, _ = request.getfixturevalue(name)
     for _ in range(count):
-        q = random_configuration(robot, rng) if name == "paper" else random_joint_configuration(robot, rng)
+        q = random_configuration(robot, rng) if name == "paper" else configuration_within_limits(robot, rng)
         an, t = terms(robot, q, task, 2.0)
         policy = min_norm_dynamic_polytope(**dynamic_terms(t))
         exact = dynamic_polytope(**dynamic_terms(t))
@@ -206,7 +203,7 @@ def test_dynamic_ellipsoid_inside_policy_polytope_inside_exact_polytope(request,
 def test_spatial_sets_are_nested_along_random_directions(tiago, rng):
     robot, _ = tiago
     for _ in range(5):
-        q = random_joint_configuration(robot, rng)
+        q = configuration_within_limits(robot, rng)
         an, t = terms(robot, q, "spatial", 2.0)
         d = _unit(rng, 30, 6)
         kin = kinematic_polytope(t["J_u"], t["W"], t["velocity_limits"]).supports(d)

@@ -17,6 +17,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from conftest import configuration_within_limits
 from mobmanip.descriptions.resources import example_robot_data_share
 from mobmanip.errors import JointNotFoundError, LimitError, MissingLimitError, SpecError
 from mobmanip.robot.spec import load_spec
@@ -57,22 +58,6 @@ def _xml_origin_xyz(urdf: Path, name: str) -> np.ndarray:
 def _xml_count_joints(urdf: Path, types=("revolute", "continuous", "prismatic"), prefix: str = "") -> int:
     root = ET.parse(urdf).getroot()
     return sum(1 for j in root.findall("joint") if j.get("type") in types and j.get("name").startswith(prefix))
-
-
-def _random_configuration(robot, rng) -> np.ndarray:
-    """Platform pose anywhere, each joint uniform within its URDF range (full turn if continuous)."""
-    model = robot.model
-    q = robot.neutral()
-    yaw = rng.uniform(-math.pi, math.pi)
-    q[:4] = (*rng.uniform(-2.0, 2.0, size=2), math.cos(yaw), math.sin(yaw))
-    for j in range(2, model.njoints):
-        joint = model.joints[j]
-        if joint.nq == 2:
-            angle = rng.uniform(-math.pi, math.pi)
-            q[joint.idx_q : joint.idx_q + 2] = (math.cos(angle), math.sin(angle))
-        else:
-            q[joint.idx_q] = rng.uniform(model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q])
-    return q
 
 
 def _tool_placements(robot, q):
@@ -139,7 +124,7 @@ def test_tiago_wheel_geometry_and_limits_come_from_the_urdf(tiago):
 
 def test_tiago_unified_jacobian_matches_finite_differences(tiago, rng):
     for _ in range(3):
-        q = _random_configuration(tiago, rng)
+        q = configuration_within_limits(tiago, rng, one_turn=False)
         J_u = unified_jacobian(tiago, q, "spatial")
         assert J_u.shape == (12, 16)
         for _ in range(3):
@@ -149,7 +134,7 @@ def test_tiago_unified_jacobian_matches_finite_differences(tiago, rng):
 
 def test_tiago_reduced_inertia_gives_the_kinetic_energy(tiago, rng):
     for _ in range(5):
-        q = _random_configuration(tiago, rng)
+        q = configuration_within_limits(tiago, rng, one_turn=False)
         x = rng.standard_normal(tiago.nx)
         P = reduced_dynamics(tiago, q).P
         energy = pin.computeKineticEnergy(tiago.model, tiago.data, q, tiago.S @ x)
@@ -163,7 +148,7 @@ def test_tiago_positive_wheel_rates_drive_both_tools_forward(tiago, rng):
         ET.parse(TIAGO_URDF).getroot().find("link[@name='wheel_right_link']/collision/geometry/sphere").get("radius")
     )
     for _ in range(3):
-        q = _random_configuration(tiago, rng)
+        q = configuration_within_limits(tiago, rng, one_turn=False)
         yaw = math.atan2(q[3], q[2])
         x = np.zeros(tiago.nx)
         x[:2] = 1.0  # both wheels at +1 rad/s, arms still: pure forward translation at r m/s
@@ -194,7 +179,7 @@ def test_tiago_torso_sits_between_platform_and_arms(tiago_torso):
 
 def test_tiago_torso_lifts_both_tools_straight_up(tiago_torso, rng):
     for _ in range(3):
-        q = _random_configuration(tiago_torso, rng)
+        q = configuration_within_limits(tiago_torso, rng, one_turn=False)
         column = unified_jacobian(tiago_torso, q, "spatial")[:, tiago_torso.torso_slice][:, 0]
         np.testing.assert_allclose(column, [0, 0, 1, 0, 0, 0] * 2, atol=1e-12)
         x = rng.standard_normal(tiago_torso.nx)
@@ -285,7 +270,7 @@ def test_fixed_base_arms_load_with_their_joints_only(name, urdf, prefix, rng):
     np.testing.assert_array_equal(robot.S[:3], 0.0)  # the root joint never moves
     for k, joint in enumerate(robot.reduced_velocity_names):
         assert robot.velocity_limits[k] == pytest.approx(_xml_limit(urdf, joint, "velocity"))
-    q = _random_configuration(robot, rng)
+    q = configuration_within_limits(robot, rng, one_turn=False)
     x = rng.standard_normal(robot.nx)
     np.testing.assert_allclose(
         unified_jacobian(robot, q, "spatial") @ x, _finite_difference_twists(robot, q, x), rtol=0, atol=FD_ATOL

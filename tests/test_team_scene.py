@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from browser_util import VIEWPORT, chromium, missing_browser, scene_objects, wait_for_scene, world_matrix
+from browser_util import VIEWPORT, scene_objects, wait_for_scene, world_matrix
 from mobmanip.team import load_team
 from mobmanip.team.analysis import analyze_team
 from mobmanip.viz.scene import planar_thickness, visual_model
@@ -18,15 +18,6 @@ from mobmanip.viz.team_scene import TEAM_PATH, TeamViewer
 
 BEAM = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
 M = "meshcat/"
-
-
-@pytest.fixture(scope="module")
-def browser():
-    reason = missing_browser()
-    if reason is not None:
-        pytest.skip(f"browser tests need Chromium and Playwright: {reason}")
-    with chromium() as b:
-        yield b
 
 
 def test_the_exported_team_scene_places_robots_object_and_sets(browser, tmp_path):

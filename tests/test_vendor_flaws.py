@@ -14,7 +14,6 @@ inertia changed by the repaired links' rotational share, nothing else) to 1e-9.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +21,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from conftest import set_joints
 from hostile_util import assert_one_line_error, run_cli
 from mobmanip.descriptions import read_description
 from mobmanip.descriptions.resources import example_robot_data_share
@@ -175,13 +175,7 @@ def _reference(urdf: Path, robot, repaired_by_hand: bool):
     differential drive and the reduced-velocity order written here."""
     model = pin.buildModelFromUrdf(str(urdf), pin.JointModelPlanar())
     data = model.createData()
-    q = pin.neutral(model)
-    for name, value in FETCH_POSTURE.items():
-        joint = model.joints[model.getJointId(name)]
-        if joint.nq == 2:
-            q[joint.idx_q : joint.idx_q + 2] = (math.cos(value), math.sin(value))
-        else:
-            q[joint.idx_q] = value
+    q = set_joints(model, pin.neutral(model), FETCH_POSTURE)
     names = ["r_wheel_joint", "l_wheel_joint", *ARM_JOINTS]
     S = np.zeros((model.nv, len(names)))
     r, b = WHEEL_RADIUS, HALF_TRACK

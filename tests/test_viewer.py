@@ -23,9 +23,7 @@ import pytest
 
 from browser_util import (
     VIEWPORT,
-    chromium,
     classify,
-    missing_browser,
     patch,
     project,
     scene_objects,
@@ -51,7 +49,6 @@ from mobmanip.viz.scene import (
 from mobmanip.viz.server import MeshcatServer, PortBusyError
 from mobmanip.viz.sweeps import fig3_frames, fig4_frames, object_angle_frames
 
-BROWSER_MISSING = missing_browser()
 M = "meshcat/"  # meshcat's root in the three.js scene tree
 TOL = 1e-5  # what three.js reports back (a decomposed and recomposed matrix) against numpy
 
@@ -292,14 +289,6 @@ def test_sweep_frames_hold_the_papers_values(robot, posture):
 
 
 # --------------------------------------------------------------------------- in the browser
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if BROWSER_MISSING is not None:
-        pytest.skip(f"browser tests need Chromium and Playwright: {BROWSER_MISSING}")
-    with chromium() as b:
-        yield b
 
 
 def expected_paths(viewer) -> dict[str, str]:

@@ -16,14 +16,13 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from browser_util import chromium, missing_browser, project, wait_for_scene, world_matrix
+from browser_util import project, wait_for_scene, world_matrix
 from mobmanip.cli import main
 from mobmanip.measures import get_measure
 from mobmanip.viz.page import MAGNIFY_BELOW, MAGNIFY_TO, inject, magnification, visual_box
 from mobmanip.viz.scene import OBJECT_COLOR, EllipsoidViewer, analyze_pair, scene_path, visual_model
 
 ROBOTS = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "robots").glob("*.toml"))
-BROWSER_MISSING = missing_browser()
 VIEW = {"width": 800, "height": 500}  # small pages render fast
 M = "meshcat/"
 TOL = 1e-5
@@ -98,14 +97,6 @@ def test_inject_puts_the_script_before_the_end_of_the_body():
 
 
 # --------------------------------------------------------------------------- in the browser
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if BROWSER_MISSING is not None:
-        pytest.skip(f"browser tests need Chromium and Playwright: {BROWSER_MISSING}")
-    with chromium() as b:
-        yield b
 
 
 _LEGEND_JS = """() => {

@@ -49,18 +49,25 @@ class UnknownPostureError(SpecError):
         super().__init__(f"robot {robot!r} has no posture {name!r}; its postures: {', '.join(self.available)}")
 
 
-class DescriptionError(MobmanipError):
-    """A robot description file is missing, unreadable, malformed, of no known format, or
-    describes no physical robot. Carries the file's ``path`` and the ``reason``; each format's
-    own error (:class:`UrdfError`) names the file's language in the message."""
+class FileError(MobmanipError):
+    """A file that cannot be used as what it should be. Carries the file's ``path`` and the
+    ``reason``; the message is ``"<label> <path>: <reason>"``."""
 
     #: How the message names the file.
-    label = "robot description"
+    label = "file"
 
     def __init__(self, path: str, reason: str):
         self.path = path
         self.reason = reason
         super().__init__(f"{self.label} {path}: {reason}")
+
+
+class DescriptionError(FileError):
+    """A robot description file is missing, unreadable, malformed, of no known format, or
+    describes no physical robot. Carries the file's ``path`` and the ``reason``; each format's
+    own error (:class:`UrdfError`) names the file's language in the message."""
+
+    label = "robot description"
 
 
 class UrdfError(DescriptionError):
@@ -95,14 +102,11 @@ class UnknownFormatError(DescriptionError):
         )
 
 
-class RecordingError(MobmanipError):
+class RecordingError(FileError):
     """A recording (a ROS bag) that cannot be read as a trajectory: missing, unreadable, a topic
     missing or of another message type, too little data. Carries the ``path`` and the ``reason``."""
 
-    def __init__(self, path: str, reason: str):
-        self.path = path
-        self.reason = reason
-        super().__init__(f"recording {path}: {reason}")
+    label = "recording"
 
 
 class NameNotFoundError(MobmanipError):

@@ -108,11 +108,7 @@ def _add_held(robot, q, result, document, duration: float, floor) -> None:
 def _describe_ellipsoid(name: str, ellipsoid, unit: str) -> str:
     axes = ", ".join(f"{s:.4f}" for s in ellipsoid.semi_axes)
     text = f"{name} semi-axes ({unit}): {axes}; isotropy {ellipsoid.isotropy:.3f}"
-    if np.any(ellipsoid.center != 0.0):
-        text += f"; centre {np.array2string(ellipsoid.center, precision=4)}"
-    if ellipsoid.degenerate:
-        text += " [degenerate: zero semi-axis]"
-    return text
+    return _centre_and_degeneracy(text, ellipsoid, "zero semi-axis")
 
 
 def _describe_set(name: str, task_set, unit: str) -> str:
@@ -122,10 +118,16 @@ def _describe_set(name: str, task_set, unit: str) -> str:
     # a polytope of more than 3 task dimensions has no vertices, so no isotropy (its reaches are LPs)
     isotropy = f"isotropy {task_set.isotropy:.3f}" if _available(lambda: task_set.isotropy) else "isotropy n/a"
     text = f"{name} reach along the task axes ({unit}): {'; '.join(reach)}; {isotropy}"
+    return _centre_and_degeneracy(text, task_set, "no reach in some direction")
+
+
+def _centre_and_degeneracy(text: str, task_set, degenerate: str) -> str:
+    """``text`` followed by the set's centre where it is off the origin, and by ``[degenerate:
+    <degenerate>]`` where the set is."""
     if np.any(task_set.center != 0.0):
         text += f"; centre {np.array2string(task_set.center, precision=4)}"
     if task_set.degenerate:
-        text += " [degenerate: no reach in some direction]"
+        text += f" [degenerate: {degenerate}]"
     return text
 
 

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..support.files import atomic_output, save_figure, write_json
+from ..support.files import atomic_output, write_json
 
 if TYPE_CHECKING:
     from ..coordination.carry import TeamCarryResult, TeamCarryRun
@@ -41,12 +41,6 @@ if TYPE_CHECKING:
 PLACEMENT_MAP_FILES = ("map.npz", "map.csv", "map.png")
 #: The files ``carry --out DIR`` writes in DIR (and ``preparation.csv`` after a self-motion).
 CARRY_FILES = ("trajectory.csv", "baseline.csv", "carry.json", "capacity.png", "preparation.csv")
-
-
-def _close(figure) -> None:
-    import matplotlib.pyplot as plt
-
-    plt.close(figure)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -189,6 +183,7 @@ def trajectory_outputs(
     (:func:`mobmanip.motion.traction.traction_along`), every contact's normal force
     (``normal_force_<contact>``) and every driven wheel's traction use (``traction_use_<wheel>``;
     an unloaded wheel's is ``inf`` in the CSV and ``null`` in the JSON)."""
+    from ..viz.figures import save_and_close
     from ..viz.motion_figures import trajectory_figure
 
     out = Path(out_dir)
@@ -224,11 +219,7 @@ def trajectory_outputs(
     paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
     write_table_csv(paths[0], header, values)
     write_json(paths[1], document)
-    fig = trajectory_figure(result)
-    try:
-        save_figure(fig, paths[2], dpi=100, bbox_inches="tight")
-    finally:
-        _close(fig)
+    save_and_close(trajectory_figure(result), paths[2], dpi=100, bbox_inches="tight")
     return [str(p) for p in paths]
 
 
@@ -260,6 +251,7 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
     the baseline's and its tracking error; capacity.png is
     :func:`mobmanip.viz.motion_figures.carry_figure`.
     """
+    from ..viz.figures import save_and_close
     from ..viz.motion_figures import carry_figure
 
     out = Path(out_dir)
@@ -282,11 +274,7 @@ def carry_outputs(robot: Robot, result: CarryResult, out_dir: str | Path) -> lis
         write_trajectory_csv(
             robot, paths[-1], prep.t, prep.q, {"capacity": prep.capacity, "tracking_error": prep.tracking_error}
         )
-    fig = carry_figure(result, robot.name)
-    try:
-        save_figure(fig, paths[3], dpi=100, bbox_inches="tight")
-    finally:
-        _close(fig)
+    save_and_close(carry_figure(result, robot.name), paths[3], dpi=100, bbox_inches="tight")
     return [str(p) for p in paths]
 
 
@@ -360,6 +348,7 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
     there is one), ``team_carry.json`` (:meth:`TeamCarryResult.summary` and which file is whose),
     ``capacity.png`` (:func:`mobmanip.viz.motion_figures.carry_figure`) and ``paths.png`` (the top
     view, :func:`mobmanip.viz.motion_figures.team_carry_figure`); returns the paths."""
+    from ..viz.figures import save_and_close
     from ..viz.motion_figures import carry_figure, team_carry_figure
 
     team = result.team
@@ -381,11 +370,8 @@ def team_carry_outputs(result: TeamCarryResult, out_dir: str | Path) -> list[str
     if prep is not None:
         files["preparation"] = {m.name: p.name for m, p in zip(team.members, paths["preparation"])}
     write_json(summary, {**result.summary(), "files": files})
-    for fig, path in ((carry_figure(result, f"team {team.name}"), figure), (team_carry_figure(result), top)):
-        try:
-            save_figure(fig, path, dpi=100)
-        finally:
-            _close(fig)
+    save_and_close(carry_figure(result, f"team {team.name}"), figure, dpi=100)
+    save_and_close(team_carry_figure(result), top, dpi=100)
     return written + [str(summary), str(figure), str(top)]
 
 

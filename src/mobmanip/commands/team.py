@@ -92,20 +92,13 @@ def register(sub) -> None:
 
 def _read_checked(args, offsets):
     """The team file's TOML, after checking its robots and the sweep's robot-headings against the bounds."""
-    import tomllib
-
     from ..errors import TeamError
-    from ..support.reading import check_toml_numbers, read_user_text
+    from ..support.reading import read_user_toml
     from ..support.work import WorkEstimate, check_work
     from ..support.work import bound as _bound
     from ..team.members import MAX_TEAM_BYTES
 
-    text = read_user_text(args.description, "team", limit=MAX_TEAM_BYTES, error=TeamError)
-    try:
-        data = tomllib.loads(text)
-        check_toml_numbers(data, str(args.description), error=TeamError)
-    except tomllib.TOMLDecodeError as exc:
-        raise TeamError(f"team {args.description} is not valid TOML: {exc}") from exc
+    data = read_user_toml(args.description, "team", limit=MAX_TEAM_BYTES, error=TeamError)
     robots = data.get("robots")
     count = len(robots) if isinstance(robots, list) else 0
     check_work(WorkEstimate("team", "robots", count, SECONDS_PER_ROBOT_HEADING), _bound(args.max_work, MAX_ROBOTS))

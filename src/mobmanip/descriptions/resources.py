@@ -34,6 +34,18 @@ def builtin_robot_names() -> list[str]:
     return sorted(p.stem for p in builtin_robots_dir().glob("*.toml"))
 
 
+def _installed(name: str) -> importlib.metadata.Distribution:
+    """The installed distribution ``name`` (its metadata: where its files are).
+
+    Raises:
+        SpecError: it is not installed (naming the pip command that installs it).
+    """
+    try:
+        return importlib.metadata.distribution(name)
+    except importlib.metadata.PackageNotFoundError as exc:
+        raise SpecError(f"{name} is not installed (pip install {name})") from exc
+
+
 @cache
 def example_robot_data_share() -> Path:
     """The ``share`` directory of the installed example-robot-data distribution.
@@ -41,10 +53,7 @@ def example_robot_data_share() -> Path:
     Found through the distribution's metadata, never a hard-coded site-packages path. Pass it
     to Pinocchio as a package directory so ``package://`` mesh URIs resolve.
     """
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError as exc:
-        raise SpecError("example-robot-data is not installed (pip install example-robot-data)") from exc
+    dist = _installed("example-robot-data")
     for file in dist.files or ():
         parts = Path(str(file)).parts
         if "example-robot-data" in parts and "robots" in parts:
@@ -60,10 +69,7 @@ def stretch_urdf_dir() -> Path:
     """The ``stretch_urdf`` directory of the installed hello-robot-stretch-urdf distribution
     (Hello Robot's URDFs of Stretch, one folder per model: RE1V0, RE2V0, SE3), found through
     the distribution's metadata like :func:`example_robot_data_share`."""
-    try:
-        dist = importlib.metadata.distribution("hello-robot-stretch-urdf")
-    except importlib.metadata.PackageNotFoundError as exc:
-        raise SpecError("hello-robot-stretch-urdf is not installed (pip install hello-robot-stretch-urdf)") from exc
+    dist = _installed("hello-robot-stretch-urdf")
     for file in dist.files or ():
         parts = Path(str(file)).parts
         if parts and parts[0] == "stretch_urdf" and str(file).endswith(".urdf"):

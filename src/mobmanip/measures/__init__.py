@@ -10,48 +10,15 @@ from . import ellipsoids, polytopes  # noqa: F401  (registers the built-in measu
 from . import force  # noqa: F401  (the force measures, after the polytopes)
 from .ellipsoids import DYNAMIC, KINEMATIC
 from .polytopes import DYNAMIC_POLYTOPE, DYNAMIC_POLYTOPE_MIN_NORM, KINEMATIC_POLYTOPE, POLYTOPE_KINDS
-from .registry import (
-    ACCELERATION,
-    MEASURES,
-    VELOCITY,
-    BatchForm,
-    BatchRequest,
-    Compute,
-    Measure,
-    MeasureTerms,
-    Quantity,
-    default_measures,
-    evaluate_batch,
-    get_measure,
-    measure_help,
-    measure_names,
-    register_measure,
-    resolve_measures,
-    unregister_measure,
-)
+from .registry import *  # noqa: F403 - the registry's public names
+from .registry import __all__ as _REGISTRY_NAMES
 
 __all__ = [
-    "ACCELERATION",
+    *_REGISTRY_NAMES,
     "DYNAMIC",
     "DYNAMIC_POLYTOPE",
     "DYNAMIC_POLYTOPE_MIN_NORM",
     "KINEMATIC",
     "KINEMATIC_POLYTOPE",
-    "MEASURES",
     "POLYTOPE_KINDS",
-    "VELOCITY",
-    "BatchForm",
-    "BatchRequest",
-    "Compute",
-    "Measure",
-    "MeasureTerms",
-    "Quantity",
-    "default_measures",
-    "evaluate_batch",
-    "get_measure",
-    "measure_help",
-    "measure_names",
-    "register_measure",
-    "resolve_measures",
-    "unregister_measure",
 ]

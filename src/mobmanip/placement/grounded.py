@@ -37,7 +37,7 @@ from scipy.optimize import minimize
 
 from ..analysis.single import analyze
 from ..errors import ArgumentError, MeasureError, MobmanipError
-from ..gradients.evaluator import GradientEvaluator, Objective
+from ..gradients.evaluator import Objective
 from ..measures import MEASURES, get_measure
 from ..robot.model import Robot
 from ..robot.tasks import get_task
@@ -195,9 +195,9 @@ def place_polytope(
         raise ArgumentError(f"the search's budget must be a positive number of evaluations, got {budget!r}")
     first = place(robot, target, objective.surrogate, task.name, object_mass=object_mass, decoupled=decoupled,
                   region=region, reference=reference, starts=starts, hold_turn=hold_turn)  # fmt: skip
-    evaluator = GradientEvaluator(robot, objective.surrogate, task, object_mass=object_mass, decoupled=decoupled)
-    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = PlacementProblem(robot, evaluator, first.target, region, q_ref)
+    problem = PlacementProblem.of_objective(
+        robot, objective.surrogate, task, first.target, region, reference, object_mass=object_mass, decoupled=decoupled
+    )
     bounds = problem.bounds()
     if hold_turn is not None:
         turn = check_turn(hold_turn)

@@ -66,8 +66,8 @@ class MapJob:
 _ROBOTS: dict[str, Robot] = {}
 
 
-def _robot(name: str) -> Robot:
-    """The robot, loaded once per process."""
+def robot_in_process(name: str) -> Robot:
+    """The robot ``name``, loaded once per (worker) process: the last one asked for is kept."""
     if name not in _ROBOTS:
         _ROBOTS.clear()
         _ROBOTS[name] = load_robot(name)
@@ -81,7 +81,7 @@ def run_band(job: MapJob, start: int, stop: int) -> tuple[int, PlacementMap | No
 
 def _rows(job: MapJob, start: int, stop: int, progress=None) -> PlacementMap | None:
     """Rows [start, stop) of the map in bands of ``job.rows_per_task`` rows, solved together."""
-    robot = _robot(job.robot)
+    robot = robot_in_process(job.robot)
     collision = None
     if job.avoid_collision is not None:
         from ..robot.collision import SelfCollision

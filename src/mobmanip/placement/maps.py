@@ -29,19 +29,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.optimize import minimize
 
 from ..errors import ArgumentError, UnreachableObjectError
-from ..gradients.evaluator import GradientEvaluator, Objective
+from ..gradients.evaluator import Objective
 from ..robot.model import Robot
-from ..robot.tasks import get_task
 from .optimize import (
     CONSTRAINT_TOLERANCE,
     PlacementProblem,
     check_target,
     check_turn,
     clip_to_bounds,
-    slsqp_constraints,
+    slsqp_run,
 )
 
 if TYPE_CHECKING:
@@ -204,10 +202,10 @@ def placement_map(
     bands = [(start, min(start + rows_per_band, len(ys))) for start in range(0, len(ys), rows_per_band)]
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to map")
-    task = get_task(task or robot.spec.default_task)
-    evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
-    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = PlacementProblem(robot, evaluator, target, None, q_ref, collision)
+    problem = PlacementProblem.of_objective(
+        robot, objective, task, target, None, reference, collision, object_mass=object_mass, decoupled=decoupled
+    )
+    evaluator, q_ref, task = problem.ev, problem.q_ref, problem.ev.task
     fixed = problem.fixed_errors(problem.start(0.0, np.random.default_rng(0)))
     if fixed.size and np.abs(fixed).max() > CONSTRAINT_TOLERANCE:  # e.g. the height of planar arms' hands
         raise UnreachableObjectError(
@@ -309,16 +307,7 @@ def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, s
         z = newton_project(problem, clip_to_bounds(z0, bounds), bounds)
         if z is None:
             continue
-        res = minimize(
-            problem.objective,
-            z,
-            jac=True,
-            method="SLSQP",
-            bounds=bounds,
-            constraints=slsqp_constraints(problem),
-            options={"maxiter": max_iterations, "ftol": tolerance},
-        )
-        z = res.x
+        z = slsqp_run(problem, problem.objective, z, bounds, max_iterations, tolerance)
         if problem.residual(z) > CONSTRAINT_TOLERANCE:
             z = newton_project(problem, z, bounds)
             if z is None or problem.residual(z) > CONSTRAINT_TOLERANCE:  # off the hold, or colliding

@@ -140,6 +140,19 @@ class Placement:
 class PlacementProblem:
     """Decision variables, objective and constraints of one placement."""
 
+    @classmethod
+    def of_objective(
+        cls, robot, objective, task, target, region=None, reference=None, collision=None, *,
+        object_mass=None, decoupled=False,
+    ) -> PlacementProblem:  # fmt: skip
+        """The problem of placing ``robot`` to hold the object at ``target``: the objective's
+        :class:`~mobmanip.gradients.GradientEvaluator` on ``task`` (a name or a task; ``None``: the
+        spec's default task), the hold of ``reference`` (``None``: the spec's hold configuration)."""
+        task = get_task(task or robot.spec.default_task)
+        evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
+        q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
+        return cls(robot, evaluator, target, region, q_ref, collision)
+
     def __init__(self, robot, evaluator, target, region, reference, collision=None):
         self.collision = collision
         self.robot = robot
@@ -428,6 +441,24 @@ def slsqp_constraints(problem: PlacementProblem) -> list[dict]:
     return out
 
 
+def slsqp_run(
+    problem: PlacementProblem, fun, z0: np.ndarray, bounds, max_iterations: int, tolerance: float
+) -> np.ndarray:
+    """SLSQP's last iterate minimising ``fun`` (value and gradient at z) from ``z0``, within
+    ``bounds``, under the problem's hold (and clearance) constraints; it may stop off the hold
+    (check :meth:`PlacementProblem.residual`)."""
+    res = minimize(
+        fun,
+        z0,
+        jac=True,
+        method="SLSQP",
+        bounds=bounds,
+        constraints=slsqp_constraints(problem),
+        options={"maxiter": max_iterations, "ftol": tolerance},
+    )
+    return res.x
+
+
 def clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
     z = z.copy()
     for k, (lo, hi) in enumerate(bounds):
@@ -440,16 +471,11 @@ def clip_to_bounds(z: np.ndarray, bounds) -> np.ndarray:
 
 def _project(problem: PlacementProblem, z0: np.ndarray, bounds) -> np.ndarray | None:
     """The nearest z (in the variables' own units) that holds the object; None if not found."""
-    res = minimize(
-        lambda z: (0.5 * float((z - z0) @ (z - z0)), z - z0),
-        clip_to_bounds(z0, bounds),
-        jac=True,
-        method="SLSQP",
-        bounds=bounds,
-        constraints=slsqp_constraints(problem),
-        options={"maxiter": 200, "ftol": 1e-12},
-    )
-    z = res.x
+
+    def distance(z: np.ndarray) -> tuple[float, np.ndarray]:  # half the squared distance to z0, its gradient
+        return 0.5 * float((z - z0) @ (z - z0)), z - z0
+
+    z = slsqp_run(problem, distance, clip_to_bounds(z0, bounds), bounds, 200, 1e-12)
     return z if problem.residual(z) <= CONSTRAINT_TOLERANCE else None
 
 
@@ -503,10 +529,10 @@ def place(
         raise ArgumentError(f"starts must be a positive integer, got {starts!r}")
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to choose")
-    task = get_task(task or robot.spec.default_task)
-    evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
-    q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
-    problem = PlacementProblem(robot, evaluator, target, region, q_ref, collision)
+    problem = PlacementProblem.of_objective(
+        robot, objective, task, target, region, reference, collision, object_mass=object_mass, decoupled=decoupled
+    )
+    evaluator = problem.ev
     bounds = problem.bounds()
     if hold_turn is not None:
         hold_turn = check_turn(hold_turn)
@@ -536,16 +562,7 @@ def place(
             return None, None, None
         start_value = -problem.objective(z0)[0]
         start_value = None if start_value <= -1e6 else start_value
-        res = minimize(
-            problem.objective,
-            z0,
-            jac=True,
-            method="SLSQP",
-            bounds=bounds,
-            constraints=slsqp_constraints(problem),
-            options={"maxiter": max_iterations, "ftol": tolerance},
-        )
-        z = res.x
+        z = slsqp_run(problem, problem.objective, z0, bounds, max_iterations, tolerance)
         if problem.residual(z) > CONSTRAINT_TOLERANCE:  # stopped between iterates: back onto the hold
             z = _project(problem, z, bounds)
             if z is None:

@@ -44,6 +44,7 @@ import numpy as np
 from ..errors import ArgumentError, MobmanipError, SpecError, TaskError
 from ..robot.model import Robot, load_robot
 from ..robot.support_spec import check_mu
+from .map_jobs import robot_in_process
 from .optimize import DEFAULT_STARTS, place
 
 #: Most object positions one site may hold, whatever the work bound (a list or a grid).
@@ -245,16 +246,6 @@ class SiteResult:
         return self.table[:, self.columns.index("value")]
 
 
-_ROBOTS: dict[str, Robot] = {}
-
-
-def _robot(name: str) -> Robot:
-    if name not in _ROBOTS:
-        _ROBOTS.clear()
-        _ROBOTS[name] = load_robot(name)
-    return _ROBOTS[name]
-
-
 def _grounded_reach(robot: Robot, q: np.ndarray, site: Site) -> float:
     from ..analysis.plausibility import floor_warnings
     from ..analysis.single import analyze
@@ -291,7 +282,7 @@ def _grounded_direction(site: Site, task) -> np.ndarray:
 
 def solve_positions(site: Site, start: int, stop: int) -> tuple[int, np.ndarray, list[str]]:
     """Rows [start, stop) of the site (a worker task): (start, rows, reasons)."""
-    robot = _robot(site.robot)
+    robot = robot_in_process(site.robot)
     nq = robot.model.nq
     rows = np.full((stop - start, len(COLUMNS) + nq), np.nan)
     reasons = []

@@ -252,6 +252,13 @@ class PlatformKind(ABC):
         """The spec's ``[wheels]`` section (with comments) for ``init-spec``; empty if none."""
         return []
 
+    @staticmethod
+    def length_overrides(lengths: Sequence[tuple[str, float | None]]) -> list[str]:
+        """Lines of :meth:`toml_lines` for lengths the URDF gives unless set: ``key = value`` for
+        each one set, a commented placeholder for each left to the URDF."""
+        return [f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF"
+                for key, value in lengths]  # fmt: skip
+
     #: Whether the wheel joints themselves take limits (False: the kind's own names do).
     limits_by_joint: ClassVar[bool] = True
 

@@ -227,9 +227,7 @@ class DifferentialDriveKind(PlatformKind):
             f"right = {toml_string(wheels.right)}",
             f"left = {toml_string(wheels.left)}",
         ]
-        for key, value in (("radius", wheels.radius), ("half_track", wheels.half_track)):
-            out.append(f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF")
-        return out
+        return out + self.length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
 
 
 KIND = DifferentialDriveKind()

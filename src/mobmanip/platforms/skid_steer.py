@@ -257,9 +257,7 @@ class SkidSteerKind(PlatformKind):
             f"right = [{', '.join(toml_string(n) for n in wheels.right)}]",
             f"left = [{', '.join(toml_string(n) for n in wheels.left)}]",
         ]
-        for key, value in (("radius", wheels.radius), ("half_track", wheels.half_track)):
-            out.append(f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF")
-        return out
+        return out + self.length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
 
     limits_by_joint = False
 

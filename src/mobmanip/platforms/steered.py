@@ -265,9 +265,7 @@ class SteeredKind(PlatformKind):
             f"steer = {toml_string(wheels.steer)}",
             f"rear = [{', '.join(toml_string(n) for n in wheels.rear)}]",
         ]
-        for key, value in (("radius", wheels.radius), ("rear_radius", wheels.rear_radius)):
-            out.append(f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF")
-        return out
+        return out + self.length_overrides((("radius", wheels.radius), ("rear_radius", wheels.rear_radius)))
 
 
 KIND = SteeredKind()

@@ -50,7 +50,6 @@ against the URDF happens when the robot is loaded (:func:`mobmanip.robot.model.l
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -429,15 +428,10 @@ def load_spec(path: str | Path) -> RobotSpec:
     Raises:
         SpecError: the file cannot be read or parsed, or its content is inconsistent.
     """
-    from ..support.reading import check_toml_numbers, read_user_text
+    from ..support.reading import read_user_toml
 
     path = Path(path)
-    text = read_user_text(path, "spec", limit=MAX_SPEC_BYTES, error=SpecError)
-    try:
-        data = tomllib.loads(text)
-        check_toml_numbers(data, str(path), error=SpecError)
-    except tomllib.TOMLDecodeError as exc:
-        raise SpecError(f"spec {path} is not valid TOML: {exc}") from exc
+    data = read_user_toml(path, "spec", limit=MAX_SPEC_BYTES, error=SpecError)
     return spec_from_dict(data, path.resolve().parent, source=path)
 
 

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ModelError, TaskError
 from .linear_programs import CertifiedProgram, LinearProgram
+from .polytope import halfspaces_json
 from .taskset import TaskSet, check_dims, check_direction, check_points
 
 _TOL = 1e-9  # relative to the set's size: a support beyond a facet by less than this adds no vertex
@@ -603,12 +604,7 @@ class LiftedPolytope(TaskSet):
         if self.dim <= 3 and not self.empty:
             out["vertices"] = self.vertices.tolist()
             out["faces"] = [f.tolist() for f in self.faces]
-            try:
-                A, b = self.halfspaces
-                out["halfspaces"] = {"A": A.tolist(), "b": b.tolist()}
-            except TaskError as error:
-                out["halfspaces"] = None
-                out["halfspaces_omitted"] = str(error)
+            out.update(halfspaces_json(self))
             out["volume"], out["isotropy"] = self.volume, self.isotropy
         else:
             out["halfspaces"] = None

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -48,6 +49,23 @@ from .taskset import TaskSet
 
 _RANK_RTOL = RANK_RTOL
 _EMPTY_TOL = 1e-9  # least effort above 1 + this: empty; above 1 - this: no interior
+
+
+class Halfspaced(Protocol):
+    """A set that gives its halfspaces (A a <= b), or raises TaskError where it cannot."""
+
+    @property
+    def halfspaces(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+def halfspaces_json(task_set: Halfspaced) -> dict:
+    """A set's halfspaces for its JSON: ``{"halfspaces": {"A", "b"}}`` (A a <= b), or
+    ``{"halfspaces": None, "halfspaces_omitted": why}`` when it cannot give them."""
+    try:
+        A, b = task_set.halfspaces
+    except TaskError as error:
+        return {"halfspaces": None, "halfspaces_omitted": str(error)}
+    return {"halfspaces": {"A": A.tolist(), "b": b.tolist()}}
 
 
 class Polytope(TaskSet):
@@ -450,12 +468,7 @@ class Polytope(TaskSet):
             "center": self.center.tolist(),
             "least_effort": self.least_effort if np.isfinite(self.least_effort) else None,
         }
-        try:
-            A, b = self.halfspaces
-            out["halfspaces"] = {"A": A.tolist(), "b": b.tolist()}
-        except TaskError as error:
-            out["halfspaces"] = None
-            out["halfspaces_omitted"] = str(error)
+        out.update(halfspaces_json(self))
         if self.dim <= 3:
             out["vertices"] = self.vertices.tolist()
             out["faces"] = [f.tolist() for f in self.faces]

@@ -145,6 +145,26 @@ def read_user_text(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
         raise error(f"{what} {path} is not UTF-8 text (byte {exc.start})") from None
 
 
+def read_user_toml(path: str | Path, what: str, *, limit: int = MAX_TEXT_BYTES,
+                   error: ErrorFactory = ArgumentError) -> dict:  # fmt: skip
+    """A user TOML file, parsed: read as :func:`read_user_text`, its numbers checked by
+    :func:`check_toml_numbers` (messages name ``path`` as given).
+
+    Raises:
+        MobmanipError: (from ``error``) as :func:`read_user_text`; the text is not TOML
+            (``"<what> <path> is not valid TOML: <reason>"``); a number is out of range.
+    """
+    import tomllib
+
+    text = read_user_text(path, what, limit=limit, error=error)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{what} {path} is not valid TOML: {exc}") from exc
+    check_toml_numbers(data, str(path), error=error)
+    return data
+
+
 def read_csv_rows(path: str | Path, what: str, *, error: ErrorFactory = ArgumentError,
                   max_field: int = MAX_CSV_FIELD) -> list[tuple[int, list[str]]]:  # fmt: skip
     """The non-blank rows of a user CSV file as ``(line number, cells)``.

@@ -52,7 +52,6 @@ the grasp points), so that it agrees exactly with the Jacobians.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -234,15 +233,10 @@ def load_team(path: str | Path) -> Team:
         TeamError: the file cannot be read or parsed, or its content is wrong (the message
             names the value and where it is); other :class:`MobmanipError` from loading a robot.
     """
-    from ..support.reading import check_toml_numbers, read_user_text
+    from ..support.reading import read_user_toml
 
     path = Path(path)
-    text = read_user_text(path, "team", limit=MAX_TEAM_BYTES, error=TeamError)
-    try:
-        data = tomllib.loads(text)
-        check_toml_numbers(data, str(path), error=TeamError)
-    except tomllib.TOMLDecodeError as exc:
-        raise TeamError(f"team {path} is not valid TOML: {exc}") from exc
+    data = read_user_toml(path, "team", limit=MAX_TEAM_BYTES, error=TeamError)
     return team_from_dict(data, path.resolve().parent, where=str(path))
 
 

@@ -57,6 +57,16 @@ PAD = 0.06
 FORMATS = ("png", "pdf")
 
 
+def save_and_close(fig: Any, path: str | Path, **options: Any) -> Path:
+    """Save ``fig`` (:func:`mobmanip.support.files.save_figure`: atomically, in the format its
+    suffix names; ``options`` go to ``savefig``) and close it, saved or not; returns the path."""
+    try:
+        save_figure(fig, path, **options)
+    finally:
+        plt.close(fig)
+    return Path(path)
+
+
 def _platform_outline(robot: Robot) -> np.ndarray:
     """Corners (k, 2) of the platform body in its own frame (the platform kind draws it)."""
     platform = robot.wheel_platform if robot.wheel_platform is not None else robot.platform

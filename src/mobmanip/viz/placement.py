@@ -206,15 +206,10 @@ def placement_figure(
     Each panel's title gives the objective's value with its unit; a set that has collapsed (a
     singular posture, :func:`collapsed_note`) is said so in its panel. One legend below the panels.
     """
-    from ..support.files import save_figure
-    from .figures import plt
+    from .figures import save_and_close
 
     fig = placement_top_figure(robot, placement, task, object_mass=object_mass, decoupled=decoupled)
-    try:
-        save_figure(fig, path, dpi=110, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    return Path(path)
+    return save_and_close(fig, path, dpi=110, bbox_inches="tight")
 
 
 def placement_map_figure(placement_map: PlacementMap, title: str | None = None) -> Figure:
@@ -262,12 +257,6 @@ def _task_of(objective) -> str:
 
 def plot_placement_map(placement_map: PlacementMap, path: str | Path, title: str | None = None) -> Path:
     """Write :func:`placement_map_figure` (PNG or SVG by the file's suffix) atomically; returns the path."""
-    from ..support.files import save_figure
-    from .figures import plt
+    from .figures import save_and_close
 
-    fig = placement_map_figure(placement_map, title)
-    try:
-        save_figure(fig, path, dpi=110, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    return Path(path)
+    return save_and_close(placement_map_figure(placement_map, title), path, dpi=110, bbox_inches="tight")

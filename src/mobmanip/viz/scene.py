@@ -74,14 +74,9 @@ sends one meshcat animation.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
-import warnings
-import webbrowser
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -91,16 +86,15 @@ from ..analysis.single import Analysis, analyze
 from ..measures import default_measures, get_measure, measure_names, resolve_measures
 from ..robot.model import Robot
 from ..sets.taskset import TaskSet
-from ..support.files import write_text
 from . import page as _page
 from .animation import CAMERA_FRAMES as CAMERA_FRAMES
 from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
-from .compact_page import compact
+from .meshcat_scene import MeshcatScene
 from .meshes import visual_model as visual_model
 from .nesting import nested, outlined
 from .scales import DEFAULT_SIZE as DEFAULT_SIZE
 from .scales import ScaleFactors as ScaleFactors
-from .server import MeshcatServer, ViewerError
+from .server import ViewerError
 from .shapes import DRAWINGS, MIN_SEMI_AXIS, drawn_ellipsoid, drawn_extent, ellipsoid_frame, line_material, translation
 from .shapes import aligned as aligned  # noqa: F401 - re-exported: the animation tests use it
 from .shapes import ellipsoid_matrix as ellipsoid_matrix
@@ -210,7 +204,7 @@ def analyze_pair(
 # --------------------------------------------------------------------------- the viewer
 
 
-class EllipsoidViewer:
+class EllipsoidViewer(MeshcatScene):
     """A meshcat viewer of a robot, its held object and its task-space sets (every measure an
     analysis holds, drawn by its set kind; see the module's docstring).
 
@@ -247,36 +241,21 @@ class EllipsoidViewer:
         measures: Iterable[str] | None = None,
         magnify: bool = True,
     ):
-        import zmq
-
-        with warnings.catch_warnings():  # meshcat 0.3.2 imports pyzmq's deprecated zmq.eventloop.ioloop
-            warnings.simplefilter("ignore", DeprecationWarning)
-            import meshcat
-        from pinocchio.visualize import MeshcatVisualizer
-
         self.robot = robot
         self.scales = scales
         self.size = size
         self.magnify = magnify
         #: How many times larger each magnified set is drawn, by (locked, measure name).
         self.magnified: dict[tuple[bool, str], float] = {}
-        self._page: dict = {}  # what page.js shows (see mobmanip.viz.page)
-        self._camera_serial = 0
-        self._closed = False
         self._visible: dict[tuple[bool, str], bool | None] = {}  # loaded sets, visibility as last sent
         #: Measures whose sets were not drawn: no drawing for their set kind yet (by name: kind).
         self.undrawn: dict[str, str] = {}
         #: The robot's own sets drawn as outlines at the last show or animation, by (locked,
         #: measure name): each contains the sets listed (as drawn), which its surface would hide.
         self.outlined: dict[tuple[bool, str], tuple[tuple[bool, str], ...]] = {}
-        self._server = MeshcatServer(port)
-        try:
-            with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its URL; we print ours
-                self._vis = meshcat.Visualizer(zmq_url=self._server.zmq_url)
-            socket = self._vis.window.zmq_socket
-            socket.setsockopt(zmq.LINGER, 0)
-            socket.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
-            socket.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
+        with self._starting(port, timeout):
+            from pinocchio.visualize import MeshcatVisualizer  # imports meshcat: once _starting has, quietly
+
             #: One line per mesh left out of the drawing (outside the package roots, missing, unreadable).
             self.mesh_notes: list[str] = []
             self.model, self.visual_model = visual_model(robot, self.mesh_notes)
@@ -285,57 +264,12 @@ class EllipsoidViewer:
                 self._pin.initViewer(viewer=self._vis)
                 self._pin.loadViewerModel(rootNodeName=ROBOT_PATH)
                 self._load_static(resolve_measures(measures))
-        except BaseException:
-            self._server.stop()
-            raise
         self._locked_visible: bool | None = None
         self.last: Frame | None = None
         if open_browser:
             self.open()
 
-    # ----- plumbing
-
-    @contextlib.contextmanager
-    def _commands(self):
-        """Turn a silent server (zmq timeout) into a ViewerError."""
-        import zmq
-
-        if self._closed:
-            raise ViewerError("the viewer is closed")
-        try:
-            yield
-        except zmq.error.Again:  # the request socket cannot be used again: give up on this viewer
-            exited = "" if self._server.running else " (it has exited)"
-            self.close()
-            raise ViewerError(
-                f"the meshcat server (pid {self._server.pid}) stopped answering{exited}; the viewer is closed"
-            ) from None
-
-    def __getitem__(self, path: str):
-        """The meshcat ``Visualizer`` at a scene path (e.g. ``viewer["mobmanip/locked"]``)."""
-        return self._vis[path]
-
-    @property
-    def url(self) -> str:
-        """The viewer page, e.g. ``http://127.0.0.1:7000/static/``."""
-        return self._server.web_url
-
-    @property
-    def port(self) -> int:
-        return self._server.port
-
-    @property
-    def server_pid(self) -> int:
-        """Process id of the meshcat server."""
-        return self._server.pid
-
-    @property
-    def server_running(self) -> bool:
-        return self._server.running
-
-    def open(self) -> None:
-        """Open the viewer page in the default web browser."""
-        webbrowser.open(self.url, new=2)
+    # ----- loading
 
     def _load_static(self, measures) -> None:
         import meshcat.geometry as mg
@@ -418,11 +352,7 @@ class EllipsoidViewer:
             all_boxes.extend(boxes)
         first = frames[0]
         heading = math.atan2(first.q[3], first.q[2]) if self.model.nq >= 4 else 0.0
-        self._camera_serial += 1
-        request = _page.fit_request(np.vstack(all_points), all_boxes, heading, self._camera_serial)
-        with self._commands():
-            self._send_page(camera=request)
-        return request
+        return self._send_fit(np.vstack(all_points), all_boxes, heading)
 
     def _frame_extent(self, frame: Frame) -> tuple[np.ndarray, list]:
         """Points (n, 3) and boxes of what one frame draws: the robot, the object, the sets."""
@@ -440,13 +370,6 @@ class EllipsoidViewer:
                 points = np.vstack([points, more])
                 boxes.extend(around)
         return points, boxes
-
-    def _send_page(self, **changes) -> None:
-        """Update what the page shows (legend, camera) if it changed."""
-        page = {**self._page, **changes}
-        if page != self._page:
-            self._vis[ROOT].set_property(_page.PAGE_PROPERTY, page)
-            self._page = page
 
     def _legend(self, sets: dict, title: str, notes: Sequence[str] = ()) -> None:
         """Show the legend of the drawn ``sets`` (by (locked, measure name))."""
@@ -675,32 +598,3 @@ class EllipsoidViewer:
         with self._commands():
             self._vis.set_animation(animation, play=play, repetitions=repetitions)
         return schedule
-
-    # ----- output and shutdown
-
-    def static_html(self) -> str:
-        """The scene as one self-contained HTML page: meshcat's ``static_html`` with each mesh
-        file kept once, compressed (:mod:`mobmanip.viz.compact_page`)."""
-        with self._commands():
-            return _page.inject(compact(self._vis.static_html()))
-
-    def export_html(self, path: str | Path) -> Path:
-        """Write the scene (with its animation, if any) as a self-contained HTML page."""
-        path = Path(path)
-        write_text(path, self.static_html())
-        return path
-
-    def close(self) -> None:
-        """Disconnect and stop the meshcat server. Safe to call twice."""
-        if self._closed:
-            return
-        self._closed = True
-        with contextlib.suppress(Exception):
-            self._vis.window.zmq_socket.close(linger=0)
-        self._server.stop()
-
-    def __enter__(self) -> EllipsoidViewer:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()

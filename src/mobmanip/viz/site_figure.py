@@ -54,12 +54,6 @@ def site_figure(result: SiteResult, title: str | None = None) -> Figure:
 
 def plot_site(result: SiteResult, path: str | Path, title: str | None = None) -> Path:
     """Write :func:`site_figure` (PNG or SVG by the file's suffix) atomically; returns the path."""
-    from ..support.files import save_figure
-    from .figures import plt
+    from .figures import save_and_close
 
-    fig = site_figure(result, title)
-    try:
-        save_figure(fig, path, dpi=110, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    return Path(path)
+    return save_and_close(site_figure(result, title), path, dpi=110, bbox_inches="tight")

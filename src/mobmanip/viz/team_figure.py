@@ -10,10 +10,9 @@ import numpy as np
 
 from ..measures import get_measure
 from ..robot.tasks import get_task
-from ..support.files import save_figure
 from ..team.analysis import TeamAnalysis
 from ..team.sweep import TeamSweep
-from .figures import COLORS, draw_ellipse, draw_robot, extent
+from .figures import COLORS, draw_ellipse, draw_robot, extent, save_and_close
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -23,14 +22,7 @@ def team_figure(
     analysis: TeamAnalysis, path: str | Path, sweep: TeamSweep | None = None, *, scale: float | None = None
 ) -> Path:
     """Write the team's figure (:func:`team_figure_of`; PNG by default, the suffix names the format)."""
-    import matplotlib.pyplot as plt
-
-    fig = team_figure_of(analysis, sweep, scale=scale)
-    try:
-        save_figure(fig, path, dpi=120, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    return Path(path)
+    return save_and_close(team_figure_of(analysis, sweep, scale=scale), path, dpi=120, bbox_inches="tight")
 
 
 def team_figure_of(analysis: TeamAnalysis, sweep: TeamSweep | None = None, *, scale: float | None = None) -> Figure:

@@ -27,27 +27,22 @@ moving along (:mod:`mobmanip.viz.animation`).
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
-import warnings
-import webbrowser
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..measures import get_measure
-from ..support.files import write_text
 from ..team.analysis import TeamAnalysis
 from . import page as _page
 from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
+from .meshcat_scene import MeshcatScene
 from .nesting import nested, outlined
 from .scene import DEFAULT_SIZE, FLOOR_COLOR, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
-from .server import MeshcatServer, ViewerError
+from .server import ViewerError
 from .shapes import DRAWINGS, line_material, translation
 
 __all__ = ["TEAM_PATH", "TeamFrame", "TeamViewer", "team_scales"]
@@ -86,7 +81,7 @@ def team_scales(analyses: Iterable[TeamAnalysis], size: float = DEFAULT_SIZE) ->
     return {q: (size / e if e > 0.0 else 1.0) for q, e in largest.items()}
 
 
-class TeamViewer:
+class TeamViewer(MeshcatScene):
     """The team's scene on a meshcat server of its own (closed by :meth:`close`).
 
     Args:
@@ -117,39 +112,20 @@ class TeamViewer:
         timeout: float = 60.0,
         scales: Mapping[str, float] | None = None,
     ):
-        import zmq
-
-        with warnings.catch_warnings():  # meshcat 0.3.2 imports pyzmq's deprecated zmq.eventloop.ioloop
-            warnings.simplefilter("ignore", DeprecationWarning)
-            import meshcat
         self.analysis = analysis
         self.mesh_notes: list[str] = []
         self.undrawn: dict[str, str] = {}
         #: The team's sets drawn as outlines (they contain, as drawn, the sets listed).
         self.outlined: dict[str, tuple[str, ...]] = {}
-        self._closed = False
-        self._page: dict = {}  # what page.js shows (see mobmanip.viz.page)
-        self._camera_serial = 0
-        self._server = MeshcatServer(port)
-        try:
-            with contextlib.redirect_stdout(io.StringIO()):
-                self._vis = meshcat.Visualizer(zmq_url=self._server.zmq_url)
-            socket = self._vis.window.zmq_socket
-            socket.setsockopt(zmq.LINGER, 0)
-            socket.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
-            socket.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
-            with self._commands():
-                self._draw_robots()
-                self._draw_object()
-                self.scales = self._draw_sets(team_scales([analysis], size) if scales is None else dict(scales))
-                self.floor_notes = self._draw_floors()
-                self._legend(self._title(), self.floor_notes)
-                self.frame_camera([TeamFrame(analysis)])
-        except BaseException:
-            self._server.stop()
-            raise
+        with self._starting(port, timeout), self._commands():
+            self._draw_robots()
+            self._draw_object()
+            self.scales = self._draw_sets(team_scales([analysis], size) if scales is None else dict(scales))
+            self.floor_notes = self._draw_floors()
+            self._legend(self._title(), self.floor_notes)
+            self.frame_camera([TeamFrame(analysis)])
         if open_browser:
-            webbrowser.open(self.url, new=2)
+            self.open()
 
     # ----- drawing
 
@@ -240,12 +216,6 @@ class TeamViewer:
         title = f"team {team.name}: {robots}; {team.task} task"
         return title + (" (linear part drawn)" if team.task in ("spatial", "planar_rigid") else "")
 
-    def _send_page(self, **changes) -> None:
-        page = {**self._page, **changes}
-        if page != self._page:
-            self._vis["mobmanip"].set_property(_page.PAGE_PROPERTY, page)
-            self._page = page
-
     def _legend(self, title: str, more: Sequence[str] = ()) -> None:
         """The legend: the team, each drawn set's colour and scale, the object; ``more`` notes."""
         scales = {name: self._set_scale(name) for name in self._sets}
@@ -284,11 +254,7 @@ class TeamViewer:
                     boxes.extend(around)
         first = frames[0].analysis.team.members[0]
         heading = math.atan2(first.q[3], first.q[2]) if first.robot.model.nq >= 4 else 0.0
-        self._camera_serial += 1
-        request = _page.fit_request(np.vstack(points), boxes, heading, self._camera_serial)
-        with self._commands():
-            self._send_page(camera=request)
-        return request
+        return self._send_fit(np.vstack(points), boxes, heading)
 
     # ----- animation
 
@@ -344,55 +310,3 @@ class TeamViewer:
     def scene_path(name: str) -> str:
         """Where the team's set of measure ``name`` is drawn."""
         return f"{TEAM_PATH}/sets/{get_measure(name).name}"
-
-    # ----- plumbing
-
-    @contextlib.contextmanager
-    def _commands(self):
-        import zmq
-
-        if self._closed:
-            raise ViewerError("the viewer is closed")
-        try:
-            yield
-        except zmq.error.Again:
-            self.close()
-            raise ViewerError(f"the meshcat server (pid {self._server.pid}) stopped answering; closed") from None
-
-    def __getitem__(self, path: str):
-        """The meshcat ``Visualizer`` at a scene path."""
-        return self._vis[path]
-
-    @property
-    def url(self) -> str:
-        """The viewer page."""
-        return self._server.web_url
-
-    def static_html(self) -> str:
-        """The scene as one self-contained HTML page, each mesh file kept once, compressed
-        (:mod:`mobmanip.viz.compact_page`)."""
-        from .compact_page import compact
-
-        with self._commands():
-            return _page.inject(compact(self._vis.static_html()))
-
-    def export_html(self, path: str | Path) -> Path:
-        """Write the scene as a self-contained HTML page."""
-        path = Path(path)
-        write_text(path, self.static_html())
-        return path
-
-    def close(self) -> None:
-        """Disconnect and stop the server. Safe to call twice."""
-        if self._closed:
-            return
-        self._closed = True
-        with contextlib.suppress(Exception):
-            self._vis.window.zmq_socket.close(linger=0)
-        self._server.stop()
-
-    def __enter__(self) -> TeamViewer:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
