@@ -291,17 +291,14 @@ def retime_outputs(
     trajectory``), :meth:`mobmanip.motion.retime.Retiming.to_dict` as JSON, the figure
     (:func:`mobmanip.viz.motion_figures.retime_figure`) and the profile (s, t, s', s'', the limit
     curve and the controllable bound per grid point) as CSV; returns the paths."""
+    from ..viz.figures import save_and_close
     from ..viz.motion_figures import retime_figure
 
     out = Path(out_dir)
     paths = [out / name for name in names]
     write_trajectory_csv(robot, paths[0], result.t, result.trajectory.q)
     write_json(paths[1], result.to_dict())
-    fig = retime_figure(result)
-    try:
-        save_figure(fig, paths[2], dpi=100, bbox_inches="tight")
-    finally:
-        _close(fig)
+    save_and_close(retime_figure(result), paths[2], dpi=100, bbox_inches="tight")
     header, values = result.table()
     write_table_csv(paths[3], header, values)
     return [str(p) for p in paths]
