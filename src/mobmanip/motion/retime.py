@@ -19,7 +19,8 @@ grid point s_i:
   support polygon, every support loaded, each driven wheel within friction, with a reserve).
 
 Each grid point therefore gives a convex polygon of (a, b). With b_{i+1} = b_i + 2 (s_{i+1} -
-s_i) a_i (a constant on each interval), reachability analysis (TOPP-RA: Pham and Pham, IEEE
+s_i) a_i (a constant on each interval, kept by the rows at both of the interval's ends: TOPP-RA's
+"interpolation" scheme, :data:`DISCRETIZATIONS`), reachability analysis (TOPP-RA: Pham and Pham, IEEE
 T-RO 2018) gives the time-optimal profile exactly on the grid: a backward pass computes each
 point's controllable set K_i, the values of b from which the end can still be reached at rest,
 and a forward pass from rest takes at each point the largest a that keeps the next b in
@@ -132,6 +133,38 @@ def path_rows(
     return out
 
 
+#: How each interval's constant s'' keeps the rows: ``"interpolation"`` at both of its ends (the
+#: sample's rows at (s'', s'^2) and the next sample's at (s'', s'^2 + 2 ds s'')), ``"collocation"``
+#: at its start only (the next sample then checks its own rows with the next interval's s'').
+DISCRETIZATIONS = ("interpolation", "collocation")
+
+
+def interval_rows(rows: list[PathRows], s: np.ndarray, discretization: str = "interpolation") -> list[PathRows]:
+    """The rows each interval's (s'', s'^2 at its start) keeps, one per sample (the last sample:
+    its own rows, with s' = 0 there): see :data:`DISCRETIZATIONS`.
+
+    Raises:
+        ArgumentError: an unknown discretization.
+    """
+    if discretization not in DISCRETIZATIONS:
+        raise ArgumentError(f"discretization must be one of {', '.join(DISCRETIZATIONS)}, got {discretization!r}")
+    if discretization == "collocation":
+        return list(rows)
+    kept = []
+    for i in range(len(rows) - 1):
+        here, there, step = rows[i], rows[i + 1], float(s[i + 1] - s[i])
+        kept.append(
+            PathRows(
+                np.concatenate([here.ca, there.ca + 2.0 * step * there.cb]),
+                np.concatenate([here.cb, there.cb]),
+                np.concatenate([here.d, there.d]),
+                here.labels + there.labels,
+                here.kinds + there.kinds,
+            )
+        )
+    return [*kept, rows[-1]]
+
+
 # ----- exact two-dimensional programs -----
 
 
@@ -226,18 +259,15 @@ def _b_range(polygon) -> tuple[float, float] | None:
     return max(min(bs), 0.0), max(bs)
 
 
-def _a_range(rows: PathRows, b: float) -> tuple[float, float]:
-    """The feasible s'' at s'^2 = b: [lo, hi] (lo > hi: none)."""
-    rhs = rows.d - rows.cb * b
-    scale = np.hypot(rows.ca, rows.cb)
-    slack = ROW_TOLERANCE * (scale + np.abs(rows.d))
-    up, down = rows.ca > 0.0, rows.ca < 0.0
-    hi = min(ACCELERATION_CAP, float(np.min(rhs[up] / rows.ca[up]))) if up.any() else ACCELERATION_CAP
-    lo = max(-ACCELERATION_CAP, float(np.max(rhs[down] / rows.ca[down]))) if down.any() else -ACCELERATION_CAP
-    flat = ~(up | down)
-    if np.any(rhs[flat] < -slack[flat]):
-        return 1.0, 0.0
-    return lo, hi
+def _a_range(polygon: Polygon, b: float) -> tuple[float, float]:
+    """The s'' the polygon allows at s'^2 = b: its cut along that line (a b a hair above the
+    polygon's top, by rounding: the top vertex's)."""
+    cut = _clip(_clip(polygon, 0.0, 1.0, b), 0.0, -1.0, -b)
+    if not cut:
+        top = max(polygon, key=lambda vertex: vertex[1])
+        return top[0], top[0]
+    values = [a for a, _, _ in cut]
+    return min(values), max(values)
 
 
 @dataclass(frozen=True)
@@ -322,6 +352,7 @@ def retime(
     floor: CarryFloor | None = None,
     progress: bool = False,
     rows: list[PathRows] | None = None,
+    discretization: str = "interpolation",
 ) -> Retiming:
     """The fastest timing of ``trajectory``'s path, from rest to rest, with every wheel and joint
     within its velocity and effort limits and, with ``floor``, the robot on its floor (see the
@@ -330,9 +361,11 @@ def retime(
     Args:
         robot, trajectory, task, object_mass, floor, progress: as :func:`path_rows`.
         rows: the path's rows when already computed (:func:`path_rows`), else computed here.
+        discretization: how each interval keeps the rows (:data:`DISCRETIZATIONS`): at both of its
+            ends (default; TOPP-RA's "interpolation") or at its start ("collocation").
 
     Raises:
-        ArgumentError: not a trajectory.
+        ArgumentError: not a trajectory, an unknown discretization.
         NumericalError: no timing keeps the rows (named: the grid point and, where one row alone
             decides, the row), or nothing limits the speed.
     """
@@ -343,31 +376,36 @@ def retime(
     s = trajectory.t
     n = len(s)
     steps = np.diff(s)
+    own = rows
+    rows = interval_rows(own, s, discretization)
+    unsteady = {}  # an end where the robot is at rest only while it accelerates
+    for i, where in ((0, "first"), (n - 1, "last")):
+        still = _still_breaks(own[i])
+        if still:
+            unsteady[where] = f"the {where} sample cannot be held still (s'' = 0): {still}"
+    context = "".join(f"; {note}" for note in unsteady.values())
     polygons = [_polygon(r) for r in rows]
     for i, polygon in enumerate(polygons):
         if not polygon:
-            raise NumericalError(f"no timing of the path keeps {_blocking(rows[i])} at sample {i} (s = {s[i]:.6g} s)")
+            raise NumericalError(
+                f"no timing of the path keeps {_blocking(rows[i])} at sample {i} (s = {s[i]:.6g} s){context}"
+            )
     limit = np.array([math.sqrt(_b_range(p)[1]) for p in polygons])  # type: ignore[index]
 
     # backward: the controllable sets, ending at rest
     K = np.zeros((n, 2))
-    unsteady = {}  # an end where the robot is at rest only while it accelerates
     for i, where in ((0, "first"), (n - 1, "last")):  # from rest to rest: s' = 0 at both ends
         if not _clip(polygons[i], 0.0, 1.0, 0.0):
             at_rest = _blocking(rows[i], lambda polygon: bool(_clip(polygon, 0.0, 1.0, 0.0)))
-            raise NumericalError(f"the path's {where} sample cannot be passed at rest: {at_rest}")
-        still = _still_breaks(rows[i])
-        if still:
-            unsteady[where] = f"the {where} sample cannot be held still (s'' = 0): {still}"
+            raise NumericalError(f"the path's {where} sample cannot be passed at rest: {at_rest}{context}")
     for i in range(n - 2, -1, -1):
         step, lo, hi = float(steps[i]), K[i + 1, 0], K[i + 1, 1]
         found = _b_range(_strip(polygons[i], step, lo, hi))
         if found is None:
             blocking = _blocking(rows[i], partial(_reaches, step=step, lo=lo, hi=hi))
-            ending = f"; {unsteady['last']}" if "last" in unsteady else ""
             raise NumericalError(
                 f"no timing of the path reaches its end at rest from sample {i} (s = {s[i]:.6g} s): "
-                f"{blocking} there{ending}"
+                f"{blocking} there{context}"
             )
         K[i] = found
     if K[0, 0] > 0.0:
@@ -377,7 +415,7 @@ def retime(
     b = np.zeros(n)
     a = np.zeros(n)
     for i in range(n - 1):
-        lo, hi = _a_range(rows[i], b[i])
+        lo, hi = _a_range(polygons[i], b[i])
         step = float(steps[i])
         hi = min(hi, (K[i + 1, 1] - b[i]) / (2.0 * step))
         lo = max(lo, (K[i + 1, 0] - b[i]) / (2.0 * step))
@@ -507,6 +545,7 @@ def stops_along(
     object_mass: float | None = None,
     floor: CarryFloor | None = None,
     rows: list[PathRows] | None = None,
+    discretization: str = "interpolation",
 ) -> Stops:
     """At every sample of the path, the highest speed from which the robot can still stop within
     ``within`` metres of its platform's travel along the path, keeping every row of
@@ -520,6 +559,7 @@ def stops_along(
     Args:
         within: the distance (m), > 0.
         rows: the path's rows when already computed (:func:`path_rows`), else computed here.
+        discretization: as :func:`retime`'s.
         robot, trajectory, task, object_mass, floor: as :func:`path_rows`.
 
     Raises:
@@ -533,7 +573,7 @@ def stops_along(
         raise ArgumentError("the path's platform does not move: a stopping distance along it means nothing")
     if rows is None:
         rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor)
-    polygons = [_polygon(r) for r in rows]
+    polygons = [_polygon(r) for r in interval_rows(rows, trajectory.t, discretization)]
     steps = np.diff(trajectory.t)
     n = len(trajectory)
     stop_at = np.minimum(np.searchsorted(distance, distance + within * (1 + 1e-12), side="right") - 1, n - 1)
