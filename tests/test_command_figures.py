@@ -33,6 +33,7 @@ COVERED = {
     "team_figure": "test_team_figure",
     "plot_site": "test_site_figure",
     "team_carry_figure": "test_team_carry.py (test_team_carry_figures_meet_the_paper_figures_standard)",
+    "retime_figure": "test_retime_figure",
 }
 
 
@@ -181,6 +182,33 @@ def test_carry_figure(text, task, unit):
         (ax,) = fig.axes
         assert ax.get_ylabel().endswith(unit) and ":" not in ax.get_ylabel().split("(")[0]
         assert ax.get_title().startswith("tiago_pro: ")
+    finally:
+        plt.close(fig)
+
+
+def test_retime_figure():
+    """The fastest timing's figure: s' against the limit curve with the binding kinds marked under
+    it, and the new time against the input's, each axis with its unit."""
+    from mobmanip.motion.retime import retime
+    from mobmanip.motion.trajectory import trajectory_from_samples
+    from mobmanip.viz.motion_figures import retime_figure
+
+    robot = mobmanip.load_robot("panda")
+    home = robot.hold_configuration()
+    s = np.linspace(0.0, 1.0, 41)
+    qs = np.tile(home, (len(s), 1))
+    joint = robot.model.joints[robot.model.getJointId("panda_joint1")].idx_q
+    qs[:, joint] += 1.5 * s**2 * (3.0 - 2.0 * s)
+    result = retime(robot, trajectory_from_samples(robot, s, qs), object_mass=0.0)
+    fig = retime_figure(result)
+    try:
+        check_paper_ready(fig, "retime.png")
+        top, bottom = fig.axes
+        assert top.get_ylabel().endswith("(1)") and bottom.get_ylabel() == "time (s)"
+        assert bottom.get_xlabel().endswith("(s)")
+        legend = [t.get_text() for t in top.get_legend().get_texts()]
+        assert "fastest timing" in legend and any(text.startswith("binds: ") for text in legend)
+        assert fig._suptitle.get_text().startswith("panda, spatial task, joint limits only: 1 s -> ")
     finally:
         plt.close(fig)
 
