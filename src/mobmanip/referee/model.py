@@ -133,6 +133,17 @@ class Rollout:
         """Driven wheels that slipped at some step."""
         return [name for name, slid in self.slipped.items() if slid]
 
+    def judge(self, slip_speed: float, at_limit: float, max_penetration: float) -> None:
+        """Fill :attr:`in_contact` and :attr:`slipped` from the rows (thresholds as
+        :meth:`Referee.rollout`'s)."""
+        for k, s in enumerate(self.supports):
+            deep = self.penetration[:, k].max()
+            self.in_contact[s.name] = bool(self.normal[:, k].min() > 0.0 and deep <= max_penetration)
+            if s.driven:
+                self.slipped[s.name] = bool(
+                    self.slip_speed[:, k].max() > slip_speed or self.friction_use[:, k].max() >= at_limit
+                )
+
 
 def _floats(text: str | None, default: str) -> np.ndarray:
     return np.array([float(v) for v in (text or default).split()])
@@ -520,12 +531,7 @@ def build(
     for follower, leader, ratio in gears:  # wheels one effort drives together turn together
         gear = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=follower, name2=leader, **soft)
         gear.data[:5] = [0.0, ratio, 0.0, 0.0, 0.0]  # follower - its qpos0 = ratio (leader - its qpos0)
-    (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), {}
-    for j in range(2, robot.model.njoints):
-        joint = robot.model.joints[j]
-        value = math.atan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
-        joints[robot.model.names[j]] = float(value)
-
+    (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), joint_positions(robot, q)
     joints.update(locks)
 
     def configuration(model) -> np.ndarray:
@@ -600,6 +606,27 @@ def build(
     return referee
 
 
+def _constraint_jacobian(model, data) -> np.ndarray:
+    """The constraints' Jacobian at the current state, dense, (nefc, nv)."""
+    if not mujoco.mj_isSparse(model):
+        return data.efc_J.reshape(data.nefc, model.nv).copy()
+    dense = np.zeros((data.nefc, model.nv))
+    mujoco.mju_sparse2dense(dense, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
+    return dense
+
+
+def joint_positions(robot, q: np.ndarray) -> dict[str, float]:
+    """mobmanip's joints (all but the platform's root) at configuration ``q`` (nq,) as MuJoCo's
+    joint positions: name -> angle (rad) or distance (m); a continuous joint's (cos, sin) as its
+    angle in (-pi, pi]."""
+    out = {}
+    for j in range(2, robot.model.njoints):
+        joint = robot.model.joints[j]
+        value = math.atan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
+        out[robot.model.names[j]] = float(value)
+    return out
+
+
 def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str, float]]]:
     """Where the reduced efforts act, joint by joint: ``(joint name, its row of B (nx,))`` for
     every joint B drives (``Q = B tau``: a joint's generalized force is its row times ``tau``),
@@ -646,7 +673,10 @@ class Referee:
         self._body = model.body("object" if has_object else hands[0]).id
         self._base = int(model.joint("floating_base").bodyid[0])
         self._root_qpos = int(model.joint("floating_base").qposadr[0])
-        self._geoms = {model.geom(f"contact_{s.name}").id: k for k, s in enumerate(supports)}
+        self._support_geoms = [model.geom(f"contact_{s.name}").id for s in supports]
+        self._support_of = np.full(model.ngeom, -1, dtype=int)  # geom id -> support index, -1: none
+        self._support_of[self._support_geoms] = np.arange(len(supports))
+        self._is_support = self._support_of >= 0
         # (MuJoCo dof, row of B: the joint's generalized force per reduced effort) per driven joint
         pairs = _actuation(robot)[0] if actuation is None else actuation
         self._nx = robot.nx
@@ -700,37 +730,61 @@ class Referee:
         names = [model.names[j] for j in range(2, model.njoints) if model.names[j] not in platform]
         return np.array([int(self.model.joint(name).dofadr[0]) for name in names], dtype=int)
 
-    def _set_run(self, x: np.ndarray) -> None:
-        """Start from reduced velocity ``x`` (nx,) of a translating robot (see :meth:`rollout`)."""
-        robot, m, d = self.robot, self.model, self.data
-        if x.shape != (robot.nx,) or not np.all(np.isfinite(x)):
-            raise ArgumentError(f"the run's velocity must be {robot.nx} finite reduced velocities, got {x.shape}")
+    def _yaw0(self) -> float:
+        """The built base's yaw (rad)."""
+        return math.atan2(self.qpos0[self._root_qpos + 6], self.qpos0[self._root_qpos + 3]) * 2.0
+
+    def configuration(self) -> np.ndarray:
+        """mobmanip's configuration (nq,) the model was built at: the base's planar pose and every
+        joint of mobmanip's model at its built position."""
+        robot, m = self.robot, self.model
         q = robot.neutral()
-        yaw = math.atan2(self.qpos0[self._root_qpos + 6], self.qpos0[self._root_qpos + 3]) * 2.0
-        q[2:4] = (math.cos(yaw), math.sin(yaw))
+        root = self.qpos0[self._root_qpos : self._root_qpos + 2]
+        yaw = self._yaw0()
+        q[:4] = (root[0], root[1], math.cos(yaw), math.sin(yaw))
         for j in range(2, robot.model.njoints):  # the built configuration's joints
             joint = robot.model.joints[j]
             value = float(self.qpos0[m.joint(robot.model.names[j]).qposadr[0]])
             q[joint.idx_q : joint.idx_q + joint.nq] = (math.cos(value), math.sin(value)) if joint.nq == 2 else value
+        return q
+
+    def _set_velocity(self, q: np.ndarray, x: np.ndarray) -> None:
+        """Set the velocities of the built state (at configuration ``q``, the built one) to reduced
+        velocity ``x`` (nx,): the base's planar velocity (world axes) and every joint's rate
+        ``S x``; the bodies mobmanip does not model (the object, a level grasp's grips, an
+        omnidirectional base's hubs) move as the model's equality constraints (the grasp) ask, at
+        velocity level, by least squares."""
+        robot, m, d = self.robot, self.model, self.data
         v = robot.null_space(q) @ x
+        yaw = math.atan2(q[3], q[2])
         c, s = math.cos(yaw), math.sin(yaw)
+        d.qvel[:] = 0.0
+        base = int(m.joint("floating_base").dofadr[0])
+        # a free joint's linear velocity is in world axes, its angular one in the body's (here level)
+        d.qvel[base : base + 6] = [c * v[0] - s * v[1], s * v[0] + c * v[1], 0.0, 0.0, 0.0, v[2]]
+        known = list(range(base, base + 6))
+        for j in range(2, robot.model.njoints):
+            dof = int(m.joint(robot.model.names[j]).dofadr[0])
+            d.qvel[dof] = v[robot.model.joints[j].idx_v]
+            known.append(dof)
+        mujoco.mj_forward(m, d)
+        rows = np.flatnonzero(d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+        rest = np.setdiff1d(np.arange(m.nv), known)
+        if len(rows) and len(rest):
+            J = _constraint_jacobian(m, d)[rows]
+            d.qvel[rest] = np.linalg.lstsq(J[:, rest], -J[:, known] @ d.qvel[known], rcond=None)[0]
+        mujoco.mj_forward(m, d)
+
+    def _set_run(self, x: np.ndarray) -> None:
+        """Start from reduced velocity ``x`` (nx,) of a translating robot (see :meth:`rollout`)."""
+        robot = self.robot
+        if x.shape != (robot.nx,) or not np.all(np.isfinite(x)):
+            raise ArgumentError(f"the run's velocity must be {robot.nx} finite reduced velocities, got {x.shape}")
+        q = self.configuration()
+        v = robot.null_space(q) @ x
         if abs(v[2]) > 1e-12 * max(1.0, float(np.abs(v).max())):
             raise ArgumentError("a run from a velocity covers a translating robot: its base must not turn")
-        linear = np.array([c * v[0] - s * v[1], s * v[0] + c * v[1], 0.0])
-        d.qvel[m.joint("floating_base").dofadr[0] :][:3] = linear
-        for j in range(2, robot.model.njoints):
-            joint = robot.model.joints[j]
-            d.qvel[m.joint(robot.model.names[j]).dofadr[0]] = v[joint.idx_v]
-        if self.has_object:  # the object moves with the base
-            for name in ("object_free", "object_x"):
-                if name in [m.joint(i).name for i in range(m.njnt)]:
-                    start = m.joint(name).dofadr[0]
-                    d.qvel[start : start + (3 if name == "object_free" else 1)] = (
-                        linear if name == "object_free" else linear[0]
-                    )
-            if "object_y" in [m.joint(i).name for i in range(m.njnt)]:
-                d.qvel[m.joint("object_y").dofadr[0]] = linear[1]
-        mujoco.mj_forward(m, d)
+        self._set_velocity(q, x)
 
     def reset(self) -> None:
         """Back to the built configuration, at rest, no applied force."""
@@ -757,14 +811,58 @@ class Referee:
 
     def contact_forces(self) -> dict[str, ContactForce]:
         """The floor's force on the robot at each support, by name, at the current state."""
-        forces = {s.name: np.zeros(3) for s in self.supports}
-        wrench = np.zeros(6)
-        for i in range(self.data.ncon):
-            contact = self.data.contact[i]
-            geom, sign = (contact.geom2, 1.0) if contact.geom2 in self._geoms else (contact.geom1, -1.0)
-            mujoco.mj_contactForce(self.model, self.data, i, wrench)  # on geom2, in the contact frame
-            forces[self.supports[self._geoms[geom]].name] += sign * contact.frame.reshape(3, 3).T @ wrench[:3]
-        return {name: ContactForce(float(f[2]), f[:2]) for name, f in forces.items()}
+        forces = self._floor_forces()
+        return {s.name: ContactForce(float(f[2]), f[:2]) for s, f in zip(self.supports, forces)}
+
+    def _floor_forces(self) -> np.ndarray:
+        """The floor's force on each support (in order), world x, y then normal, (n, 3) N.
+
+        The model's cones are elliptic (:func:`build`): a contact's force in its frame (on its
+        second geom; normal first) is its rows of ``efc_force`` (as ``mj_contactForce`` reads it).
+        """
+        d = self.data
+        forces = np.zeros((len(self.supports), 3))
+        if d.ncon == 0:
+            return forces
+        contact = d.contact
+        pairs, frames = contact.geom.reshape(-1, 2), contact.frame.reshape(-1, 3, 3)
+        address, dim = contact.efc_address.reshape(-1), contact.dim.reshape(-1)
+        local = np.zeros((len(address), 3))
+        kept = address >= 0  # (an excluded contact has no rows and no force)
+        local[kept, 0] = d.efc_force[address[kept]]
+        rough = kept & (dim >= 3)
+        local[rough, 1] = d.efc_force[address[rough] + 1]
+        local[rough, 2] = d.efc_force[address[rough] + 2]
+        second = self._is_support[pairs[:, 1]]
+        local[~second] *= -1.0  # the force on the support when it is the first geom
+        world = (frames * local[:, :, None]).sum(axis=1)  # the frame's rows are the contact's axes
+        index = self._support_of[np.where(second, pairs[:, 1], pairs[:, 0])]
+        for axis in range(3):
+            forces[:, axis] = np.bincount(index, world[:, axis], minlength=len(forces))
+        return forces
+
+    def _support_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At the current state, per support (in order): the floor's force on it, world x, y then
+        normal, (n, 3) N; the speed along the floor of its sphere's material point at its lowest
+        point, (n,) m/s (a driven wheel's slip, a caster's sliding); the sphere's depth in the
+        floor, (n,) m (negative: lifted)."""
+        m, d = self.model, self.data
+        slip, depth = np.zeros(len(self.supports)), np.zeros(len(self.supports))
+        velocity = np.zeros(6)
+        for k, geom in enumerate(self._support_geoms):
+            radius = m.geom_size[geom, 0]
+            # angular then linear velocity at the sphere's centre, world axes
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, geom, velocity, 0)
+            # the lowest point, -radius e_z from the centre: v + w x (-radius e_z)
+            slip[k] = math.hypot(velocity[3] - radius * velocity[1], velocity[4] + radius * velocity[0])
+            depth[k] = radius - d.geom_xpos[geom, 2]
+        return self._floor_forces(), slip, depth
+
+    def _friction_use(self, normal: np.ndarray, tangential: np.ndarray) -> np.ndarray:
+        """``|tangential| / (mu normal)`` per support, (..., n); 0 for frictionless ones."""
+        mu = np.array([s.mu for s in self.supports])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.nan_to_num(np.where(mu > 0, np.linalg.norm(tangential, axis=-1) / (mu * normal), 0.0), nan=0.0)
 
     def forward(
         self, tau: np.ndarray, traction: Mapping[str, np.ndarray] | None = None
@@ -823,9 +921,7 @@ class Referee:
         kp, kd = feedback if feedback is not None else (0.0, 0.0)
         q_held = np.array([d.qpos[m.jnt_qposadr[m.dof_jntid[dof]]] for dof in held])
         largest = 0.0
-        geoms = [m.geom(f"contact_{s.name}").id for s in self.supports]
         rows: dict[str, list] = {k: [] for k in ("t", "f", "slip", "pen", "pos", "rpy", "acc")}
-        jacp = np.zeros((3, m.nv))
         for _ in range(int(round(duration / m.opt.timestep)) + 1):
             d.qfrc_applied[:] = applied
             if len(held):
@@ -834,14 +930,9 @@ class Referee:
                 d.qfrc_applied[held] += push
                 largest = max(largest, float(np.abs(push).max()))
             mujoco.mj_forward(m, d)
-            slip, pen = [], []
-            for geom in geoms:
-                lowest = d.geom_xpos[geom] - [0.0, 0.0, m.geom_size[geom, 0]]
-                mujoco.mj_jac(m, d, jacp, None, lowest, m.geom_bodyid[geom])
-                slip.append(np.linalg.norm((jacp @ d.qvel)[:2]))
-                pen.append(-lowest[2])
+            forces, slip, pen = self._support_state()
             rows["t"].append(d.time)
-            rows["f"].append([[*c.tangential, c.normal] for c in self.contact_forces().values()])
+            rows["f"].append(forces)
             rows["slip"].append(slip)
             rows["pen"].append(pen)
             rows["pos"].append(d.xpos[self._base].copy())
@@ -849,13 +940,9 @@ class Referee:
             rows["acc"].append(self.acceleration())
             mujoco.mj_Euler(m, d)
         f = np.array(rows["f"])
-        fn, ft, mu = f[:, :, 2], f[:, :, :2], np.array([s.mu for s in self.supports])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            use = np.nan_to_num(np.where(mu > 0, np.linalg.norm(ft, axis=2) / (mu * fn), 0.0), nan=0.0)
+        fn, ft = f[:, :, 2], f[:, :, :2]
+        use = self._friction_use(fn, ft)
         slip, pen, pos, rpy, acc = (np.array(rows[k]) for k in ("slip", "pen", "pos", "rpy", "acc"))
         out = Rollout(self.supports, np.array(rows["t"]), fn, ft, use, slip, pen, pos, rpy, acc, feedback=largest)
-        for k, s in enumerate(self.supports):
-            out.in_contact[s.name] = bool(fn[:, k].min() > 0.0 and pen[:, k].max() <= max_penetration)
-            if s.driven:
-                out.slipped[s.name] = bool(slip[:, k].max() > slip_speed or use[:, k].max() >= at_limit)
+        out.judge(slip_speed, at_limit, max_penetration)
         return out
