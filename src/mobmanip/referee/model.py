@@ -39,7 +39,7 @@ import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import mujoco
 import numpy as np
@@ -133,16 +133,66 @@ class Rollout:
         """Driven wheels that slipped at some step."""
         return [name for name, slid in self.slipped.items() if slid]
 
+    def _deepest(self) -> np.ndarray:
+        """Each support's largest depth in the floor per row, (N, n) m."""
+        return self.penetration
+
     def judge(self, slip_speed: float, at_limit: float, max_penetration: float) -> None:
         """Fill :attr:`in_contact` and :attr:`slipped` from the rows (thresholds as
         :meth:`Referee.rollout`'s)."""
+        deepest = self._deepest()
         for k, s in enumerate(self.supports):
-            deep = self.penetration[:, k].max()
-            self.in_contact[s.name] = bool(self.normal[:, k].min() > 0.0 and deep <= max_penetration)
+            self.in_contact[s.name] = bool(self.normal[:, k].min() > 0.0 and deepest[:, k].max() <= max_penetration)
             if s.driven:
                 self.slipped[s.name] = bool(
                     self.slip_speed[:, k].max() > slip_speed or self.friction_use[:, k].max() >= at_limit
                 )
+
+
+@dataclass
+class MotionReplay(Rollout):
+    """A whole timed motion replayed in MuJoCo (:meth:`Referee.follow`): one row per sample of the
+    plan (N), one column per support (n).
+
+    Row i is taken at the MuJoCo step nearest the plan's sample i (:attr:`Rollout.time`, from the
+    plan's first time stamp). The fields that judge the floor hold the extremes over every step
+    from the previous row's (excluded) to this one's (included), none skipped: ``normal`` the
+    least normal force, ``slip_speed`` and ``friction_use`` the largest, ``penetration`` the least
+    depth (the most risen; negative when lifted) and :attr:`deepest` the largest. The others
+    (``tangential``, ``base_position``, ``base_rpy``, ``acceleration``, the tracking errors) are
+    the state at the row's step.
+
+    Attributes:
+        planned_base: the plan's base pose at each row's time: x, y (m), yaw (rad), (N, 3).
+        base_error: horizontal distance of MuJoCo's root link origin from the plan's, (N,) m.
+        yaw_error: MuJoCo's base yaw minus the plan's, in [-pi, pi), (N,) rad.
+        joints: the tracked joints (every actuated one: the wheels and the arms' joints), (j,).
+        joint_error: MuJoCo's position minus the plan's per tracked joint, (N, j) rad or m.
+        feedback_effort: the largest magnitude of the feedback on each tracked joint over the
+            row's steps, (N, j) N m or N (:attr:`Rollout.feedback`: the largest over the replay).
+        deepest: each support's largest depth in the floor over the row's steps, (N, n) m.
+    """
+
+    planned_base: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    base_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    yaw_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    joints: tuple[str, ...] = ()
+    joint_error: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    feedback_effort: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    deepest: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    def _deepest(self) -> np.ndarray:
+        return self.deepest
+
+    @property
+    def least_normal(self) -> dict[str, float]:
+        """Each support's least normal force over the whole replay (N)."""
+        return {s.name: float(self.normal[:, k].min()) for k, s in enumerate(self.supports)}
+
+    @property
+    def largest_slide(self) -> dict[str, float]:
+        """Each driven wheel's largest slide speed at its contact point over the whole replay (m/s)."""
+        return {s.name: float(self.slip_speed[:, k].max()) for k, s in enumerate(self.supports) if s.driven}
 
 
 def _floats(text: str | None, default: str) -> np.ndarray:
@@ -615,6 +665,35 @@ def _constraint_jacobian(model, data) -> np.ndarray:
     return dense
 
 
+class TimedMotion(Protocol):
+    """What :meth:`Referee.follow` reads of a plan: a
+    :class:`mobmanip.motion.trajectory.Trajectory` (whose layer the referee does not import)."""
+
+    @property
+    def t(self) -> np.ndarray:
+        """Time stamps (s), (N,)."""
+
+    @property
+    def q(self) -> np.ndarray:
+        """Configurations, (N, nq)."""
+
+    @property
+    def x(self) -> np.ndarray:
+        """Reduced velocities, (N, nx)."""
+
+
+def _hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, i: int, time: float) -> tuple[np.ndarray, np.ndarray]:
+    """Position and rate at ``time`` of the cubic through samples i and i + 1 of positions ``p``
+    (N, k) with rates ``v`` (N, k) at time stamps ``t`` (N,)."""
+    h = t[i + 1] - t[i]
+    u = (time - t[i]) / h
+    u2, u3 = u * u, u * u * u
+    position = (2 * u3 - 3 * u2 + 1) * p[i] + (u3 - 2 * u2 + u) * h * v[i] + (3 * u2 - 2 * u3) * p[i + 1]
+    position += (u3 - u2) * h * v[i + 1]
+    rate = (6 * u2 - 6 * u) / h * (p[i] - p[i + 1]) + (3 * u2 - 4 * u + 1) * v[i] + (3 * u2 - 2 * u) * v[i + 1]
+    return position, rate
+
+
 def joint_positions(robot, q: np.ndarray) -> dict[str, float]:
     """mobmanip's joints (all but the platform's root) at configuration ``q`` (nq,) as MuJoCo's
     joint positions: name -> angle (rad) or distance (m); a continuous joint's (cos, sin) as its
@@ -681,6 +760,7 @@ class Referee:
         pairs = _actuation(robot)[0] if actuation is None else actuation
         self._nx = robot.nx
         self._actuation = [(int(model.joint(name).dofadr[0]), row) for name, row in pairs]
+        self._actuated = tuple(name for name, _ in pairs)
         self.reset()
 
     #: Per omnidirectional wheel's driven slide: (contact name, MuJoCo dof, axis in the root frame (2,)).
@@ -944,5 +1024,165 @@ class Referee:
         use = self._friction_use(fn, ft)
         slip, pen, pos, rpy, acc = (np.array(rows[k]) for k in ("slip", "pen", "pos", "rpy", "acc"))
         out = Rollout(self.supports, np.array(rows["t"]), fn, ft, use, slip, pen, pos, rpy, acc, feedback=largest)
+        out.judge(slip_speed, at_limit, max_penetration)
+        return out
+
+    def follow(
+        self,
+        trajectory: TimedMotion,
+        efforts: np.ndarray,
+        *,
+        feedback: tuple[float, float],
+        slip_speed: float = 1e-3,
+        at_limit: float = 0.999,
+        max_penetration: float = 1e-3,
+    ) -> MotionReplay:
+        """Replay a whole timed motion: from its first configuration and velocity, apply its
+        planned efforts and track its planned joints (semi-implicit Euler at the model's step).
+
+        At every step, at time t: the feed-forward, the plan's reduced efforts interpolated
+        linearly in time between its samples and mapped to the joints as
+        :meth:`generalized_force` does; plus a joint-space feedback on every actuated joint
+        (each wheel and each joint of the arms, torso or head that B drives),
+        ``-kp (q_j - q_j*(t)) - kd (qdot_j - qdot_j*(t))`` with q_j* the plan's position (a
+        wheel's angle unwound from its start) and qdot_j* its rate ``(S x)_j``, both from the
+        cubic through the neighbouring samples' positions and rates. Nothing acts on the floating
+        base: the wheels drive it through the floor, and where it goes is reported
+        (:attr:`MotionReplay.base_error`), not corrected.
+
+        Args:
+            trajectory: the plan: time stamps ``t`` (N,) s, configurations ``q`` (N, nq) and
+                reduced velocities ``x`` (N, nx) (a :class:`mobmanip.motion.trajectory.Trajectory`);
+                its first configuration the one the model was built at, its configurations
+                moving every tracked joint (the wheels too) as its velocities do.
+            efforts: the plan's reduced efforts per sample, (N, nx), in
+                ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N), e.g.
+                :attr:`mobmanip.motion.trajectory_analysis.TrajectoryAnalysis.efforts`.
+            feedback: ``(kp, kd)`` (N m/rad, N m s/rad; N/m, N s/m on a prismatic joint), >= 0.
+            slip_speed, at_limit, max_penetration: as :meth:`rollout`'s.
+
+        Raises:
+            ArgumentError: a plan of the wrong shape, not starting at the built configuration,
+                with samples closer than the model's step, or whose configurations do not move a
+                tracked joint as its velocities do (over the whole plan, by half or more); negative
+                gains.
+            NotRepresentable: an omnidirectional base (its efforts are its wheels' traction,
+                which the plan does not give).
+        """
+        robot, m, d = self.robot, self.model, self.data
+        if self.drives:
+            raise NotRepresentable(
+                f"{robot.name}'s base efforts are its wheels' traction: a motion replay covers bases its wheels' "
+                "joints drive"
+            )
+        try:
+            t, qs, xs = (np.asarray(getattr(trajectory, k), dtype=float) for k in ("t", "q", "x"))
+        except AttributeError:
+            raise ArgumentError(f"expected a trajectory (t, q, x), got {type(trajectory).__name__}") from None
+        n = t.shape[0]
+        tau = np.asarray(efforts, dtype=float)
+        shapes = {"q": (qs, robot.model.nq), "x": (xs, robot.nx), "efforts": (tau, robot.nx)}
+        for name, (array, width) in shapes.items():
+            got, want = array.shape, (n, width)
+            if got != want:
+                raise ArgumentError(f"the plan's {name} must have shape {want}, got {got}")
+        if n < 2 or not all(np.all(np.isfinite(a)) for a in (t, qs, xs, tau)):
+            raise ArgumentError("the plan needs at least 2 samples of finite numbers")
+        step = float(m.opt.timestep)
+        if np.any(np.diff(t) < step):
+            k = int(np.flatnonzero(np.diff(t) < step)[0])
+            raise ArgumentError(
+                f"the plan's samples {k} and {k + 1} are {t[k + 1] - t[k]:.3g} s apart, closer than MuJoCo's step "
+                f"{step:g} s"
+            )
+        kp, kd = (float(g) for g in feedback)
+        if not (math.isfinite(kp) and math.isfinite(kd) and kp >= 0.0 and kd >= 0.0):
+            raise ArgumentError(f"the feedback's gains must be finite and >= 0, got {feedback!r}")
+        built = self.configuration()
+        off = float(np.abs(pin.difference(robot.model, built, qs[0])).max())
+        if off > 1e-9:
+            raise ArgumentError(
+                f"the plan starts {off:.3g} (m or rad) away from the configuration the model was built at: "
+                "build it at the plan's first configuration"
+            )
+
+        # the plan per tracked joint: positions (unwound: the sum of the steps) and rates
+        model = robot.model
+        names = self._actuated
+        columns = [model.joints[model.getJointId(name)].idx_v for name in names]
+        dofs = np.array([int(m.joint(name).dofadr[0]) for name in names], dtype=int)
+        addresses = np.array([int(m.jnt_qposadr[m.dof_jntid[dof]]) for dof in dofs], dtype=int)
+        steps = np.array([pin.difference(model, qs[i], qs[i + 1])[columns] for i in range(n - 1)])
+        planned = self.qpos0[addresses] + np.vstack([np.zeros(len(dofs)), np.cumsum(steps, axis=0)])
+        rates = np.array([(robot.null_space(qs[i]) @ xs[i])[columns] for i in range(n)])
+        travel = 0.5 * np.diff(t)[:, None] * (rates[:-1] + rates[1:])  # what the rates move (trapezoid)
+        mismatch = np.abs(steps - travel).sum(axis=0)
+        scale = np.maximum(np.abs(steps).sum(axis=0), np.abs(travel).sum(axis=0))
+        if np.any(mismatch > 0.5 * scale):
+            k = int(np.argmax(mismatch / np.where(scale > 0.0, scale, 1.0)))
+            raise ArgumentError(
+                f"the plan's configurations move {names[k]} by {np.abs(steps[:, k]).sum():.4g} in all, its velocities "
+                f"by {np.abs(travel[:, k]).sum():.4g}: give configurations that carry every tracked joint's position "
+                "(a trajectory file needs the wheels' columns)"
+            )
+        forces = np.array([self.generalized_force(tau[i])[dofs] for i in range(n)])
+        # the plan's base: pose and world velocity
+        yaw = np.unwrap(np.arctan2(qs[:, 3], qs[:, 2]))
+        base = np.c_[qs[:, :2], yaw]
+        base_rate = np.zeros((n, 3))
+        for i in range(n):
+            v = robot.null_space(qs[i])[:3] @ xs[i]
+            c, s = math.cos(yaw[i]), math.sin(yaw[i])
+            base_rate[i] = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+
+        self.reset()
+        self._set_velocity(qs[0], xs[0])
+        record = np.round((t - t[0]) / step).astype(int)  # the step of each sample's row
+        keys = "t ft pos rpy acc base base_error yaw_error joint_error fn use slip pen deep push"
+        rows: dict[str, list] = {key: [] for key in keys.split()}
+        steps_since: list[tuple] = []  # (floor forces, slip, depth, feedback) at each step of the row
+        i = 0  # the plan's interval [t_i, t_i+1] holding the step
+        for k in range(int(record[-1]) + 1):
+            now = t[0] + d.time
+            while i < n - 2 and now > t[i + 1]:
+                i += 1
+            w = min(max((now - t[i]) / (t[i + 1] - t[i]), 0.0), 1.0)
+            target, target_rate = _hermite(t, planned, rates, i, t[i] + w * (t[i + 1] - t[i]))
+            push = -kp * (d.qpos[addresses] - target) - kd * (d.qvel[dofs] - target_rate)
+            d.qfrc_applied[:] = 0.0
+            d.qfrc_applied[dofs] = (1.0 - w) * forces[i] + w * forces[i + 1] + push
+            mujoco.mj_forward(m, d)
+            f, slip, depth = self._support_state()
+            steps_since.append((f, slip, depth, np.abs(push)))
+            r = len(rows["t"])
+            if k == record[r]:  # sample r's row: the state now, the extremes since the last row
+                fs, slides, depths, pushes = (np.array(column) for column in zip(*steps_since))
+                steps_since = []
+                rows["fn"].append(fs[:, :, 2].min(axis=0))
+                rows["use"].append(self._friction_use(fs[:, :, 2], fs[:, :, :2]).max(axis=0))
+                rows["slip"].append(slides.max(axis=0))
+                rows["pen"].append(depths.min(axis=0))
+                rows["deep"].append(depths.max(axis=0))
+                rows["push"].append(pushes.max(axis=0))
+                rows["t"].append(now)
+                rows["ft"].append(f[:, :2])
+                position, R = d.xpos[self._base].copy(), d.xmat[self._base].reshape(3, 3)
+                rows["pos"].append(position)
+                rows["rpy"].append(pin.rpy.matrixToRpy(R))
+                rows["acc"].append(self.acceleration())
+                plan, _ = _hermite(t, base, base_rate, min(r, n - 2), now)
+                rows["base"].append(plan)
+                rows["base_error"].append(float(np.hypot(*(position[:2] - plan[:2]))))
+                turn = math.atan2(R[1, 0], R[0, 0]) - plan[2]
+                rows["yaw_error"].append((turn + math.pi) % (2.0 * math.pi) - math.pi)
+                rows["joint_error"].append(d.qpos[addresses] - target)
+            mujoco.mj_Euler(m, d)
+        a = {key: np.array(value) for key, value in rows.items()}
+        out = MotionReplay(
+            self.supports, a["t"], a["fn"], a["ft"], a["use"], a["slip"], a["pen"], a["pos"], a["rpy"], a["acc"],
+            feedback=float(a["push"].max(initial=0.0)), planned_base=a["base"], base_error=a["base_error"],
+            yaw_error=a["yaw_error"], joints=names, joint_error=a["joint_error"], feedback_effort=a["push"],
+            deepest=a["deep"],
+        )  # fmt: skip
         out.judge(slip_speed, at_limit, max_penetration)
         return out
