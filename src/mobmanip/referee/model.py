@@ -1066,7 +1066,7 @@ class Referee:
                 with samples closer than the model's step, or whose configurations do not move a
                 tracked joint as its velocities do (over the whole plan, by half or more); negative
                 gains.
-            NotRepresentable: an omnidirectional base (its efforts are its wheels' traction,
+            mobmanip.errors.NotRepresentable: an omnidirectional base (its efforts are its wheels' traction,
                 which the plan does not give).
         """
         robot, m, d = self.robot, self.model, self.data
