@@ -4,7 +4,9 @@ not contain (``pip install 'mobmanip[referee]'``; the command is ``mobmanip refe
 :func:`build` makes MuJoCo's model of a loaded robot standing on the floor with the object held
 (:mod:`mobmanip.referee.model`); :func:`referee_for` builds it for a grounded analysis, with the
 floor constraint's own contacts; :func:`replay_maxima` replays each axis maximum and says whether
-MuJoCo agrees at t = 0 and whether the robot holds (:mod:`mobmanip.referee.check`).
+MuJoCo agrees at t = 0 and whether the robot holds (:mod:`mobmanip.referee.check`);
+:meth:`Referee.follow` replays a whole timed motion, its planned efforts with a joint feedback
+(:class:`MotionReplay`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from .check import (
 )
 from .model import (
     ContactForce,
+    MotionReplay,
     NotRepresentable,
     Referee,
     Rollout,
@@ -52,6 +55,7 @@ __all__ = [
     "SLIDE",
     "AxisReplay",
     "ContactForce",
+    "MotionReplay",
     "NotRepresentable",
     "Referee",
     "Rollout",

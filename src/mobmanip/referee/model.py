@@ -39,7 +39,7 @@ import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import mujoco
 import numpy as np
@@ -132,6 +132,67 @@ class Rollout:
     def slipping(self) -> list[str]:
         """Driven wheels that slipped at some step."""
         return [name for name, slid in self.slipped.items() if slid]
+
+    def _deepest(self) -> np.ndarray:
+        """Each support's largest depth in the floor per row, (N, n) m."""
+        return self.penetration
+
+    def judge(self, slip_speed: float, at_limit: float, max_penetration: float) -> None:
+        """Fill :attr:`in_contact` and :attr:`slipped` from the rows (thresholds as
+        :meth:`Referee.rollout`'s)."""
+        deepest = self._deepest()
+        for k, s in enumerate(self.supports):
+            self.in_contact[s.name] = bool(self.normal[:, k].min() > 0.0 and deepest[:, k].max() <= max_penetration)
+            if s.driven:
+                self.slipped[s.name] = bool(
+                    self.slip_speed[:, k].max() > slip_speed or self.friction_use[:, k].max() >= at_limit
+                )
+
+
+@dataclass
+class MotionReplay(Rollout):
+    """A whole timed motion replayed in MuJoCo (:meth:`Referee.follow`): one row per sample of the
+    plan (N), one column per support (n).
+
+    Row i is taken at the MuJoCo step nearest the plan's sample i (:attr:`Rollout.time`, from the
+    plan's first time stamp). The fields that judge the floor hold the extremes over every step
+    from the previous row's (excluded) to this one's (included), none skipped: ``normal`` the
+    least normal force, ``slip_speed`` and ``friction_use`` the largest, ``penetration`` the least
+    depth (the most risen; negative when lifted) and :attr:`deepest` the largest. The others
+    (``tangential``, ``base_position``, ``base_rpy``, ``acceleration``, the tracking errors) are
+    the state at the row's step.
+
+    Attributes:
+        planned_base: the plan's base pose at each row's time: x, y (m), yaw (rad), (N, 3).
+        base_error: horizontal distance of MuJoCo's root link origin from the plan's, (N,) m.
+        yaw_error: MuJoCo's base yaw minus the plan's, in [-pi, pi), (N,) rad.
+        joints: the tracked joints (every actuated one: the wheels and the arms' joints), (j,).
+        joint_error: MuJoCo's position minus the plan's per tracked joint, (N, j) rad or m.
+        feedback_effort: the largest magnitude of the feedback on each tracked joint over the
+            row's steps, (N, j) N m or N (:attr:`Rollout.feedback`: the largest over the replay).
+        deepest: each support's largest depth in the floor over the row's steps, (N, n) m.
+    """
+
+    planned_base: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    base_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    yaw_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    joints: tuple[str, ...] = ()
+    joint_error: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    feedback_effort: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    deepest: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    def _deepest(self) -> np.ndarray:
+        return self.deepest
+
+    @property
+    def least_normal(self) -> dict[str, float]:
+        """Each support's least normal force over the whole replay (N)."""
+        return {s.name: float(self.normal[:, k].min()) for k, s in enumerate(self.supports)}
+
+    @property
+    def largest_slide(self) -> dict[str, float]:
+        """Each driven wheel's largest slide speed at its contact point over the whole replay (m/s)."""
+        return {s.name: float(self.slip_speed[:, k].max()) for k, s in enumerate(self.supports) if s.driven}
 
 
 def _floats(text: str | None, default: str) -> np.ndarray:
@@ -520,12 +581,7 @@ def build(
     for follower, leader, ratio in gears:  # wheels one effort drives together turn together
         gear = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=follower, name2=leader, **soft)
         gear.data[:5] = [0.0, ratio, 0.0, 0.0, 0.0]  # follower - its qpos0 = ratio (leader - its qpos0)
-    (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), {}
-    for j in range(2, robot.model.njoints):
-        joint = robot.model.joints[j]
-        value = math.atan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
-        joints[robot.model.names[j]] = float(value)
-
+    (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), joint_positions(robot, q)
     joints.update(locks)
 
     def configuration(model) -> np.ndarray:
@@ -600,6 +656,56 @@ def build(
     return referee
 
 
+def _constraint_jacobian(model, data) -> np.ndarray:
+    """The constraints' Jacobian at the current state, dense, (nefc, nv)."""
+    if not mujoco.mj_isSparse(model):
+        return data.efc_J.reshape(data.nefc, model.nv).copy()
+    dense = np.zeros((data.nefc, model.nv))
+    mujoco.mju_sparse2dense(dense, data.efc_J, data.efc_J_rownnz, data.efc_J_rowadr, data.efc_J_colind)
+    return dense
+
+
+class TimedMotion(Protocol):
+    """What :meth:`Referee.follow` reads of a plan: a
+    :class:`mobmanip.motion.trajectory.Trajectory` (whose layer the referee does not import)."""
+
+    @property
+    def t(self) -> np.ndarray:
+        """Time stamps (s), (N,)."""
+
+    @property
+    def q(self) -> np.ndarray:
+        """Configurations, (N, nq)."""
+
+    @property
+    def x(self) -> np.ndarray:
+        """Reduced velocities, (N, nx)."""
+
+
+def _hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, i: int, time: float) -> tuple[np.ndarray, np.ndarray]:
+    """Position and rate at ``time`` of the cubic through samples i and i + 1 of positions ``p``
+    (N, k) with rates ``v`` (N, k) at time stamps ``t`` (N,)."""
+    h = t[i + 1] - t[i]
+    u = (time - t[i]) / h
+    u2, u3 = u * u, u * u * u
+    position = (2 * u3 - 3 * u2 + 1) * p[i] + (u3 - 2 * u2 + u) * h * v[i] + (3 * u2 - 2 * u3) * p[i + 1]
+    position += (u3 - u2) * h * v[i + 1]
+    rate = (6 * u2 - 6 * u) / h * (p[i] - p[i + 1]) + (3 * u2 - 4 * u + 1) * v[i] + (3 * u2 - 2 * u) * v[i + 1]
+    return position, rate
+
+
+def joint_positions(robot, q: np.ndarray) -> dict[str, float]:
+    """mobmanip's joints (all but the platform's root) at configuration ``q`` (nq,) as MuJoCo's
+    joint positions: name -> angle (rad) or distance (m); a continuous joint's (cos, sin) as its
+    angle in (-pi, pi]."""
+    out = {}
+    for j in range(2, robot.model.njoints):
+        joint = robot.model.joints[j]
+        value = math.atan2(q[joint.idx_q + 1], q[joint.idx_q]) if joint.nq == 2 else q[joint.idx_q]
+        out[robot.model.names[j]] = float(value)
+    return out
+
+
 def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str, float]]]:
     """Where the reduced efforts act, joint by joint: ``(joint name, its row of B (nx,))`` for
     every joint B drives (``Q = B tau``: a joint's generalized force is its row times ``tau``),
@@ -646,11 +752,15 @@ class Referee:
         self._body = model.body("object" if has_object else hands[0]).id
         self._base = int(model.joint("floating_base").bodyid[0])
         self._root_qpos = int(model.joint("floating_base").qposadr[0])
-        self._geoms = {model.geom(f"contact_{s.name}").id: k for k, s in enumerate(supports)}
+        self._support_geoms = [model.geom(f"contact_{s.name}").id for s in supports]
+        self._support_of = np.full(model.ngeom, -1, dtype=int)  # geom id -> support index, -1: none
+        self._support_of[self._support_geoms] = np.arange(len(supports))
+        self._is_support = self._support_of >= 0
         # (MuJoCo dof, row of B: the joint's generalized force per reduced effort) per driven joint
         pairs = _actuation(robot)[0] if actuation is None else actuation
         self._nx = robot.nx
         self._actuation = [(int(model.joint(name).dofadr[0]), row) for name, row in pairs]
+        self._actuated = tuple(name for name, _ in pairs)
         self.reset()
 
     #: Per omnidirectional wheel's driven slide: (contact name, MuJoCo dof, axis in the root frame (2,)).
@@ -700,37 +810,61 @@ class Referee:
         names = [model.names[j] for j in range(2, model.njoints) if model.names[j] not in platform]
         return np.array([int(self.model.joint(name).dofadr[0]) for name in names], dtype=int)
 
-    def _set_run(self, x: np.ndarray) -> None:
-        """Start from reduced velocity ``x`` (nx,) of a translating robot (see :meth:`rollout`)."""
-        robot, m, d = self.robot, self.model, self.data
-        if x.shape != (robot.nx,) or not np.all(np.isfinite(x)):
-            raise ArgumentError(f"the run's velocity must be {robot.nx} finite reduced velocities, got {x.shape}")
+    def _yaw0(self) -> float:
+        """The built base's yaw (rad)."""
+        return math.atan2(self.qpos0[self._root_qpos + 6], self.qpos0[self._root_qpos + 3]) * 2.0
+
+    def configuration(self) -> np.ndarray:
+        """mobmanip's configuration (nq,) the model was built at: the base's planar pose and every
+        joint of mobmanip's model at its built position."""
+        robot, m = self.robot, self.model
         q = robot.neutral()
-        yaw = math.atan2(self.qpos0[self._root_qpos + 6], self.qpos0[self._root_qpos + 3]) * 2.0
-        q[2:4] = (math.cos(yaw), math.sin(yaw))
+        root = self.qpos0[self._root_qpos : self._root_qpos + 2]
+        yaw = self._yaw0()
+        q[:4] = (root[0], root[1], math.cos(yaw), math.sin(yaw))
         for j in range(2, robot.model.njoints):  # the built configuration's joints
             joint = robot.model.joints[j]
             value = float(self.qpos0[m.joint(robot.model.names[j]).qposadr[0]])
             q[joint.idx_q : joint.idx_q + joint.nq] = (math.cos(value), math.sin(value)) if joint.nq == 2 else value
+        return q
+
+    def _set_velocity(self, q: np.ndarray, x: np.ndarray) -> None:
+        """Set the velocities of the built state (at configuration ``q``, the built one) to reduced
+        velocity ``x`` (nx,): the base's planar velocity (world axes) and every joint's rate
+        ``S x``; the bodies mobmanip does not model (the object, a level grasp's grips, an
+        omnidirectional base's hubs) move as the model's equality constraints (the grasp) ask, at
+        velocity level, by least squares."""
+        robot, m, d = self.robot, self.model, self.data
         v = robot.null_space(q) @ x
+        yaw = math.atan2(q[3], q[2])
         c, s = math.cos(yaw), math.sin(yaw)
+        d.qvel[:] = 0.0
+        base = int(m.joint("floating_base").dofadr[0])
+        # a free joint's linear velocity is in world axes, its angular one in the body's (here level)
+        d.qvel[base : base + 6] = [c * v[0] - s * v[1], s * v[0] + c * v[1], 0.0, 0.0, 0.0, v[2]]
+        known = list(range(base, base + 6))
+        for j in range(2, robot.model.njoints):
+            dof = int(m.joint(robot.model.names[j]).dofadr[0])
+            d.qvel[dof] = v[robot.model.joints[j].idx_v]
+            known.append(dof)
+        mujoco.mj_forward(m, d)
+        rows = np.flatnonzero(d.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+        rest = np.setdiff1d(np.arange(m.nv), known)
+        if len(rows) and len(rest):
+            J = _constraint_jacobian(m, d)[rows]
+            d.qvel[rest] = np.linalg.lstsq(J[:, rest], -J[:, known] @ d.qvel[known], rcond=None)[0]
+        mujoco.mj_forward(m, d)
+
+    def _set_run(self, x: np.ndarray) -> None:
+        """Start from reduced velocity ``x`` (nx,) of a translating robot (see :meth:`rollout`)."""
+        robot = self.robot
+        if x.shape != (robot.nx,) or not np.all(np.isfinite(x)):
+            raise ArgumentError(f"the run's velocity must be {robot.nx} finite reduced velocities, got {x.shape}")
+        q = self.configuration()
+        v = robot.null_space(q) @ x
         if abs(v[2]) > 1e-12 * max(1.0, float(np.abs(v).max())):
             raise ArgumentError("a run from a velocity covers a translating robot: its base must not turn")
-        linear = np.array([c * v[0] - s * v[1], s * v[0] + c * v[1], 0.0])
-        d.qvel[m.joint("floating_base").dofadr[0] :][:3] = linear
-        for j in range(2, robot.model.njoints):
-            joint = robot.model.joints[j]
-            d.qvel[m.joint(robot.model.names[j]).dofadr[0]] = v[joint.idx_v]
-        if self.has_object:  # the object moves with the base
-            for name in ("object_free", "object_x"):
-                if name in [m.joint(i).name for i in range(m.njnt)]:
-                    start = m.joint(name).dofadr[0]
-                    d.qvel[start : start + (3 if name == "object_free" else 1)] = (
-                        linear if name == "object_free" else linear[0]
-                    )
-            if "object_y" in [m.joint(i).name for i in range(m.njnt)]:
-                d.qvel[m.joint("object_y").dofadr[0]] = linear[1]
-        mujoco.mj_forward(m, d)
+        self._set_velocity(q, x)
 
     def reset(self) -> None:
         """Back to the built configuration, at rest, no applied force."""
@@ -757,14 +891,58 @@ class Referee:
 
     def contact_forces(self) -> dict[str, ContactForce]:
         """The floor's force on the robot at each support, by name, at the current state."""
-        forces = {s.name: np.zeros(3) for s in self.supports}
-        wrench = np.zeros(6)
-        for i in range(self.data.ncon):
-            contact = self.data.contact[i]
-            geom, sign = (contact.geom2, 1.0) if contact.geom2 in self._geoms else (contact.geom1, -1.0)
-            mujoco.mj_contactForce(self.model, self.data, i, wrench)  # on geom2, in the contact frame
-            forces[self.supports[self._geoms[geom]].name] += sign * contact.frame.reshape(3, 3).T @ wrench[:3]
-        return {name: ContactForce(float(f[2]), f[:2]) for name, f in forces.items()}
+        forces = self._floor_forces()
+        return {s.name: ContactForce(float(f[2]), f[:2]) for s, f in zip(self.supports, forces)}
+
+    def _floor_forces(self) -> np.ndarray:
+        """The floor's force on each support (in order), world x, y then normal, (n, 3) N.
+
+        The model's cones are elliptic (:func:`build`): a contact's force in its frame (on its
+        second geom; normal first) is its rows of ``efc_force`` (as ``mj_contactForce`` reads it).
+        """
+        d = self.data
+        forces = np.zeros((len(self.supports), 3))
+        if d.ncon == 0:
+            return forces
+        contact = d.contact
+        pairs, frames = contact.geom.reshape(-1, 2), contact.frame.reshape(-1, 3, 3)
+        address, dim = contact.efc_address.reshape(-1), contact.dim.reshape(-1)
+        local = np.zeros((len(address), 3))
+        kept = address >= 0  # (an excluded contact has no rows and no force)
+        local[kept, 0] = d.efc_force[address[kept]]
+        rough = kept & (dim >= 3)
+        local[rough, 1] = d.efc_force[address[rough] + 1]
+        local[rough, 2] = d.efc_force[address[rough] + 2]
+        second = self._is_support[pairs[:, 1]]
+        local[~second] *= -1.0  # the force on the support when it is the first geom
+        world = (frames * local[:, :, None]).sum(axis=1)  # the frame's rows are the contact's axes
+        index = self._support_of[np.where(second, pairs[:, 1], pairs[:, 0])]
+        for axis in range(3):
+            forces[:, axis] = np.bincount(index, world[:, axis], minlength=len(forces))
+        return forces
+
+    def _support_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At the current state, per support (in order): the floor's force on it, world x, y then
+        normal, (n, 3) N; the speed along the floor of its sphere's material point at its lowest
+        point, (n,) m/s (a driven wheel's slip, a caster's sliding); the sphere's depth in the
+        floor, (n,) m (negative: lifted)."""
+        m, d = self.model, self.data
+        slip, depth = np.zeros(len(self.supports)), np.zeros(len(self.supports))
+        velocity = np.zeros(6)
+        for k, geom in enumerate(self._support_geoms):
+            radius = m.geom_size[geom, 0]
+            # angular then linear velocity at the sphere's centre, world axes
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_GEOM, geom, velocity, 0)
+            # the lowest point, -radius e_z from the centre: v + w x (-radius e_z)
+            slip[k] = math.hypot(velocity[3] - radius * velocity[1], velocity[4] + radius * velocity[0])
+            depth[k] = radius - d.geom_xpos[geom, 2]
+        return self._floor_forces(), slip, depth
+
+    def _friction_use(self, normal: np.ndarray, tangential: np.ndarray) -> np.ndarray:
+        """``|tangential| / (mu normal)`` per support, (..., n); 0 for frictionless ones."""
+        mu = np.array([s.mu for s in self.supports])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.nan_to_num(np.where(mu > 0, np.linalg.norm(tangential, axis=-1) / (mu * normal), 0.0), nan=0.0)
 
     def forward(
         self, tau: np.ndarray, traction: Mapping[str, np.ndarray] | None = None
@@ -823,9 +1001,7 @@ class Referee:
         kp, kd = feedback if feedback is not None else (0.0, 0.0)
         q_held = np.array([d.qpos[m.jnt_qposadr[m.dof_jntid[dof]]] for dof in held])
         largest = 0.0
-        geoms = [m.geom(f"contact_{s.name}").id for s in self.supports]
         rows: dict[str, list] = {k: [] for k in ("t", "f", "slip", "pen", "pos", "rpy", "acc")}
-        jacp = np.zeros((3, m.nv))
         for _ in range(int(round(duration / m.opt.timestep)) + 1):
             d.qfrc_applied[:] = applied
             if len(held):
@@ -834,14 +1010,9 @@ class Referee:
                 d.qfrc_applied[held] += push
                 largest = max(largest, float(np.abs(push).max()))
             mujoco.mj_forward(m, d)
-            slip, pen = [], []
-            for geom in geoms:
-                lowest = d.geom_xpos[geom] - [0.0, 0.0, m.geom_size[geom, 0]]
-                mujoco.mj_jac(m, d, jacp, None, lowest, m.geom_bodyid[geom])
-                slip.append(np.linalg.norm((jacp @ d.qvel)[:2]))
-                pen.append(-lowest[2])
+            forces, slip, pen = self._support_state()
             rows["t"].append(d.time)
-            rows["f"].append([[*c.tangential, c.normal] for c in self.contact_forces().values()])
+            rows["f"].append(forces)
             rows["slip"].append(slip)
             rows["pen"].append(pen)
             rows["pos"].append(d.xpos[self._base].copy())
@@ -849,13 +1020,169 @@ class Referee:
             rows["acc"].append(self.acceleration())
             mujoco.mj_Euler(m, d)
         f = np.array(rows["f"])
-        fn, ft, mu = f[:, :, 2], f[:, :, :2], np.array([s.mu for s in self.supports])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            use = np.nan_to_num(np.where(mu > 0, np.linalg.norm(ft, axis=2) / (mu * fn), 0.0), nan=0.0)
+        fn, ft = f[:, :, 2], f[:, :, :2]
+        use = self._friction_use(fn, ft)
         slip, pen, pos, rpy, acc = (np.array(rows[k]) for k in ("slip", "pen", "pos", "rpy", "acc"))
         out = Rollout(self.supports, np.array(rows["t"]), fn, ft, use, slip, pen, pos, rpy, acc, feedback=largest)
-        for k, s in enumerate(self.supports):
-            out.in_contact[s.name] = bool(fn[:, k].min() > 0.0 and pen[:, k].max() <= max_penetration)
-            if s.driven:
-                out.slipped[s.name] = bool(slip[:, k].max() > slip_speed or use[:, k].max() >= at_limit)
+        out.judge(slip_speed, at_limit, max_penetration)
+        return out
+
+    def follow(
+        self,
+        trajectory: TimedMotion,
+        efforts: np.ndarray,
+        *,
+        feedback: tuple[float, float],
+        slip_speed: float = 1e-3,
+        at_limit: float = 0.999,
+        max_penetration: float = 1e-3,
+    ) -> MotionReplay:
+        """Replay a whole timed motion: from its first configuration and velocity, apply its
+        planned efforts and track its planned joints (semi-implicit Euler at the model's step).
+
+        At every step, at time t: the feed-forward, the plan's reduced efforts interpolated
+        linearly in time between its samples and mapped to the joints as
+        :meth:`generalized_force` does; plus a joint-space feedback on every actuated joint
+        (each wheel and each joint of the arms, torso or head that B drives),
+        ``-kp (q_j - q_j*(t)) - kd (qdot_j - qdot_j*(t))`` with q_j* the plan's position (a
+        wheel's angle unwound from its start) and qdot_j* its rate ``(S x)_j``, both from the
+        cubic through the neighbouring samples' positions and rates. Nothing acts on the floating
+        base: the wheels drive it through the floor, and where it goes is reported
+        (:attr:`MotionReplay.base_error`), not corrected.
+
+        Args:
+            trajectory: the plan: time stamps ``t`` (N,) s, configurations ``q`` (N, nq) and
+                reduced velocities ``x`` (N, nx) (a :class:`mobmanip.motion.trajectory.Trajectory`);
+                its first configuration the one the model was built at, its configurations
+                moving every tracked joint (the wheels too) as its velocities do.
+            efforts: the plan's reduced efforts per sample, (N, nx), in
+                ``robot.reduced_velocity_names`` order and mobmanip's sense (N m or N), e.g.
+                :attr:`mobmanip.motion.trajectory_analysis.TrajectoryAnalysis.efforts`.
+            feedback: ``(kp, kd)`` (N m/rad, N m s/rad; N/m, N s/m on a prismatic joint), >= 0.
+            slip_speed, at_limit, max_penetration: as :meth:`rollout`'s.
+
+        Raises:
+            ArgumentError: a plan of the wrong shape, not starting at the built configuration,
+                with samples closer than the model's step, or whose configurations do not move a
+                tracked joint as its velocities do (over the whole plan, by half or more); negative
+                gains.
+            mobmanip.errors.NotRepresentable: an omnidirectional base (its efforts are its wheels' traction,
+                which the plan does not give).
+        """
+        robot, m, d = self.robot, self.model, self.data
+        if self.drives:
+            raise NotRepresentable(
+                f"{robot.name}'s base efforts are its wheels' traction: a motion replay covers bases its wheels' "
+                "joints drive"
+            )
+        try:
+            t, qs, xs = (np.asarray(getattr(trajectory, k), dtype=float) for k in ("t", "q", "x"))
+        except AttributeError:
+            raise ArgumentError(f"expected a trajectory (t, q, x), got {type(trajectory).__name__}") from None
+        n = t.shape[0]
+        tau = np.asarray(efforts, dtype=float)
+        shapes = {"q": (qs, robot.model.nq), "x": (xs, robot.nx), "efforts": (tau, robot.nx)}
+        for name, (array, width) in shapes.items():
+            got, want = array.shape, (n, width)
+            if got != want:
+                raise ArgumentError(f"the plan's {name} must have shape {want}, got {got}")
+        if n < 2 or not all(np.all(np.isfinite(a)) for a in (t, qs, xs, tau)):
+            raise ArgumentError("the plan needs at least 2 samples of finite numbers")
+        step = float(m.opt.timestep)
+        if np.any(np.diff(t) < step):
+            k = int(np.flatnonzero(np.diff(t) < step)[0])
+            raise ArgumentError(
+                f"the plan's samples {k} and {k + 1} are {t[k + 1] - t[k]:.3g} s apart, closer than MuJoCo's step "
+                f"{step:g} s"
+            )
+        kp, kd = (float(g) for g in feedback)
+        if not (math.isfinite(kp) and math.isfinite(kd) and kp >= 0.0 and kd >= 0.0):
+            raise ArgumentError(f"the feedback's gains must be finite and >= 0, got {feedback!r}")
+        built = self.configuration()
+        off = float(np.abs(pin.difference(robot.model, built, qs[0])).max())
+        if off > 1e-9:
+            raise ArgumentError(
+                f"the plan starts {off:.3g} (m or rad) away from the configuration the model was built at: "
+                "build it at the plan's first configuration"
+            )
+
+        # the plan per tracked joint: positions (unwound: the sum of the steps) and rates
+        model = robot.model
+        names = self._actuated
+        columns = [model.joints[model.getJointId(name)].idx_v for name in names]
+        dofs = np.array([int(m.joint(name).dofadr[0]) for name in names], dtype=int)
+        addresses = np.array([int(m.jnt_qposadr[m.dof_jntid[dof]]) for dof in dofs], dtype=int)
+        steps = np.array([pin.difference(model, qs[i], qs[i + 1])[columns] for i in range(n - 1)])
+        planned = self.qpos0[addresses] + np.vstack([np.zeros(len(dofs)), np.cumsum(steps, axis=0)])
+        rates = np.array([(robot.null_space(qs[i]) @ xs[i])[columns] for i in range(n)])
+        travel = 0.5 * np.diff(t)[:, None] * (rates[:-1] + rates[1:])  # what the rates move (trapezoid)
+        mismatch = np.abs(steps - travel).sum(axis=0)
+        scale = np.maximum(np.abs(steps).sum(axis=0), np.abs(travel).sum(axis=0))
+        if np.any(mismatch > 0.5 * scale):
+            k = int(np.argmax(mismatch / np.where(scale > 0.0, scale, 1.0)))
+            raise ArgumentError(
+                f"the plan's configurations move {names[k]} by {np.abs(steps[:, k]).sum():.4g} in all, its velocities "
+                f"by {np.abs(travel[:, k]).sum():.4g}: give configurations that carry every tracked joint's position "
+                "(a trajectory file needs the wheels' columns)"
+            )
+        forces = np.array([self.generalized_force(tau[i])[dofs] for i in range(n)])
+        # the plan's base: pose and world velocity
+        yaw = np.unwrap(np.arctan2(qs[:, 3], qs[:, 2]))
+        base = np.c_[qs[:, :2], yaw]
+        base_rate = np.zeros((n, 3))
+        for i in range(n):
+            v = robot.null_space(qs[i])[:3] @ xs[i]
+            c, s = math.cos(yaw[i]), math.sin(yaw[i])
+            base_rate[i] = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+
+        self.reset()
+        self._set_velocity(qs[0], xs[0])
+        record = np.round((t - t[0]) / step).astype(int)  # the step of each sample's row
+        keys = "t ft pos rpy acc base base_error yaw_error joint_error fn use slip pen deep push"
+        rows: dict[str, list] = {key: [] for key in keys.split()}
+        steps_since: list[tuple] = []  # (floor forces, slip, depth, feedback) at each step of the row
+        i = 0  # the plan's interval [t_i, t_i+1] holding the step
+        for k in range(int(record[-1]) + 1):
+            now = t[0] + d.time
+            while i < n - 2 and now > t[i + 1]:
+                i += 1
+            w = min(max((now - t[i]) / (t[i + 1] - t[i]), 0.0), 1.0)
+            target, target_rate = _hermite(t, planned, rates, i, t[i] + w * (t[i + 1] - t[i]))
+            push = -kp * (d.qpos[addresses] - target) - kd * (d.qvel[dofs] - target_rate)
+            d.qfrc_applied[:] = 0.0
+            d.qfrc_applied[dofs] = (1.0 - w) * forces[i] + w * forces[i + 1] + push
+            mujoco.mj_forward(m, d)
+            f, slip, depth = self._support_state()
+            steps_since.append((f, slip, depth, np.abs(push)))
+            r = len(rows["t"])
+            if k == record[r]:  # sample r's row: the state now, the extremes since the last row
+                fs, slides, depths, pushes = (np.array(column) for column in zip(*steps_since))
+                steps_since = []
+                rows["fn"].append(fs[:, :, 2].min(axis=0))
+                rows["use"].append(self._friction_use(fs[:, :, 2], fs[:, :, :2]).max(axis=0))
+                rows["slip"].append(slides.max(axis=0))
+                rows["pen"].append(depths.min(axis=0))
+                rows["deep"].append(depths.max(axis=0))
+                rows["push"].append(pushes.max(axis=0))
+                rows["t"].append(now)
+                rows["ft"].append(f[:, :2])
+                position, R = d.xpos[self._base].copy(), d.xmat[self._base].reshape(3, 3)
+                rows["pos"].append(position)
+                rows["rpy"].append(pin.rpy.matrixToRpy(R))
+                rows["acc"].append(self.acceleration())
+                plan, _ = _hermite(t, base, base_rate, min(r, n - 2), now)
+                rows["base"].append(plan)
+                rows["base_error"].append(float(np.hypot(*(position[:2] - plan[:2]))))
+                turn = math.atan2(R[1, 0], R[0, 0]) - plan[2]
+                rows["yaw_error"].append((turn + math.pi) % (2.0 * math.pi) - math.pi)
+                rows["joint_error"].append(d.qpos[addresses] - target)
+            mujoco.mj_Euler(m, d)
+        a = {key: np.array(value) for key, value in rows.items()}
+        out = MotionReplay(
+            self.supports, a["t"], a["fn"], a["ft"], a["use"], a["slip"], a["pen"], a["pos"], a["rpy"], a["acc"],
+            feedback=float(a["push"].max(initial=0.0)), planned_base=a["base"], base_error=a["base_error"],
+            yaw_error=a["yaw_error"], joints=names, joint_error=a["joint_error"], feedback_effort=a["push"],
+            deepest=a["deep"],
+        )  # fmt: skip
+        out.judge(slip_speed, at_limit, max_penetration)
         return out

@@ -1,0 +1,274 @@
+"""A retimed motion replayed in MuJoCo (:meth:`mobmanip.referee.Referee.follow`, issue 37 item 4).
+
+The referee starts MuJoCo's model of the robot on the floor, holding the object, at the plan's
+first configuration and velocity; at every step it applies the plan's efforts interpolated in
+time and a joint feedback (kp 200 N m/rad, kd 20 N m s/rad) on every wheel and arm joint towards
+the plan's positions and rates; the base is driven by the wheels only. What is judged is
+MuJoCo's: its contact forces, the slide of each wheel's contact point, where its base went.
+
+TIAGo++ carries 2 kg along ``examples/carry_turn.csv`` (``carry`` with the floor's reserve 0.3),
+and the carry's path is retimed on the floor. A reserve of 0.3 cannot be asked of the retiming:
+it starts and ends at rest, and at rest at the carry's first configuration the back left caster
+carries 0.29 of its equal share (MuJoCo, standing still, says so too); the carry keeps 0.3 there
+only because it is already moving. The retiming keeps a reserve of 0.2 (at rest the path's
+least-loaded posture gives a caster 0.235 of its share).
+
+Measured (MuJoCo 4.0, step 0.1 ms; the figures of one run):
+
+- retimed (5.81 s): least normal force 29.1 N (back left caster; the plan's reserve is 32.7 N,
+  which MuJoCo undercuts where the retiming's accelerations jump between grid points: s'' goes
+  +45, -117, +61 within 0.03 s near the end, and the efforts, interpolated between samples, do
+  not jump with it), largest wheel slide 2.9e-5 m/s, friction use at most 0.88, base within 0.16
+  mm and 0.8 mrad of the plan, joints within 2.6 mrad (wheels) and 0.9 mrad (arms), feedback at
+  most 3.6 N m (a wheel, at those jumps; median over the samples 0.07 N m);
+- 10 % faster: the plan breaks its effort limits (by 21 %, at 168 samples) and its floor's rows
+  (a support 6.7 N under the reserve, a wheel's traction 12.7 N over its pyramid). In MuJoCo the
+  left wheel's traction reaches its friction cone (for 40 ms in all) but nothing unloads (least
+  23.6 N) and no wheel slides (3.5e-5 m/s): the plan splits the lateral force equally between
+  the wheels, MuJoCo's contacts as friction allows, and the right wheel has friction to spare;
+- retimed with no reserve, 10 % faster: both back casters unload (normal force 0 over many
+  rows) and the left wheel works at its friction limit for 2.2 s in all, the pair still sliding
+  under 1e-4 m/s.
+
+The retiming's last sample carries the previous interval's acceleration, which its rows do not
+check there: its plan's traction is 5.9 N over the pyramid at that one sample (the replay's
+friction use 0.88 there).
+
+The slow tests share one carry (about 5 s with Numba's cache warm) and take about 45 s together.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import mobmanip
+from mobmanip import load_robot
+from mobmanip.errors import ArgumentError, NumericalError
+from mobmanip.motion.carry import carry, read_path
+from mobmanip.motion.carry_floor import CarryFloor, wrench_rows
+from mobmanip.motion.ground import ground_along
+from mobmanip.motion.in_motion import motion_terms
+from mobmanip.motion.retime import retime
+from mobmanip.motion.trajectory import Trajectory, tangent_integrate, trajectory_from_samples
+from mobmanip.motion.trajectory_analysis import analyze_trajectory
+from mobmanip.robot.support import robot_support
+
+pytest.importorskip("mujoco")
+
+ROOT = Path(__file__).resolve().parents[1]
+MASS = 2.0
+FEEDBACK = (200.0, 20.0)
+SLIDE = 1e-3  # m/s: a wheel sliding faster than this does not hold
+
+
+@pytest.fixture(scope="module")
+def tiago():
+    return load_robot("tiago_dual")
+
+
+def _referee(robot, q0):
+    """MuJoCo's model at ``q0``, on the contacts the carry's floor uses (mu 0.5 at the wheels,
+    frictionless casters, equally stiff), holding the 2 kg object between the hands."""
+    import mobmanip.referee as referee_package
+
+    support = robot_support(robot)
+    contacts = [(c.name, c.point, c.driven) for c in support.contacts]
+    held = mobmanip.analyze(robot, q0, object_mass=MASS, measures=("kinematic",)).held_object
+    return referee_package.build(
+        robot, q0, contacts=contacts, object=referee_package.object_for_referee(held), mu=support.mu
+    )
+
+
+def _share(robot) -> float:
+    """Each support's equal share of the weight of robot and object (N)."""
+    return (pin.computeTotalMass(robot.model) + MASS) * 9.81 / len(robot_support(robot).contacts)
+
+
+def _replay(robot, motion: Trajectory):
+    efforts = analyze_trajectory(robot, motion, object_mass=MASS).efforts
+    return _referee(robot, motion.q[0]).follow(motion, efforts, feedback=FEEDBACK)
+
+
+def _driven(run) -> list[int]:
+    return [k for k, s in enumerate(run.supports) if s.driven]
+
+
+# ----- the referee follows a motion: quick checks -----
+
+
+def _turning_drive(robot, duration=0.2, samples=21):
+    """TIAGo++ at its hold posture driving on an arc at constant wheel rates (3 and 2 rad/s),
+    already moving at the start: configurations integrated exactly, accelerations zero."""
+    x = np.zeros(robot.nx)
+    x[:2] = (3.0, 2.0)
+    t = np.linspace(0.0, duration, samples)
+    q = [robot.hold_configuration()]
+    for h in np.diff(t):
+        q.append(tangent_integrate(robot.model, q[-1], robot.null_space(q[-1]) @ x * h))
+    n = len(t)
+    return trajectory_from_samples(robot, t, np.array(q), np.tile(x, (n, 1)), np.zeros((n, robot.nx)))
+
+
+def test_a_drive_already_turning_is_followed_from_its_speed(tiago):
+    """The replay starts at the plan's velocity (the base turning, the held object moving with the
+    hands): the robot goes on along the arc, its base within 0.1 mm and 1 mrad of the plan, no
+    support unloads, the wheels roll, the feedback stays small; at the end MuJoCo's object moves
+    as the plan's does (to 1 % of its speed)."""
+    motion = _turning_drive(tiago)
+    analysis = analyze_trajectory(tiago, motion, object_mass=MASS)
+    referee = _referee(tiago, motion.q[0])
+    run = referee.follow(motion, analysis.efforts, feedback=FEEDBACK)
+    assert run.time[0] == 0.0 and run.time[-1] == pytest.approx(motion.t[-1], abs=1e-9)
+    assert len(run.time) == len(motion)
+    assert run.base_error.max() < 1e-4 and np.abs(run.yaw_error).max() < 1e-3
+    assert run.lifted == [] and run.slipping == []
+    assert run.slip_speed[:, _driven(run)].max() < SLIDE
+    assert run.feedback < 0.5  # N m
+    travelled = np.linalg.norm(run.base_position[-1, :2] - run.base_position[0, :2])
+    assert travelled == pytest.approx(np.linalg.norm(motion.q[-1, :2] - motion.q[0, :2]), rel=1e-3)
+    # the object's velocity in MuJoCo at the end, against the plan's (linear at its centre; angular)
+    import mujoco
+
+    velocity = np.zeros(6)  # angular then linear, world axes, at the object's centre
+    mujoco.mj_objectVelocity(referee.model, referee.data, mujoco.mjtObj.mjOBJ_BODY,
+                             referee.model.body("object").id, velocity, 0)  # fmt: skip
+    planned = analysis.object_velocity[-1]  # linear then angular
+    assert np.linalg.norm(np.r_[velocity[3:], velocity[:3]] - planned) < 1e-2 * np.linalg.norm(planned)
+
+
+def test_follow_refuses_a_plan_it_cannot_replay(tiago):
+    motion = _turning_drive(tiago)
+    efforts = analyze_trajectory(tiago, motion, object_mass=MASS).efforts
+    referee = _referee(tiago, motion.q[1])  # built one sample on
+    with pytest.raises(ArgumentError, match="build it at the plan's first configuration"):
+        referee.follow(motion, efforts, feedback=FEEDBACK)
+    referee = _referee(tiago, motion.q[0])
+    with pytest.raises(ArgumentError, match="shape"):
+        referee.follow(motion, efforts[:, :3], feedback=FEEDBACK)
+    with pytest.raises(ArgumentError, match="gains"):
+        referee.follow(motion, efforts, feedback=(-1.0, 0.0))
+    # the wheels' rates without their angles (a file without the wheels' columns)
+    still = motion.q.copy()
+    for name in ("wheel_left_joint", "wheel_right_joint"):
+        j = tiago.model.joints[tiago.model.getJointId(name)]
+        still[:, j.idx_q : j.idx_q + 2] = motion.q[0, j.idx_q : j.idx_q + 2]
+    blind = Trajectory(motion.t, still, motion.x, motion.xdot, motion.slip)
+    with pytest.raises(ArgumentError, match="wheels' columns"):
+        referee.follow(blind, efforts, feedback=FEEDBACK)
+    dense = Trajectory(motion.t * 1e-3, motion.q, motion.x, motion.xdot, motion.slip)  # 10 us apart
+    with pytest.raises(ArgumentError, match="closer than MuJoCo's step"):
+        referee.follow(dense, efforts, feedback=FEEDBACK)
+
+
+# ----- TIAGo++ carrying 2 kg, retimed on its floor, in MuJoCo -----
+
+
+@pytest.fixture(scope="module")
+def carried(tiago):
+    """The carry's path (its QP motion's configurations, their rates estimated)."""
+    result = carry(
+        tiago, read_path(ROOT / "examples" / "carry_turn.csv"), object_mass=MASS, floor=CarryFloor(reserve=0.3)
+    )
+    return trajectory_from_samples(tiago, result.motion.t, result.motion.q)
+
+
+@pytest.fixture(scope="module")
+def retimed(tiago, carried):
+    """Reserve -> the retiming of the carry's path on the floor (mu 0.5, ZMP 2 cm inside)."""
+    return {
+        reserve: retime(tiago, carried, object_mass=MASS, floor=CarryFloor(reserve=reserve)) for reserve in (0.2, 0.0)
+    }
+
+
+@pytest.mark.slow
+def test_a_reserve_of_0_3_cannot_start_from_rest(tiago, carried):
+    """The retiming starts at rest; standing still at the carry's first configuration the back
+    left caster carries 0.29 of its equal share: retime refuses a reserve of 0.3 there, and
+    MuJoCo, the robot holding itself still (gravity's efforts), puts between 0.2 and 0.3 of the
+    share on that caster too."""
+    with pytest.raises(NumericalError, match="first sample cannot be held still: support caster_back_left_2_link"):
+        retime(tiago, carried, object_mass=MASS, floor=CarryFloor(reserve=0.3))
+    q0 = carried.q[0]
+    holding = motion_terms(tiago, q0, np.zeros(tiago.nx), object_mass=MASS).static_torques()
+    _, contacts = _referee(tiago, q0).forward(holding)
+    assert 0.2 < contacts["caster_back_left_2_link"].normal / _share(tiago) < 0.3
+
+
+@pytest.mark.slow
+def test_the_retimed_carry_holds_in_mujoco(tiago, retimed):
+    """The retimed carry (reserve 0.2) in MuJoCo: every support stays loaded throughout (least
+    normal force 29.1 N measured), every wheel's contact point slides under 1 mm/s (2.9e-5 m/s) and
+    stays off its friction limit (use at most 0.88), the base within 0.5 mm and 2 mrad of the plan
+    and the joints within 5 mrad (measured: 0.16 mm, 0.8 mrad, 2.6 mrad)."""
+    motion = retimed[0.2].trajectory
+    run = _replay(tiago, motion)
+    assert run.time[-1] == pytest.approx(motion.t[-1], abs=1e-4)
+    least = run.least_normal
+    print(f"retimed {retimed[0.2].duration:.3f} s: least normal {min(least.values()):.2f} N, "
+          f"slide {max(run.largest_slide.values()):.2e} m/s, friction use {run.friction_use.max():.3f}, "
+          f"base {run.base_error.max() * 1e3:.3f} mm, yaw {np.abs(run.yaw_error).max() * 1e3:.3f} mrad, "
+          f"joints {np.abs(run.joint_error).max() * 1e3:.3f} mrad, feedback {run.feedback:.3f} N m")  # fmt: skip
+    assert min(least.values()) > 0.0 and run.lifted == []
+    assert max(run.largest_slide.values()) < SLIDE
+    assert run.slipping == []  # no wheel at its friction limit either
+    assert run.base_error.max() < 5e-4 and np.abs(run.yaw_error).max() < 2e-3
+    assert np.abs(run.joint_error).max() < 5e-3
+    assert np.median(run.feedback_effort.max(axis=1)) < 0.2  # N m; its peaks: 3.6 N m at the jumps
+
+
+def _floor_excess(robot, motion, floor):
+    """The plan's own floor along ``motion``: per kind of row, the most a row is broken by
+    (N; negative: kept), from the floor's resultant wrench (ground_along)."""
+    analysis = analyze_trajectory(robot, motion, object_mass=MASS)
+    along = ground_along(robot, motion, analysis.object_acceleration, object_mass=MASS)
+    resolved = floor.resolve(robot)
+    worst: dict[str, float] = {}
+    for i in range(len(motion)):
+        R, r, _, kinds = wrench_rows(robot, motion.q[i], MASS, floor, resolved)
+        excess = R @ np.r_[along.force[i], along.moment[i]] - r
+        for kind in set(kinds):
+            worst[kind] = max(worst.get(kind, -math.inf), float(excess[np.array(kinds) == kind].max()))
+    return worst, analysis.effort_use.max()
+
+
+@pytest.mark.slow
+def test_ten_percent_faster_breaks_the_plan_and_meets_friction(tiago, retimed):
+    """The same motion 10 % faster: its plan breaks the effort limits (by 21 %) and the floor's
+    reserve (a support 6.7 N under it). In MuJoCo a driven wheel reaches its friction limit, which
+    the retimed motion never did; but no support unloads and no wheel slides (measured: least
+    normal force 23.6 N, slide 3.5e-5 m/s; the other wheel takes the lateral force the first
+    cannot)."""
+    floor = CarryFloor(reserve=0.2)
+    motion = retimed[0.2].trajectory
+    kept, effort = _floor_excess(tiago, motion, floor)
+    assert kept["contact"] <= 1e-6 * _share(tiago) and effort <= 1.0 + 1e-9
+    fast = motion.scaled(1.1)
+    broken, effort = _floor_excess(tiago, fast, floor)
+    assert broken["contact"] > 1.0 and effort > 1.1  # N: a support under the reserve; efforts over their limits
+
+    run = _replay(tiago, fast)
+    driven = _driven(run)
+    print(f"10 % faster: least normal {min(run.least_normal.values()):.2f} N, "
+          f"slide {max(run.largest_slide.values()):.2e} m/s, friction use {run.friction_use[:, driven].max():.3f}, "
+          f"base {run.base_error.max() * 1e3:.3f} mm, feedback {run.feedback:.3f} N m")  # fmt: skip
+    assert run.slipping  # a wheel at its friction limit (use >= 0.999)
+    assert run.friction_use[:, driven].max() >= 0.999
+    assert run.lifted == [] and max(run.largest_slide.values()) < SLIDE
+
+
+@pytest.mark.slow
+def test_with_no_reserve_ten_percent_faster_unloads_a_support(tiago, retimed):
+    """Retimed with no reserve (the floor's rows at zero load and full friction), then run 10 %
+    faster: in MuJoCo both back casters unload (normal force 0) and both wheels reach their
+    friction limit (measured: the pair still slides under 1e-4 m/s)."""
+    run = _replay(tiago, retimed[0.0].trajectory.scaled(1.1))
+    print(f"no reserve, 10 % faster: lifted {run.lifted}, slipping {run.slipping}, "
+          f"slide {max(run.largest_slide.values()):.2e} m/s")  # fmt: skip
+    assert {"caster_back_left_2_link", "caster_back_right_2_link"} <= set(run.lifted)
+    assert min(run.least_normal.values()) == 0.0
+    assert set(run.slipping) == {"wheel_left_joint", "wheel_right_joint"}
