@@ -7,32 +7,22 @@ the plan's positions and rates; the base is driven by the wheels only. What is j
 MuJoCo's: its contact forces, the slide of each wheel's contact point, where its base went.
 
 TIAGo++ carries 2 kg along ``examples/carry_turn.csv`` (``carry`` with the floor's reserve 0.3),
-and the carry's path is retimed on the floor. A reserve of 0.3 cannot be asked of the retiming:
-it starts and ends at rest, and at rest at the carry's first configuration the back left caster
-carries 0.29 of its equal share (MuJoCo, standing still, says so too); the carry keeps 0.3 there
-only because it is already moving. The retiming keeps a reserve of 0.2 (at rest the path's
-least-loaded posture gives a caster 0.235 of its share).
+and the carry's path is retimed on the floor with the same reserve (mu 0.5, zero-moment point
+2 cm inside). At rest at the carry's first configuration the back left caster carries 0.29 of
+its equal share (MuJoCo, standing still, says so too): the carry keeps 0.3 there only by
+accelerating, and the retiming starts so, saying it in a note.
 
 Measured (MuJoCo 4.0, step 0.1 ms; the figures of one run):
 
-- retimed (5.81 s): least normal force 29.1 N (back left caster; the plan's reserve is 32.7 N,
-  which MuJoCo undercuts where the retiming's accelerations jump between grid points: s'' goes
-  +45, -117, +61 within 0.03 s near the end, and the efforts, interpolated between samples, do
-  not jump with it), largest wheel slide 2.9e-5 m/s, friction use at most 0.88, base within 0.16
-  mm and 0.8 mrad of the plan, joints within 2.6 mrad (wheels) and 0.9 mrad (arms), feedback at
-  most 3.6 N m (a wheel, at those jumps; median over the samples 0.07 N m);
-- 10 % faster: the plan breaks its effort limits (by 21 %, at 168 samples) and its floor's rows
-  (a support 6.7 N under the reserve, a wheel's traction 12.7 N over its pyramid). In MuJoCo the
-  left wheel's traction reaches its friction cone (for 40 ms in all) but nothing unloads (least
-  23.6 N) and no wheel slides (3.5e-5 m/s): the plan splits the lateral force equally between
-  the wheels, MuJoCo's contacts as friction allows, and the right wheel has friction to spare;
-- retimed with no reserve, 10 % faster: both back casters unload (normal force 0 over many
-  rows) and the left wheel works at its friction limit for 2.2 s in all, the pair still sliding
-  under 1e-4 m/s.
-
-The retiming's last sample carries the previous interval's acceleration, which its rows do not
-check there: its plan's traction is 5.9 N over the pyramid at that one sample (the replay's
-friction use 0.88 there).
+- retimed (11.32 s): least normal force 44.7 N (a back caster; the plan's reserve is 49.2 N:
+  MuJoCo's contacts share the load near the plan's equally stiff springs, not exactly), largest
+  wheel slide 6.5e-6 m/s, friction use at most 0.77, base within 0.19 mm and 0.36 mrad of the
+  plan, joints within 2.1 mrad, feedback at most 2.3 N m;
+- 10 % faster: the plan breaks its effort limits and its floor's reserve; in MuJoCo nothing
+  unloads (least 44.3 N) and no wheel slides (7.8e-6 m/s, friction use 0.91): the reserve is a
+  margin, and the margin holds;
+- retimed with no reserve, 10 % faster: both back casters unload (normal force 0) and the left
+  wheel works at its friction limit, still sliding under 1e-4 m/s.
 
 The slow tests share one carry (about 5 s with Numba's cache warm) and take about 45 s together.
 """
@@ -48,7 +38,7 @@ import pytest
 
 import mobmanip
 from mobmanip import load_robot
-from mobmanip.errors import ArgumentError, NumericalError
+from mobmanip.errors import ArgumentError
 from mobmanip.motion.carry import carry, read_path
 from mobmanip.motion.carry_floor import CarryFloor, wrench_rows
 from mobmanip.motion.ground import ground_along
@@ -181,18 +171,20 @@ def carried(tiago):
 def retimed(tiago, carried):
     """Reserve -> the retiming of the carry's path on the floor (mu 0.5, ZMP 2 cm inside)."""
     return {
-        reserve: retime(tiago, carried, object_mass=MASS, floor=CarryFloor(reserve=reserve)) for reserve in (0.2, 0.0)
+        reserve: retime(tiago, carried, object_mass=MASS, floor=CarryFloor(reserve=reserve)) for reserve in (0.3, 0.0)
     }
 
 
 @pytest.mark.slow
-def test_a_reserve_of_0_3_cannot_start_from_rest(tiago, carried):
+def test_a_reserve_of_0_3_holds_at_the_start_only_while_moving(tiago, carried, retimed):
     """The retiming starts at rest; standing still at the carry's first configuration the back
-    left caster carries 0.29 of its equal share: retime refuses a reserve of 0.3 there, and
-    MuJoCo, the robot holding itself still (gravity's efforts), puts between 0.2 and 0.3 of the
-    share on that caster too."""
-    with pytest.raises(NumericalError, match="first sample cannot be held still: support caster_back_left_2_link"):
-        retime(tiago, carried, object_mass=MASS, floor=CarryFloor(reserve=0.3))
+    left caster carries 0.29 of its equal share, under the 0.3 reserve: the carry keeps 0.3 there
+    only by accelerating. The retiming starts so and says it in a note, and MuJoCo, the robot
+    holding itself still (gravity's efforts), puts between 0.2 and 0.3 of the share on that caster
+    too."""
+    assert retimed[0.3].notes == (
+        "the first sample cannot be held still (s'' = 0): support caster_back_left_2_link loaded",
+    )
     q0 = carried.q[0]
     holding = motion_terms(tiago, q0, np.zeros(tiago.nx), object_mass=MASS).static_torques()
     _, contacts = _referee(tiago, q0).forward(holding)
@@ -201,15 +193,15 @@ def test_a_reserve_of_0_3_cannot_start_from_rest(tiago, carried):
 
 @pytest.mark.slow
 def test_the_retimed_carry_holds_in_mujoco(tiago, retimed):
-    """The retimed carry (reserve 0.2) in MuJoCo: every support stays loaded throughout (least
-    normal force 29.1 N measured), every wheel's contact point slides under 1 mm/s (2.9e-5 m/s) and
-    stays off its friction limit (use at most 0.88), the base within 0.5 mm and 2 mrad of the plan
-    and the joints within 5 mrad (measured: 0.16 mm, 0.8 mrad, 2.6 mrad)."""
-    motion = retimed[0.2].trajectory
+    """The retimed carry (reserve 0.3) in MuJoCo: every support stays loaded throughout (least
+    normal force 44.7 N measured), every wheel's contact point slides under 1 mm/s (6.5e-6 m/s) and
+    stays off its friction limit (use at most 0.77), the base within 0.5 mm and 2 mrad of the plan
+    and the joints within 5 mrad (measured: 0.19 mm, 0.36 mrad, 2.1 mrad)."""
+    motion = retimed[0.3].trajectory
     run = _replay(tiago, motion)
     assert run.time[-1] == pytest.approx(motion.t[-1], abs=1e-4)
     least = run.least_normal
-    print(f"retimed {retimed[0.2].duration:.3f} s: least normal {min(least.values()):.2f} N, "
+    print(f"retimed {retimed[0.3].duration:.3f} s: least normal {min(least.values()):.2f} N, "
           f"slide {max(run.largest_slide.values()):.2e} m/s, friction use {run.friction_use.max():.3f}, "
           f"base {run.base_error.max() * 1e3:.3f} mm, yaw {np.abs(run.yaw_error).max() * 1e3:.3f} mrad, "
           f"joints {np.abs(run.joint_error).max() * 1e3:.3f} mrad, feedback {run.feedback:.3f} N m")  # fmt: skip
@@ -218,7 +210,7 @@ def test_the_retimed_carry_holds_in_mujoco(tiago, retimed):
     assert run.slipping == []  # no wheel at its friction limit either
     assert run.base_error.max() < 5e-4 and np.abs(run.yaw_error).max() < 2e-3
     assert np.abs(run.joint_error).max() < 5e-3
-    assert np.median(run.feedback_effort.max(axis=1)) < 0.2  # N m; its peaks: 3.6 N m at the jumps
+    assert np.median(run.feedback_effort.max(axis=1)) < 0.2  # N m; its largest: 2.3 N m
 
 
 def _floor_excess(robot, motion, floor):
@@ -237,38 +229,35 @@ def _floor_excess(robot, motion, floor):
 
 
 @pytest.mark.slow
-def test_ten_percent_faster_breaks_the_plan_and_meets_friction(tiago, retimed):
-    """The same motion 10 % faster: its plan breaks the effort limits (by 21 %) and the floor's
-    reserve (a support 6.7 N under it). In MuJoCo a driven wheel reaches its friction limit, which
-    the retimed motion never did; but no support unloads and no wheel slides (measured: least
-    normal force 23.6 N, slide 3.5e-5 m/s; the other wheel takes the lateral force the first
-    cannot)."""
-    floor = CarryFloor(reserve=0.2)
-    motion = retimed[0.2].trajectory
+def test_ten_percent_faster_breaks_the_plan_the_reserve_still_holds(tiago, retimed):
+    """The same motion 10 % faster: its plan breaks the floor's reserve (a support under it) and the
+    effort limits. The reserve is a margin, not a physical limit: in MuJoCo no support unloads and
+    no wheel slides (measured: least normal force 44.3 N against 44.7 N retimed; friction use 0.91
+    against 0.77). The physical limit is the next test's."""
+    floor = CarryFloor(reserve=0.3)
+    motion = retimed[0.3].trajectory
     kept, effort = _floor_excess(tiago, motion, floor)
     assert kept["contact"] <= 1e-6 * _share(tiago) and effort <= 1.0 + 1e-9
     fast = motion.scaled(1.1)
     broken, effort = _floor_excess(tiago, fast, floor)
-    assert broken["contact"] > 1.0 and effort > 1.1  # N: a support under the reserve; efforts over their limits
+    assert broken["contact"] > 1.0 and effort > 1.0  # N: a support under the reserve; efforts over their limits
 
     run = _replay(tiago, fast)
     driven = _driven(run)
     print(f"10 % faster: least normal {min(run.least_normal.values()):.2f} N, "
           f"slide {max(run.largest_slide.values()):.2e} m/s, friction use {run.friction_use[:, driven].max():.3f}, "
           f"base {run.base_error.max() * 1e3:.3f} mm, feedback {run.feedback:.3f} N m")  # fmt: skip
-    assert run.slipping  # a wheel at its friction limit (use >= 0.999)
-    assert run.friction_use[:, driven].max() >= 0.999
     assert run.lifted == [] and max(run.largest_slide.values()) < SLIDE
 
 
 @pytest.mark.slow
 def test_with_no_reserve_ten_percent_faster_unloads_a_support(tiago, retimed):
     """Retimed with no reserve (the floor's rows at zero load and full friction), then run 10 %
-    faster: in MuJoCo both back casters unload (normal force 0) and both wheels reach their
-    friction limit (measured: the pair still slides under 1e-4 m/s)."""
+    faster: in MuJoCo both back casters unload (normal force 0) and the left wheel reaches its
+    friction limit (measured: it still slides under 1e-4 m/s)."""
     run = _replay(tiago, retimed[0.0].trajectory.scaled(1.1))
     print(f"no reserve, 10 % faster: lifted {run.lifted}, slipping {run.slipping}, "
           f"slide {max(run.largest_slide.values()):.2e} m/s")  # fmt: skip
     assert {"caster_back_left_2_link", "caster_back_right_2_link"} <= set(run.lifted)
     assert min(run.least_normal.values()) == 0.0
-    assert set(run.slipping) == {"wheel_left_joint", "wheel_right_joint"}
+    assert "wheel_left_joint" in run.slipping
