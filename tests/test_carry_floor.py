@@ -121,6 +121,9 @@ def test_carry_ground_from_the_command_line_checked_by_trajectory_ground(tmp_pat
     assert check.returncode == 0, check.stderr
     doc = json.loads((tmp_path / "check" / "analysis.json").read_text())
     assert doc["traction"]["max_traction_use"] <= 1.0 and doc["min_stability_margin"] > 0.0
+    # the carry keeps its floor at its own speed: the floor's time-scaling margin is above 1
+    floor_k = doc["floor_time_scaling"]["k_max"]
+    assert floor_k > 1.0 and f"time-scaling margin on the floor {floor_k:.6g}" in check.stdout
     assert "slips" not in check.stderr and "unloads" not in check.stderr
     for bad, message in ((("--zmp-margin", "-1"), "--zmp-margin must be a distance >= 0 m"),
                          (("--ground", "--load", "any"), "carry's floor shares the load"),
@@ -154,3 +157,33 @@ def test_a_zmp_margin_the_support_polygon_cannot_give_is_refused_up_front(name):
     CarryFloor(zmp_margin=0.99 * deepest).resolve(robot)
     with pytest.raises(ArgumentError, match=rf"margin {1.01 * deepest:g} m is more than {name}'s support polygon"):
         CarryFloor(zmp_margin=1.01 * deepest).resolve(robot)
+
+
+def test_the_floor_time_scaling_margin_is_where_the_floor_readings_break():
+    """The paper robot's grounded carry (mu 0.2): the floor's time-scaling margin k, found from
+    the floor's wrench at the motion's own speed and at rest, is where the readings of the motion
+    replayed faster break: at 0.99 k every sample keeps the zero-moment point inside, every
+    support loaded and every wheel's traction use at most 1; at 1.05 k some sample does not."""
+    from mobmanip.motion.traction import floor_time_scaling
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    path = read_path(EXAMPLES / "carry_line.csv")
+    grounded = carry(robot, ObjectPath(path.t / 3.0, path.xy), prepare=0.0, floor=CarryFloor(mu=0.2))
+    motion = trajectory_from_samples(robot, grounded.motion.t, grounded.motion.q)
+    analysis = analyze_trajectory(robot, motion)
+    ground = ground_along(robot, motion, analysis.object_acceleration, analysis.task)
+    scaling = floor_time_scaling(robot, motion, ground, 0.2)
+    k = scaling.k_max
+    assert k is not None and 1.0 < k < 10.0, scaling
+
+    def readings(factor):
+        fast = motion.scaled(factor)
+        result = analyze_trajectory(robot, fast)
+        along = ground_along(robot, fast, result.object_acceleration, result.task)
+        traction = traction_along(along, fast, 0.2)
+        return float(along.margin.min()), float(traction.use.max()), float(traction.normal.min())
+
+    margin, use, normal = readings(0.99 * k)
+    assert margin > 0.0 and use <= 1.0 and normal > 0.0
+    margin, use, normal = readings(1.05 * k)
+    assert margin < 0.0 or use > 1.0 or normal <= 0.0

@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from ..motion.carry import CarryResult
     from ..motion.ground import GroundAlong
     from ..motion.retime import Retiming
-    from ..motion.traction import TractionAlong
+    from ..motion.traction import FloorScaling, TractionAlong
     from ..motion.trajectory_analysis import TrajectoryAnalysis
     from ..placement.maps import PlacementMap
     from ..placement.site import SiteResult
@@ -175,6 +175,7 @@ def trajectory_outputs(
     prefix: str = "analysis",
     ground: GroundAlong | None = None,
     traction: TractionAlong | None = None,
+    floor_scaling: FloorScaling | None = None,
 ) -> list[str]:
     """``{prefix}.csv`` (:meth:`TrajectoryAnalysis.table`), ``{prefix}.json`` and ``{prefix}.png``
     (:func:`mobmanip.viz.motion_figures.trajectory_figure`) in ``out_dir``; returns the paths.
@@ -182,7 +183,8 @@ def trajectory_outputs(
     zero-moment point and the stability margin per sample; with ``traction``
     (:func:`mobmanip.motion.traction.traction_along`), every contact's normal force
     (``normal_force_<contact>``) and every driven wheel's traction use (``traction_use_<wheel>``;
-    an unloaded wheel's is ``inf`` in the CSV and ``null`` in the JSON)."""
+    an unloaded wheel's is ``inf`` in the CSV and ``null`` in the JSON); with ``floor_scaling``
+    (:func:`mobmanip.motion.traction.floor_time_scaling`), the JSON's ``floor_time_scaling``."""
     from ..viz.figures import save_and_close
     from ..viz.motion_figures import trajectory_figure
 
@@ -216,6 +218,8 @@ def trajectory_outputs(
             "slipping_samples": traction.slipping().tolist(),
             "unloaded_samples": traction.unloaded().tolist(),
         }  # fmt: skip
+    if floor_scaling is not None:
+        document["floor_time_scaling"] = floor_scaling.to_dict()
     paths = [out / f"{prefix}.csv", out / f"{prefix}.json", out / f"{prefix}.png"]
     write_table_csv(paths[0], header, values)
     write_json(paths[1], document)

@@ -143,6 +143,26 @@ def _check_work(args) -> None:
     work.check(max(lines - 1, 0), f"rows of {Path(args.trajectory).name}")
 
 
+def _report_floor_scaling(robot, trajectory, ground, args, scaling):
+    """The time-scaling margin the floor allows, printed beside the limits' own with the one that
+    holds both; returned (:class:`mobmanip.motion.traction.FloorScaling`)."""
+    from ..motion.traction import floor_time_scaling
+
+    floor = floor_time_scaling(robot, trajectory, ground, args.mu, object_mass=args.object_mass)
+    if floor.k_max is None:
+        print("time-scaling margin on the floor: unbounded (the floor's forces do not change with the speed)")
+        return floor
+    print(
+        f"time-scaling margin on the floor {floor.k_max:.6g} (decided by {floor.limit} at sample {floor.sample}: "
+        "the zero-moment point inside the support polygon, every support loaded, every wheel within friction)"
+    )
+    if scaling.feasible and scaling.k_max is not None:
+        both = min(floor.k_max, scaling.k_max)
+        which = "the floor" if floor.k_max <= scaling.k_max else f"the {scaling.limit} limit"
+        print(f"time-scaling margin, limits and floor together {both:.6g} (decided by {which})")
+    return floor
+
+
 def _report_traction(traction, trajectory) -> None:
     """The largest traction use printed; a wheel that slips and a support that unloads warned about."""
     i, k = traction.worst()
@@ -238,7 +258,7 @@ def run(args) -> int:
         print(f"time-scaling margin {s.k_max:.6g} (decided by the {s.limit} limit at sample {s.sample})")
         if s.k_min > 0.0:
             print(f"slowest feasible speed-up {s.k_min:.6g}")
-    ground = traction = None
+    ground = traction = floor_scaling = None
     if args.ground:
         from ..motion.ground import ground_along
         from ..motion.traction import traction_along
@@ -258,8 +278,10 @@ def run(args) -> int:
             print(f"traction per wheel: not computed ({exc})")
         else:
             _report_traction(traction, trajectory)
+            floor_scaling = _report_floor_scaling(robot, trajectory, ground, args, s)
     if args.out:
-        for path in trajectory_outputs(robot, result, args.out, ground=ground, traction=traction):
+        for path in trajectory_outputs(robot, result, args.out, ground=ground, traction=traction,
+                                       floor_scaling=floor_scaling):  # fmt: skip
             print(f"wrote {path}")
     if args.export:
         from ..viz.trajectory_page import export_trajectory_page
