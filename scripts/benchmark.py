@@ -426,6 +426,9 @@ def main(argv=None) -> int:
         action="store_true",
         help="only the fastest timing of a path, beside toppra (scripts/benchmark_retime.py)",
     )
+    parser.add_argument(
+        "--payload", action="store_true", help="only the payload program and its map (scripts/benchmark_payload.py)"
+    )
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
@@ -449,6 +452,10 @@ def main(argv=None) -> int:
         from benchmark_sweeps import run as run_sweeps
 
         return run_sweeps(quick=args.quick)
+    if args.payload:
+        from benchmark_payload import run as run_payload
+
+        return run_payload(quick=args.quick, rounds=args.rounds)
     if args.retime:
         from benchmark_retime import run as run_retime
 

@@ -34,6 +34,7 @@ COVERED = {
     "plot_site": "test_site_figure",
     "team_carry_figure": "test_team_carry.py (test_team_carry_figures_meet_the_paper_figures_standard)",
     "retime_figure": "test_retime_figure",
+    "payload_map_figure": "test_payload_map_figure",
 }
 
 
@@ -209,6 +210,25 @@ def test_retime_figure():
         legend = [t.get_text() for t in top.get_legend().get_texts()]
         assert "fastest timing" in legend and any(text.startswith("binds: ") for text in legend)
         assert fig._suptitle.get_text().startswith("panda, spatial task, joint limits only: 1 s -> ")
+    finally:
+        plt.close(fig)
+
+
+def test_payload_map_figure():
+    """The payload map: a polar heat map with its colour bar in kg, the heaviest cell marked, the
+    acceleration asked for with its unit in the title."""
+    from mobmanip.analysis.payload_map import payload_map
+    from mobmanip.sweep.spec import SweepGrid
+    from mobmanip.viz.payload_figure import payload_map_figure
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    grid = SweepGrid(np.linspace(-60.0, 60.0, 4), np.linspace(0.3, 0.9, 3))
+    fig = payload_map_figure(payload_map(robot, grid, "planar", acceleration=(1.0, 0.0)))
+    try:
+        check_paper_ready(fig, "payload_map.png")
+        colour_bars = [ax for ax in fig.axes if is_colorbar(ax)]
+        assert len(colour_bars) == 1 and colour_bars[0].get_ylabel() == "heaviest object (kg)"
+        assert "given the acceleration (1, 0) m/s$^2$" in fig._suptitle.get_text()
     finally:
         plt.close(fig)
 

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from ..support.files import atomic_output, write_json
 
 if TYPE_CHECKING:
+    from ..analysis.payload_map import PayloadMap
     from ..coordination.carry import TeamCarryResult, TeamCarryRun
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
@@ -305,6 +306,25 @@ def retime_outputs(
     save_and_close(retime_figure(result), paths[2], dpi=100, bbox_inches="tight")
     header, values = result.table()
     write_table_csv(paths[3], header, values)
+    return [str(p) for p in paths]
+
+
+def write_payload_map(result: PayloadMap, out_dir: str | Path) -> list[str]:
+    """payload_map.csv (one row per object position), payload_map.json
+    (:meth:`mobmanip.analysis.payload_map.PayloadMap.to_dict`) and payload_map.png
+    (:func:`mobmanip.viz.payload_figure.payload_map_figure`) in ``out_dir``; returns the paths."""
+    from ..viz.figures import save_and_close
+    from ..viz.payload_figure import payload_map_figure
+
+    out = Path(out_dir)
+    paths = [out / "payload_map.csv", out / "payload_map.json", out / "payload_map.png"]
+    header, rows = result.table()
+    with atomic_output(paths[0], "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+    write_json(paths[1], result.to_dict())
+    save_and_close(payload_map_figure(result), paths[2], dpi=100, bbox_inches="tight")
     return [str(p) for p in paths]
 
 

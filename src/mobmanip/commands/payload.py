@@ -34,6 +34,24 @@ def register(sub) -> None:
     )
     add_floor_options(parser)
     parser.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
+    mapping = parser.add_argument_group("a map over object positions (instead of one posture)")
+    mapping.add_argument(
+        "--map",
+        action="store_true",
+        help="the payload at every object position of a polar grid around the robot, the arms holding each as "
+        "`mobmanip sweep` finds them (not with --q or --posture)",
+    )
+    mapping.add_argument(
+        "--angle", default="-90:90:13", metavar="GRID", help="the object's direction from the heading, deg "
+        "(START:STOP:COUNT, V1,V2,... or V; default %(default)s)"
+    )  # fmt: skip
+    mapping.add_argument("--distance", default="0.3:0.9:13", metavar="GRID",
+                         help="its distance from the arms' reference point, m (default %(default)s)")  # fmt: skip
+    mapping.add_argument("--postures", choices=["auto", "planar", "ik"], default="auto",
+                         help="how the arms hold each position, as `mobmanip sweep` (default %(default)s)")  # fmt: skip
+    mapping.add_argument(
+        "--out", metavar="DIR", help="with --map: write payload_map.csv, payload_map.json, payload_map.png"
+    )
     parser.set_defaults(func=run)
 
 
@@ -61,6 +79,12 @@ def run(args) -> int:
     from ..analysis.payload import payload
     from ..support.files import require_finite, write_json
 
+    if args.map:
+        return run_map(args)
+    if args.out:
+        from ..errors import UsageError
+
+        raise UsageError("--out writes a payload map's files: give --map (one posture's result: --json)")
     robot, q = load_robot_and_configuration(args)
     acceleration = parse_acceleration(args.accel)
     constraints = floor_constraints(args)
@@ -90,3 +114,44 @@ def _force(value: float) -> str:
     """A force for the summary, N (no "-0" for a contact unloaded to rounding)."""
     text = f"{value:.4g}"
     return "0" if float(text) == 0.0 else text
+
+
+def run_map(args) -> int:
+    """``--map``: the payload over a polar grid of object positions."""
+    from ..analysis.payload_map import CELL_STATUSES, payload_map
+    from ..errors import UsageError
+    from ..support.files import check_output, output_directory
+    from ..sweep.spec import SweepGrid, parse_grid
+    from .common import robot_spec_from_args
+    from .outputs import write_payload_map
+
+    if args.q or args.posture:
+        raise UsageError("--map holds the object at every grid position in the posture the sweep finds: "
+                         "--q and --posture do not apply")  # fmt: skip
+    if args.json:
+        raise UsageError("--map writes its JSON with its other files: give --out DIR")
+    from ..robot.model import load_robot
+
+    robot = load_robot(robot_spec_from_args(args))
+    grid = SweepGrid(parse_grid(args.angle, "--angle"), parse_grid(args.distance, "--distance", positive=True))
+    if args.out:  # refuse an unwritable output before the map is computed
+        out = output_directory(args.out)
+        for name in ("payload_map.csv", "payload_map.json", "payload_map.png"):
+            check_output(out / name)
+    found = payload_map(robot, grid, args.task, acceleration=parse_acceleration(args.accel),
+                        constraints=floor_constraints(args), static=args.static, postures=args.postures)  # fmt: skip
+    counts = {status: int((found.status == status).sum()) for status in CELL_STATUSES}
+    print(f"robot {robot.name}, task {found.task}: {found.status.size} object positions "
+          f"({', '.join(f'{n} {s}' for s, n in counts.items() if n)})")  # fmt: skip
+    best = found.best()
+    if best is None:
+        print("no position has a bounded payload")
+    else:
+        bounded = found.mass[found.status == "bounded"]
+        print(f"heaviest object: {found.mass[best]:.6g} kg at {found.angle_deg[best[0]]:g} deg, "
+              f"{found.distance[best[1]]:g} m; the lightest of the positions: {bounded.min():.6g} kg")  # fmt: skip
+        print(f"what stops it there: {binding_summary(found.limit[best].split('; '))}")
+    if args.out:
+        for written in write_payload_map(found, args.out):
+            print(f"wrote {written}")
+    return 0

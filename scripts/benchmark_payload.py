@@ -1,0 +1,87 @@
+"""Time the payload program at a posture and over a 15 x 15 map of object positions.
+
+Run: ``python scripts/benchmark.py --payload [--quick]`` (or this file directly). In one process,
+warm, BLAS and OpenMP limited to one thread as the ``mobmanip`` command runs; CPU medians of
+interleaved rounds (``time.process_time``), wall time beside them:
+
+- the payload program at TIAGo++'s hold posture, held still, on the ideal model and on the floor
+  (mu 0.5), and the paper's robot's given 1 m/s^2 along x;
+- the paper robot's map of 15 x 15 object positions (-60..60 deg, 0.3..0.9 m), the object given
+  1 m/s^2 along x, on the floor (mu 0.5).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The issue's bounds (s of CPU): one program at a posture, and the 15 x 15 map.
+POSTURE_BOUND, MAP_BOUND = 0.010, 2.0
+
+
+def run(quick: bool = False, rounds: int | None = None) -> int:
+    import mobmanip
+    from mobmanip.analysis.payload import payload
+    from mobmanip.analysis.payload_map import payload_map
+    from mobmanip.support.threads import limit_threads
+    from mobmanip.sweep.spec import SweepGrid
+    from mobmanip.terms.constraints.floor import Floor
+
+    rounds = rounds or (2 if quick else 5)
+    side = 5 if quick else 15
+    with limit_threads():
+        tiago = mobmanip.load_robot("tiago_dual")
+        hold = mobmanip.named_configuration(tiago, "hold")
+        paper = mobmanip.load_robot("planar_dual_arm")
+        home = paper.hold_configuration()
+        grid = SweepGrid(np.linspace(-60.0, 60.0, side), np.linspace(0.3, 0.9, side))
+        floor = (Floor(mu=0.5),)
+        cases = {
+            "TIAGo++ at hold, ideal": lambda: payload(tiago, hold).mass,
+            "TIAGo++ at hold, floor": lambda: payload(tiago, hold, constraints=floor).mass,
+            "paper robot, 1 m/s^2, floor": lambda: (
+                payload(paper, home, "planar", acceleration=(1.0, 0.0), constraints=floor).mass
+            ),  # fmt: skip
+            f"paper robot map {side} x {side}, floor": lambda: float(
+                np.nanmax(payload_map(paper, grid, "planar", acceleration=(1.0, 0.0), constraints=floor).mass)
+            ),
+        }
+        for call in cases.values():  # warm-up
+            call()
+        times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
+        values = {}
+        for _ in range(rounds):
+            for name, call in cases.items():
+                wall, cpu = time.perf_counter(), time.process_time()
+                values[name] = call()
+                times[name].append((time.process_time() - cpu, time.perf_counter() - wall))
+    print(f"payload, medians of {rounds} interleaved rounds (one BLAS thread)")
+    print(f"{'case':36s} {'CPU ms':>9s} {'wall ms':>9s} {'heaviest kg':>12s}")
+    medians = {}
+    for name, pairs in times.items():
+        medians[name] = statistics.median(p[0] for p in pairs)
+        wall = statistics.median(p[1] for p in pairs)
+        print(f"{name:36s} {1e3 * medians[name]:9.1f} {1e3 * wall:9.1f} {values[name]:12.4f}")
+    if not quick:
+        posture = max(medians[name] for name in list(cases)[:3])
+        whole = medians[f"paper robot map {side} x {side}, floor"]
+        for what, cpu, bound in (("slowest program at a posture", posture, POSTURE_BOUND),
+                                 ("15 x 15 map", whole, MAP_BOUND)):  # fmt: skip
+            verdict = "within" if cpu <= bound else "ABOVE"
+            print(f"{what}: {1e3 * cpu:.1f} ms of CPU, {verdict} the {1e3 * bound:.0f} ms bound")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT / "src"))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--rounds", type=int)
+    arguments = parser.parse_args()
+    sys.exit(run(quick=arguments.quick, rounds=arguments.rounds))

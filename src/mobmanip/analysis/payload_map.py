@@ -1,0 +1,163 @@
+"""The heaviest object over a map of object positions: the payload program
+(:func:`mobmanip.analysis.payload.payload`) at every position of a polar grid around the robot.
+
+The grid is a sweep's (:class:`mobmanip.sweep.spec.SweepGrid`): the object at an angle from the
+platform's heading and a horizontal distance from the arms' reference point, the arms holding it
+in the posture the sweep finds there (the paper's closed form, or inverse kinematics from the hold
+posture); a position the arms cannot reach has no payload. Each reachable position is one linear
+program, so a 15 x 15 map of the paper's robot takes about a second.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..robot.model import Robot
+from ..robot.tasks import get_task
+from ..sweep.runner import sweep_configurations, sweep_postures
+from ..sweep.spec import SweepGrid
+from ..terms.constraints.base import Constraint
+from .payload import payload
+
+#: What a cell of the map can be: the program's outcomes, and out of the arms' reach.
+CELL_STATUSES = ("bounded", "unbounded", "infeasible", "unreachable")
+
+
+@dataclass(frozen=True)
+class PayloadMap:
+    """The payload at every object position of a polar grid (see the module's docstring).
+
+    Attributes:
+        robot, task: what was asked.
+        angle_deg: the object's directions from the platform's heading (deg), (A,).
+        distance: its horizontal distances from the arms' reference point (m), (D,).
+        mass: the heaviest object at each position (kg), NaN where there is none (see
+            ``status``), (A, D).
+        status: each position's :data:`CELL_STATUSES` entry, (A, D).
+        limit: what stops the mass at each bounded position (the payload's reading), "" elsewhere, (A, D).
+        configurations: the robot's configuration holding each position (the home posture where
+            out of reach), (A, D, nq).
+        acceleration: the object's acceleration asked for (zeros: held still), (m,).
+        static: whether the robot was held static too.
+        constraints: the constraints, as described in JSON.
+    """
+
+    robot: str
+    task: str
+    angle_deg: np.ndarray
+    distance: np.ndarray
+    mass: np.ndarray
+    status: np.ndarray
+    limit: np.ndarray
+    acceleration: np.ndarray
+    static: bool
+    constraints: tuple[dict, ...]
+    configurations: np.ndarray
+
+    def best(self) -> tuple[int, int] | None:
+        """(angle index, distance index) of the heaviest bounded cell, or ``None``."""
+        if not np.any(self.status == "bounded"):
+            return None
+        i, j = np.unravel_index(
+            int(np.nanargmax(np.where(self.status == "bounded", self.mass, np.nan))), self.mass.shape
+        )
+        return int(i), int(j)
+
+    def table(self) -> tuple[list[str], list[list]]:
+        """One row per position: angle_deg, distance, mass (empty where none), status, limit."""
+        rows = []
+        for i, angle in enumerate(self.angle_deg):
+            for j, distance in enumerate(self.distance):
+                mass = "" if self.status[i, j] != "bounded" else repr(float(self.mass[i, j]))
+                rows.append(
+                    [repr(float(angle)), repr(float(distance)), mass, str(self.status[i, j]), str(self.limit[i, j])]
+                )
+        return ["angle_deg", "distance", "mass", "status", "limit"], rows
+
+    def to_dict(self) -> dict:
+        """JSON-ready (no NaN: a position without a payload has ``null``)."""
+        best = self.best()
+        return {
+            "robot": self.robot,
+            "task": self.task,
+            "acceleration": self.acceleration.tolist(),
+            "static": self.static,
+            "constraints": [dict(c) for c in self.constraints],
+            "angle_deg": self.angle_deg.tolist(),
+            "distance": self.distance.tolist(),
+            "mass": [
+                [None if s != "bounded" else float(m) for m, s in zip(row, srow)]
+                for row, srow in zip(self.mass, self.status)
+            ],  # fmt: skip
+            "status": self.status.tolist(),
+            "limit": self.limit.tolist(),
+            "best": None
+            if best is None
+            else {
+                "angle_deg": float(self.angle_deg[best[0]]),
+                "distance": float(self.distance[best[1]]),
+                "mass": float(self.mass[best]),
+                "limit": str(self.limit[best]),
+            },  # fmt: skip
+        }
+
+
+def payload_map(
+    robot: Robot,
+    grid: SweepGrid,
+    task: str | None = None,
+    *,
+    acceleration: Iterable[float] | None = None,
+    constraints: Iterable[Constraint] = (),
+    static: bool = False,
+    postures: str = "auto",
+) -> PayloadMap:
+    """The payload at every object position of ``grid`` (its angles and distances; one heading,
+    the wheels' limits as they are).
+
+    Args:
+        robot: the loaded robot.
+        grid: the positions (:class:`mobmanip.sweep.spec.SweepGrid`, its other axes single values of 1).
+        task, acceleration, constraints, static: as :func:`mobmanip.analysis.payload.payload`.
+        postures: how the arms hold each position, as a sweep's (``"auto"``, ``"planar"``, ``"ik"``).
+
+    Raises:
+        ArgumentError: a grid with more than one heading or a wheel-limit scale other than 1.
+    """
+    if grid.shape[2:] != (1, 1, 1) or grid.wheel_velocity_scale[0] != 1.0 or grid.wheel_effort_scale[0] != 1.0:
+        raise ArgumentError("a payload map covers object positions: one heading and the wheels' own limits")
+    task_space = get_task(task or robot.spec.default_task)
+    constraints = tuple(constraints)
+    table = sweep_postures(robot, grid, postures)
+    a_count, d_count = grid.shape[:2]
+    qs, reachable = sweep_configurations(robot, grid, table, np.arange(a_count * d_count))
+    mass = np.full(a_count * d_count, np.nan)
+    status = np.full(a_count * d_count, "unreachable", dtype=object)
+    limit = np.full(a_count * d_count, "", dtype=object)
+    asked = None
+    for k in np.flatnonzero(reachable):
+        found = payload(robot, qs[k], task_space.name, acceleration=acceleration, constraints=constraints,
+                        static=static)  # fmt: skip
+        asked = found.acceleration
+        status[k] = found.status
+        if found.status == "bounded":
+            mass[k] = found.mass
+            limit[k] = "; ".join(found.reading)
+    shape = (a_count, d_count)
+    return PayloadMap(
+        robot=robot.name,
+        task=task_space.name,
+        angle_deg=grid.angle_deg.copy(),
+        distance=grid.distance.copy(),
+        mass=mass.reshape(shape),
+        status=status.reshape(shape).astype(str),
+        limit=limit.reshape(shape).astype(str),
+        acceleration=np.zeros(task_space.dim) if asked is None else asked,
+        static=static,
+        constraints=tuple(c.describe() for c in constraints),
+        configurations=qs.reshape(*shape, -1),
+    )

@@ -1,0 +1,84 @@
+"""The payload over a map of object positions (``mobmanip.analysis.payload_map``, ``payload --map``).
+
+References: at sampled positions the cell's mass against the bisection on the mass over the
+capacity sets that existed before the payload program (tests/test_payload.py's reference), and the
+object's position recomputed here from Pinocchio's frames at the configuration the map used.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from hostile_util import assert_one_line_error, run_cli
+from mobmanip import analyze, load_robot
+from mobmanip.analysis.payload_map import payload_map
+from mobmanip.sweep.spec import SweepGrid
+from mobmanip.terms.constraints.floor import Floor
+from test_payload import RTOL, bisection
+
+ACCELERATION = np.array([1.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def paper():
+    robot = load_robot("planar_dual_arm")
+    grid = SweepGrid(np.linspace(-60.0, 60.0, 5), np.linspace(0.3, 0.9, 4))
+    return robot, payload_map(robot, grid, "planar", acceleration=ACCELERATION, constraints=(Floor(mu=0.5),))
+
+
+@pytest.mark.parametrize("cell", [(0, 0), (2, 3), (4, 1)])
+def test_a_cell_is_the_bisection_at_its_configuration(paper, cell):
+    robot, found = paper
+    assert found.status[cell] == "bounded"
+    q = found.configurations[cell]
+    lo, hi = bisection(robot, q, ACCELERATION, Floor(mu=0.5))
+    assert lo - RTOL * hi <= found.mass[cell] <= hi + RTOL * hi
+
+
+def test_each_cell_holds_the_object_where_the_map_says(paper):
+    """The object between the hands is at the cell's angle from the heading and distance from the
+    arms' common first joint (the paper robot's reference point), from Pinocchio's frames."""
+    robot, found = paper
+    model, data = robot.model, robot.model.createData()
+    first = model.getJointId(robot.arms[0].joint_names[0])
+    for i, angle in enumerate(found.angle_deg):
+        for j, distance in enumerate(found.distance):
+            q = found.configurations[i, j]
+            pin.forwardKinematics(model, data, q)
+            centre = analyze(robot, q, "planar", measures=("kinematic",)).held_object.center
+            offset = centre[:2] - data.oMi[first].translation[:2]
+            heading = math.atan2(q[3], q[2])
+            assert np.linalg.norm(offset) == pytest.approx(distance, abs=1e-9)
+            assert math.degrees(math.atan2(offset[1], offset[0]) - heading) == pytest.approx(angle, abs=1e-7)
+
+
+def test_a_harder_acceleration_lowers_every_cell_and_the_ideal_is_no_lower(paper):
+    robot, found = paper
+    grid = SweepGrid(found.angle_deg, found.distance)
+    harder = payload_map(robot, grid, "planar", acceleration=2.0 * ACCELERATION, constraints=(Floor(mu=0.5),))
+    ideal = payload_map(robot, grid, "planar", acceleration=ACCELERATION)
+    assert np.all(harder.mass < found.mass)
+    assert np.all(ideal.mass >= found.mass * (1 - 1e-9))
+
+
+def test_command_writes_the_map(tmp_path, capfd):
+    out = tmp_path / "map"
+    code, stdout, stderr = run_cli(
+        capfd, "payload", "planar_dual_arm", "--map", "--angle=-60:60:5", "--distance", "0.3:0.9:4",
+        "--accel", "1,0", "--mu", "0.5", "--out", out,
+    )  # fmt: skip
+    assert code == 0, stderr
+    document = json.loads((out / "payload_map.json").read_text())
+    best = document["best"]
+    assert f"heaviest object: {best['mass']:.6g} kg at {best['angle_deg']:g} deg" in stdout
+    assert len((out / "payload_map.csv").read_text().splitlines()) == 1 + 20
+    assert (out / "payload_map.png").stat().st_size > 0
+    code, _, err = run_cli(capfd, "payload", "planar_dual_arm", "--map", "--posture", "hold")
+    assert_one_line_error(code, err, "--map", "--posture")
+    code, _, err = run_cli(capfd, "payload", "planar_dual_arm", "--map", "--distance", "0:1:3")
+    assert_one_line_error(code, err, "--distance")
