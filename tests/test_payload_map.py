@@ -82,3 +82,50 @@ def test_command_writes_the_map(tmp_path, capfd):
     assert_one_line_error(code, err, "--map", "--posture")
     code, _, err = run_cli(capfd, "payload", "planar_dual_arm", "--map", "--distance", "0:1:3")
     assert_one_line_error(code, err, "--distance")
+
+
+# ----- along a path -----
+
+
+@pytest.fixture(scope="module")
+def along():
+    """The paper robot's arms turning through five postures, the object held still on the floor."""
+    from mobmanip.analysis.payload_map import payload_along
+    from mobmanip.motion.trajectory import trajectory_from_samples
+
+    robot = load_robot("planar_dual_arm")
+    home = robot.hold_configuration()
+    t = np.linspace(0.0, 2.0, 5)
+    q = np.tile(home, (5, 1))
+    for name, change in (("arm_left_1_joint", 0.4), ("arm_right_1_joint", -0.4)):
+        q[:, robot.model.joints[robot.model.getJointId(name)].idx_q] += change * t / 2.0
+    path = trajectory_from_samples(robot, t, q)
+    return robot, path, payload_along(robot, path, "planar", acceleration=ACCELERATION, constraints=(Floor(mu=0.5),))
+
+
+def test_the_lightest_sample_is_the_bisection_at_its_posture(along):
+    robot, path, found = along
+    assert set(found.status) == {"bounded"}
+    k = found.lightest()
+    assert found.mass[k] == found.mass.min()
+    lo, hi = bisection(robot, path.q[k], ACCELERATION, Floor(mu=0.5))
+    assert lo - RTOL * hi <= found.mass[k] <= hi + RTOL * hi
+
+
+def test_command_gives_the_payload_along_a_path(along, tmp_path, capfd):
+    from mobmanip.commands.outputs import write_trajectory_csv
+
+    robot, path, found = along
+    source = write_trajectory_csv(robot, tmp_path / "path.csv", path.t, path.q)
+    out = tmp_path / "along"
+    code, stdout, stderr = run_cli(
+        capfd, "payload", "planar_dual_arm", "--trajectory", source, "--task", "planar", "--accel", "1,0",
+        "--mu", "0.5", "--out", out,
+    )  # fmt: skip
+    assert code == 0, stderr
+    k = found.lightest()
+    assert f"lightest payload along the path: {found.mass[k]:.6g} kg at sample {k}" in stdout
+    document = json.loads((out / "payload_along.json").read_text())
+    assert document["lightest"]["sample"] == k and len(document["mass"]) == 5
+    code, _, err = run_cli(capfd, "payload", "planar_dual_arm", "--trajectory", source, "--posture", "hold")
+    assert_one_line_error(code, err, "--trajectory", "--posture")

@@ -1,5 +1,6 @@
-"""The heaviest object over a map of object positions: the payload program
-(:func:`mobmanip.analysis.payload.payload`) at every position of a polar grid around the robot.
+"""The heaviest object over a map of object positions, and along a path: the payload program
+(:func:`mobmanip.analysis.payload.payload`) at every position of a polar grid around the robot
+(:func:`payload_map`), or at every sample of a motion (:func:`payload_along`).
 
 The grid is a sweep's (:class:`mobmanip.sweep.spec.SweepGrid`): the object at an angle from the
 platform's heading and a horizontal distance from the arms' reference point, the arms holding it
@@ -160,4 +161,112 @@ def payload_map(
         static=static,
         constraints=tuple(c.describe() for c in constraints),
         configurations=qs.reshape(*shape, -1),
+    )
+
+
+@dataclass(frozen=True)
+class PayloadAlong:
+    """The payload at every sample of a motion's path (see :func:`payload_along`).
+
+    Attributes:
+        robot, task: what was asked.
+        t: the samples' time stamps (s), (N,).
+        mass: the heaviest object at each sample's posture (kg), NaN where there is none, (N,).
+        status: each sample's outcome (``"bounded"``, ``"unbounded"``, ``"infeasible"``), (N,).
+        limit: what stops the mass at each bounded sample, "" elsewhere, (N,).
+        acceleration: the object's acceleration asked for at every sample (zeros: held still), (m,).
+        static: whether the robot was held static too.
+        constraints: the constraints, as described in JSON.
+    """
+
+    robot: str
+    task: str
+    t: np.ndarray
+    mass: np.ndarray
+    status: np.ndarray
+    limit: np.ndarray
+    acceleration: np.ndarray
+    static: bool
+    constraints: tuple[dict, ...]
+
+    def lightest(self) -> int | None:
+        """The sample whose payload is the least among the bounded ones, or ``None``."""
+        bounded = np.flatnonzero(self.status == "bounded")
+        return None if not bounded.size else int(bounded[np.argmin(self.mass[bounded])])
+
+    def table(self) -> tuple[list[str], list[list]]:
+        """One row per sample: t, mass (empty where none), status, limit."""
+        rows = [[repr(float(t)), "" if s != "bounded" else repr(float(m)), str(s), str(limit)]
+                for t, m, s, limit in zip(self.t, self.mass, self.status, self.limit)]  # fmt: skip
+        return ["t", "mass", "status", "limit"], rows
+
+    def to_dict(self) -> dict:
+        """JSON-ready (no NaN: a sample without a payload has ``null``)."""
+        k = self.lightest()
+        return {
+            "robot": self.robot,
+            "task": self.task,
+            "acceleration": self.acceleration.tolist(),
+            "static": self.static,
+            "constraints": [dict(c) for c in self.constraints],
+            "t": self.t.tolist(),
+            "mass": [None if s != "bounded" else float(m) for m, s in zip(self.mass, self.status)],
+            "status": self.status.tolist(),
+            "limit": self.limit.tolist(),
+            "lightest": None
+            if k is None
+            else {
+                "sample": k,
+                "t": float(self.t[k]),
+                "mass": float(self.mass[k]),
+                "limit": str(self.limit[k]),
+            },  # fmt: skip
+        }
+
+
+def payload_along(
+    robot: Robot,
+    trajectory,
+    task: str | None = None,
+    *,
+    acceleration: Iterable[float] | None = None,
+    constraints: Iterable[Constraint] = (),
+    static: bool = False,
+) -> PayloadAlong:
+    """The payload (:func:`mobmanip.analysis.payload.payload`) at the posture of every sample of a
+    motion (:class:`mobmanip.motion.trajectory.Trajectory`): the heaviest object the robot could
+    hold still (or give ``acceleration``) had it stopped there. The lightest sample bounds what can
+    be carried along the whole path at rest; the motion's own accelerations are not in it (the
+    fastest timing of a path with its object is :func:`mobmanip.motion.retime.retime`).
+
+    Args:
+        robot: the loaded robot.
+        trajectory: the motion (its configurations are used).
+        task, acceleration, constraints, static: as :func:`mobmanip.analysis.payload.payload`.
+    """
+    task_space = get_task(task or robot.spec.default_task)
+    constraints = tuple(constraints)
+    n = len(trajectory.t)
+    mass = np.full(n, np.nan)
+    status = np.full(n, "", dtype=object)
+    limit = np.full(n, "", dtype=object)
+    asked = np.zeros(task_space.dim)
+    for k in range(n):
+        found = payload(robot, trajectory.q[k], task_space.name, acceleration=acceleration, constraints=constraints,
+                        static=static)  # fmt: skip
+        asked = found.acceleration
+        status[k] = found.status
+        if found.status == "bounded":
+            mass[k] = found.mass
+            limit[k] = "; ".join(found.reading)
+    return PayloadAlong(
+        robot=robot.name,
+        task=task_space.name,
+        t=np.asarray(trajectory.t, dtype=float).copy(),
+        mass=mass,
+        status=status.astype(str),
+        limit=limit.astype(str),
+        acceleration=asked,
+        static=static,
+        constraints=tuple(c.describe() for c in constraints),
     )

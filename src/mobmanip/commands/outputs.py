@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 from ..support.files import atomic_output, write_json
 
 if TYPE_CHECKING:
-    from ..analysis.payload_map import PayloadMap
+    from ..analysis.payload_map import PayloadAlong, PayloadMap
     from ..coordination.carry import TeamCarryResult, TeamCarryRun
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
@@ -306,6 +306,20 @@ def retime_outputs(
     save_and_close(retime_figure(result), paths[2], dpi=100, bbox_inches="tight")
     header, values = result.table()
     write_table_csv(paths[3], header, values)
+    return [str(p) for p in paths]
+
+
+def write_payload_along(result: PayloadAlong, out_dir: str | Path) -> list[str]:
+    """payload_along.csv (one row per sample) and payload_along.json
+    (:meth:`mobmanip.analysis.payload_map.PayloadAlong.to_dict`) in ``out_dir``; returns the paths."""
+    out = Path(out_dir)
+    paths = [out / "payload_along.csv", out / "payload_along.json"]
+    header, rows = result.table()
+    with atomic_output(paths[0], "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+    write_json(paths[1], result.to_dict())
     return [str(p) for p in paths]
 
 

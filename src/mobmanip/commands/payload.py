@@ -6,6 +6,8 @@ stops it
 
 from __future__ import annotations
 
+import numpy as np
+
 from .common import (
     add_floor_options,
     add_robot_options,
@@ -50,7 +52,14 @@ def register(sub) -> None:
     mapping.add_argument("--postures", choices=["auto", "planar", "ik"], default="auto",
                          help="how the arms hold each position, as `mobmanip sweep` (default %(default)s)")  # fmt: skip
     mapping.add_argument(
-        "--out", metavar="DIR", help="with --map: write payload_map.csv, payload_map.json, payload_map.png"
+        "--out", metavar="DIR", help="with --map: write payload_map.csv, payload_map.json, payload_map.png; "
+        "with --trajectory: payload_along.csv, payload_along.json"
+    )  # fmt: skip
+    parser.add_argument(
+        "--trajectory",
+        metavar="TRAJ.csv",
+        help="the payload at every sample's posture of a whole-body trajectory (as `mobmanip trajectory` reads it; "
+        "not with --q, --posture or --map): what could be held had the robot stopped there",
     )
     parser.set_defaults(func=run)
 
@@ -79,8 +88,14 @@ def run(args) -> int:
     from ..analysis.payload import payload
     from ..support.files import require_finite, write_json
 
+    if args.map and args.trajectory:
+        from ..errors import UsageError
+
+        raise UsageError("give --map (object positions) or --trajectory (a path's samples), not both")
     if args.map:
         return run_map(args)
+    if args.trajectory:
+        return run_along(args)
     if args.out:
         from ..errors import UsageError
 
@@ -153,5 +168,42 @@ def run_map(args) -> int:
         print(f"what stops it there: {binding_summary(found.limit[best].split('; '))}")
     if args.out:
         for written in write_payload_map(found, args.out):
+            print(f"wrote {written}")
+    return 0
+
+
+def run_along(args) -> int:
+    """``--trajectory``: the payload at every sample of a motion."""
+    from ..analysis.payload_map import payload_along
+    from ..errors import UsageError
+    from ..motion.trajectory import read_trajectory
+    from ..robot.model import load_robot
+    from ..support.files import check_output, note_input, output_directory
+    from .common import robot_spec_from_args
+    from .outputs import write_payload_along
+
+    if args.q or args.posture:
+        raise UsageError("--trajectory holds the object at every sample's posture: --q and --posture do not apply")
+    if args.json:
+        raise UsageError("--trajectory writes its JSON with its CSV: give --out DIR")
+    note_input(args.trajectory)
+    robot = load_robot(robot_spec_from_args(args))
+    motion = read_trajectory(robot, args.trajectory)
+    if args.out:  # refuse an unwritable output before the payloads are computed
+        out = output_directory(args.out)
+        for name in ("payload_along.csv", "payload_along.json"):
+            check_output(out / name)
+    found = payload_along(robot, motion, args.task, acceleration=parse_acceleration(args.accel),
+                          constraints=floor_constraints(args), static=args.static)  # fmt: skip
+    print(f"robot {robot.name}, task {found.task}: {len(found.t)} samples")
+    k = found.lightest()
+    if k is None:
+        print("no sample has a bounded payload")
+    else:
+        print(f"lightest payload along the path: {found.mass[k]:.6g} kg at sample {k} (t = {found.t[k]:g} s); "
+              f"the heaviest sample's {np.nanmax(found.mass):.6g} kg")  # fmt: skip
+        print(f"what stops it there: {binding_summary(found.limit[k].split('; '))}")
+    if args.out:
+        for written in write_payload_along(found, args.out):
             print(f"wrote {written}")
     return 0
