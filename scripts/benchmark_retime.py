@@ -109,7 +109,12 @@ def _panda_case(n: int):
     def theirs():
         limits = [
             constraint.JointVelocityConstraint(np.c_[-vlim, vlim]),
-            constraint.JointTorqueConstraint(inverse_dynamics, np.c_[-elim, elim], np.zeros(7)),
+            constraint.JointTorqueConstraint(
+                inverse_dynamics,
+                np.c_[-elim, elim],
+                np.zeros(7),
+                discretization_scheme=constraint.DiscretizationType.Interpolation,  # as retime's default
+            ),
         ]
         solver = algorithm.TOPPRA(limits, SinePath(), gridpoints=s, parametrizer="ParametrizeConstAccel")
         return solver.compute_trajectory(0, 0).duration
