@@ -24,10 +24,11 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   mass matrix); the planar base joints' armature goes to the platform joint's three velocities;
 - inertias: ``<inertial>`` (``diaginertia`` in its ``quat`` frame, or ``fullinertia``); a body
   without one gets its geoms' (``mass``, or ``density`` times volume, for spheres, boxes,
-  cylinders, capsules and ellipsoids) as Pinocchio computes them. A mesh geom is not integrated,
-  by mobmanip (its mass counts as a point at the geom) nor by Pinocchio 4.1 (which gives such a
-  body 1 kg and a unit tensor): the notes say so, and such a body needs an ``<inertial>`` before
-  the dynamic measures mean anything (Menagerie's Stretch is built this way);
+  cylinders, capsules and ellipsoids) as Pinocchio computes them, and its closed mesh geoms'
+  integrated as MuJoCo does (:meth:`_Tree.mesh_mass_properties`; the body is then given the
+  ``<inertial>`` for Pinocchio, which would give it 1 kg and a unit tensor). A mesh whose file is
+  missing or not closed is not integrated: the notes name its body, which needs the file or an
+  ``<inertial>`` before the dynamic measures mean anything (Menagerie's Stretch without its meshes);
 - limits: position from a joint's ``range``; effort from its ``actuatorfrcrange``, else from the
   actuators on it: ``gear`` times the largest ``forcerange`` bound, or for a ``motor`` without
   one, ``gear`` times the largest ``ctrlrange`` bound; velocity from a ``velocity`` actuator's
@@ -154,6 +155,8 @@ class _Reader:
         for top in self.root.findall("default"):
             self._read_defaults(top, {}, top.get("class", "main"))
         self.meshes: dict[str, tuple[Path, tuple[float, float, float] | None]] = {}
+        #: Each mesh's ``inertia`` attribute: how MuJoCo integrates its mass (``legacy`` unless said).
+        self.mesh_inertia: dict[str, str] = {}
         for asset in self.root.iter("asset"):
             for mesh in asset.findall("mesh"):
                 file = mesh.get("file")
@@ -163,6 +166,7 @@ class _Reader:
                 scale = _floats(mesh.get("scale"), f"mesh {name!r} scale", 3)
                 factors = None if scale is None else (scale[0], scale[1], scale[2])
                 self.meshes[name] = (self.meshdir / file, factors)
+                self.mesh_inertia[name] = mesh.get("inertia", "legacy")
         for tag, what in SKIPPED.items():
             if any(len(element) for element in self.root.iter(tag)):
                 self.notes.append(f"not read: {what}")
@@ -269,6 +273,18 @@ class _Reader:
         return Origin(xyz=tuple(float(v) for v in pos), rpy=_rpy(self.rotation(attrs, what)))  # type: ignore[arg-type]
 
 
+def _write_inertial(body, inertial: Inertial, shift: np.ndarray | None) -> None:
+    """Give ``body`` the ``<inertial>`` (its frame's axes, ``fullinertia``) mobmanip computed."""
+    xyz = np.asarray(inertial.origin.xyz, dtype=float) + (shift if shift is not None else 0.0)
+    I = np.asarray(inertial.inertia, dtype=float)
+    full = (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])
+    ElementTree.SubElement(body, "inertial", {
+        "pos": " ".join(repr(float(v)) for v in xyz),
+        "mass": repr(float(inertial.mass)),
+        "fullinertia": " ".join(repr(float(v)) for v in full),
+    })  # fmt: skip
+
+
 def _geom_mass_properties(kind: str, size: list[float], attrs: dict[str, str]) -> tuple[float, np.ndarray] | None:
     """Mass and rotational inertia (3, 3) about the geom's centre in its frame, for primitives."""
     volume: float
@@ -302,7 +318,8 @@ class _Tree:
         self.links: list[LinkDescription] = []
         self.joints: list[JointDescription] = []
         self.limits: dict[str, dict[str, float]] = {}
-        self.mesh_notes = 0
+        #: Bodies without <inertial> whose mesh geoms' mass could not be integrated (their files missing).
+        self.mesh_notes: list[str] = []
         self.counter = 0
         self.planar_base: tuple[JointDescription, ...] = ()
         #: Armature (kg or kg m^2) of the file's planar base joints, by role (x, y, yaw).
@@ -652,12 +669,16 @@ class _Tree:
                 tensor = ((d[0], 0.0, 0.0), (0.0, d[1], 0.0), (0.0, 0.0, d[2]))
             inertial = Inertial(mass, r.origin(attrs, where, shift), tensor)
         elif geom_masses:
-            inertial = self.geom_inertial(name, geom_masses)
+            inertial, meshed = self.geom_inertial(name, geom_masses)
+            if meshed and inertial is not None:  # Pinocchio builds from the file: it reads this one
+                _write_inertial(body, inertial, shift)
         return LinkDescription(name, inertial, tuple(collisions), tuple(visuals))
 
-    def geom_inertial(self, name: str, geoms) -> Inertial | None:
-        """The bodies' geoms' mass properties, as one inertial about their centre of mass."""
+    def geom_inertial(self, name: str, geoms) -> tuple[Inertial | None, bool]:
+        """The bodies' geoms' mass properties, as one inertial about their centre of mass, and
+        whether a mesh's mass is in it."""
         parts = []
+        meshed = False
         for shape, attrs in geoms:
             kind = attrs.get("type", "sphere")
             if shape.kind == "box":
@@ -668,18 +689,25 @@ class _Tree:
                 size = [shape.radius or 0.0] * 3
             if kind == "ellipsoid":
                 size = [float(v) for v in (attrs.get("size") or "0 0 0").split()][:3]
+            R = shape.origin.rotation
+            if kind == "mesh":
+                found = self.mesh_mass_properties(name, shape, attrs)
+                if found is not None:
+                    mass, centre, inertia = found
+                    parts.append((mass, np.asarray(shape.origin.xyz) + R @ centre, R @ inertia @ R.T))
+                    meshed = True
+                    continue
             props = _geom_mass_properties(kind, size, attrs) if kind != "mesh" else None
             if props is None:
                 mass = float(attrs.get("mass", 0.0))
-                if kind == "mesh" and mass > 0.0:
-                    self.mesh_notes += 1
+                if kind == "mesh":
+                    self.mesh_notes.append(name)
                 props = (mass, np.zeros((3, 3)))
             if props[0] > 0.0:
-                R = shape.origin.rotation
                 parts.append((props[0], np.asarray(shape.origin.xyz), R @ props[1] @ R.T))
         total = sum(m for m, _, _ in parts)
         if total <= 0.0:
-            return None
+            return None, False
         com = sum(m * p for m, p, _ in parts) / total
         tensor = np.zeros((3, 3))
         for m, p, inertia in parts:
@@ -687,7 +715,48 @@ class _Tree:
             tensor += inertia + m * (float(d @ d) * np.eye(3) - np.outer(d, d))
         x, y, z = (float(v) for v in np.asarray(com))
         rows = tuple((float(row[0]), float(row[1]), float(row[2])) for row in tensor)
-        return Inertial(total, Origin(xyz=(x, y, z)), (rows[0], rows[1], rows[2]))
+        return Inertial(total, Origin(xyz=(x, y, z)), (rows[0], rows[1], rows[2])), meshed
+
+    def mesh_mass_properties(self, body: str, shape: Shape, attrs) -> tuple[float, np.ndarray, np.ndarray] | None:
+        """A mesh geom's mass, centre of mass and inertia about it (geom frame) as MuJoCo computes
+        them: the closed mesh's volume at the geom's density (1000 kg/m^3 unless set) or its
+        ``mass``, integrated exactly (trimesh); ``None`` when the file is missing or not closed.
+
+        MuJoCo's own default for a mesh (``inertia="legacy"``) over-counts a non-convex mesh's
+        volume; the exact integral is used and a note says so (``inertia="exact"`` in the
+        ``<mesh>`` makes MuJoCo agree). ``"convex"`` integrates the convex hull; ``"shell"`` is
+        left to the notes.
+        """
+        mesh_name = attrs.get("mesh")
+        mode = self.r.mesh_inertia.get(mesh_name, "legacy")
+        try:
+            import trimesh
+
+            loaded = trimesh.load(shape.filename, force="mesh", process=True)
+        except Exception:  # a missing or unreadable file: the notes name the body
+            return None
+        if not isinstance(loaded, trimesh.Trimesh):
+            return None
+        mesh = loaded
+        if shape.scale is not None:
+            mesh.apply_scale(shape.scale)
+        if mode == "shell" or not mesh.is_volume:
+            return None
+        if mode == "convex":
+            mesh = mesh.convex_hull
+        elif mode == "legacy" and not mesh.is_convex:
+            self.r.notes.append(
+                f"mesh {mesh_name!r} of body {body!r} is not convex: its mass is integrated exactly "
+                f'({mesh.volume:.6g} m^3), where MuJoCo\'s default (inertia="legacy") over-counts its volume; '
+                'inertia="exact" in its <mesh> makes MuJoCo agree'
+            )
+        volume = float(mesh.volume)
+        mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * volume
+        if mass <= 0.0 or volume <= 0.0:
+            return None
+        # trimesh's moment of inertia is about the centre of mass at unit density
+        inertia = np.asarray(mesh.moment_inertia, dtype=float) * (mass / volume) / float(mesh.density)
+        return mass, np.asarray(mesh.center_mass, dtype=float), inertia
 
     def shape(self, geom, attrs, body: str, shift) -> Shape | None:
         r = self.r
@@ -916,10 +985,12 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     except ValueError as exc:  # a number attribute that is not one
         raise reader.fail(str(exc)) from None
     if tree.mesh_notes:
+        bodies = ", ".join(repr(name) for name in dict.fromkeys(tree.mesh_notes))
         reader.notes.append(
-            f"{tree.mesh_notes} mesh geom(s) in bodies without <inertial>: neither mobmanip nor Pinocchio integrates "
-            "a mesh (Pinocchio gives such a body 1 kg and a unit tensor), so the dynamic measures are not the robot's; "
-            "give those bodies an <inertial>"
+            f"mesh geom(s) of bodies without <inertial> whose files are missing or not closed: {bodies}; MuJoCo gives "
+            "them the mass of their meshes' volume, mobmanip cannot integrate them (Pinocchio would give such a body "
+            "1 kg and a unit tensor), so the dynamic measures are not the robot's: give them the mesh files or an "
+            "<inertial>"
         )
     for parent in list(reader.root.iter()):  # keyframes are sized for the file's joints, not mobmanip's model
         for section in parent.findall("keyframe"):
