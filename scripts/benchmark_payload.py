@@ -13,9 +13,7 @@ interleaved rounds (``time.process_time``), wall time beside them:
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +25,7 @@ POSTURE_BOUND, MAP_BOUND = 0.010, 2.0
 
 def run(quick: bool = False, rounds: int | None = None) -> int:
     import mobmanip
+    from benchmark_retime import interleaved
     from mobmanip.analysis.payload import payload
     from mobmanip.analysis.payload_map import payload_map
     from mobmanip.support.threads import limit_threads
@@ -52,22 +51,12 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
                 np.nanmax(payload_map(paper, grid, "planar", acceleration=(1.0, 0.0), constraints=floor).mass)
             ),
         }
-        for call in cases.values():  # warm-up
-            call()
-        times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
-        values = {}
-        for _ in range(rounds):
-            for name, call in cases.items():
-                wall, cpu = time.perf_counter(), time.process_time()
-                values[name] = call()
-                times[name].append((time.process_time() - cpu, time.perf_counter() - wall))
+        timed, values = interleaved(cases, rounds)
     print(f"payload, medians of {rounds} interleaved rounds (one BLAS thread)")
     print(f"{'case':36s} {'CPU ms':>9s} {'wall ms':>9s} {'heaviest kg':>12s}")
-    medians = {}
-    for name, pairs in times.items():
-        medians[name] = statistics.median(p[0] for p in pairs)
-        wall = statistics.median(p[1] for p in pairs)
-        print(f"{name:36s} {1e3 * medians[name]:9.1f} {1e3 * wall:9.1f} {values[name]:12.4f}")
+    for name, (cpu, wall) in timed.items():
+        print(f"{name:36s} {1e3 * cpu:9.1f} {1e3 * wall:9.1f} {values[name]:12.4f}")
+    medians = {name: cpu for name, (cpu, _) in timed.items()}
     if not quick:
         posture = max(medians[name] for name in list(cases)[:3])
         whole = medians[f"paper robot map {side} x {side}, floor"]

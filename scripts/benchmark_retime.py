@@ -122,10 +122,24 @@ def _panda_case(n: int):
     return ours, theirs
 
 
-def _timed(call) -> tuple[float, float, float]:
-    wall, cpu = time.perf_counter(), time.process_time()
-    value = call()
-    return time.process_time() - cpu, time.perf_counter() - wall, value
+def interleaved(cases: dict, rounds: int) -> tuple[dict[str, tuple[float, float]], dict]:
+    """Each case called once to warm up, then ``rounds`` rounds calling every case in turn (a busy
+    moment of the machine falls on all alike): name -> (median CPU s, median wall s), and each
+    case's last value."""
+    for call in cases.values():
+        call()
+    times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
+    values = {}
+    for _ in range(rounds):
+        for name, call in cases.items():
+            wall, cpu = time.perf_counter(), time.process_time()
+            values[name] = call()
+            times[name].append((time.process_time() - cpu, time.perf_counter() - wall))
+    medians = {
+        name: (statistics.median(p[0] for p in pairs), statistics.median(p[1] for p in pairs))
+        for name, pairs in times.items()
+    }
+    return medians, values
 
 
 def run(quick: bool = False, rounds: int | None = None) -> int:
@@ -148,22 +162,12 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
         cases["Panda, limits only"] = ours
         if theirs is not None:
             cases["Panda, limits only (toppra)"] = theirs
-        for call in cases.values():  # warm-up
-            call()
-        times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
-        durations = {}
-        for _ in range(rounds):
-            for name, call in cases.items():
-                cpu, wall, durations[name] = _timed(call)
-                times[name].append((cpu, wall))
+        medians, durations = interleaved(cases, rounds)
     print(f"retime, {n} samples, medians of {rounds} interleaved rounds (one BLAS thread)")
     print(f"{'case':32s} {'CPU ms':>8s} {'wall ms':>8s} {'duration s':>11s}")
-    medians = {}
-    for name, pairs in times.items():
-        cpu = statistics.median(p[0] for p in pairs)
-        wall = statistics.median(p[1] for p in pairs)
-        medians[name] = cpu
+    for name, (cpu, wall) in medians.items():
         print(f"{name:32s} {1e3 * cpu:8.1f} {1e3 * wall:8.1f} {durations[name]:11.6f}")
+    medians = {name: cpu for name, (cpu, _) in medians.items()}
     if "Panda, limits only (toppra)" in medians:
         ratio = medians["Panda, limits only"] / medians["Panda, limits only (toppra)"]
         gap = durations["Panda, limits only"] / durations["Panda, limits only (toppra)"] - 1.0

@@ -12,7 +12,7 @@ program, so a 15 x 15 map of the paper's robot takes about a second.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,19 +29,14 @@ CELL_STATUSES = ("bounded", "unbounded", "infeasible", "unreachable")
 
 
 @dataclass(frozen=True)
-class PayloadMap:
-    """The payload at every object position of a polar grid (see the module's docstring).
+class _Payloads:
+    """The payload program's answers at many postures.
 
     Attributes:
         robot, task: what was asked.
-        angle_deg: the object's directions from the platform's heading (deg), (A,).
-        distance: its horizontal distances from the arms' reference point (m), (D,).
-        mass: the heaviest object at each position (kg), NaN where there is none (see
-            ``status``), (A, D).
-        status: each position's :data:`CELL_STATUSES` entry, (A, D).
-        limit: what stops the mass at each bounded position (the payload's reading), "" elsewhere, (A, D).
-        configurations: the robot's configuration holding each position (the home posture where
-            out of reach), (A, D, nq).
+        mass: the heaviest object at each posture (kg), NaN where there is none (see ``status``).
+        status: each posture's outcome: :data:`CELL_STATUSES`.
+        limit: what stops the mass at each bounded posture (the payload's reading), "" elsewhere.
         acceleration: the object's acceleration asked for (zeros: held still), (m,).
         static: whether the robot was held static too.
         constraints: the constraints, as described in JSON.
@@ -49,15 +44,45 @@ class PayloadMap:
 
     robot: str
     task: str
-    angle_deg: np.ndarray
-    distance: np.ndarray
     mass: np.ndarray
     status: np.ndarray
     limit: np.ndarray
     acceleration: np.ndarray
     static: bool
     constraints: tuple[dict, ...]
-    configurations: np.ndarray
+
+    def _asked(self) -> dict:
+        """The JSON of what was asked, and the masses (no NaN: ``null`` where there is none)."""
+        bounded = self.status == "bounded"
+        masses = np.empty(self.mass.shape, dtype=object)
+        masses[bounded] = [float(m) for m in self.mass[bounded]]
+        return {
+            "robot": self.robot,
+            "task": self.task,
+            "acceleration": self.acceleration.tolist(),
+            "static": self.static,
+            "constraints": [dict(c) for c in self.constraints],
+            "mass": masses.tolist(),
+            "status": self.status.tolist(),
+            "limit": self.limit.tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class PayloadMap(_Payloads):
+    """The payload at every object position of a polar grid (see the module's docstring); its
+    arrays are (A, D), one entry per angle and distance.
+
+    Attributes:
+        angle_deg: the object's directions from the platform's heading (deg), (A,).
+        distance: its horizontal distances from the arms' reference point (m), (D,).
+        configurations: the robot's configuration holding each position (the home posture where
+            out of reach), (A, D, nq).
+    """
+
+    angle_deg: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    distance: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    configurations: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
 
     def best(self) -> tuple[int, int] | None:
         """(angle index, distance index) of the heaviest bounded cell, or ``None``."""
@@ -83,19 +108,9 @@ class PayloadMap:
         """JSON-ready (no NaN: a position without a payload has ``null``)."""
         best = self.best()
         return {
-            "robot": self.robot,
-            "task": self.task,
-            "acceleration": self.acceleration.tolist(),
-            "static": self.static,
-            "constraints": [dict(c) for c in self.constraints],
+            **self._asked(),
             "angle_deg": self.angle_deg.tolist(),
             "distance": self.distance.tolist(),
-            "mass": [
-                [None if s != "bounded" else float(m) for m, s in zip(row, srow)]
-                for row, srow in zip(self.mass, self.status)
-            ],  # fmt: skip
-            "status": self.status.tolist(),
-            "limit": self.limit.tolist(),
             "best": None
             if best is None
             else {
@@ -165,29 +180,15 @@ def payload_map(
 
 
 @dataclass(frozen=True)
-class PayloadAlong:
-    """The payload at every sample of a motion's path (see :func:`payload_along`).
+class PayloadAlong(_Payloads):
+    """The payload at every sample of a motion's path (see :func:`payload_along`); its arrays are
+    (N,), one entry per sample.
 
     Attributes:
-        robot, task: what was asked.
         t: the samples' time stamps (s), (N,).
-        mass: the heaviest object at each sample's posture (kg), NaN where there is none, (N,).
-        status: each sample's outcome (``"bounded"``, ``"unbounded"``, ``"infeasible"``), (N,).
-        limit: what stops the mass at each bounded sample, "" elsewhere, (N,).
-        acceleration: the object's acceleration asked for at every sample (zeros: held still), (m,).
-        static: whether the robot was held static too.
-        constraints: the constraints, as described in JSON.
     """
 
-    robot: str
-    task: str
-    t: np.ndarray
-    mass: np.ndarray
-    status: np.ndarray
-    limit: np.ndarray
-    acceleration: np.ndarray
-    static: bool
-    constraints: tuple[dict, ...]
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def lightest(self) -> int | None:
         """The sample whose payload is the least among the bounded ones, or ``None``."""
@@ -204,15 +205,8 @@ class PayloadAlong:
         """JSON-ready (no NaN: a sample without a payload has ``null``)."""
         k = self.lightest()
         return {
-            "robot": self.robot,
-            "task": self.task,
-            "acceleration": self.acceleration.tolist(),
-            "static": self.static,
-            "constraints": [dict(c) for c in self.constraints],
+            **self._asked(),
             "t": self.t.tolist(),
-            "mass": [None if s != "bounded" else float(m) for m, s in zip(self.mass, self.status)],
-            "status": self.status.tolist(),
-            "limit": self.limit.tolist(),
             "lightest": None
             if k is None
             else {

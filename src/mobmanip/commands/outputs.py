@@ -309,16 +309,21 @@ def retime_outputs(
     return [str(p) for p in paths]
 
 
+def write_rows_csv(path: str | Path, header: list[str], rows: list[list]) -> Path:
+    """A CSV of rows already written as text (numbers by ``repr``, empty where there is none)."""
+    with atomic_output(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+    return Path(path)
+
+
 def write_payload_along(result: PayloadAlong, out_dir: str | Path) -> list[str]:
     """payload_along.csv (one row per sample) and payload_along.json
     (:meth:`mobmanip.analysis.payload_map.PayloadAlong.to_dict`) in ``out_dir``; returns the paths."""
     out = Path(out_dir)
     paths = [out / "payload_along.csv", out / "payload_along.json"]
-    header, rows = result.table()
-    with atomic_output(paths[0], "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        writer.writerows(rows)
+    write_rows_csv(paths[0], *result.table())
     write_json(paths[1], result.to_dict())
     return [str(p) for p in paths]
 
@@ -332,11 +337,7 @@ def write_payload_map(result: PayloadMap, out_dir: str | Path) -> list[str]:
 
     out = Path(out_dir)
     paths = [out / "payload_map.csv", out / "payload_map.json", out / "payload_map.png"]
-    header, rows = result.table()
-    with atomic_output(paths[0], "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        writer.writerows(rows)
+    write_rows_csv(paths[0], *result.table())
     write_json(paths[1], result.to_dict())
     save_and_close(payload_map_figure(result), paths[2], dpi=100, bbox_inches="tight")
     return [str(p) for p in paths]

@@ -134,17 +134,12 @@ def _force(value: float) -> str:
 def run_map(args) -> int:
     """``--map``: the payload over a polar grid of object positions."""
     from ..analysis.payload_map import CELL_STATUSES, payload_map
-    from ..errors import UsageError
     from ..support.files import check_output, output_directory
     from ..sweep.spec import SweepGrid, parse_grid
     from .common import robot_spec_from_args
     from .outputs import write_payload_map
 
-    if args.q or args.posture:
-        raise UsageError("--map holds the object at every grid position in the posture the sweep finds: "
-                         "--q and --posture do not apply")  # fmt: skip
-    if args.json:
-        raise UsageError("--map writes its JSON with its other files: give --out DIR")
+    _refuse_one_posture(args, "--map", "holds the object at every grid position in the posture the sweep finds")
     from ..robot.model import load_robot
 
     robot = load_robot(robot_spec_from_args(args))
@@ -175,17 +170,13 @@ def run_map(args) -> int:
 def run_along(args) -> int:
     """``--trajectory``: the payload at every sample of a motion."""
     from ..analysis.payload_map import payload_along
-    from ..errors import UsageError
     from ..motion.trajectory import read_trajectory
     from ..robot.model import load_robot
     from ..support.files import check_output, note_input, output_directory
     from .common import robot_spec_from_args
     from .outputs import write_payload_along
 
-    if args.q or args.posture:
-        raise UsageError("--trajectory holds the object at every sample's posture: --q and --posture do not apply")
-    if args.json:
-        raise UsageError("--trajectory writes its JSON with its CSV: give --out DIR")
+    _refuse_one_posture(args, "--trajectory", "holds the object at every sample's posture")
     note_input(args.trajectory)
     robot = load_robot(robot_spec_from_args(args))
     motion = read_trajectory(robot, args.trajectory)
@@ -207,3 +198,14 @@ def run_along(args) -> int:
         for written in write_payload_along(found, args.out):
             print(f"wrote {written}")
     return 0
+
+
+def _refuse_one_posture(args, option: str, why: str) -> None:
+    """A map or a path has its own postures and writes its JSON beside its other files: --q,
+    --posture and --json are refused with ``option``, saying ``why``."""
+    from ..errors import UsageError
+
+    if args.q or args.posture:
+        raise UsageError(f"{option} {why}: --q and --posture do not apply")
+    if args.json:
+        raise UsageError(f"{option} writes its JSON with its other files: give --out DIR")

@@ -149,6 +149,21 @@ def contact_shares(
     return normal, particular.reshape(d, 2)  # each tyre of the axle half of its lateral force
 
 
+def _checked_floor(ground: GroundAlong, mu: float | None, what: str) -> tuple[float, np.ndarray, np.ndarray]:
+    """The friction coefficient (``mu``, else the support's), checked, and ``ground``'s resultant
+    forces and moments, for a reading of the floor along a motion.
+
+    Raises:
+        ArgumentError: ``mu`` not a positive finite number; ``ground`` without resultant forces.
+    """
+    mu = ground.support.mu if mu is None else mu
+    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not (math.isfinite(mu) and mu > 0.0):
+        raise ArgumentError(f"{what} needs a friction coefficient mu > 0, got {mu!r}")
+    if ground.force is None or ground.moment is None:
+        raise ArgumentError("the floor along the motion has no resultant forces (from ground_along)")
+    return float(mu), ground.force, ground.moment
+
+
 def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None = None) -> TractionAlong:
     """Every contact's force and every driven wheel's traction use along a motion.
 
@@ -161,11 +176,7 @@ def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None
         ArgumentError: ``mu`` not a positive finite number.
     """
     support = ground.support
-    mu = support.mu if mu is None else mu
-    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not (math.isfinite(mu) and mu > 0.0):
-        raise ArgumentError(f"the traction along a motion needs a friction coefficient mu > 0, got {mu!r}")
-    if ground.force is None or ground.moment is None:
-        raise ArgumentError("the floor along the motion has no resultant forces (from ground_along)")
+    mu, force, moment = _checked_floor(ground, mu, "the traction along a motion")
     driven = np.array([c.driven for c in support.contacts])
     n, d = len(trajectory), int(driven.sum())
     normal, tangential, use = np.zeros((n, len(driven))), np.zeros((n, d, 2)), np.zeros((n, d))
@@ -173,7 +184,7 @@ def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None
         q = trajectory.q[i]
         points = support.world_points((float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))))
         normal[i], tangential[i], use[i] = contact_forces(
-            points, driven, ground.force[i], ground.moment[i], ground.zmp[i], float(mu), support.stiffness
+            points, driven, force[i], moment[i], ground.zmp[i], mu, support.stiffness
         )
     names = tuple(c.name for c in support.contacts)
     wheels = tuple(c.name for c in support.contacts if c.driven)
@@ -230,11 +241,7 @@ def floor_time_scaling(
     from .ground import floor_wrench_terms
 
     support = ground.support
-    mu = support.mu if mu is None else mu
-    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not (math.isfinite(mu) and mu > 0.0):
-        raise ArgumentError(f"the floor's time-scaling needs a friction coefficient mu > 0, got {mu!r}")
-    if ground.force is None or ground.moment is None:
-        raise ArgumentError("the floor along the motion has no resultant forces (from ground_along)")
+    mu, force, moment = _checked_floor(ground, mu, "the floor's time-scaling")
     mass = float(robot.spec.object_mass if object_mass is None else object_mass)
     driven = np.array([c.driven for c in support.contacts])
     wheels = [c.name for c in support.contacts if c.driven]
@@ -249,7 +256,7 @@ def floor_time_scaling(
         q = trajectory.q[i]
         pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
         rest = floor_wrench_terms(robot, q, np.zeros(robot.nx), mass, np.zeros(6), np.zeros((6, robot.nx)))[2]
-        moving = np.r_[ground.force[i], ground.moment[i]] - rest
+        moving = np.r_[force[i], moment[i]] - rest
         points = support.world_points(pose)
         bounds: list[tuple[float, str]] = []
         # the zero-moment point: n . N <= (n . p - margin) F_z, linear in b = k^2
