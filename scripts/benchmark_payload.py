@@ -27,8 +27,8 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
     import mobmanip
     from benchmark_retime import interleaved
     from mobmanip.analysis.payload import payload
-    from mobmanip.analysis.payload_map import payload_map
     from mobmanip.support.threads import limit_threads
+    from mobmanip.sweep.payload_map import payload_map
     from mobmanip.sweep.spec import SweepGrid
     from mobmanip.terms.constraints.floor import Floor
 

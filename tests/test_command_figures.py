@@ -217,7 +217,7 @@ def test_retime_figure():
 def test_payload_map_figure():
     """The payload map: a polar heat map with its colour bar in kg, the heaviest cell marked, the
     acceleration asked for with its unit in the title."""
-    from mobmanip.analysis.payload_map import payload_map
+    from mobmanip.sweep.payload_map import payload_map
     from mobmanip.sweep.spec import SweepGrid
     from mobmanip.viz.payload_figure import payload_map_figure
 

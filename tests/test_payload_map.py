@@ -1,4 +1,4 @@
-"""The payload over a map of object positions (``mobmanip.analysis.payload_map``, ``payload --map``).
+"""The payload over a map of object positions (``mobmanip.sweep.payload_map``, ``payload --map``).
 
 References: at sampled positions the cell's mass against the bisection on the mass over the
 capacity sets that existed before the payload program (tests/test_payload.py's reference), and the
@@ -16,7 +16,7 @@ import pytest
 
 from hostile_util import assert_one_line_error, run_cli
 from mobmanip import analyze, load_robot
-from mobmanip.analysis.payload_map import payload_map
+from mobmanip.sweep.payload_map import payload_map
 from mobmanip.sweep.spec import SweepGrid
 from mobmanip.terms.constraints.floor import Floor
 from test_payload import RTOL, bisection
@@ -90,8 +90,8 @@ def test_command_writes_the_map(tmp_path, capfd):
 @pytest.fixture(scope="module")
 def along():
     """The paper robot's arms turning through five postures, the object held still on the floor."""
-    from mobmanip.analysis.payload_map import payload_along
     from mobmanip.motion.trajectory import trajectory_from_samples
+    from mobmanip.sweep.payload_map import payload_along
 
     robot = load_robot("planar_dual_arm")
     home = robot.hold_configuration()

@@ -24,7 +24,6 @@ from numpy.typing import ArrayLike
 from ..support.files import atomic_output, write_json
 
 if TYPE_CHECKING:
-    from ..analysis.payload_map import PayloadAlong, PayloadMap
     from ..coordination.carry import TeamCarryResult, TeamCarryRun
     from ..errors import CarryFailed
     from ..motion.carry import CarryResult
@@ -35,6 +34,7 @@ if TYPE_CHECKING:
     from ..placement.maps import PlacementMap
     from ..placement.site import SiteResult
     from ..robot.model import Robot
+    from ..sweep.payload_map import PayloadAlong, PayloadMap
     from ..sweep.results import SweepResult
     from ..team import Team
 
@@ -320,7 +320,7 @@ def write_rows_csv(path: str | Path, header: list[str], rows: list[list]) -> Pat
 
 def write_payload_along(result: PayloadAlong, out_dir: str | Path) -> list[str]:
     """payload_along.csv (one row per sample) and payload_along.json
-    (:meth:`mobmanip.analysis.payload_map.PayloadAlong.to_dict`) in ``out_dir``; returns the paths."""
+    (:meth:`mobmanip.sweep.payload_map.PayloadAlong.to_dict`) in ``out_dir``; returns the paths."""
     out = Path(out_dir)
     paths = [out / "payload_along.csv", out / "payload_along.json"]
     write_rows_csv(paths[0], *result.table())
@@ -330,7 +330,7 @@ def write_payload_along(result: PayloadAlong, out_dir: str | Path) -> list[str]:
 
 def write_payload_map(result: PayloadMap, out_dir: str | Path) -> list[str]:
     """payload_map.csv (one row per object position), payload_map.json
-    (:meth:`mobmanip.analysis.payload_map.PayloadMap.to_dict`) and payload_map.png
+    (:meth:`mobmanip.sweep.payload_map.PayloadMap.to_dict`) and payload_map.png
     (:func:`mobmanip.viz.payload_figure.payload_map_figure`) in ``out_dir``; returns the paths."""
     from ..viz.figures import save_and_close
     from ..viz.payload_figure import payload_map_figure

@@ -133,8 +133,8 @@ def _force(value: float) -> str:
 
 def run_map(args) -> int:
     """``--map``: the payload over a polar grid of object positions."""
-    from ..analysis.payload_map import CELL_STATUSES, payload_map
     from ..support.files import check_output, output_directory
+    from ..sweep.payload_map import CELL_STATUSES, payload_map
     from ..sweep.spec import SweepGrid, parse_grid
     from .common import robot_spec_from_args
     from .outputs import write_payload_map
@@ -169,10 +169,10 @@ def run_map(args) -> int:
 
 def run_along(args) -> int:
     """``--trajectory``: the payload at every sample of a motion."""
-    from ..analysis.payload_map import payload_along
     from ..motion.trajectory import read_trajectory
     from ..robot.model import load_robot
     from ..support.files import check_output, note_input, output_directory
+    from ..sweep.payload_map import payload_along
     from .common import robot_spec_from_args
     from .outputs import write_payload_along
 

@@ -12,7 +12,7 @@ from .sweep_plot import _polar_panel
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ..analysis.payload_map import PayloadMap
+    from ..sweep.payload_map import PayloadMap
 
 
 def payload_map_figure(result: PayloadMap) -> Figure:

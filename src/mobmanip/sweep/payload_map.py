@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..analysis.payload import payload
 from ..errors import ArgumentError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
-from ..sweep.runner import sweep_configurations, sweep_postures
-from ..sweep.spec import SweepGrid
 from ..terms.constraints.base import Constraint
-from .payload import payload
+from .runner import sweep_configurations, sweep_postures
+from .spec import SweepGrid
 
 #: What a cell of the map can be: the program's outcomes, and out of the arms' reach.
 CELL_STATUSES = ("bounded", "unbounded", "infeasible", "unreachable")
