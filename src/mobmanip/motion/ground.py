@@ -22,12 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..engine.stacked_linalg import cross3
 from ..errors import NumericalError
 from ..robot.model import Robot
 from ..robot.support import Support, polygon_margin, robot_support
 from ..robot.tasks import get_task
 from ..terms.dynamics import placed_end_effectors
-from ..terms.grasp import GRAVITY, HeldObject
+from ..terms.grasp import GRAVITY, HeldObject, skew
 from .trajectory import Trajectory
 
 
@@ -106,21 +107,17 @@ def floor_wrench_terms(
     offset, linear = np.zeros(6), np.zeros((6, S.shape[1]))
     offset[:3] = rate0[:3] + object_mass * a0[:3] - (mass + object_mass) * g
     linear[:3] = rate1[:3] + object_mass * a1[:3]
-    offset[3:] = rate0[3:] + np.cross(c, rate0[:3]) + object_mass * np.cross(c_o, a0[:3])
+    offset[3:] = rate0[3:] + cross3(c, rate0[:3]) + object_mass * cross3(c_o, a0[:3])
     weight = np.zeros(6)
     weight[:3] = -(mass + object_mass) * g
-    weight[3:] = -(np.cross(c, mass * g) + np.cross(c_o, object_mass * g))
+    weight[3:] = -(cross3(c, mass * g) + cross3(c_o, object_mass * g))
     offset[3:] += weight[3:]
-    linear[3:] = rate1[3:] + _skew(c) @ rate1[:3] + object_mass * _skew(c_o) @ a1[:3]
+    linear[3:] = rate1[3:] + skew(c) @ rate1[:3] + object_mass * skew(c_o) @ a1[:3]
     if object_mass > 0.0:
         inertia = HeldObject.between(hands, object_mass).inertia
         offset[3:] += inertia @ a0[3:]
         linear[3:] += inertia @ a1[3:]
     return offset, linear, weight
-
-
-def _skew(r: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 def ground_along(

@@ -29,11 +29,13 @@ velocities the limits allow) does not depend on x.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..engine.stacked_linalg import cross3
 from ..errors import ConfigurationError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
@@ -97,8 +99,10 @@ class MotionTerms:
         """xi(q, x) - P J_u^+ (Wdot^T v_o - d/dt(J_u) x): the bias the at-rest formulas take, (nx,)."""
         return self.xi - self.P @ (np.linalg.pinv(self.J_u) @ (self.grasp_drift - self.drift))
 
-    @property
+    @cached_property
     def W_pinv(self) -> np.ndarray:
+        """W^+, (m k, m): computed once (the effort map and the floor's rows take it and its
+        transpose, ``pinv(W^T) = pinv(W)^T``)."""
         return np.linalg.pinv(self.W)
 
     def joint_accelerations(self, a_o: np.ndarray) -> np.ndarray:
@@ -125,7 +129,7 @@ class MotionTerms:
     def effort_map(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`torques` with the object's acceleration the hands give, as ``L @ xdot + bias``:
         (L (nx, nx), bias (nx,)), the bias holding gravity and every velocity term."""
-        to_object = np.linalg.pinv(self.W.T)
+        to_object = self.W_pinv.T
         hands_to_joints = self.J_u.T @ self.W_pinv
         L = np.linalg.solve(self.Q, self.P + hands_to_joints @ (self.M_o @ (to_object @ self.J_u)))
         wrench = self.M_o @ (to_object @ (self.drift - self.grasp_drift)) + self.c_o + self.g_o
@@ -207,11 +211,11 @@ def motion_terms(
     if held_object is None:
         offset_rates = hand_linear - hand_linear.mean(axis=0)
     else:
-        offset_rates = np.cross(omega, obj.offsets)
+        offset_rates = cross3(omega, obj.offsets)
     W_rate = grasp_matrix_rate(task, offset_rates)
     inertia = obj.inertia
     c_full = np.zeros(6)
-    c_full[3:] = np.cross(omega, inertia @ omega)
+    c_full[3:] = cross3(omega, inertia @ omega)
     return MotionTerms(
         q=q,
         x=x,
@@ -243,12 +247,11 @@ def grasp_matrix_rate(task: str | TaskSpace, offset_rates: np.ndarray) -> np.nda
     """
     task = get_task(task)
     rates = np.atleast_2d(np.asarray(offset_rates, dtype=float))
-    rows = list(task.rows)
     blocks = []
     for rate in rates:
         full = np.zeros((6, 6))
         full[3:, :3] = skew(rate)
-        blocks.append(full[np.ix_(rows, rows)])
+        blocks.append(task.restrict(full))
     return np.hstack(blocks)
 
 

@@ -118,7 +118,7 @@ def path_rows(
             labels = [f"velocity {names[j]}" for j in moves] + [f"effort {n}" for n in names] * 2
             kinds = ["velocity"] * len(moves) + ["effort"] * (2 * nx)
             if floor_rows is not None:
-                to_object = np.linalg.pinv(terms.W.T)
+                to_object = terms.W_pinv.T
                 a0, a1 = np.zeros(6), np.zeros((6, nx))
                 a0[rows_task] = to_object @ (terms.drift - terms.grasp_drift)
                 a1[rows_task] = to_object @ terms.J_u
@@ -228,16 +228,22 @@ def _polygon(rows: PathRows) -> Polygon:
         return []
     moving = scale > 0.0
     ca, cb, d = (v[moving] / scale[moving] for v in (rows.ca, rows.cb, rows.d))
-    tol = ROW_TOLERANCE * (1.0 + np.abs(d))
+    d_tol = d + ROW_TOLERANCE * (1.0 + np.abs(d))
     for _ in range(len(d) + 1):
-        vertices = np.asarray([(a, b) for a, b, _ in polygon])
-        broken = (np.outer(ca, vertices[:, 0]) + np.outer(cb, vertices[:, 1])).max(axis=1) - d - tol
+        a, b = np.array([vertex[0] for vertex in polygon]), np.array([vertex[1] for vertex in polygon])
+        broken = (ca[:, None] * a + cb[:, None] * b).max(axis=1) - d_tol
         k = int(np.argmax(broken))
         if broken[k] <= 0.0:
             return polygon
         polygon = _clip(polygon, float(ca[k]), float(cb[k]), float(d[k]))
         if not polygon:
             return []
+        # a row this polygon keeps, every later (smaller) one keeps: only the broken ones are left
+        still = broken > 0.0
+        still[k] = False
+        ca, cb, d, d_tol = ca[still], cb[still], d[still], d_tol[still]
+        if not len(d):
+            return polygon
     return polygon
 
 

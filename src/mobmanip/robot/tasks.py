@@ -34,6 +34,12 @@ class TaskSpace:
         """``rows`` as an integer array, for fancy indexing."""
         return np.array(self.rows)
 
+    def restrict(self, full: np.ndarray) -> np.ndarray:
+        """The task's rows and columns of a 6 x 6 matrix (``full`` itself for the 6-D task)."""
+        if self.rows == (0, 1, 2, 3, 4, 5):
+            return full
+        return full[np.ix_(self.rows, self.rows)]
+
     @property
     def angular(self) -> np.ndarray:
         return np.array([r >= 3 for r in self.rows])

@@ -33,8 +33,7 @@ def grasp_block(task: str | TaskSpace, offset: np.ndarray) -> np.ndarray:
     task = get_task(task)
     full = np.eye(6)
     full[3:, :3] = skew(np.asarray(offset, dtype=float))
-    rows = list(task.rows)
-    return full[np.ix_(rows, rows)]
+    return task.restrict(full)
 
 
 def grasp_matrix(task: str | TaskSpace, offsets: np.ndarray) -> np.ndarray:
@@ -109,8 +108,7 @@ class HeldObject:
         full = np.zeros((6, 6))
         full[:3, :3] = self.mass * np.eye(3)
         full[3:, 3:] = self.inertia
-        rows = list(task.rows)
-        return full[np.ix_(rows, rows)]
+        return task.restrict(full)
 
     def gravity_vector(self, task: str | TaskSpace, gravity: np.ndarray = GRAVITY) -> np.ndarray:
         """g_o in Eq. 22: the wrench the grasps must supply to hold the object still, (m,).
