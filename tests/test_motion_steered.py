@@ -133,3 +133,17 @@ def test_trajectory_estimates_on_a_rolling_path(tricycle, rng):
     S_pinv = np.linalg.pinv(tricycle.null_space(qs[middle]))
     share = S_pinv @ tricycle.null_space_rate(qs[middle], traj.x[middle]) @ traj.x[middle]
     assert np.abs(share).max() > 0.5
+
+
+def test_path_terms_keep_sdot_on_a_rolling_path(tricycle, rng):
+    """retime's stacked rows (path_terms) against motion_terms where Sdot x_s is not zero: the
+    path's samples on the rolling path, x_s = x(t) and x_ss = xdot."""
+    from test_retime import assert_path_terms_match
+
+    q, x, xdot = _state(tricycle, rng)
+    times = np.linspace(-0.1, 0.1, 5)
+    qs = rolling_path(tricycle, q, x, xdot, times, substeps=20)
+    path = trajectory_from_samples(tricycle, times, qs, x + times[:, None] * xdot, np.tile(xdot, (5, 1)))
+    turning = tricycle.null_space_rate(qs[2], path.x[2]) @ path.x[2]
+    assert np.abs(turning).max() > 0.1  # the term under test is there
+    assert_path_terms_match(tricycle, path, "spatial", 1.5)

@@ -433,3 +433,61 @@ def _driving(path, robot):
     """The samples where the platform drives at least a tenth of its fastest (the test's own)."""
     rates = np.array([np.linalg.norm((robot.null_space(q) @ x)[:2]) for q, x in zip(path.q, path.x)])
     return set(np.flatnonzero(rates >= 0.1 * rates.max()).tolist())
+
+
+@pytest.mark.parametrize(
+    "name, task, mass",
+    [("tiago_dual", "spatial", 2.0), ("tiago_dual", "planar_rigid", 0.0), ("planar_dual_arm", "planar", 2.0)],
+)
+def test_path_terms_equal_the_reduced_dynamics_at_every_sample(tiago, name, task, mass):
+    """Two routes to the rows: the stacked Newton-Euler terms retime uses (path_terms) against the
+    reduced dynamics P, xi and the grasp of :func:`motion_terms` with :func:`floor_wrench_terms`,
+    sample by sample, on a path that drives along an arc (S changes with the heading) while the
+    arms move."""
+    robot = tiago if name == "tiago_dual" else load_robot(name)
+    if name == "tiago_dual":
+        path = _drive_and_reach(robot, n=9)
+    else:  # the paper robot along an arc, its arms swinging
+        home = robot.hold_configuration()
+        s = np.linspace(0.0, 2.0, 9)
+        yaw = 0.3 * s
+        q = np.tile(home, (9, 1))
+        q[:, 0], q[:, 1] = 2.0 * np.sin(yaw), 2.0 * (1.0 - np.cos(yaw))
+        q[:, 2], q[:, 3] = np.cos(yaw), np.sin(yaw)
+        for arm in robot.arms:
+            for joint in arm.joint_names:
+                q[:, robot.model.joints[robot.model.getJointId(joint)].idx_q] += 0.2 * np.sin(s)
+        known = [n for n in robot.joint_names if "wheel" not in n]
+        path = trajectory_from_samples(robot, s, q, known_joints=known)
+    terms = assert_path_terms_match(robot, path, task, mass)
+    assert np.abs(terms.effort_b).max() > 1e-3 * np.abs(terms.effort_0).max()  # the velocity terms are there
+
+
+def assert_path_terms_match(robot, path, task, mass):
+    """path_terms (stacked Newton-Euler) against motion_terms' effort map and floor_wrench_terms
+    (the reduced dynamics P, xi and the grasp), sample by sample, to 1e-10 of their scale."""
+    from mobmanip.motion.ground import floor_wrench_terms
+    from mobmanip.motion.in_motion import motion_terms
+    from mobmanip.motion.path_terms import path_terms
+    from mobmanip.robot.tasks import get_task
+
+    terms = path_terms(robot, path, get_task(task), mass, wrench=True)
+    for i in range(len(path)):
+        q, x_s, x_ss = path.q[i], path.x[i], path.xdot[i]
+        reference = motion_terms(robot, q, x_s, task, object_mass=mass)
+        L, moving = reference.effort_map()
+        static = reference.static_torques()
+        scale = max(np.abs(static).max(), np.abs(L @ x_s).max())  # the paper robot's gravity is 0
+        assert np.allclose(terms.effort_0[i], static, rtol=0, atol=1e-10 * scale)
+        assert np.allclose(terms.effort_a[i], L @ x_s, rtol=0, atol=1e-10 * scale)
+        assert np.allclose(terms.effort_b[i], L @ x_ss + moving - static, rtol=0, atol=1e-10 * scale)
+        rows = list(get_task(task).rows)
+        a0, a1 = np.zeros(6), np.zeros((6, robot.nx))
+        a0[rows] = reference.W_pinv.T @ (reference.drift - reference.grasp_drift)
+        a1[rows] = reference.W_pinv.T @ reference.J_u
+        offset, linear, weight = floor_wrench_terms(robot, q, x_s, mass, a0, a1)
+        size = np.abs(weight).max()
+        assert np.allclose(terms.wrench_0[i], weight, rtol=0, atol=1e-10 * size)
+        assert np.allclose(terms.wrench_a[i], linear @ x_s, rtol=0, atol=1e-10 * size)
+        assert np.allclose(terms.wrench_b[i], linear @ x_ss + offset - weight, rtol=0, atol=1e-10 * size)
+    return terms

@@ -41,10 +41,8 @@ import numpy as np
 from ..errors import ArgumentError, NumericalError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
-from ..support.progress import progress_bar
 from .carry_floor import CarryFloor, FloorRows
-from .ground import floor_wrench_terms
-from .in_motion import motion_terms
+from .path_terms import path_terms
 from .trajectory import Trajectory
 
 #: The largest speed-up of the path parameter the solver looks at, s' <= this (the original
@@ -96,40 +94,31 @@ def path_rows(
     task_space = get_task(task or robot.spec.default_task)
     mass = float(robot.spec.object_mass if object_mass is None else object_mass)
     floor_rows = None if floor is None else FloorRows.build(robot, mass, floor, floor.resolve(robot))
+    terms = path_terms(robot, trajectory, task_space, mass, wrench=floor_rows is not None, progress=progress)
     vlim = np.asarray(robot.velocity_limits, dtype=float)
     elim = np.asarray(robot.effort_limits, dtype=float)
     names = robot.reduced_velocity_names
     nx = robot.nx
-    rows_task = list(task_space.rows)
+    efforts = [f"effort {n}" for n in names] * 2
     out = []
-    with progress_bar(len(trajectory), desc=f"retime {robot.name}", unit="point", show=progress) as bar:
-        for i in range(len(trajectory)):
-            bar.update(1)
-            q, x_s, x_ss = trajectory.q[i], trajectory.x[i], trajectory.xdot[i]
-            terms = motion_terms(robot, q, x_s, task_space, object_mass=mass)
-            static = terms.static_torques()
-            L, moving = terms.effort_map()  # moving: gravity and the velocity terms at s' = 1
-            T_a = L @ x_s
-            T_b = L @ x_ss + moving - static
-            moves = np.flatnonzero(x_s != 0.0)
-            ca = [np.zeros(len(moves)), T_a, -T_a]
-            cb = [x_s[moves] ** 2, T_b, -T_b]
-            d = [vlim[moves] ** 2, elim - static, elim + static]
-            labels = [f"velocity {names[j]}" for j in moves] + [f"effort {n}" for n in names] * 2
-            kinds = ["velocity"] * len(moves) + ["effort"] * (2 * nx)
-            if floor_rows is not None:
-                to_object = terms.W_pinv.T
-                a0, a1 = np.zeros(6), np.zeros((6, nx))
-                a0[rows_task] = to_object @ (terms.drift - terms.grasp_drift)
-                a1[rows_task] = to_object @ terms.J_u
-                offset, linear, resting = floor_wrench_terms(robot, q, x_s, mass, a0, a1)
-                R, r = floor_rows.at(q)
-                ca.append(R @ (linear @ x_s))
-                cb.append(R @ (linear @ x_ss + offset - resting))
-                d.append(r - R @ resting)
-                labels += floor_rows.labels
-                kinds += floor_rows.kinds
-            out.append(PathRows(np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels), tuple(kinds)))
+    for i in range(len(trajectory)):
+        x_s = trajectory.x[i]
+        T_a, T_b, static = terms.effort_a[i], terms.effort_b[i], terms.effort_0[i]
+        moves = np.flatnonzero(x_s != 0.0)
+        ca = [np.zeros(len(moves)), T_a, -T_a]
+        cb = [x_s[moves] ** 2, T_b, -T_b]
+        d = [vlim[moves] ** 2, elim - static, elim + static]
+        labels = [f"velocity {names[j]}" for j in moves] + efforts
+        kinds = ["velocity"] * len(moves) + ["effort"] * (2 * nx)
+        if floor_rows is not None:
+            R, r = floor_rows.at(trajectory.q[i])
+            resting = terms.wrench_0[i]  # type: ignore[index]
+            ca.append(R @ terms.wrench_a[i])  # type: ignore[index]
+            cb.append(R @ terms.wrench_b[i])  # type: ignore[index]
+            d.append(r - R @ resting)
+            labels += floor_rows.labels
+            kinds += floor_rows.kinds
+        out.append(PathRows(np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels), tuple(kinds)))
     return out
 
 
