@@ -186,22 +186,55 @@ def payload(
     """
     q = robot.check_configuration(q)
     task_space = get_task(task or robot.spec.default_task)
-    a = _checked_acceleration(acceleration, task_space.dim, task_space.name)
+    a = checked_acceleration(acceleration, task_space.dim, task_space.name)
     constraints = tuple(constraints)
+    shape = _unit_object(robot, q, object)
+    unloaded: list[MeasureTerms] = []
+
+    def terms_of(mass: float) -> MeasureTerms:
+        # the robot's terms once; only the object (and the constraints' rows) change with the mass
+        if not unloaded:
+            unloaded.append(_terms(robot, q, task_space.name, shape, mass, decoupled, constraints))
+            return unloaded[0]
+        return _with_object(unloaded[0], scaled_object(shape, mass), constraints)
+
+    return heaviest(
+        terms_of,
+        a,
+        name=robot.name,
+        task=task_space.name,
+        reduced_names=tuple(robot.reduced_velocity_names),
+        constraints=constraints,
+        static=static,
+    )
+
+
+def heaviest(
+    terms_of: Callable[[float], MeasureTerms],
+    acceleration: np.ndarray,
+    *,
+    name: str,
+    task: str,
+    reduced_names: tuple[str, ...],
+    constraints: tuple[Constraint, ...],
+    static: bool = False,
+) -> Payload:
+    """The program behind :func:`payload` for any terms that hold an object of a given mass: one
+    robot's, or a team's (:func:`mobmanip.team.payload.team_payload`).
+
+    Args:
+        terms_of: the terms (with the constraints' rows) holding the object at a mass (kg); called
+            first at mass 0.
+        acceleration: the object's acceleration, checked, (m,).
+        name: who holds it, for the result. task, reduced_names, constraints: as the result
+            states them.
+        static: as :func:`payload`.
+    """
+    a = acceleration
     if static and np.any(a):
         raise ArgumentError("a static robot holds the object still: give no acceleration with static")
-    shape = _unit_object(robot, q, object)
-    stacks: list[CapacityRows] = []
-    terms: list[MeasureTerms] = []
-    for m in _MASSES:
-        # the robot's terms once; only the object (and the constraints' rows) change with the mass
-        t = (
-            _terms(robot, q, task_space.name, shape, m, decoupled, constraints)
-            if not terms
-            else _with_object(terms[0], _scaled(shape, m), constraints)
-        )
-        terms.append(t)
-        stacks.append(capacity_rows(t, "acceleration"))
+    terms = [terms_of(m) for m in _MASSES]
+    stacks = [capacity_rows(t, "acceleration") for t in terms]
     A, lo_rows, hi_rows, lo, hi = _program_rows(stacks, terms, a)
     if static:
         lo[stacks[0].columns["xdot"]] = hi[stacks[0].columns["xdot"]] = 0.0
@@ -209,10 +242,10 @@ def payload(
     cost = np.zeros(A.shape[1])
     cost[-1] = 1.0
     common: dict[str, Any] = dict(
-        robot=robot.name,
-        task=task_space.name,
+        robot=name,
+        task=task,
         acceleration=a,
-        reduced_names=tuple(robot.reduced_velocity_names),
+        reduced_names=reduced_names,
         constraints=tuple(c.describe() for c in constraints),
         static=static,
     )
@@ -234,9 +267,7 @@ def payload(
     labels = first.labels
     # a label that states a bound depending on the mass (a reserve's share): read at the optimum's mass
     if labels != stacks[1].labels and mass <= OBJECT_MASS[1]:
-        labels = capacity_rows(
-            _terms(robot, q, task_space.name, shape, mass, decoupled, constraints), "acceleration"
-        ).labels
+        labels = capacity_rows(terms_of(mass), "acceleration").labels
     slack = hi_rows[n_eq:] - A[n_eq:] @ z
     tight = slack <= 1e-7 * (np.abs(hi_rows[n_eq:]) + np.abs(A[n_eq:]) @ np.abs(z) + 1e-12)
     chosen |= _unloaded_wheels(labels, chosen, tight, first.model)
@@ -254,7 +285,13 @@ def payload(
 
 def _terms(robot, q, task, shape, mass, decoupled, constraints) -> MeasureTerms:
     return terms_at(
-        robot, q, task, held_object=_scaled(shape, mass), decoupled=decoupled, constraints=constraints, check=False
+        robot,
+        q,
+        task,
+        held_object=scaled_object(shape, mass),
+        decoupled=decoupled,
+        constraints=constraints,
+        check=False,
     )
 
 
@@ -284,7 +321,7 @@ def _unloaded_wheels(labels: tuple[str, ...], chosen: np.ndarray, tight: np.ndar
     return out
 
 
-def _checked_acceleration(acceleration: Iterable[float] | None, dim: int, task: str) -> np.ndarray:
+def checked_acceleration(acceleration: Iterable[float] | None, dim: int, task: str) -> np.ndarray:
     if acceleration is None:
         return np.zeros(dim)
     try:
@@ -300,8 +337,15 @@ def _checked_acceleration(acceleration: Iterable[float] | None, dim: int, task: 
 
 def _unit_object(robot: Robot, q: np.ndarray, given: HeldObject | None) -> HeldObject:
     """The object's shape at 1 kg: its inertia per kilogram, its centre and grasp offsets."""
-    if given is None:
-        return default_object(robot, q, 1.0)
+    return default_object(robot, q, 1.0) if given is None else unit_object(given)
+
+
+def unit_object(given: HeldObject) -> HeldObject:
+    """``given``'s shape at 1 kg: its inertia per kilogram, its centre and grasp offsets.
+
+    Raises:
+        ArgumentError: an object of zero mass with an inertia (no inertia per kilogram).
+    """
     if given.mass > 0.0:
         return replace(given, mass=1.0, inertia=np.asarray(given.inertia, dtype=float) / given.mass)
     if np.any(given.inertia):
@@ -309,7 +353,8 @@ def _unit_object(robot: Robot, q: np.ndarray, given: HeldObject | None) -> HeldO
     return replace(given, mass=1.0)
 
 
-def _scaled(shape: HeldObject, mass: float) -> HeldObject:
+def scaled_object(shape: HeldObject, mass: float) -> HeldObject:
+    """The object of ``shape`` (:func:`unit_object`) at ``mass`` kg: its inertia scaled with it."""
     return replace(shape, mass=float(mass), inertia=shape.inertia * float(mass))
 
 

@@ -21,6 +21,7 @@ from .common import (
     add_measure_option,
     add_progress_option,
     add_work_option,
+    binding_summary,
     cluster_executor,
     describe_reaches,
     floor_constraints,
@@ -72,6 +73,12 @@ def register(sub) -> None:
     parser.add_argument("description", metavar="TEAM.toml", help="the team description (robots, grasps, object)")
     add_measure_option(parser)
     add_floor_options(parser)
+    parser.add_argument(
+        "--payload",
+        action="store_true",
+        help="also the heaviest object the team can hold still where it stands (the object's shape per kilogram "
+        "as given; with --ground, every robot on its own floor) and what stops it",
+    )
     parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
     parser.add_argument("--plot", metavar="FILE", help="write a figure (top view; with a sweep, its curves too)")
     parser.add_argument(
@@ -196,6 +203,14 @@ def _run(args, offsets, data, executor, constraints=()) -> int:
         print(f"  {name}: worst normalised torque {worst:.4f}")
     if sharing.limiting:
         print(f"  most loaded joint: {sharing.limiting}")
+    if args.payload:
+        from ..team.payload import team_payload
+
+        found = team_payload(team, constraints=constraints)
+        print(found.summary())
+        if found.status == "bounded":
+            print(f"  what stops it: {binding_summary(list(found.reading))}")
+        document["payload"] = found.to_dict()
     sweep = None
     if offsets is not None:
         from ..team.heading_jobs import HeadingJob, run_heading_sweep
