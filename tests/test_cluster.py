@@ -26,6 +26,8 @@ SWEEP = ["sweep", "planar_dual_arm", "--angle", "0:360:181", "--distance", "0.6:
 PLACE = ["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
          "--map-cells", "9", "--no-progress"]  # fmt: skip
 TEAM = ["team", str(ROOT / "examples" / "beam_team.toml"), "--polytope", "--sweep-heading=-40:40:17", "--no-progress"]
+PAYLOAD = ["payload", "planar_dual_arm", "--map", "--angle=-60:60:9", "--distance", "0.3:0.9:9", "--accel", "1,0",
+           "--mu", "0.5"]  # fmt: skip
 
 
 def free_port() -> int:
@@ -161,7 +163,19 @@ def test_site_on_a_cluster_equals_the_serial_run(cluster, tmp_path):
     assert (tmp_path / "dask" / "site.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.mark.parametrize("command", [SWEEP, [*PLACE, "--map", "MAP"], [*TEAM, "--json", "team.json"]])
+def test_a_payload_map_on_a_cluster_equals_the_serial_run(cluster, tmp_path):
+    address, _ = cluster
+    serial = finish(cli([*PAYLOAD, "--out", str(tmp_path / "serial")]))
+    dask = finish(cli([*PAYLOAD, "--out", str(tmp_path / "dask"), "--dask", address]))
+    assert dask.replace("dask", "serial") == serial  # the same report
+    assert "81 object positions (81 bounded)" in serial
+    for name in ("payload_map.csv", "payload_map.json"):
+        assert (tmp_path / "dask" / name).read_bytes() == (tmp_path / "serial" / name).read_bytes(), name
+
+
+@pytest.mark.parametrize(
+    "command", [SWEEP, [*PLACE, "--map", "MAP"], [*TEAM, "--json", "team.json"], [*PAYLOAD, "--out", "pmap"]]
+)
 def test_an_unreachable_scheduler_is_refused_in_one_line_within_10_s(command, tmp_path):
     started = time.monotonic()
     process = cli([*command, "--dask", f"tcp://127.0.0.1:{free_port()}"], cwd=tmp_path)

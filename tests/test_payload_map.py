@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -16,6 +17,7 @@ import pytest
 
 from hostile_util import assert_one_line_error, run_cli
 from mobmanip import analyze, load_robot
+from mobmanip.errors import ArgumentError
 from mobmanip.sweep.payload_map import payload_map
 from mobmanip.sweep.spec import SweepGrid
 from mobmanip.terms.constraints.floor import Floor
@@ -82,6 +84,31 @@ def test_command_writes_the_map(tmp_path, capfd):
     assert_one_line_error(code, err, "--map", "--posture")
     code, _, err = run_cli(capfd, "payload", "planar_dual_arm", "--map", "--distance", "0:1:3")
     assert_one_line_error(code, err, "--distance")
+    code, _, err = run_cli(capfd, "payload", "planar_dual_arm", "--dask", "local:1")
+    assert_one_line_error(code, err, "--dask", "--map")
+    urdf = Path(__file__).resolve().parents[1] / "robots" / "planar_dual_arm.urdf"
+    code, _, err = run_cli(
+        capfd, "payload", "--urdf", urdf, "--ee", "arm_right_tool_link", "--map", "--dask", "local:1"
+    )
+    assert_one_line_error(code, err, "--dask", "--urdf")
+
+
+def test_a_map_on_an_executor_equals_the_map_here(paper):
+    robot, _ = paper
+    """The cells sent out in tasks (a one-thread pool standing in for the cluster, whose own run is
+    tests/test_cluster.py) come back the same and in their places."""
+    import concurrent.futures as cf
+
+    grid = SweepGrid(np.linspace(-60.0, 60.0, 5), np.linspace(0.3, 0.9, 8))
+    here = payload_map(robot, grid, acceleration=(1.0, 0.0), constraints=(Floor(mu=0.5),))
+    with cf.ThreadPoolExecutor(1) as pool:  # one thread: the workers share this process's robot
+        there = payload_map(robot, grid, acceleration=(1.0, 0.0), constraints=(Floor(mu=0.5),), executor=pool,
+                            robot_source="planar_dual_arm")  # fmt: skip
+    np.testing.assert_array_equal(there.mass, here.mass)
+    np.testing.assert_array_equal(there.limit, here.limit)
+    assert len(np.unique(here.mass)) > 20  # the cells differ: a misplaced one would show
+    with pytest.raises(ArgumentError, match="robot_source"):
+        payload_map(robot, grid, executor=cf.ThreadPoolExecutor(1))
 
 
 # ----- along a path -----

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .common import (
+    add_dask_option,
     add_floor_options,
     add_robot_options,
     binding_summary,
@@ -51,6 +52,7 @@ def register(sub) -> None:
                          help="its distance from the arms' reference point, m (default %(default)s)")  # fmt: skip
     mapping.add_argument("--postures", choices=["auto", "planar", "ik"], default="auto",
                          help="how the arms hold each position, as `mobmanip sweep` (default %(default)s)")  # fmt: skip
+    add_dask_option(mapping)
     mapping.add_argument(
         "--out", metavar="DIR", help="with --map: write payload_map.csv, payload_map.json, payload_map.png; "
         "with --trajectory: payload_along.csv, payload_along.json"
@@ -92,6 +94,10 @@ def run(args) -> int:
         from ..errors import UsageError
 
         raise UsageError("give --map (object positions) or --trajectory (a path's samples), not both")
+    if args.dask is not None and not args.map:
+        from ..errors import UsageError
+
+        raise UsageError("--dask runs a payload map on a cluster: give --map too")
     if args.map:
         return run_map(args)
     if args.trajectory:
@@ -136,7 +142,7 @@ def run_map(args) -> int:
     from ..support.files import check_output, output_directory
     from ..sweep.payload_map import CELL_STATUSES, payload_map
     from ..sweep.spec import SweepGrid, parse_grid
-    from .common import robot_spec_from_args
+    from .common import cluster_executor, robot_for_workers, robot_spec_from_args
     from .outputs import write_payload_map
 
     _refuse_one_posture(args, "--map", "holds the object at every grid position in the posture the sweep finds")
@@ -148,8 +154,17 @@ def run_map(args) -> int:
         out = output_directory(args.out)
         for name in ("payload_map.csv", "payload_map.json", "payload_map.png"):
             check_output(out / name)
-    found = payload_map(robot, grid, args.task, acceleration=parse_acceleration(args.accel),
-                        constraints=floor_constraints(args), static=args.static, postures=args.postures)  # fmt: skip
+    source = None
+    if args.dask is not None:
+        if args.robot is None:
+            from ..errors import UsageError
+
+            raise UsageError("--dask: the workers load the robot by its name or spec path; give ROBOT, not --urdf")
+        source = robot_for_workers(args.robot)
+    with cluster_executor(args) as executor:  # connected (or refused) before any work
+        found = payload_map(robot, grid, args.task, acceleration=parse_acceleration(args.accel),
+                            constraints=floor_constraints(args), static=args.static, postures=args.postures,
+                            executor=executor, robot_source=source)  # fmt: skip
     counts = {status: int((found.status == status).sum()) for status in CELL_STATUSES}
     print(f"robot {robot.name}, task {found.task}: {found.status.size} object positions "
           f"({', '.join(f'{n} {s}' for s, n in counts.items() if n)})")  # fmt: skip

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError, UnreachableObjectError
-from ..robot.model import Robot, load_robot
+from ..robot.model import robot_in_process
 from .maps import PlacementMap, placement_map
 
 #: Rows of the grid per task by default.
@@ -61,17 +61,6 @@ class MapJob:
         """(first row, stop row) of each task."""
         n, k = len(self.y), self.rows_per_task
         return [(s, min(s + k, n)) for s in range(0, n, k)]
-
-
-_ROBOTS: dict[str, Robot] = {}
-
-
-def robot_in_process(name: str) -> Robot:
-    """The robot ``name``, loaded once per (worker) process: the last one asked for is kept."""
-    if name not in _ROBOTS:
-        _ROBOTS.clear()
-        _ROBOTS[name] = load_robot(name)
-    return _ROBOTS[name]
 
 
 def run_band(job: MapJob, start: int, stop: int) -> tuple[int, PlacementMap | None]:

@@ -42,9 +42,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, MobmanipError, SpecError, TaskError
-from ..robot.model import Robot, load_robot
+from ..robot.model import Robot, load_robot, robot_in_process
 from ..robot.support_spec import check_mu
-from .map_jobs import robot_in_process
 from .optimize import DEFAULT_STARTS, place
 
 #: Most object positions one site may hold, whatever the work bound (a list or a grid).

@@ -697,6 +697,18 @@ def load_robot(spec_or_name: RobotSpec | str | Path, *, strict: bool | None = No
     return robot
 
 
+_ROBOTS_IN_PROCESS: dict[str, Robot] = {}
+
+
+def robot_in_process(name: str) -> Robot:
+    """The robot ``name`` (a built-in name or a spec path), loaded once per process: a worker
+    process of a map keeps the last one asked for, so its tasks do not load it again."""
+    if name not in _ROBOTS_IN_PROCESS:
+        _ROBOTS_IN_PROCESS.clear()
+        _ROBOTS_IN_PROCESS[name] = load_robot(name)
+    return _ROBOTS_IN_PROCESS[name]
+
+
 def description_of(robot: Robot) -> RobotDescription:
     """The robot's description: the one it was loaded with, else its spec's file read again.
 

@@ -6,19 +6,23 @@ The grid is a sweep's (:class:`mobmanip.sweep.spec.SweepGrid`): the object at an
 platform's heading and a horizontal distance from the arms' reference point, the arms holding it
 in the posture the sweep finds there (the paper's closed form, or inverse kinematics from the hold
 posture); a position the arms cannot reach has no payload. Each reachable position is one linear
-program, so a 15 x 15 map of the paper's robot takes about a second.
+program, so a 15 x 15 map of the paper's robot takes about a second. On an executor (a Dask
+client's, ``payload --map --dask``) the reachable positions go out in tasks of
+:data:`CELLS_PER_TASK` configurations, each worker loading the robot once by its name or spec
+path; every cell is the same program either way, so the map is the same.
 """
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.payload import payload
+from ..analysis.payload import checked_acceleration, payload
 from ..errors import ArgumentError
-from ..robot.model import Robot
+from ..robot.model import Robot, robot_in_process
 from ..robot.tasks import get_task
 from ..terms.constraints.base import Constraint
 from .runner import sweep_configurations, sweep_postures
@@ -26,6 +30,44 @@ from .spec import SweepGrid
 
 #: What a cell of the map can be: the program's outcomes, and out of the arms' reach.
 CELL_STATUSES = ("bounded", "unbounded", "infeasible", "unreachable")
+#: Positions per task on an executor: each is one program of a few milliseconds, against a
+#: scheduler's millisecond or so per task.
+CELLS_PER_TASK = 16
+
+
+@dataclass(frozen=True)
+class PayloadCells:
+    """Some of a map's positions, by values a worker process can load them from (a task).
+
+    Attributes:
+        robot: the robot's built-in name or spec path (absolute, for workers elsewhere).
+        configurations: the configurations holding the positions, (n, nq).
+        task, acceleration, constraints, static: as :func:`mobmanip.analysis.payload.payload`.
+    """
+
+    robot: str
+    configurations: np.ndarray
+    task: str
+    acceleration: tuple[float, ...] | None
+    constraints: tuple[Constraint, ...]
+    static: bool
+
+
+def payload_cells(cells: PayloadCells) -> list[tuple[str, float, str]]:
+    """Each position's (status, mass or NaN, what stops it)."""
+    robot = robot_in_process(cells.robot)
+    return _cells(robot, cells.configurations, cells.task, cells.acceleration, cells.constraints, cells.static)
+
+
+def _cells(robot, configurations, task, acceleration, constraints, static) -> list[tuple[str, float, str]]:
+    out = []
+    for q in configurations:
+        found = payload(robot, q, task, acceleration=acceleration, constraints=constraints, static=static)
+        if found.mass is None:  # unbounded or infeasible
+            out.append((found.status, np.nan, ""))
+        else:
+            out.append((found.status, float(found.mass), "; ".join(found.reading)))
+    return out
 
 
 @dataclass(frozen=True)
@@ -131,6 +173,8 @@ def payload_map(
     constraints: Iterable[Constraint] = (),
     static: bool = False,
     postures: str = "auto",
+    executor: cf.Executor | None = None,
+    robot_source: str | None = None,
 ) -> PayloadMap:
     """The payload at every object position of ``grid`` (its angles and distances; one heading,
     the wheels' limits as they are).
@@ -140,9 +184,14 @@ def payload_map(
         grid: the positions (:class:`mobmanip.sweep.spec.SweepGrid`, its other axes single values of 1).
         task, acceleration, constraints, static: as :func:`mobmanip.analysis.payload.payload`.
         postures: how the arms hold each position, as a sweep's (``"auto"``, ``"planar"``, ``"ik"``).
+        executor: run the positions' programs there (e.g. a Dask client's executor) in tasks of
+            :data:`CELLS_PER_TASK`; ``None``: in this process.
+        robot_source: the robot's built-in name or spec path, from which the executor's workers
+            load it (required with ``executor``).
 
     Raises:
-        ArgumentError: a grid with more than one heading or a wheel-limit scale other than 1.
+        ArgumentError: a grid with more than one heading or a wheel-limit scale other than 1; an
+            executor without ``robot_source``.
     """
     if grid.shape[2:] != (1, 1, 1) or grid.wheel_velocity_scale[0] != 1.0 or grid.wheel_effort_scale[0] != 1.0:
         raise ArgumentError("a payload map covers object positions: one heading and the wheels' own limits")
@@ -154,15 +203,26 @@ def payload_map(
     mass = np.full(a_count * d_count, np.nan)
     status = np.full(a_count * d_count, "unreachable", dtype=object)
     limit = np.full(a_count * d_count, "", dtype=object)
-    asked = None
-    for k in np.flatnonzero(reachable):
-        found = payload(robot, qs[k], task_space.name, acceleration=acceleration, constraints=constraints,
-                        static=static)  # fmt: skip
-        asked = found.acceleration
-        status[k] = found.status
-        if found.status == "bounded":
-            mass[k] = found.mass
-            limit[k] = "; ".join(found.reading)
+    a = checked_acceleration(acceleration, task_space.dim, task_space.name)
+    asked = tuple(float(v) for v in a)
+    cells = np.flatnonzero(reachable)
+    if executor is None:
+        found = _cells(robot, qs[cells], task_space.name, asked, constraints, static)
+    else:
+        if robot_source is None:
+            raise ArgumentError(
+                "a payload map on an executor needs robot_source: the name or spec path its workers load"
+            )
+        tasks = [
+            executor.submit(
+                payload_cells, PayloadCells(robot_source, qs[part], task_space.name, asked, constraints, static)
+            )
+            for part in np.array_split(cells, max(1, -(-len(cells) // CELLS_PER_TASK)))
+            if len(part)
+        ]
+        found = [cell for task in tasks for cell in task.result()]
+    for k, (cell_status, cell_mass, cell_limit) in zip(cells, found):
+        status[k], mass[k], limit[k] = cell_status, cell_mass, cell_limit
     shape = (a_count, d_count)
     return PayloadMap(
         robot=robot.name,
@@ -172,7 +232,7 @@ def payload_map(
         mass=mass.reshape(shape),
         status=status.reshape(shape).astype(str),
         limit=limit.reshape(shape).astype(str),
-        acceleration=np.zeros(task_space.dim) if asked is None else asked,
+        acceleration=a,
         static=static,
         constraints=tuple(c.describe() for c in constraints),
         configurations=qs.reshape(*shape, -1),
@@ -240,27 +300,17 @@ def payload_along(
     """
     task_space = get_task(task or robot.spec.default_task)
     constraints = tuple(constraints)
-    n = len(trajectory.t)
-    mass = np.full(n, np.nan)
-    status = np.full(n, "", dtype=object)
-    limit = np.full(n, "", dtype=object)
-    asked = np.zeros(task_space.dim)
-    for k in range(n):
-        found = payload(robot, trajectory.q[k], task_space.name, acceleration=acceleration, constraints=constraints,
-                        static=static)  # fmt: skip
-        asked = found.acceleration
-        status[k] = found.status
-        if found.status == "bounded":
-            mass[k] = found.mass
-            limit[k] = "; ".join(found.reading)
+    a = checked_acceleration(acceleration, task_space.dim, task_space.name)
+    found = _cells(robot, trajectory.q, task_space.name, tuple(float(v) for v in a), constraints, static)
+    status, mass, limit = (np.array(column) for column in zip(*found))
     return PayloadAlong(
         robot=robot.name,
         task=task_space.name,
         t=np.asarray(trajectory.t, dtype=float).copy(),
-        mass=mass,
+        mass=mass.astype(float),
         status=status.astype(str),
         limit=limit.astype(str),
-        acceleration=asked,
+        acceleration=a,
         static=static,
         constraints=tuple(c.describe() for c in constraints),
     )
