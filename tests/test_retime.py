@@ -292,13 +292,6 @@ def test_an_end_that_cannot_stand_still_is_named(tiago):
     )
 
 
-def test_the_floor_refuses_what_it_does_not_model():
-    omni = load_robot("planar_dual_arm_omni")
-    path = _planar_path(omni)
-    with pytest.raises(MobmanipError, match="differential-drive"):
-        retime(omni, path, floor=CarryFloor())
-
-
 def _planar_path(robot, n=21):
     home = robot.hold_configuration()
     s = np.linspace(0.0, 1.0, n)

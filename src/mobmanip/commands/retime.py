@@ -18,8 +18,8 @@ velocity and effort limits (efforts of the motion with the object held between t
 paper's policy) and, with --ground, the floor of `carry --ground`: the zero-moment point
 --zmp-margin inside the support polygon, every support loaded (with --reserve R: at least R of
 its equal share), each driven wheel within friction (mu; --no-traction: no traction rows). The
-floor covers differential-drive platforms. Solved exactly on the samples by reachability
-analysis (as TOPP-RA): a constant s'' between samples.
+floor covers every platform on wheels (a skid-steer's path must keep its heading). Solved exactly
+on the samples by reachability analysis (as TOPP-RA): a constant s'' between samples.
 
 --out DIR writes retimed.csv (the path at its fastest timing, an input of `mobmanip trajectory`),
 retime.json (duration, what binds where, the profile), retime.png (s' with its limit curve) and

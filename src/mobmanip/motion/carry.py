@@ -55,7 +55,7 @@ from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
-from .carry_floor import CarryFloor, floor_binding, floor_rows, solve_with_floor
+from .carry_floor import NO_TURN, CarryFloor, floor_binding, floor_rows, solve_with_floor
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
 from .carry_step import CarryDiagnosis as CarryDiagnosis
@@ -462,7 +462,8 @@ def _run(
                             solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g, labels
                         )
                     if binding is not None:
-                        diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=True)
+                        helps = binding != NO_TURN  # a turn the base cannot make is no matter of speed
+                        diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=helps)
                     else:
                         diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
                     partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],

@@ -13,11 +13,21 @@ N(x) = (z_f F_x - M_y, M_x + z_f F_y), also affine. So, exactly for that wrench:
 - no support unloads: the compliant normal forces (equally stiff contacts under a rigid platform,
   as the floor constraint's :func:`~mobmanip.terms.constraints.floor.compliant_sharing`) are a
   linear map of (F_z, N), each >= the reserve's share of the weight;
-- traction: the casters are frictionless, so the driven wheels carry (F_x, F_y, M_z); a
-  differential drive's two wheels share their lateral force as the floor constraint's compliant
-  sharing does, half each (equal tyres: t = P (F_x, F_y, M_z), P the pseudo-inverse; the QP keeps
-  a split variable s for the rows' shape, which nothing moves), and each wheel's tangential force
-  lies in the pyramid with ``faces`` faces inscribed in its cone, scaled by 1 - reserve.
+- traction: the casters are frictionless, so the driven wheels carry (F_x, F_y, M_z). Each
+  wheel pushes along the floor where its mechanism lets it (:func:`traction_components`): a
+  wheel with a motor both ways (along its rolling direction its torque's force, across it a
+  constraint force), a mecanum wheel only across its rollers, a free-rolling wheel (a tricycle's
+  rear wheels) only across its rolling direction. The wheels share the force as equally stiff
+  tyres under a rigid platform do: the least-norm split t = P (F_x, F_y, M_z), P the
+  pseudo-inverse (a differential drive's two wheels: half the lateral force each; the QP keeps a
+  split variable s for the rows' shape, which nothing moves). A wheel pushing both ways keeps its
+  force in the pyramid with ``faces`` faces inscribed in its cone, one pushing one way within
+  its cone (a segment), each scaled by 1 - reserve;
+- a skid-steer turns only by sliding its wheels sideways, so on the floor it keeps its heading
+  (:data:`NO_TURN`: two rows hold its turn rate at zero).
+
+Every platform that rolls on wheels is covered (differential drive, skid-steer, steered,
+omnidirectional on ``[support] wheels``); a fixed base is refused.
 
 The rows are over (x, s); :func:`floor_rows` gives them with a label per row naming what it
 keeps (the zero-moment point, a support, a wheel's traction) for the diagnosis.
@@ -32,6 +42,7 @@ import numpy as np
 
 from ..errors import ArgumentError, SpecError
 from ..platforms import a_platform
+from ..platforms.base import BASE_V
 from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
@@ -80,10 +91,9 @@ class CarryFloor:
 
     def resolve(self, robot: Robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces for ``robot``."""
-        if robot.wheel_platform is None or robot.platform.kind != "differential_drive":
+        if robot.wheel_platform is None:
             raise SpecError(
-                f"the floor in carry covers differential-drive platforms; "
-                f"{robot.name!r} has {a_platform(robot.platform.kind)}"
+                f"the floor needs a platform that moves on wheels; {robot.name!r} has {a_platform(robot.platform.kind)}"
             )
         support = self.support if self.support is not None else robot_support(robot)
         deepest = deepest_margin(support.polygon((0.0, 0.0, 0.0)))
@@ -133,7 +143,13 @@ def floor_rows(
     R, r, labels, _ = wrench_rows(robot, q, mass_o, floor, resolved)
     # over (x, s): the lateral split s is the compliant floor's own, half per tyre; no row moves it
     G = np.hstack([R @ w1, np.zeros((len(R), 1))])
-    return G, r - R @ w0, labels
+    g = r - R @ w0
+    turn = turning_row(robot, q)
+    if turn is not None:  # a skid-steer keeps its heading: both senses of the turn rate at zero
+        G = np.vstack([G, np.r_[turn, 0.0], np.r_[-turn, 0.0]])
+        g = np.r_[g, 0.0, 0.0]
+        labels = [*labels, *[NO_TURN] * 2]
+    return G, g, labels
 
 
 @dataclass(frozen=True)
@@ -233,28 +249,66 @@ def _platform_rows(
         kinds.append("contact")
 
     if mu is not None:
-        driven = [c for c, contact in enumerate(support.contacts) if contact.driven]
-        w = points[driven]
-        d = len(driven)
-        B = np.zeros((3, 2 * d))
-        B[0, 0::2], B[1, 1::2] = 1.0, 1.0
-        B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
-        _, sigma, vt = np.linalg.svd(B)
-        free = vt[int(np.sum(sigma > 1e-12 * sigma[0])) :]
-        if len(free) != 1:
-            raise SpecError(f"the floor in carry covers two driven wheels on one axle; this support has {d}")
+        components = traction_components(robot, support)
+        B = np.zeros((3, len(components)))
+        for k, (c, direction) in enumerate(components):
+            x, y = points[c]
+            B[:, k] = direction[0], direction[1], x * direction[1] - y * direction[0]
+        if np.linalg.matrix_rank(B) < 3:
+            raise SpecError(
+                f"{robot.name}'s wheels cannot hold the floor's sideways force and turning moment together "
+                f"(contacts {', '.join(support.contacts[c].name for c, _ in components)})"
+            )
         H = np.zeros((3, 6))
         H[0, 0], H[1, 1], H[2, 5] = 1.0, 1.0, 1.0
-        traction = np.linalg.pinv(B) @ H  # equal tyres: the minimum-norm split, half per tyre
-        tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
-        for i, c in enumerate(driven):
-            for u in pyramid_faces(faces, pose[2]):
-                # u . t_i - tilt fn_c <= 0
-                R_rows.append(u @ traction[2 * i : 2 * i + 2] - tilt * fn[c])
-                r_rows.append(0.0)
-                labels.append(f"traction of {support.contacts[c].name} within friction (mu = {mu:g})")
-                kinds.append("traction")
+        traction = np.linalg.pinv(B) @ H  # equally stiff tyres: the minimum-norm split
+        for c in dict.fromkeys(c for c, _ in components):
+            mine = [k for k, (owner, _) in enumerate(components) if owner == c]
+            label = f"traction of {support.contacts[c].name} within friction (mu = {mu:g})"
+            if len(mine) == 2:  # along the floor both ways: the pyramid inscribed in the cone
+                tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
+                rows = [u @ traction[mine] - tilt * fn[c] for u in pyramid_faces(faces, pose[2])]
+            else:  # one way only (rollers, or a wheel rolling free): the cone is a segment
+                reach = mu * (1.0 - floor.reserve)
+                rows = [traction[mine[0]] - reach * fn[c], -traction[mine[0]] - reach * fn[c]]
+            R_rows += rows
+            r_rows += [0.0] * len(rows)
+            labels += [label] * len(rows)
+            kinds += ["traction"] * len(rows)
     return np.array(R_rows), np.array(r_rows, dtype=float), tuple(labels), tuple(kinds)
+
+
+#: Why a base whose wheels scrub as it turns keeps its heading on the floor.
+NO_TURN = "no turn: a skid-steer turns only by sliding its wheels sideways, and on the floor no wheel slides"
+
+
+def turning_row(robot: Robot, q: np.ndarray) -> np.ndarray | None:
+    """The base's turn rate as a row over the reduced velocities (rad/s per unit of x), (nx,),
+    for a platform whose wheels scrub as it turns (a skid-steer's); ``None`` for the others, which
+    turn on rolling wheels."""
+    if not robot.platform.scrubs:
+        return None
+    return np.asarray(robot.null_space(q)[BASE_V[2]], dtype=float).copy()
+
+
+def traction_components(robot: Robot, support: Support) -> list[tuple[int, np.ndarray]]:
+    """The floor's tangential force components the contacts take, as (contact index, unit
+    direction in the platform frame): both axes for a wheel the floor may push any way along the
+    floor (a driven wheel's rolling force is its torque's, its sideways one a constraint force);
+    only the direction across a free direction for a mecanum wheel's rollers (``[support]
+    rollers``) or a wheel rolling free (:meth:`~mobmanip.platforms.base.Platform.free_rolling`,
+    a steered base's rear wheels); none for a caster."""
+    rolling = robot.platform.free_rolling()
+    out = []
+    for c, contact in enumerate(support.contacts):
+        if not contact.driven:
+            continue
+        free = contact.free if contact.free is not None else rolling.get(contact.name)
+        if free is None:
+            out += [(c, np.array([1.0, 0.0])), (c, np.array([0.0, 1.0]))]
+        else:
+            out.append((c, np.array([-free[1], free[0]]) / math.hypot(free[0], free[1])))
+    return out
 
 
 def robot_mass(robot: Robot) -> float:

@@ -62,6 +62,11 @@ class CarryDiagnosis:
                 f"{where} the hands cannot move as the path asks at this posture even without limits (a singular "
                 "posture); slowing down does not help: change the start posture or the path"
             )
+        if self.kind == "floor" and self.slowing_helps is False:
+            return (
+                f"{where} the floor binds: {self.joint}; the path needs the base to turn here, and slowing down does "
+                "not help (give the path a heading the base keeps, or carry it without --ground)"
+            )
         if self.kind == "floor":
             return (
                 f"{where} the floor binds: {self.joint} cannot hold together with the path and the limits; slowing "

@@ -38,10 +38,10 @@ from functools import partial
 
 import numpy as np
 
-from ..errors import ArgumentError, NumericalError
+from ..errors import ArgumentError, NumericalError, SpecError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
-from .carry_floor import CarryFloor, FloorRows
+from .carry_floor import NO_TURN, CarryFloor, FloorRows, turning_row
 from .path_terms import path_terms
 from .trajectory import Trajectory
 
@@ -88,12 +88,14 @@ def path_rows(
         trajectory: the path, its time stamps the path parameter s.
         task, object_mass: the task space and the object held between the hands (default: the
             spec's), as :func:`mobmanip.motion.trajectory_analysis.analyze_trajectory`.
-        floor: also keep the robot on its floor (differential drives, as ``carry``'s floor).
+        floor: also keep the robot on its floor (as ``carry``'s floor, every platform on wheels).
         progress: a progress bar over the grid points on standard error.
     """
     task_space = get_task(task or robot.spec.default_task)
     mass = float(robot.spec.object_mass if object_mass is None else object_mass)
     floor_rows = None if floor is None else FloorRows.build(robot, mass, floor, floor.resolve(robot))
+    if floor_rows is not None:
+        _check_no_turn(robot, trajectory)
     terms = path_terms(robot, trajectory, task_space, mass, wrench=floor_rows is not None, progress=progress)
     vlim = np.asarray(robot.velocity_limits, dtype=float)
     elim = np.asarray(robot.effort_limits, dtype=float)
@@ -120,6 +122,25 @@ def path_rows(
             kinds += floor_rows.kinds
         out.append(PathRows(np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels), tuple(kinds)))
     return out
+
+
+def _check_no_turn(robot: Robot, trajectory: Trajectory) -> None:
+    """A skid-steer's path on the floor drives straight (see :data:`~mobmanip.motion.carry_floor.NO_TURN`).
+
+    Raises:
+        SpecError: the path turns the base, at its first such sample.
+    """
+    if turning_row(robot, trajectory.q[0]) is None:
+        return
+    rates = np.array([turning_row(robot, q) @ x for q, x in zip(trajectory.q, trajectory.x)])
+    speeds = np.abs(trajectory.x).max(axis=1)
+    turns = np.abs(rates) > 1e-6 * np.maximum(speeds, 1e-300)  # a file's rounding is no turn
+    if np.any(turns):
+        i = int(np.argmax(np.where(turns, np.abs(rates), -1.0)))
+        raise SpecError(
+            f"the path turns {robot.name}'s base ({rates[i]:.4g} rad/s at sample {i}, t = {trajectory.t[i]:.6g} s, "
+            f"the fastest turn): {NO_TURN}; retime it without --ground, or give a path that drives straight"
+        )
 
 
 #: How each interval's constant s'' keeps the rows: ``"interpolation"`` at both of its ends (the

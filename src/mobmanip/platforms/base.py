@@ -158,6 +158,12 @@ class Platform(ABC):
         """(joint name, radius in m) of each wheel a figure draws."""
         return ()
 
+    def free_rolling(self) -> dict[str, tuple[float, float]]:
+        """The wheels that roll freely (no motor), by joint name, each with its rolling direction in
+        the platform frame's floor plane (unit (2,)): the floor pushes such a wheel across it only
+        (along it, only what the wheel's own spin takes). None by default."""
+        return {}
+
 
 @dataclass(frozen=True)
 class WheelsSpec:

@@ -171,6 +171,10 @@ class Steered(Platform):
     def wheels(self) -> tuple[tuple[str, float], ...]:
         return ((self.drive_name, self.radius),) + tuple((n, self.rear_radius) for n in self.rear_names)
 
+    def free_rolling(self) -> dict[str, tuple[float, float]]:
+        """The rear wheels, rolling along the platform's x axis (their axle is across it)."""
+        return {name: (1.0, 0.0) for name in self.rear_names}
+
 
 def _name(table: Mapping, key: str, where: str) -> str:
     value = table.get(key)
