@@ -136,18 +136,22 @@ def test_a_heading_sweep_on_the_floor(tmp_path):
     the grounded set's ray radii; along x the robot named as limiting it is one whose joint limits
     bind at the maximum (with each tyre carrying half of its axle's sideways force, both robots'
     arm efforts bind there beside the wheels' traction); turned by 10 deg the beam's reaches are
-    those of the team built at that heading."""
+    those of the team built at that heading. The headings run on a local Dask cluster of two
+    workers, each heading a task: the jobs travel pickled with their floor, and what comes back is
+    the reference's (tests/test_cluster.py holds a cluster's files equal to a serial run's)."""
     import json
 
     path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
     out = tmp_path / "s.json"
     run = _cli("team", str(path), "--measure", "dynamic_polytope", "--mu", "0.5", "--level", "--sweep-heading",
-               "0,10", "--json", str(out))  # fmt: skip
+               "0,10", "--json", str(out), "--dask", "local:2")  # fmt: skip
     assert run.returncode == 0, run.stderr
     points = json.loads(out.read_text())["heading_sweep"]["points"]
     P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure("dynamic_polytope")
     assert points[0]["offset_deg"] == 0.0
     np.testing.assert_allclose(points[0]["reach"]["dynamic_polytope"], [ray_radius(P, e) for e in np.eye(3)], rtol=1e-9)
+    ideal = analyze_team(BEAM, ("dynamic_polytope",)).measure("dynamic_polytope")
+    assert points[0]["reach"]["dynamic_polytope"][0] < 0.5 * ray_radius(ideal, np.eye(3)[0])  # the floor binds
     named = points[0]["limiting_robot"]["dynamic_polytope"][0]
     binding = P.straight_line_witness(np.eye(3)[0]).binding
     assert named == "" or any(label.startswith(f"{named}: ") and "effort limit" in label for label in binding)
@@ -163,24 +167,6 @@ def test_a_heading_sweep_on_the_floor(tmp_path):
     got = points[1]["reach"]["dynamic_polytope"]
     np.testing.assert_allclose(got, [ray_radius(turned, e) for e in np.eye(3)], rtol=1e-9)
     assert not np.allclose(got, points[0]["reach"]["dynamic_polytope"], rtol=1e-3)
-
-
-def test_a_heading_sweep_on_the_floor_through_an_executor_equals_the_serial_one():
-    """The heading jobs a cluster runs carry the floor: through a process pool (the jobs pickled,
-    as for Dask) the points equal the serial sweep's."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    from mobmanip.team.heading_jobs import HeadingJob, run_heading_sweep
-
-    path = Path(__file__).resolve().parents[1] / "examples" / "beam_team.toml"
-    job = HeadingJob(BEAM_DATA, (-10.0, 0.0, 10.0), str(path.parent), ("dynamic_polytope",), str(path),
-                     headings_per_task=1, constraints=(Floor(level=True, mu=0.5),))  # fmt: skip
-    serial = run_heading_sweep(job)
-    with ProcessPoolExecutor(2) as pool:
-        pooled = run_heading_sweep(job, pool)
-    assert serial.to_dict() == pooled.to_dict()
-    ideal = run_heading_sweep(HeadingJob(BEAM_DATA, (0.0,), str(path.parent), ("dynamic_polytope",), str(path)))
-    assert serial.points[1].reach["dynamic_polytope"][0] < 0.5 * ideal.points[0].reach["dynamic_polytope"][0]
 
 
 def test_the_team_page_draws_each_robots_support_and_zmp(tmp_path):
