@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..support.reading import decimal
-from ..sweep.budget import MAX_GRID_POINTS
+from ..support.work import MAX_GRID_POINTS
 
 GRID_HELP = """\
 grid syntax (each axis): START:STOP:COUNT gives COUNT evenly spaced values from START to STOP,

@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import ConvexHull, cKDTree
 
 #: Copies of one vertex agree to round-off; distinct vertices are farther apart than this
 #: fraction of the set's size.
@@ -72,6 +71,8 @@ def enumerate_hull(An: np.ndarray, s: np.ndarray) -> Hull:
         return Hull(ends, use[[lo, hi]], [np.array([0]), np.array([1])], np.array([[0, 0], [1, 1]]))
     if k == 2:
         return _polygon(W, use)
+    from scipy.spatial import ConvexHull  # loaded at the first hull (about 0.08 s)
+
     hull = ConvexHull(W)
     eq = hull.equations
     U = eq[:, :k] / -eq[:, k:]
@@ -146,6 +147,8 @@ def _polygon(W: np.ndarray, use: np.ndarray) -> Hull:
     if len(x) < 3:
         # Near-duplicate rays across the +-pi cut (a heavy object's box-like polytope: polar points
         # 5e-12 rad apart) can leave too few points to bound the polygon: Qhull decides instead.
+        from scipy.spatial import ConvexHull
+
         keep = ConvexHull(W).vertices  # counter-clockwise in 2-D
         x, y = W[keep, 0], W[keep, 1]
     # Facet i (polar point w_i) and facet i + 1 meet at the vertex u with w_i . u = w_(i+1) . u = 1.
@@ -187,6 +190,8 @@ def _groups(U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         close = np.max(np.abs(U[:, None, :] - U[None, :, :]), axis=2) <= MERGE_RTOL * scale
         leader = np.argmax(close, axis=1)  # the first candidate close to each one
     else:
+        from scipy.spatial import cKDTree
+
         pairs = cKDTree(U).query_pairs(MERGE_RTOL * scale, output_type="ndarray")
         leader = np.arange(n)
         if len(pairs):

@@ -20,7 +20,6 @@ import math
 import numpy as np
 
 from ..errors import TaskError
-from . import zonotope_kernel
 
 #: Largest number of generator subsets enumerated for facets or volume; beyond it the count of
 #: candidate facets makes the halfspace form impractical (e.g. 30 generators in 12 dimensions).
@@ -28,10 +27,16 @@ MAX_SUBSETS = 400_000
 #: A subset whose eliminated pivot falls below this fraction of its largest entry is dependent.
 _DEPENDENT_RTOL = 1e-12
 
-try:  # pragma: no cover - exercised when Numba is installed (the default)
-    from numba import njit
-except ImportError:  # pragma: no cover
-    njit = None  # type: ignore[assignment]
+
+@functools.cache
+def _numba_njit():
+    """Numba's ``njit``, imported at its first use (the import alone takes about 0.1 s, which a
+    command that draws no polytope need not pay); ``None`` without Numba."""
+    try:  # pragma: no cover - exercised when Numba is installed (the default)
+        from numba import njit
+    except ImportError:  # pragma: no cover
+        return None
+    return njit
 
 
 def subset_count(n: int, k: int) -> int:
@@ -146,6 +151,7 @@ def facet_normals(G: np.ndarray) -> np.ndarray:
         return np.ones((1, 1))
     subsets = combinations(n, r - 1)
     G = np.ascontiguousarray(G, dtype=float)
+    njit = _numba_njit()
     if njit is not None:
         if _compiled is None:
             _compiled = njit(cache=True, nogil=True)(_normals_kernel)
@@ -210,6 +216,8 @@ def low_dim_faces(center: np.ndarray, G: np.ndarray) -> dict | None:
     the kernel declines) :func:`low_dim_faces_numpy`, the reference it is tested against; both
     give the same dict, described there.
     """
+    from . import zonotope_kernel  # its compiler loads at the first face computed
+
     out = zonotope_kernel.faces(center, G)
     return out if out is not None else low_dim_faces_numpy(center, G)
 

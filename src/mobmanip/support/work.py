@@ -18,6 +18,9 @@ from ..errors import ArgumentError
 
 #: An estimate above this many seconds is announced on standard error before the work starts.
 ANNOUNCE_SECONDS = 30.0
+#: Grid points (angle x distance x heading x velocity scale x effort scale) a sweep runs without
+#: being asked for more: about a minute and a few gigabytes on one core (:mod:`mobmanip.sweep.budget`).
+MAX_GRID_POINTS = 10_000_000
 
 _log = logging.getLogger("mobmanip")
 

@@ -21,10 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import GridError
+from ..support.work import MAX_GRID_POINTS
 
-#: Grid points (angle x distance x heading x velocity scale x effort scale) a sweep runs without
-#: being asked for more: about a minute and a few gigabytes on one core.
-MAX_GRID_POINTS = 10_000_000
 #: Measured on the paper's robot (docs/howto/batch.md, "How fast"): 3.85 s for 10^6 configurations in one
 #: process, 440 MB peak; per point, rounded up.
 SECONDS_PER_POINT = 4e-6
