@@ -285,3 +285,26 @@ def test_a_heading_that_crosses_pi_is_interpolated_across_it(robot, tmp_path):
     truth = start + rate * stamps
     np.testing.assert_allclose(trajectory.q[:, 2], np.cos(truth), atol=1e-9)
     np.testing.assert_allclose(trajectory.q[:, 3], np.sin(truth), atol=1e-9)
+
+
+def test_retime_reads_a_recording_as_it_reads_the_same_motion_from_a_file(robot, tmp_path, capfd):
+    """``retime --bag``: the recorded path's fastest timing is the CSV's, printed the same way; the
+    cut and the source are checked as ``trajectory`` checks them."""
+    t = np.arange(80) * 0.025
+    values = motion(t)
+    csv_path = tmp_path / "motion.csv"
+    write_csv(csv_path, t, values)
+    records, _ = motion_records("mcap", t, values)
+    bag = write_bag(tmp_path / "run", "mcap", records)
+    code, from_bag, err = run_cli(capfd, "retime", ROBOT, "--bag", bag, "--out", tmp_path / "bag")
+    assert code == 0, err
+    code, from_csv, err = run_cli(capfd, "retime", ROBOT, csv_path, "--out", tmp_path / "csv")
+    assert code == 0, err
+    assert f"recording {bag}" in from_bag
+    summary = [line for line in from_bag.splitlines() if not line.startswith(("recording ", "  "))]
+    assert [line.replace("bag/", "csv/") for line in summary] == from_csv.splitlines()
+    assert "fastest timing from rest to rest" in from_csv
+    code, _, err = run_cli(capfd, "retime", ROBOT, csv_path, "--bag", bag)
+    assert_one_line_error(code, err, "either TRAJ.csv or --bag")
+    code, _, err = run_cli(capfd, "retime", ROBOT, csv_path, "--start", "0.5")
+    assert_one_line_error(code, err, "--start and --end cut a --bag recording")

@@ -526,3 +526,51 @@ def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
         level = ", object held level" if floor.get("level") else ""
         lines.insert(0, f"  on the floor ({mu}, {floor['faces']}-face pyramid{ramp}{level}): contacts {names}")
     return "\n".join(lines)
+
+
+def add_recording_options(parser: argparse.ArgumentParser) -> None:
+    """``--bag RUN`` and its topics and cut: a ROS recording in place of a trajectory file (the
+    command's ``trajectory`` positional is then left out)."""
+    recording = parser.add_argument_group("a ROS recording instead of TRAJ.csv")
+    recording.add_argument("--bag", metavar="RUN", help="a ROS 1 .bag, a ROS 2 .mcap / .db3 file or bag folder")
+    recording.add_argument(
+        "--joint-states", default="/joint_states", metavar="TOPIC", help="sensor_msgs/JointState topic (%(default)s)"
+    )
+    recording.add_argument(
+        "--odom",
+        default="/odom",
+        metavar="TOPIC",
+        help="nav_msgs/Odometry topic (%(default)s); 'none' keeps the platform at the origin",
+    )
+    recording.add_argument("--start", type=decimal, metavar="S", help="read from S seconds after the recording's start")
+    recording.add_argument("--end", type=decimal, metavar="S", help="read up to S seconds after the recording's start")
+
+
+def check_trajectory_source(args) -> None:
+    """One of TRAJ.csv and ``--bag``, and ``--start``/``--end`` only with ``--bag``.
+
+    Raises:
+        UsageError: both or neither, or a cut without a recording.
+    """
+    from ..errors import UsageError
+
+    if (args.trajectory is None) == (args.bag is None):
+        raise UsageError("give a trajectory: either TRAJ.csv or --bag RUN, not both")
+    if args.bag is None and (args.start is not None or args.end is not None):
+        raise UsageError("--start and --end cut a --bag recording")
+
+
+def read_recorded(robot, args, work):
+    """The trajectory of ``--bag`` (its joint-state messages counted against ``work`` before any
+    is decoded), its report printed and its gaps and clock jumps warned about."""
+    from ..motion.recordings import read_recording
+    from ..support.notices import notice
+
+    odometry = None if args.odom.lower() == "none" else args.odom
+    recording = read_recording(robot, args.bag, args.joint_states, odometry, start=args.start, end=args.end,
+                               work=work)  # fmt: skip
+    for line in recording.report.lines():
+        print(line)
+    for text in recording.report.warnings:
+        notice(text)
+    return recording.trajectory

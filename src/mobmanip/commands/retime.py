@@ -8,11 +8,21 @@ import argparse
 
 from ..robot.tasks import TASKS
 from ..support.reading import decimal
-from .common import add_motion_floor_options, add_progress_option, add_work_option, motion_floor, show_progress
+from .common import (
+    add_motion_floor_options,
+    add_progress_option,
+    add_recording_options,
+    add_work_option,
+    check_trajectory_source,
+    motion_floor,
+    read_recorded,
+    show_progress,
+)
 
 RETIME_HELP = """\
 TRAJ.csv is a whole-body trajectory as `mobmanip trajectory` reads it (`carry --out` writes
-one); its configurations are the path and its time stamps the path parameter s. The fastest
+one), or --bag RUN a ROS recording as `mobmanip trajectory --bag` reads it; its configurations
+are the path and its time stamps the path parameter s. The fastest
 timing s(t) starts and ends at rest and keeps, at every sample, every wheel and joint within its
 velocity and effort limits (efforts of the motion with the object held between the hands, the
 paper's policy) and, with --ground, the floor of `carry --ground`: the zero-moment point
@@ -47,7 +57,10 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
-    parser.add_argument("trajectory", metavar="TRAJ.csv", help="the path: a whole-body trajectory (see below)")
+    parser.add_argument(
+        "trajectory", metavar="TRAJ.csv", nargs="?", help="the path: a whole-body trajectory (see below), or --bag"
+    )
+    add_recording_options(parser)
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument(
@@ -76,13 +89,17 @@ def run(args) -> int:
     from ..support.work import WorkBound, bound
     from .outputs import RETIME_FILES, retime_outputs
 
-    note_input(args.trajectory)
+    check_trajectory_source(args)
+    note_input(args.trajectory or args.bag)
     work = WorkBound("retime", "samples", SECONDS_PER_SAMPLE, bound(args.max_work, MAX_SAMPLES))
-    # counted before the file is parsed
-    work.check(max(read_user_bytes(args.trajectory, "trajectory").count(b"\n") - 1, 0), "rows of the trajectory")
+    if args.trajectory is not None:  # counted before the file is parsed
+        work.check(max(read_user_bytes(args.trajectory, "trajectory").count(b"\n") - 1, 0), "rows of the trajectory")
     robot = load_robot(find_spec(args.robot))
     floor = motion_floor(args, "retime")
-    trajectory = read_trajectory(robot, args.trajectory)
+    if args.bag is not None:  # the path as recorded: its messages counted before any is decoded
+        trajectory = read_recorded(robot, args, work)
+    else:
+        trajectory = read_trajectory(robot, args.trajectory)
     if args.out:  # refuse an unwritable output before the timing is computed
         out = output_directory(args.out)
         for name in RETIME_FILES:

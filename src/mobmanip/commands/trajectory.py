@@ -10,7 +10,15 @@ import numpy as np
 
 from ..robot.tasks import TASKS
 from ..support.reading import decimal
-from .common import add_progress_option, add_strict_option, add_work_option, show_progress
+from .common import (
+    add_progress_option,
+    add_recording_options,
+    add_strict_option,
+    add_work_option,
+    check_trajectory_source,
+    read_recorded,
+    show_progress,
+)
 
 #: Samples a trajectory analysis runs without being asked (each: both ellipsoids, RNEA, scaling).
 MAX_SAMPLES = 200_000
@@ -51,19 +59,7 @@ def register(sub) -> None:
     )
     parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
     parser.add_argument("trajectory", metavar="TRAJ.csv", nargs="?", help="the trajectory (see below), or --bag")
-    recording = parser.add_argument_group("a ROS recording instead of TRAJ.csv")
-    recording.add_argument("--bag", metavar="RUN", help="a ROS 1 .bag, a ROS 2 .mcap / .db3 file or bag folder")
-    recording.add_argument(
-        "--joint-states", default="/joint_states", metavar="TOPIC", help="sensor_msgs/JointState topic (%(default)s)"
-    )
-    recording.add_argument(
-        "--odom",
-        default="/odom",
-        metavar="TOPIC",
-        help="nav_msgs/Odometry topic (%(default)s); 'none' keeps the platform at the origin",
-    )
-    recording.add_argument("--start", type=decimal, metavar="S", help="read from S seconds after the recording's start")
-    recording.add_argument("--end", type=decimal, metavar="S", help="read up to S seconds after the recording's start")
+    add_recording_options(parser)
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
     parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
@@ -103,21 +99,6 @@ def register(sub) -> None:
     parser.set_defaults(func=run)
 
 
-def _read_bag(robot, args):
-    """The trajectory of --bag, its report printed and its gaps and clock jumps warned about."""
-    from ..motion.recordings import read_recording
-    from ..support.notices import notice
-
-    odometry = None if args.odom.lower() == "none" else args.odom
-    recording = read_recording(robot, args.bag, args.joint_states, odometry, start=args.start, end=args.end,
-                               work=_sample_bound(args))  # fmt: skip
-    for line in recording.report.lines():
-        print(line)
-    for text in recording.report.warnings:
-        notice(text)
-    return recording.trajectory
-
-
 def _sample_bound(args):
     """The bound on the samples analysed (--max-work, else :data:`MAX_SAMPLES`)."""
     from ..support.work import WorkBound, bound
@@ -128,7 +109,8 @@ def _sample_bound(args):
 
 def _check_work(args) -> None:
     """Count the samples (lines) before the file is parsed, and refuse more than the bound; a
-    recording's joint-state messages are counted by :func:`_read_bag` before any is decoded."""
+    recording's joint-state messages are counted by
+    :func:`~mobmanip.commands.common.read_recorded` before any is decoded."""
     from pathlib import Path
 
     from ..errors import UsageError
@@ -202,10 +184,7 @@ def run(args) -> int:
     from ..support.files import check_output, note_input, output_directory
     from .outputs import trajectory_outputs
 
-    if (args.trajectory is None) == (args.bag is None):
-        raise UsageError("give a trajectory: either TRAJ.csv or --bag RUN, not both")
-    if args.bag is None and (args.start is not None or args.end is not None):
-        raise UsageError("--start and --end cut a --bag recording")
+    check_trajectory_source(args)
     if args.mu is not None:
         if not (math.isfinite(args.mu) and args.mu > 0.0):
             raise UsageError(f"--mu must be a positive friction coefficient, got {args.mu!r}")
@@ -218,7 +197,7 @@ def run(args) -> int:
             check_output(out / f"analysis{suffix}")
     robot = load_robot(find_spec(args.robot), strict=True if args.strict else None)
     if args.bag is not None:
-        trajectory = _read_bag(robot, args)
+        trajectory = read_recorded(robot, args, _sample_bound(args))
     else:
         trajectory = read_trajectory(robot, args.trajectory)
     result = analyze_trajectory(
