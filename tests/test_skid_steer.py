@@ -149,6 +149,15 @@ def test_husky_spec_loads_with_per_side_limits(husky):
     np.testing.assert_allclose(husky.platform.center, (0.0, 0.0), atol=1e-12)
 
 
+def test_a_wheel_limit_reaches_each_side_as_its_wheels_give_it(husky):
+    """--wheel-velocity-limit / --wheel-effort-limit are each wheel's: a side of two wheels geared
+    together turns at their rate and pushes with both torques (the Husky's sides: two wheels each)."""
+    limited = husky.with_wheel_limits(velocity=3.0, effort=5.0)
+    np.testing.assert_allclose(limited.velocity_limits[:2], (3.0, 3.0))
+    np.testing.assert_allclose(limited.effort_limits[:2], (2 * 5.0, 2 * 5.0))
+    np.testing.assert_array_equal(limited.effort_limits[2:], husky.effort_limits[2:])  # the arm's are its own
+
+
 def test_constraints_annihilate_s_and_s_spans_their_null_space(husky, rng):
     for _ in range(5):
         q = random_q(husky, rng)

@@ -203,8 +203,15 @@ def format_matrix(matrix: np.ndarray, indent: str = "  ") -> str:
 
 def add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Limits, platform and object options shared by analyze, view and sweep."""
-    parser.add_argument("--wheel-velocity-limit", type=decimal, metavar="RAD_S", help="both wheels' qdot_max (rad/s)")
-    parser.add_argument("--wheel-effort-limit", type=decimal, metavar="NM", help="both wheels' tau_max (N m)")
+    parser.add_argument(
+        "--wheel-velocity-limit", type=decimal, metavar="RAD_S", help="every drive wheel's qdot_max (rad/s)"
+    )
+    parser.add_argument(
+        "--wheel-effort-limit",
+        type=decimal,
+        metavar="NM",
+        help="every drive wheel's tau_max (N m; a skid-steer side pushes with the sum of its wheels')",
+    )
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
     parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")

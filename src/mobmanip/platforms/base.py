@@ -158,6 +158,11 @@ class Platform(ABC):
         """(joint name, radius in m) of each wheel a figure draws."""
         return ()
 
+    def wheels_per_drive(self, name: str) -> int:
+        """How many wheels the drive ``name`` (one of :attr:`drive_names`) turns together: its
+        effort is their torques' sum, its rate theirs. One by default."""
+        return 1
+
     def free_rolling(self) -> dict[str, tuple[float, float]]:
         """The wheels that roll freely (no motor), by joint name, each with its rolling direction in
         the platform frame's floor plane (unit (2,)): the floor pushes such a wheel across it only

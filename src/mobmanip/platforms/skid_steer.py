@@ -121,6 +121,10 @@ class SkidSteer(Platform):
         shares = [s / (self.n_right if k < self.n_right else n_left) for k, s in enumerate(self.signs)]
         return np.array(self.wheel_v), self._side_matrix(shares)
 
+    def wheels_per_drive(self, name: str) -> int:
+        """A side's wheels, geared together."""
+        return len(self.side_wheels(name))
+
     def side_wheels(self, side: str) -> tuple[str, ...]:
         return self.wheel_names[: self.n_right] if side == SIDES[0] else self.wheel_names[self.n_right :]
 

@@ -276,13 +276,17 @@ class Robot:
         return dataclasses.replace(self, joint_velocity_limits=new_v, joint_effort_limits=new_e)
 
     def with_wheel_limits(self, velocity: float | None = None, effort: float | None = None) -> Robot:
-        """The same robot with both drive wheels' velocity (rad/s) or effort (N m) limit set."""
-        wheels = self.wheel_platform.drive_names if self.wheel_platform is not None else ()
-        if not wheels:
+        """The same robot with every drive wheel's velocity (rad/s) or effort (N m) limit set. A
+        drive that turns several wheels together (a skid-steer's side) turns at their rate and
+        pushes with the sum of their torques: its effort limit is ``effort`` times its wheels."""
+        platform = self.wheel_platform
+        drives = platform.drive_names if platform is not None else ()
+        if not drives:
             raise WheelError(f"robot {self.name!r} has no drive wheels to set a wheel limit on")
+        assert platform is not None
         return self.with_limits(
-            velocity=None if velocity is None else dict.fromkeys(wheels, velocity),
-            effort=None if effort is None else dict.fromkeys(wheels, effort),
+            velocity=None if velocity is None else dict.fromkeys(drives, velocity),
+            effort=None if effort is None else {name: effort * platform.wheels_per_drive(name) for name in drives},
         )
 
     # ----- configurations -----
