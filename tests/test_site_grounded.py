@@ -31,9 +31,11 @@ def test_the_grounded_reach_at_each_placement_is_the_independent_lps(tmp_path):
     run, rows = _site(tmp_path, 'objective = "dynamic:capacity:+x"\n[grounded]\nmu = 0.5\ndirection = "+x"\n')
     assert run.returncode == 0, run.stderr
     robot = mobmanip.load_robot("planar_dual_arm")
-    assert "q_0" not in rows[0] and {"platform_cos_yaw", "arm_right_1_joint"} <= set(rows[0])  # named columns
+    header = (tmp_path / "o" / "site.csv").read_text().splitlines()[0].split(",")
+    assert len(header) == len(set(header))  # every column once: the placement's platform_x and q's apart
+    assert "q_0" not in rows[0] and {"q.platform_cos_yaw", "q.arm_right_1_joint", "platform_x"} <= set(rows[0])
     for row in rows:
-        q = np.array([float(row[name]) for name in robot.coordinate_names])
+        q = np.array([float(row[f"q.{name}"]) for name in robot.coordinate_names])
         held = mobmanip.analyze(robot, q, "planar", measures=("kinematic",)).held_object
         problem = build_problem(robot, q, "planar", held, casters=PAPER_CASTERS)
         ref = straight_line(problem, np.array([1.0, 0.0]), mode="friction", mu=0.5, springs=True).value

@@ -19,8 +19,8 @@ or a grid:
 
 Each position is solved as `mobmanip place` solves it (same starts: the result does not depend on
 where it runs). OUT_DIR/site.csv has one row per position (object x, y, z, value, platform x, y,
-heading, hold turn, grounded reach, evaluations, the configuration q by name (platform_x,
-platform_y, platform_cos_yaw, platform_sin_yaw, then each joint) and, where a
+heading, hold turn, grounded reach, evaluations, the configuration q by name (q.platform_x,
+q.platform_y, q.platform_cos_yaw, q.platform_sin_yaw, then q.JOINT for each joint) and, where a
 position has no placement or no grounded reach (the robot cannot stand on its floor there), the
 reason); OUT_DIR/site.png shows the positions coloured by value,
 each with its platform position and heading. A site of more than 10,000 positions is refused

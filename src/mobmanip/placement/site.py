@@ -226,7 +226,8 @@ class SiteResult:
 
     Attributes:
         site: the site.
-        table: :data:`COLUMNS` then one column per configuration entry, (n, len(columns)).
+        table: :data:`COLUMNS` then one column per configuration entry (``q.`` and its name, e.g.
+            ``q.platform_cos_yaw``), (n, len(columns)).
         columns: the column names.
         reasons: per position, why it has no placement ("" where it has one).
         seconds: wall time of the run (s).
@@ -332,7 +333,8 @@ def run_site(
     if site.mu is not None:
         _grounded_direction(site, task)
     n = len(site.positions)
-    names = robot.coordinate_names  # the configuration's columns, named (not q_0..)
+    # the configuration's columns, named (not q_0..) and apart from the placement's own platform_x, platform_y
+    names = tuple(f"q.{name}" for name in robot.coordinate_names)
     table = np.full((n, len(COLUMNS) + len(names)), np.nan)
     reasons = [""] * n
     bounds = [(s, min(s + positions_per_task, n)) for s in range(0, n, positions_per_task)]
