@@ -306,6 +306,19 @@ def test_site_figure():
         assert bar.get_ylabel() == "kinematic capacity along +x (m/s)"
     finally:
         plt.close(fig)
+    # positions that tie up to rounding (a symmetric robot's): one colour, and the colour bar reads
+    # as the value, not as an offset plus 1e-9 of noise
+    table[:2, COLUMNS.index("value")] = (7.498511612918628, 7.498511612918628 + 3e-9)
+    fig = site_figure(SiteResult(site, table, COLUMNS, ("", "", "out of reach"), 0.0, "planar"))
+    try:
+        fig.canvas.draw()
+        (bar,) = [ax for ax in fig.axes if is_colorbar(ax)]
+        low, high = bar.get_ylim()
+        assert high - low >= 0.01 * 7.4985 and low < 7.4985 < high
+        labels = [t.get_text() for t in bar.get_yticklabels()] + [bar.yaxis.get_offset_text().get_text()]
+        assert not any("e-" in text for text in labels), labels
+    finally:
+        plt.close(fig)
 
 
 def test_sweep_polar_plot_ticks_on_its_grid():

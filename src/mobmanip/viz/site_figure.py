@@ -37,7 +37,8 @@ def site_figure(result: SiteResult, title: str | None = None) -> Figure:
     tick = 0.15
     ax.quiver(px[ok], py[ok], tick * np.cos(heading[ok]), tick * np.sin(heading[ok]), angles="xy", scale_units="xy",
               scale=1.0, width=0.003, color="0.3", zorder=2)  # fmt: skip
-    points = ax.scatter(x[ok], y[ok], c=value[ok], cmap="viridis", s=36, zorder=3, edgecolors="k", linewidths=0.3)
+    points = ax.scatter(x[ok], y[ok], c=value[ok], cmap="viridis", s=36, zorder=3, edgecolors="k", linewidths=0.3,
+                        norm=_colour_range(value[ok]))  # fmt: skip
     if (~ok).any():
         ax.scatter(x[~ok], y[~ok], marker="x", color="0.5", s=30, zorder=3, label="no placement")
         fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", fontsize=8, frameon=False)
@@ -50,6 +51,22 @@ def site_figure(result: SiteResult, title: str | None = None) -> Figure:
     ax.set_title(title or f"{Path(result.site.robot).stem}: {reached} of {len(ok)} positions placed "
                           f"({objective_words(objective, task)})", fontsize=10)  # fmt: skip
     return fig
+
+
+def _colour_range(values: np.ndarray):
+    """The colour scale: the values' own range, or, where they tie up to rounding (1e-6 relative:
+    a symmetric robot's positions), 1 % either side of them, so that the tie is one colour and
+    the colour bar reads as the value rather than as rounding noise."""
+    from matplotlib.colors import Normalize
+
+    if values.size == 0:
+        return None
+    lo, hi = float(values.min()), float(values.max())
+    if hi - lo > 1e-6 * max(abs(lo), abs(hi)):
+        return Normalize(lo, hi)
+    centre = 0.5 * (lo + hi)
+    half = 0.01 * abs(centre) if centre != 0.0 else 1.0
+    return Normalize(centre - half, centre + half)
 
 
 def plot_site(result: SiteResult, path: str | Path, title: str | None = None) -> Path:
