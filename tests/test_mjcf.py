@@ -356,3 +356,20 @@ def test_full_inertias_and_geared_velocity_actuators_read_as_mujoco_reads_them(t
         (a,) = [a for a in on_joint if theirs.actuator_biastype[a] == 1]  # the velocity actuator (affine bias)
         expected = np.abs(theirs.actuator_ctrlrange[a]).max() / abs(theirs.actuator_gear[a, 0])
         assert description.limits(joint)[0] == pytest.approx(expected, rel=1e-12)
+
+
+def test_limits_the_file_lacks_are_given_by_pattern(tmp_path, capfd):
+    """Menagerie's TIAGo++ gives no velocity limits: 14 arm joints take two patterns, and a joint
+    named exactly keeps its own value; a pattern that matches nothing is one line naming it."""
+    spec = tmp_path / "tiago_mjcf.toml"
+    argv = ["init-spec", TIAGO_MJCF, "--ee", HANDS[0], "--ee", HANDS[1], "--platform", "fixed",
+            "--velocity-limit", "arm_*_joint=1.9", "--effort-limit", "arm_*_joint=39",
+            "--velocity-limit", "arm_left_4_joint=1.2", "--out", spec]  # fmt: skip
+    code, _, err = run_cli(capfd, *argv)
+    assert code == 0 and err == "", err
+    robot = mobmanip.load_robot(spec)
+    assert len(robot.reduced_velocity_names) == 14
+    for name, v, e in zip(robot.reduced_velocity_names, robot.velocity_limits, robot.effort_limits):
+        assert (v, e) == ((1.2 if name == "arm_left_4_joint" else 1.9), 39.0), name
+    code, _, err = run_cli(capfd, *argv[:-2], "--velocity-limit", "elbow_*=2", "--out", tmp_path / "b.toml")
+    assert_one_line_error(code, err, "--velocity-limit elbow_*", "matches no joint")

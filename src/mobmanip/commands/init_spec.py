@@ -69,10 +69,19 @@ def register(sub) -> None:
         "--wheel-effort-limit", type=decimal, metavar="NM", help="each platform wheel's tau_max the URDF lacks"
     )
     given.add_argument(
-        "--velocity-limit", action="append", default=[], metavar="NAME=V", help="a joint's velocity limit (repeat)"
+        "--velocity-limit",
+        action="append",
+        default=[],
+        metavar="NAME=V",
+        help="a joint's velocity limit (repeat); NAME may be a pattern such as 'arm_*_joint' for every joint it "
+        "matches (a joint named exactly keeps its own)",
     )
     given.add_argument(
-        "--effort-limit", action="append", default=[], metavar="NAME=E", help="a joint's effort limit (repeat)"
+        "--effort-limit",
+        action="append",
+        default=[],
+        metavar="NAME=E",
+        help="a joint's effort limit (repeat; NAME may be a pattern, as for --velocity-limit)",
     )
     parser.set_defaults(func=run)
 
@@ -108,12 +117,7 @@ def _write_spec(args, urdf, read_options, mounted=None, final_urdf=None) -> int:
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value > 0):
             raise UsageError(f"--{name.replace('_', '-')} must be a positive number, got {value!r}")
-    limits: dict = {}
-    for index, items in ((0, args.velocity_limit), (1, args.effort_limit)):
-        for joint, value in _pairs(items, "--velocity-limit" if index == 0 else "--effort-limit"):
-            pair = list(limits.get(joint, (None, None)))
-            pair[index] = value
-            limits[joint] = tuple(pair)
+    limits = _joint_limits(args, urdf, read_options)
     wheels = None if args.wheels is None else parse_wheel_list(args.wheels)
     found = detect_spec(
         urdf,
@@ -232,6 +236,48 @@ def _run_mounted(args, read_options) -> int:
         finally:
             if draft.exists():
                 os.unlink(draft)
+
+
+def _joint_limits(args, urdf, read_options) -> dict[str, tuple[float | None, float | None]]:
+    """``--velocity-limit`` and ``--effort-limit`` by joint: (velocity, effort), each ``None``
+    where not given. A NAME may be a shell-style pattern (``arm_*_joint``, ``wheel_?_joint``) that
+    stands for every joint of the file it matches; a joint named exactly keeps its own value.
+
+    Raises:
+        UsageError: a malformed item, or a pattern that matches no joint of the file (named, with
+            the closest joints).
+    """
+    import fnmatch
+
+    from ..errors import UsageError, closest_first
+
+    items = [(0, args.velocity_limit, "--velocity-limit"), (1, args.effort_limit, "--effort-limit")]
+    if not any(given for _, given, _ in items):
+        return {}
+    names: list[str] | None = None
+    limits: dict[str, list[float | None]] = {}
+    for index, given, option in items:
+        exact, patterns = {}, []
+        for name, value in _pairs(given, option):
+            if any(c in name for c in "*?["):
+                patterns.append((name, value))
+            else:
+                exact[name] = value
+        if patterns and names is None:
+            from ..descriptions import read_description
+
+            names = list(read_description(urdf, **read_options).joints)
+        for pattern, value in patterns:
+            matched = [n for n in names or () if fnmatch.fnmatchcase(n, pattern)]
+            if not matched:
+                close = ", ".join(closest_first(pattern.replace("*", "").replace("?", ""), names or (), 5))
+                raise UsageError(f"{option} {pattern}: the pattern matches no joint of the file (closest: {close})")
+            for name in matched:
+                if name not in exact:
+                    limits.setdefault(name, [None, None])[index] = value
+        for name, value in exact.items():
+            limits.setdefault(name, [None, None])[index] = value
+    return {name: (pair[0], pair[1]) for name, pair in limits.items()}
 
 
 def _pairs(items, option: str):
