@@ -308,3 +308,28 @@ def test_retime_reads_a_recording_as_it_reads_the_same_motion_from_a_file(robot,
     assert_one_line_error(code, err, "either TRAJ.csv or --bag")
     code, _, err = run_cli(capfd, "retime", ROBOT, csv_path, "--start", "0.5")
     assert_one_line_error(code, err, "--start and --end cut a --bag recording")
+
+
+@pytest.mark.parametrize("kind", ["ros1", "db3"])
+def test_a_recording_given_as_the_trajectory_is_read_as_one(robot, tmp_path, capfd, kind):
+    """A recording passed where TRAJ.csv goes is known by its first bytes (not its name) and read
+    as --bag would read it; the same bytes under a suffix its reader cannot take are one line
+    naming the suffix to give it."""
+    import shutil
+
+    t = np.arange(60) * 0.025
+    records, _ = motion_records(kind, t, motion(t))
+    bag = write_bag(tmp_path / "run", kind, records)
+    code, as_bag, err = run_cli(capfd, "trajectory", ROBOT, "--bag", bag)
+    assert code == 0, err
+    code, as_file, err = run_cli(capfd, "trajectory", ROBOT, bag)
+    assert code == 0, err
+    assert (
+        as_file.splitlines()[0]
+        == f"{bag} is {'a ROS 1 bag' if kind == 'ros1' else 'a ROS 2 SQLite bag'}: read as --bag {bag}"
+    )
+    assert as_file.splitlines()[1:] == as_bag.splitlines()
+    renamed = tmp_path / "looks_like.csv"
+    shutil.copy(bag, renamed)
+    code, _, err = run_cli(capfd, "retime", ROBOT, renamed)
+    assert_one_line_error(code, err, "looks_like.csv", "by its first bytes", ".bag" if kind == "ros1" else ".db3")

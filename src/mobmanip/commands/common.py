@@ -554,7 +554,8 @@ def add_recording_options(parser: argparse.ArgumentParser) -> None:
 
 
 def check_trajectory_source(args) -> None:
-    """One of TRAJ.csv and ``--bag``, and ``--start``/``--end`` only with ``--bag``.
+    """One of TRAJ.csv and ``--bag``, and ``--start``/``--end`` only with ``--bag``; a TRAJ.csv
+    that is a recording by its first bytes becomes ``--bag``.
 
     Raises:
         UsageError: both or neither, or a cut without a recording.
@@ -563,6 +564,13 @@ def check_trajectory_source(args) -> None:
 
     if (args.trajectory is None) == (args.bag is None):
         raise UsageError("give a trajectory: either TRAJ.csv or --bag RUN, not both")
+    if args.trajectory is not None:
+        from ..motion.recordings import recording_kind
+
+        kind = recording_kind(args.trajectory)
+        if kind is not None:  # a recording given where a trajectory file goes: read it as one
+            print(f"{args.trajectory} is {kind}: read as --bag {args.trajectory}")
+            args.bag, args.trajectory = args.trajectory, None
     if args.bag is None and (args.start is not None or args.end is not None):
         raise UsageError("--start and --end cut a --bag recording")
 

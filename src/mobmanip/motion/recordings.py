@@ -128,6 +128,39 @@ def _seconds(ns: int | float) -> float:
     return float(ns) * 1e-9
 
 
+#: The first bytes of each kind of recording file, and the suffix its reader needs.
+_SIGNATURES = (
+    (b"#ROSBAG V2.0", "a ROS 1 bag", ".bag"),
+    (b"\x89MCAP", "an MCAP file", ".mcap"),
+    (b"SQLite format 3\x00", "a ROS 2 SQLite bag", ".db3"),
+)
+
+
+def recording_kind(path: str | Path) -> str | None:
+    """What ``path`` is by its first bytes when it is a ROS recording (``"a ROS 1 bag"``, ``"an
+    MCAP file"``, ``"a ROS 2 SQLite bag"``, ``"a ROS 2 bag folder"``), else ``None``: a file
+    named as a trajectory that holds a recording is read as one. Only a regular file is opened
+    (a FIFO or a device is never read here).
+
+    Raises:
+        RecordingError: a recording whose suffix its reader cannot take (named, with the suffix to
+            give it).
+    """
+    path = Path(path)
+    if path.is_dir():
+        return "a ROS 2 bag folder" if (path / "metadata.yaml").is_file() else None
+    if not path.is_file():
+        return None
+    with open(path, "rb") as handle:
+        head = handle.read(16)
+    for signature, kind, suffix in _SIGNATURES:
+        if head.startswith(signature):
+            if path.suffix.lower() != suffix:
+                raise RecordingError(str(path), f"it is {kind} by its first bytes: name it with the suffix {suffix}")
+            return kind
+    return None
+
+
 def _check_recording_files(path: Path) -> None:
     """A recording is a regular file, or a ROS 2 bag folder of regular files, of at most
     :data:`~mobmanip.support.reading.MAX_RECORDING_BYTES` (together): a FIFO or a device is
