@@ -333,3 +333,18 @@ def test_a_recording_given_as_the_trajectory_is_read_as_one(robot, tmp_path, cap
     shutil.copy(bag, renamed)
     code, _, err = run_cli(capfd, "retime", ROBOT, renamed)
     assert_one_line_error(code, err, "looks_like.csv", "by its first bytes", ".bag" if kind == "ros1" else ".db3")
+
+
+@pytest.mark.parametrize("kind, share", [("ros1", 0.6), ("ros1", 0.95), ("mcap", 0.6)])
+def test_a_bag_cut_short_is_one_line_that_says_how_to_repair_it(robot, tmp_path, capfd, kind, share):
+    """A recorder stopped mid-chunk (60 %) or before writing its index (95 %: the chunks whole,
+    the index gone): one line naming the file, why, and the tool that repairs it."""
+    t = np.arange(200) * 0.025
+    records, _ = motion_records(kind, t, motion(t))
+    bag = write_bag(tmp_path / "run", kind, records)
+    cut = tmp_path / f"cut{bag.suffix}"
+    whole = bag.read_bytes()
+    cut.write_bytes(whole[: int(len(whole) * share)])
+    code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", cut)
+    repair = "rosbag reindex" if kind == "ros1" else "mcap recover"
+    assert_one_line_error(code, err, str(cut), "cannot read it as a ROS bag", repair)

@@ -206,8 +206,22 @@ def _open(path: Path):
         reader.open()
     except (AnyReaderError, Exception) as exc:  # rosbags raises its own and OS errors alike
         reason = " ".join(str(exc).split()) or type(exc).__name__
-        raise RecordingError(str(path), f"cannot read it as a ROS bag: {reason}") from None
+        raise RecordingError(str(path), f"cannot read it as a ROS bag: {reason}{_repair_hint(path)}") from None
     return reader
+
+
+def _repair_hint(path: Path) -> str:
+    """How to repair a recording its reader refuses (a recorder stopped without writing its index,
+    a file cut short by a full disk or a copy), by its kind."""
+    suffix = path.suffix.lower()
+    if suffix == ".bag":
+        return (
+            "; a ROS 1 bag cut short or left without its index is repaired by `rosbag reindex` "
+            "(it rebuilds the index from the chunks that are whole), then read again"
+        )
+    if suffix == ".mcap":
+        return "; an MCAP file cut short is repaired by `mcap recover IN.mcap -o OUT.mcap`, then read again"
+    return ""
 
 
 def _connections(reader, path: Path, topic: str, kind: str, option: str):
