@@ -348,3 +348,28 @@ def test_a_bag_cut_short_is_one_line_that_says_how_to_repair_it(robot, tmp_path,
     code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", cut)
     repair = "rosbag reindex" if kind == "ros1" else "mcap recover"
     assert_one_line_error(code, err, str(cut), "cannot read it as a ROS bag", repair)
+
+
+def test_a_ros2_bag_with_other_topic_names_is_read_by_message_type(robot, tmp_path, capfd):
+    """A ROS 2 bag whose joint states and odometry are on other names: each is found by its
+    message type and the report says which was read; the same motion as under the conventional
+    names. Two topics of one type leave the choice to the user."""
+    t = np.arange(60) * 0.025
+    records, _ = motion_records("mcap", t, motion(t))
+    renamed = {"/joint_states": "/robot/joint_states", "/odom": "/robot/odom"}
+    moved = [(renamed[topic], received, message) for topic, received, message in records]
+    plain = read_recording(robot, write_bag(tmp_path / "plain", "mcap", records))
+    found = read_recording(robot, write_bag(tmp_path / "named", "mcap", moved))
+    np.testing.assert_array_equal(found.trajectory.q, plain.trajectory.q)
+    assert (
+        "no topic '/joint_states': read '/robot/joint_states', the recording's one sensor_msgs/msg/JointState topic"
+        in found.report.notes
+    )
+    assert any("read '/robot/odom'" in note for note in found.report.notes)
+    twice = write_bag(
+        tmp_path / "twice",
+        "mcap",
+        moved + [("/robot/joint_states_raw", r, m) for tp, r, m in moved if tp == "/robot/joint_states"],
+    )
+    code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", twice)
+    assert_one_line_error(code, err, "2 topics carry sensor_msgs/msg/JointState", "--joint-states")

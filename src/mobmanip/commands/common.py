@@ -541,13 +541,17 @@ def add_recording_options(parser: argparse.ArgumentParser) -> None:
     recording = parser.add_argument_group("a ROS recording instead of TRAJ.csv")
     recording.add_argument("--bag", metavar="RUN", help="a ROS 1 .bag, a ROS 2 .mcap / .db3 file or bag folder")
     recording.add_argument(
-        "--joint-states", default="/joint_states", metavar="TOPIC", help="sensor_msgs/JointState topic (%(default)s)"
+        "--joint-states",
+        default="auto",
+        metavar="TOPIC",
+        help="sensor_msgs/JointState topic (default: /joint_states, else the recording's one topic of that type)",
     )
     recording.add_argument(
         "--odom",
-        default="/odom",
+        default="auto",
         metavar="TOPIC",
-        help="nav_msgs/Odometry topic (%(default)s); 'none' keeps the platform at the origin",
+        help="nav_msgs/Odometry topic (default: /odom, else the recording's one topic of that type); 'none' keeps "
+        "the platform at the origin",
     )
     recording.add_argument("--start", type=decimal, metavar="S", help="read from S seconds after the recording's start")
     recording.add_argument("--end", type=decimal, metavar="S", help="read up to S seconds after the recording's start")

@@ -34,7 +34,7 @@ The result is the same :class:`~mobmanip.motion.trajectory.Trajectory` a CSV fil
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +54,11 @@ CLOCK_JUMP = 0.5
 #: The message types read, as rosbags names them (ROS 1 and ROS 2 alike).
 JOINT_STATE = "sensor_msgs/msg/JointState"
 ODOMETRY = "nav_msgs/msg/Odometry"
+#: A topic left for the recording to say: the conventional name if the recording has it, else its
+#: one topic of the message type (named in the report).
+BY_TYPE = "auto"
+#: The conventional names :data:`BY_TYPE` looks for first.
+DEFAULT_TOPICS = {JOINT_STATE: "/joint_states", ODOMETRY: "/odom"}
 
 #: Suffixes of the files read (a ROS 2 bag's folder is read too).
 BAG_SUFFIXES = (".bag", ".mcap", ".db3")
@@ -224,6 +229,29 @@ def _repair_hint(path: Path) -> str:
     return ""
 
 
+def _chosen_topic(reader, path: Path, topic: str, kind: str, option: str) -> tuple[str, str | None]:
+    """``topic``, or for :data:`BY_TYPE` the recording's conventional one, else its one topic of
+    ``kind``: (the topic, a note saying which was taken where it was not the conventional name).
+
+    Raises:
+        RecordingError: :data:`BY_TYPE` and the recording has no topic of ``kind``, or several
+            (listed, with the option that names one).
+    """
+    if topic != BY_TYPE:
+        return topic, None
+    conventional = DEFAULT_TOPICS[kind]
+    if any(c.topic == conventional for c in reader.connections):
+        return conventional, None
+    typed = sorted({c.topic for c in reader.connections if c.msgtype == kind})
+    if len(typed) == 1:
+        return typed[0], f"no topic {conventional!r}: read {typed[0]!r}, the recording's one {kind} topic"
+    listed = ", ".join(f"{c.topic} ({c.msgtype})" for c in sorted(reader.connections, key=lambda c: c.topic))
+    which = f"{len(typed)} topics carry {kind}" if typed else f"no topic carries {kind}"
+    raise RecordingError(
+        str(path), f"no topic {conventional!r}, and {which}: name one with {option} (the bag has: {listed or 'none'})"
+    )
+
+
 def _connections(reader, path: Path, topic: str, kind: str, option: str):
     found = [c for c in reader.connections if c.topic == topic]
     if not found:
@@ -328,8 +356,8 @@ def _count_messages(reader, connections, low: int | None, high: int | None, limi
 def read_recording(
     robot: Robot,
     path: str | Path,
-    joint_states: str = "/joint_states",
-    odometry: str | None = "/odom",
+    joint_states: str = BY_TYPE,
+    odometry: str | None = BY_TYPE,
     *,
     start: float | None = None,
     end: float | None = None,
@@ -340,9 +368,12 @@ def read_recording(
     Args:
         robot: the loaded robot.
         path: the bag: ``.bag`` (ROS 1), ``.mcap`` / ``.db3`` (ROS 2), or a ROS 2 bag's folder.
-        joint_states: the ``sensor_msgs/msg/JointState`` topic.
-        odometry: the ``nav_msgs/msg/Odometry`` topic; ``None`` for a robot whose platform does
-            not move (the platform stays at the origin).
+        joint_states: the ``sensor_msgs/msg/JointState`` topic; :data:`BY_TYPE` (default):
+            ``/joint_states`` if the recording has it, else its one topic of that type (said in
+            the report's notes).
+        odometry: the ``nav_msgs/msg/Odometry`` topic (:data:`BY_TYPE`: ``/odom``, else the one
+            of that type); ``None`` for a robot whose platform does not move (the platform stays
+            at the origin).
         start, end: seconds from the recording's first message; only what lies between is read.
         work: the bound on the samples (joint-state messages in the part read), checked before
             any message is decoded (from the bag's index, or by counting the part read up to
@@ -363,7 +394,13 @@ def read_recording(
     if start is not None and end is not None and not start < end:
         raise ArgumentError(f"--start {start:g} must come before --end {end:g}")
     reader = _open(path)
+    chosen = []
     try:
+        joint_states, note = _chosen_topic(reader, path, joint_states, JOINT_STATE, "--joint-states")
+        chosen.append(note)
+        if odometry is not None:
+            odometry, note = _chosen_topic(reader, path, odometry, ODOMETRY, "--odom")
+            chosen.append(note)
         js_connections = _connections(reader, path, joint_states, JOINT_STATE, "--joint-states")
         odom_connections = [] if odometry is None else _connections(reader, path, odometry, ODOMETRY, "--odom")
         origin = int(reader.start_time)
@@ -399,7 +436,9 @@ def read_recording(
             topics[odometry] = (ODOMETRY, len(odom_raw))
     finally:
         reader.close()
-    return _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_states, odometry)
+    found = _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_states, odometry)
+    said = tuple(note for note in chosen if note is not None)
+    return replace(found, report=replace(found.report, notes=said + found.report.notes)) if said else found
 
 
 def _resample(robot, path, joints_raw, odom_raw, frames, topics, origin, joint_states, odometry) -> Recording:
