@@ -28,6 +28,26 @@ def robot():
     return mobmanip.load_robot("planar_dual_arm")
 
 
+@pytest.fixture(scope="session")
+def paper(robot):
+    """The paper's robot again, by the name the tests that also load other robots give it."""
+    return robot
+
+
+@pytest.fixture(scope="session")
+def posture(robot):
+    """The paper's optimal arm posture (its case study's, :func:`mobmanip.casestudy.optimal_posture`)."""
+    from mobmanip.casestudy import optimal_posture
+
+    return optimal_posture(robot)
+
+
+@pytest.fixture(scope="session")
+def tiago():
+    """PAL's TIAGo++ (built-in ``tiago_dual``)."""
+    return mobmanip.load_robot("tiago_dual")
+
+
 @pytest.fixture
 def rng():
     """A fresh generator with a fixed seed, so every test sees the same draws."""

@@ -7,6 +7,8 @@ legends, and one unit per axis (a label that names both m/s and rad/s says it is
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
@@ -94,3 +96,21 @@ def check_paper_ready(fig: Figure, name: str = "figure") -> None:
         and tight.x1 <= page.x1 + slack
         and tight.y1 <= page.y1 + slack
     ), f"{name}: drawn {tight.bounds} reaches past the page {page.bounds}: a label is cut off"
+
+
+def colour_bars(fig: Figure) -> list[Axes]:
+    """The figure's colour bars."""
+    return [ax for ax in fig.axes if is_colorbar(ax)]
+
+
+@contextmanager
+def paper_ready(fig: Figure, name: str = "figure") -> Iterator[Figure]:
+    """``fig`` held to the standard (:func:`check_paper_ready`) before the block's own checks of
+    it, and closed after them, whatever happens."""
+    import matplotlib.pyplot as plt
+
+    try:
+        check_paper_ready(fig, name)
+        yield fig
+    finally:
+        plt.close(fig)

@@ -19,11 +19,6 @@ TOL = 1e-10  # relative to the ellipsoid's size: max(largest semi-axis, |centre|
 _EPS = np.finfo(float).eps
 
 
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
 def assert_same_ellipsoid(batch_e, single_e, label="", tol=TOL):
     """Equal to tol of the ellipsoid's size: semi-axes, centre, G G^T, axes up to sign, flags."""
     assert batch_e.degenerate == single_e.degenerate, label

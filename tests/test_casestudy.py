@@ -15,9 +15,8 @@ import pinocchio as pin
 import pytest
 import scipy.optimize
 
-import mobmanip
 from mobmanip.analysis import analyze
-from mobmanip.casestudy import configuration_at, optimal_posture, run_case_study
+from mobmanip.casestudy import configuration_at, run_case_study
 
 LINKS = (0.5, 0.5, 0.5)  # m, Table 1
 WHEEL_RADIUS = 0.075  # m, Table 2
@@ -25,16 +24,6 @@ ARM_SPEED = 3.14  # rad/s, Table 1
 RIGHT = ("arm_right_1_joint", "arm_right_2_joint", "arm_right_3_joint")
 LEFT = ("arm_left_1_joint", "arm_left_2_joint", "arm_left_3_joint")
 TOOLS = ("arm_right_tool_link", "arm_left_tool_link")
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return mobmanip.load_robot("planar_dual_arm")
-
-
-@pytest.fixture(scope="module")
-def posture(paper):
-    return optimal_posture(paper)
 
 
 @pytest.fixture(scope="module")

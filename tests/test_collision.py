@@ -6,18 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import mobmanip
 from conftest import central_differences, random_configuration
 from mobmanip.errors import ArgumentError
 from mobmanip.placement import place
 from mobmanip.robot.collision import SelfCollision
 
 STEP = 1e-4
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return mobmanip.load_robot("planar_dual_arm")
 
 
 @pytest.fixture(scope="module")

@@ -32,11 +32,6 @@ CONFIGURATIONS = 1000
 
 
 @pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
-@pytest.fixture(scope="module")
 def shipped(tiago):
     return read_collision_matrix(matrix_path(tiago))
 

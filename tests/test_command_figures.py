@@ -11,13 +11,12 @@ import ast
 import math
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
 import mobmanip
 from conftest import paper_case
-from figure_checks import check_paper_ready, is_colorbar
+from figure_checks import colour_bars, paper_ready
 from mobmanip.gradients.evaluator import Objective
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -76,15 +75,13 @@ def test_placement_figure_from_above_has_units_and_a_legend_below(planar):
     robot, q = planar
     objective = Objective.parse("kinematic:minor_axis", "planar")
     value = float(analyze(robot, q).kinematic.semi_axes[-1])
-    fig = placement_top_figure(robot, _placement(robot, q, objective, value, q, value))
-    try:
-        check_paper_ready(fig, "place --figure")
+    with paper_ready(
+        placement_top_figure(robot, _placement(robot, q, objective, value, q, value)), "place --figure"
+    ) as fig:
         titles = [ax.get_title() for ax in fig.axes]
         assert titles == [f"best start: {value:.4g} (m/s)", f"optimum: {value:.4g} (m/s)"]
         assert [ax.get_xlabel() for ax in fig.axes] == ["$x$ (m)"] * 2
         assert not any("collapsed" in t for t in _texts(fig))
-    finally:
-        plt.close(fig)
 
 
 def test_placement_figure_shows_a_vertical_objective_from_the_side():
@@ -96,9 +93,9 @@ def test_placement_figure_shows_a_vertical_objective_from_the_side():
     objective = Objective.parse("dynamic:capacity:+z", "translational")
     analysis = analyze(robot, q, "translational")
     value = analysis.dynamic.support(np.array([0.0, 0.0, 1.0]))
-    fig = placement_top_figure(robot, _placement(robot, q, objective, value), "translational")
-    try:
-        check_paper_ready(fig, "place --figure (+z)")
+    with paper_ready(
+        placement_top_figure(robot, _placement(robot, q, objective, value), "translational"), "place --figure (+z)"
+    ) as fig:
         (ax,) = fig.axes
         assert ax.get_ylabel() == "$z$ (m)" and "from the platform towards the object" in ax.get_xlabel()
         assert ax.get_title() == f"optimum: {value:.4g} (m/s$^2$)"
@@ -110,8 +107,6 @@ def test_placement_figure_shows_a_vertical_objective_from_the_side():
         scale = 0.6 / analysis.dynamic.semi_axes[0]
         top = analysis.held_object.center[2] + scale * value
         assert np.max(shadow.get_ydata()) == pytest.approx(top, rel=1e-3)
-    finally:
-        plt.close(fig)
 
 
 def test_placement_figure_says_when_the_optimum_set_has_collapsed(planar):
@@ -125,12 +120,11 @@ def test_placement_figure_says_when_the_optimum_set_has_collapsed(planar):
     # independently: the hands cannot move along the stretched arms (the x axis)
     assert kinematic.support(np.array([1.0, 0.0])) < 1e-9 * kinematic.semi_axes[0]
     objective = Objective.parse("kinematic:minor_axis", "planar")
-    fig = placement_top_figure(fixed, _placement(fixed, q, objective, float(kinematic.semi_axes[-1])))
-    try:
-        check_paper_ready(fig, "place --figure (collapsed)")
+    with paper_ready(
+        placement_top_figure(fixed, _placement(fixed, q, objective, float(kinematic.semi_axes[-1]))),
+        "place --figure (collapsed)",
+    ) as fig:
         assert any("collapsed" in t for t in _texts(fig))
-    finally:
-        plt.close(fig)
 
 
 def test_placement_map_figure(planar):
@@ -145,13 +139,9 @@ def test_placement_map_figure(planar):
     objective = Objective.parse("kinematic:minor_axis", "planar")
     grid = PlacementMap(objective, np.array([1.0, 0.5, 0.35]), x, y, None, values, np.zeros_like(values),
                         configurations, 1, 0.0, task="planar")  # fmt: skip
-    fig = placement_map_figure(grid)
-    try:
-        check_paper_ready(fig, "map.png")
-        (bar,) = [ax for ax in fig.axes if is_colorbar(ax)]
+    with paper_ready(placement_map_figure(grid), "map.png") as fig:
+        (bar,) = colour_bars(fig)
         assert bar.get_ylabel() == "kinematic minor semi-axis (m/s)"
-    finally:
-        plt.close(fig)
 
 
 def _run(method: str, t, capacity):
@@ -177,14 +167,10 @@ def test_carry_figure(text, task, unit):
     result = CarryResult(
         Objective.parse(text, task), task, _run("qp", t, 1 + t), _run("pinv", t, 1 + 0.5 * t), _run("qp", t - 2.0, t)
     )
-    fig = carry_figure(result, "tiago_pro")
-    try:
-        check_paper_ready(fig, "capacity.png")
+    with paper_ready(carry_figure(result, "tiago_pro"), "capacity.png") as fig:
         (ax,) = fig.axes
         assert ax.get_ylabel().endswith(unit) and ":" not in ax.get_ylabel().split("(")[0]
         assert ax.get_title().startswith("tiago_pro: ")
-    finally:
-        plt.close(fig)
 
 
 def test_retime_figure():
@@ -201,17 +187,13 @@ def test_retime_figure():
     joint = robot.model.joints[robot.model.getJointId("panda_joint1")].idx_q
     qs[:, joint] += 1.5 * s**2 * (3.0 - 2.0 * s)
     result = retime(robot, trajectory_from_samples(robot, s, qs), object_mass=0.0)
-    fig = retime_figure(result)
-    try:
-        check_paper_ready(fig, "retime.png")
+    with paper_ready(retime_figure(result), "retime.png") as fig:
         top, bottom = fig.axes
         assert top.get_ylabel().endswith("(1)") and bottom.get_ylabel() == "time (s)"
         assert bottom.get_xlabel().endswith("(s)")
         legend = [t.get_text() for t in top.get_legend().get_texts()]
         assert "fastest timing" in legend and any(text.startswith("binds: ") for text in legend)
         assert fig._suptitle.get_text().startswith("panda, spatial task, joint limits only: 1 s -> ")
-    finally:
-        plt.close(fig)
 
 
 def test_payload_map_figure():
@@ -223,14 +205,12 @@ def test_payload_map_figure():
 
     robot = mobmanip.load_robot("planar_dual_arm")
     grid = SweepGrid(np.linspace(-60.0, 60.0, 4), np.linspace(0.3, 0.9, 3))
-    fig = payload_map_figure(payload_map(robot, grid, "planar", acceleration=(1.0, 0.0)))
-    try:
-        check_paper_ready(fig, "payload_map.png")
-        colour_bars = [ax for ax in fig.axes if is_colorbar(ax)]
-        assert len(colour_bars) == 1 and colour_bars[0].get_ylabel() == "heaviest object (kg)"
+    with paper_ready(
+        payload_map_figure(payload_map(robot, grid, "planar", acceleration=(1.0, 0.0))), "payload_map.png"
+    ) as fig:
+        (bar,) = colour_bars(fig)
+        assert bar.get_ylabel() == "heaviest object (kg)"
         assert "given the acceleration (1, 0) m/s$^2$" in fig._suptitle.get_text()
-    finally:
-        plt.close(fig)
 
 
 def test_trajectory_figure_of_a_planar_task(planar):
@@ -248,16 +228,12 @@ def test_trajectory_figure_of_a_planar_task(planar):
         qs.append(robot.configuration((0.2 * ti, 0.0, 0.0), joints))
     result = analyze_trajectory(robot, trajectory_from_samples(robot, t, np.array(qs), known_joints=arms))
     assert result.task == "planar"
-    fig = trajectory_figure(result)
-    try:
-        check_paper_ready(fig, "analysis.png")
+    with paper_ready(trajectory_figure(result), "analysis.png") as fig:
         assert [ax.get_ylabel() for ax in fig.axes] == [
             "velocity (m/s)",
             "acceleration (m/s$^2$)",
             "use of the limit (1)",
         ]
-    finally:
-        plt.close(fig)
 
 
 def test_team_figure():
@@ -274,17 +250,13 @@ def test_team_figure():
     analysis = analyze_team(team, measures=measures)
     data = tomllib.loads(path.read_text())
     sweep = sweep_heading(data, np.linspace(-30.0, 30.0, 3), base_dir=path.parent, measures=measures)
-    fig = team_figure_of(analysis, sweep)
-    try:
-        check_paper_ready(fig, "team --plot")
+    with paper_ready(team_figure_of(analysis, sweep), "team --plot") as fig:
         top, linear, angular = fig.axes
         labels = [line.get_label() for line in top.get_lines() if not line.get_label().startswith("_")]
         for member in team.members:  # each arm named after its robot, once
             arms = [label for label in labels if label.startswith(f"{member.name}: arm ")]
             assert len(arms) == len(member.robot.arms) == len(set(arms))
         assert linear.get_ylabel().endswith("(m/s)") and angular.get_ylabel().endswith("(rad/s)")
-    finally:
-        plt.close(fig)
 
 
 def test_site_figure():
@@ -299,26 +271,19 @@ def test_site_figure():
     for name, values in (("platform_x", (0.0, 0.5)), ("platform_y", (0.0, 0.0)), ("heading_deg", (0.0, 30.0))):
         table[:2, COLUMNS.index(name)] = values
     result = SiteResult(site, table, COLUMNS, ("", "", "out of reach"), 0.0, "planar")
-    fig = site_figure(result)
-    try:
-        check_paper_ready(fig, "site.png")
-        (bar,) = [ax for ax in fig.axes if is_colorbar(ax)]
+    with paper_ready(site_figure(result), "site.png") as fig:
+        (bar,) = colour_bars(fig)
         assert bar.get_ylabel() == "kinematic capacity along +x (m/s)"
-    finally:
-        plt.close(fig)
     # positions that tie up to rounding (a symmetric robot's): one colour, and the colour bar reads
     # as the value, not as an offset plus 1e-9 of noise
     table[:2, COLUMNS.index("value")] = (7.498511612918628, 7.498511612918628 + 3e-9)
-    fig = site_figure(SiteResult(site, table, COLUMNS, ("", "", "out of reach"), 0.0, "planar"))
-    try:
+    with paper_ready(site_figure(SiteResult(site, table, COLUMNS, ("", "", "out of reach"), 0.0, "planar"))) as fig:
         fig.canvas.draw()
-        (bar,) = [ax for ax in fig.axes if is_colorbar(ax)]
+        (bar,) = colour_bars(fig)
         low, high = bar.get_ylim()
         assert high - low >= 0.01 * 7.4985 and low < 7.4985 < high
         labels = [t.get_text() for t in bar.get_yticklabels()] + [bar.yaxis.get_offset_text().get_text()]
         assert not any("e-" in text for text in labels), labels
-    finally:
-        plt.close(fig)
 
 
 def test_sweep_polar_plot_ticks_on_its_grid():
@@ -328,11 +293,7 @@ def test_sweep_polar_plot_ticks_on_its_grid():
     angles = np.arange(-30.0, 30.0 + 1e-9, 10.0)
     grid = SweepGrid(angle_deg=angles, distance=np.array([0.9, 1.1]))
     result = run_sweep(SweepSpec(robot="planar_dual_arm"), grid, workers=1)
-    fig = sweep_plot_figure(result, "kinematic.semi_axis_2")
-    try:
-        check_paper_ready(fig, "sweep --plot")
+    with paper_ready(sweep_plot_figure(result, "kinematic.semi_axis_2"), "sweep --plot") as fig:
         ax = fig.axes[0]
         ticks = np.degrees(ax.get_xticks())
         np.testing.assert_allclose(np.sort(ticks), angles, atol=1e-9)
-    finally:
-        plt.close(fig)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.sets import ellipsoid as ellipsoids
 from mobmanip.sets.ellipsoid import Ellipsoid
@@ -25,11 +24,6 @@ def _assert_same(fast, exact, rtol=1e-9):
         np.testing.assert_allclose(fast.generator @ fast.generator.T, exact.generator @ exact.generator.T,
                                    rtol=rtol, atol=rtol * scale**2)  # fmt: skip
         np.testing.assert_allclose(fast.matrix, exact.matrix, rtol=1e-7, atol=1e-9 * np.abs(exact.matrix).max())
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return mobmanip.load_robot("planar_dual_arm")
 
 
 def _random_q(robot, rng):

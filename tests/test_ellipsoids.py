@@ -86,11 +86,6 @@ def rng():
 
 
 @pytest.fixture(scope="module")
-def paper():
-    return mobmanip.load_robot("planar_dual_arm")
-
-
-@pytest.fixture(scope="module")
 def q0(paper):
     return paper.configuration(POSE, JOINTS)
 

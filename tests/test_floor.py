@@ -165,16 +165,20 @@ def test_compliant_normals_are_an_affine_function_of_the_contacts_positions():
         assert (np.abs(residual).max() < 1e-6 * normals.sum()) == affine, (load, residual)
 
 
+#: The issue table's columns: no floor, no tip-over alone, and tip-over with friction.
+ISSUE_FLOORS = {
+    "ideal": (),
+    "no_tip": (Floor(mu=None, level=True),),
+    "mu=0.5": (Floor(mu=0.5, load="any", level=True),),
+}
+
+
 def test_the_issue_table_in_numbers():
     """Issue 24's table (measured with an LP of this kind, any sharing of the load), at its
     printed rounding."""
     robot, q, task, _ = CASES["tiago_dual hold"]
     reach = {}
-    for label, floor in (
-        ("ideal", ()),
-        ("no_tip", (Floor(mu=None, level=True),)),
-        ("mu=0.5", (Floor(mu=0.5, load="any", level=True),)),
-    ):
+    for label, floor in ISSUE_FLOORS.items():
         P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=floor)
         e = np.eye(6)[0]
         reach[label] = (
@@ -186,11 +190,7 @@ def test_the_issue_table_in_numbers():
     assert [round(v, 2) for v in reach["mu=0.5"]] == [37.08, 27.87]
     paper, q0, _, _ = CASES["paper 0 deg"]
     policy = {}
-    for label, floor in (
-        ("ideal", ()),
-        ("no_tip", (Floor(mu=None, level=True),)),
-        ("mu=0.5", (Floor(mu=0.5, load="any", level=True),)),
-    ):
+    for label, floor in ISSUE_FLOORS.items():
         P = mobmanip.analyze(
             paper, q0, "planar", object_mass=MASS, measures=("dynamic_polytope_min_norm",), constraints=floor
         )

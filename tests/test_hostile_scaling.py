@@ -21,11 +21,6 @@ RTOL = 1e-9  # of each ellipsoid's size
 
 
 @pytest.fixture(scope="module")
-def paper():
-    return mobmanip.load_robot("planar_dual_arm")
-
-
-@pytest.fixture(scope="module")
 def q45(paper):
     return configuration_at(paper, optimal_posture(paper), angle_deg=45.0)
 

@@ -26,11 +26,6 @@ from test_batch import assert_same_ellipsoid
 pytestmark = pytest.mark.skipif(not kernel_available(), reason="Numba is not installed")
 
 
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
 def assert_same_analysis(fast, exact, label):
     for name in ("unified_jacobian", "reduced_inertia", "reduced_inertia_decoupled", "bias", "grasp_matrix"):
         a, b = getattr(fast, name), getattr(exact, name)

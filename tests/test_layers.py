@@ -206,18 +206,21 @@ def test_tests_and_scripts_use_public_names_only(folder):
 # the checks themselves fail for what they name
 
 
-def _copy_package(tmp_path: Path) -> Path:
+def _package_with(tmp_path: Path, module: str, addition: str) -> Path:
+    """A copy of the package with ``addition`` appended to its ``module`` (a path inside it)."""
     import shutil
 
     target = tmp_path / "mobmanip"
     shutil.copytree(PACKAGE, target, ignore=shutil.ignore_patterns("__pycache__", "*.js", "*.typed"))
+    path = target / module
+    path.write_text(path.read_text() + addition)
     return target
 
 
 def test_an_upward_import_is_caught(tmp_path):
-    package = _copy_package(tmp_path)
-    hull = package / "sets" / "hull.py"
-    hull.write_text(hull.read_text() + "\n\ndef _late():\n    from ..analysis import analyze\n\n    return analyze\n")
+    package = _package_with(
+        tmp_path, "sets/hull.py", "\n\ndef _late():\n    from ..analysis import analyze\n\n    return analyze\n"
+    )
     graph, _ = package_graph(package)
     found = layer_violations(graph)
     print("\n".join(found))
@@ -225,9 +228,9 @@ def test_an_upward_import_is_caught(tmp_path):
 
 
 def test_a_circle_is_caught(tmp_path):
-    package = _copy_package(tmp_path)
-    tasks = package / "robot" / "tasks.py"
-    tasks.write_text(tasks.read_text() + "\n\ndef _late():\n    from .spec import load_spec\n\n    return load_spec\n")
+    package = _package_with(
+        tmp_path, "robot/tasks.py", "\n\ndef _late():\n    from .spec import load_spec\n\n    return load_spec\n"
+    )
     graph, _ = package_graph(package)
     found = circles(graph)
     print(found)
@@ -235,8 +238,6 @@ def test_a_circle_is_caught(tmp_path):
 
 
 def test_a_private_crossing_is_caught(tmp_path):
-    package = _copy_package(tmp_path)
-    sweep = package / "sweep" / "runner.py"
-    sweep.write_text(sweep.read_text() + "\n\nfrom ..robot.model import _build_model  # noqa: E402\n")
+    package = _package_with(tmp_path, "sweep/runner.py", "\n\nfrom ..robot.model import _build_model  # noqa: E402\n")
     _, names = package_graph(package)
     assert any("takes the private _build_model of mobmanip.robot.model" in m for m in private_crossings(names))

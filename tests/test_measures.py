@@ -24,7 +24,7 @@ import mobmanip
 from conftest import random_configurations
 from mobmanip import EllipsoidBatch, Measure, MeasureTerms, TaskSet, register_measure, unregister_measure
 from mobmanip.batch import BatchSetup, ellipsoids_from_terms, iter_terms
-from mobmanip.casestudy import configuration_at, optimal_posture
+from mobmanip.casestudy import configuration_at
 from mobmanip.cli import main
 from mobmanip.commands.outputs import write_sweep_csv, write_sweep_npz
 from mobmanip.errors import MeasureError, MobmanipError, UnknownMeasureError
@@ -176,11 +176,6 @@ def toys():
     yield
     unregister_measure(DOUBLED.name)
     unregister_measure(BOX.name)
-
-
-@pytest.fixture(scope="module")
-def posture(robot):
-    return optimal_posture(robot)
 
 
 def _same_ellipsoid_document(got: dict, expected, rel: float = 1e-9) -> None:

@@ -23,6 +23,7 @@ import pytest
 
 import mobmanip
 from hostile_util import assert_one_line_error, run_cli
+from mjcf_util import compiled_inertia, read_beside_mujoco
 from mobmanip.descriptions import read_description
 from mobmanip.descriptions.resources import example_robot_data_share
 from mobmanip.errors import MjcfError
@@ -336,21 +337,17 @@ def test_full_inertias_and_geared_velocity_actuators_read_as_mujoco_reads_them(t
     turned in its parent, and each joint's velocity limit is the actuator's largest command over
     its gear, as MuJoCo's compiled gear and ctrlrange give it (multiplying by the gear is 16x off
     on the shoulder)."""
-    mujoco = pytest.importorskip("mujoco")
+    pytest.importorskip("mujoco")
     path = tmp_path / "full.xml"
     path.write_text(FULL_INERTIA)
-    description = read_description(path)
-    model = description.build_model(pin.JointModelPlanar())
-    theirs = mujoco.MjModel.from_xml_path(str(path))
+    description, model, theirs = read_beside_mujoco(path)
     for joint, body in (("shoulder", "upper"), ("elbow", "lower")):
-        b = theirs.body(body)
-        w, x, y, z = b.iquat
-        R = pin.Quaternion(w, x, y, z).normalized().matrix()
+        mass, com, tensor = compiled_inertia(theirs, body)
         # the description's reading (checks, repairs, the viewer) and Pinocchio's model alike
         for inertia in (_inertia_of(description.links[body]), model.inertias[model.getJointId(joint)]):
-            assert inertia.mass == pytest.approx(float(b.mass[0]), rel=1e-12)
-            np.testing.assert_allclose(inertia.lever, b.ipos, atol=1e-12)
-            np.testing.assert_allclose(inertia.inertia, R @ np.diag(b.inertia) @ R.T, atol=1e-9)
+            assert inertia.mass == pytest.approx(mass, rel=1e-12)
+            np.testing.assert_allclose(inertia.lever, com, atol=1e-12)
+            np.testing.assert_allclose(inertia.inertia, tensor, atol=1e-9)
     for joint in ("shoulder", "elbow"):
         on_joint = [a for a in range(theirs.nu) if theirs.actuator_trnid[a, 0] == theirs.joint(joint).id]
         (a,) = [a for a in on_joint if theirs.actuator_biastype[a] == 1]  # the velocity actuator (affine bias)

@@ -9,9 +9,9 @@ float32 computations, so they agree to 1e-6 relative, not to 1e-12 as its primit
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
+from mjcf_util import compiled_inertia, read_beside_mujoco
 from mobmanip.descriptions import read_description
 
 trimesh = pytest.importorskip("trimesh")
@@ -62,14 +62,9 @@ def test_mesh_bodies_weigh_what_mujoco_compiles(tmp_path):
     description equal MuJoCo's compiled ones to 1e-6 (the base alone, 1 kg and a unit tensor in
     Pinocchio before: 7.2 kg, the scaled block at 1000 kg/m^3)."""
     path = _write(tmp_path)
-    description = read_description(path)
-    model = description.build_model(pin.JointModelPlanar())
-    theirs = mujoco.MjModel.from_xml_path(str(path))
+    description, model, theirs = read_beside_mujoco(path)
     for joint, body in (("shoulder", "upper"), ("elbow", "lower")):
-        b = theirs.body(body)
-        w, x, y, z = b.iquat
-        R = pin.Quaternion(w, x, y, z).normalized().matrix()
-        expected = R @ np.diag(b.inertia) @ R.T
+        their_mass, com, expected = compiled_inertia(theirs, body)
         inertial = description.links[body].inertial
         Rl = inertial.origin.rotation
         for mass, lever, tensor in (
@@ -77,8 +72,8 @@ def test_mesh_bodies_weigh_what_mujoco_compiles(tmp_path):
             (model.inertias[model.getJointId(joint)].mass, model.inertias[model.getJointId(joint)].lever,
              model.inertias[model.getJointId(joint)].inertia),
         ):  # fmt: skip
-            assert mass == pytest.approx(float(b.mass[0]), rel=1e-6)
-            np.testing.assert_allclose(lever, b.ipos, atol=1e-6)
+            assert mass == pytest.approx(their_mass, rel=1e-6)
+            np.testing.assert_allclose(lever, com, atol=1e-6)
             np.testing.assert_allclose(tensor, expected, atol=1e-6 * np.abs(expected).max())
     base = theirs.body("base")
     assert description.links["base"].inertial.mass == pytest.approx(float(base.mass[0]), rel=1e-6)

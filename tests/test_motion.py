@@ -6,17 +6,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.errors import ConfigurationError, MobmanipError
 from mobmanip.motion import analyze_motion, motion_terms
 from mobmanip.terms.dynamics import frame_jacobians
 from mobmanip.terms.grasp import HeldObject
-
-
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
 
 
 def _moving_state(robot, rng, scale=0.5):

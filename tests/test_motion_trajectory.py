@@ -25,11 +25,6 @@ from mobmanip.motion.trajectory import (
 from mobmanip.motion.trajectory_analysis import analyze_trajectory
 
 
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
 def arc_motion(robot, n=60, duration=6.0, speed=0.3, yaw_rate=0.15, amplitude=0.25):
     """A platform on a circle (no slip) with every arm joint swinging: closed-form samples and
     the exact reduced velocities and accelerations of the arm joints."""

@@ -14,7 +14,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-import mobmanip
 from mobmanip.analysis.single import analyze
 from mobmanip.cli import main
 from mobmanip.errors import ArgumentError
@@ -23,11 +22,6 @@ from mobmanip.robot.tasks import get_task
 from mobmanip.viz.labels import objective_label
 
 STEP = 1e-5
-
-
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
 
 
 def _reference(robot, q, objective: Objective, task: str) -> float:

@@ -11,19 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import mobmanip
 from mobmanip.analysis import analyze
-from mobmanip.casestudy import configuration_at, optimal_posture
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return mobmanip.load_robot("planar_dual_arm")
-
-
-@pytest.fixture(scope="module")
-def posture(robot):
-    return optimal_posture(robot)
+from mobmanip.casestudy import configuration_at
 
 
 def kinematic(robot, posture, angle, rim_speed=None):

@@ -19,16 +19,6 @@ from mobmanip.placement.optimize import UnreachableObjectError
 from mobmanip.postures.inverse_kinematics import hold_from
 
 
-@pytest.fixture(scope="module")
-def paper():
-    return mobmanip.load_robot("planar_dual_arm")
-
-
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
 def check_holds(robot, result, orientation: bool):
     """Independently of the optimiser: forward kinematics puts every hand where the reference
     hold, turned by the result's hold_turn, puts it around the target; joints within limits."""

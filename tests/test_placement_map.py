@@ -24,11 +24,6 @@ OBJECTIVE = "kinematic:capacity:+x"
 
 
 @pytest.fixture(scope="module")
-def paper():
-    return mobmanip.load_robot("planar_dual_arm")
-
-
-@pytest.fixture(scope="module")
 def paper_map(paper):
     """A 13 x 13 grid of 0.25 m that contains place's optimum platform positions, (1, -1) and (1, 2)."""
     return placement_map(paper, TARGET, OBJECTIVE, np.arange(-0.5, 2.51, 0.25), np.arange(-1.0, 2.01, 0.25))

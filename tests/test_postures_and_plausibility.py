@@ -25,11 +25,6 @@ def _run(argv, capsys):
     return code, out.out, out.err
 
 
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
 # ----- named postures -----
 
 

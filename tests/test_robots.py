@@ -78,11 +78,6 @@ def _finite_difference_twists(robot, q, x) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
-@pytest.fixture(scope="module")
 def tiago_torso():
     return mobmanip.load_robot("tiago_dual_torso")
 

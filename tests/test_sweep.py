@@ -11,17 +11,11 @@ import pytest
 
 import mobmanip
 from mobmanip.analysis import analyze
-from mobmanip.casestudy import ArmPosture, arm_measure, configuration_at, optimal_posture
+from mobmanip.casestudy import ArmPosture, arm_measure, configuration_at
 from mobmanip.cli import main
 from mobmanip.errors import SpecError
 from mobmanip.sweep import SweepGrid, SweepSpec, parse_grid, run_sweep
 from mobmanip.sweep.runner import GridError, planar_arm, posture_at_reach
-
-
-@pytest.fixture(scope="module")
-def posture(robot):
-    return optimal_posture(robot)
-
 
 # ----- grid syntax -----
 

@@ -26,11 +26,6 @@ TIAGO_HOLD = dict(
 )
 
 
-@pytest.fixture(scope="module")
-def tiago():
-    return mobmanip.load_robot("tiago_dual")
-
-
 def rz(angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

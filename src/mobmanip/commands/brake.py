@@ -12,6 +12,7 @@ import math
 from ..support.reading import decimal
 from .common import (
     add_floor_options,
+    add_object_mass_option,
     add_robot_options,
     binding_summary,
     floor_constraints,
@@ -25,7 +26,7 @@ def register(sub) -> None:
         help="the hardest stop from a straight run holding the object, on the floor: distance, time, what stops it",
     )
     add_robot_options(parser)
-    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_object_mass_option(parser)
     parser.add_argument("--speed", type=decimal, default=1.0, metavar="M_S", help="the speed braked from (default 1)")
     parser.add_argument(
         "--within", type=decimal, metavar="M", help="also the highest speed from which the robot stops within M metres"

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
-import argparse
-import sys
-
-from ..robot.tasks import TASKS
 from ..support.reading import decimal
-from .common import add_motion_floor_options, add_progress_option, add_work_option, motion_floor, show_progress
+from .common import (
+    ROBOT_HELP,
+    add_guided_command,
+    add_motion_floor_options,
+    add_object_mass_option,
+    add_progress_option,
+    add_task_option,
+    add_work_option,
+    motion_floor,
+    report_partial_carry,
+    show_progress,
+)
 
 CARRY_HELP = """\
 PATH.csv has a header t,x,y and optionally z, yaw: the object's path (s, m, rad), relative to
@@ -46,15 +53,15 @@ examples:
 
 
 def register(sub) -> None:
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "carry",
-        help="whole-body motion carrying the object along a path with the most capacity",
-        description="Synthesise wheel and joint motions that carry the held object along a path while "
+        "whole-body motion carrying the object along a path with the most capacity",
+        "Synthesise wheel and joint motions that carry the held object along a path while "
         "maximising a measure, and compare with a pseudo-inverse baseline.",
-        epilog=CARRY_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        CARRY_HELP,
     )
-    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("robot", help=ROBOT_HELP)
     parser.add_argument("--path", required=True, metavar="PATH.csv", help="the object's path (see below)")
     parser.add_argument(
         "--objective",
@@ -62,9 +69,9 @@ def register(sub) -> None:
         metavar="ELLIPSOID:INDEX[:DIR|:BLOCK]",
         help="what to maximise (as for `place`, e.g. dynamic:minor_axis:linear; default kinematic:minor_axis)",
     )
-    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    add_task_option(parser)
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
-    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_object_mass_option(parser)
     parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
     parser.add_argument(
         "--prepare",
@@ -179,12 +186,7 @@ def run(args) -> int:
     except CarryFailed as failure:
         if not args.out:
             raise
-        # keep what succeeded, flagged partial: returning (not raising) lets the command's
-        # outputs be published; the error is still one line and the exit status 2
-        for written in carry_partial_outputs(robot, failure, args.out):
-            print(f"wrote {written} (partial: up to t = {failure.partial.t[-1]:g} s)")
-        print(f"mobmanip: error: {failure}", file=sys.stderr)
-        return 2
+        return report_partial_carry(failure, carry_partial_outputs(robot, failure, args.out))
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
     prep = result.preparation

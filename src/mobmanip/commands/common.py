@@ -10,6 +10,34 @@ import numpy as np
 from ..robot.tasks import TASKS
 from ..support.reading import decimal
 
+#: Where an option is added: a parser or one of its argument groups (both take add_argument).
+Options = argparse._ActionsContainer
+
+#: The positional ROBOT of the commands that take a built-in robot or a spec (not a bare URDF).
+ROBOT_HELP = "built-in robot name or path of a robot spec (.toml)"
+
+
+def add_guided_command(sub, name: str, summary: str, description: str, guide: str) -> argparse.ArgumentParser:
+    """A subcommand's parser whose ``--help`` ends with ``guide`` (file formats, examples) printed
+    as written, line breaks kept."""
+    return sub.add_parser(
+        name,
+        help=summary,
+        description=description,
+        epilog=guide,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+
+
+def add_task_option(parser: Options) -> None:
+    """--task NAME: one of the task spaces, else the spec's default."""
+    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+
+
+def add_object_mass_option(parser: Options) -> None:
+    """--object-mass KG: the held object's mass instead of the spec's."""
+    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+
 
 def add_urdf_options(parser: argparse.ArgumentParser, ee_required: bool = False) -> None:
     """--ee FRAME (repeatable) and --wheels RIGHT,LEFT, for a robot inferred from a URDF."""
@@ -38,7 +66,7 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
         "--q", metavar="Q.json", help='configuration {"platform": [x, y, yaw], "joints": {NAME: value}}'
     )
     add_posture_option(parser, "the configuration: a named posture of the spec, platform at the origin")
-    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
+    add_task_option(parser)
     add_strict_option(parser)
     add_description_options(parser)
 
@@ -214,11 +242,11 @@ def add_analysis_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
-    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_object_mass_option(parser)
     add_measure_option(parser)
 
 
-def add_measure_option(parser: argparse.ArgumentParser) -> None:
+def add_measure_option(parser: Options) -> None:
     """--measure NAME (repeatable): the measures to compute instead of the default ones."""
     from ..measures import default_measures, measure_names
 
@@ -239,7 +267,7 @@ def add_measure_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_floor_options(parser: argparse.ArgumentParser) -> None:
+def add_floor_options(parser: Options) -> None:
     """--ground, --mu, --no-traction: the capacity that holds on the floor."""
     parser.add_argument(
         "--ground",
@@ -454,7 +482,7 @@ def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
-def add_progress_option(parser: argparse.ArgumentParser, what: str = "") -> None:
+def add_progress_option(parser: Options, what: str = "") -> None:
     """``--no-progress``: a long run shows a progress bar on standard error when that is a terminal."""
     suffix = f" for {what}" if what else ""
     parser.add_argument(
@@ -593,3 +621,15 @@ def read_recorded(robot, args, work):
     for text in recording.report.warnings:
         notice(text)
     return recording.trajectory
+
+
+def report_partial_carry(failure, written: list[str]) -> int:
+    """After a carry that failed part-way, with --out: name the files kept of what succeeded
+    (flagged partial) and the error in one line; the exit status 2. Returning instead of raising
+    lets the command's outputs be published."""
+    import sys
+
+    for path in written:
+        print(f"wrote {path} (partial: up to t = {failure.partial.t[-1]:g} s)")
+    print(f"mobmanip: error: {failure}", file=sys.stderr)
+    return 2

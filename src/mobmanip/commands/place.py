@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 
 from ..support.reading import decimal
-from .common import add_progress_option, add_work_option, show_progress
+from .common import ROBOT_HELP, add_guided_command, add_progress_option, add_work_option, show_progress
 
 PLACE_HELP = """\
 objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX one of
@@ -55,15 +54,15 @@ examples:
 
 
 def register(sub) -> None:
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "place",
-        help="optimal platform pose and arm posture holding an object at a point",
-        description="Find the platform pose and arm posture that hold the object at a world point and "
+        "optimal platform pose and arm posture holding an object at a point",
+        "Find the platform pose and arm posture that hold the object at a world point and "
         "maximise a measure (gradient-based, several starts).",
-        epilog=PLACE_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        PLACE_HELP,
     )
-    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("robot", help=ROBOT_HELP)
     parser.add_argument("--object", required=True, metavar="X,Y,Z", help="object centre in the world (m)")
     parser.add_argument("--objective", required=True, metavar="ELLIPSOID:INDEX[:DIR]", help="what to maximise")
     parser.add_argument("--mass", type=decimal, metavar="KG", help="object mass (default: the spec's)")

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 from ..support.reading import decimal
-from .common import add_floor_options, add_robot_options
+from .common import add_floor_options, add_object_mass_option, add_robot_options
 
 #: MuJoCo's friction coefficient of the driven wheels when the floor does not limit traction.
 UNLIMITED_FRICTION = 10.0
@@ -31,7 +31,7 @@ HOLD_SHARE = 0.9
 def register(sub) -> None:
     parser = sub.add_parser("referee", help="replay the grounded maxima in MuJoCo (needs mobmanip[referee])")
     add_robot_options(parser)
-    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_object_mass_option(parser)
     add_floor_options(parser)
     parser.add_argument(
         "--fraction", type=decimal, default=1.0, help="share of each maximum replayed, in (0, 1] (default 1)"

@@ -4,14 +4,15 @@ within the wheels' and joints' limits and, with ``--ground``, on the floor
 
 from __future__ import annotations
 
-import argparse
-
-from ..robot.tasks import TASKS
 from ..support.reading import decimal
 from .common import (
+    ROBOT_HELP,
+    add_guided_command,
     add_motion_floor_options,
+    add_object_mass_option,
     add_progress_option,
     add_recording_options,
+    add_task_option,
     add_work_option,
     check_trajectory_source,
     motion_floor,
@@ -47,22 +48,22 @@ SECONDS_PER_SAMPLE = 5e-3
 
 
 def register(sub) -> None:
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "retime",
-        help="the fastest timing of a whole-body path, within limits and on the floor",
-        description="The time-optimal timing of a whole-body path from rest to rest: every wheel and joint within "
+        "the fastest timing of a whole-body path, within limits and on the floor",
+        "The time-optimal timing of a whole-body path from rest to rest: every wheel and joint within "
         "its velocity and effort limits and, with --ground, the robot on its floor (no tip-over, every support "
         "loaded, traction within friction).",
-        epilog=RETIME_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        RETIME_HELP,
     )
-    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("robot", help=ROBOT_HELP)
     parser.add_argument(
         "trajectory", metavar="TRAJ.csv", nargs="?", help="the path: a whole-body trajectory (see below), or --bag"
     )
     add_recording_options(parser)
-    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
-    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_task_option(parser)
+    add_object_mass_option(parser)
     parser.add_argument(
         "--stop-within",
         type=decimal,

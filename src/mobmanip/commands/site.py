@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import argparse
+from .common import add_guided_command
 
 SITE_HELP = """\
 SITE.toml names the robot, the objective (as mobmanip place) and the object positions, a list
@@ -45,12 +45,12 @@ SECONDS_PER_POSITION = 0.25
 def register(sub) -> None:
     from .common import add_dask_option, add_progress_option, add_work_option
 
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "site",
-        help="best placement and its value for every object position of a site (list or grid; Dask)",
-        description="Place the robot for every object position of a site and write one table and a map.",
-        epilog=SITE_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "best placement and its value for every object position of a site (list or grid; Dask)",
+        "Place the robot for every object position of a site and write one table and a map.",
+        SITE_HELP,
     )
     parser.add_argument("site", metavar="SITE.toml", help="the site file (see below)")
     parser.add_argument("--output", "-o", default="site", metavar="OUT_DIR", help="output directory (default: site)")

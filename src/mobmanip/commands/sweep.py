@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import argparse
-
 from ..support.reading import decimal
 from ..support.work import MAX_GRID_POINTS
+from .common import add_guided_command, add_object_mass_option
 
 GRID_HELP = """\
 grid syntax (each axis): START:STOP:COUNT gives COUNT evenly spaced values from START to STOP,
@@ -61,12 +60,12 @@ examples:
 def register(sub) -> None:
     from .common import add_dask_option, add_floor_options, add_measure_option, add_progress_option
 
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "sweep",
-        help="indices over object direction, distance, heading and limit scales (parallel)",
-        description="Sweep the unified ellipsoids' indices over a grid, on local cores.",
-        epilog=GRID_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "indices over object direction, distance, heading and limit scales (parallel)",
+        "Sweep the unified ellipsoids' indices over a grid, on local cores.",
+        GRID_HELP,
     )
     parser.add_argument("robot", help="built-in robot name (e.g. planar_dual_arm) or path of a robot spec (.toml)")
     grid = parser.add_argument_group("grid")
@@ -89,7 +88,7 @@ def register(sub) -> None:
     )
     analysis.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     analysis.add_argument("--platform", choices=["own", "fixed"], default="own", help="'fixed' locks the platform")
-    analysis.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_object_mass_option(analysis)
     analysis.add_argument(
         "--direction", default="radial", metavar="D", help="capacity direction: radial, tangential or X,Y[,...]"
     )

@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-import argparse
-import sys
-
 from ..support.reading import decimal
-from .common import add_work_option
+from .common import add_guided_command, add_work_option, report_partial_carry
 
 TEAM_CARRY_HELP = """\
 TEAM.toml is a team description (as for `mobmanip team`): the robots, where they stand, their
@@ -51,14 +48,14 @@ MAX_SCALE = 1e3
 
 
 def register(sub) -> None:
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "team-carry",
-        help="a team's whole-body motions carrying their object along a path with the most capacity",
-        description="Synthesise every robot's wheel and joint motions so that a team carries its object along a "
+        "a team's whole-body motions carrying their object along a path with the most capacity",
+        "Synthesise every robot's wheel and joint motions so that a team carries its object along a "
         "path within every robot's limits while maximising the team's capacity, and compare with a "
         "pseudo-inverse baseline.",
-        epilog=TEAM_CARRY_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        TEAM_CARRY_HELP,
     )
     parser.add_argument("description", metavar="TEAM.toml", help="the team description (robots, grasps, object)")
     parser.add_argument("--path", required=True, metavar="PATH.csv", help="the object's path (see below)")
@@ -160,10 +157,7 @@ def run(args) -> int:
     except CarryFailed as failure:
         if not args.out:
             raise
-        for written in team_carry_partial_outputs(team, failure, args.out):
-            print(f"wrote {written} (partial: up to t = {failure.partial.t[-1]:g} s)")
-        print(f"mobmanip: error: {failure}", file=sys.stderr)
-        return 2
+        return report_partial_carry(failure, team_carry_partial_outputs(team, failure, args.out))
     summary = result.summary()
     require_finite(summary)
     names = ", ".join(f"{m.name} ({m.robot.name})" for m in team.members)

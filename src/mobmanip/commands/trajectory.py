@@ -2,18 +2,20 @@
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 
 import numpy as np
 
-from ..robot.tasks import TASKS
 from ..support.reading import decimal
 from .common import (
+    ROBOT_HELP,
+    add_guided_command,
+    add_object_mass_option,
     add_progress_option,
     add_recording_options,
     add_strict_option,
+    add_task_option,
     add_work_option,
     check_trajectory_source,
     read_recorded,
@@ -48,20 +50,20 @@ example:
 
 
 def register(sub) -> None:
-    parser = sub.add_parser(
+    parser = add_guided_command(
+        sub,
         "trajectory",
-        help="measures, demands and time-scaling margin along a whole-body trajectory",
-        description="Analyse a time-stamped whole-body trajectory: per sample the kinematic and the in-motion "
+        "measures, demands and time-scaling margin along a whole-body trajectory",
+        "Analyse a time-stamped whole-body trajectory: per sample the kinematic and the in-motion "
         "dynamic ellipsoid, the object's velocity and acceleration against them, efforts against limits, and "
         "by how much the motion could be sped up.",
-        epilog=TRAJECTORY_HELP,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        TRAJECTORY_HELP,
     )
-    parser.add_argument("robot", help="built-in robot name or path of a robot spec (.toml)")
+    parser.add_argument("robot", help=ROBOT_HELP)
     parser.add_argument("trajectory", metavar="TRAJ.csv", nargs="?", help="the trajectory (see below), or --bag")
     add_recording_options(parser)
-    parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")
-    parser.add_argument("--object-mass", type=decimal, metavar="KG", help="mass of the held object (default: spec)")
+    add_task_option(parser)
+    add_object_mass_option(parser)
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
     parser.add_argument(
         "--polytope",

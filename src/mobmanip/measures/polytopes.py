@@ -11,7 +11,7 @@ import numpy as np
 
 from ..sets.taskset import TaskSet, TaskSetBatch
 from ..terms.builder import MeasureTerms
-from .registry import ACCELERATION, VELOCITY, BatchRequest, Compute, Measure, get_measure, register_measure
+from .registry import ACCELERATION, VELOCITY, BatchRequest, Compute, Measure, Quantity, get_measure, register_measure
 
 #: Polytope measures by name -> the kind :func:`mobmanip.sets.capacity.polytopes` builds.
 POLYTOPE_KINDS = {
@@ -127,51 +127,47 @@ def _polytopes_batch(request: BatchRequest) -> dict[str, TaskSetBatch]:
 
 _POLYTOPE_AXES = (("widths", "width"),)
 
-KINEMATIC_POLYTOPE = register_measure(
-    Measure(
-        name="kinematic_polytope",
-        json_key="kinematic_polytope",
-        quantity=VELOCITY,
-        label="kinematic polytope",
-        set_kind="polytope",
-        color=0x0B7A75,  # teal
-        locked_color=0xB8860B,  # dark gold
-        compute=_polytope_compute("kinematic"),
-        batch=_polytopes_batch,
-        axis_indices=_POLYTOPE_AXES,
-        honours_constraints=True,
-        description="exact set of object velocities, every wheel and joint within its own speed limit",
+
+def _register_polytope(name: str, quantity: Quantity, label: str, colors: tuple[int, int], description: str) -> Measure:
+    """Register one capacity polytope of :data:`POLYTOPE_KINDS` (its name also its JSON key):
+    computed by its kind's closed form or linear programs, swept by :func:`_polytopes_batch`,
+    every constraint honoured; ``colors``: its own and its locked counterpart's in the viewer."""
+    return register_measure(
+        Measure(
+            name=name,
+            json_key=name,
+            quantity=quantity,
+            label=label,
+            set_kind="polytope",
+            color=colors[0],
+            locked_color=colors[1],
+            compute=_polytope_compute(POLYTOPE_KINDS[name]),
+            batch=_polytopes_batch,
+            axis_indices=_POLYTOPE_AXES,
+            honours_constraints=True,
+            description=description,
+        )
     )
+
+
+KINEMATIC_POLYTOPE = _register_polytope(
+    "kinematic_polytope",
+    VELOCITY,
+    "kinematic polytope",
+    (0x0B7A75, 0xB8860B),  # teal, dark gold
+    "exact set of object velocities, every wheel and joint within its own speed limit",
 )
-DYNAMIC_POLYTOPE = register_measure(
-    Measure(
-        name="dynamic_polytope",
-        json_key="dynamic_polytope",
-        quantity=ACCELERATION,
-        label="dynamic polytope",
-        set_kind="polytope",
-        color=0x6A3FB5,  # violet
-        locked_color=0xA0522D,  # sienna
-        compute=_polytope_compute("dynamic"),
-        batch=_polytopes_batch,
-        axis_indices=_POLYTOPE_AXES,
-        honours_constraints=True,
-        description="exact set of object accelerations at rest, every torque within its own limit",
-    )
+DYNAMIC_POLYTOPE = _register_polytope(
+    "dynamic_polytope",
+    ACCELERATION,
+    "dynamic polytope",
+    (0x6A3FB5, 0xA0522D),  # violet, sienna
+    "exact set of object accelerations at rest, every torque within its own limit",
 )
-DYNAMIC_POLYTOPE_MIN_NORM = register_measure(
-    Measure(
-        name="dynamic_polytope_min_norm",
-        json_key="dynamic_polytope_min_norm",
-        quantity=ACCELERATION,
-        label="dynamic polytope, minimum-norm policy",
-        set_kind="polytope",
-        color=0xE0559F,  # pink
-        locked_color=0xFF8C1A,  # orange
-        compute=_polytope_compute("dynamic_min_norm"),
-        batch=_polytopes_batch,
-        axis_indices=_POLYTOPE_AXES,
-        honours_constraints=True,
-        description="object accelerations at rest of the paper's minimum-norm policy under box torque limits",
-    )
+DYNAMIC_POLYTOPE_MIN_NORM = _register_polytope(
+    "dynamic_polytope_min_norm",
+    ACCELERATION,
+    "dynamic polytope, minimum-norm policy",
+    (0xE0559F, 0xFF8C1A),  # pink, orange
+    "object accelerations at rest of the paper's minimum-norm policy under box torque limits",
 )

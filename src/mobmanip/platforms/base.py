@@ -179,6 +179,24 @@ class WheelsSpec:
         """URDF joints the platform keeps moving (they stay in the Pinocchio model)."""
         return ()
 
+    @staticmethod
+    def check_lengths(*lengths: tuple[str, float | None]) -> None:
+        """Each (label, value) length the table gives within range (:func:`positive_length`);
+        ``None``, read from the robot file instead, passes."""
+        for label, value in lengths:
+            if value is not None:
+                positive_length(label, value)
+
+    @staticmethod
+    def refuse_repeated(names: Sequence[str], kind: str) -> None:
+        """A SpecError naming the joints the table lists more than once (``kind``: how the
+        message names the platform's wheels, e.g. ``"skid-steer"``)."""
+        from ..errors import SpecError
+
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise SpecError(f"{kind} wheels listed twice: {repeated}")
+
 
 @dataclass(frozen=True)
 class Detected:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string, unicycle_rows
 from .wheels import radius_of, side_by_side_message, wheel_geometry
 
 if TYPE_CHECKING:
@@ -43,9 +43,7 @@ class WheelSpec(WheelsSpec):
     def __post_init__(self):
         if self.right == self.left:
             raise SpecError(f"right and left wheel are the same joint {self.right!r}")
-        for label, value in (("wheel radius", self.radius), ("half_track", self.half_track)):
-            if value is not None:
-                positive_length(label, value)
+        self.check_lengths(("wheel radius", self.radius), ("half_track", self.half_track))
 
     @property
     def joint_names(self) -> tuple[str, ...]:

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string, unicycle_rows
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string, unicycle_rows
 from .wheels import radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -55,13 +55,8 @@ class SkidSteerWheels(WheelsSpec):
         object.__setattr__(self, "left", tuple(self.left))
         if not self.right or not self.left:
             raise SpecError("a skid-steer platform needs at least one wheel on each side")
-        names = self.right + self.left
-        repeated = sorted({n for n in names if names.count(n) > 1})
-        if repeated:
-            raise SpecError(f"skid-steer wheels listed twice: {repeated}")
-        for label, value in (("wheel radius", self.radius), ("half_track", self.half_track)):
-            if value is not None:
-                positive_length(label, value)
+        self.refuse_repeated(self.right + self.left, "skid-steer")
+        self.check_lengths(("wheel radius", self.radius), ("half_track", self.half_track))
 
     @property
     def joint_names(self) -> tuple[str, ...]:

@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, positive_length, toml_string
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string
 from .wheels import LATERAL, radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -55,13 +55,8 @@ class SteeredWheels(WheelsSpec):
         object.__setattr__(self, "rear", tuple(self.rear))
         if not self.rear:
             raise SpecError("a steered base needs its rear wheels ([wheels] rear = [...])")
-        names = self.joint_names
-        repeated = sorted({n for n in names if names.count(n) > 1})
-        if repeated:
-            raise SpecError(f"steered-base wheels listed twice: {repeated}")
-        for label, value in (("wheel radius", self.radius), ("rear wheel radius", self.rear_radius)):
-            if value is not None:
-                positive_length(label, value)
+        self.refuse_repeated(self.joint_names, "steered-base")
+        self.check_lengths(("wheel radius", self.radius), ("rear wheel radius", self.rear_radius))
 
     @property
     def joint_names(self) -> tuple[str, ...]:

@@ -241,33 +241,17 @@ class Polytope(TaskSet):
     def ray_radius(self, direction: ArrayLike) -> float:
         """How far the set extends from its centre exactly along d: the largest t >= 0 with
         ``centre + t d / |d|`` in the set (one linear program; 0 when empty or flat across d)."""
-        from scipy.optimize import linprog
-
-        d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
-        norm = float(np.linalg.norm(d))
-        if norm == 0.0:
-            raise TaskError("ray_radius needs a non-zero direction")
+        u = self._unit_direction(direction, "ray_radius")
         if self.empty:
             return 0.0
-        n = self._G.shape[1]
-        # columns (t, y): F u t - G y = c - F centre, t >= 0, |y| <= 1; maximise t
-        A = np.hstack([(self._F @ (d / norm))[:, None], -self._G])
-        b = self._c - self._F @ self.center
-        cost = np.r_[-1.0, np.zeros(n)]
-        result = linprog(cost, A_eq=A, b_eq=b, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs")
-        return float(result.x[0]) if result.status == 0 else 0.0
+        return self._farthest_along(u, self._c - self._F @ self.center)  # from the centre
 
     def straight_line_reach(self, direction: ArrayLike) -> float:
         """The largest s >= 0 with ``s d / |d|`` in the set: how far along d from rest (the origin),
         exactly along d (0 when no point of the ray is in the set, or it is empty). A full-dimensional
         set of up to 3 dimensions intersects the ray with its facet inequalities; any other set
         solves one linear program."""
-        from scipy.optimize import linprog
-
-        d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
-        norm = float(np.linalg.norm(d))
-        if norm == 0.0:
-            raise TaskError("straight_line_reach needs a non-zero direction")
+        u = self._unit_direction(direction, "straight_line_reach")
         if self.empty:
             return 0.0
         if self.dim <= 3 and not len(self._eq_A):
@@ -276,20 +260,32 @@ class Polytope(TaskSet):
             except TaskError:  # too many candidate facets: the program below
                 pass
             else:
-                return _ray_in_halfspaces(A, b0 + h, d / norm)
+                return _ray_in_halfspaces(A, b0 + h, u)
+        return self._farthest_along(u, self._c)  # from the origin
+
+    def _unit_direction(self, direction: ArrayLike, what: str) -> np.ndarray:
+        """``direction`` scaled to unit length; a TaskError naming ``what`` when it is zero."""
+        d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
+        norm = float(np.linalg.norm(d))
+        if norm == 0.0:
+            raise TaskError(f"{what} needs a non-zero direction")
+        return d / norm
+
+    def _farthest_along(self, u: np.ndarray, rhs: np.ndarray) -> float:
+        """The largest t >= 0 with ``F u t - G y = rhs`` for some ``|y| <= 1`` (one linear program;
+        0 when there is none): how far the set reaches along the unit u from the point ``rhs``
+        stands for."""
+        from scipy.optimize import linprog
+
         n = self._G.shape[1]
-        A = np.hstack([(self._F @ (d / norm))[:, None], -self._G])  # F (s u) - G y = c
+        A = np.hstack([(self._F @ u)[:, None], -self._G])  # columns (t, y)
         result = linprog(
-            np.r_[-1.0, np.zeros(n)], A_eq=A, b_eq=self._c, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs"
+            np.r_[-1.0, np.zeros(n)], A_eq=A, b_eq=rhs, bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs"
         )
         return float(result.x[0]) if result.status == 0 else 0.0
 
     def radius_along(self, direction: ArrayLike) -> float:
-        d = self._directions(np.asarray(direction, dtype=float).reshape(1, -1))[0]
-        norm = float(np.linalg.norm(d))
-        if norm == 0.0:
-            raise TaskError("radius_along needs a non-zero direction")
-        d = d / norm
+        d = self._unit_direction(direction, "radius_along")
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
     def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
