@@ -148,3 +148,22 @@ def test_command_json_reproduces_with_analyze(tmp_path, capsys):
     code = main(["place", "planar_dual_arm", "--object", "1,0.5", "--objective", "dynamic:log_volume"])
     assert code == 2
     assert "--object must be three finite numbers" in capsys.readouterr().err
+
+
+def test_place_says_how_many_starts_reached_its_best_value(tmp_path, capsys):
+    """Each start's end value is in the JSON; the printed line and ``starts_agreeing`` count them
+    as the test does (within 1e-6 of the best, below it, no hold)."""
+    out = tmp_path / "place.json"
+    code = main(["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
+                 "--json", str(out)])  # fmt: skip
+    assert code == 0
+    printed = capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    ends = [s["value"] for s in doc["starts"]]
+    best = doc["value"]
+    assert best == max(v for v in ends if v is not None)
+    reached = sum(1 for v in ends if v is not None and v >= best - 1e-6 * abs(best))
+    failed = sum(1 for v in ends if v is None)
+    assert doc["starts_agreeing"] == {"best": reached, "lower": len(ends) - reached - failed, "failed": failed}
+    assert f"starts: {reached} of {len(ends)} reached the best value" in printed
+    assert 1 <= reached < len(ends)  # on the paper robot some starts stop at another optimum (7.4653 against 7.4985)

@@ -243,6 +243,20 @@ def _run(args, executor) -> int:
         f"{result.evaluations} measure evaluations, {len(result.runs)} starts, hold error {result.residual:.1e}, "
         f"{result.seconds:.2f} s"
     )
+    from ..placement.optimize import AGREEMENT_RTOL
+
+    ends = result.agreement()
+    short = result.value - AGREEMENT_RTOL * abs(result.value)
+    lower = [v for _, v in result.runs if v is not None and v < short]
+    print(
+        f"starts: {ends['best']} of {len(result.runs)} reached the best value"
+        + (
+            f", {ends['lower']} stopped lower (the highest of them at {max(lower):.7g}, the best {result.value:.7g})"
+            if lower
+            else ""
+        )
+        + (f", {ends['failed']} found no hold" if ends["failed"] else "")
+    )
     if collision is not None:
         print(f"self-collision: {len(collision.pairs)} shape pairs kept >= {collision.margin:g} m apart; "
               f"clearance {collision.clearance(result.q):.4f} m")  # fmt: skip

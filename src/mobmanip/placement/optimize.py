@@ -53,6 +53,8 @@ from ..support.lockstep import Lockstep
 if TYPE_CHECKING:
     from ..robot.collision import SelfCollision
 
+#: How close (relative) a start's value must come to the best to count as reaching it.
+AGREEMENT_RTOL = 1e-6
 #: A run's result holds the object when every position error is at most this (m) and every
 #: orientation error (rad) too.
 CONSTRAINT_TOLERANCE = 1e-6
@@ -135,6 +137,15 @@ class Placement:
     def platform(self) -> tuple[float, float, float]:
         """(x m, y m, heading rad) of the platform."""
         return float(self.q[0]), float(self.q[1]), math.atan2(self.q[3], self.q[2])
+
+    def agreement(self, rtol: float = AGREEMENT_RTOL) -> dict[str, int]:
+        """How the starts ended: ``{"best": reached the best value within ``rtol`` of its size,
+        "lower": stopped at a lower value, "failed": found no hold}``. Several starts at the best
+        say the search found that value more than once (a local optimum each start fell into
+        alone would show as one)."""
+        values = [v for _, v in self.runs if v is not None]
+        best = sum(1 for v in values if v >= self.value - rtol * max(abs(self.value), 1e-300))
+        return {"best": best, "lower": len(values) - best, "failed": len(self.runs) - len(values)}
 
 
 class PlacementProblem:
@@ -652,6 +663,7 @@ def placement_document(robot: Robot, placement: Placement, analysis: Analysis) -
         "hold_error": placement.residual,
         "evaluations": placement.evaluations,
         "starts": [{"start_value": s, "value": v} for s, v in placement.runs],
+        "starts_agreeing": placement.agreement(),
         "seconds": placement.seconds,
         "q": robot.configuration_dict(placement.q),
         "analysis": analysis.to_dict(),
