@@ -187,14 +187,14 @@ MUTANTS: tuple[Mutant, ...] = (
         'return float(np.min(np.einsum("ij,ij->i", normals, P) - normals @ np.asarray(point, dtype=float)[:2]))',
         'return float(np.max(np.einsum("ij,ij->i", normals, P) - normals @ np.asarray(point, dtype=float)[:2]))',
         "the stability margin is the distance to the farthest edge of the support polygon, not the nearest",
-        "tests/test_floor_reference.py", "tests/test_ground_along.py",
+        "tests/test_floor.py", "tests/test_floor_reference.py", "tests/test_ground_along.py",
     ),
     _m(
         "F11", "floor", SUPPORT,
         "free = (math.cos(angle), math.sin(angle))",
         "free = (math.sin(angle), math.cos(angle))",
         "a wheel's roller angle ([support] rollers) is measured from the platform's y axis instead of its x axis",
-        "tests/test_floor_kinds.py", "tests/test_retime_kinds.py",
+        "tests/test_floor_rollers.py", "tests/test_floor_kinds.py", "tests/test_retime_kinds.py",
     ),
     _m(
         "F12", "floor", CARRY_FLOOR,
@@ -428,7 +428,7 @@ MUTANTS: tuple[Mutant, ...] = (
         'yaw = math.radians(_number(entry.get("yaw_deg", 0.0), f"{here} yaw_deg"))',
         'yaw = _number(entry.get("yaw_deg", 0.0), f"{here} yaw_deg")',
         "a robot's yaw_deg is used as radians (a wrong unit)",
-        "tests/test_team_spec.py",
+        "tests/test_team_spec.py", "tests/test_team_carry.py",
     ),
     _m(
         "T04", "teams", MEMBERS,
