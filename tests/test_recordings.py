@@ -373,3 +373,19 @@ def test_a_ros2_bag_with_other_topic_names_is_read_by_message_type(robot, tmp_pa
     )
     code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", twice)
     assert_one_line_error(code, err, "2 topics carry sensor_msgs/msg/JointState", "--joint-states")
+
+
+def test_a_message_repeated_with_the_same_stamp_is_dropped_and_said(robot, tmp_path):
+    """A driver that publishes one joint state twice (the same header stamp, received 1 ms apart):
+    the copy is dropped as a clock jump, said in the report, and the motion is the one without it
+    (a repeated stamp would otherwise give a zero time step)."""
+    t = np.arange(40) * 0.025
+    records, _ = motion_records("ros1", t, motion(t))
+    joint_states = [r for r in records if r[0] == "/joint_states"]
+    topic, received, message = joint_states[17]
+    repeated = records + [(topic, received + 1_000_000, message)]
+    plain = read_recording(robot, write_bag(tmp_path / "plain", "ros1", records))
+    found = read_recording(robot, write_bag(tmp_path / "repeated", "ros1", repeated))
+    assert found.report.samples == plain.report.samples == 40
+    assert len(found.report.clock_jumps) == 1 and "0.000 s earlier" in found.report.clock_jumps[0]
+    np.testing.assert_array_equal(found.trajectory.q, plain.trajectory.q)
