@@ -912,6 +912,40 @@ def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str
     return rows, gears
 
 
+class _TrackedPlan(NamedTuple):
+    """A plan per tracked joint, for :meth:`Referee.follow` (:meth:`Referee._tracked_plan`).
+
+    Attributes:
+        names: the tracked joints (every actuated one), (j,).
+        dofs: their MuJoCo dofs, (j,); addresses: their MuJoCo positions' addresses, (j,).
+        planned: their positions per sample, unwound, in MuJoCo's sense, (N, j) rad or m.
+        rates: their rates per sample, (N, j).
+        forces: the plan's efforts as their generalized forces per sample, (N, j) N m or N.
+    """
+
+    names: tuple[str, ...]
+    dofs: np.ndarray
+    addresses: np.ndarray
+    planned: np.ndarray
+    rates: np.ndarray
+    forces: np.ndarray
+
+
+def _planned_base(robot, qs: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's base at each sample of configurations ``qs`` (N, nq) and reduced velocities
+    ``xs`` (N, nx): its pose, x, y (m) and yaw unwound (rad), (N, 3), and its velocity in world
+    axes, (N, 3) m/s and rad/s."""
+    n = qs.shape[0]
+    yaw = np.unwrap(np.arctan2(qs[:, 3], qs[:, 2]))
+    base = np.c_[qs[:, :2], yaw]
+    base_rate = np.zeros((n, 3))
+    for i in range(n):
+        v = robot.null_space(qs[i])[:3] @ xs[i]
+        c, s = math.cos(yaw[i]), math.sin(yaw[i])
+        base_rate[i] = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+    return base, base_rate
+
+
 class Referee:
     """A MuJoCo model of a mobmanip robot on the floor; build it with :func:`build`.
 
@@ -1246,7 +1280,31 @@ class Referee:
             mobmanip.errors.NotRepresentable: an omnidirectional base (its efforts are its wheels' traction,
                 which the plan does not give).
         """
-        robot, m, d = self.robot, self.model, self.data
+        t, qs, xs, tau, kp, kd = self._checked_plan(trajectory, efforts, feedback)
+        tracked = self._tracked_plan(t, qs, xs, tau)
+        base, base_rate = _planned_base(self.robot, qs, xs)
+        a = self._replay(t, qs[0], xs[0], tracked, base, base_rate, kp, kd)
+        out = MotionReplay(
+            self.supports, a["t"], a["fn"], a["ft"], a["use"], a["slip"], a["pen"], a["pos"], a["rpy"], a["acc"],
+            feedback=float(a["push"].max(initial=0.0)), planned_base=a["base"], base_error=a["base_error"],
+            yaw_error=a["yaw_error"], joints=tracked.names, joint_error=a["joint_error"], feedback_effort=a["push"],
+            deepest=a["deep"],
+        )  # fmt: skip
+        out.judge(slip_speed, at_limit, max_penetration)
+        return out
+
+    def _checked_plan(
+        self, trajectory: TimedMotion, efforts: np.ndarray, feedback: tuple[float, float]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
+        """A plan :meth:`follow` can replay, checked: ``(t, q, x, efforts, kp, kd)``, the arrays as
+        floats, (N,), (N, nq), (N, nx), (N, nx), and the feedback's gains.
+
+        Raises:
+            ArgumentError, mobmanip.errors.NotRepresentable: as :meth:`follow` says, but for a
+                plan whose configurations do not move its joints as its velocities do
+                (:meth:`_tracked_plan`).
+        """
+        robot, m = self.robot, self.model
         if self.drives:
             raise NotRepresentable(
                 f"{robot.name}'s base efforts are its wheels' traction: a motion replay covers bases its wheels' "
@@ -1282,8 +1340,19 @@ class Referee:
                 f"the plan starts {off:.3g} (m or rad) away from the configuration the model was built at: "
                 "build it at the plan's first configuration"
             )
+        return t, qs, xs, tau, kp, kd
 
-        # the plan per tracked joint: positions (unwound: the sum of the steps) and rates
+    def _tracked_plan(self, t: np.ndarray, qs: np.ndarray, xs: np.ndarray, tau: np.ndarray) -> _TrackedPlan:
+        """The plan per tracked joint (every actuated one), from its time stamps ``t`` (N,),
+        configurations ``qs`` (N, nq), reduced velocities ``xs`` (N, nx) and efforts ``tau``
+        (N, nx): the joints' positions (unwound: the sum of the configurations' steps, from the
+        built ones), their rates ``S x`` and their feed-forward forces.
+
+        Raises:
+            ArgumentError: configurations that do not move a tracked joint as the velocities do
+                (over the whole plan, by half or more).
+        """
+        robot, m, n = self.robot, self.model, t.shape[0]
         model = robot.model
         names = self._actuated
         columns = [model.joints[model.getJointId(name)].idx_v for name in names]
@@ -1303,17 +1372,36 @@ class Referee:
                 "(a trajectory file needs the wheels' columns)"
             )
         forces = np.array([self.generalized_force(tau[i])[dofs] for i in range(n)])
-        # the plan's base: pose and world velocity
-        yaw = np.unwrap(np.arctan2(qs[:, 3], qs[:, 2]))
-        base = np.c_[qs[:, :2], yaw]
-        base_rate = np.zeros((n, 3))
-        for i in range(n):
-            v = robot.null_space(qs[i])[:3] @ xs[i]
-            c, s = math.cos(yaw[i]), math.sin(yaw[i])
-            base_rate[i] = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+        return _TrackedPlan(names, dofs, addresses, planned, rates, forces)
 
+    def _replay(
+        self,
+        t: np.ndarray,
+        q0: np.ndarray,
+        x0: np.ndarray,
+        tracked: _TrackedPlan,
+        base: np.ndarray,
+        base_rate: np.ndarray,
+        kp: float,
+        kd: float,
+    ) -> dict[str, np.ndarray]:
+        """Run the replay :meth:`follow` describes from the plan's first configuration ``q0`` and
+        reduced velocity ``x0``, one row per time stamp of ``t`` (N,).
+
+        Args:
+            tracked: the plan per tracked joint (:meth:`_tracked_plan`).
+            base, base_rate: the plan's base pose and its world velocity per sample, (N, 3)
+                (:func:`_planned_base`).
+            kp, kd: the feedback's gains.
+
+        Returns:
+            The rows by key (:meth:`_record_row`), each an array with one row per sample.
+        """
+        m, d = self.model, self.data
+        n, step = t.shape[0], float(m.opt.timestep)
+        dofs, addresses, forces = tracked.dofs, tracked.addresses, tracked.forces
         self.reset()
-        self._set_velocity(qs[0], xs[0])
+        self._set_velocity(q0, x0)
         record = np.round((t - t[0]) / step).astype(int)  # the step of each sample's row
         keys = "t ft pos rpy acc base base_error yaw_error joint_error fn use slip pen deep push"
         rows: dict[str, list] = {key: [] for key in keys.split()}
@@ -1324,7 +1412,7 @@ class Referee:
             while i < n - 2 and now > t[i + 1]:
                 i += 1
             w = min(max((now - t[i]) / (t[i + 1] - t[i]), 0.0), 1.0)
-            target, target_rate = _hermite(t, planned, rates, i, t[i] + w * (t[i + 1] - t[i]))
+            target, target_rate = _hermite(t, tracked.planned, tracked.rates, i, t[i] + w * (t[i + 1] - t[i]))
             push = -kp * (d.qpos[addresses] - target) - kd * (d.qvel[dofs] - target_rate)
             d.qfrc_applied[:] = 0.0
             d.qfrc_applied[dofs] = (1.0 - w) * forces[i] + w * forces[i + 1] + push
@@ -1333,33 +1421,43 @@ class Referee:
             steps_since.append((f, slip, depth, np.abs(push)))
             r = len(rows["t"])
             if k == record[r]:  # sample r's row: the state now, the extremes since the last row
-                fs, slides, depths, pushes = (np.array(column) for column in zip(*steps_since))
-                steps_since = []
-                rows["fn"].append(fs[:, :, 2].min(axis=0))
-                rows["use"].append(self._friction_use(fs[:, :, 2], fs[:, :, :2]).max(axis=0))
-                rows["slip"].append(slides.max(axis=0))
-                rows["pen"].append(depths.min(axis=0))
-                rows["deep"].append(depths.max(axis=0))
-                rows["push"].append(pushes.max(axis=0))
-                rows["t"].append(now)
-                rows["ft"].append(f[:, :2])
-                position, R = d.xpos[self._base].copy(), d.xmat[self._base].reshape(3, 3)
-                rows["pos"].append(position)
-                rows["rpy"].append(pin.rpy.matrixToRpy(R))
-                rows["acc"].append(self.acceleration())
                 plan, _ = _hermite(t, base, base_rate, min(r, n - 2), now)
-                rows["base"].append(plan)
-                rows["base_error"].append(float(np.hypot(*(position[:2] - plan[:2]))))
-                turn = math.atan2(R[1, 0], R[0, 0]) - plan[2]
-                rows["yaw_error"].append((turn + math.pi) % (2.0 * math.pi) - math.pi)
-                rows["joint_error"].append(d.qpos[addresses] - target)
+                self._record_row(rows, steps_since, now, plan, d.qpos[addresses] - target)
+                steps_since = []
             mujoco.mj_Euler(m, d)
-        a = {key: np.array(value) for key, value in rows.items()}
-        out = MotionReplay(
-            self.supports, a["t"], a["fn"], a["ft"], a["use"], a["slip"], a["pen"], a["pos"], a["rpy"], a["acc"],
-            feedback=float(a["push"].max(initial=0.0)), planned_base=a["base"], base_error=a["base_error"],
-            yaw_error=a["yaw_error"], joints=names, joint_error=a["joint_error"], feedback_effort=a["push"],
-            deepest=a["deep"],
-        )  # fmt: skip
-        out.judge(slip_speed, at_limit, max_penetration)
-        return out
+        return {key: np.array(value) for key, value in rows.items()}
+
+    def _record_row(
+        self, rows: dict[str, list], steps: list[tuple], now: float, plan: np.ndarray, joint_error: np.ndarray
+    ) -> None:
+        """Add one row of a replay (:meth:`follow`) to ``rows``, by key.
+
+        Args:
+            rows: the rows so far, by key, each a list: ``fn`` ``use`` ``slip`` ``pen`` ``deep``
+                ``push`` the extremes over the row's ``steps``, ``t`` ``ft`` ``pos`` ``rpy`` ``acc``
+                ``base`` ``base_error`` ``yaw_error`` ``joint_error`` the state now.
+            steps: each MuJoCo step since the last row, the last one now: ``(floor forces (n, 3)
+                N, slide speed (n,) m/s, depth (n,) m, feedback magnitude (j,))``.
+            now: the time (s, from the plan's first time stamp).
+            plan: the plan's base pose now, x, y (m), yaw (rad), (3,).
+            joint_error: MuJoCo's tracked joints' positions minus the plan's now, (j,).
+        """
+        fs, slides, depths, pushes = (np.array(column) for column in zip(*steps))
+        rows["fn"].append(fs[:, :, 2].min(axis=0))
+        rows["use"].append(self._friction_use(fs[:, :, 2], fs[:, :, :2]).max(axis=0))
+        rows["slip"].append(slides.max(axis=0))
+        rows["pen"].append(depths.min(axis=0))
+        rows["deep"].append(depths.max(axis=0))
+        rows["push"].append(pushes.max(axis=0))
+        rows["t"].append(now)
+        rows["ft"].append(steps[-1][0][:, :2])
+        d = self.data
+        position, R = d.xpos[self._base].copy(), d.xmat[self._base].reshape(3, 3)
+        rows["pos"].append(position)
+        rows["rpy"].append(pin.rpy.matrixToRpy(R))
+        rows["acc"].append(self.acceleration())
+        rows["base"].append(plan)
+        rows["base_error"].append(float(np.hypot(*(position[:2] - plan[:2]))))
+        turn = math.atan2(R[1, 0], R[0, 0]) - plan[2]
+        rows["yaw_error"].append((turn + math.pi) % (2.0 * math.pi) - math.pi)
+        rows["joint_error"].append(joint_error)
