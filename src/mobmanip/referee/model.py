@@ -480,6 +480,53 @@ def build(
             docstring).
     """
     actuation, gears = _actuation(robot)  # refuses what MuJoCo cannot drive, before any work
+    spec, locks, repairs = _robot_spec(robot)
+    base = spec.worldbody.first_body()
+    _set_options(spec, timestep, impratio, gravity)
+    soft = {"solref": [2.0 * timestep, 1.0], "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0]}
+    q = np.asarray(q, dtype=float)
+    contacts, radius, lift = _floor_contacts(robot, q, support_points, contacts)
+    supports, drives = _add_supports(spec, base, contacts, radius, lift, mu, penetration)
+    _add_floor_pairs(spec, supports, stiffness, soft)
+    _add_joint_equalities(spec, locks, gears, soft)
+    pose, joints = (q[0], q[1], math.atan2(q[3], q[2])), joint_positions(robot, q)
+    joints.update(locks)
+    model = spec.compile()
+    qpos0, hands = _built_qpos(model, pose, lift, joints), [arm.end_effector for arm in robot.arms]
+    grips = 0  # a level grasp's grips
+    if object is not None:
+        grasp = grasp or ("point" if robot.spec.default_task in ("planar", "translational") else "weld")
+        centre = _hold_object(spec, model, qpos0, object, grasp, hands, lift, soft)
+        model = spec.compile()
+        qpos0 = _built_qpos(model, pose, lift, joints)
+        if grasp != "level":  # (its slides start at 0: the body's own position)
+            qpos0[model.joint("object_free").qposadr[0] :][:7] = [*centre, 1.0, 0.0, 0.0, 0.0]
+        grips = len(hands) if grasp == "level" else 0
+    _soften(model, base.name, supports, grips, regularisation, equal_supports)
+    referee = Referee(robot, model, qpos0, tuple(supports), hands, object is not None, repairs, lift, actuation)
+    referee.drives = tuple((name, int(model.joint(joint).dofadr[0]), axis) for name, joint, axis in drives)
+    return referee
+
+
+#: A floor contact as :func:`build` takes it: name, point in the root link frame (3,) m, driven,
+#: rollers' free direction in the root frame (2,) or ``None``.
+_Contact = tuple[str, np.ndarray, bool, tuple[float, float] | None]
+
+
+def _robot_spec(robot) -> tuple[mujoco.MjSpec, dict[str, float], dict[str, tuple[np.ndarray, np.ndarray]]]:
+    """MuJoCo's spec of the robot's own file (:func:`mjcf_spec` for MJCF, :func:`stripped_urdf`
+    for a URDF or xacro file), its root body on a free joint ``floating_base`` and every hinge
+    and slide moving freely: no damping, stiffness, friction loss or limits (an MJCF joint mobmanip
+    keeps moving keeps its armature, which mobmanip's mass matrix has too).
+
+    Returns:
+        ``(spec, locks, repairs)``: the spec; the MJCF joints mobmanip locks, by name, with their
+        values (rad or m; none for a URDF, whose locked joints are fixed); the inertia repairs,
+        link -> (old, new) (3, 3) kg m^2.
+
+    Raises:
+        mobmanip.errors.NotRepresentable: a file MuJoCo's model is not built from.
+    """
     mjcf = _file_kind(robot) == "mjcf"
     if mjcf:  # MuJoCo's own format: its parser reads the file itself
         spec, locks = mjcf_spec(robot)
@@ -487,8 +534,7 @@ def build(
     else:
         text, repairs = stripped_urdf(robot)
         spec, locks = mujoco.MjSpec.from_string(text), {}
-    base = spec.worldbody.first_body()
-    base.add_freejoint(name="floating_base")
+    spec.worldbody.first_body().add_freejoint(name="floating_base")
     for joint in spec.joints:
         if joint.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
             # an MJCF joint's armature is in mobmanip's mass matrix too (Pinocchio's MJCF builder reads it)
@@ -496,15 +542,40 @@ def build(
             joint.damping, joint.stiffness, joint.frictionloss = np.zeros(3), np.zeros(3), 0.0
             joint.armature = armature
             joint.limited = joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE
+    return spec, locks, repairs
+
+
+def _set_options(spec: mujoco.MjSpec, timestep: float, impratio: float, gravity: np.ndarray | None) -> None:
+    """The simulation's options: ``timestep`` (s), ``impratio``, ``gravity`` (3,) m/s^2 (default
+    straight down), elliptic friction cones and the Newton solver run to a tight tolerance."""
     option = spec.option
     down = [0.0, 0.0, -GRAVITY] if gravity is None else [float(v) for v in gravity]
     option.timestep, option.impratio, option.gravity = timestep, impratio, down
     option.cone, option.solver = mujoco.mjtCone.mjCONE_ELLIPTIC, mujoco.mjtSolver.mjSOL_NEWTON
     option.iterations, option.tolerance, option.ls_iterations = 1000, 1e-12, 100
-    soft = {"solref": [2.0 * timestep, 1.0], "solimp": [0.9999, 0.9999, 0.001, 0.5, 2.0]}
 
+
+def _floor_contacts(
+    robot, q: np.ndarray, support_points: Mapping[str, np.ndarray] | None, contacts: Sequence[tuple] | None
+) -> tuple[list[_Contact], dict[str, float], float]:
+    """The contacts :func:`build` puts spheres at, checked: the ones given, else a driven one
+    below each wheel of the platform and a passive one at each of ``support_points``.
+
+    Args:
+        robot: the robot; ``q`` its configuration (nq,) (only its joints matter: the wheels'
+            axles are taken with the platform at the origin, as in mobmanip's model).
+        support_points, contacts: as :func:`build`'s.
+
+    Returns:
+        ``(contacts, radius, lift)``: each contact as ``(name, point (3,), driven, free
+        direction or None)``; each platform wheel's radius (m) by joint name; the height of the
+        root link's origin above the floor (m).
+
+    Raises:
+        ArgumentError: both kinds of contacts given, none at all, a wheel's contact not below its
+            axle by its radius, or wheels not on one floor.
+    """
     # The wheels' axles at the platform's origin (mobmanip's model) give each wheel's contact.
-    q = np.asarray(q, dtype=float)
     home, data = q.copy(), robot.model.createData()
     home[:4] = (0.0, 0.0, 1.0, 0.0)
     pin.forwardKinematics(robot.model, data, home)
@@ -515,23 +586,54 @@ def build(
         contacts += [(name, point, False) for name, point in (support_points or {}).items()]
     elif support_points:
         raise ArgumentError("give the contacts or the passive support points, not both")
-    contacts = [(str(c[0]), np.asarray(c[1], dtype=float), bool(c[2]), c[3] if len(c) > 3 else None) for c in contacts]
-    wheels = [name for name, _, _, _ in contacts if name in radius]
-    for name, point, _, _ in contacts:
+    out = [(str(c[0]), np.asarray(c[1], dtype=float), bool(c[2]), c[3] if len(c) > 3 else None) for c in contacts]
+    wheels = [name for name, _, _, _ in out if name in radius]
+    for name, point, _, _ in out:
         if name in radius and np.linalg.norm(point - axles[name] + [0.0, 0.0, radius[name]]) > 1e-6:
             raise ArgumentError(f"contact {name!r} at {point} m is not below its wheel's axle by its radius")
-    if not contacts:
+    if not out:
         raise ArgumentError(f"{robot.name} has no contacts with the floor")
     # the floor's height in the root frame: the wheels' contacts (else the first contact)
-    heights = [-point[2] for name, point, _, _ in contacts if name in wheels] or [-contacts[0][1][2]]
+    heights = [-point[2] for name, point, _, _ in out if name in wheels] or [-out[0][1][2]]
     if max(heights) - min(heights) > 1e-6:
         raise ArgumentError(f"wheels {wheels} do not stand on one floor (root heights {heights} m)")
-    lift = heights[0]
+    return out, radius, heights[0]
 
-    def friction(name: str, driven: bool) -> float:
-        default = 0.5 if driven else 0.0
-        return float(mu.get(name, default) if isinstance(mu, Mapping) else (mu if driven else 0.0))
 
+def _friction(mu: float | Mapping[str, float], name: str, driven: bool) -> float:
+    """Contact ``name``'s friction coefficient from :func:`build`'s ``mu``."""
+    default = 0.5 if driven else 0.0
+    return float(mu.get(name, default) if isinstance(mu, Mapping) else (mu if driven else 0.0))
+
+
+def _add_supports(
+    spec: mujoco.MjSpec,
+    base,
+    contacts: list[_Contact],
+    radius: Mapping[str, float],
+    lift: float,
+    mu: float | Mapping[str, float],
+    penetration: float,
+) -> tuple[list[Support], list[tuple[str, str, np.ndarray]]]:
+    """The floor (a plane in the world body) and a contact sphere for each contact, touching
+    nothing by itself (each touches the floor through its own pair: :func:`_add_floor_pairs`):
+    on its wheel's body for a platform wheel; on a hub under the root body ``base`` for an
+    omnidirectional base's wheel (:func:`_add_hub`); on ``base`` for a passive support.
+
+    Args:
+        spec: the robot's spec, edited.
+        contacts: from :func:`_floor_contacts`; ``radius`` its wheel radii and ``lift`` the floor's
+            depth below the root link's origin (m).
+        mu, penetration: as :func:`build`'s.
+
+    Returns:
+        ``(supports, drives)``: the supports, wheels first; each hub's driven slide as ``(contact
+        name, slide joint name, axis in the root frame (2,))``.
+
+    Raises:
+        ArgumentError: a contact that is not a wheel and not on the floor.
+    """
+    wheels = [name for name, _, _, _ in contacts if name in radius]
     sphere, free = mujoco.mjtGeom.mjGEOM_SPHERE, {"contype": 0, "conaffinity": 0}
     spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.1], **free)
     supports, drives = [], []
@@ -543,27 +645,54 @@ def build(
             )  # (an MJCF joint may sit off its body's origin)
             size = [radius[name] + penetration, 0, 0]
             body.add_geom(name=f"contact_{name}", type=sphere, size=size, pos=anchor, **free)
-            supports.append(Support(name, driven, body.name, point, friction(name, driven)))
+            supports.append(Support(name, driven, body.name, point, _friction(mu, name, driven)))
             continue
         if abs(point[2] + lift) > 1e-6:
             raise ArgumentError(f"support {name!r} at z = {point[2]:.6g} m is not on the floor (z = {-lift:.6g} m)")
         centre = [point[0], point[1], -lift + SUPPORT_RADIUS - penetration]
         if driven:  # an omnidirectional base's wheel: a hub on two slides (see the module's docstring)
-            hub = base.add_body(name=f"hub_{name}", pos=centre, mass=HUB_MASS, explicitinertial=True)
-            hub.ipos, hub.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
-            hub.fullinertia = [HUB_MASS * HUB_RADIUS**2] * 3 + [0.0, 0.0, 0.0]
-            along = np.array([1.0, 0.0]) if rollers is None else np.asarray(rollers, dtype=float)
-            along = along / np.linalg.norm(along)
-            for k, axis in enumerate((along, np.array([-along[1], along[0]]))):
-                joint = f"hub_{name}_{k}"
-                hub.add_joint(name=joint, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[axis[0], axis[1], 0.0])
-                if k == 1 or rollers is None:  # the rollers' free direction carries nothing
-                    drives.append((name, joint, axis))
-            hub.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], **free)
-            supports.append(Support(name, driven, hub.name, point, friction(name, driven)))
+            hub, slides = _add_hub(base, name, centre, rollers)
+            drives += slides
+            supports.append(Support(name, driven, hub.name, point, _friction(mu, name, driven)))
             continue
         base.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], pos=centre, **free)
-        supports.append(Support(name, driven, base.name, point, friction(name, driven)))
+        supports.append(Support(name, driven, base.name, point, _friction(mu, name, driven)))
+    return supports, drives
+
+
+def _add_hub(
+    base, name: str, centre: list[float], rollers: tuple[float, float] | None
+) -> tuple[mujoco.MjsBody, list[tuple[str, str, np.ndarray]]]:
+    """An omnidirectional base's wheel ``name``: a hub body under the root body ``base`` at
+    ``centre`` (root frame, m) on two slides along the floor, carrying the contact sphere.
+
+    Returns:
+        ``(hub, drives)``: the hub's body, and the slides that pass the wheel's traction to the
+        base (the one across the rollers' free direction ``rollers`` (2,); both without rollers),
+        each as ``(name, slide joint name, axis in the root frame (2,))``.
+    """
+    sphere, free = mujoco.mjtGeom.mjGEOM_SPHERE, {"contype": 0, "conaffinity": 0}
+    drives = []
+    hub = base.add_body(name=f"hub_{name}", pos=centre, mass=HUB_MASS, explicitinertial=True)
+    hub.ipos, hub.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+    hub.fullinertia = [HUB_MASS * HUB_RADIUS**2] * 3 + [0.0, 0.0, 0.0]
+    along = np.array([1.0, 0.0]) if rollers is None else np.asarray(rollers, dtype=float)
+    along = along / np.linalg.norm(along)
+    for k, axis in enumerate((along, np.array([-along[1], along[0]]))):
+        joint = f"hub_{name}_{k}"
+        hub.add_joint(name=joint, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[axis[0], axis[1], 0.0])
+        if k == 1 or rollers is None:  # the rollers' free direction carries nothing
+            drives.append((name, joint, axis))
+    hub.add_geom(name=f"contact_{name}", type=sphere, size=[SUPPORT_RADIUS, 0, 0], **free)
+    return hub, drives
+
+
+def _add_floor_pairs(
+    spec: mujoco.MjSpec, supports: list[Support], stiffness: Mapping[str, float] | None, soft: Mapping[str, list]
+) -> None:
+    """The floor's contact with each support's sphere: with the support's friction (round, none
+    for a frictionless one), as soft as ``soft`` says for the stiffest contacts, softer for the
+    others in proportion to their relative ``stiffness`` (by contact name, missing: 1)."""
     k = {s.name: float((stiffness or {}).get(s.name, 1.0)) for s in supports}
     stiffest = max(k.values())
     for s in supports:
@@ -575,85 +704,133 @@ def build(
             d = 1.0 / (1.0 + ratio)
             pair["solimp"] = [d, d, *soft["solimp"][2:]]
         spec.add_pair(geomname1="floor", geomname2=f"contact_{s.name}", condim=condim, friction=friction_5, **pair)
+
+
+def _add_joint_equalities(
+    spec: mujoco.MjSpec, locks: Mapping[str, float], gears: Sequence[tuple[str, str, float]], soft: Mapping[str, list]
+) -> None:
+    """Joint equalities, as soft as ``soft`` says: each joint mobmanip locks held at its value
+    (``locks``, rad or m), and each wheel one effort drives together with another geared to it
+    (``gears``: ``(follower, leader, ratio)``, from :func:`_actuation`)."""
     for name, value in locks.items():  # the joints mobmanip locks, held at their values
         lock = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=name, **soft)
         lock.data[:5] = [value - float(spec.joint(name).ref), 0.0, 0.0, 0.0, 0.0]  # from its qpos0 (its ref)
     for follower, leader, ratio in gears:  # wheels one effort drives together turn together
         gear = spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=follower, name2=leader, **soft)
         gear.data[:5] = [0.0, ratio, 0.0, 0.0, 0.0]  # follower - its qpos0 = ratio (leader - its qpos0)
-    (x, y, yaw), joints = (q[0], q[1], math.atan2(q[3], q[2])), joint_positions(robot, q)
-    joints.update(locks)
 
-    def configuration(model) -> np.ndarray:
-        qpos = model.qpos0.copy()
-        qpos[model.joint("floating_base").qposadr[0] :][:7] = [x, y, lift, math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
-        for name, value in joints.items():
-            qpos[model.joint(name).qposadr[0]] = value
-        return qpos
 
-    model = spec.compile()
-    qpos0, hands = configuration(model), [arm.end_effector for arm in robot.arms]
-    if object is not None:
-        grasp = grasp or ("point" if robot.spec.default_task in ("planar", "translational") else "weld")
-        if grasp not in GRASPS:
-            raise ArgumentError(f"grasp must be one of {', '.join(GRASPS)}, got {grasp!r}")
-        placed = mujoco.MjData(model)
-        placed.qpos[:] = qpos0
-        mujoco.mj_kinematics(model, placed)
-        centre, inertia = np.asarray(object.center, dtype=float) + [0.0, 0.0, lift], np.asarray(object.inertia)
-        body = spec.worldbody.add_body(name="object", pos=centre, mass=float(object.mass), explicitinertial=True)
-        body.ipos, body.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # the centre of mass at the centre
-        body.fullinertia = [*np.diag(inertia), inertia[0, 1], inertia[0, 2], inertia[1, 2]]
-        if grasp == "level":  # it moves, tilts as the hands tilt it, never turns about the vertical
-            for axis, name in zip(np.eye(3), ("x", "y", "z")):
-                body.add_joint(name=f"object_{name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis)
-            for axis, name in zip(np.eye(3)[:2], ("roll", "pitch")):
-                body.add_joint(name=f"object_{name}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis)
-        else:
-            body.add_freejoint(name="object_free")
-        for k, hand in enumerate(hands):
-            if spec.body(hand) is None:
-                raise ArgumentError(f"end effector {hand!r} is not a link of the URDF")
-            p, R = placed.body(hand).xpos.copy(), placed.body(hand).xmat.reshape(3, 3).copy()
-            if np.linalg.norm(p - centre - np.asarray(object.offsets[k])) > 1e-6:
-                raise ArgumentError(
-                    f"grasp point {k} of the object is not at hand {hand!r} (hand - centre {p - centre})"
-                )
-            if grasp == "weld":  # a site at the hand frame on both
-                quat = np.zeros(4)
-                mujoco.mju_mat2Quat(quat, R.ravel())
-                body.add_site(name=f"grasp_{k}", pos=p - centre, quat=quat)
-                spec.body(hand).add_site(name=f"hand_{k}")
-            elif grasp == "point":  # a site at the object's centre on both
-                body.add_site(name=f"grasp_{k}")
-                spec.body(hand).add_site(name=f"hand_{k}", pos=R.T @ (centre - p))
-            else:  # welded to a grip that turns about the vertical on the object, at the hand's origin
-                grip = body.add_body(name=f"grip_{k}", pos=p - centre, mass=GRIP_MASS, explicitinertial=True)
-                grip.ipos, grip.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
-                grip.fullinertia = [GRIP_MASS * GRIP_RADIUS**2] * 3 + [0.0, 0.0, 0.0]
-                grip.add_joint(name=f"grip_{k}_yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0])
-                quat = np.zeros(4)
-                mujoco.mju_mat2Quat(quat, R.ravel())
-                grip.add_site(name=f"grasp_{k}", quat=quat)
-                spec.body(hand).add_site(name=f"hand_{k}")
-            kind = mujoco.mjtEq.mjEQ_CONNECT if grasp == "point" else mujoco.mjtEq.mjEQ_WELD
-            site = mujoco.mjtObj.mjOBJ_SITE
-            spec.add_equality(type=kind, objtype=site, name1=f"grasp_{k}", name2=f"hand_{k}", **soft)
-        model = spec.compile()
-        qpos0 = configuration(model)
-        if grasp != "level":  # (its slides start at 0: the body's own position)
-            qpos0[model.joint("object_free").qposadr[0] :][:7] = [*centre, 1.0, 0.0, 0.0, 0.0]
-    if object is not None and grasp == "level":  # as stiff as the object's own constraints
-        for k in range(len(hands)):
-            model.body_invweight0[model.body(f"grip_{k}").id] = model.body_invweight0[model.body("object").id]
+def _built_qpos(model, pose: tuple[float, float, float], lift: float, joints: Mapping[str, float]) -> np.ndarray:
+    """MuJoCo's configuration (model.nq,) of the built robot: the root link at the planar
+    ``pose`` (x, y m; yaw rad) ``lift`` (m) above the floor, the named ``joints`` at their values
+    (rad or m), everything else at the model's ``qpos0``."""
+    x, y, yaw = pose
+    qpos = model.qpos0.copy()
+    qpos[model.joint("floating_base").qposadr[0] :][:7] = [x, y, lift, math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]
+    for name, value in joints.items():
+        qpos[model.joint(name).qposadr[0]] = value
+    return qpos
+
+
+def _hold_object(
+    spec: mujoco.MjSpec,
+    model,
+    qpos0: np.ndarray,
+    object,
+    grasp: str,
+    hands: Sequence[str],
+    lift: float,
+    soft: Mapping[str, list],
+) -> np.ndarray:
+    """Add the held object to the spec: a body at its centre with its mass and inertia, free
+    (on a free joint; a ``"level"`` grasp's on slides and the roll and pitch hinges), held by each
+    hand as the ``grasp`` says (see :func:`build`) through an equality as soft as ``soft``.
+
+    Args:
+        spec: the robot's spec, edited; ``model`` compiled from it without the object, and
+            ``qpos0`` its built configuration (where the hands are).
+        object: as :func:`build`'s; its centre is taken ``lift`` (m) above the floor's origin.
+        hands: the end effectors' links, in the object's grasp points' order.
+
+    Returns:
+        The object's centre in MuJoCo's world, (3,) m.
+
+    Raises:
+        ArgumentError: an unknown grasp, a hand that is not a link of the file, or a grasp point
+            of the object not at its hand.
+    """
+    if grasp not in GRASPS:
+        raise ArgumentError(f"grasp must be one of {', '.join(GRASPS)}, got {grasp!r}")
+    placed = mujoco.MjData(model)
+    placed.qpos[:] = qpos0
+    mujoco.mj_kinematics(model, placed)
+    centre, inertia = np.asarray(object.center, dtype=float) + [0.0, 0.0, lift], np.asarray(object.inertia)
+    body = spec.worldbody.add_body(name="object", pos=centre, mass=float(object.mass), explicitinertial=True)
+    body.ipos, body.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # the centre of mass at the centre
+    body.fullinertia = [*np.diag(inertia), inertia[0, 1], inertia[0, 2], inertia[1, 2]]
+    if grasp == "level":  # it moves, tilts as the hands tilt it, never turns about the vertical
+        for axis, name in zip(np.eye(3), ("x", "y", "z")):
+            body.add_joint(name=f"object_{name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis)
+        for axis, name in zip(np.eye(3)[:2], ("roll", "pitch")):
+            body.add_joint(name=f"object_{name}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis)
+    else:
+        body.add_freejoint(name="object_free")
+    for k, hand in enumerate(hands):
+        if spec.body(hand) is None:
+            raise ArgumentError(f"end effector {hand!r} is not a link of the URDF")
+        p, R = placed.body(hand).xpos.copy(), placed.body(hand).xmat.reshape(3, 3).copy()
+        if np.linalg.norm(p - centre - np.asarray(object.offsets[k])) > 1e-6:
+            raise ArgumentError(f"grasp point {k} of the object is not at hand {hand!r} (hand - centre {p - centre})")
+        _add_grasp_sites(spec, body, k, hand, p, R, centre, grasp)
+        kind = mujoco.mjtEq.mjEQ_CONNECT if grasp == "point" else mujoco.mjtEq.mjEQ_WELD
+        site = mujoco.mjtObj.mjOBJ_SITE
+        spec.add_equality(type=kind, objtype=site, name1=f"grasp_{k}", name2=f"hand_{k}", **soft)
+    return centre
+
+
+def _add_grasp_sites(
+    spec: mujoco.MjSpec, body, k: int, hand: str, p: np.ndarray, R: np.ndarray, centre: np.ndarray, grasp: str
+) -> None:
+    """The sites that grasp ``k`` ties together: ``grasp_k`` on the object ``body`` (or on a
+    level grasp's grip) and ``hand_k`` on the ``hand``'s body, for a hand at ``p`` (3,) m with
+    orientation ``R`` (3, 3) in the world and the object's centre at ``centre`` (3,) m.
+
+    ``"weld"``: both sites at the hand frame; ``"point"``: both at the object's centre; ``"level"``:
+    both at the hand frame, the object's on a grip that turns about the vertical on the object,
+    at the hand's origin."""
+    if grasp == "weld":  # a site at the hand frame on both
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, R.ravel())
+        body.add_site(name=f"grasp_{k}", pos=p - centre, quat=quat)
+        spec.body(hand).add_site(name=f"hand_{k}")
+    elif grasp == "point":  # a site at the object's centre on both
+        body.add_site(name=f"grasp_{k}")
+        spec.body(hand).add_site(name=f"hand_{k}", pos=R.T @ (centre - p))
+    else:  # welded to a grip that turns about the vertical on the object, at the hand's origin
+        grip = body.add_body(name=f"grip_{k}", pos=p - centre, mass=GRIP_MASS, explicitinertial=True)
+        grip.ipos, grip.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+        grip.fullinertia = [GRIP_MASS * GRIP_RADIUS**2] * 3 + [0.0, 0.0, 0.0]
+        grip.add_joint(name=f"grip_{k}_yaw", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 0.0, 1.0])
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, R.ravel())
+        grip.add_site(name=f"grasp_{k}", quat=quat)
+        spec.body(hand).add_site(name=f"hand_{k}")
+
+
+def _soften(
+    model, root: str, supports: Sequence[Support], grips: int, regularisation: float, equal_supports: bool
+) -> None:
+    """Set the constraints' softness through the bodies' ``invweight0`` (see :func:`build`'s
+    ``regularisation`` and ``equal_supports``): a level grasp's ``grips`` as stiff as the
+    object's own constraints, every body's scaled by ``regularisation``, and with
+    ``equal_supports`` each support's body weighted as the ``root`` body."""
+    for k in range(grips):  # as stiff as the object's own constraints
+        model.body_invweight0[model.body(f"grip_{k}").id] = model.body_invweight0[model.body("object").id]
     model.body_invweight0[:] *= regularisation
     if equal_supports:
-        root = model.body(base.name).id
+        root_id = model.body(root).id
         for s in supports:
-            model.body_invweight0[model.body(s.body).id, 0] = model.body_invweight0[root, 0]
-    referee = Referee(robot, model, qpos0, tuple(supports), hands, object is not None, repairs, lift, actuation)
-    referee.drives = tuple((name, int(model.joint(joint).dofadr[0]), axis) for name, joint, axis in drives)
-    return referee
+            model.body_invweight0[model.body(s.body).id, 0] = model.body_invweight0[root_id, 0]
 
 
 def _constraint_jacobian(model, data) -> np.ndarray:
@@ -733,6 +910,40 @@ def _actuation(robot) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, str
             if S[v0, k] != 0.0:
                 gears.append((name, leader, float(S[v, k] / S[v0, k])))
     return rows, gears
+
+
+class _TrackedPlan(NamedTuple):
+    """A plan per tracked joint, for :meth:`Referee.follow` (:meth:`Referee._tracked_plan`).
+
+    Attributes:
+        names: the tracked joints (every actuated one), (j,).
+        dofs: their MuJoCo dofs, (j,); addresses: their MuJoCo positions' addresses, (j,).
+        planned: their positions per sample, unwound, in MuJoCo's sense, (N, j) rad or m.
+        rates: their rates per sample, (N, j).
+        forces: the plan's efforts as their generalized forces per sample, (N, j) N m or N.
+    """
+
+    names: tuple[str, ...]
+    dofs: np.ndarray
+    addresses: np.ndarray
+    planned: np.ndarray
+    rates: np.ndarray
+    forces: np.ndarray
+
+
+def _planned_base(robot, qs: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's base at each sample of configurations ``qs`` (N, nq) and reduced velocities
+    ``xs`` (N, nx): its pose, x, y (m) and yaw unwound (rad), (N, 3), and its velocity in world
+    axes, (N, 3) m/s and rad/s."""
+    n = qs.shape[0]
+    yaw = np.unwrap(np.arctan2(qs[:, 3], qs[:, 2]))
+    base = np.c_[qs[:, :2], yaw]
+    base_rate = np.zeros((n, 3))
+    for i in range(n):
+        v = robot.null_space(qs[i])[:3] @ xs[i]
+        c, s = math.cos(yaw[i]), math.sin(yaw[i])
+        base_rate[i] = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+    return base, base_rate
 
 
 class Referee:
@@ -1069,7 +1280,31 @@ class Referee:
             mobmanip.errors.NotRepresentable: an omnidirectional base (its efforts are its wheels' traction,
                 which the plan does not give).
         """
-        robot, m, d = self.robot, self.model, self.data
+        t, qs, xs, tau, kp, kd = self._checked_plan(trajectory, efforts, feedback)
+        tracked = self._tracked_plan(t, qs, xs, tau)
+        base, base_rate = _planned_base(self.robot, qs, xs)
+        a = self._replay(t, qs[0], xs[0], tracked, base, base_rate, kp, kd)
+        out = MotionReplay(
+            self.supports, a["t"], a["fn"], a["ft"], a["use"], a["slip"], a["pen"], a["pos"], a["rpy"], a["acc"],
+            feedback=float(a["push"].max(initial=0.0)), planned_base=a["base"], base_error=a["base_error"],
+            yaw_error=a["yaw_error"], joints=tracked.names, joint_error=a["joint_error"], feedback_effort=a["push"],
+            deepest=a["deep"],
+        )  # fmt: skip
+        out.judge(slip_speed, at_limit, max_penetration)
+        return out
+
+    def _checked_plan(
+        self, trajectory: TimedMotion, efforts: np.ndarray, feedback: tuple[float, float]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
+        """A plan :meth:`follow` can replay, checked: ``(t, q, x, efforts, kp, kd)``, the arrays as
+        floats, (N,), (N, nq), (N, nx), (N, nx), and the feedback's gains.
+
+        Raises:
+            ArgumentError, mobmanip.errors.NotRepresentable: as :meth:`follow` says, but for a
+                plan whose configurations do not move its joints as its velocities do
+                (:meth:`_tracked_plan`).
+        """
+        robot, m = self.robot, self.model
         if self.drives:
             raise NotRepresentable(
                 f"{robot.name}'s base efforts are its wheels' traction: a motion replay covers bases its wheels' "
@@ -1105,8 +1340,19 @@ class Referee:
                 f"the plan starts {off:.3g} (m or rad) away from the configuration the model was built at: "
                 "build it at the plan's first configuration"
             )
+        return t, qs, xs, tau, kp, kd
 
-        # the plan per tracked joint: positions (unwound: the sum of the steps) and rates
+    def _tracked_plan(self, t: np.ndarray, qs: np.ndarray, xs: np.ndarray, tau: np.ndarray) -> _TrackedPlan:
+        """The plan per tracked joint (every actuated one), from its time stamps ``t`` (N,),
+        configurations ``qs`` (N, nq), reduced velocities ``xs`` (N, nx) and efforts ``tau``
+        (N, nx): the joints' positions (unwound: the sum of the configurations' steps, from the
+        built ones), their rates ``S x`` and their feed-forward forces.
+
+        Raises:
+            ArgumentError: configurations that do not move a tracked joint as the velocities do
+                (over the whole plan, by half or more).
+        """
+        robot, m, n = self.robot, self.model, t.shape[0]
         model = robot.model
         names = self._actuated
         columns = [model.joints[model.getJointId(name)].idx_v for name in names]
@@ -1126,17 +1372,36 @@ class Referee:
                 "(a trajectory file needs the wheels' columns)"
             )
         forces = np.array([self.generalized_force(tau[i])[dofs] for i in range(n)])
-        # the plan's base: pose and world velocity
-        yaw = np.unwrap(np.arctan2(qs[:, 3], qs[:, 2]))
-        base = np.c_[qs[:, :2], yaw]
-        base_rate = np.zeros((n, 3))
-        for i in range(n):
-            v = robot.null_space(qs[i])[:3] @ xs[i]
-            c, s = math.cos(yaw[i]), math.sin(yaw[i])
-            base_rate[i] = (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+        return _TrackedPlan(names, dofs, addresses, planned, rates, forces)
 
+    def _replay(
+        self,
+        t: np.ndarray,
+        q0: np.ndarray,
+        x0: np.ndarray,
+        tracked: _TrackedPlan,
+        base: np.ndarray,
+        base_rate: np.ndarray,
+        kp: float,
+        kd: float,
+    ) -> dict[str, np.ndarray]:
+        """Run the replay :meth:`follow` describes from the plan's first configuration ``q0`` and
+        reduced velocity ``x0``, one row per time stamp of ``t`` (N,).
+
+        Args:
+            tracked: the plan per tracked joint (:meth:`_tracked_plan`).
+            base, base_rate: the plan's base pose and its world velocity per sample, (N, 3)
+                (:func:`_planned_base`).
+            kp, kd: the feedback's gains.
+
+        Returns:
+            The rows by key (:meth:`_record_row`), each an array with one row per sample.
+        """
+        m, d = self.model, self.data
+        n, step = t.shape[0], float(m.opt.timestep)
+        dofs, addresses, forces = tracked.dofs, tracked.addresses, tracked.forces
         self.reset()
-        self._set_velocity(qs[0], xs[0])
+        self._set_velocity(q0, x0)
         record = np.round((t - t[0]) / step).astype(int)  # the step of each sample's row
         keys = "t ft pos rpy acc base base_error yaw_error joint_error fn use slip pen deep push"
         rows: dict[str, list] = {key: [] for key in keys.split()}
@@ -1147,7 +1412,7 @@ class Referee:
             while i < n - 2 and now > t[i + 1]:
                 i += 1
             w = min(max((now - t[i]) / (t[i + 1] - t[i]), 0.0), 1.0)
-            target, target_rate = _hermite(t, planned, rates, i, t[i] + w * (t[i + 1] - t[i]))
+            target, target_rate = _hermite(t, tracked.planned, tracked.rates, i, t[i] + w * (t[i + 1] - t[i]))
             push = -kp * (d.qpos[addresses] - target) - kd * (d.qvel[dofs] - target_rate)
             d.qfrc_applied[:] = 0.0
             d.qfrc_applied[dofs] = (1.0 - w) * forces[i] + w * forces[i + 1] + push
@@ -1156,33 +1421,43 @@ class Referee:
             steps_since.append((f, slip, depth, np.abs(push)))
             r = len(rows["t"])
             if k == record[r]:  # sample r's row: the state now, the extremes since the last row
-                fs, slides, depths, pushes = (np.array(column) for column in zip(*steps_since))
-                steps_since = []
-                rows["fn"].append(fs[:, :, 2].min(axis=0))
-                rows["use"].append(self._friction_use(fs[:, :, 2], fs[:, :, :2]).max(axis=0))
-                rows["slip"].append(slides.max(axis=0))
-                rows["pen"].append(depths.min(axis=0))
-                rows["deep"].append(depths.max(axis=0))
-                rows["push"].append(pushes.max(axis=0))
-                rows["t"].append(now)
-                rows["ft"].append(f[:, :2])
-                position, R = d.xpos[self._base].copy(), d.xmat[self._base].reshape(3, 3)
-                rows["pos"].append(position)
-                rows["rpy"].append(pin.rpy.matrixToRpy(R))
-                rows["acc"].append(self.acceleration())
                 plan, _ = _hermite(t, base, base_rate, min(r, n - 2), now)
-                rows["base"].append(plan)
-                rows["base_error"].append(float(np.hypot(*(position[:2] - plan[:2]))))
-                turn = math.atan2(R[1, 0], R[0, 0]) - plan[2]
-                rows["yaw_error"].append((turn + math.pi) % (2.0 * math.pi) - math.pi)
-                rows["joint_error"].append(d.qpos[addresses] - target)
+                self._record_row(rows, steps_since, now, plan, d.qpos[addresses] - target)
+                steps_since = []
             mujoco.mj_Euler(m, d)
-        a = {key: np.array(value) for key, value in rows.items()}
-        out = MotionReplay(
-            self.supports, a["t"], a["fn"], a["ft"], a["use"], a["slip"], a["pen"], a["pos"], a["rpy"], a["acc"],
-            feedback=float(a["push"].max(initial=0.0)), planned_base=a["base"], base_error=a["base_error"],
-            yaw_error=a["yaw_error"], joints=names, joint_error=a["joint_error"], feedback_effort=a["push"],
-            deepest=a["deep"],
-        )  # fmt: skip
-        out.judge(slip_speed, at_limit, max_penetration)
-        return out
+        return {key: np.array(value) for key, value in rows.items()}
+
+    def _record_row(
+        self, rows: dict[str, list], steps: list[tuple], now: float, plan: np.ndarray, joint_error: np.ndarray
+    ) -> None:
+        """Add one row of a replay (:meth:`follow`) to ``rows``, by key.
+
+        Args:
+            rows: the rows so far, by key, each a list: ``fn`` ``use`` ``slip`` ``pen`` ``deep``
+                ``push`` the extremes over the row's ``steps``, ``t`` ``ft`` ``pos`` ``rpy`` ``acc``
+                ``base`` ``base_error`` ``yaw_error`` ``joint_error`` the state now.
+            steps: each MuJoCo step since the last row, the last one now: ``(floor forces (n, 3)
+                N, slide speed (n,) m/s, depth (n,) m, feedback magnitude (j,))``.
+            now: the time (s, from the plan's first time stamp).
+            plan: the plan's base pose now, x, y (m), yaw (rad), (3,).
+            joint_error: MuJoCo's tracked joints' positions minus the plan's now, (j,).
+        """
+        fs, slides, depths, pushes = (np.array(column) for column in zip(*steps))
+        rows["fn"].append(fs[:, :, 2].min(axis=0))
+        rows["use"].append(self._friction_use(fs[:, :, 2], fs[:, :, :2]).max(axis=0))
+        rows["slip"].append(slides.max(axis=0))
+        rows["pen"].append(depths.min(axis=0))
+        rows["deep"].append(depths.max(axis=0))
+        rows["push"].append(pushes.max(axis=0))
+        rows["t"].append(now)
+        rows["ft"].append(steps[-1][0][:, :2])
+        d = self.data
+        position, R = d.xpos[self._base].copy(), d.xmat[self._base].reshape(3, 3)
+        rows["pos"].append(position)
+        rows["rpy"].append(pin.rpy.matrixToRpy(R))
+        rows["acc"].append(self.acceleration())
+        rows["base"].append(plan)
+        rows["base_error"].append(float(np.hypot(*(position[:2] - plan[:2]))))
+        turn = math.atan2(R[1, 0], R[0, 0]) - plan[2]
+        rows["yaw_error"].append((turn + math.pi) % (2.0 * math.pi) - math.pi)
+        rows["joint_error"].append(joint_error)

@@ -250,15 +250,89 @@ def detect_spec(
     """
     path = Path(path)
     read_options = dict(read_options or {})
+    description = _read_checked(path, read_options, strict, platform)
+    end_effectors = list(end_effectors)
+    if not end_effectors:
+        raise SpecError(f"{path}: name at least one end-effector frame")
+    notes = _description_notes(description)
+    candidates, on_arms = _wheels_off_the_arms(description, end_effectors, wheel_radius, path)
+    kind, wheel_spec = _choose_platform(description, candidates, wheels, platform, path, notes)
+    drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
+    how = "wheels" if wheels is not None else ("platform" if platform is not None else "detected")
+    considered = _considered(description, candidates, kind, drive, on_arms, how, path)
+    wheel_spec, unmeasured = _given_radius(wheel_spec, wheel_radius, candidates, drive)
+    extra = [c.name for c in candidates if c.name not in drive]
+    if extra and kind.takes_wheels:
+        notes.append(f"wheel-like joints that are not platform wheels are locked: {', '.join(extra)}")
+
+    arms, shared = _arms(description, end_effectors, drive, path)
+    torso_joints = shared if torso else ()
+    active = set(torso_joints) | {j for arm in arms for j in arm.joints}
+    if wheel_spec is not None:
+        active |= set(wheel_spec.joint_names)
+    reference = _reference(description, shared)
+    if shared:
+        if torso:
+            notes.append(f"joints shared by several arms form the torso: {', '.join(shared)}")
+        else:
+            notes.append(f"joints shared by several arms are locked at mid-range: {', '.join(shared)}")
+    if default_task is None:
+        default_task = "planar" if _planar(description, active - drive) else "spatial"
+
+    urdf_limits, given_v, given_e = _limits(description, kind, wheel_spec, active, wheel_limits, limits)
+    postures = _keyframe_postures(description, torso_joints + tuple(j for arm in arms for j in arm.joints), notes)
+    spec = RobotSpec(
+        name=name or description.name or path.stem,
+        urdf=path.resolve(),
+        platform=kind.name,
+        arms=tuple(arms),
+        wheels=wheel_spec,
+        default_task=default_task,
+        reference=reference,
+        torso=torso_joints,
+        postures=postures,
+        velocity_limits=given_v,
+        effort_limits=given_e,
+        package_dirs=(path.resolve().parent,),
+        strict=strict,
+        xacro_args=read_options.get("xacro_args") or {},
+        package_paths=tuple(Path(p).resolve() for p in read_options.get("package_paths") or ()),
+    )
+    missing = _missing(spec, kind, urdf_limits, unmeasured)
+    source_format = FORMAT_NAMES.get(description.format, description.format)
+    notes += _platform_limits_notes(description, kind, wheel_spec, source_format)
+    return Detection(
+        spec=spec,
+        shared_joints=shared,
+        notes=tuple(notes),
+        urdf_limits=urdf_limits,
+        considered=tuple(considered),
+        missing=tuple(missing),
+        source_format=source_format,
+    )
+
+
+def _read_checked(path: Path, read_options: Mapping[str, Any], strict: bool, platform: str | None) -> RobotDescription:
+    """The robot file as read, checked before any detection: its flaws refused when ``strict``,
+    a construct mobmanip does not support refused, and the ``platform`` asked for a known kind.
+
+    Raises:
+        UrdfError: as :func:`detect_spec` (another format: its own
+            :class:`~mobmanip.errors.DescriptionError`).
+        SpecError: an unknown platform kind (the message lists the known ones).
+    """
     description = read_description(path, **read_options)
     if strict:
         refuse(description.flaws, description.error)
     check_supported(description)
     if platform is not None:
         get_kind(platform)  # an unknown kind is a SpecError listing the known ones
-    end_effectors = list(end_effectors)
-    if not end_effectors:
-        raise SpecError(f"{path}: name at least one end-effector frame")
+    return description
+
+
+def _description_notes(description: RobotDescription) -> list[str]:
+    """The notes every detection starts with: the platform's frame, what reading the file
+    remarked, and each flaw that is repaired at load."""
     notes: list[str] = [f"platform frame: root link {description.root_link!r} (forward = +x, left = +y)"]
     notes += [f"{description.format}: {note}" for note in description.notes]
     for flaw in description.flaws:
@@ -266,7 +340,19 @@ def detect_spec(
             f"{flaw.subject}: {flaw.problem}; repaired at load by {flaw.repair}, with a warning (list the link in "
             "accepted_repairs once reviewed, or set strict = true to refuse it)"
         )
+    return notes
 
+
+def _wheels_off_the_arms(
+    description: RobotDescription, end_effectors: Sequence[str], wheel_radius: float | None, path: Path
+) -> tuple[list[WheelCandidate], dict[str, str]]:
+    """The wheel candidates that lie on no arm's path, and the wheel-like joints that do (joint
+    -> the end effector whose path holds it), ``wheel_radius`` (m) given to wheels known by
+    name only.
+
+    Raises:
+        FrameNotFoundError: an unknown end-effector frame.
+    """
     on_arm_paths = {j: ee for ee in end_effectors for j in arm_joints(description, ee, (), path)}
     candidates = wheel_candidates(description, exclude=on_arm_paths, radius=wheel_radius)
     on_arms = {
@@ -274,7 +360,27 @@ def detect_spec(
         for c in wheel_candidates(description, radius=wheel_radius)
         if c.name in on_arm_paths
     }
-    how = "wheels" if wheels is not None else ("platform" if platform is not None else "detected")
+    return candidates, on_arms
+
+
+def _choose_platform(
+    description: RobotDescription,
+    candidates: Sequence[WheelCandidate],
+    wheels: tuple[str, ...] | None,
+    platform: str | None,
+    path: Path,
+    notes: list[str],
+) -> tuple[PlatformKind, WheelsSpec | None]:
+    """The platform kind and its wheels (``None``: none the spec names), from the wheels given
+    (a differential drive's unless ``platform`` says otherwise), from the platform given, from
+    the file's planar base joints, or detected among the ``candidates``; what was chosen is
+    said in ``notes``.
+
+    Raises:
+        JointNotFoundError: a given wheel joint that does not exist.
+        WheelError: wheels that do not fit, none of the given platform's found, or several kinds
+            that fit (:func:`detect_platform`).
+    """
     wheel_spec: WheelsSpec | None = None
     if wheels is not None:
         for joint in wheels:
@@ -288,7 +394,7 @@ def detect_spec(
         else:
             notes.append(f"platform {kind.name!r}: wheels {', '.join(given.joint_names)} are locked")
     elif platform is None and description.planar_base:
-        kind, detected = KINDS["omnidirectional"], None
+        kind = KINDS["omnidirectional"]
         names = ", ".join(j.name for j in description.planar_base)
         notes.append(f"platform omnidirectional: the file moves its root link on planar joints ({names})")
     elif platform is None:
@@ -308,20 +414,54 @@ def detect_spec(
                 )
             wheel_spec = detected.wheels
             notes.extend(detected.notes)
-    platform = kind.name
-    drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
+    return kind, wheel_spec
+
+
+def _considered(
+    description: RobotDescription,
+    candidates: Sequence[WheelCandidate],
+    kind: PlatformKind,
+    drive: set[str],
+    on_arms: Mapping[str, str],
+    how: str,
+    path: Path,
+) -> list[str]:
+    """What detection looked at and why it chose ``kind`` (:attr:`Detection.considered`): every
+    wheel-like joint and what became of it, each wheeled kind's verdict when the kind was
+    detected (``how``: ``"wheels"``, ``"platform"`` or ``"detected"``), and the choice."""
     considered = explain_wheels(description, candidates, drive if kind.takes_wheels else (), on_arms)
     if candidates and how == "detected":
         considered += platform_reasons(description, candidates, str(path))
     considered.append(choice_reason(kind.name, how, candidates))
+    return considered
+
+
+def _given_radius(
+    wheel_spec: WheelsSpec | None, wheel_radius: float | None, candidates: Sequence[WheelCandidate], drive: set[str]
+) -> tuple[WheelsSpec | None, list[str]]:
+    """The platform's wheels with the ``wheel_radius`` given (m), for a kind whose wheels have
+    one, and the ``drive`` wheels whose radius is still unknown (mesh geometry, no radius given)."""
     unmeasured = [c.name for c in candidates if c.radius is None and c.name in drive]
     if wheel_spec is not None and wheel_radius is not None and hasattr(wheel_spec, "radius"):
         # kinds with a radius (checked just above); mypy sees only the base class
         wheel_spec = dataclasses.replace(wheel_spec, radius=float(wheel_radius))  # type: ignore[call-arg]
         unmeasured = []
-    extra = [c.name for c in candidates if c.name not in drive]
-    if extra and kind.takes_wheels:
-        notes.append(f"wheel-like joints that are not platform wheels are locked: {', '.join(extra)}")
+    return wheel_spec, unmeasured
+
+
+def _arms(
+    description: RobotDescription, end_effectors: Sequence[str], drive: set[str], path: Path
+) -> tuple[list[ArmSpec], tuple[str, ...]]:
+    """One arm per end effector, and the joints shared by several arms' paths.
+
+    Each arm is the actuated joints on its path from the root link, the ``drive`` wheels and
+    the shared joints left out, named after its side when the end effector's name says one.
+
+    Raises:
+        SpecError: an end effector that no joint of its own moves.
+        UrdfError: a mimic joint on an arm's path (another format: its own
+            :class:`~mobmanip.errors.DescriptionError`).
+    """
     paths = [arm_joints(description, ee, drive, path) for ee in end_effectors]
     counts: dict[str, int] = {}
     for joints in paths:
@@ -329,7 +469,7 @@ def detect_spec(
             counts[joint] = counts.get(joint, 0) + 1
     shared = tuple(j for j in dict.fromkeys(j for p in paths for j in p) if counts[j] > 1)
     mimics = description.mimics
-    arms: list = []
+    arms: list[ArmSpec] = []
     taken: set[str] = set()
     for k, (ee, joints) in enumerate(zip(end_effectors, paths)):
         own = tuple(j for j in joints if j not in shared)
@@ -347,26 +487,42 @@ def detect_spec(
         arm_name = _arm_name(ee, k, taken)
         taken.add(arm_name)
         arms.append(ArmSpec(name=arm_name, joints=own, end_effector=ee))
+    return arms, shared
 
-    torso_joints = shared if torso else ()
+
+def _reference(description: RobotDescription, shared: Sequence[str]) -> dict[str, float]:
+    """The spec's ``[reference]``: the ``shared`` joints (a torso, locked or home) at mid-range,
+    and every other moving joint whose range excludes zero at its mid-range."""
     reference: dict[str, float] = {}
-    active = set(torso_joints) | {j for arm in arms for j in arm.joints}
-    if wheel_spec is not None:
-        active |= set(wheel_spec.joint_names)
     for joint in description.moving_joints():
         mid = _mid_range(description, joint.name)
         if joint.name in shared and mid is not None:
             reference[joint.name] = mid  # the torso, locked or home: mid-height
         elif _excludes_zero(description, joint.name) and mid is not None:
             reference[joint.name] = mid
-    if shared:
-        if torso:
-            notes.append(f"joints shared by several arms form the torso: {', '.join(shared)}")
-        else:
-            notes.append(f"joints shared by several arms are locked at mid-range: {', '.join(shared)}")
-    if default_task is None:
-        default_task = "planar" if _planar(description, active - drive) else "spatial"
+    return reference
 
+
+def _limits(
+    description: RobotDescription,
+    kind: PlatformKind,
+    wheel_spec: WheelsSpec | None,
+    active: set[str],
+    wheel_limits: tuple[float | None, float | None],
+    limits: Mapping[str, tuple[float | None, float | None]] | None,
+) -> tuple[dict[str, tuple[float | None, float | None]], dict, dict]:
+    """The file's limits and the spec's overrides.
+
+    Args:
+        description: the robot file as read; ``kind`` and ``wheel_spec`` its platform.
+        active: the spec's active joints (arms, torso, wheels).
+        wheel_limits, limits: as :func:`detect_spec`'s.
+
+    Returns:
+        ``(file_limits, velocity, effort)``: ``{name: (velocity, effort)}`` from the file for every
+        active joint and platform coordinate (``None`` where it gives none), and the spec's
+        velocity and effort overrides by name.
+    """
     urdf_limits = {j: description.limits(j) for j in sorted(active)}
     urdf_limits.update(kind.description_limits(wheel_spec, description))
     wheel_names = set(kind.description_limits(wheel_spec, description)) | set(
@@ -378,42 +534,22 @@ def detect_spec(
         base = {name: (j.velocity_limit, j.effort_limit) for name, j in zip(OMNI_COORDINATES, description.planar_base)}
         limits = {**base, **(limits or {})}
     given_v, given_e = _given_limits(platform_limits, wheel_limits, limits or {})
-    postures = _keyframe_postures(description, torso_joints + tuple(j for arm in arms for j in arm.joints), notes)
-    spec = RobotSpec(
-        name=name or description.name or path.stem,
-        urdf=path.resolve(),
-        platform=platform,
-        arms=tuple(arms),
-        wheels=wheel_spec,
-        default_task=default_task,
-        reference=reference,
-        torso=torso_joints,
-        postures=postures,
-        velocity_limits=given_v,
-        effort_limits=given_e,
-        package_dirs=(path.resolve().parent,),
-        strict=strict,
-        xacro_args=read_options.get("xacro_args") or {},
-        package_paths=tuple(Path(p).resolve() for p in read_options.get("package_paths") or ()),
-    )
-    missing = _missing(spec, kind, urdf_limits, unmeasured)
-    source_format = FORMAT_NAMES.get(description.format, description.format)
+    return urdf_limits, given_v, given_e
+
+
+def _platform_limits_notes(
+    description: RobotDescription, kind: PlatformKind, wheel_spec: WheelsSpec | None, source_format: str
+) -> list[str]:
+    """A note naming the platform coordinates that need limits the robot file does not give
+    (none when it gives them all)."""
     needed = [name for name, _ in kind.toml_limit_hints(wheel_spec)]
     needed += [name for name, pair in kind.description_limits(wheel_spec, description).items() if None in pair]
-    if needed:
-        notes.append(
-            f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "
-            f"[limits.effort] ({_source(source_format)} gives none)"
-        )
-    return Detection(
-        spec=spec,
-        shared_joints=shared,
-        notes=tuple(notes),
-        urdf_limits=urdf_limits,
-        considered=tuple(considered),
-        missing=tuple(missing),
-        source_format=source_format,
-    )
+    if not needed:
+        return []
+    return [
+        f"a {kind.name} platform needs limits for {', '.join(needed)} in [limits.velocity] and "
+        f"[limits.effort] ({_source(source_format)} gives none)"
+    ]
 
 
 def _keyframe_postures(

@@ -85,7 +85,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -94,7 +94,7 @@ from ...errors import ArgumentError, SpecError
 from ...platforms import a_platform
 from ...robot.support import Support, check_faces, check_mu, polygon_margin, robot_support
 from ...robot.tasks import get_task
-from ..grasp import GRAVITY
+from ..grasp import GRAVITY, HeldObject
 
 if TYPE_CHECKING:
     from ...robot.model import Robot
@@ -120,6 +120,11 @@ FLOOR_KINDS = ("differential_drive", "skid_steer", "steered", "omnidirectional")
 CONTACT_FORCES = "contact_forces"
 #: The name of the hands' wrench components on the level rows a task leaves out.
 LEVEL_WRENCHES = "level_wrenches"
+
+
+#: One group of equality rows: blocks by variable name, each (p, size of the variable), and the
+#: right-hand side (p,).
+_Equations = tuple[dict[str, np.ndarray], np.ndarray]
 
 
 def _skew(r: np.ndarray) -> np.ndarray:
@@ -235,19 +240,9 @@ class Floor(Constraint):
         return out
 
     def rows(self, terms: Terms) -> ConstraintRows:
-        robot, q = terms.robot, terms.q
-        if robot is None or q is None or terms.held_object is None:
-            raise ArgumentError("the floor needs the robot, its configuration and the object (terms from terms_at)")
-        if robot.wheel_platform is None or robot.platform.kind not in FLOOR_KINDS:
-            raise SpecError(
-                f"the floor model covers platforms that move on the floor "
-                f"({', '.join(kind.replace('_', ' ') for kind in FLOOR_KINDS)}); "
-                f"{robot.name!r} has {a_platform(robot.platform.kind)}"
-            )
+        robot, q, held = _standing_robot(terms)
         support, mu, faces = self.resolve(robot)
-        sharing_model = self.sharing(mu)
         model, data = robot.model, robot.data
-        task = get_task(terms.task)
         S = robot.null_space(q)
         c = pin.centerOfMass(model, data, q).copy()
         mass = float(pin.computeTotalMass(model))
@@ -256,70 +251,77 @@ class Floor(Constraint):
         pin.updateFramePlacements(model, data)
         pose = _pose(q)
         points = support.world_points(pose)
-
-        # contact forces: 3 columns per driven wheel, 1 (the normal) per passive support
-        columns: list[np.ndarray] = []
-        normal_col: list[int] = []
-        slices: list[tuple[int, int]] = []
-        for contact, p in zip(support.contacts, points):
-            start = sum(col.shape[1] for col in columns)
-            wrench = np.vstack([np.eye(3), _skew(p - c)])
-            block = wrench if contact.driven else wrench[:, 2:3]
-            columns.append(block)
-            slices.append((start, start + block.shape[1]))
-            normal_col.append(start + block.shape[1] - 1)
-        C = np.hstack(columns)
-        n_forces = C.shape[1]
-
-        rows = list(task.rows)
+        columns = _contact_columns(support, points, c)
+        n_forces, nx = columns.size, S.shape[1]
+        rows = list(get_task(terms.task).rows)
         level = [r for r in LEVEL_ROWS if r not in rows] if self.level else []
-        center = np.asarray(terms.held_object.center, dtype=float)
-        H_task, H_level, couple, level_kin, grasp_task, grasp_level = [], [], [], [], [], []
-        for arm in robot.arms:
-            p = data.oMf[arm.frame_id].translation
-            about_c = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - c), np.eye(3)]])  # wrench at c
-            H_task.append(about_c[:, rows])
-            H_level.append(about_c[:, level])
-            J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)
-            couple.append((J[level] @ S).T)
-            level_kin.append(J[level] @ S)
-            G6 = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - center), np.eye(3)]])
-            grasp_task.append(G6[np.ix_(level, rows)])
-            grasp_level.append(G6[np.ix_(level, level)])
+        hands = _hand_rows(robot, S, c, np.asarray(held.center, dtype=float), rows, level)
         k, nl = len(robot.arms), len(level)
-
-        nx = S.shape[1]
-        # the whole robot's Newton-Euler rows (6)
         gravity = self.gravity()
-        equations = [({"xdot": A_G @ S, CONTACT_FORCES: -C, "h": np.hstack(H_task)}, _weight(mass, gravity))]
+
+        # the whole robot's Newton-Euler rows (6)
+        whole = {"xdot": A_G @ S, CONTACT_FORCES: -columns.wrench, "h": np.hstack(hands.task)}
+        equations = [(whole, _weight(mass, gravity))]
         variables = {CONTACT_FORCES: (n_forces, -np.inf, np.inf)}
-        couplings = {}
+        couplings: dict[str, dict[str, np.ndarray]] = {}
         object_E: dict[str, np.ndarray] = {}
         object_e = np.zeros(0)
         if nl:
             variables[LEVEL_WRENCHES] = (k * nl, -np.inf, np.inf)
-            equations[0][0][LEVEL_WRENCHES] = np.hstack(H_level)
-            # the object held level: its level rows balance its weight (g_o's convention: +m g up;
-            # the object's own rows: in a team every robot's hands share them) ...
-            object_e = np.array([-terms.held_object.mass * gravity[r] if r < 3 else 0.0 for r in level])
-            object_E = {"h": np.hstack(grasp_task), LEVEL_WRENCHES: np.hstack(grasp_level)}
-            couplings["dynamics"] = {LEVEL_WRENCHES: np.hstack(couple)}
-            # ... shared by the hands without squeezing it on those rows (the minimum-norm share:
-            # no part in the null space of their grasp map)
-            squeeze = _null_space(np.hstack(grasp_level))
-            if len(squeeze):
-                equations.append(({LEVEL_WRENCHES: squeeze}, np.zeros(len(squeeze))))
+            whole[LEVEL_WRENCHES] = np.hstack(hands.level)
+            object_E, object_e, couplings["dynamics"], squeeze = _level_hold(hands, level, held.mass, gravity)
+            equations += squeeze
         wheels, turning = _wheel_equations(
-            robot, q, S, support, points, slices, n_forces, gravity, mass, rows, self.lift
+            robot, q, S, support, points, columns.slices, n_forces, gravity, mass, rows, self.lift
         )
         equations += wheels
         if turning is not None:  # the sideways forces that hold a skid-steer from turning do work along S
             couplings.setdefault("dynamics", {})[CONTACT_FORCES] = turning
+        equations += self._sharing_equations(robot, support, points, columns, mu, pose[2])
+        sizes = {"xdot": nx, "tau": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl}
+        E, e = _stack(equations, sizes)
+        shifts = self._slope_shifts(robot, q, S, mass, held.mass, gravity, rows)
+
+        G, h, labels = self._contact_inequalities(support, columns, mu, faces, mass + held.mass, gravity, pose[2])
+        if nl:  # the hands keep the object level: their accelerations on the level rows in the band
+            G, h, labels = self._level_band(G, h, labels, hands.kinematics, robot.arms, level, pose[2], nx)
+        info = self._report(support, mu, faces, pose, points, columns.slices, gravity)
+        return ConstraintRows(
+            self.name, self.problem, variables=variables, G=G, h=h, E=E, e=e, couplings=couplings,
+            object_E=object_E, object_e=object_e, shifts=shifts,
+            labels=tuple(labels), info=info,
+        )  # fmt: skip
+
+    def _sharing_equations(
+        self,
+        robot: Robot,
+        support: Support,
+        points: np.ndarray,
+        columns: _ContactColumns,
+        mu: float | None,
+        heading: float,
+    ) -> list[_Equations]:
+        """How the contacts share their forces, as equations over the contact forces: the normal
+        forces as springs under a rigid platform (compliant sharing), then the sideways forces of
+        wheels rolling along the platform's x as tyres share them.
+
+        Args:
+            robot: the robot on the floor.
+            support: its contacts; ``points`` their world points, (n, 3) m.
+            columns: where each contact's force is in the contact forces.
+            mu: the friction coefficient in use (``None``: no traction limit).
+            heading: the platform's heading (rad).
+
+        Returns:
+            ``(blocks, right-hand side)`` per group of rows, none when nothing is shared.
+        """
+        sharing_model, n_forces = self.sharing(mu), columns.size
+        equations = []
         if sharing_model == "compliant":
             sharing = compliant_sharing(points, support.stiffness)
             if len(sharing):
                 block = np.zeros((len(sharing), n_forces))
-                block[:, normal_col] = sharing
+                block[:, columns.normals] = sharing
                 equations.append(({CONTACT_FORCES: block}, np.zeros(len(sharing))))
         # the sideways forces as tyres share them: under the compliant sharing, and wherever
         # friction does not bound them (an axle's squeeze would be unbounded, and a file's 1e-8
@@ -328,24 +330,62 @@ class Floor(Constraint):
             wheels = [i for i, ct in enumerate(support.contacts) if ct.driven and ct.source == "wheel"]
             sideways = lateral_sharing(support.root_points()[wheels, 0], support.stiffness[wheels])
             if len(sideways):
-                lateral = (-math.sin(pose[2]), math.cos(pose[2]))
+                lateral = (-math.sin(heading), math.cos(heading))
                 block = np.zeros((len(sideways), n_forces))
                 for column, i in enumerate(wheels):
-                    a = slices[i][0]
+                    a = columns.slices[i][0]
                     block[:, a : a + 2] = np.outer(sideways[:, column], lateral)
                 equations.append(({CONTACT_FORCES: block}, np.zeros(len(sideways))))
-        sizes = {"xdot": nx, "tau": nx, CONTACT_FORCES: n_forces, "h": terms.W.shape[1], LEVEL_WRENCHES: k * nl}
-        E, e = _stack(equations, sizes)
+        return equations
+
+    def _slope_shifts(
+        self, robot: Robot, q: np.ndarray, S: np.ndarray, mass: float, object_mass: float, gravity: np.ndarray, rows
+    ) -> dict[str, np.ndarray]:
+        """On a ramp, what the leaning weights change in the problem's own equations: the robot's
+        in the reduced dynamics (``"dynamics"``, (nx,)) and the object's in its own balance
+        (``"object"``, on the task's ``rows``); empty on a level floor.
+
+        Args:
+            robot, q: the robot and its configuration; S its null space at q, (nv, nx).
+            mass, object_mass: the robot's and the object's masses (kg).
+            gravity: gravity in the floor's axes (:meth:`gravity`), (3,).
+            rows: the task's rows of a 6-D wrench.
+        """
         shifts = {}
         if self.slope:  # the weights lean with the ramp: the reduced dynamics' and the object's own
             lean = gravity - np.array([0.0, 0.0, -_G])
-            J_c = pin.jacobianCenterOfMass(model, data, q)
+            J_c = pin.jacobianCenterOfMass(robot.model, robot.data, q)
             shifts["dynamics"] = mass * S.T @ (J_c.T @ lean)  # xi = m S^T J_c^T g
-            shifts["object"] = np.r_[-terms.held_object.mass * lean, np.zeros(3)][rows]  # g_o = -m_o g
+            shifts["object"] = np.r_[-object_mass * lean, np.zeros(3)][rows]  # g_o = -m_o g
+        return shifts
 
+    def _contact_inequalities(
+        self,
+        support: Support,
+        columns: _ContactColumns,
+        mu: float | None,
+        faces: int,
+        carried: float,
+        gravity: np.ndarray,
+        heading: float,
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
+        """The floor's inequalities on the contact forces, each with its label: no contact lifts
+        (its normal force at least its reserve), unless contacts may pull (``lift``), and, with a
+        friction coefficient ``mu``, every driven wheel's traction inside its pyramid of ``faces``
+        faces turned to the platform's ``heading`` (rad), less the reserve.
+
+        Args:
+            support: the contacts; ``columns`` where each one's force is in the contact forces.
+            carried: the mass the floor carries, robot and object (kg); ``gravity`` in the
+                floor's axes, (3,) m/s^2: the reserve is a share of their weight.
+
+        Returns:
+            ``(G, h, labels)``: G by variable name (r, n_forces), h (r,), one label per row.
+        """
+        sharing_model, n_forces = self.sharing(mu), columns.size
         G_rows, h_rows, labels = [], [], []
-        least = self.reserve * (mass + terms.held_object.mass) * -gravity[2] / len(support.contacts)
-        for contact, col in zip(support.contacts if not self.lift else (), normal_col):
+        least = self.reserve * carried * -gravity[2] / len(support.contacts)
+        for contact, col in zip(support.contacts if not self.lift else (), columns.normals):
             row = np.zeros(n_forces)
             row[col] = -1.0
             G_rows.append(row)
@@ -355,36 +395,73 @@ class Floor(Constraint):
             labels.append(f"{contact.name} lifts off the floor ({lifts}{why})")
         if mu is not None and not self.lift:
             tilt = mu * math.cos(math.pi / faces) * (1.0 - self.reserve)
-            for contact, (a, b) in zip(support.contacts, slices):
+            for contact, (a, b) in zip(support.contacts, columns.slices):
                 if not contact.driven:
                     continue
-                for u in pyramid_faces(faces, pose[2]):
+                for u in pyramid_faces(faces, heading):
                     row = np.zeros(n_forces)
                     row[a:b] = (u[0], u[1], -tilt)
                     G_rows.append(row)
                     h_rows.append(0.0)
                     labels.append(f"{contact.name} slips (traction at its friction limit, mu = {mu:g})")
         G = {CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)}
-        h = np.array(h_rows, dtype=float)
-        if nl:  # the hands keep the object level: their accelerations on the level rows in the band
-            # the band on roll and pitch about the platform's own axes: a square in the world's
-            # would make the set depend on the heading (by 7e-6 of a reach)
-            kin = np.vstack([_platform_axes(block, level, pose[2]) for block in level_kin])
-            G = {CONTACT_FORCES: np.vstack([G[CONTACT_FORCES], np.zeros((2 * len(kin), n_forces))]),
-                 "xdot": np.vstack([np.zeros((len(h), nx)), kin, -kin])}  # fmt: skip
-            h = np.r_[h, np.full(2 * len(kin), self.level_tolerance)]
-            names = ("vertical acceleration", "roll acceleration", "pitch acceleration")
-            labels += [
-                f"{arm.name} hand's {names[r - 2]} at the level band ({sign}{self.level_tolerance:g}; held level)"
-                for sign in "+-"
-                for arm in robot.arms
-                for r in level
-            ]
+        return G, np.array(h_rows, dtype=float), labels
+
+    def _level_band(
+        self,
+        G: dict[str, np.ndarray],
+        h: np.ndarray,
+        labels: list[str],
+        kinematics: list[np.ndarray],
+        arms,
+        level: list[int],
+        heading: float,
+        nx: int,
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
+        """The contact inequalities ``(G, h, labels)`` with the level requirement's rows added:
+        each hand's accelerations on the ``level`` rows within :attr:`level_tolerance` of zero,
+        both senses.
+
+        Args:
+            kinematics: each hand's rows on the level rows, ``J[level] S`` (len(level), nx).
+            arms: the robot's arms, in the hands' order (for the labels).
+            heading: the platform's heading (rad): the band on roll and pitch is about its axes.
+            nx: the number of reduced velocities.
+        """
+        n_forces = G[CONTACT_FORCES].shape[1]
+        # the band on roll and pitch about the platform's own axes: a square in the world's
+        # would make the set depend on the heading (by 7e-6 of a reach)
+        kin = np.vstack([_platform_axes(block, level, heading) for block in kinematics])
+        G = {CONTACT_FORCES: np.vstack([G[CONTACT_FORCES], np.zeros((2 * len(kin), n_forces))]),
+             "xdot": np.vstack([np.zeros((len(h), nx)), kin, -kin])}  # fmt: skip
+        h = np.r_[h, np.full(2 * len(kin), self.level_tolerance)]
+        names = ("vertical acceleration", "roll acceleration", "pitch acceleration")
+        labels = labels + [
+            f"{arm.name} hand's {names[r - 2]} at the level band ({sign}{self.level_tolerance:g}; held level)"
+            for sign in "+-"
+            for arm in arms
+            for r in level
+        ]
+        return G, h, labels
+
+    def _report(
+        self,
+        support: Support,
+        mu: float | None,
+        faces: int,
+        pose: tuple[float, float, float],
+        points: np.ndarray,
+        slices: list[tuple[int, int]],
+        gravity: np.ndarray,
+    ) -> dict:
+        """What the floor reports with the set (``set.model["floor"]``), JSON-ready: its settings,
+        the platform's pose, each contact (world point, columns in the contact forces, stiffness,
+        rollers' free direction), the support polygon and, on a ramp, the slope and gravity."""
         info = {
             "floor": {
                 "mu": None if self.lift else mu,
                 "lift": self.lift,
-                "load": sharing_model,
+                "load": self.sharing(mu),
                 "reserve": self.reserve,
                 "faces": faces,
                 "pose": list(pose),
@@ -405,11 +482,131 @@ class Floor(Constraint):
         }
         if self.slope:
             info["floor"].update(slope=self.slope, uphill=self.uphill, gravity=gravity.tolist())
-        return ConstraintRows(
-            self.name, self.problem, variables=variables, G=G, h=h, E=E, e=e, couplings=couplings,
-            object_E=object_E, object_e=object_e, shifts=shifts,
-            labels=tuple(labels), info=info,
-        )  # fmt: skip
+        return info
+
+
+def _standing_robot(terms: Terms) -> tuple[Robot, np.ndarray, HeldObject]:
+    """The robot, its configuration and the held object of ``terms``, checked for the floor.
+
+    Raises:
+        ArgumentError: terms without a robot, a configuration or an object.
+        SpecError: a platform that does not move on the floor (:data:`FLOOR_KINDS`).
+    """
+    robot, q = terms.robot, terms.q
+    if robot is None or q is None or terms.held_object is None:
+        raise ArgumentError("the floor needs the robot, its configuration and the object (terms from terms_at)")
+    if robot.wheel_platform is None or robot.platform.kind not in FLOOR_KINDS:
+        raise SpecError(
+            f"the floor model covers platforms that move on the floor "
+            f"({', '.join(kind.replace('_', ' ') for kind in FLOOR_KINDS)}); "
+            f"{robot.name!r} has {a_platform(robot.platform.kind)}"
+        )
+    return robot, q, terms.held_object
+
+
+class _ContactColumns(NamedTuple):
+    """The contact force variable's columns: 3 per driven contact (world x, y, z), 1 (the normal)
+    per passive one.
+
+    Attributes:
+        wrench: the contact forces' wrench about the robot's centre of mass, (6, size).
+        slices: each contact's ``(start, end)`` columns.
+        normals: each contact's normal force column.
+    """
+
+    wrench: np.ndarray
+    slices: list[tuple[int, int]]
+    normals: list[int]
+
+    @property
+    def size(self) -> int:
+        """How many columns in all."""
+        return int(self.wrench.shape[1])
+
+
+def _contact_columns(support: Support, points: np.ndarray, c: np.ndarray) -> _ContactColumns:
+    """The contact force variable's columns for ``support``'s contacts at world ``points`` (n, 3)
+    m, their wrench taken about the centre of mass ``c`` (3,) m."""
+    blocks: list[np.ndarray] = []
+    normals: list[int] = []
+    slices: list[tuple[int, int]] = []
+    for contact, p in zip(support.contacts, points):
+        start = sum(block.shape[1] for block in blocks)
+        wrench = np.vstack([np.eye(3), _skew(p - c)])
+        block = wrench if contact.driven else wrench[:, 2:3]
+        blocks.append(block)
+        slices.append((start, start + block.shape[1]))
+        normals.append(start + block.shape[1] - 1)
+    return _ContactColumns(np.hstack(blocks), slices, normals)
+
+
+class _HandRows(NamedTuple):
+    """Per hand (one entry per arm), what the floor's equations take of it (see :func:`_hand_rows`)."""
+
+    task: list[np.ndarray]
+    level: list[np.ndarray]
+    kinematics: list[np.ndarray]
+    grasp_task: list[np.ndarray]
+    grasp_level: list[np.ndarray]
+
+
+def _hand_rows(
+    robot: Robot, S: np.ndarray, c: np.ndarray, center: np.ndarray, rows: list[int], level: list[int]
+) -> _HandRows:
+    """Each hand's wrench on the object seen by the whole robot and by the object, at the current
+    frame placements and joint Jacobians of ``robot.data``.
+
+    Args:
+        robot: the robot; ``S`` its null space at the configuration, (nv, nx).
+        c: its centre of mass, (3,) m; ``center`` the object's centre, (3,) m.
+        rows: the task's rows of a 6-D wrench; ``level`` the level rows it leaves out.
+
+    Returns:
+        per hand: its wrench moved to c on the task's rows (``task``, (6, len(rows))) and on the
+        level rows (``level``, (6, len(level))); its rows ``J[level] S`` (``kinematics``); its
+        grasp map's level rows on the task's rows and on the level rows (``grasp_task``,
+        ``grasp_level``).
+    """
+    model, data = robot.model, robot.data
+    out = _HandRows([], [], [], [], [])
+    for arm in robot.arms:
+        p = data.oMf[arm.frame_id].translation
+        about_c = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - c), np.eye(3)]])  # wrench at c
+        out.task.append(about_c[:, rows])
+        out.level.append(about_c[:, level])
+        J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)
+        out.kinematics.append(J[level] @ S)
+        G6 = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - center), np.eye(3)]])
+        out.grasp_task.append(G6[np.ix_(level, rows)])
+        out.grasp_level.append(G6[np.ix_(level, level)])
+    return out
+
+
+def _level_hold(
+    hands: _HandRows, level: list[int], object_mass: float, gravity: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, dict[str, np.ndarray], list[_Equations]]:
+    """The object held level: its level rows balance its weight, shared by the hands without
+    squeezing it on those rows.
+
+    Args:
+        hands: from :func:`_hand_rows`; ``level`` the level rows a task leaves out.
+        object_mass: kg; ``gravity`` in the floor's axes, (3,) m/s^2.
+
+    Returns:
+        ``(object_E, object_e, coupling, squeeze)``: the object's own rows (blocks by variable,
+        right-hand side), the level wrenches' term in the reduced dynamics (by variable) and the
+        no-squeeze equations (empty when the hands cannot squeeze on those rows).
+    """
+    # the object held level: its level rows balance its weight (g_o's convention: +m g up;
+    # the object's own rows: in a team every robot's hands share them) ...
+    object_e = np.array([-object_mass * gravity[r] if r < 3 else 0.0 for r in level])
+    object_E = {"h": np.hstack(hands.grasp_task), LEVEL_WRENCHES: np.hstack(hands.grasp_level)}
+    coupling = {LEVEL_WRENCHES: np.hstack([kin.T for kin in hands.kinematics])}
+    # ... shared by the hands without squeezing it on those rows (the minimum-norm share:
+    # no part in the null space of their grasp map)
+    squeeze = _null_space(np.hstack(hands.grasp_level))
+    equations = [({LEVEL_WRENCHES: squeeze}, np.zeros(len(squeeze)))] if len(squeeze) else []
+    return object_E, object_e, coupling, equations
 
 
 def pyramid_faces(faces: int, heading: float) -> np.ndarray:
