@@ -156,8 +156,8 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     _m(
         "F06", "floor", FLOOR,
-        "lateral = (-math.sin(pose[2]), math.cos(pose[2]))",
-        "lateral = (math.cos(pose[2]), math.sin(pose[2]))",
+        "lateral = (-math.sin(heading), math.cos(heading))",
+        "lateral = (math.cos(heading), math.sin(heading))",
         "the tyres' sideways sharing is written along the wheels' rolling direction instead of across it",
         "tests/test_floor.py",
     ),
