@@ -389,3 +389,19 @@ def test_a_message_repeated_with_the_same_stamp_is_dropped_and_said(robot, tmp_p
     assert found.report.samples == plain.report.samples == 40
     assert len(found.report.clock_jumps) == 1 and "0.000 s earlier" in found.report.clock_jumps[0]
     np.testing.assert_array_equal(found.trajectory.q, plain.trajectory.q)
+
+
+def test_a_trajectory_file_that_cannot_be_read_is_one_line(tmp_path, capfd, monkeypatch):
+    """Looking at a trajectory file's first bytes (is it a recording?) on a file the system will
+    not open: one line naming the file and why, not an internal error."""
+    import mobmanip.motion.recordings as recordings
+
+    path = tmp_path / "motion.csv"
+    path.write_text("t\n0\n")
+
+    def refused(*_args, **_kwargs):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(recordings, "open", refused, raising=False)
+    code, _, err = run_cli(capfd, "trajectory", ROBOT, path)
+    assert_one_line_error(code, err, "motion.csv", "cannot read its first bytes: Permission denied")

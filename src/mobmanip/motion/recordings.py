@@ -149,15 +149,18 @@ def recording_kind(path: str | Path) -> str | None:
 
     Raises:
         RecordingError: a recording whose suffix its reader cannot take (named, with the suffix to
-            give it).
+            give it), or a file that cannot be read.
     """
     path = Path(path)
     if path.is_dir():
         return "a ROS 2 bag folder" if (path / "metadata.yaml").is_file() else None
     if not path.is_file():
         return None
-    with open(path, "rb") as handle:
-        head = handle.read(16)
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(16)
+    except OSError as exc:  # unreadable: named, not an internal error
+        raise RecordingError(str(path), f"cannot read its first bytes: {exc.strerror or exc}") from None
     for signature, kind, suffix in _SIGNATURES:
         if head.startswith(signature):
             if path.suffix.lower() != suffix:
