@@ -35,12 +35,13 @@ def _start(cwd: Path, *argv) -> subprocess.Popen:
     )
 
 
-def _kill_after(proc: subprocess.Popen, delay: float, signum: int) -> tuple[int, str]:
+def _kill_all_after(procs: list[subprocess.Popen], delay: float, signum: int) -> list[tuple[int, str]]:
     time.sleep(delay)
-    if proc.poll() is None:
-        proc.send_signal(signum)
-    _, err = proc.communicate(timeout=120)
-    return proc.returncode, err
+    for proc in procs:
+        if proc.poll() is None:
+            proc.send_signal(signum)
+    errors = [proc.communicate(timeout=120)[1] for proc in procs]
+    return [(proc.returncode, err) for proc, err in zip(procs, errors)]
 
 
 def _listing(directory: Path) -> list[str]:
@@ -237,8 +238,9 @@ def test_a_killed_run_leaves_nothing_behind(tmp_path, command, files):
         existing = work / "kept"
         existing.mkdir()
         (existing / next(iter(sorted(files)))).write_text("earlier result")
-        code_new, err_new = _kill_after(_start(work, *argv("new/sub")), delay, signum)
-        code_old, err_old = _kill_after(_start(work, *argv("kept")), delay, signum)
+        # the run into a new directory and the run into an existing one side by side, killed together
+        procs = [_start(work, *argv("new/sub")), _start(work, *argv("kept"))]
+        (code_new, err_new), (code_old, err_old) = _kill_all_after(procs, delay, signum)
         for code, err in ((code_new, err_new), (code_old, err_old)):
             # One line, also while NumPy and Pinocchio are being imported (0.3 s is long after
             # Python's own start-up, which takes some 40 ms).

@@ -23,6 +23,11 @@ from mobmanip.viz.page import MAGNIFY_BELOW, MAGNIFY_TO, inject, magnification, 
 from mobmanip.viz.scene import OBJECT_COLOR, EllipsoidViewer, analyze_pair, scene_path, visual_model
 
 ROBOTS = sorted(p.stem for p in (Path(__file__).resolve().parents[1] / "robots").glob("*.toml"))
+#: The robots whose live page is checked beside the exported one: a differential drive with two
+#: planar arms, a one-arm base with many meshes, a two-arm base (the live page is the same scene,
+#: sent over meshcat's websocket instead of written into the file; every robot's exported page is
+#: checked). Each page costs seconds of software rendering on a 2-core machine.
+LIVE = ("planar_dual_arm", "stretch", "tiago_dual")
 VIEW = {"width": 800, "height": 500}  # small pages render fast
 M = "meshcat/"
 TOL = 1e-5
@@ -180,26 +185,27 @@ def _check_framed(page, viewer, q, analysis, locked):
 
 @pytest.fixture(scope="module", params=ROBOTS)
 def shown(request, browser, tmp_path_factory):
-    """A robot in its home configuration (what `mobmanip view ROBOT` shows), its viewer, its live
-    page and its exported page."""
+    """A robot in its home configuration (what `mobmanip view ROBOT` shows), its viewer, its
+    exported page and, for the robots of :data:`LIVE`, its live page."""
     robot = mobmanip.load_robot(request.param)
     q = robot.neutral()
     analysis, locked = analyze_pair(robot, q)
     with EllipsoidViewer(robot) as viewer:
         viewer.show(q, analysis, locked)
         path = viewer.export_html(tmp_path_factory.mktemp("page") / f"{robot.name}.html")
-        live = _open(browser, viewer.url)
-        exported = _open(browser, path.as_uri())
+        pages = [_open(browser, path.as_uri())]
+        if robot.name in LIVE:
+            pages.insert(0, _open(browser, viewer.url))
         yield {
             "robot": robot,
             "q": q,
             "analysis": analysis,
             "locked": locked,
             "viewer": viewer,
-            "pages": (live, exported),
+            "pages": tuple(pages),
         }
-        live.close()
-        exported.close()
+        for page in pages:
+            page.close()
 
 
 def test_legend_names_every_drawn_set_with_its_colour_and_scale(shown):
@@ -210,7 +216,8 @@ def test_legend_names_every_drawn_set_with_its_colour_and_scale(shown):
 def test_robot_and_object_are_inside_the_frame(shown):
     args = shown["viewer"], shown["q"], shown["analysis"], shown["locked"]
     drawn = [_check_framed(page, *args) for page in shown["pages"]]
-    np.testing.assert_allclose(drawn[0], drawn[1], atol=1.0)  # the exported page frames it the same
+    if len(drawn) == 2:
+        np.testing.assert_allclose(drawn[0], drawn[1], atol=1.0)  # the exported page frames it as the live one
 
 
 def test_magnified_small_set_is_drawn_larger_and_says_so(browser):
