@@ -81,7 +81,7 @@ PLACE = ["place", "planar_dual_arm", "--object", "1,0.5,0.35"]
 @pytest.mark.parametrize("budget", ["50", "300", "0"])
 def test_budget_with_an_ellipsoid_objective_is_refused(capfd, objective, budget):
     code, out, err = run_cli(capfd, *PLACE, "--objective", objective, "--budget", budget)
-    assert_one_line_error(code, err, f"--budget {budget}", repr(objective), "polytope objective", "not one")
+    assert_one_line_error(code, err, f"--budget {budget}", repr(objective), "a measure's reading", "not one")
     assert out == ""
 
 

@@ -95,15 +95,14 @@ def _cli(*args):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (("--objective", "dynamic:capacity:+x", "--mu", "0.5"), "--ground needs a polytope objective"),
+        (("--objective", "dynamic:capacity:+x", "--mu", "0.5"), "--ground needs a measure's reading"),
         (("--objective", "dynamic_polytope:widest:+x"), "the reading must be one of reach, support"),
-        (("--objective", "force_polytope:reach:+x"), "placement maximises the polytopes of motion"),
         (("--objective", "dynamic_polytope:reach:+x", "--budget", "0"), "--budget must be at least 1"),
         (
             ("--objective", "dynamic_polytope:reach:+q"),
             "direction '+q' is neither a signed axis of the planar task (+x, -x, +y, -y) nor 2 numbers like 1,0",
         ),
-        (("--objective", "dynamic_polytope:reach:+x", "--map", "m"), "--map is not available with a polytope"),
+        (("--objective", "dynamic_polytope:reach:+x", "--map", "m"), "--map is not available with a measure's reading"),
     ],
 )
 def test_bad_polytope_placements_are_one_line_errors(args, message):

@@ -17,11 +17,13 @@ DIRECTION is a signed task axis (+x, -z, +yaw) or components (1,1,0). ELLIPSOID:
 (or :angular) takes the index of the set's shadow on the task's linear (angular) rows, one unit,
 as `analyze` reports per block: dynamic:minor_axis:linear on a spatial task.
 
-or POLYTOPE:READING:DIRECTION, POLYTOPE kinematic_polytope, dynamic_polytope or
-dynamic_polytope_min_norm, READING reach (straight-line reach from rest) or support: no gradient;
-the ellipsoid's capacity along DIRECTION is optimised first (without the floor), then a
-derivative-free search (Nelder-Mead, --budget evaluations) maximises the polytope's reading from
-there. With --ground (--mu, --no-traction, --load, --reserve) the reading is the grounded one.
+or MEASURE:READING:DIRECTION, MEASURE any other registered measure (kinematic_polytope,
+dynamic_polytope, dynamic_polytope_min_norm, force_ellipsoid, force_polytope, or one registered
+from Python), READING reach (straight-line reach from rest) or support: no closed-form gradient;
+the ellipsoid's capacity along DIRECTION (for a force measure the kinematic ellipsoid's volume)
+is optimised first (without the floor), then a derivative-free search (Nelder-Mead, --budget
+evaluations) maximises the reading from there. With --ground (--mu, --no-traction, --load,
+--reserve) the reading is the grounded one.
 
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
@@ -101,7 +103,7 @@ def register(sub) -> None:
         "--budget",
         type=int,
         metavar="N",
-        help=f"with a polytope objective: evaluations of the derivative-free search (default {DEFAULT_BUDGET}; "
+        help=f"with a measure's reading: evaluations of the derivative-free search (default {DEFAULT_BUDGET}; "
         "refused with an ellipsoid objective, which gradient ascent maximises)",
     )
     add_dask_option(parser)
@@ -113,7 +115,7 @@ def register(sub) -> None:
     parser.set_defaults(func=run)
 
 
-#: Default evaluations of a polytope objective's derivative-free search (--budget).
+#: Default evaluations of a measure reading's derivative-free search (--budget).
 DEFAULT_BUDGET = 300
 #: Evaluations of that search place runs without being asked, and the wall time of one (s).
 MAX_EVALUATIONS = 20_000
@@ -136,7 +138,7 @@ def _check_work(args) -> None:
     check_work(WorkEstimate("place", "starts", args.starts, SECONDS_PER_START), _bound(args.max_work, MAX_STARTS))
     if args.budget is not None and not _polytope_objective(args):
         raise UsageError(
-            f"--budget {args.budget} sets the derivative-free search of a polytope objective (e.g. "
+            f"--budget {args.budget} sets the derivative-free search of a measure's reading (e.g. "
             f"dynamic_polytope:reach:+x); the objective {args.objective!r} is not one (an ellipsoid objective is "
             "maximised by gradient ascent from --starts starts)"
         )
@@ -155,9 +157,9 @@ def _check_work(args) -> None:
 
 
 def _polytope_objective(args) -> bool:
-    from ..placement.grounded import is_polytope_objective
+    from ..gradients.readings import is_reading_objective
 
-    return is_polytope_objective(args.objective)
+    return is_reading_objective(args.objective)
 
 
 def _parse_point(text: str):
@@ -202,7 +204,7 @@ def _run(args, executor) -> int:
         from ..errors import UsageError
 
         raise UsageError(
-            f"--ground needs a polytope objective (e.g. dynamic_polytope:reach:+x): the ellipsoid of "
+            f"--ground needs a measure's reading (e.g. dynamic_polytope:reach:+x): the ellipsoid of "
             f"{args.objective!r} ignores the floor"
         )
     reference = None if args.posture is None else named_configuration(robot, args.posture)
@@ -287,10 +289,11 @@ def _run(args, executor) -> int:
 
 
 def _run_polytope(args, robot, target) -> int:
-    """``place`` with a polytope objective (:func:`mobmanip.placement.grounded.place_polytope`)."""
+    """``place`` with a measure's reading (:func:`mobmanip.placement.grounded.place_polytope`)."""
     from ..analysis.single import analyze
     from ..errors import UsageError
-    from ..placement.grounded import PolytopeObjective, place_polytope
+    from ..gradients.readings import ReadingObjective
+    from ..placement.grounded import place_polytope, surrogate
     from ..placement.optimize import Region
     from ..postures.named import named_configuration
     from ..robot.tasks import get_task
@@ -300,9 +303,9 @@ def _run_polytope(args, robot, target) -> int:
     for option, given in (("--map", args.map), ("--figure", args.figure),
                           ("--avoid-collision", args.avoid_collision is not None)):  # fmt: skip
         if given:
-            raise UsageError(f"{option} is not available with a polytope objective ({args.objective})")
+            raise UsageError(f"{option} is not available with a measure's reading ({args.objective})")
     task = get_task(args.task or robot.spec.default_task)
-    objective = PolytopeObjective.parse(args.objective, task)
+    objective = ReadingObjective.parse(args.objective, task)
     constraints = floor_constraints(args)
     reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
@@ -319,7 +322,7 @@ def _run_polytope(args, robot, target) -> int:
     print("joints: " + ", ".join(f"{name} {value:.4f}" for name, value in joints.items()))
     print(f"{objective.name} = {result.value:.6g}")
     print(
-        f"at the optimum of {objective.surrogate} ({result.ungrounded.value:.6g}, without the floor): "
+        f"at the optimum of {surrogate(objective)} ({result.ungrounded.value:.6g}, without the floor): "
         f"{objective.name} = {result.ungrounded_value:.6g}"
     )
     print(
@@ -339,7 +342,7 @@ def _run_polytope(args, robot, target) -> int:
             "constraints": [c.describe() for c in constraints],
             "value": result.value,
             "ungrounded": {
-                "objective": objective.surrogate,
+                "objective": surrogate(objective),
                 "value": result.ungrounded.value,
                 "q": robot.configuration_dict(result.ungrounded.q),
                 "objective_value": result.ungrounded_value,

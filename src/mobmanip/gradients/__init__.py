@@ -12,6 +12,7 @@ from .evaluator import (
     platform_gradient,
 )
 from .rank import SINGULAR_RTOL
+from .readings import READINGS, ReadingGradient, ReadingObjective, is_reading_objective, objective_evaluator
 
 __all__ = [
     "ELLIPSOIDS",
@@ -19,9 +20,14 @@ __all__ = [
     "GradientEvaluator",
     "INDICES",
     "Objective",
+    "READINGS",
+    "ReadingGradient",
+    "ReadingObjective",
     "SINGULAR_RTOL",
+    "is_reading_objective",
     "measure_gradient",
     "measure_gradients",
+    "objective_evaluator",
     "objective_names",
     "platform_gradient",
 ]

@@ -112,6 +112,11 @@ class Objective:
         elif self.rows is not None:
             raise ArgumentError("task rows are given by a block (linear or angular)")
 
+    @property
+    def measure_name(self) -> str:
+        """The measure whose set the objective reads: its ellipsoid."""
+        return self.ellipsoid
+
     def whole(self) -> Objective:
         """The same objective of the whole set (no block)."""
         return Objective(self.ellipsoid, self.index, self.direction)

@@ -50,7 +50,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ArgumentError, CarryFailed, MeasureError, SpecError
-from ..gradients.evaluator import GradientEvaluator, Objective
+from ..gradients.evaluator import Objective
+from ..gradients.readings import ReadingObjective, objective_evaluator
 from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
@@ -250,7 +251,7 @@ class CarryResult:
         floor: the floor the QP motion kept (:meth:`CarryFloor.describe`), or ``None``.
     """
 
-    objective: Objective
+    objective: Objective | ReadingObjective
     task: str
     motion: CarryRun
     baseline: CarryRun
@@ -488,7 +489,7 @@ def _jacobian(robot: Robot, q: np.ndarray, rows: list[int]) -> np.ndarray:
 def carry(
     robot: Robot,
     path: ObjectPath,
-    objective: Objective | str | None = None,
+    objective: Objective | ReadingObjective | str | None = None,
     task: str | None = None,
     *,
     start: np.ndarray | None = None,
@@ -504,8 +505,11 @@ def carry(
     Args:
         robot: the loaded robot; its platform's S must not depend on q (gradients).
         path: the object's path, relative to where ``start`` holds it.
-        objective: the measure to maximise (``ELLIPSOID:INDEX[:DIRECTION]``, :class:`Objective`);
-            default ``kinematic:minor_axis``.
+        objective: the measure to maximise: an ellipsoid's index (``ELLIPSOID:INDEX[:DIRECTION]``,
+            :class:`Objective`, by its closed-form gradient) or any other registered measure's
+            reading (``MEASURE:READING:DIRECTION``, :class:`~mobmanip.gradients.ReadingObjective`,
+            by checked central differences: 4 nv + 1 measures a step); default
+            ``kinematic:minor_axis``.
         task: task space; default the spec's.
         start: start configuration, (nq,); default :func:`default_start`.
         object_mass: mass of the object held between the hands (kg); default the spec's.
@@ -536,7 +540,7 @@ def carry(
     if floor is not None and not isinstance(floor, CarryFloor):
         raise ArgumentError(f"floor must be a CarryFloor, got {type(floor).__name__}")
     task = get_task(task or robot.spec.default_task)
-    evaluator = GradientEvaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
+    evaluator = objective_evaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
     q0 = default_start(robot) if start is None else robot.check_configuration(start)
     label = "the given start configuration" if start is not None else _default_start_label(robot, q0)
     step, gain = float(step), float(gain)
@@ -580,13 +584,16 @@ def carry(
 
 
 def _collapsed_at_minimum(
-    robot: Robot, run: CarryRun, objective: Objective, task: str, object_mass: float | None
+    robot: Robot, run: CarryRun, objective: Objective | ReadingObjective, task: str, object_mass: float | None
 ) -> tuple[float, float] | None:
-    """(smallest, largest semi-axis) of the objective's set (its block's shadow for a block
-    objective) at the run's minimum, when it has collapsed there; else ``None``."""
+    """(smallest, largest semi-axis) of the objective's ellipsoid (its block's shadow for a block
+    objective) at the run's minimum, when it has collapsed there; else ``None`` (also for a
+    reading of another measure: its set has no semi-axes)."""
     from ..analysis.plausibility import collapsed
     from ..analysis.single import analyze
 
+    if not isinstance(objective, Objective):
+        return None
     q = run.q[int(np.argmin(run.capacity))]
     task_set = analyze(robot, q, task, object_mass=object_mass).measure(objective.ellipsoid)
     if objective.rows is not None:

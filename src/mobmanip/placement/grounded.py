@@ -1,13 +1,15 @@
-"""Base placement that maximises a polytope's reading, on the floor or not.
+"""Base placement that maximises a measure's reading, on the floor or not.
 
-:func:`mobmanip.placement.optimize.place` climbs the ellipsoids' analytic gradients. A polytope's
-reading (its straight-line reach or its support along a task axis), and above all a grounded one
-(the floor constraint's contacts in the linear program), has no such gradient: it is the value of
-a linear program whose data move with the configuration, piecewise smooth, with kinks where the
-binding rows change. :func:`place_polytope` therefore works in two stages:
+:func:`mobmanip.placement.optimize.place` climbs the ellipsoids' analytic gradients. Any other
+registered measure is read along a task direction (:class:`mobmanip.gradients.ReadingObjective`:
+its straight-line reach or its support). A polytope's reading, and above all a grounded one (the
+floor constraint's contacts in the linear program), has no closed-form gradient: it is the value
+of a linear program whose data move with the configuration, piecewise smooth, with kinks where
+the binding rows change. :func:`place_polytope` therefore works in stages:
 
 1. the ellipsoid's capacity along the same direction (the kinematic ellipsoid for a velocity
-   polytope, the dynamic one for an acceleration polytope), without the floor, by
+   set, the dynamic one for an acceleration set; for a measure of another quantity, such as
+   force, the kinematic ellipsoid's volume), without the floor, by
    :func:`~mobmanip.placement.optimize.place` (its gradients, its starts): the *ungrounded
    optimum*;
 2. the polytope's reading (with the constraints, e.g. on the floor) at the seeds: the ungrounded
@@ -36,93 +38,50 @@ from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
 from ..analysis.single import analyze
-from ..errors import ArgumentError, MeasureError, MobmanipError
-from ..gradients.evaluator import Objective
-from ..measures import MEASURES, get_measure
+from ..errors import ArgumentError, MobmanipError
+from ..gradients.readings import ReadingObjective, is_reading_objective
+from ..measures import get_measure
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from .optimize import DEFAULT_STARTS, Placement, PlacementProblem, Region, _project, check_turn, place
 
-#: Readings of a polytope an objective may name.
-READINGS = ("reach", "support")
-#: Default budget of the derivative-free stage (evaluations, each a projection and a polytope).
+#: Default budget of the derivative-free stage (evaluations, each a projection and a set).
 DEFAULT_BUDGET = 300
 #: Derivative-free searches, from the best seeds (the budget shared among them).
 SEARCHES = 2
-#: The ellipsoid whose gradient gives stage 1's start, per quantity of the polytope.
+#: The ellipsoid whose gradient gives stage 1's start, per quantity of the measure: its capacity
+#: along the same direction. A quantity with no ellipsoid of its kind (the force measures, a
+#: user's) starts from the hold of the largest kinematic ellipsoid (:data:`FALLBACK_SURROGATE`).
 SURROGATES = {"velocity": "kinematic", "acceleration": "dynamic"}
+#: Stage 1's objective for a measure whose quantity has no ellipsoid of its kind.
+FALLBACK_SURROGATE = "kinematic:log_volume"
+
+#: The objectives of this module (any registered measure's reading), under their old name.
+PolytopeObjective = ReadingObjective
 
 
-@dataclass(frozen=True)
-class PolytopeObjective:
-    """``POLYTOPE:READING:DIRECTION``: a polytope measure, ``reach`` (straight-line reach from
-    rest) or ``support`` (extent with the other components free), along a unit task direction."""
-
-    measure: str
-    reading: str
-    direction: tuple[float, ...]
-    text: str
-    direction_text: str = ""
-
-    @property
-    def name(self) -> str:
-        return self.text
-
-    @property
-    def surrogate(self) -> str:
-        """Stage 1's ellipsoid objective: its capacity along the same direction."""
-        ellipsoid = SURROGATES[get_measure(self.measure).quantity.name]
-        return f"{ellipsoid}:capacity:" + (self.direction_text or ",".join(repr(v) for v in self.direction))
-
-    @classmethod
-    def parse(cls, text: str, task) -> PolytopeObjective:
-        """From ``POLYTOPE:READING:DIRECTION`` (DIRECTION as :meth:`Objective.parse` reads it).
-
-        Raises:
-            ArgumentError: not three parts, an unknown reading, a bad direction.
-            MeasureError: not a polytope measure with an ellipsoid counterpart.
-        """
-        task = get_task(task)
-        parts = str(text).split(":")
-        if len(parts) != 3:
-            raise ArgumentError(f"a polytope objective is POLYTOPE:READING:DIRECTION (e.g. dynamic_polytope:reach:+x), "
-                                f"got {text!r}")  # fmt: skip
-        measure, reading, direction = parts
-        if not is_polytope_objective(text):
-            known = ", ".join(n for n, m in MEASURES.items() if m.set_kind == "polytope")
-            raise MeasureError(f"objective {text!r}: {measure!r} is not a polytope measure ({known})")
-        if get_measure(measure).quantity.name not in SURROGATES:
-            names = ", ".join(
-                n for n, m in MEASURES.items() if m.set_kind == "polytope" and m.quantity.name in SURROGATES
-            )
-            raise MeasureError(f"objective {text!r}: placement maximises the polytopes of motion ({names})")
-        if reading not in READINGS:
-            raise ArgumentError(f"objective {text!r}: the reading must be one of {', '.join(READINGS)}")
-        unit = Objective.parse(f"dynamic:capacity:{direction}", task)  # its direction, checked and made unit
-        unit.check_task(task)
-        assert unit.direction is not None
-        return cls(measure, reading, unit.direction, str(text), direction.strip())
+def surrogate(objective: ReadingObjective) -> str:
+    """Stage 1's ellipsoid objective: the ellipsoid of the measure's quantity, its capacity along
+    the same direction, or :data:`FALLBACK_SURROGATE`."""
+    ellipsoid = SURROGATES.get(get_measure(objective.measure).quantity.name)
+    if ellipsoid is None:
+        return FALLBACK_SURROGATE
+    return f"{ellipsoid}:capacity:" + (objective.direction_text or ",".join(repr(v) for v in objective.direction))
 
 
 def is_polytope_objective(text: str) -> bool:
-    """Whether ``text`` names a registered polytope measure (``POLYTOPE:...``)."""
-    head = str(text).split(":", 1)[0]
-    return head in MEASURES and MEASURES[head].set_kind == "polytope"
+    """Whether ``text`` is an objective of this module: a reading of a registered measure other
+    than the two ellipsoids with closed-form gradients (``MEASURE:...``)."""
+    return is_reading_objective(text)
 
 
 def polytope_value(
-    robot: Robot, q: np.ndarray, objective: PolytopeObjective, task, object_mass, constraints, decoupled=False
+    robot: Robot, q: np.ndarray, objective: ReadingObjective, task, object_mass, constraints, decoupled=False
 ) -> float:
     """The objective's reading at ``q`` (0 when the set is empty)."""
     result = analyze(robot, q, task, object_mass=object_mass, constraints=tuple(constraints),
                      measures=(objective.measure,), decoupled=decoupled)  # fmt: skip
-    polytope = result.measure(objective.measure)
-    if polytope.empty:
-        return 0.0
-    reading = getattr(polytope, "straight_line_reach", None) if objective.reading == "reach" else polytope.support
-    if reading is None:
-        raise MeasureError(f"{objective.measure} has no straight-line reach")
-    return float(reading(np.asarray(objective.direction)))
+    return objective.read(result.measure(objective.measure))
 
 
 @dataclass(frozen=True)
@@ -143,7 +102,7 @@ class PolytopePlacement:
     """
 
     q: np.ndarray
-    objective: PolytopeObjective
+    objective: ReadingObjective
     value: float
     ungrounded: Placement
     ungrounded_value: float
@@ -162,7 +121,7 @@ class PolytopePlacement:
 def place_polytope(
     robot: Robot,
     target: ArrayLike,
-    objective: str | PolytopeObjective,
+    objective: str | ReadingObjective,
     task: str | None = None,
     *,
     constraints: tuple = (),
@@ -189,14 +148,14 @@ def place_polytope(
     """
     started = time.perf_counter()
     task = get_task(task or robot.spec.default_task)
-    if not isinstance(objective, PolytopeObjective):
-        objective = PolytopeObjective.parse(objective, task)
+    if not isinstance(objective, ReadingObjective):
+        objective = ReadingObjective.parse(objective, task)
     if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
         raise ArgumentError(f"the search's budget must be a positive number of evaluations, got {budget!r}")
-    first = place(robot, target, objective.surrogate, task.name, object_mass=object_mass, decoupled=decoupled,
+    first = place(robot, target, surrogate(objective), task.name, object_mass=object_mass, decoupled=decoupled,
                   region=region, reference=reference, starts=starts, hold_turn=hold_turn)  # fmt: skip
     problem = PlacementProblem.of_objective(
-        robot, objective.surrogate, task, first.target, region, reference, object_mass=object_mass, decoupled=decoupled
+        robot, surrogate(objective), task, first.target, region, reference, object_mass=object_mass, decoupled=decoupled
     )
     bounds = problem.bounds()
     if hold_turn is not None:

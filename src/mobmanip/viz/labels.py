@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ..gradients.evaluator import Objective
+    from ..gradients.readings import ReadingObjective
     from ..measures.registry import Quantity
     from ..robot.tasks import TaskSpace
 
@@ -23,6 +24,8 @@ INDEX_WORDS = {
     "capacity": "capacity",
     "log_volume": "ln volume",
     "log_isotropy": "ln isotropy",
+    "reach": "reach from rest",
+    "support": "support",
 }
 
 
@@ -55,11 +58,11 @@ def task_unit(quantity: Quantity, task: str | TaskSpace, rows: Sequence[int] | N
     return f"mixed: {mathtext(linear)}, {mathtext(angular or linear)}"
 
 
-def objective_words(objective: Objective, task: str | TaskSpace) -> str:
+def objective_words(objective: Objective | ReadingObjective, task: str | TaskSpace) -> str:
     """``kinematic minor semi-axis``, ``dynamic capacity along +z``."""
     from ..robot.tasks import get_task
 
-    words = f"{objective.ellipsoid} {INDEX_WORDS.get(objective.index, objective.index.replace('_', ' '))}"
+    words = f"{objective.measure_name} {INDEX_WORDS.get(objective.index, objective.index.replace('_', ' '))}"
     block = getattr(objective, "block", None)
     if block:
         words += f" of the {block} block"
@@ -74,13 +77,13 @@ def objective_words(objective: Objective, task: str | TaskSpace) -> str:
     return words
 
 
-def objective_unit(objective: Objective, task: str | TaskSpace) -> str:
+def objective_unit(objective: Objective | ReadingObjective, task: str | TaskSpace) -> str:
     """The unit (mathtext) of an objective's value over a task."""
     from ..measures import get_measure
     from ..robot.tasks import get_task
 
     space = get_task(task)
-    quantity = get_measure(objective.ellipsoid).quantity
+    quantity = get_measure(objective.measure_name).quantity
     block = getattr(objective, "block", None)
     if objective.index == "log_isotropy":
         return "1"
@@ -100,6 +103,6 @@ def objective_unit(objective: Objective, task: str | TaskSpace) -> str:
     return task_unit(quantity, space)
 
 
-def objective_label(objective: Objective, task: str | TaskSpace) -> str:
+def objective_label(objective: Objective | ReadingObjective, task: str | TaskSpace) -> str:
     """``kinematic minor semi-axis (m/s)``: an axis or colour-bar label of an objective."""
     return f"{objective_words(objective, task)} ({objective_unit(objective, task)})"
