@@ -711,7 +711,12 @@ def _ordered(V: np.ndarray) -> np.ndarray:
             except Exception:  # a flat set: every point is kept  # noqa: BLE001
                 return V
         return V
-    pts = sorted(map(tuple, V))
+    # Andrew's monotone chain sorts by x, then y. Points on one vertical edge found by different
+    # programs differ in x by rounding (3e-13 on a 18 m/s^2 box): sorted by that noise, the chain
+    # ran down the edge and back up and dropped a corner as "straight on". Their x is compared on
+    # a grid of 1e-9 of the set's size, so that they sort by y.
+    grid = 1e-9 * max(float(np.max(np.abs(V))), 1e-300)
+    pts = sorted(map(tuple, V), key=lambda p: (round(p[0] / grid), p[1]))
     lower: list = []
     upper: list = []
     for p in pts:
