@@ -26,8 +26,8 @@ from .common import (
     add_floor_options,
     add_robot_options,
     apply_analysis_options,
+    constraints_from_args,
     describe_reaches,
-    floor_constraints,
     format_matrix,
     load_robot_and_configuration,
     print_warnings,
@@ -234,7 +234,7 @@ def run(args) -> int:
     measures = requested_measures(args)
     # one configuration: the reference path, which needs no compiled kernel and gives the same
     # numbers whatever this process ran before
-    constraints = floor_constraints(args)
+    constraints = constraints_from_args(args)
     hold = _check_hold(args, constraints)
     result = analyze(
         robot,

@@ -321,13 +321,22 @@ def add_floor_options(parser: Options) -> None:
         "its roll and pitch moments where the task leaves those rows out, and keep it level within "
         "0.01 m/s^2 and rad/s^2; off by default: the task is the one analysed without the floor",
     )
+    add_constraint_options(parser)
 
 
 def floor_constraints(args) -> tuple:
     """The constraints --ground, --mu, --no-traction, --load and --reserve ask for (empty: the
-    ideal robot)."""
+    ideal robot). A registered constraint option given too is refused, naming the command
+    (:func:`constraints_from_args` is for the commands that honour them).
+
+    Raises:
+        ArgumentError: contradicting floor options or a bad value.
+        UsageError: a registered constraint option the command cannot honour.
+    """
     from ..errors import ArgumentError
     from ..terms.constraints.floor import Floor
+
+    refuse_constraint_options(args)
 
     mu, no_traction = getattr(args, "mu", None), getattr(args, "no_traction", False)
     load, reserve = getattr(args, "load", None), getattr(args, "reserve", None)
@@ -354,6 +363,91 @@ def floor_constraints(args) -> tuple:
             level=level,
         ),
     )
+
+
+#: Why a command that takes the floor's options cannot honour another constraint (the default:
+#: it models the floor on its own).
+CANNOT_HONOUR = {
+    "brake": "it stops the robot along a path, on rows only the floor has in motion",
+    "carry": "it solves one step of motion at a time, on rows only the floor has in motion",
+    "retime": "it times a path on rows only the floor has in motion",
+    "referee": "it replays the floor in MuJoCo, which models no other constraint",
+    "place": "an ellipsoid objective ignores every constraint beyond the joint boxes; give a measure's reading "
+    "(e.g. dynamic_polytope:reach:+x)",
+}
+
+
+def add_constraint_options(parser: Options) -> None:
+    """The registered constraint options (:mod:`mobmanip.terms.constraints.options`)."""
+    from ..terms.constraints.options import CONSTRAINT_OPTIONS
+
+    for option in CONSTRAINT_OPTIONS.values():
+        parser.add_argument(option.flag, type=decimal, metavar=option.metavar, dest=option.dest,
+                            help=f"{option.help} (a constraint of the {option.problem} problem at rest)")  # fmt: skip
+
+
+def given_constraint_options(args) -> list:
+    """(option, value) for each registered constraint option given, in registration order."""
+    from ..terms.constraints.options import CONSTRAINT_OPTIONS
+
+    return [
+        (option, getattr(args, option.dest))
+        for option in CONSTRAINT_OPTIONS.values()
+        if getattr(args, option.dest, None) is not None
+    ]
+
+
+def refuse_constraint_options(args, why: str | None = None) -> None:
+    """Refuse, in one line, the registered constraint options given to a command that cannot
+    honour them: the option, its constraint's name and ``why`` (default :data:`CANNOT_HONOUR`'s
+    line for the command).
+
+    Raises:
+        UsageError: one was given.
+    """
+    from ..errors import UsageError
+
+    given = given_constraint_options(args)
+    if given:
+        option, value = given[0]
+        command = getattr(args, "command", None) or "this command"
+        reason = why or CANNOT_HONOUR.get(command, "it models the floor on its own and no other constraint")
+        raise UsageError(f"{command} cannot honour {option.flag} ({option.build(value).name}): {reason}")
+
+
+def constraints_from_args(args, problems: tuple[str, ...] = ("velocity", "acceleration")) -> tuple:
+    """Every constraint the options ask for: the floor's (:func:`floor_constraints`), then one per
+    registered constraint option given, for a command whose sets honour every constraint of
+    ``problems``; an option of another problem is refused by name.
+
+    Raises:
+        ArgumentError: a bad value (the constraint's own message).
+        UsageError: an option of a problem the command does not solve.
+    """
+    from ..errors import UsageError
+
+    given = given_constraint_options(args)
+    built = []
+    for option, value in given:
+        if option.problem not in problems:
+            command = getattr(args, "command", None) or "this command"
+            raise UsageError(f"{command} cannot honour {option.flag}: its rows are of the {option.problem} problem, "
+                             f"and {command} solves the {' and '.join(problems)} problem")  # fmt: skip
+        built.append(option.build(value))
+    floor = floor_constraints(_without_constraint_options(args, given))
+    return (*floor, *built)
+
+
+def _without_constraint_options(args, given):
+    """``args`` with the registered constraint options cleared (they are built already)."""
+    if not given:
+        return args
+    import copy
+
+    cleared = copy.copy(args)
+    for option, _ in given:
+        setattr(cleared, option.dest, None)
+    return cleared
 
 
 def add_motion_floor_options(parser: argparse.ArgumentParser) -> None:
@@ -424,7 +518,7 @@ def requested_measures(args) -> tuple[str, ...] | None:
         wanted = tuple(measures or default_measures())
         measures = wanted + tuple(name for name in polytope_measures(wanted) if name not in wanted)
     asked = tuple(measures or default_measures())
-    if floor_constraints(args) and not set(asked) & set(polytope_measures(asked)):
+    if constraints_from_args(args) and not set(asked) & set(polytope_measures(asked)):
         measures = asked + ("dynamic_polytope",)
     return measures
 

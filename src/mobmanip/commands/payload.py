@@ -13,9 +13,13 @@ from .common import (
     add_floor_options,
     add_robot_options,
     binding_summary,
-    floor_constraints,
+    constraints_from_args,
     load_robot_and_configuration,
 )
+
+#: The problem the payload's linear program solves: a constraint's rows join it when they are of
+#: this problem (and affine in the object's mass, as the floor's are).
+ACCELERATION = ("acceleration",)
 
 
 def register(sub) -> None:
@@ -108,7 +112,7 @@ def run(args) -> int:
         raise UsageError("--out writes a payload map's files: give --map (one posture's result: --json)")
     robot, q = load_robot_and_configuration(args)
     acceleration = parse_acceleration(args.accel)
-    constraints = floor_constraints(args)
+    constraints = constraints_from_args(args, ACCELERATION)
     found = payload(robot, q, args.task, acceleration=acceleration, constraints=constraints, static=args.static)
     document = found.to_dict()
     require_finite(document)  # never a NaN or an infinity printed as a result
@@ -163,8 +167,8 @@ def run_map(args) -> int:
         source = robot_for_workers(args.robot)
     with cluster_executor(args) as executor:  # connected (or refused) before any work
         found = payload_map(robot, grid, args.task, acceleration=parse_acceleration(args.accel),
-                            constraints=floor_constraints(args), static=args.static, postures=args.postures,
-                            executor=executor, robot_source=source)  # fmt: skip
+                            constraints=constraints_from_args(args, ACCELERATION), static=args.static,
+                            postures=args.postures, executor=executor, robot_source=source)  # fmt: skip
     counts = {status: int((found.status == status).sum()) for status in CELL_STATUSES}
     print(f"robot {robot.name}, task {found.task}: {found.status.size} object positions "
           f"({', '.join(f'{n} {s}' for s, n in counts.items() if n)})")  # fmt: skip
@@ -200,7 +204,7 @@ def run_along(args) -> int:
         for name in ("payload_along.csv", "payload_along.json"):
             check_output(out / name)
     found = payload_along(robot, motion, args.task, acceleration=parse_acceleration(args.accel),
-                          constraints=floor_constraints(args), static=args.static)  # fmt: skip
+                          constraints=constraints_from_args(args, ACCELERATION), static=args.static)  # fmt: skip
     print(f"robot {robot.name}, task {found.task}: {len(found.t)} samples")
     k = found.lightest()
     if k is None:

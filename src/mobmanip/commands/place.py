@@ -193,13 +193,14 @@ def _run(args, executor) -> int:
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
     from ..support.files import write_json
-    from .common import floor_constraints, print_warnings
+    from .common import floor_constraints, print_warnings, refuse_constraint_options
 
     _check_work(args)
     robot = load_robot(find_spec(args.robot))
     target = _parse_point(args.object)
     if _polytope_objective(args):
         return _run_polytope(args, robot, target)
+    refuse_constraint_options(args)  # an ellipsoid objective honours no constraint beyond the joint boxes
     if floor_constraints(args):
         from ..errors import UsageError
 
@@ -298,7 +299,7 @@ def _run_polytope(args, robot, target) -> int:
     from ..postures.named import named_configuration
     from ..robot.tasks import get_task
     from ..support.files import write_json
-    from .common import floor_constraints, print_warnings
+    from .common import constraints_from_args, print_warnings
 
     for option, given in (("--map", args.map), ("--figure", args.figure),
                           ("--avoid-collision", args.avoid_collision is not None)):  # fmt: skip
@@ -306,7 +307,7 @@ def _run_polytope(args, robot, target) -> int:
             raise UsageError(f"{option} is not available with a measure's reading ({args.objective})")
     task = get_task(args.task or robot.spec.default_task)
     objective = ReadingObjective.parse(args.objective, task)
-    constraints = floor_constraints(args)
+    constraints = constraints_from_args(args)
     reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
     _check_outputs(args)

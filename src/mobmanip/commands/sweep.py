@@ -149,7 +149,7 @@ def run_command(args) -> int:
     from ..sweep.budget import check_grid
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
     from ..viz.sweep_plot import plot_sweep
-    from .common import cluster_executor, floor_constraints, requested_measures, robot_for_workers, show_progress
+    from .common import cluster_executor, constraints_from_args, requested_measures, robot_for_workers, show_progress
     from .outputs import write_sweep_csv, write_sweep_npz
 
     _check_outputs(args)  # before anything is loaded, compiled or computed
@@ -196,7 +196,7 @@ def run_command(args) -> int:
         postures=args.postures,
         reference=reference,
         measures=measures,
-        constraints=floor_constraints(args),
+        constraints=constraints_from_args(args),
     )
     out = Path(args.output)
     if out.parent and not out.parent.exists():

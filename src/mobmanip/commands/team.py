@@ -23,8 +23,8 @@ from .common import (
     add_work_option,
     binding_summary,
     cluster_executor,
+    constraints_from_args,
     describe_reaches,
-    floor_constraints,
     requested_measures,
     show_progress,
 )
@@ -123,7 +123,7 @@ def run(args) -> int:
 
     if args.dask is not None and not args.sweep_heading:
         raise UsageError("--dask runs a heading sweep on a cluster: give --sweep-heading GRID too")
-    constraints = floor_constraints(args)
+    constraints = constraints_from_args(args)
     if args.plot:
         check_output(args.plot)
     offsets = parse_grid(args.sweep_heading, "--sweep-heading") if args.sweep_heading else None

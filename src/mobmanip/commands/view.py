@@ -21,7 +21,7 @@ from .common import (
     add_floor_options,
     add_robot_options,
     apply_analysis_options,
-    floor_constraints,
+    constraints_from_args,
     load_robot_and_configuration,
     print_warnings,
     requested_measures,
@@ -116,7 +116,7 @@ def run(args) -> int:
         "object_mass": args.object_mass,
         "decoupled": args.decoupled,
         "measures": requested_measures(args),
-        "constraints": floor_constraints(args),
+        "constraints": constraints_from_args(args),
     }
     frames = None
     if args.sweep:
