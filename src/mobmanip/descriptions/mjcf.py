@@ -351,6 +351,8 @@ class _Tree:
         #: Bodies without <inertial> whose mesh geoms' mass could not be integrated (their files missing).
         self.mesh_notes: list[str] = []
         self.counter = 0
+        #: Links whose inertia is their geoms' (no <inertial>): not judged for plausibility.
+        self.from_geometry: list[str] = []
         #: The file's body names (a site of the same name is renamed: see :meth:`walk`).
         self.body_names = {body.get("name") for body in reader.root.iter("body") if body.get("name")}
         self.planar_base: tuple[JointDescription, ...] = ()
@@ -707,6 +709,7 @@ class _Tree:
             inertial = Inertial(mass, r.origin(attrs, where, shift), tensor)
         elif geom_masses:
             inertial, meshed = self.geom_inertial(name, geom_masses)
+            self.from_geometry.append(name)
             visual_mass = any(
                 a.get("contype", "1") == "0" and a.get("conaffinity", "1") == "0" and float(a.get("mass", 1.0)) > 0
                 for _, a in geom_masses
@@ -1060,7 +1063,16 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     text = ElementTree.tostring(reader.root, encoding="unicode")
     builder = MjcfBuilder(text, tuple(reader.notes), _platform_armature(reader, tree.base_armature))
     dirs = tuple(Path(p) for p in package_dirs) if package_dirs is not None else (path.parent,)
-    description = assemble(reader.root.get("model") or path.stem, path, "mjcf", tree.links, tree.joints, builder, dirs)
+    description = assemble(
+        reader.root.get("model") or path.stem,
+        path,
+        "mjcf",
+        tree.links,
+        tree.joints,
+        builder,
+        dirs,
+        inertia_from_geometry=tree.from_geometry,
+    )
     import dataclasses
 
     return dataclasses.replace(
