@@ -90,3 +90,27 @@ def test_a_non_convex_mesh_at_mujocos_default_is_noted_and_a_missing_one_named(t
     (tmp_path / "block.obj").unlink()
     notes = " ".join(read_description(path).notes)
     assert "whose files are missing or not closed: 'base', 'lower'" in notes
+
+
+def test_a_shell_mesh_and_a_class_scaled_mesh_weigh_what_mujoco_compiles(tmp_path):
+    """A mesh with ``inertia="shell"`` (its mass on the surface: Stretch's stickers) and a mesh
+    whose scale comes from its class's default (Robotiq's millimetres, in TidyBot), each alone in a
+    body: mass, centre and inertia equal MuJoCo's compiled ones."""
+    text = ROBOT.replace(
+        '<mesh name="ell_legacy" file="ell.obj"/>',
+        '<mesh name="ell_legacy" file="ell.obj"/><mesh name="skin" file="block.obj" inertia="shell"/>'
+        '<mesh name="small" class="mm" file="block.obj"/>',
+    ).replace("<compiler", '<default><default class="mm"><mesh scale="0.5 0.25 2"/></default></default><compiler')
+    text = text.replace(
+        '<site name="tool" pos="0.25 0 0"/>',
+        '<site name="tool" pos="0.25 0 0"/><body name="sticker" pos="0.1 0 0"><geom type="mesh" mesh="skin" '
+        'mass="0.3" pos="0.01 0.02 0"/><body name="tiny"><geom type="mesh" mesh="small"/></body></body>',
+    )
+    description, _, theirs = read_beside_mujoco(_write(tmp_path, text))
+    for body in ("sticker", "tiny"):
+        their_mass, com, expected = compiled_inertia(theirs, body)
+        inertial = description.links[body].inertial
+        R = inertial.origin.rotation
+        assert inertial.mass == pytest.approx(their_mass, rel=1e-6)
+        np.testing.assert_allclose(inertial.origin.xyz, com, atol=1e-7)
+        np.testing.assert_allclose(R @ inertial.inertia_matrix @ R.T, expected, atol=1e-6 * np.abs(expected).max())

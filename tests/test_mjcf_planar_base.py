@@ -9,7 +9,8 @@ MuJoCo's = T mobmanip's with T = diag(R(theta), 1, I), and M = T^T M_mujoco T, g
 J = J_mujoco T. The one place the models differ by the reader's stated rule: ``virtual_x``
 slides along x only in MuJoCo, and is counted along y too as part of the platform, so its mass
 is added to MuJoCo's y-y entry before the comparison (``virtual_y`` slides along both: exact).
-Armature (item 3) is in both: every joint's, the platform's included.
+Armature (item 3) is in both: every joint's, the platform's included (the slides' as a point mass
+on the yaw axis: the same kinetic energy, so the same mass matrix and bias as MuJoCo's).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from mjcf_util import mujoco_terms, platform_map
 from mobmanip.descriptions import read_description
 from mobmanip.robot.detect import detect_spec
 from mobmanip.terms.dynamics import mass_matrix
@@ -100,17 +102,6 @@ def test_the_nested_planar_joints_are_the_platform_not_arm_or_torso_joints(model
     assert explicit.torso == () and explicit.arms[0].joints == ARM
 
 
-def _mujoco(mj_model, qpos):
-    data = mujoco.MjData(mj_model)
-    data.qpos[:] = qpos
-    mujoco.mj_forward(mj_model, data)
-    M = np.zeros((mj_model.nv, mj_model.nv))
-    mujoco.mj_fullM(mj_model, data, M)
-    jacp, jacr = np.zeros((3, mj_model.nv)), np.zeros((3, mj_model.nv))
-    mujoco.mj_jacSite(mj_model, data, jacp, jacr, mj_model.site("hand").id)
-    return M, data.qfrc_bias.copy(), np.vstack([jacp, jacr]), data.site_xpos[mj_model.site("hand").id].copy()
-
-
 def test_mass_matrix_gravity_and_hand_jacobian_equal_mujocos(models):
     _, _, robot, mj_model = models
     assert mj_model.nq == mj_model.nv == 7  # x, y, theta, then the arm
@@ -121,11 +112,10 @@ def test_mass_matrix_gravity_and_hand_jacobian_equal_mujocos(models):
     for _ in range(6):
         x, y, theta = rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-np.pi, np.pi)
         arm = [rng.uniform(*mj_model.jnt_range[mj_model.joint(name).id]) for name in ARM]
-        M_mj, g_mj, J_mj, hand_mj = _mujoco(mj_model, [x, y, theta, *arm])
+        M_mj, g_mj, (J_mj,), (hand_mj,) = mujoco_terms(mj_model, [x, y, theta, *arm], np.zeros(7), ["hand"])
         q = np.array([x + AXIS[0], y + AXIS[1], np.cos(theta), np.sin(theta), *arm])
-        c, s = np.cos(theta), np.sin(theta)
-        T = np.eye(7)
-        T[:2, :2] = [[c, -s], [s, c]]
+        T = platform_map(theta, (0, 1, 2), 7, 7)
+        T[3:, 3:] = np.eye(4)
         M_mj[1, 1] += VIRTUAL_X_MASS  # the one stated difference (see the module docstring)
         M = mass_matrix(robot, q)
         np.testing.assert_allclose(M, T.T @ M_mj @ T, rtol=0, atol=1e-9)
@@ -137,9 +127,19 @@ def test_mass_matrix_gravity_and_hand_jacobian_equal_mujocos(models):
     assert largest > 60.0  # the platform's mass is in it
 
 
+def _root_mass(model) -> float:
+    """The root body's mass: the platform's bodies and the planar slides' armature, which
+    mobmanip puts on the yaw axis as a point mass (its kinetic energy a/2 |v|^2 in any frame,
+    with its gyroscopic term in the bias, as MuJoCo's)."""
+    return float(model.inertias[1].mass)
+
+
 def test_the_platforms_armature_is_in_the_mass_matrix(models):
     _, _, robot, mj_model = models
-    np.testing.assert_allclose(robot.model.armature[:3], [0.195, 0.195, 0.05])
+    np.testing.assert_allclose(robot.model.armature[:3], [0.0, 0.0, 0.05])  # yaw on the joint
+    # the slides' on the yaw axis: the root body is base_link (60 kg), the lumped virtual_x, virtual_y and it
+    mass = 60 + VIRTUAL_X_MASS + 0.5 + 0.195
+    assert _root_mass(robot.model) == pytest.approx(mass, rel=1e-15)
     np.testing.assert_allclose(robot.model.armature[3:], mj_model.dof_armature[3:])  # Pinocchio's reading
     assert mj_model.dof_armature.tolist() == pytest.approx([0.195, 0.195, 0.05, 0.4, 0.195, 0.02, 0.195])
 
@@ -149,7 +149,8 @@ def test_unequal_armature_along_x_and_y_gets_their_mean_with_a_note(tmp_path):
     path.write_text(NESTED.replace('name="planar_y" type="slide"', 'name="planar_y" armature="0.305" type="slide"'))
     description = read_description(path)
     model = description.build_model(pin.JointModelPlanar())
-    np.testing.assert_allclose(model.armature[:3], [0.25, 0.25, 0.05])
+    np.testing.assert_allclose(model.armature[:3], [0.0, 0.0, 0.05])
+    assert _root_mass(model) == pytest.approx(60 + VIRTUAL_X_MASS + 0.5 + 0.25, rel=1e-15)
     assert any("both get their mean, 0.25 kg" in note for note in description.notes)
 
 
@@ -197,7 +198,8 @@ def test_armature_of_every_joint_with_the_base_on_the_root_body_equals_mujocos(t
     limits = dict.fromkeys(("base_x", "base_y", "base_yaw", "pan", "pitch", "elbow"), (1.0, 100.0))
     robot = mobmanip.load_robot(detect_spec(path, ["hand"], limits=limits).spec)
     mj_model = mujoco.MjModel.from_xml_path(str(path))
-    np.testing.assert_allclose(robot.model.armature, [0.1, 0.1, 0.7, 0.3, 0.1, 0.05])
+    np.testing.assert_allclose(robot.model.armature, [0.0, 0.0, 0.7, 0.3, 0.1, 0.05])
+    assert _root_mass(robot.model) == pytest.approx(40 + 0.1, rel=1e-15)  # the slides' 0.1 on the yaw axis
     rng = np.random.default_rng(3)
     for _ in range(4):
         x, y, theta = rng.uniform(-2, 2, 3)

@@ -1,5 +1,5 @@
 """The robot zoo (issue 25, item 4): every robot with an arm in example-robot-data and in
-pybullet's data, and the Menagerie model this project ships as a fixture, goes through
+pybullet's data, and the Menagerie models this project ships as fixtures, goes through
 ``init-spec`` and ``analyze`` with no hand edits, or stops with one message naming exactly what is
 missing and the flag that supplies it. The table in ``docs/howto/robot-zoo.md`` lists each robot's
 platform kind, what was repaired and what the user must supply; this test checks it row by row
@@ -67,6 +67,10 @@ ZOO = [
     ("xarm6_with_gripper", "pybullet_data", "xarm/xarm6_with_gripper.urdf", ["xarm_gripper_base_link"]),
     ("tiago_dual (MJCF)", "mujoco_menagerie", "menagerie_tiago_dual/tiago_dual.xml",
      ["arm_right_7_link", "arm_left_7_link"]),
+    ("tidybot (MJCF)", "mujoco_menagerie", "menagerie_stanford_tidybot/tidybot.xml", ["pinch_site"]),
+    ("fr3_duo (MJCF)", "mujoco_menagerie", "menagerie_franka_mobile_fr3_duo/mobile_fr3_duo.xml",
+     ["left_attachment_site", "right_attachment_site"]),
+    ("stretch_3 (MJCF)", "mujoco_menagerie", "menagerie_hello_robot_stretch_3/stretch.xml", ["link_grasp_center"]),
 ]  # fmt: skip
 
 

@@ -33,7 +33,8 @@ import numpy as np
 from ..errors import DescriptionError
 from ..support.ranges import LINK_INERTIA, LINK_MASS, LINK_OFFSET, MAX_URDF_LINKS
 from .description import JointDescription, LinkDescription, ModelBuilder, NameMap, Origin, RobotDescription
-from .flaws import INERTIA_SLACK, Flaw, inertia_flaw
+from .extents import geometry_extents
+from .flaws import INERTIA_SLACK, PLAUSIBLE_MIN_SHARE, Flaw, implausible_inertia, inertia_flaw
 
 __all__ = ["INERTIA_SLACK", "UNSUPPORTED_JOINT_TYPES", "assemble", "check_supported"]
 
@@ -52,6 +53,7 @@ def assemble(
     joints: Sequence[JointDescription],
     builder: ModelBuilder,
     package_dirs: Iterable[str | Path] | None = None,
+    inertia_from_geometry: Iterable[str] = (),
 ) -> RobotDescription:
     """The description of checked parts (see the module docstring for what is checked).
 
@@ -63,6 +65,9 @@ def assemble(
         joints: every joint, in file order.
         builder: hands the source to Pinocchio.
         package_dirs: where ``package://`` URIs resolve (default: the file's folder).
+        inertia_from_geometry: links whose inertia the reader computed from their own geometry
+            (an MJCF body without ``<inertial>``): not judged by the plausibility rule, which
+            measures a stated tensor against the geometry.
 
     Raises:
         DescriptionError: the first problem found (the format's own subclass, e.g.
@@ -84,8 +89,18 @@ def assemble(
         if repeated:
             raise fail(f"{kind} name {repeated[0]!r} is defined more than once")
     flaws: list[Flaw] = []  # repaired when the model is built, refused by a strict load
+    dirs = tuple(Path(p) for p in package_dirs) if package_dirs is not None else (source.parent,)
+    derived = set(inertia_from_geometry)
+    total = sum(float(link.inertial.mass) for link in links if link.inertial is not None)
+    judged = {
+        link.name
+        for link in links
+        if link.inertial is not None and link.inertial.mass >= PLAUSIBLE_MIN_SHARE * total and link.name not in derived
+    }
     for link in links:
         flaw = _check_inertial(link, fail)
+        if flaw is None and link.name in judged:
+            flaw = _check_plausible(link, dirs)
         if flaw is not None:
             flaws.append(flaw)
     for joint in joints:
@@ -167,6 +182,19 @@ def _check_inertial(link: LinkDescription, fail) -> Flaw | None:
     if scale > LINK_INERTIA:
         raise fail(f"{where} has a moment of inertia of {scale:g} kg m^2 (at most {LINK_INERTIA:g})")
     return inertia_flaw(link.name, inertia)
+
+
+def _check_plausible(link: LinkDescription, package_dirs: Sequence[Path]) -> Flaw | None:
+    """The link's :class:`~mobmanip.descriptions.flaws.ImplausibleInertia`, if its (physical)
+    tensor is far below what its mass has in its geometry's bounding box; ``None`` when it is not,
+    or when the link has no mass, no tensor or no geometry mobmanip can measure."""
+    inertial = link.inertial
+    if inertial is None or inertial.inertia is None or inertial.mass <= 0.0:
+        return None
+    extents = geometry_extents(link, package_dirs)
+    if extents is None:
+        return None
+    return implausible_inertia(link.name, float(inertial.mass), np.asarray(inertial.inertia, dtype=float), extents)
 
 
 def _check_joint(joint: JointDescription, fail) -> None:

@@ -30,6 +30,25 @@ the dynamic measures move by no more than the repaired links' share of ``P``.
 
 A tensor within rounding of the physical set (:data:`INERTIA_SLACK`, relative to its largest
 entry: values printed to six digits) is read as written and is no flaw.
+
+**Implausible inertia** (:class:`ImplausibleInertia`): a physical tensor can still be far too
+small for the body it belongs to (MuJoCo Menagerie's TidyBot: a 60 kg base with
+``diaginertia="0.001 0.001 0.001"``, whose dynamic polytope then reaches 1,047 m/s^2 sideways).
+The rule: a link of mass m whose geometry (its collision shapes, else its visual ones) fills a
+bounding box of edges a, b, c in the link's frame would have, as a solid box, the trace
+``m (a^2 + b^2 + c^2) / 6``; the link is implausible when its tensor's trace is below
+:data:`PLAUSIBLE_TRACE_FRACTION` of that. The trace is the sum of the moments about three
+orthogonal axes, so the rule does not depend on how the tensor is turned; a fraction of 1/10
+means a radius of gyration under a third of the box's (sqrt(1/10) = 0.32). Real links sit near
+or above a solid box (hollow covers, motors at the ends of an arm link); a link whose mass sits
+in a small core inside a large cover can reach a few tenths, not a tenth. Only links carrying
+at least :data:`PLAUSIBLE_MIN_SHARE` of the robot's mass are judged: vendor files are full of
+frames with a placeholder point mass (0.1 kg and a zero tensor on TIAGo's and TALOS's force
+sensors, 0.1 g on Baxter's covers), which break the rule without mattering to any measure,
+while the bodies the rule is for carry a platform or an arm. There is no repair:
+the file's numbers are kept, with one warning naming the link and the numbers, and refused under
+``strict``. A link without geometry mobmanip can measure (none, or only mesh files it cannot
+read) is not judged.
 """
 
 from __future__ import annotations
@@ -48,6 +67,14 @@ if TYPE_CHECKING:
 #: significant digits (a thin plate's moments satisfy the inequality with equality). Beyond it
 #: the tensor is a flaw, repaired with a warning or refused under ``strict``.
 INERTIA_SLACK = 1e-5
+
+#: The fraction of a solid box's trace (the link's mass filling its geometry's bounding box)
+#: below which a link's rotational inertia is implausible (see the module docstring).
+PLAUSIBLE_TRACE_FRACTION = 0.1
+
+#: The least share of the robot's total mass a link must carry to be judged by the plausibility
+#: rule (see the module docstring).
+PLAUSIBLE_MIN_SHARE = 0.02
 
 #: What the inertia repair is called in messages.
 INERTIA_RULE = "MuJoCo's balanceinertia rule"
@@ -93,6 +120,14 @@ class Flaw:
             f"to have mobmanip repair it by {self.repair} with a warning"
         )
 
+    @property
+    def note(self) -> str:
+        """What ``init-spec`` says of it among the detection notes."""
+        return (
+            f"{self.subject}: {self.problem}; repaired at load by {self.repair}, with a warning (list the link in "
+            "accepted_repairs once reviewed, or set strict = true to refuse it)"
+        )
+
 
 @dataclass(frozen=True)
 class InertiaFlaw(Flaw):
@@ -120,6 +155,75 @@ class InertiaFlaw(Flaw):
     def delta(self) -> np.ndarray:
         """``repaired - inertia`` (3, 3), in the ``<inertial>`` frame (kg m^2)."""
         return np.array(self.repaired) - np.array(self.inertia)
+
+
+@dataclass(frozen=True)
+class ImplausibleInertia(Flaw):
+    """A link's rotational inertia far below what its mass has in its geometry's bounding box
+    (see the module docstring); kept as written (no repair), warned, refused when strict.
+
+    Attributes:
+        link: the link's name.
+        mass: its mass (kg).
+        trace: its tensor's trace (kg m^2).
+        extents: its geometry's bounding box edges in the link frame (m), (3,).
+        box_trace: the trace of a solid box of that mass and those edges (kg m^2).
+    """
+
+    link: str = ""
+    mass: float = 0.0
+    trace: float = 0.0
+    extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    box_trace: float = 0.0
+
+    @property
+    def warning(self) -> str:
+        return (
+            f"{self.subject}: {self.problem}; kept as written, so the dynamic measures may be far too large "
+            f"(kinematic results unaffected; {STRICT_HINT} refuses instead)"
+        )
+
+    @property
+    def refusal(self) -> str:
+        return (
+            f"{self.subject} {self.problem}; correct it in the file, or drop --strict (strict = false in the spec) "
+            "to analyse it as written with a warning"
+        )
+
+    @property
+    def note(self) -> str:
+        return (
+            f"{self.subject}: {self.problem}; kept as written, with a warning at load (list the link in "
+            "accepted_repairs once reviewed, or set strict = true to refuse it)"
+        )
+
+
+def implausible_inertia(link: str, mass: float, inertia: np.ndarray, extents: np.ndarray) -> ImplausibleInertia | None:
+    """The flaw of a link whose tensor's trace is below :data:`PLAUSIBLE_TRACE_FRACTION` of a
+    solid box's of its ``mass`` (kg) and its geometry's bounding box ``extents`` (m, (3,)), or
+    ``None`` (also for no mass or no extent)."""
+    a, b, c = (float(v) for v in extents)
+    box = mass * (a * a + b * b + c * c) / 6.0
+    trace = float(np.trace(inertia))
+    if mass <= 0.0 or box <= 0.0 or trace >= PLAUSIBLE_TRACE_FRACTION * box:
+        return None
+    moments = ", ".join(f"{m:.3g}" for m in np.linalg.eigvalsh(0.5 * (inertia + inertia.T)))
+    problem = (
+        f"rotational inertia implausibly small for its mass: {mass:.4g} kg with principal moments {moments} kg m^2 "
+        f"(trace {trace:.3g}), where a solid box of that mass filling its geometry's {a:.3g} x {b:.3g} x {c:.3g} m "
+        f"bounding box has trace {box:.3g} kg m^2, {box / trace if trace > 0 else float('inf'):.3g} times more "
+        f"(below 1/{round(1 / PLAUSIBLE_TRACE_FRACTION)} of it)"
+    )
+    return ImplausibleInertia(
+        subject=f"link {link!r}",
+        problem=problem,
+        repair="nothing (kept as written)",
+        link=link,
+        mass=float(mass),
+        trace=trace,
+        extents=(a, b, c),
+        box_trace=box,
+    )
 
 
 def inertia_flaw(link: str, inertia: np.ndarray) -> InertiaFlaw | None:

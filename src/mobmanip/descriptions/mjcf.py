@@ -12,7 +12,9 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   joints (prismatic), their axes, and their anchors (``pos``: the link frame is put on the joint
   as in Pinocchio's model); a body with several joints becomes a chain of links, one joint each
   (``BODY__JOINT`` for all but the last), as MuJoCo applies them in order; sites become frames
-  (a link ``SITE`` on a fixed joint ``SITE_site``): an end effector may be a site;
+  (a link ``SITE`` on a fixed joint ``SITE_site``; ``SITE_site`` when a body has the site's name,
+  MuJoCo naming the two apart): an end effector may be a site; a geom's shape is named by the
+  geom, else by its class (a sphere of class ``caster`` is a caster of the floor model);
 - the one body under ``<worldbody>`` is the root link; its ``free`` joint is dropped (mobmanip
   adds the platform's planar joint); a ``ball`` joint or a ``free`` joint elsewhere is refused;
 - a planar base: a slide along x, a slide along y and a hinge about z on the root body, or on a
@@ -21,12 +23,16 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   omnidirectional platform with those joints' limits; see ``_Tree.nested_base`` for how the
   bodies above the yaw are lumped into the platform and the yaw axis put on its origin);
 - armature: Pinocchio's builder reads every joint's ``armature`` into ``model.armature`` (and its
-  mass matrix); the planar base joints' armature goes to the platform joint's three velocities;
+  mass matrix); of the planar base joints', the yaw's goes to the platform joint's yaw rate and the
+  slides' become a point mass on the yaw axis (the same kinetic energy as MuJoCo's, so the same
+  mass matrix and bias; see :class:`~mobmanip.descriptions.mjcf_builder.MjcfBuilder`);
 - inertias: ``<inertial>`` (``diaginertia`` in its ``quat`` frame, or ``fullinertia``); a body
   without one gets its geoms' (``mass``, or ``density`` times volume, for spheres, boxes,
   cylinders, capsules and ellipsoids) as Pinocchio computes them, and its closed mesh geoms'
-  integrated as MuJoCo does (:meth:`_Tree.mesh_mass_properties`; the body is then given the
-  ``<inertial>`` for Pinocchio, which would give it 1 kg and a unit tensor). A mesh whose file is
+  integrated as MuJoCo does (:meth:`_Tree.mesh_mass_properties`: volume, or surface for
+  ``inertia="shell"``; a mesh's ``scale`` from its class too; the body is then given the
+  ``<inertial>`` for Pinocchio, which would give it 1 kg and a unit tensor, and likewise when a
+  geom that collides with nothing has mass: Pinocchio leaves such geoms out, MuJoCo weighs them). A mesh whose file is
   missing or not closed is not integrated: the notes name its body, which needs the file or an
   ``<inertial>`` before the dynamic measures mean anything (Menagerie's Stretch without its meshes);
 - limits: position from a joint's ``range``; effort from its ``actuatorfrcrange``, else from the
@@ -163,10 +169,11 @@ class _Reader:
                 if file is None:
                     continue
                 name = mesh.get("name") or Path(file).stem
-                scale = _floats(mesh.get("scale"), f"mesh {name!r} scale", 3)
+                attrs = self.attributes(mesh, "mesh", "main")  # a class may give the scale (Robotiq's mm)
+                scale = _floats(attrs.get("scale"), f"mesh {name!r} scale", 3)
                 factors = None if scale is None else (scale[0], scale[1], scale[2])
                 self.meshes[name] = (self.meshdir / file, factors)
-                self.mesh_inertia[name] = mesh.get("inertia", "legacy")
+                self.mesh_inertia[name] = attrs.get("inertia", "legacy")
         for tag, what in SKIPPED.items():
             if any(len(element) for element in self.root.iter(tag)):
                 self.notes.append(f"not read: {what}")
@@ -310,6 +317,29 @@ def _geom_mass_properties(kind: str, size: list[float], attrs: dict[str, str]) -
     return mass, np.diag(mass * shape)
 
 
+def _shell_mass_properties(mesh, attrs: dict[str, str]) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """A mesh's mass, centre and inertia about it (mesh frame) with the mass spread evenly over
+    its surface (MuJoCo's ``inertia="shell"``): ``mass``, or the density (per m^2 here) times
+    the area; the centre is the area-weighted mean of the triangles' centroids, and each
+    triangle (vertices a, b, c, area A) adds its exact second moment
+    ``A / 12 (a a^T + b b^T + c c^T + s s^T)``, s = a + b + c. ``None`` for a mesh of no area."""
+    triangles = np.asarray(mesh.triangles, dtype=float)
+    areas = np.asarray(mesh.area_faces, dtype=float)
+    area = float(areas.sum())
+    if area <= 0.0:
+        return None
+    mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * area
+    if mass == 0.0:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    if mass < 0.0:
+        return None
+    centre = (areas[:, None] * triangles.mean(axis=1)).sum(axis=0) / area
+    sums = triangles.sum(axis=1)
+    second = np.einsum("t,tki,tkj->ij", areas, triangles, triangles) + np.einsum("t,ti,tj->ij", areas, sums, sums)
+    second = second / 12.0 / area - np.outer(centre, centre)  # per unit mass, about the centre
+    return mass, centre, mass * (np.trace(second) * np.eye(3) - second)
+
+
 class _Tree:
     """The body tree walked into links and joints, and the text handed to Pinocchio."""
 
@@ -321,6 +351,10 @@ class _Tree:
         #: Bodies without <inertial> whose mesh geoms' mass could not be integrated (their files missing).
         self.mesh_notes: list[str] = []
         self.counter = 0
+        #: Links whose inertia is their geoms' (no <inertial>): not judged for plausibility.
+        self.from_geometry: list[str] = []
+        #: The file's body names (a site of the same name is renamed: see :meth:`walk`).
+        self.body_names = {body.get("name") for body in reader.root.iter("body") if body.get("name")}
         self.planar_base: tuple[JointDescription, ...] = ()
         #: Armature (kg or kg m^2) of the file's planar base joints, by role (x, y, yaw).
         self.base_armature: dict[str, float] = {}
@@ -400,6 +434,11 @@ class _Tree:
         self.links.append(self.link(body, name, childclass, shift if described else None))
         for site in body.findall("site"):
             sname = self.name(site, f"{name}_site")
+            if sname in self.body_names:  # MuJoCo names bodies and sites apart; a link name is one of both
+                renamed = f"{sname}_site"
+                r.notes.append(f"site {sname!r} shares its name with a body: its frame is called {renamed!r}")
+                sname = renamed
+                site.set("name", sname)  # Pinocchio's model then uses the same name
             attrs = r.attributes(site, "site", childclass)
             self.links.append(LinkDescription(sname))
             self.joints.append(
@@ -670,7 +709,15 @@ class _Tree:
             inertial = Inertial(mass, r.origin(attrs, where, shift), tensor)
         elif geom_masses:
             inertial, meshed = self.geom_inertial(name, geom_masses)
-            if meshed and inertial is not None:  # Pinocchio builds from the file: it reads this one
+            self.from_geometry.append(name)
+            visual_mass = any(
+                a.get("contype", "1") == "0" and a.get("conaffinity", "1") == "0" and float(a.get("mass", 1.0)) > 0
+                for _, a in geom_masses
+            )
+            # Pinocchio builds from the file: it reads this one. It integrates no mesh, and leaves out
+            # a geom that collides with nothing (contype = conaffinity = 0), which MuJoCo weighs
+            # (Stretch's gripper slider is such a 50 g box).
+            if (meshed or visual_mass) and inertial is not None:
                 _write_inertial(body, inertial, shift)
         return LinkDescription(name, inertial, tuple(collisions), tuple(visuals))
 
@@ -694,8 +741,9 @@ class _Tree:
                 found = self.mesh_mass_properties(name, shape, attrs)
                 if found is not None:
                     mass, centre, inertia = found
-                    parts.append((mass, np.asarray(shape.origin.xyz) + R @ centre, R @ inertia @ R.T))
-                    meshed = True
+                    if mass > 0.0:
+                        parts.append((mass, np.asarray(shape.origin.xyz) + R @ centre, R @ inertia @ R.T))
+                        meshed = True
                     continue
             props = _geom_mass_properties(kind, size, attrs) if kind != "mesh" else None
             if props is None:
@@ -724,8 +772,10 @@ class _Tree:
 
         MuJoCo's own default for a mesh (``inertia="legacy"``) over-counts a non-convex mesh's
         volume; the exact integral is used and a note says so (``inertia="exact"`` in the
-        ``<mesh>`` makes MuJoCo agree). ``"convex"`` integrates the convex hull; ``"shell"`` is
-        left to the notes.
+        ``<mesh>`` makes MuJoCo agree). ``"convex"`` integrates the convex hull; ``"shell"`` spreads
+        the mass over the surface (density per m^2 times the area, or ``mass``), integrated exactly
+        over each triangle (:func:`_shell_mass_properties`), as MuJoCo does. A geom of zero mass
+        (``mass="0"``, as a class may give every visual geom) gives ``(0, 0, 0)``: nothing to add.
         """
         mesh_name = attrs.get("mesh")
         mode = self.r.mesh_inertia.get(mesh_name, "legacy")
@@ -740,7 +790,9 @@ class _Tree:
         mesh = loaded
         if shape.scale is not None:
             mesh.apply_scale(shape.scale)
-        if mode == "shell" or not mesh.is_volume:
+        if mode == "shell":
+            return _shell_mass_properties(mesh, attrs)
+        if not mesh.is_volume:
             return None
         if mode == "convex":
             mesh = mesh.convex_hull
@@ -752,7 +804,9 @@ class _Tree:
             )
         volume = float(mesh.volume)
         mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * volume
-        if mass <= 0.0 or volume <= 0.0:
+        if mass == 0.0:
+            return 0.0, np.zeros(3), np.zeros((3, 3))
+        if mass < 0.0 or volume <= 0.0:
             return None
         # trimesh's moment of inertia is about the centre of mass at unit density
         inertia = np.asarray(mesh.moment_inertia, dtype=float) * (mass / volume) / float(mesh.density)
@@ -762,6 +816,8 @@ class _Tree:
         r = self.r
         kind = attrs.get("type", "sphere")
         where = f"a geom of body {body!r}"
+        # the geom's name, else its class's: what it is (Stretch's caster is a geom of class "caster")
+        label = geom.get("name") or geom.get("class")
         size = [float(v) for v in (attrs.get("size") or "0 0 0").split()]
         if "fromto" in attrs and kind in ("capsule", "cylinder", "box", "ellipsoid"):
             a, b = np.split(np.array(_floats(attrs["fromto"], f"{where} fromto", 6)), 2)
@@ -780,19 +836,19 @@ class _Tree:
         else:
             origin = r.origin(attrs, where, shift)
         if kind == "sphere":
-            return Shape("sphere", origin, radius=size[0])
+            return Shape("sphere", origin, radius=size[0], name=label)
         if kind in ("cylinder", "capsule"):
-            return Shape("cylinder", origin, radius=size[0], length=2 * size[1])
+            return Shape("cylinder", origin, radius=size[0], length=2 * size[1], name=label)
         if kind == "box":
-            return Shape("box", origin, size=(2 * size[0], 2 * size[1], 2 * size[2]))
+            return Shape("box", origin, size=(2 * size[0], 2 * size[1], 2 * size[2]), name=label)
         if kind == "ellipsoid":
-            return Shape("sphere", origin, radius=max(size[:3]))
+            return Shape("sphere", origin, radius=max(size[:3]), name=label)
         if kind == "mesh":
             mesh = attrs.get("mesh")
             if mesh not in r.meshes:
                 raise r.fail(f"{where} uses mesh {mesh!r}, which no <asset> <mesh> defines")
             file, scale = r.meshes[mesh]
-            return Shape("mesh", origin, filename=str(file), scale=scale)
+            return Shape("mesh", origin, filename=str(file), scale=scale, name=label)
         return None  # planes, height fields: not the robot's
 
     def actuators(self) -> None:
@@ -1007,7 +1063,16 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     text = ElementTree.tostring(reader.root, encoding="unicode")
     builder = MjcfBuilder(text, tuple(reader.notes), _platform_armature(reader, tree.base_armature))
     dirs = tuple(Path(p) for p in package_dirs) if package_dirs is not None else (path.parent,)
-    description = assemble(reader.root.get("model") or path.stem, path, "mjcf", tree.links, tree.joints, builder, dirs)
+    description = assemble(
+        reader.root.get("model") or path.stem,
+        path,
+        "mjcf",
+        tree.links,
+        tree.joints,
+        builder,
+        dirs,
+        inertia_from_geometry=tree.from_geometry,
+    )
     import dataclasses
 
     return dataclasses.replace(

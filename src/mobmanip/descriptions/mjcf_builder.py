@@ -32,8 +32,10 @@ class MjcfBuilder(ModelBuilder):
             body with several joints split, unnamed elements named, asset folders absolute.
         notes: what the reader skipped.
         platform_armature: the armature of the file's own planar base joints (kg, kg, kg m^2),
-            which mobmanip's platform joint replaces: given to a planar root joint's three
-            velocities (Pinocchio reads every other joint's ``armature`` itself).
+            which mobmanip's platform joint replaces: the yaw's on a planar root joint's yaw rate,
+            the slides' (equal, see :func:`~mobmanip.descriptions.mjcf._platform_armature`) as a
+            point mass on the yaw axis (see :meth:`build_model`); Pinocchio reads every other
+            joint's ``armature`` itself.
     """
 
     language = "MJCF"
@@ -74,9 +76,15 @@ class MjcfBuilder(ModelBuilder):
         model = self._call(source, "build a model", pin.buildModelFromMJCFAndRootJoint, _FILE, root_joint)
         root = model.joints[1] if model.njoints > 1 else None
         if self.platform_armature is not None and root is not None and root.shortname() == "JointModelPlanar":
+            # The slides' armature is kinetic energy a/2 (x'^2 + y'^2) along the world's axes, which
+            # is a/2 |v|^2 in the platform's turning frame: a point mass a on the yaw axis, whose
+            # gyroscopic term (omega x a v) is in the bias. On the joint's diagonal (model.armature)
+            # the mass matrix would be the same but that term would be missing from the bias.
+            along, _, yaw = self.platform_armature
             armature = np.array(model.armature, dtype=float)
-            armature[root.idx_v : root.idx_v + 3] = self.platform_armature
+            armature[root.idx_v : root.idx_v + 3] = (0.0, 0.0, yaw)
             model.armature = armature
+            model.inertias[1] = model.inertias[1] + pin.Inertia(along, np.zeros(3), np.zeros((3, 3)))
         return model
 
     def build_geometry(

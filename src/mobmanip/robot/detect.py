@@ -335,11 +335,7 @@ def _description_notes(description: RobotDescription) -> list[str]:
     remarked, and each flaw that is repaired at load."""
     notes: list[str] = [f"platform frame: root link {description.root_link!r} (forward = +x, left = +y)"]
     notes += [f"{description.format}: {note}" for note in description.notes]
-    for flaw in description.flaws:
-        notes.append(
-            f"{flaw.subject}: {flaw.problem}; repaired at load by {flaw.repair}, with a warning (list the link in "
-            "accepted_repairs once reviewed, or set strict = true to refuse it)"
-        )
+    notes += [flaw.note for flaw in description.flaws]
     return notes
 
 

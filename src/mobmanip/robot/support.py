@@ -258,20 +258,25 @@ def robot_support(robot: Robot, mu: float | None = None, faces: int | None = Non
 
 
 def _urdf_casters(robot: Robot, data: pin.Data) -> list[tuple[str, np.ndarray]]:
-    """(link name, (x, y) in the root frame) of each caster wheel of the robot's description: a
-    link named ``*caster*`` with a sphere or cylinder collision shape, at that shape's centre."""
+    """(name, (x, y) in the root frame) of each caster wheel of the robot's description: a link
+    named ``*caster*`` with a sphere or cylinder collision shape, at that shape's centre (named by
+    the link), or a sphere or cylinder collision shape named ``*caster*`` on any link, at its
+    centre (named ``LINK/SHAPE``: an MJCF geom of class ``caster`` on the base, as Stretch's)."""
     from .model import description_of
 
     description = description_of(robot)
     model = robot.model
     found = []
     for name, link in description.links.items():
-        if "caster" not in name.lower() or not model.existFrame(name):
+        if not model.existFrame(name):
             continue
         shapes = [s for s in link.collisions if s.kind in ("sphere", "cylinder")]
-        if not shapes:
-            continue
+        if "caster" in name.lower():
+            chosen = [(name, shapes[0])] if shapes else []
+        else:
+            chosen = [(f"{name}/{s.name}", s) for s in shapes if s.name and "caster" in s.name.lower()]
         frame = data.oMf[model.getFrameId(name)]
-        center = frame.rotation @ np.asarray(shapes[0].origin.xyz, dtype=float) + frame.translation
-        found.append((name, center[:2].copy()))
+        for label, shape in chosen:
+            center = frame.rotation @ np.asarray(shape.origin.xyz, dtype=float) + frame.translation
+            found.append((label, center[:2].copy()))
     return found
