@@ -213,8 +213,8 @@ def test_analyze_on_the_ground(robot, capfd):
     TidyBot and the FR3 Duo move on planar joints, with no wheel under
     the platform's control: ``--ground`` says so in one line and names what to give."""
     name, _, spec, _, _ = robot
-    if name == "tiago_dual":  # its four wheels work (by hand: about 15 s, 18 velocities); too slow here
-        pytest.skip("TIAGo++'s grounded polytope takes about 15 s; this file stays under 20 s")
+    if name == "tiago_dual":  # its four wheels work: about 15 s (18 velocities)
+        pytest.skip("Menagerie's TIAGo++ on its floor is checked in tests/test_floor_task.py")
     code, out, err = run_cli(capfd, "analyze", spec, "--ground")
     if name == "stretch":
         assert code == 0, err
