@@ -37,7 +37,7 @@ from ..errors import ModelError, TaskError
 from .linear_programs import CertifiedProgram, LinearProgram
 from .polytope import halfspaces_json
 from .polytope_vertices import DUPLICATE_RTOL, distinct_rows
-from .taskset import TaskSet, check_dims, check_direction, check_points
+from .taskset import TaskSet, check_dims, check_direction, check_membership_points, check_points, membership
 
 _TOL = 1e-9  # relative to the set's size: a support beyond a facet by less than this adds no vertex
 #: Below this (in the task's units: m/s^2, N, ...) two points are one, whatever the set's size: a
@@ -357,10 +357,17 @@ class LiftedPolytope(TaskSet):
         d = d / np.linalg.norm(d)
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
-    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
-        P = check_points(points, self.dim)
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
+        """Whether points lie in the set, each with the task coordinates free by ``tol`` times the
+        set's size (one feasibility program per point): a ``bool`` for one point (m,), a bool array
+        (n,) for points (n, m).
+
+        Raises:
+            SetQueryError: any other shape (named), or a non-finite coordinate.
+        """
+        P, single = check_membership_points(points, self.dim)
         if self.empty:
-            return np.zeros(len(P), dtype=bool)
+            return membership(np.zeros(len(P), dtype=bool), single)
         out = np.zeros(len(P), dtype=bool)
         slack = tol * self._size
         lower, upper = self._lower.copy(), self._upper.copy()
@@ -368,7 +375,7 @@ class LiftedPolytope(TaskSet):
             lower[self._task], upper[self._task] = p - slack, p + slack
             out[i] = self._program().solve(np.zeros(len(lower)), True, lower, upper) is not None
         self._program().solve(np.zeros(len(lower)), True, self._lower, self._upper)  # restore the bounds
-        return out
+        return membership(out, single)
 
     def project(self, dims: Sequence[int] = (0, 1)) -> LiftedPolytope:
         keep = check_dims(dims, self.dim)

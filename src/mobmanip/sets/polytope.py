@@ -46,7 +46,7 @@ from . import zonotope
 from .hull import enumerate_hull
 from .linear_programs import LinearProgram
 from .polytope_vertices import distinct_rows, exact_vertices, halfspace_vertices, volume_from_vertices
-from .taskset import TaskSet
+from .taskset import TaskSet, check_membership_points, membership
 
 _RANK_RTOL = RANK_RTOL
 _EMPTY_TOL = 1e-9  # least effort above 1 + this: empty; above 1 - this: no interior
@@ -289,25 +289,27 @@ class Polytope(TaskSet):
         d = self._unit_direction(direction, "radius_along")
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
-    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
-        """Whether each point (n, m) or (m,) is reached with every ``|y_i| <= 1 + tol``.
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
+        """Whether points are reached with every ``|y_i| <= 1 + tol``: a ``bool`` for one point
+        (m,), a bool array (n,) for points (n, m).
 
         That is: every joint within (1 + tol) times its own limit; the equalities (directions in
         which the set is flat) hold to ``tol`` times the set's size.
+
+        Raises:
+            SetQueryError: any other shape (named), or a non-finite coordinate.
         """
-        P = np.atleast_2d(np.asarray(points, dtype=float))
-        if P.shape[1] != self.dim:
-            raise TaskError(f"points must have {self.dim} coordinates, got shape {np.shape(points)}")
+        P, single = check_membership_points(points, self.dim)
         if self.empty:
-            return np.zeros(len(P), dtype=bool)
+            return membership(np.zeros(len(P), dtype=bool), single)
         try:
             A, b0, h = self._inequalities()
         except TaskError:  # too many candidate facets: one feasibility program per point
-            return np.array([self._feasible_y(p, 1.0 + tol) is not None for p in P])
+            return membership(np.array([self._feasible_y(p, 1.0 + tol) is not None for p in P], dtype=bool), single)
         inside = np.all(P @ A.T <= b0 + (1.0 + tol) * h + 1e-12 * self._size, axis=1)
         if len(self._eq_A):
             inside &= np.all(np.abs(P @ self._eq_A.T - self._eq_b) <= tol * self._size + 1e-12 * self._size, axis=1)
-        return inside
+        return membership(inside, single)
 
     def project(self, dims: Sequence[int] = (0, 1)) -> Polytope:
         """The shadow on the task coordinates ``dims``: {a_D : some a_R completes a point of the set}.
