@@ -29,7 +29,7 @@ FIGURES: dict[str, tuple[list[str], str]] = {
     "fig4_dynamic.png": (["paper", "--out", "out"], "out/fig4_dynamic.png"),
     "sweep.png": (
         ["sweep", "planar_dual_arm", "--angle", "0:360:37", "--distance", "0.6:1.4:9", "--plot", "-o", "sweep"],
-        "sweep.png",
+        "sweep/sweep.png",
     ),
     "floor_sweep.png": (
         [
@@ -45,7 +45,7 @@ FIGURES: dict[str, tuple[list[str], str]] = {
             "grounded",
             "--plot",
         ],
-        "grounded.png",
+        "grounded/sweep.png",
     ),  # fmt: skip
     "place_tiago_dual.png": (
         [

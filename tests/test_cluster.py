@@ -110,7 +110,7 @@ def test_sweep_and_map_on_a_cluster_survive_a_killed_worker(cluster, tmp_path):
     for process in serial:
         finish(process)
     run_killing(address, workers, "w1", [*SWEEP, "--dask", address, "-o", str(tmp_path / "dask")])
-    assert (tmp_path / "dask.csv").read_bytes() == (tmp_path / "serial.csv").read_bytes()
+    assert (tmp_path / "dask" / "sweep.csv").read_bytes() == (tmp_path / "serial" / "sweep.csv").read_bytes()
     # the remaining worker alone (a lost one is not needed), killed one mid-task, restarted as w1
     workers["w1"] = subprocess.Popen(
         [str(BIN / "dask"), "worker", address, "--name", "w1b", "--nthreads", "1", "--no-nanny", "--no-dashboard"],

@@ -89,10 +89,10 @@ def test_payload_takes_the_option_and_equals_a_bisection_over_the_closed_form(op
     q = robot.neutral()
     a = np.array([2.0, 0.0])
     low, high = 0.0, 2.0 * got["mass"]
-    assert _closed_form(robot, q, low).contains(a)[0] and not _closed_form(robot, q, high).contains(a)[0]
+    assert _closed_form(robot, q, low).contains(a) and not _closed_form(robot, q, high).contains(a)
     for _ in range(50):
         middle = 0.5 * (low + high)
-        low, high = (middle, high) if _closed_form(robot, q, middle).contains(a, tol=1e-12)[0] else (low, middle)
+        low, high = (middle, high) if _closed_form(robot, q, middle).contains(a, tol=1e-12) else (low, middle)
     assert got["mass"] == pytest.approx(low, rel=1e-6)
 
 

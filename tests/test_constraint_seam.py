@@ -196,3 +196,15 @@ def test_the_constraint_types_are_at_the_top_level_and_an_ignored_constraint_is_
     assert not [w for w in polytopes.warnings if "ignores" in w]
     code, out, err = run_cli(capfd, "analyze", "tiago_dual", "--posture", "hold", "--ground")
     assert code == 0 and "[ignores floor" in out and "ignores the floor" not in err
+
+
+def test_the_default_measures_with_a_floor_say_that_the_ellipsoids_ignore_it():
+    """The call of issue 39 as a user writes it, with the default measures (the two ellipsoids):
+    ``warnings`` is not empty but says that the dynamic ellipsoid ignores the floor. The velocity
+    ellipsoid is not named: a floor limits forces, which no velocity depends on."""
+    robot = mobmanip.load_robot("planar_dual_arm")
+    found = mobmanip.analyze(robot, mobmanip.named_configuration(robot, "home"), constraints=(mobmanip.Floor(mu=0.5),))
+    assert set(found.measures) == {"kinematic", "dynamic"}
+    said = [w for w in found.warnings if "ignores" in w]
+    assert len(said) == 1 and said[0].startswith("the dynamic measure ignores the floor constraint(s)")
+    assert found.ignored_constraints("kinematic") == () and found.ignored_constraints("dynamic") == ("floor",)

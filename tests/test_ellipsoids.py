@@ -371,7 +371,7 @@ def test_kinematic_ellipsoid_is_the_image_of_the_unit_ball(paper, q0, task, lock
         np.testing.assert_allclose(J_hat @ qbar_u, W.T @ u, rtol=0, atol=1e-12)
         point = u / np.linalg.norm(qbar_u)
         assert _quad(A, 0.0, point)[0] == pytest.approx(1.0, abs=ON_BOUNDARY)
-        assert E.contains(point)[0] and not E.contains(point * (1 + 1e-6))[0]
+        assert E.contains(point) and not E.contains(point * (1 + 1e-6))
 
     # 3. Support in each direction: no sample exceeds it; the exact maximiser K^T d / |K^T d| reaches it,
     # and samples in its neighbourhood (perturbation 1e-3) come within the second-order gap
@@ -424,7 +424,7 @@ def test_ellipsoids_of_tasks_the_planar_robot_only_partly_spans(paper, q0, task,
     for E in (an.kinematic, an.dynamic):
         assert E.degenerate and not E.empty
         assert E.radius_along(flat) < 1e-12 * E.semi_axes[0]
-        assert not E.contains(E.center + 1e-6 * flat)[0]
+        assert not E.contains(E.center + 1e-6 * flat)
     v = _unit(rng, 2000, N.shape[1]) @ K.T
     assert an.kinematic.contains(v, tol=1e-9).all()
 
@@ -586,7 +586,7 @@ def test_dynamic_ellipsoid_is_its_defining_set(paper, q0, platform, task, decoup
         tau_bar = r + math.sqrt(1.0 - r @ r) * u
         a = np.linalg.lstsq(L, tau_bar - mu_bar, rcond=None)[0]
         np.testing.assert_allclose(L @ a + mu_bar, tau_bar, rtol=0, atol=1e-10)
-        assert E.contains(a)[0]
+        assert E.contains(a)
         assert _quad(E.matrix, E.center, a)[0] == pytest.approx(1.0, abs=ON_BOUNDARY)
 
     # Matrix and centre from the independent maps: A = L^T L / (1 - |r|^2), c = -L^+ mu_bar.
@@ -836,8 +836,8 @@ def test_stretched_arms_give_a_flat_ellipsoid(paper, own):
         assert document.pop("kind") == "ellipsoid"
         for value in document.values():
             assert np.all(np.isfinite(value))
-        assert E.contains(0.9 * E.semi_axes[0] * n)[0]
-        assert not E.contains(1e-6 * u)[0] and not E.contains(0.5 * E.semi_axes[0] * n + 1e-6 * u)[0]
+        assert E.contains(0.9 * E.semi_axes[0] * n)
+        assert not E.contains(1e-6 * u) and not E.contains(0.5 * E.semi_axes[0] * n + 1e-6 * u)
         json.dumps(E.to_dict(), allow_nan=False)
     # Kinematic: each arm moves its tip across u at j . qbar_i with j = 3.14 (1.5, 1.0, 0.5) (joint i's
     # distance to the tip); both must agree, so the cheapest unit-norm motion gives |v| = |j| / sqrt(2).
@@ -1020,7 +1020,7 @@ def test_gravity_shifts_the_centre_to_the_zero_torque_acceleration(tmp_path, loa
         assert abs(a[1]) < 1e-12
         tau = M @ np.linalg.solve(J_xz, a[[0, 2]]) + g
         assert np.linalg.norm(Z * tau) == pytest.approx(1.0, abs=ON_BOUNDARY)
-    assert not E.contains(E.center + np.array([0.0, 1e-6, 0.0]))[0]
+    assert not E.contains(E.center + np.array([0.0, 1e-6, 0.0]))
 
 
 def _own_dynamic_set(model, q_own, tools_and_joints, mass, effort):
@@ -1082,7 +1082,7 @@ def test_redundant_arm_under_gravity_centre_and_emptiness(tmp_path):
         assert an.dynamic.empty == empty
         if empty:
             assert np.all(an.dynamic.semi_axes == 0.0)
-            assert not an.dynamic.contains(an.dynamic.center)[0]
+            assert not an.dynamic.contains(an.dynamic.center)
             # the reported centre is still the least-violating acceleration
             L, mu_bar, _ = residual(mass, scale)
             expected = plane @ (-np.linalg.pinv(L) @ mu_bar)  # its y entry is 0: held to the centre's own scale
@@ -1122,7 +1122,7 @@ def test_threshold_mass_matches_the_static_torque_balance(tmp_path):
     np.testing.assert_allclose(hold.held_object.offsets, 0.0, atol=1e-12)  # the tips do coincide
     assert not hold.dynamic.empty
     assert np.all(hold.dynamic.semi_axes == 0.0) and hold.dynamic.degenerate
-    assert hold.dynamic.contains(np.zeros(3))[0] and not hold.dynamic.contains(np.array([1e-6, 0.0, 0.0]))[0]
+    assert hold.dynamic.contains(np.zeros(3)) and not hold.dynamic.contains(np.array([1e-6, 0.0, 0.0]))
     assert not analyze(robot, q, "translational", object_mass=threshold * (1 - 1e-6)).dynamic.empty
     heavy = analyze(robot, q, "translational", object_mass=threshold * (1 + 1e-6))
     assert heavy.dynamic.empty

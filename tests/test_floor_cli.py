@@ -228,7 +228,7 @@ def test_a_collapsed_grounded_set_is_said_so_not_a_qhull_error(tmp_path):
         robot, named_configuration(robot, "hold"), "translational", object_mass=2.0,
         measures=("dynamic_polytope_min_norm",), constraints=(Floor(level=True, level_tolerance=1e-12),),
     ).measures["dynamic_polytope_min_norm"]  # fmt: skip
-    assert P.contains(np.zeros(3))[0]
+    assert P.contains(np.zeros(3))
     assert max(P.support(e) + P.support(-e) for e in np.eye(3)) < 1e-9
 
 
@@ -257,7 +257,7 @@ def test_hold_adds_the_reach_that_holds_per_axis(tmp_path):
         e[k // 2] = 1.0 if k % 2 == 0 else -1.0
         tau = np.array(held["efforts"])  # what the JSON says achieves it: efforts within limits ...
         assert np.all(np.abs(tau) <= robot.effort_limits * (1.0 + 1e-9))
-        assert P.contains(held["straight_line"] * e)[0]
+        assert P.contains(held["straight_line"] * e)
         kept = replay(robot, q, tau, object_mass=2.0, floor=Floor(mu=0.5))  # ... that reach it and hold 20 ms
         assert kept.holds and kept.object_acceleration[0] == pytest.approx(held["straight_line"] * e, abs=1e-9)
         weight = (float(pin.computeTotalMass(robot.model)) + 2.0) * 9.81

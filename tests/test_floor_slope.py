@@ -302,7 +302,7 @@ def test_a_sweep_on_a_ramp_says_so_and_equals_the_analysis(tmp_path):
             "--distance", "1.0", "--measure", "dynamic_polytope", "--output", str(out), "--no-progress"]  # fmt: skip
     run = subprocess.run([sys.executable, "-m", "mobmanip", *argv], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    data = np.load(str(out) + ".npz")
+    data = np.load(out / "sweep.npz")
     models = json.loads(str(data["meta_constraint_models"]))
     assert models[0]["name"] == "floor" and models[0]["slope"] == 5.0 and models[0]["uphill"] == 90.0
     robot = mobmanip.load_robot("planar_dual_arm")  # the posture the sweep used at angle 0, from its file

@@ -207,8 +207,8 @@ def test_force_ellipsoid_touches_the_polytope_where_one_effort_saturates_alone(r
             f = np.linalg.solve(arm.J.T, sign * arm.limits[i] * np.eye(6)[i] - arm.gravity)
             for task_set in (ellipsoid, polytope):
                 c = task_set.center
-                assert task_set.contains(f, tol=1e-9)[0]
-                assert not task_set.contains(c + (1.0 + 1e-6) * (f - c), tol=1e-9)[0]
+                assert task_set.contains(f, tol=1e-9)
+                assert not task_set.contains(c + (1.0 + 1e-6) * (f - c), tol=1e-9)
 
 
 # ----- 3. a mobile robot: the independent whole-robot LP -----

@@ -186,7 +186,7 @@ def test_the_held_reach_holds_and_beats_the_calm_efforts(axis):
     terms = motion_terms(robot, q, np.zeros(robot.nx), task, object_mass=MASS)
     _, _, a_o = forward_accelerations(terms, tau)
     assert np.abs(a_o - found.reach * e).max() <= 1e-8 * found.reach
-    assert polytope.contains(found.reach * e)[0]
+    assert polytope.contains(found.reach * e)
     replayed = replay(robot, q, tau, task, object_mass=MASS, floor=Floor(mu=MU))
     assert replayed.holds and found.hold.holds and found.hold.held == 0.02
     assert abs(found.bound - found.reach) <= 1.1 * 0.005 * found.instant  # the rounds settled

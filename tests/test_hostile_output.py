@@ -132,14 +132,13 @@ def test_a_failed_rename_restores_what_was_published(tmp_path, monkeypatch):
 
 
 def test_a_sweep_with_one_unwritable_output_changes_no_output(tmp_path, capfd):
-    prefix = tmp_path / "sweep"
-    npz = prefix.with_name("sweep.npz")
+    npz = tmp_path / "sweep.npz"
     npz.write_bytes(b"previous result")
-    csv = prefix.with_name("sweep.csv")
+    csv = tmp_path / "sweep.csv"
     csv.mkdir()  # the CSV cannot be written: a directory is in the way
     code, _, err = run_cli(
         capfd, "sweep", "planar_dual_arm", "--angle", "0,90", "--distance", "1.0", "--workers", "1", "--no-progress",
-        "-o", prefix,
+        "-o", tmp_path,
     )  # fmt: skip
     assert_one_line_error(code, err, "sweep.csv", "directory")
     assert npz.read_bytes() == b"previous result"

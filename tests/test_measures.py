@@ -39,6 +39,7 @@ from mobmanip.measures import (
     resolve_measures,
 )
 from mobmanip.sets.ellipsoid import dynamic_ellipsoid, kinematic_ellipsoid
+from mobmanip.sets.taskset import check_membership_points, membership
 from mobmanip.sweep import SweepGrid, SweepSpec, run_sweep
 from mobmanip.sweep.runner import index_names
 from mobmanip.terms.dynamics import end_effector_positions, reduced_dynamics, unified_jacobian
@@ -132,8 +133,9 @@ class Box(TaskSet):
         d = np.asarray(direction, dtype=float)
         return float(self.half_widths @ np.abs(d / np.linalg.norm(d)))
 
-    def contains(self, points, tol: float = 1e-9) -> np.ndarray:
-        return np.all(np.abs(np.atleast_2d(points) - self.center) <= self.half_widths + tol, axis=1)
+    def contains(self, points, tol: float = 1e-9) -> bool | np.ndarray:
+        P, single = check_membership_points(points, self.dim)  # one point (m,) or points (n, m)
+        return membership(np.all(np.abs(P - self.center) <= self.half_widths + tol, axis=1), single)
 
     def project(self, dims: Sequence[int] = (0, 1)) -> Box:
         return Box(self.center[list(dims)], self.half_widths[list(dims)])
@@ -424,9 +426,9 @@ def test_sweep_command_takes_measures(tmp_path, capsys, toys):
     assert main([*argv, "--measure", "doubled", "--plot", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "doubled volume: min" in text and "kinematic volume" not in text
-    data = np.load(out.with_suffix(".npz"))
+    data = np.load(out / "sweep.npz")
     assert {k for k in data if k.endswith("_volume")} == {"doubled_volume"}
-    assert out.with_suffix(".png").exists()
+    assert (out / "sweep.png").exists()
 
 
 # --------------------------------------------------------------------------- the viewer
@@ -527,7 +529,7 @@ def test_contains_agrees_with_the_quadratic_form(m, rng):
     clear = np.abs(value - 1.0) > 1e-6
     np.testing.assert_array_equal(E.contains(points)[clear], (value <= 1.0)[clear])
     assert 0.2 < np.mean(value[clear] <= 1.0) < 0.9
-    assert E.contains(c).tolist() == [True]
+    assert E.contains(c) is True
 
 
 @pytest.mark.parametrize("dims", [(0,), (0, 2), (3, 1, 4)])
@@ -551,7 +553,7 @@ def test_projection_and_slice_are_consistent(dims, rng):
         full = c.copy()
         full[list(dims)] = far
         assert (full - c) @ A @ (full - c) == pytest.approx(1.0, rel=1e-9)
-        assert E.contains(full, tol=1e-9)[0] and not E.contains(c + 1.001 * (full - c))[0]
+        assert E.contains(full, tol=1e-9) and not E.contains(c + 1.001 * (full - c))
 
 
 def test_empty_ellipsoid_answers_zero_and_never_nan(rng):

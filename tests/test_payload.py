@@ -80,7 +80,7 @@ def grounded_set(robot, q, mass, floor):
 def bisection(robot, q, a, floor) -> tuple[float, float]:
     """The heaviest mass whose set contains ``a``, bracketed (lo contains it, hi does not) to
     RTOL / 10 of the mass: doubling from 1 kg, then halving the bracket."""
-    holds = lambda m: bool(grounded_set(robot, q, m, floor).contains(a)[0])  # noqa: E731
+    holds = lambda m: grounded_set(robot, q, m, floor).contains(a)  # noqa: E731
     assert holds(0.0), "the robot cannot do it with no object: no payload to compare"
     lo, hi = 0.0, 1.0
     while holds(hi):
@@ -278,13 +278,13 @@ def test_a_planar_task_carries_no_weight_unless_held_level(robots):
     assert "unbounded" in found.summary() and "inf" not in found.summary().replace("unbounded", "")
     assert json.loads(json.dumps(found.to_dict(), allow_nan=False))["mass"] is None
     # and the bisection agrees: no mass up to 1e4 kg leaves 0 outside the set
-    assert grounded_set(robot, q, 1e4, None).contains(np.zeros(2))[0]
+    assert grounded_set(robot, q, 1e4, None).contains(np.zeros(2))
 
 
 def test_an_acceleration_beyond_the_robot_with_no_object_is_infeasible_in_words(robots):
     robot, q = robots["stretch"]
     a = np.array([100.0, 0.0, 0.0])
-    assert not grounded_set(robot, q, 0.0, None).contains(a)[0]  # the set without an object says so
+    assert not grounded_set(robot, q, 0.0, None).contains(a)  # the set without an object says so
     found = payload(robot, q, acceleration=a)
     assert found.status == "infeasible" and found.mass is None
     assert "even with no object" in found.summary()

@@ -181,7 +181,7 @@ def test_flat_sets_are_degenerate_with_equalities(rng):
     assert np.abs(flat.vertices @ normal).max() <= 1e-9
     assert len(flat.faces) == len(flat.vertices) >= 4 and len(flat.triangles) == len(flat.vertices) - 2
     A, b = flat.halfspaces
-    assert flat.contains(flat.vertices).all() and not flat.contains(0.01 * normal).any()
+    assert flat.contains(flat.vertices).all() and flat.contains(0.01 * normal) is False
     assert np.all(A @ (0.5 * flat.vertices[0]) <= b + 1e-12)
     segment = Polytope.zonotope([1.0, 1.0], [[1.0, 2.0], [1.0, 2.0]])
     np.testing.assert_allclose(np.sort(segment.vertices[:, 0]), [-2.0, 4.0], atol=1e-12)
@@ -211,11 +211,11 @@ def test_too_many_candidate_facets_fall_back_to_linear_programs(rng):
     G = rng.normal(size=(12, 40))  # C(40, 11) candidate facets
     poly = Polytope(F, np.zeros(12), G)
     assert zonotope.subset_count(40, 11) > zonotope.MAX_SUBSETS
-    assert poly.contains(np.zeros(6)).all()
+    assert poly.contains(np.zeros(6)) is True
     d = _unit(rng, 3, 6)
     np.testing.assert_allclose(poly.supports(d), [_lp_support(F, np.zeros(12), G, x) for x in d], rtol=1e-9)
     far = 1.001 * poly.support(d[0]) * d[0] / (d[0] @ d[0])
-    assert not poly.contains(far).any()
+    assert poly.contains(far) is False
     with pytest.raises(TaskError, match="candidate facets"):
         poly.halfspaces  # noqa: B018
     assert poly.to_dict()["halfspaces"] is None

@@ -308,9 +308,9 @@ def test_overload_gives_an_empty_policy_set_and_never_nan(tiago):
     policy = min_norm_dynamic_polytope(**d)
     assert policy.empty and policy.degenerate and dynamic_ellipsoid(**d).empty
     assert policy.support(np.ones(3)) == 0.0 and policy.volume == 0.0 and policy.isotropy == 0.0
-    assert policy.radius_along(np.ones(3)) == 0.0 and not policy.contains(np.zeros(3)).any()
+    assert policy.radius_along(np.ones(3)) == 0.0 and policy.contains(np.zeros(3)) is False
     assert policy.vertices.shape == (0, 3)
     json.dumps(policy.to_dict(), allow_nan=False)
     exact = dynamic_polytope(**d)
-    assert not exact.empty and not exact.contains(np.zeros(3))[0]
+    assert not exact.empty and not exact.contains(np.zeros(3))
     json.dumps(exact.to_dict(), allow_nan=False)

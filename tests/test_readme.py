@@ -134,13 +134,11 @@ def test_every_example_command_is_run_or_mapped():
 
 
 def _outputs(argv: list[str]) -> list[str]:
-    """The files a command says it writes (after --json, --out, --export, or -o/--output PREFIX)."""
+    """The files and folders a command says it writes (after --json, --out, --export or -o/--output)."""
     out = []
     for flag, value in zip(argv, argv[1:]):
-        if flag in ("--json", "--export") or (flag == "--out" and argv[0] != "paper"):
+        if flag in ("--json", "--export", "-o", "--output") or (flag == "--out" and argv[0] != "paper"):
             out.append(value)
-        elif flag in ("-o", "--output"):
-            out.append(value + ".npz")
     return out
 
 
@@ -182,7 +180,7 @@ def test_example_command_gives_a_meaningful_result(command, tmp_path, monkeypatc
     for directory in [p for p in outputs if p.is_dir()]:  # an --out DIR: what it holds instead
         written = sorted(directory.iterdir())
         assert written and all(p.stat().st_size > 0 for p in written), directory
-        outputs += [p for p in written if p.suffix == ".json"]
+        outputs += [p for p in written if p.suffix in (".json", ".npz")]
     for path in [p for p in outputs if not p.is_dir()]:
         assert path.is_file() and path.stat().st_size > 0, path.name
         if path.suffix == ".json":

@@ -1,7 +1,7 @@
 """Small defects a hostile pass found (issue 25, item 6): joint names TOML can hold round-trip
 through init-spec (the rest are refused with a message); a URDF with a DTD is refused, because
-Pinocchio's parser and Python's read its entities differently; ``sweep -o`` into a directory is
-refused before any work."""
+Pinocchio's parser and Python's read its entities differently; a ``sweep -o`` that cannot be its
+output folder is refused before any work."""
 
 from __future__ import annotations
 
@@ -101,7 +101,10 @@ def test_a_urdf_with_a_dtd_is_refused(tmp_path, capfd):
         assert_one_line_error(code, err, "DOCTYPE")
 
 
-def test_sweep_into_a_directory_is_refused_before_any_work(tmp_path, capfd, monkeypatch):
+def test_a_sweep_output_that_cannot_be_its_folder_is_refused_before_any_work(tmp_path, capfd, monkeypatch):
+    """``sweep -o`` names a folder (issue 39), as ``site -o`` and ``carry --out`` do. Refused in one
+    line before anything is loaded: a name ending in a file suffix (the old prefix habit, naming the
+    folder to give instead), a file where the folder would be, a folder whose sweep.csv is a directory."""
     import mobmanip.sweep.runner as runner
 
     def no_work(*args, **kwargs):
@@ -109,17 +112,18 @@ def test_sweep_into_a_directory_is_refused_before_any_work(tmp_path, capfd, monk
 
     monkeypatch.setattr(runner, "run_sweep", no_work)
     monkeypatch.setattr(mobmanip.robot.model, "load_robot", no_work)
-    folder = tmp_path / "results"
-    folder.mkdir()
-    taken = tmp_path / "taken"
-    (tmp_path / "taken.csv").mkdir()  # an output file the prefix names is a directory
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "taken" / "sweep.csv").mkdir()  # a file the folder would hold is a directory
+    (tmp_path / "plain").write_text("a file, not a folder")
     for target, needles in (
-        (folder, ["results", "directory", "prefix"]),
-        (f"{folder}/", ["results", "directory", "prefix"]),
-        (taken, ["taken.csv", "directory"]),
+        (tmp_path / "run.npz", ["-o", "run.npz", "folder", f"give -o {tmp_path / 'run'}"]),
+        (tmp_path / "fig.PNG", ["fig.PNG", "folder", f"give -o {tmp_path / 'fig'}"]),
+        (tmp_path / "plain", ["plain", "a file of that name exists", "folder"]),
+        (tmp_path / "taken", ["sweep.csv", "directory"]),
     ):
         started = time.perf_counter()
         code, out, err = run_cli(capfd, "sweep", "planar_dual_arm", "--angle", "0:90:3", "-o", target, "--no-progress")
         assert_one_line_error(code, err, *needles)
         assert out == "" and time.perf_counter() - started < 5.0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["results", "taken.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plain", "taken"]
+    assert [p.name for p in (tmp_path / "taken").iterdir()] == ["sweep.csv"]

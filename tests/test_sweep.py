@@ -198,7 +198,7 @@ def test_fixed_platform_and_fixed_direction(robot, posture):
 
 
 def test_cli_writes_npz_csv_and_plot(tmp_path, capsys):
-    out = tmp_path / "run" / "sweep"
+    out = tmp_path / "run" / "fig"  # a folder, created with its parent
     code = main(
         [
             "sweep",
@@ -220,7 +220,7 @@ def test_cli_writes_npz_csv_and_plot(tmp_path, capsys):
         ]
     )
     assert code == 0, capsys.readouterr().err
-    data = np.load(out.with_suffix(".npz"))
+    data = np.load(out / "sweep.npz")
     np.testing.assert_allclose(data["angle_deg"], [0.0, 30.0, 60.0, 90.0])
     np.testing.assert_allclose(data["distance"], [0.8, 1.0, 1.6])
     np.testing.assert_allclose(data["wheel_velocity_scale"], [0.5, 1.0])
@@ -231,7 +231,7 @@ def test_cli_writes_npz_csv_and_plot(tmp_path, capsys):
         assert data[f"{kind}_semi_axes"].shape == shape + (2,)
     assert str(data["meta_robot"]) == "planar_dual_arm" and str(data["meta_task"]) == "planar"
     assert not data["reachable"][:, 2].any() and data["reachable"][:, :2].all()
-    with open(out.with_suffix(".csv")) as f:
+    with open(out / "sweep.csv") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == int(np.prod(shape))
     assert set(rows[0]) >= {"angle_deg", "distance", "kinematic_volume", "dynamic_semi_axis_2", "reachable"}
@@ -242,7 +242,30 @@ def test_cli_writes_npz_csv_and_plot(tmp_path, capsys):
     )
     assert float(row["kinematic_volume"]) == pytest.approx(data["kinematic_volume"][2, 1, 0, 1, 0], rel=1e-11)
     assert float(row["dynamic_isotropy"]) == pytest.approx(data["dynamic_isotropy"][2, 1, 0, 1, 0], rel=1e-11)
-    assert out.with_suffix(".png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_cli_output_is_a_folder_and_an_old_prefix_gets_one_line(tmp_path, capfd):
+    """``-o OUT`` writes OUT/sweep.npz and OUT/sweep.csv (issue 39: it was a prefix, OUT.npz). Beside
+    an earlier run's OUT.csv, a folder OUT that does not exist yet gets one warning line naming where
+    the files go and the old file, which is left alone; once the folder exists nothing is said."""
+    from hostile_util import run_cli
+
+    old = tmp_path / "fig.csv"
+    old.write_text("an earlier run's table")
+    argv = ["sweep", "planar_dual_arm", "--angle", "0,90", "--distance", "1.0", "--workers", "1", "--no-progress"]
+    code, out, err = run_cli(capfd, *argv, "-o", tmp_path / "fig")
+    assert code == 0, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("warning: -o ") and "is a folder now" in lines[0]
+    assert str(tmp_path / "fig" / "sweep.npz") in lines[0] and str(old) in lines[0]
+    assert old.read_text() == "an earlier run's table"
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == ["sweep.csv", "sweep.npz"]
+    assert f"wrote {tmp_path / 'fig' / 'sweep.npz'}" in out
+    with np.load(tmp_path / "fig" / "sweep.npz") as data:
+        np.testing.assert_allclose(data["angle_deg"], [0.0, 90.0])
+    code, _, err = run_cli(capfd, *argv, "-o", tmp_path / "fig")
+    assert code == 0 and err.strip() == ""
 
 
 # ----- executors -----

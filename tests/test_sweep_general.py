@@ -303,7 +303,7 @@ def test_cli_ik_sweep_writes_postures(tmp_path, capsys):
     printed = capsys.readouterr()
     assert code == 0, printed.err
     assert "postures by inverse kinematics" in printed.out and "2 of 4 (angle, distance) points in reach" in printed.out
-    data = np.load(out.with_suffix(".npz"))
+    data = np.load(out / "sweep.npz")
     assert str(data["meta_postures"]) == "ik"
     assert data["posture_joints"].shape == (2, 2, 14) and len(data["posture_joint_names"]) == 14
     assert np.isfinite(data["posture_joints"][:, 0]).all() and np.isnan(data["posture_joints"][:, 1]).all()

@@ -94,7 +94,7 @@ def bisected_reach(inside, u: np.ndarray, radius: float, samples: int = 4001) ->
 
 def _ellipsoid_reach(e: Ellipsoid, u: np.ndarray) -> float:
     radius = 1.01 * (np.linalg.norm(e.center) + e.semi_axes[0])  # every point farther is outside
-    return bisected_reach(lambda p: bool(e.contains(p, tol=0.0)[0]), u, radius)
+    return bisected_reach(lambda p: e.contains(p, tol=0.0), u, radius)
 
 
 def _ellipsoid_at(name: str, t) -> Ellipsoid:

@@ -50,7 +50,7 @@ def _holds(team, mass, constraints, a) -> bool:
     """Whether the team's dynamic polytope at ``mass`` contains ``a``."""
     held = replace(team, held_object=scaled_object(unit_object(team.held_object), mass))
     found = analyze_team(held, ("dynamic_polytope",), constraints=constraints).measure("dynamic_polytope")
-    return not found.empty and bool(found.contains(a)[0])
+    return not found.empty and found.contains(a)
 
 
 CASES = {

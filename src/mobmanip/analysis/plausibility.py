@@ -107,7 +107,7 @@ def rest_warnings(analysis) -> list[str]:
     for name, task_set in analysis.measures.items():
         if not isinstance(task_set, Ellipsoid) or task_set.empty or name != "dynamic":
             continue
-        if task_set.contains(np.zeros(task_set.dim))[0]:
+        if task_set.contains(np.zeros(task_set.dim)):
             continue
         terms = analysis.terms
         hold = -terms.xi + terms.J_u.T @ (np.linalg.pinv(terms.W) @ terms.g_o)  # the policy's efforts at rest

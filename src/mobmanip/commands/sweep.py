@@ -37,11 +37,14 @@ misses the set), and for ellipsoids semi_axis_K (K = 1 is the largest), for poly
 (along task axis K), e.g. kinematic.volume, dynamic.semi_axis_1, dynamic_polytope.straight_line_reach.
 capacity and straight_line_reach are NaN where the set is empty.
 
-outputs: OUT.npz (grid axes, index arrays of shape angle x distance x heading x velocity scale x
-effort scale [x task axis], the arm joints' positions per angle x distance, settings) and OUT.csv
-(one row per grid point); --plot writes OUT.png with --index over the two varying grid axes
-(polar when they are angle and distance; one panel per value of a third varying axis, up to 6;
-further axes at their first value).
+outputs, in the folder -o DIR (default sweep; created if missing), as site -o and carry --out:
+DIR/sweep.npz (grid axes, index arrays of shape angle x distance x heading x velocity scale x
+effort scale [x task axis], the arm joints' positions per angle x distance, settings) and
+DIR/sweep.csv (one row per grid point); --plot writes DIR/sweep.png with --index over the two
+varying grid axes (polar when they are angle and distance; one panel per value of a third varying
+axis, up to 6; further axes at their first value). -o was a file prefix before (OUT.npz, ...): a
+name ending in .npz, .csv or .png is refused, and a folder that does not exist yet beside an
+earlier run's OUT.npz / OUT.csv / OUT.png gets one line saying where the files go now.
 
 --dask tcp://HOST:8786 runs the chunks on a running Dask scheduler's workers (they load the robot
 from its name or spec path, and must import mobmanip); --dask local:N starts a local Dask cluster of
@@ -51,7 +54,7 @@ executor=client.get_executor()).
 
 examples:
   mobmanip sweep planar_dual_arm --angle 0:360:37 --distance 0.6:1.4:9 \\
-      --wheel-velocity-scale 0.1:1:5 --plot --index kinematic.volume --output fig/sweep
+      --wheel-velocity-scale 0.1:1:5 --plot --index kinematic.volume --output fig/sweep   # fig/sweep/sweep.png
   mobmanip sweep panda --angle=-90:90:19 --distance 0.2:0.8:7 --plot -o panda   # "=" before a minus
   mobmanip sweep tiago_dual --angle=-40:40:9 --distance 0.3:0.8:6 -o tiago
 """
@@ -112,9 +115,15 @@ def register(sub) -> None:
     run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
     add_dask_option(run)
     run.add_argument("--chunk-size", type=int, default=4096, metavar="N", help="configurations per task")
-    run.add_argument("--output", "-o", default="sweep", metavar="OUT", help="output prefix (default: %(default)s)")
-    run.add_argument("--no-csv", action="store_true", help="write only OUT.npz")
-    run.add_argument("--plot", action="store_true", help="also write OUT.png")
+    run.add_argument(
+        "--output",
+        "-o",
+        default="sweep",
+        metavar="OUT_DIR",
+        help="output directory for sweep.npz, sweep.csv and sweep.png (default: %(default)s)",
+    )
+    run.add_argument("--no-csv", action="store_true", help="write only OUT_DIR/sweep.npz")
+    run.add_argument("--plot", action="store_true", help="also write OUT_DIR/sweep.png")
     run.add_argument("--index", help="index to plot (default: the first measure's volume, kinematic.volume)")
     add_progress_option(run)
     run.add_argument(
@@ -139,13 +148,12 @@ def _direction(text: str):
 
 
 def run_command(args) -> int:
-    from pathlib import Path
 
     from ..errors import UsageError
     from ..measures import resolve_measures
     from ..robot.spec import find_spec
     from ..robot.tasks import TASKS
-    from ..support.files import OutputError
+    from ..support.files import output_directory
     from ..sweep.budget import check_grid
     from ..sweep.runner import SweepGrid, SweepSpec, check_index_name, default_workers, run_sweep
     from ..viz.sweep_plot import plot_sweep
@@ -198,12 +206,7 @@ def run_command(args) -> int:
         measures=measures,
         constraints=constraints_from_args(args),
     )
-    out = Path(args.output)
-    if out.parent and not out.parent.exists():
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"cannot create output directory {out.parent}: {exc.strerror or exc}") from exc
+    out = output_directory(args.output, "-o")  # removed again if the sweep fails
     if args.max_points < 1:
         raise UsageError(f"--max-points must be at least 1, got {args.max_points}")
     cost = check_grid(grid.shape, args.max_points, args.workers or default_workers())
@@ -248,38 +251,57 @@ def run_command(args) -> int:
             if ignored:
                 label += f" [ignores {', '.join(ignored)}]"
             print(f"{label}: min {_nanfmt(values, 'min')}, max {_nanfmt(values, 'max')}")
-    written = [write_sweep_npz(result, out.with_name(out.name + ".npz"))]
+    written = [write_sweep_npz(result, out / "sweep.npz")]
     if not args.no_csv:
-        written.append(write_sweep_csv(result, out.with_name(out.name + ".csv")))
+        written.append(write_sweep_csv(result, out / "sweep.csv"))
     if args.plot:
-        written.append(plot_sweep(result, index, out.with_name(out.name + ".png")))
+        written.append(plot_sweep(result, index, out / "sweep.png"))
     for path in written:
         print(f"wrote {path}")
     return 0
 
 
+#: The files a sweep writes into its -o folder; -o was once a prefix of names ending so.
+OUTPUT_SUFFIXES = (".npz", ".csv", ".png")
+
+
 def _check_outputs(args) -> None:
-    """Refuse an output prefix that names a directory, or whose files (OUT.npz, OUT.csv, OUT.png)
-    could not be written, before any work.
+    """Refuse, before any work, an -o that cannot be the sweep's folder or whose files could not
+    be written; say in one line where the files go when -o looks like the file prefix it once was.
+
+    The transition rule: -o names a folder (as ``site -o`` and ``carry --out`` do) holding sweep.npz,
+    sweep.csv and sweep.png. A name ending in one of those suffixes was meant as a file: refused,
+    naming the folder to give instead. A folder that does not exist yet, beside files an earlier
+    run wrote with -o as a prefix (OUT.npz, OUT.csv or OUT.png), is created, with one line saying
+    that the new files go inside it and the old ones stay.
 
     Raises:
         OutputError: naming the path and what to give instead.
     """
-    import os
     from pathlib import Path
 
     from ..support.files import OutputError, check_output
+    from ..support.notices import notice
 
     text = str(args.output)
     out = Path(text)
-    if text.endswith(("/", os.sep)) or out.is_dir():
+    if out.suffix.lower() in OUTPUT_SUFFIXES:
         raise OutputError(
-            f"-o {text} is a directory; -o takes an output prefix (it writes PREFIX.npz, PREFIX.csv and, with "
-            f"--plot, PREFIX.png): e.g. -o {out / 'sweep'}"
+            f"-o {text}: -o names the folder the sweep writes sweep.npz, sweep.csv and sweep.png into (it was a "
+            f"file prefix before); give -o {out.with_suffix('')}"
         )
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"-o {text}: a file of that name exists; -o names a folder (sweep.npz, sweep.csv go into it)")
     suffixes = [".npz"] + ([] if args.no_csv else [".csv"]) + ([".png"] if args.plot else [])
     for suffix in suffixes:
-        check_output(out.with_name(out.name + suffix))
+        check_output(out / f"sweep{suffix}")
+    old = [out.with_name(out.name + suffix) for suffix in OUTPUT_SUFFIXES]
+    if not out.exists() and any(path.is_file() for path in old):
+        first = next(path for path in old if path.is_file())
+        notice(
+            f"-o {text} is a folder now (it was a file prefix): the results go to {out / 'sweep.npz'} and beside "
+            f"it, not to {first}, which stays as it is"
+        )
 
 
 def _nanfmt(values, how: str) -> str:

@@ -172,7 +172,7 @@ def _run(args, offsets, data, executor, constraints=()) -> int:
             continue
         print(f"{label} ({measure.quantity.units}): reach from its centre along each task axis, both ways")
         if np.any(task_set.center != 0.0):
-            held = bool(task_set.contains(np.zeros(task.dim))[0])
+            held = bool(task_set.contains(np.zeros(task.dim)))
             print(
                 f"  centre {np.array2string(task_set.center, precision=4)}; "
                 + ("the object at rest is inside" if held else "the object cannot be held still (rest is outside)")

@@ -24,11 +24,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import ModelError, SetQueryError
 from ..support.tolerances import FAST_RTOL
 from ..support.tolerances import RANK_RTOL as _RANK_RTOL
-from .taskset import TaskSet, check_dims, check_direction, check_points
+from .taskset import TaskSet, check_dims, check_direction, check_membership_points, membership
 
 # The full-rank branches below (J of full row rank, every W^T a_o reachable) skip the null-space
 # projections; they run while the smallest singular value exceeds FAST_RTOL times the largest
@@ -135,12 +136,18 @@ class Ellipsoid(TaskSet):
         reach = straight_line_reaches(self.center[None], self.semi_axes[None], self.axes[None], d[None])
         return 0.0 if self.empty else float(reach[0])
 
-    def contains(self, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-        """Whether points, (n, m) or (m,), lie in the ellipsoid (within ``tol`` in the normalised
-        norm, and ``tol`` in task units along a zero semi-axis); bool array (n,)."""
-        p = check_points(points, self.dim) - self.center
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
+        """Whether points lie in the ellipsoid (within ``tol`` in the normalised norm, and ``tol``
+        in task units along a zero semi-axis): a ``bool`` for one point (m,), a bool array (n,)
+        for points (n, m).
+
+        Raises:
+            SetQueryError: any other shape (named), or a non-finite coordinate.
+        """
+        P, single = check_membership_points(points, self.dim)
+        p = P - self.center
         if self.empty:
-            return np.zeros(len(p), dtype=bool)
+            return membership(np.zeros(len(p), dtype=bool), single)
         coords = p @ self.axes.T  # components along each axis
         inside = np.ones(len(p), dtype=bool)
         positive = self.semi_axes > 0
@@ -148,7 +155,7 @@ class Ellipsoid(TaskSet):
         inside &= norm2 <= (1.0 + tol) ** 2
         if (~positive).any():
             inside &= np.all(np.abs(coords[:, ~positive]) <= tol, axis=1)
-        return inside
+        return membership(inside, single)
 
     def project(self, dims: Sequence[int] = (0, 1)) -> Ellipsoid:
         """The shadow of the ellipsoid on the task coordinates ``dims`` (e.g. (0, 1) gives a 2-D

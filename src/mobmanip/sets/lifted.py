@@ -36,7 +36,8 @@ from numpy.typing import ArrayLike
 from ..errors import ModelError, TaskError
 from .linear_programs import CertifiedProgram, LinearProgram
 from .polytope import halfspaces_json
-from .taskset import TaskSet, check_dims, check_direction, check_points
+from .polytope_vertices import DUPLICATE_RTOL, distinct_rows
+from .taskset import TaskSet, check_dims, check_direction, check_membership_points, check_points, membership
 
 _TOL = 1e-9  # relative to the set's size: a support beyond a facet by less than this adds no vertex
 #: Below this (in the task's units: m/s^2, N, ...) two points are one, whatever the set's size: a
@@ -356,10 +357,17 @@ class LiftedPolytope(TaskSet):
         d = d / np.linalg.norm(d)
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
-    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
-        P = check_points(points, self.dim)
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
+        """Whether points lie in the set, each with the task coordinates free by ``tol`` times the
+        set's size (one feasibility program per point): a ``bool`` for one point (m,), a bool array
+        (n,) for points (n, m).
+
+        Raises:
+            SetQueryError: any other shape (named), or a non-finite coordinate.
+        """
+        P, single = check_membership_points(points, self.dim)
         if self.empty:
-            return np.zeros(len(P), dtype=bool)
+            return membership(np.zeros(len(P), dtype=bool), single)
         out = np.zeros(len(P), dtype=bool)
         slack = tol * self._size
         lower, upper = self._lower.copy(), self._upper.copy()
@@ -367,7 +375,7 @@ class LiftedPolytope(TaskSet):
             lower[self._task], upper[self._task] = p - slack, p + slack
             out[i] = self._program().solve(np.zeros(len(lower)), True, lower, upper) is not None
         self._program().solve(np.zeros(len(lower)), True, self._lower, self._upper)  # restore the bounds
-        return out
+        return membership(out, single)
 
     def project(self, dims: Sequence[int] = (0, 1)) -> LiftedPolytope:
         keep = check_dims(dims, self.dim)
@@ -533,7 +541,9 @@ class LiftedPolytope(TaskSet):
 
     @property
     def halfspaces(self) -> tuple[np.ndarray, np.ndarray]:
-        """(A, b) with the set = {a : A a <= b}, rows of unit norm (m <= 3, full-dimensional)."""
+        """(A, b) with the set = {a : A a <= b}, rows of unit norm (m <= 3, full-dimensional); no
+        halfspace twice (unit normals that agree to 1e-9 and offsets to 1e-9 of the set's size are
+        one row, :func:`~mobmanip.sets.polytope_vertices.distinct_rows`)."""
         V = self.vertices
         normals, offsets = _facets(V, self._tol()) if len(V) else (None, None)
         if normals is None or offsets is None:
@@ -680,7 +690,7 @@ def _facets(V: np.ndarray, tol: float) -> tuple[np.ndarray | None, np.ndarray | 
         length = np.linalg.norm(normals, axis=1)
         keep = length > tol
         normals = normals[keep] / length[keep, None]
-        return normals, np.einsum("ij,ij->i", normals, P[keep])
+        return _distinct(normals, np.einsum("ij,ij->i", normals, P[keep]), tol)
     from scipy.spatial import ConvexHull, QhullError
 
     try:
@@ -689,14 +699,15 @@ def _facets(V: np.ndarray, tol: float) -> tuple[np.ndarray | None, np.ndarray | 
         return None, None
     normals, offsets = hull.equations[:, :-1], -hull.equations[:, -1]
     scale = np.linalg.norm(normals, axis=1)
-    normals, offsets = normals / scale[:, None], offsets / scale
     # Qhull lists a facet once per simplex of it (a square facet twice): one row per facet
-    facets: list[int] = []
-    for i in range(len(normals)):
-        same = np.abs(normals[facets] - normals[i]).max(axis=1) <= 1e-9 if facets else np.zeros(0, dtype=bool)
-        if not np.any(same & (np.abs(offsets[facets] - offsets[i]) <= max(tol, 1e-12))):
-            facets.append(i)
-    return normals[facets], offsets[facets]
+    return _distinct(normals / scale[:, None], offsets / scale, tol)
+
+
+def _distinct(normals: np.ndarray, offsets: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """One row per halfspace (:func:`~mobmanip.sets.polytope_vertices.distinct_rows`): unit normals
+    that agree to its relative tolerance and offsets that agree to ``tol``, the set's own."""
+    keep, _ = distinct_rows(normals, offsets, tol / DUPLICATE_RTOL)
+    return normals[keep], offsets[keep]
 
 
 def _ordered(V: np.ndarray) -> np.ndarray:

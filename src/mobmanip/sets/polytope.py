@@ -14,7 +14,8 @@ of F) and under slicing (the fixed coordinates move into c), so these stay exact
 Queries and how they are answered:
 
 - halfspaces ``A a <= b``: the zonotope's facets (:mod:`mobmanip.sets.zonotope`) pulled back by F,
-  plus the equalities of the directions in which the zonotope is flat; irredundant for m <= 3;
+  plus the equalities of the directions in which the zonotope is flat; irredundant for m <= 3, and
+  no halfspace listed twice in any dimension (rows that several generator subsets give are one);
 - vertices and faces (m <= 3): one Qhull call on the polar set (:mod:`mobmanip.sets.hull`);
   a zonotope's vertices are then recomputed exactly as c + G sign(G^T d) from their normals
   (:mod:`mobmanip.sets.polytope_vertices`, which also enumerates vertices above 3 dimensions);
@@ -44,8 +45,8 @@ from ..support.tolerances import RANK_RTOL
 from . import zonotope
 from .hull import enumerate_hull
 from .linear_programs import LinearProgram
-from .polytope_vertices import exact_vertices, halfspace_vertices, volume_from_vertices
-from .taskset import TaskSet
+from .polytope_vertices import distinct_rows, exact_vertices, halfspace_vertices, volume_from_vertices
+from .taskset import TaskSet, check_membership_points, membership
 
 _RANK_RTOL = RANK_RTOL
 _EMPTY_TOL = 1e-9  # least effort above 1 + this: empty; above 1 - this: no interior
@@ -288,25 +289,27 @@ class Polytope(TaskSet):
         d = self._unit_direction(direction, "radius_along")
         return 0.0 if self.empty else max(self.support(d) - float(d @ self.center), 0.0)
 
-    def contains(self, points: ArrayLike, tol: float = 1e-9) -> np.ndarray:
-        """Whether each point (n, m) or (m,) is reached with every ``|y_i| <= 1 + tol``.
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
+        """Whether points are reached with every ``|y_i| <= 1 + tol``: a ``bool`` for one point
+        (m,), a bool array (n,) for points (n, m).
 
         That is: every joint within (1 + tol) times its own limit; the equalities (directions in
         which the set is flat) hold to ``tol`` times the set's size.
+
+        Raises:
+            SetQueryError: any other shape (named), or a non-finite coordinate.
         """
-        P = np.atleast_2d(np.asarray(points, dtype=float))
-        if P.shape[1] != self.dim:
-            raise TaskError(f"points must have {self.dim} coordinates, got shape {np.shape(points)}")
+        P, single = check_membership_points(points, self.dim)
         if self.empty:
-            return np.zeros(len(P), dtype=bool)
+            return membership(np.zeros(len(P), dtype=bool), single)
         try:
             A, b0, h = self._inequalities()
         except TaskError:  # too many candidate facets: one feasibility program per point
-            return np.array([self._feasible_y(p, 1.0 + tol) is not None for p in P])
+            return membership(np.array([self._feasible_y(p, 1.0 + tol) is not None for p in P], dtype=bool), single)
         inside = np.all(P @ A.T <= b0 + (1.0 + tol) * h + 1e-12 * self._size, axis=1)
         if len(self._eq_A):
             inside &= np.all(np.abs(P @ self._eq_A.T - self._eq_b) <= tol * self._size + 1e-12 * self._size, axis=1)
-        return inside
+        return membership(inside, single)
 
     def project(self, dims: Sequence[int] = (0, 1)) -> Polytope:
         """The shadow on the task coordinates ``dims``: {a_D : some a_R completes a point of the set}.
@@ -377,14 +380,20 @@ class Polytope(TaskSet):
         """(A, b) with the set = {a : A a <= b}, unit rows; equalities appear as two opposite rows.
 
         For m <= 3 only facets are listed; for larger m every pulled-back facet of the
-        zonotope is, and some rows may be redundant.
+        zonotope is, and some rows may be redundant. No halfspace is listed twice: rows whose unit
+        normals agree to :data:`~mobmanip.sets.polytope_vertices.DUPLICATE_RTOL` in every coordinate
+        and offsets to that times the set's size are one, kept once
+        (:func:`~mobmanip.sets.polytope_vertices.distinct_rows`).
         """
         A, b0, h = self._inequalities()
         if self.dim <= 3 and not self.empty:
             rows = self._vrep()["facet_rows"]
+            rows = rows[np.sort(np.unique(rows, return_index=True)[1])]  # faces in one plane share a row
             A, b0, h = A[rows], b0[rows], h[rows]
         eq_A, eq_b = self._eq_A, self._eq_b
-        return np.vstack([A, eq_A, -eq_A]), np.concatenate([b0 + h, eq_b, -eq_b])
+        A, b = np.vstack([A, eq_A, -eq_A]), np.concatenate([b0 + h, eq_b, -eq_b])
+        unique, _ = distinct_rows(A, b, self._size)  # e.g. a facet row that repeats an equality's side
+        return A[unique], b[unique]
 
     @property
     def vertices(self) -> np.ndarray:
@@ -530,8 +539,12 @@ class Polytope(TaskSet):
             length = np.linalg.norm(A, axis=1)
             keep = length > 1e-12 * max(float(length.max(initial=0.0)), 1e-300)
             length = length[keep]
-            self._cache["ineq"] = (A[keep] / length[:, None], b0[keep] / length, h[keep] / length)
-            self._cache["z_normals"] = rows[keep]
+            A, b0, h, rows = A[keep] / length[:, None], b0[keep] / length, h[keep] / length, rows[keep]
+            # Several generator subsets give one facet (coplanar generators; zonotope facets that F
+            # pulls back onto one task halfspace): one row each (the rule of distinct_rows).
+            unique, _ = distinct_rows(A, np.c_[b0, h], self._size)
+            self._cache["ineq"] = (A[unique], b0[unique], h[unique])
+            self._cache["z_normals"] = rows[unique]
         return self._cache["ineq"]
 
     def _interior_point(self) -> np.ndarray:
@@ -567,15 +580,16 @@ class Polytope(TaskSet):
         fast = zonotope.low_dim_faces(self._c, self._G)
         if fast is None:
             return False
-        normals = fast["normals"]
-        self._cache["ineq"] = (normals, fast["offsets"], fast["widths"])
-        self._cache["z_normals"] = normals  # F = I: the zonotope's normals are the set's
+        normals, offsets, widths = fast["normals"], fast["offsets"], fast["widths"]
+        unique, row_of = distinct_rows(normals, np.c_[offsets, widths], self._size)  # one row per facet plane
+        self._cache["ineq"] = (normals[unique], offsets[unique], widths[unique])
+        self._cache["z_normals"] = normals[unique]  # F = I: the zonotope's normals are the set's
         vertices = fast["vertices"]
         vertices.setflags(write=False)
         self._cache["vrep"] = {
             "vertices": vertices,
             "faces": fast["faces"],
-            "facet_rows": np.arange(len(normals)),
+            "facet_rows": row_of,  # each face's row: faces in one plane share it
             "hull": None,
             "Y": fast["Y"],
         }

@@ -5,8 +5,9 @@ the zonotope's faces, their enumeration above three dimensions, and the volume t
 call (:func:`mobmanip.sets.hull.enumerate_hull`), accurate to the conditioning of its facets;
 :func:`exact_vertices` then recomputes each one, with the joint values that reach it, from the
 face of the zonotope it lies on. Above three dimensions :func:`halfspace_vertices` intersects
-the halfspaces in the set's own plane (for volume and isotropy only). Functions of arrays: the
-polytope keeps the caching and decides when each is called.
+the halfspaces in the set's own plane (for volume and isotropy only); :func:`distinct_rows`
+keeps one row of each halfspace listed more than once. Functions of arrays: the polytope keeps the
+caching and decides when each is called.
 """
 
 from __future__ import annotations
@@ -20,6 +21,62 @@ from .hull import _groups, enumerate_hull
 #: Above 3 dimensions, vertices (for volume and isotropy) are enumerated only up to this many
 #: halfspaces: beyond, Qhull's output explodes (a 6-D kinematic section of TIAGo++ has ~5,000).
 MAX_HIGH_DIM_ROWS = 400
+#: Two halfspace rows are one when, each divided by the length of its normal, their normals agree
+#: to this in every coordinate and their offsets to this times the set's size.
+DUPLICATE_RTOL = 1e-9
+
+
+def distinct_rows(
+    A: np.ndarray, offsets: np.ndarray, size: float, rtol: float = DUPLICATE_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
+    """One row of each halfspace ``A_i a <= b_i`` that is listed more than once.
+
+    The rule: every row (its normal and its offsets) is divided by the length of its normal, so a
+    copy scaled by a positive factor becomes the same row; rows i and j are then one halfspace when
+    ``max |A_i - A_j| <= rtol`` and ``max |b_i - b_j| <= rtol * size``. Of each such group (taken
+    transitively) the first row is kept, in the original order. Opposite rows (an equality's two
+    sides) differ in sign and stay. Removing a copy leaves the set as it was: only rows that agree
+    to the tolerance are merged, and the row kept is one of them.
+
+    Args:
+        A: normals, (r, m); a zero normal is compared as it is (not divided).
+        offsets: (r,), or (r, k) for several offsets per row (e.g. the parts of b that are scaled
+            separately); all must agree.
+        size: the set's size, the scale of the offsets' tolerance.
+        rtol: the tolerance, :data:`DUPLICATE_RTOL` by default.
+
+    Returns:
+        ``keep``, the indices of the rows kept (increasing), and ``inverse``, for each row the
+        position in ``keep`` of the row that stands for it.
+    """
+    r = len(A)
+    if r == 0:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    length = np.linalg.norm(A, axis=1)
+    length = np.where(length > 0.0, length, 1.0)
+    b = np.asarray(offsets, dtype=float).reshape(r, -1)
+    key = np.hstack([A / length[:, None], b / (length[:, None] * max(size, 1e-300))])
+    if r <= 256:
+        close = np.flatnonzero(np.triu(np.max(np.abs(key[:, None, :] - key[None, :, :]), axis=2) <= rtol, 1))
+        pairs = np.stack(np.divmod(close, r), axis=1)
+    else:
+        from scipy.spatial import cKDTree
+
+        pairs = cKDTree(key).query_pairs(rtol, p=np.inf, output_type="ndarray")
+    leader = np.arange(r)
+    for i, j in sorted(map(tuple, pairs.tolist())):  # union by the smaller index: a group's first row leads
+        a, c = leader[i], leader[j]
+        while leader[a] != a:
+            a = leader[a]
+        while leader[c] != c:
+            c = leader[c]
+        leader[max(a, c)] = min(a, c)
+    for i in range(r):
+        leader[i] = leader[leader[i]]
+    keep = np.flatnonzero(leader == np.arange(r))
+    position = np.empty(r, dtype=np.intp)
+    position[keep] = np.arange(len(keep))
+    return keep, position[leader]
 
 
 def exact_vertices(

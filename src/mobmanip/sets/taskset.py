@@ -8,7 +8,7 @@ ask the same questions of each, through :class:`TaskSet`:
 - ``support(d)``: max of d . p over the set (how far it reaches along d, from the origin);
 - ``radius_along(d)``: how far it reaches from its :attr:`TaskSet.center` along a unit d
   (the *capacity* along d);
-- ``contains(points)``: membership;
+- ``contains(points)``: membership (a ``bool`` for one point, a bool array for several);
 - ``project(dims)`` / ``slice(dims)``: the shadow on, or the cut through the centre in, a few
   task coordinates (e.g. the linear part of a spatial task);
 - ``volume``, ``isotropy`` and :meth:`TaskSet.indices` for sweeps;
@@ -17,11 +17,11 @@ ask the same questions of each, through :class:`TaskSet`:
 - ``to_dict()``: its JSON form.
 
 An empty set never yields NaN or infinity from these queries: ``support``, ``radius_along``,
-``volume`` and ``isotropy`` are 0 and ``contains`` is all False; callers that must tell "no
+``volume`` and ``isotropy`` are 0 and ``contains`` is False; callers that must tell "no
 capacity" from "empty" look at ``empty``. Bad arguments (a zero or non-finite direction, points
 of the wrong dimension, coordinates out of range) raise :class:`mobmanip.errors.SetQueryError`;
-:func:`check_direction`, :func:`check_points` and :func:`check_dims` do these checks for every
-subclass.
+:func:`check_direction`, :func:`check_points`, :func:`check_membership_points` and
+:func:`check_dims` do these checks for every subclass.
 
 Many configurations at once (sweeps) give a *batch* of sets of one kind: see
 :class:`TaskSetBatch`. Which measures exist, and how each is computed, is the registry
@@ -90,8 +90,11 @@ class TaskSet(ABC):
         """How far the set reaches from :attr:`center` along the unit direction of d; 0 when empty."""
 
     @abstractmethod
-    def contains(self, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-        """Whether points, (n, m) or (m,), lie in the set (within ``tol``); bool array (n,)."""
+    def contains(self, points: ArrayLike, tol: float = 1e-9) -> bool | np.ndarray:
+        """Whether points lie in the set (within ``tol``), as NumPy answers elementwise questions:
+        one point, shape (m,), gives a Python ``bool``; n points, shape (n, m), give a bool array
+        (n,) (also for n = 1). Any other shape is a :class:`~mobmanip.errors.SetQueryError` naming
+        it (:func:`check_membership_points` and :func:`membership` do both for a subclass)."""
 
     @abstractmethod
     def project(self, dims: Sequence[int] = (0, 1)) -> TaskSet:
@@ -165,6 +168,33 @@ def check_direction(direction: ArrayLike, m: int, where: str = "direction") -> n
     if not np.all(np.isfinite(d)) or not np.any(d):
         raise SetQueryError(f"{where} must be finite and not zero, got {d.tolist()}")
     return d
+
+
+def check_membership_points(points: ArrayLike, m: int) -> tuple[np.ndarray, bool]:
+    """The points of a :meth:`TaskSet.contains` query as a float array (n, m), checked finite, and
+    whether one point was given: shape (m,) (or a scalar when m = 1) is one point, (n, m) is n.
+
+    Raises:
+        SetQueryError: any other shape (named), or a NaN or infinite entry.
+    """
+    try:
+        p = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise SetQueryError(f"points must be numbers of shape ({m},) or (n, {m}), got {points!r}") from None
+    single = p.ndim == 1 or (p.ndim == 0 and m == 1)
+    if not (p.shape == (m,) or (p.ndim == 0 and m == 1) or (p.ndim == 2 and p.shape[1] == m)):
+        raise SetQueryError(
+            f"points must have shape ({m},) for one point or (n, {m}) for n points in this {m}-dimensional "
+            f"task space, got shape {p.shape}"
+        )
+    if not np.all(np.isfinite(p)):
+        raise SetQueryError("points must be finite (a NaN or infinite coordinate was given)")
+    return p.reshape(-1, m), single
+
+
+def membership(inside: np.ndarray, single: bool) -> bool | np.ndarray:
+    """A :meth:`TaskSet.contains` answer: a Python bool for one point, the bool array (n,) for n."""
+    return bool(inside[0]) if single else np.asarray(inside, dtype=bool)
 
 
 def check_points(points: ArrayLike, m: int) -> np.ndarray:
