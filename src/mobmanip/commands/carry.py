@@ -12,6 +12,7 @@ from .common import (
     add_task_option,
     add_work_option,
     motion_floor,
+    registered_constraints,
     report_partial_carry,
     show_progress,
 )
@@ -41,6 +42,10 @@ its friction pyramid (mu: the spec's [support] mu, else 0.5). These are rows of 
 the step's floor wrench with the velocity terms at the previous step's rates; a step they make
 infeasible is reported with the floor's row that binds. The baseline ignores the floor. Check a
 result with `mobmanip trajectory OUT/trajectory.csv --ground --mu MU`.
+
+A constraint option registered in Python (mobmanip.terms.constraints.options, e.g. a share of
+the effort limits) is kept at every step of the QP motion, its rows written over the step's
+rates; the baseline ignores it, and --fastest refuses it (its timing cannot honour it).
 
 --out DIR writes trajectory.csv (t, platform_x, platform_y, platform_yaw, one column per joint
 as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
@@ -160,8 +165,7 @@ def objective_unit_text(result) -> str:
 
 
 def run(args) -> int:
-
-    from ..errors import CarryFailed
+    from ..errors import CarryFailed, UsageError
     from ..motion.carry import carry, read_path
     from ..robot.configurations import read_configuration
     from ..robot.model import load_robot
@@ -174,7 +178,11 @@ def run(args) -> int:
     path = read_path(args.path)
     _check_work(args, path)
     start = read_configuration(robot, args.start) if args.start else None
-    floor = motion_floor(args, "carry")
+    constraints, floor_args = registered_constraints(args)
+    if constraints and args.fastest:
+        raise UsageError(f"carry --fastest times the motion with retime, which cannot honour {constraints[0].name}: "
+                         "give the constraint without --fastest")  # fmt: skip
+    floor = motion_floor(floor_args, "carry")
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
         for name in CARRY_FILES + (CARRY_FASTEST_FILES if args.fastest else ()):
@@ -191,6 +199,7 @@ def run(args) -> int:
             prepare=args.prepare,
             progress=show_progress(args),
             floor=floor,
+            constraints=constraints,
         )
     except CarryFailed as failure:
         if not args.out:

@@ -369,7 +369,6 @@ def floor_constraints(args) -> tuple:
 #: it models the floor on its own).
 CANNOT_HONOUR = {
     "brake": "it stops the robot along a path, on rows only the floor has in motion",
-    "carry": "it solves one step of motion at a time, on rows only the floor has in motion",
     "retime": "it times a path on rows only the floor has in motion",
     "referee": "it replays the floor in MuJoCo, which models no other constraint",
     "place": "an ellipsoid objective ignores every constraint beyond the joint boxes; give a measure's reading "
@@ -424,6 +423,18 @@ def constraints_from_args(args, problems: tuple[str, ...] = ("velocity", "accele
         ArgumentError: a bad value (the constraint's own message).
         UsageError: an option of a problem the command does not solve.
     """
+    built, rest = registered_constraints(args, problems)
+    return (*floor_constraints(rest), *built)
+
+
+def registered_constraints(args, problems: tuple[str, ...] = ("velocity", "acceleration")):
+    """(the constraints of the registered options given, ``args`` without them): for a command
+    that honours constraints of ``problems`` beside its floor options (which ``args`` keeps).
+
+    Raises:
+        ArgumentError: a bad value (the constraint's own message).
+        UsageError: an option of a problem the command does not solve.
+    """
     from ..errors import UsageError
 
     given = given_constraint_options(args)
@@ -434,8 +445,7 @@ def constraints_from_args(args, problems: tuple[str, ...] = ("velocity", "accele
             raise UsageError(f"{command} cannot honour {option.flag}: its rows are of the {option.problem} problem, "
                              f"and {command} solves the {' and '.join(problems)} problem")  # fmt: skip
         built.append(option.build(value))
-    floor = floor_constraints(_without_constraint_options(args, given))
-    return (*floor, *built)
+    return tuple(built), _without_constraint_options(args, given)
 
 
 def _without_constraint_options(args, given):

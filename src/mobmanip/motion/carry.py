@@ -56,11 +56,13 @@ from ..postures.planar import optimal_configuration
 from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..support.progress import progress_bar
+from ..terms.builder import terms_at
 from .carry_floor import NO_TURN, CarryFloor, floor_binding, floor_rows, solve_with_floor
 from .carry_step import EFFORT_SHARE as EFFORT_SHARE
 from .carry_step import LIMIT_HORIZON as LIMIT_HORIZON
 from .carry_step import CarryDiagnosis as CarryDiagnosis
-from .carry_step import _effort_rows, diagnose_step, solve_step_qp, velocity_bounds
+from .carry_step import _effort_map, diagnose_step, effort_rows_of, solve_step_qp, velocity_bounds
+from .step_constraints import StepRows, check_constraints, step_rows
 from .trajectory import tangent_integrate
 
 PATH_COLUMNS = ("t", "x", "y", "z", "yaw")
@@ -249,6 +251,7 @@ class CarryResult:
             (:func:`mobmanip.analysis.plausibility.collapsed`: a singular posture); a ratio to
             that minimum is not reported.
         floor: the floor the QP motion kept (:meth:`CarryFloor.describe`), or ``None``.
+        constraints: the other constraints it kept, as described in JSON.
     """
 
     objective: Objective | ReadingObjective
@@ -260,6 +263,7 @@ class CarryResult:
     prepared_baseline: CarryRun | None = None
     collapsed: dict[str, tuple[float, float]] = field(default_factory=dict)
     floor: dict | None = None
+    constraints: tuple[dict, ...] = ()
 
     def starts(self) -> dict:
         """What each run started from, in words and numbers (JSON-ready)."""
@@ -322,6 +326,8 @@ class CarryResult:
         }
         if self.floor is not None:
             out["floor"] = self.floor
+        if self.constraints:
+            out["constraints"] = [dict(c) for c in self.constraints]
         return out
 
 
@@ -399,6 +405,7 @@ def _run(
     x_start=None,
     floor=None,
     progress=False,
+    constraints=(),
 ) -> tuple[CarryRun, float]:
     """One motion along ``path`` from ``q0``; returns it and the capacity term's weight used.
     ``converge`` stops early once the objective rises by less than :data:`PREPARE_TOLERANCE`
@@ -450,7 +457,13 @@ def _run(
                     norm = float(np.linalg.norm(np.sqrt(D2) * g))
                     weight = gain / norm if norm > 0 else 0.0
                 lo, hi = velocity_bounds(robot, q, h)
-                G, g_hi = _effort_rows(robot, q, x_prev, h, task, object_mass, effort_limits)
+                effort_map = _effort_map(robot, q, x_prev, h, task, object_mass)
+                G, g_hi = effort_rows_of(effort_map, effort_limits)
+                extra = None
+                if constraints:
+                    at_rest = terms_at(robot, q, task.name, object_mass=object_mass, check=False)
+                    extra = step_rows(constraints, at_rest, x_prev, h, effort_map)
+                    G, g_hi = np.vstack([G, extra.G]), np.concatenate([g_hi, extra.h])
                 if resolved is None:
                     x = solve_step_qp(H, -weight * g, J_u, b, lo, hi, G, g_hi)
                 else:
@@ -462,9 +475,13 @@ def _run(
                         binding = floor_binding(
                             solve_step_qp, H, -weight * g, J_u, b, lo, hi, G, g_hi, floor_G, floor_g, labels
                         )
+                    constraint = None if extra is None else _binding_constraint(H, -weight * g, J_u, b, lo, hi, G, g_hi,
+                                                                              extra)  # fmt: skip
                     if binding is not None:
                         helps = binding != NO_TURN  # a turn the base cannot make is no matter of speed
                         diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=helps)
+                    elif constraint is not None:
+                        diagnosis = CarryDiagnosis(k, float(times[k]), constraint, "constraint")
                     else:
                         diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
                     partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
@@ -475,6 +492,17 @@ def _run(
             q = tangent_integrate(model, q, S @ x * h)
     run = CarryRun(method, times[:n], qs[:n], xs[: n - 1], capacity[:n], track[:n], hand[:n])
     return run, (0.0 if weight is None else weight)
+
+
+def _binding_constraint(H, c, J_u, b, lo, hi, G, g_hi, extra: StepRows) -> str | None:
+    """The label of the given constraints' row the step breaks most without them (at the step
+    solved with the robot's own limits only), or ``None`` when it has no solution without them
+    either."""
+    own = len(g_hi) - len(extra.h)
+    x = solve_step_qp(H, c, J_u, b, lo, hi, G[:own], g_hi[:own])
+    if x is None:
+        return None
+    return extra.labels[int(np.argmax(extra.G @ x - extra.h))]
 
 
 def _jacobian(robot: Robot, q: np.ndarray, rows: list[int]) -> np.ndarray:
@@ -498,6 +526,7 @@ def carry(
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
     floor: CarryFloor | None = None,
+    constraints: tuple = (),
     progress: bool = False,
 ) -> CarryResult:
     """Synthesise the capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
@@ -521,6 +550,10 @@ def carry(
             QP motion's (and the self-motion's) steps keep the zero-moment point inside the
             support polygon with a margin, every support loaded and the driven wheels within
             friction; the baseline does not.
+        constraints: constraints of the sets at rest (:mod:`mobmanip.terms.constraints`, e.g. a
+            share of the effort limits) kept at every step of the QP motion and the self-motion,
+            their rows compiled over the step (:mod:`mobmanip.motion.step_constraints`); the
+            baseline ignores them. One that cannot join a step is refused by name.
         progress: show a progress bar per motion on standard error.
 
     Raises:
@@ -542,6 +575,11 @@ def carry(
     task = get_task(task or robot.spec.default_task)
     evaluator = objective_evaluator(robot, objective or "kinematic:minor_axis", task, object_mass=object_mass)
     q0 = default_start(robot) if start is None else robot.check_configuration(start)
+    constraints = check_constraints(constraints)
+    if constraints:  # refused before any work when one cannot join a step
+        rest = np.zeros(robot.nx)
+        step_rows(constraints, terms_at(robot, q0, task.name, object_mass=object_mass), rest, float(step),
+                  (np.zeros((robot.nx, robot.nx)), rest))  # fmt: skip
     label = "the given start configuration" if start is not None else _default_start_label(robot, q0)
     step, gain = float(step), float(gain)
     preparation, weight, q_path = None, None, q0
@@ -549,7 +587,7 @@ def carry(
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
         preparation, weight = _run(
             robot, q0, still, evaluator, task, step, "self-motion", gain, converge=True, object_mass=object_mass,
-            floor=floor, progress=progress,
+            floor=floor, progress=progress, constraints=constraints,
         )  # fmt: skip
         shift = path.t[0] - preparation.t[-1]  # the self-motion ends where the path starts
         preparation = CarryRun(
@@ -562,7 +600,7 @@ def carry(
     try:
         motion, _ = _run(
             robot, q_path, path, evaluator, task, step, "qp", gain, weight=weight, object_mass=object_mass,
-            x_start=x_start, floor=floor, progress=progress,
+            x_start=x_start, floor=floor, progress=progress, constraints=constraints,
         )  # fmt: skip
     except CarryFailed as exc:
         if exc.partial.method == "qp":
@@ -579,7 +617,7 @@ def carry(
     collapsed = {key: value for key, value in found.items() if value is not None}
     return CarryResult(
         evaluator.objective, task.name, motion, baseline, preparation, label, prepared, collapsed,
-        None if floor is None else floor.describe(),
+        None if floor is None else floor.describe(), tuple(c.describe() for c in constraints),
     )  # fmt: skip
 
 

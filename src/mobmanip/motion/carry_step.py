@@ -29,6 +29,7 @@ class CarryDiagnosis:
             single limit does (then ``kind`` names what does).
         kind: ``"position"`` (the joint reaches the end of its range), ``"velocity"``,
             ``"effort"``, ``"floor"`` (a row of ``carry``'s floor: ``joint`` then names it),
+            ``"constraint"`` (a row of a constraint given to ``carry``: ``joint`` names it),
             ``"limits together"`` (no single limit: several at once) or
             ``"singular"`` (the hands cannot move as asked at this posture, whatever the limits).
         asked, allowed: for the binding limit, what the step needs and what the limit allows
@@ -71,6 +72,11 @@ class CarryDiagnosis:
             return (
                 f"{where} the floor binds: {self.joint} cannot hold together with the path and the limits; slowing "
                 "the path down likely helps (the floor's forces from the accelerations fall with the speed squared)"
+            )
+        if self.kind == "constraint":
+            return (
+                f"{where} a constraint binds: {self.joint}; without it the step has a solution (slowing the path "
+                "down may help where the constraint bounds efforts or speeds)"
             )
         if self.kind == "limits together":
             return (
@@ -275,7 +281,12 @@ def _effort_rows(robot, q, x_prev, dt, task, object_mass, limits) -> tuple[np.nd
     their limits: with xdot = (x - x_prev) / dt the efforts are affine in x, tau = c + A xdot
     (:meth:`mobmanip.motion.MotionTerms.torques`, the velocity terms at x_prev), and
     -s tau_max <= tau <= s tau_max with s = :data:`EFFORT_SHARE`."""
-    A, offset = _effort_map(robot, q, x_prev, dt, task, object_mass)
+    return effort_rows_of(_effort_map(robot, q, x_prev, dt, task, object_mass), limits)
+
+
+def effort_rows_of(effort_map: tuple[np.ndarray, np.ndarray], limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_effort_rows` from the step's effort map (A, offset): tau = A x + offset."""
+    A, offset = effort_map
     bound = EFFORT_SHARE * limits
     return np.vstack([A, -A]), np.concatenate([bound - offset, bound + offset])
 

@@ -1,0 +1,133 @@
+"""Constraints of the sets at rest, over one step of motion: the constraint seam's rows compiled
+over ``carry``'s step variable.
+
+``carry`` solves one quadratic program a step over the reduced velocities x of the step. A
+constraint written for the problems at rest (:mod:`mobmanip.terms.constraints`) gives rows over
+their variables at the step's configuration; over one step they are rows over x:
+
+- velocity problem: its ``x`` is the step's x, and the object's velocity ``v`` follows from the
+  rigid grasp, ``v = (W^T)^+ J_u x``;
+- acceleration problem: ``xdot = (x - x_prev) / dt`` and ``tau = A x + offset``, the efforts of
+  the paper's policy with the velocity terms at the previous step's rates (carry's own effort
+  rows, :func:`mobmanip.motion.carry_step._effort_rows`).
+
+What cannot be written over x alone is refused, naming the constraint and what it asks: rows over
+the hands' wrenches ``h`` or the object's acceleration ``a``, variables of its own (the floor's
+contact forces: the floor has its own model in motion, :mod:`mobmanip.motion.carry_floor`),
+equalities, and terms added to the problem's equations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArgumentError
+from ..terms.builder import MeasureTerms
+from ..terms.constraints.base import Constraint, ConstraintRows
+
+#: The variables of each problem a step's rows may use.
+STEP_VARIABLES = {"velocity": ("x", "v"), "acceleration": ("xdot", "tau")}
+
+
+@dataclass(frozen=True)
+class StepRows:
+    """Rows ``G x <= h`` over one step's reduced velocities, with one label per row."""
+
+    G: np.ndarray
+    h: np.ndarray
+    labels: tuple[str, ...]
+
+    @classmethod
+    def none(cls, nx: int) -> StepRows:
+        return cls(np.zeros((0, nx)), np.zeros(0), ())
+
+
+def check_constraints(constraints: Sequence[Constraint]) -> tuple[Constraint, ...]:
+    """The constraints as a tuple, each a :class:`Constraint` and not the floor.
+
+    Raises:
+        ArgumentError: something else, or the floor (given as ``carry``'s ``floor``).
+    """
+    from ..terms.constraints.floor import Floor
+
+    out = tuple(constraints)
+    for constraint in out:
+        if not isinstance(constraint, Constraint):
+            raise ArgumentError(f"constraints must be Constraint objects, got {type(constraint).__name__}")
+        if isinstance(constraint, Floor):
+            raise ArgumentError("the floor in motion is carry's floor= (a CarryFloor), not the floor of the sets")
+    return out
+
+
+def joins_a_step(rows: ConstraintRows) -> None:
+    """Whether a constraint's rows can be written over one step's x (module docstring).
+
+    Raises:
+        ArgumentError: naming the constraint and what keeps it out.
+    """
+    allowed = STEP_VARIABLES[rows.problem]
+    reasons = []
+    if rows.variables:
+        reasons.append(f"it declares variables of its own ({', '.join(rows.variables)})")
+    other = sorted(set(rows.G) - set(allowed))
+    if other:
+        reasons.append(f"its rows use {', '.join(other)}")
+    if rows.E or len(rows.e) or rows.object_E or rows.couplings or rows.shifts:
+        reasons.append("it adds equalities or terms to the problem's equations")
+    if reasons:
+        raise ArgumentError(
+            f"constraint {rows.name!r} cannot join a step of motion: {'; '.join(reasons)} (a step's rows are over "
+            f"{' and '.join(allowed)} of the {rows.problem} problem)"
+        )
+
+
+def step_rows(
+    constraints: Sequence[Constraint],
+    terms: MeasureTerms,
+    x_prev: np.ndarray,
+    dt: float,
+    effort_map: tuple[np.ndarray, np.ndarray],
+) -> StepRows:
+    """The constraints' rows over the step's x (see the module's docstring).
+
+    Args:
+        constraints: the constraints (:func:`check_constraints`).
+        terms: the terms at rest at the step's configuration.
+        x_prev: the previous step's reduced velocities, (nx,).
+        dt: the step (s).
+        effort_map: (A, offset) with the step's efforts tau = A x + offset.
+
+    Raises:
+        ArgumentError: a constraint that cannot join a step (:func:`joins_a_step`).
+    """
+    nx = len(x_prev)
+    if not constraints:
+        return StepRows.none(nx)
+    A, offset = effort_map
+    G_rows: list[np.ndarray] = []
+    h_rows: list[np.ndarray] = []
+    labels: list[str] = []
+    for constraint in constraints:
+        rows = constraint.rows(terms)
+        joins_a_step(rows)
+        G = np.zeros((len(rows.h), nx))
+        h = np.asarray(rows.h, dtype=float).copy()
+        for name, block in rows.G.items():
+            block = np.asarray(block, dtype=float)
+            if name == "x":
+                G += block
+            elif name == "v":
+                G += block @ np.linalg.pinv(terms.W.T) @ terms.J_u
+            elif name == "xdot":
+                G += block / dt
+                h += block @ x_prev / dt
+            else:  # tau
+                G += block @ A
+                h -= block @ offset
+        G_rows.append(G)
+        h_rows.append(h)
+        labels.extend(rows.labels or [f"{rows.name} row {i}" for i in range(len(h))])
+    return StepRows(np.vstack(G_rows), np.concatenate(h_rows), tuple(labels))

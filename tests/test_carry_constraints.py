@@ -1,0 +1,113 @@
+"""Constraints of the sets at rest kept by ``carry`` at every step (issue 36, item 1, for carry):
+a constraint's rows over the efforts or the reduced velocities compiled over the step's rates
+(:mod:`mobmanip.motion.step_constraints`), checked on the toy constraints of
+``tests/toy_constraint.py``.
+
+The reference for the effort share is the robot itself with every effort limit scaled: carry's
+own effort rows keep the efforts within EFFORT_SHARE of the limits, so the toy's share s is the
+scaled robot's own rows when its limits are scaled by s / EFFORT_SHARE.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mobmanip
+from hostile_util import assert_one_line_error, run_cli
+from mobmanip.errors import ArgumentError, CarryFailed
+from mobmanip.motion.carry import EFFORT_SHARE, ObjectPath, carry, read_path
+from mobmanip.terms.constraints import Constraint, ConstraintRows
+from mobmanip.terms.constraints.options import (
+    ConstraintOption,
+    register_constraint_option,
+    unregister_constraint_option,
+)
+from toy_constraint import EffortShare, SpeedShare
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The example line (2 m in 12 s) after a self-motion of at most 5 s: on the paper robot the
+#: self-motion asks 13.6 % of an effort limit and 10.6 % of a speed limit, the path 0.5 % of an
+#: effort limit.
+PATH = read_path(ROOT / "examples" / "carry_line.csv")
+PREPARE = 5.0
+
+
+@pytest.fixture(scope="module")
+def unconstrained(robot):
+    return carry(robot, PATH, prepare=PREPARE)
+
+
+def test_an_effort_share_is_the_robot_with_its_limits_scaled(robot, unconstrained):
+    share = 0.08
+    constrained = carry(robot, PATH, prepare=PREPARE, constraints=(EffortShare(share),))
+    scaled = robot.with_limits(effort={n: v * share / EFFORT_SHARE for n, v in robot.joint_effort_limits.items()})
+    reference = carry(scaled, PATH, prepare=PREPARE)
+    for ours, theirs in ((constrained.preparation, reference.preparation), (constrained.motion, reference.motion)):
+        assert ours.q.shape == theirs.q.shape
+        np.testing.assert_allclose(ours.q, theirs.q, rtol=0, atol=1e-9)
+    n = min(len(constrained.preparation.q), len(unconstrained.preparation.q))
+    assert np.max(np.abs(constrained.preparation.q[:n] - unconstrained.preparation.q[:n])) > 1e-3  # it binds
+    assert constrained.summary()["constraints"] == [{"name": "effort_share", "share": share, "problem": "acceleration"}]
+
+
+def test_a_speed_share_bounds_every_rate_of_the_qp_motion_and_binds(robot, unconstrained):
+    """The self-motion climbs at up to 10.6 % of a speed limit; with the share at 5 % it keeps to
+    it (the line itself needs 21.9 % of a wheel's speed, so the object is held still after it)."""
+    share = 0.05
+    used = np.max(np.abs(unconstrained.preparation.x) / robot.velocity_limits)
+    assert used > share  # without it the self-motion goes faster
+    still = ObjectPath(np.array([0.0, 1.0]), np.zeros((2, 2)))
+    constrained = carry(robot, still, prepare=PREPARE, constraints=(SpeedShare(share),))
+    for run in (constrained.preparation, constrained.motion):
+        ratio = np.abs(run.x) / robot.velocity_limits
+        assert ratio.max() <= share * (1.0 + 1e-9)
+    assert np.abs(constrained.preparation.x / robot.velocity_limits).max() == pytest.approx(share, rel=1e-6)
+
+
+def test_a_step_the_constraint_makes_infeasible_names_its_row(robot):
+    with pytest.raises(CarryFailed) as failed:
+        carry(robot, PATH, prepare=0.0, constraints=(EffortShare(0.001),))
+    diagnosis = failed.value.diagnosis
+    assert diagnosis.kind == "constraint"
+    assert "at 0.001 of its effort limit" in diagnosis.joint
+    assert "a constraint binds" in str(failed.value)
+
+
+@dataclass(frozen=True)
+class ObjectAccelerationCap(Constraint):
+    """A row over the object's acceleration: not over a step's rates alone."""
+
+    name: str = "object_acceleration_cap"
+    problem: str = "acceleration"
+
+    def rows(self, terms) -> ConstraintRows:
+        m = terms.W.shape[0]
+        return ConstraintRows(self.name, self.problem, G={"a": np.eye(m)}, h=np.ones(m))
+
+
+def test_a_constraint_that_cannot_join_a_step_is_refused_before_any_work(robot):
+    with pytest.raises(ArgumentError, match="'object_acceleration_cap' cannot join a step of motion: its rows use a"):
+        carry(robot, PATH, constraints=(ObjectAccelerationCap(),))
+    with pytest.raises(ArgumentError, match="the floor in motion is carry's floor="):
+        carry(robot, PATH, constraints=(mobmanip.Floor(mu=0.5),))
+
+
+def test_the_command_takes_a_registered_option(tmp_path, capfd):
+    register_constraint_option(ConstraintOption("--effort-share", EffortShare, "keep every effort within a share"))
+    try:
+        out = tmp_path / "run"
+        code, _, err = run_cli(capfd, "carry", "planar_dual_arm", "--path", ROOT / "examples" / "carry_line.csv",
+                               "--prepare", "0", "--effort-share", "0.5", "--out", out)  # fmt: skip
+        assert code == 0, err
+        document = json.loads((out / "carry.json").read_text())
+        assert document["constraints"] == [{"name": "effort_share", "share": 0.5, "problem": "acceleration"}]
+        code, _, err = run_cli(capfd, "carry", "planar_dual_arm", "--path", ROOT / "examples" / "carry_line.csv",
+                               "--fastest", "--effort-share", "0.5")  # fmt: skip
+        assert_one_line_error(code, err, "carry --fastest times the motion with retime", "effort_share")
+    finally:
+        unregister_constraint_option("--effort-share")
