@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from hostile_util import assert_one_line_error, run_cli
+from hostile_util import run_cli
 from mobmanip.errors import ArgumentError, CarryFailed
 from mobmanip.motion.carry import EFFORT_SHARE, ObjectPath, carry, read_path
 from mobmanip.terms.constraints import Constraint, ConstraintRows
@@ -106,8 +106,52 @@ def test_the_command_takes_a_registered_option(tmp_path, capfd):
         assert code == 0, err
         document = json.loads((out / "carry.json").read_text())
         assert document["constraints"] == [{"name": "effort_share", "share": 0.5, "problem": "acceleration"}]
-        code, _, err = run_cli(capfd, "carry", "planar_dual_arm", "--path", ROOT / "examples" / "carry_line.csv",
-                               "--fastest", "--effort-share", "0.5")  # fmt: skip
-        assert_one_line_error(code, err, "carry --fastest times the motion with retime", "effort_share")
+        code, _, err = run_cli(capfd, "retime", "planar_dual_arm", out / "trajectory.csv", "--effort-share", "0.5",
+                               "--out", tmp_path / "timed")  # fmt: skip
+        assert code == 0, err
+        timed = json.loads((tmp_path / "timed" / "retime.json").read_text())
+        assert timed["constraints"] == [{"name": "effort_share", "share": 0.5, "problem": "acceleration"}]
     finally:
         unregister_constraint_option("--effort-share")
+
+
+# --------------------------------------------------------------------------- the fastest timing
+
+
+def _panda_sine(n=81):
+    """The Panda's seven joints swinging by 0.4 rad, q(s) = home + 0.4 sin(pi s), s in [0, 1]."""
+    from mobmanip.motion.trajectory import trajectory_from_samples
+
+    panda = mobmanip.load_robot("panda")
+    home = panda.hold_configuration()
+    ids = [panda.model.getJointId(name) for name in panda.reduced_velocity_names]
+    iq = [panda.model.joints[j].idx_q for j in ids]
+    s = np.linspace(0.0, 1.0, n)
+    q = np.tile(home, (n, 1))
+    q[:, iq] = home[iq] + 0.4 * np.sin(np.pi * s)[:, None]
+    x_s = 0.4 * np.pi * np.cos(np.pi * s)[:, None] * np.ones(len(iq))
+    x_ss = -0.4 * np.pi**2 * np.sin(np.pi * s)[:, None] * np.ones(len(iq))
+    return panda, trajectory_from_samples(panda, s, q, x_s, x_ss)
+
+
+@pytest.mark.parametrize(
+    ("constraint", "scaled"),
+    [(EffortShare(0.3), "effort"), (SpeedShare(0.4), "velocity")],
+    ids=["effort share", "speed share"],
+)
+def test_retime_keeps_a_share_as_the_robot_with_its_limits_scaled(constraint, scaled):
+    """retime's own rows are |tau| <= tau_max and |x| <= xdot_max, so a share s of either is the
+    robot with those limits scaled by s: the same timing, to round-off, and slower than without."""
+    from mobmanip.motion.retime import retime
+
+    panda, path = _panda_sine()
+    plain = retime(panda, path, object_mass=0.5)
+    kept = retime(panda, path, object_mass=0.5, constraints=(constraint,))
+    limits = panda.joint_effort_limits if scaled == "effort" else panda.joint_velocity_limits
+    reference = retime(panda.with_limits(**{scaled: {n: constraint.share * v for n, v in limits.items()}}), path,
+                       object_mass=0.5)  # fmt: skip
+    assert kept.duration == pytest.approx(reference.duration, rel=1e-9)
+    np.testing.assert_allclose(kept.speed, reference.speed, rtol=1e-9, atol=1e-12)
+    assert kept.duration > 1.2 * plain.duration  # it binds
+    assert "constraint" in kept.binding_kind
+    assert kept.to_dict()["constraints"] == [constraint.describe()]

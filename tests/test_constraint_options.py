@@ -133,10 +133,6 @@ def test_place_by_a_reading_honours_the_option(options, tmp_path, capfd):
 @pytest.mark.parametrize(
     ("argv", "needles"),
     [
-        (("carry", "planar_dual_arm", "--path", ROOT / "examples" / "carry_line.csv", "--fastest"),
-         ("carry --fastest times the motion with retime, which cannot honour effort_share",)),
-        (("retime", "planar_dual_arm", ROOT / "examples" / "carry_line.csv"),
-         ("retime cannot honour --effort-share (effort_share)", "times a path")),
         (("brake", "planar_dual_arm"), ("brake cannot honour --effort-share (effort_share)",)),
         (("place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "dynamic:log_volume"),
          ("place cannot honour --effort-share (effort_share)", "an ellipsoid objective ignores")),

@@ -45,7 +45,7 @@ result with `mobmanip trajectory OUT/trajectory.csv --ground --mu MU`.
 
 A constraint option registered in Python (mobmanip.terms.constraints.options, e.g. a share of
 the effort limits) is kept at every step of the QP motion, its rows written over the step's
-rates; the baseline ignores it, and --fastest refuses it (its timing cannot honour it).
+rates (and --fastest keeps it at every sample); the baseline ignores it.
 
 --out DIR writes trajectory.csv (t, platform_x, platform_y, platform_yaw, one column per joint
 as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
@@ -165,7 +165,7 @@ def objective_unit_text(result) -> str:
 
 
 def run(args) -> int:
-    from ..errors import CarryFailed, UsageError
+    from ..errors import CarryFailed
     from ..motion.carry import carry, read_path
     from ..robot.configurations import read_configuration
     from ..robot.model import load_robot
@@ -179,9 +179,6 @@ def run(args) -> int:
     _check_work(args, path)
     start = read_configuration(robot, args.start) if args.start else None
     constraints, floor_args = registered_constraints(args)
-    if constraints and args.fastest:
-        raise UsageError(f"carry --fastest times the motion with retime, which cannot honour {constraints[0].name}: "
-                         "give the constraint without --fastest")  # fmt: skip
     floor = motion_floor(floor_args, "carry")
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
@@ -239,7 +236,7 @@ def run(args) -> int:
         print_ratio("  of which the preparation gives (baseline from the prepared start / from the start posture)",
                      parts["preparation"])  # fmt: skip
         print_ratio("  and the motion gives (QP / baseline from the prepared start)", parts["motion"])
-    fastest = _fastest(robot, result, args, floor) if args.fastest else None
+    fastest = _fastest(robot, result, args, floor, constraints) if args.fastest else None
     if args.out:
         for written in carry_outputs(robot, result, args.out):
             print(f"wrote {written}")
@@ -251,7 +248,7 @@ def run(args) -> int:
     return 0
 
 
-def _fastest(robot, result, args, floor):
+def _fastest(robot, result, args, floor, constraints=()):
     """The QP motion's path at its fastest timing (:func:`mobmanip.motion.retime.retime`), printed."""
     from ..motion.retime import retime
     from ..motion.trajectory import trajectory_from_samples
@@ -259,7 +256,7 @@ def _fastest(robot, result, args, floor):
 
     motion = result.motion
     path = trajectory_from_samples(robot, motion.t, motion.q)
-    fastest = retime(robot, path, result.task, object_mass=args.object_mass, floor=floor)
+    fastest = retime(robot, path, result.task, object_mass=args.object_mass, floor=floor, constraints=constraints)
     where = "on the same floor" if floor is not None else "within the limits (no floor: --ground keeps it)"
     print(
         f"fastest timing of the QP motion's path, rest to rest, {where}: {fastest.duration:.4g} s "

@@ -369,7 +369,6 @@ def floor_constraints(args) -> tuple:
 #: it models the floor on its own).
 CANNOT_HONOUR = {
     "brake": "it stops the robot along a path, on rows only the floor has in motion",
-    "retime": "it times a path on rows only the floor has in motion",
     "referee": "it replays the floor in MuJoCo, which models no other constraint",
     "place": "an ellipsoid objective ignores every constraint beyond the joint boxes; give a measure's reading "
     "(e.g. dynamic_polytope:reach:+x)",

@@ -17,6 +17,7 @@ from .common import (
     check_trajectory_source,
     motion_floor,
     read_recorded,
+    registered_constraints,
     show_progress,
 )
 
@@ -96,7 +97,8 @@ def run(args) -> int:
     if args.trajectory is not None:  # counted before the file is parsed
         work.check(max(read_user_bytes(args.trajectory, "trajectory").count(b"\n") - 1, 0), "rows of the trajectory")
     robot = load_robot(find_spec(args.robot))
-    floor = motion_floor(args, "retime")
+    constraints, floor_args = registered_constraints(args)
+    floor = motion_floor(floor_args, "retime")
     if args.bag is not None:  # the path as recorded: its messages counted before any is decoded
         trajectory = read_recorded(robot, args, work)
     else:
@@ -105,10 +107,10 @@ def run(args) -> int:
         out = output_directory(args.out)
         for name in RETIME_FILES:
             check_output(out / name)
-    rows = path_rows(
-        robot, trajectory, args.task, object_mass=args.object_mass, floor=floor, progress=show_progress(args)
-    )
-    result = retime(robot, trajectory, args.task, object_mass=args.object_mass, floor=floor, rows=rows)
+    rows = path_rows(robot, trajectory, args.task, object_mass=args.object_mass, floor=floor,
+                     progress=show_progress(args), constraints=constraints)  # fmt: skip
+    result = retime(robot, trajectory, args.task, object_mass=args.object_mass, floor=floor, rows=rows,
+                    constraints=constraints)  # fmt: skip
     stops = None
     if args.stop_within is not None:
         stops = stops_along(robot, trajectory, args.stop_within, rows=rows)

@@ -41,8 +41,10 @@ import numpy as np
 from ..errors import ArgumentError, NumericalError, SpecError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from ..terms.builder import terms_at
 from .carry_floor import NO_TURN, CarryFloor, FloorRows, turning_row
 from .path_terms import path_terms
+from .step_constraints import check_constraints, path_timing_rows
 from .trajectory import Trajectory
 
 #: The largest speed-up of the path parameter the solver looks at, s' <= this (the original
@@ -61,8 +63,8 @@ class PathRows:
     Attributes:
         ca, cb, d: (r,) each.
         labels: what each row keeps (``"velocity NAME"``, ``"effort NAME"`` or the floor's), (r,).
-        kinds: each row's kind: ``"velocity"``, ``"effort"``, ``"tip-over"``, ``"contact"`` or
-            ``"traction"``, (r,).
+        kinds: each row's kind: ``"velocity"``, ``"effort"``, ``"tip-over"``, ``"contact"``,
+            ``"traction"`` or ``"constraint"`` (a constraint given to :func:`path_rows`), (r,).
     """
 
     ca: np.ndarray
@@ -80,6 +82,7 @@ def path_rows(
     object_mass: float | None = None,
     floor: CarryFloor | None = None,
     progress: bool = False,
+    constraints: tuple = (),
 ) -> list[PathRows]:
     """Every grid point's rows over (s'', s'^2) (see the module's docstring).
 
@@ -90,7 +93,14 @@ def path_rows(
             spec's), as :func:`mobmanip.motion.trajectory_analysis.analyze_trajectory`.
         floor: also keep the robot on its floor (as ``carry``'s floor, every platform on wheels).
         progress: a progress bar over the grid points on standard error.
+        constraints: constraints of the sets at rest kept at every grid point, their rows over the
+            reduced velocities or efforts written over (s'', s'^2)
+            (:func:`mobmanip.motion.step_constraints.path_timing_rows`; kind ``"constraint"``).
+
+    Raises:
+        ArgumentError: a constraint that cannot join a step of motion (named).
     """
+    constraints = check_constraints(constraints)
     task_space = get_task(task or robot.spec.default_task)
     mass = float(robot.spec.object_mass if object_mass is None else object_mass)
     floor_rows = None if floor is None else FloorRows.build(robot, mass, floor, floor.resolve(robot))
@@ -120,6 +130,14 @@ def path_rows(
             d.append(r - R @ resting)
             labels += floor_rows.labels
             kinds += floor_rows.kinds
+        if constraints:
+            at_rest = terms_at(robot, trajectory.q[i], task_space.name, object_mass=mass, check=False)
+            more = path_timing_rows(constraints, at_rest, x_s, trajectory.xdot[i], (T_a, T_b, static))
+            ca.append(more[0])
+            cb.append(more[1])
+            d.append(more[2])
+            labels += more[3]
+            kinds += ["constraint"] * len(more[3])
         out.append(PathRows(np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels), tuple(kinds)))
     return out
 
@@ -305,6 +323,7 @@ class Retiming:
         notes: what the user should know of the result: an end of the path where the robot is at
             rest only while it accelerates (it cannot stand still there within the rows).
         stops: braking along the path (:func:`stops_along`), when asked for.
+        constraints: the constraints kept beside the limits and the floor (their descriptions).
     """
 
     robot_name: str
@@ -321,6 +340,7 @@ class Retiming:
     floor: dict | None = None
     notes: tuple[str, ...] = ()
     stops: Stops | None = None
+    constraints: tuple[dict, ...] = ()
 
     @property
     def duration(self) -> float:
@@ -351,6 +371,7 @@ class Retiming:
             "input_duration": float(self.s[-1] - self.s[0]),
             "duration": self.duration,
             "floor": self.floor,
+            "constraints": [dict(c) for c in self.constraints],
             "notes": list(self.notes),
             "stops": None if self.stops is None else self.stops.to_dict(),
             "binding": [{"from_s": a, "to_s": b, "row": label} for a, b, label in self.binding_runs()],
@@ -369,13 +390,14 @@ def retime(
     progress: bool = False,
     rows: list[PathRows] | None = None,
     discretization: str = "interpolation",
+    constraints: tuple = (),
 ) -> Retiming:
     """The fastest timing of ``trajectory``'s path, from rest to rest, with every wheel and joint
     within its velocity and effort limits and, with ``floor``, the robot on its floor (see the
     module's docstring).
 
     Args:
-        robot, trajectory, task, object_mass, floor, progress: as :func:`path_rows`.
+        robot, trajectory, task, object_mass, floor, progress, constraints: as :func:`path_rows`.
         rows: the path's rows when already computed (:func:`path_rows`), else computed here.
         discretization: how each interval keeps the rows (:data:`DISCRETIZATIONS`): at both of its
             ends (default; TOPP-RA's "interpolation") or at its start ("collocation").
@@ -388,7 +410,8 @@ def retime(
     if not isinstance(trajectory, Trajectory):
         raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
     if rows is None:
-        rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor, progress=progress)
+        rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor, progress=progress,
+                         constraints=constraints)  # fmt: skip
     s = trajectory.t
     n = len(s)
     steps = np.diff(s)
@@ -473,6 +496,7 @@ def retime(
         trajectory=retimed,
         floor=None if floor is None else floor.describe(),
         notes=tuple(unsteady.values()),
+        constraints=tuple(c.describe() for c in check_constraints(constraints)),
     )
 
 
@@ -562,6 +586,7 @@ def stops_along(
     floor: CarryFloor | None = None,
     rows: list[PathRows] | None = None,
     discretization: str = "interpolation",
+    constraints: tuple = (),
 ) -> Stops:
     """At every sample of the path, the highest speed from which the robot can still stop within
     ``within`` metres of its platform's travel along the path, keeping every row of
@@ -576,7 +601,7 @@ def stops_along(
         within: the distance (m), > 0.
         rows: the path's rows when already computed (:func:`path_rows`), else computed here.
         discretization: as :func:`retime`'s.
-        robot, trajectory, task, object_mass, floor: as :func:`path_rows`.
+        robot, trajectory, task, object_mass, floor, constraints: as :func:`path_rows`.
 
     Raises:
         ArgumentError: a distance that is not a finite positive number; a path whose platform does
@@ -588,7 +613,7 @@ def stops_along(
     if distance[-1] <= 0.0:
         raise ArgumentError("the path's platform does not move: a stopping distance along it means nothing")
     if rows is None:
-        rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor)
+        rows = path_rows(robot, trajectory, task, object_mass=object_mass, floor=floor, constraints=constraints)
     polygons = [_polygon(r) for r in interval_rows(rows, trajectory.t, discretization)]
     steps = np.diff(trajectory.t)
     n = len(trajectory)

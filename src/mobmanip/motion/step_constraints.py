@@ -131,3 +131,71 @@ def step_rows(
         h_rows.append(h)
         labels.extend(rows.labels or [f"{rows.name} row {i}" for i in range(len(h))])
     return StepRows(np.vstack(G_rows), np.concatenate(h_rows), tuple(labels))
+
+
+def path_timing_rows(
+    constraints: Sequence[Constraint],
+    terms: MeasureTerms,
+    x_s: np.ndarray,
+    x_ss: np.ndarray,
+    efforts: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
+    """The constraints' rows at one grid point of a path's timing, over (a, b) = (s'', s'^2)
+    (:mod:`mobmanip.motion.retime`): ``ca a + cb b <= d``.
+
+    With x = x_s s' and xdot = x_s a + x_ss b, and the efforts tau = T_a a + T_b b + T_0:
+
+    - rows over ``xdot`` and ``tau`` (the acceleration problem) are linear in (a, b);
+    - a row ``g . x <= h`` over ``x`` (and ``v``, through the rigid grasp) of the velocity
+      problem reads ``(g . x_s) s' <= h`` with s' >= 0: for g . x_s > 0 and h >= 0 it is
+      ``(g . x_s)^2 b <= h^2``; for g . x_s < 0 and h < 0 it is ``-b <= -(h / g . x_s)^2``; for
+      g . x_s <= 0 and h >= 0 it always holds (no row); for g . x_s >= 0 and h < 0 no timing
+      keeps it (the row ``0 <= h``).
+
+    Args:
+        constraints: as :func:`step_rows`.
+        terms: the terms at rest at the grid point's configuration.
+        x_s, x_ss: the path's reduced velocities and accelerations in its own parameter, (nx,).
+        efforts: (T_a, T_b, T_0), each (nx,).
+
+    Raises:
+        ArgumentError: a constraint that cannot join a step (:func:`joins_a_step`).
+    """
+    T_a, T_b, T_0 = efforts
+    ca: list[np.ndarray] = []
+    cb: list[np.ndarray] = []
+    d: list[np.ndarray] = []
+    labels: list[str] = []
+    for constraint in constraints:
+        rows = constraint.rows(terms)
+        joins_a_step(rows)
+        names = rows.labels or tuple(f"{rows.name} row {i}" for i in range(len(rows.h)))
+        h = np.asarray(rows.h, dtype=float)
+        if rows.problem == "acceleration":
+            G_xdot = np.asarray(rows.G.get("xdot", np.zeros((len(h), len(x_s)))), dtype=float)
+            G_tau = np.asarray(rows.G.get("tau", np.zeros((len(h), len(x_s)))), dtype=float)
+            ca.append(G_xdot @ x_s + G_tau @ T_a)
+            cb.append(G_xdot @ x_ss + G_tau @ T_b)
+            d.append(h - G_tau @ T_0)
+            labels.extend(names)
+            continue
+        g = np.zeros(len(h))
+        for name, block in rows.G.items():
+            block = np.asarray(block, dtype=float)
+            g += block @ x_s if name == "x" else block @ (np.linalg.pinv(terms.W.T) @ terms.J_u @ x_s)
+        for k in range(len(h)):
+            if g[k] > 0.0 and h[k] >= 0.0:
+                row = (0.0, g[k] ** 2, h[k] ** 2)  # s' <= h / g
+            elif g[k] < 0.0 and h[k] < 0.0:
+                row = (0.0, -1.0, -((h[k] / g[k]) ** 2))  # s' >= h / g
+            elif h[k] < 0.0:
+                row = (0.0, 0.0, h[k])  # no timing keeps it
+            else:
+                continue  # every timing keeps it
+            ca.append(np.array([row[0]]))
+            cb.append(np.array([row[1]]))
+            d.append(np.array([row[2]]))
+            labels.append(names[k])
+    if not labels:
+        return np.zeros(0), np.zeros(0), np.zeros(0), ()
+    return np.concatenate(ca), np.concatenate(cb), np.concatenate(d), tuple(labels)
