@@ -231,6 +231,13 @@ MUTANTS: tuple[Mutant, ...] = (
         "the rate of the robot's momentum is not moved from its centre of mass to the world origin (c x p dropped)",
         "tests/test_ground_along.py",
     ),
+    _m(
+        "F17", "floor", FLOOR,
+        "-math.sin(s) * math.cos(u), -math.sin(s) * math.sin(u), -math.cos(s)",
+        "math.sin(s) * math.cos(u), math.sin(s) * math.sin(u), -math.cos(s)",
+        "on a ramp, gravity's part along the floor points uphill instead of downhill",
+        "tests/test_floor_slope.py", "tests/test_brake.py",
+    ),
     # ----- robot descriptions: URDF, MJCF, vendor flaws, xacro
     _m(
         "D01", "descriptions", URDF,
@@ -491,6 +498,13 @@ MUTANTS: tuple[Mutant, ...] = (
         "inertia = P_t + J_u.T @ W_pinv @ M_o @ Wt_pinv @ J_u",
         "inertia = P_t",
         "the team's efforts leave out the object's inertia reflected through the grasp (a dropped term)",
+        "tests/test_team_carry.py",
+    ),
+    _m(
+        "T13", "teams", TEAM_EFFORT,
+        "    bound = EFFORT_SHARE * limits\n",
+        "    bound = limits\n",
+        "the team's efforts are held to their whole limits: the 1 % reserve is dropped",
         "tests/test_team_carry.py",
     ),
     # ----- base placement

@@ -142,10 +142,13 @@ def test_tiago_stops_in_mujoco_as_predicted(sense, slope):
     floor = Floor(mu=0.5, slope=slope)
     stop = hardest_stop(robot, q, sense, 1.0, 2.0, floor)
     info = braking_set(robot, q, 2.0, floor).model["floor"]
+    # the ramp rises along +x: in its axes gravity has g sin s downhill (-x) and g cos s into it
+    s = math.radians(slope)
+    gravity = 9.81 * np.array([-math.sin(s), 0.0, -math.cos(s)]) if slope else None
     held = mobmanip.analyze(robot, q, "planar", object_mass=2.0, measures=("kinematic",)).held_object
     referee = referee_package.build(
         robot, q, contacts=referee_package.contacts_of_floor(info), object=referee_package.object_for_referee(held),
-        grasp="level", mu=0.5, gravity=info.get("gravity"),
+        grasp="level", mu=0.5, gravity=gravity,
     )  # fmt: skip
     S = robot.null_space(q)
     n = robot.platform.n_reduced

@@ -191,3 +191,26 @@ def test_a_file_larger_than_its_reported_size_is_refused_not_cut_short():
     with pytest.raises(ArgumentError, match="grew to more than the 16 bytes"):
         read_bounded(path, limit=16, refuse=ArgumentError)
     assert len(read_bounded(path, limit=1 << 20, refuse=ArgumentError)) > 16  # within the limit: read whole
+
+
+def test_a_file_that_grows_after_its_size_is_checked_is_refused_not_cut_short(tmp_path, monkeypatch):
+    """Anywhere (not only where procfs reports 0 bytes): a file of exactly the limit passes the
+    size check and then grows by four bytes before it is read. The reader refuses it, naming the
+    limit, rather than returning its first 16 bytes; a file of exactly the limit that stays so is
+    read whole."""
+    from mobmanip.support import reading
+
+    path = tmp_path / "growing.txt"
+    path.write_bytes(b"0123456789abcdef")
+    checked = reading.file_refusal
+
+    def check_then_grow(where, *, limit):
+        reason = checked(where, limit=limit)
+        with open(where, "ab") as handle:
+            handle.write(b"more")
+        return reason
+
+    assert reading.read_bounded(path, limit=16, refuse=ArgumentError) == b"0123456789abcdef"
+    monkeypatch.setattr(reading, "file_refusal", check_then_grow)
+    with pytest.raises(ArgumentError, match="grew to more than the 16 bytes"):
+        reading.read_bounded(path, limit=16, refuse=ArgumentError)

@@ -73,6 +73,40 @@ def test_cells_beyond_the_reach_bound_are_empty_and_the_bound_holds(paper, paper
     assert distance[reachable].max() >= bound - 0.36
 
 
+def test_the_reach_bound_is_the_links_plus_the_grasp_offset_from_the_urdf(paper):
+    """The reach bound as documented (per arm: the first joint's horizontal distance from the
+    platform origin, the distances between successive joint origins, the grasp offset), from the
+    URDF's numbers written here: each arm's first joint stands on the platform's vertical (0 m),
+    then three links of 0.5 m. In a hold with the hands 1 m apart (right arm at -90, +90, 0 deg:
+    its tip at (1.0, -0.5) m, 0.3 m up, by the planar angle sums; the left mirrored at 0.4 m) the
+    centre is (1.0, 0, 0.35) and the offset from hand to centre is sqrt(0.5^2 + 0.05^2) m.
+
+    That offset is what lets one arm carry the centre past its own tip: the right arm stretched
+    (tip at 1.5 m, here from Pinocchio's forward kinematics) with the hold turned by -90 deg so the
+    offset points outward holds the centre 2.0 m from the platform, which a bound of the links
+    alone (1.5 m) does not cover. (In a two-handed hold the centre is the hands' mean, within the
+    links' reach; the bound documents one arm's.)"""
+    import pinocchio as pin
+
+    half = math.pi / 2
+    joints = {"arm_right_1_joint": -half, "arm_right_2_joint": half, "arm_left_1_joint": half,
+              "arm_left_2_joint": -half}  # fmt: skip
+    reference = paper.configuration((0.0, 0.0, 0.0), joints)
+    offset = np.array([0.0, -0.5, -0.05])  # the right hand minus the centre: (1, -0.5, 0.3) - (1, 0, 0.35)
+    expected = 0.5 + 0.5 + 0.5 + float(np.linalg.norm(offset))
+    assert reach_bound(paper, reference) == pytest.approx(expected, abs=1e-12)
+
+    data = paper.model.createData()
+    stretched = paper.configuration((0.0, 0.0, 0.0), {})
+    pin.framesForwardKinematics(paper.model, data, stretched)
+    tip = data.oMf[paper.arms[0].frame_id].translation
+    np.testing.assert_allclose(tip, [1.5, 0.0, 0.3], atol=1e-12)
+    c, s = math.cos(-half), math.sin(-half)
+    centre = tip - np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ offset
+    np.testing.assert_allclose(centre, [2.0, 0.0, 0.35], atol=1e-12)
+    assert math.hypot(centre[0], centre[1]) <= reach_bound(paper, reference) + 1e-12
+
+
 def test_map_files(paper_map, tmp_path):
     """NPZ arrays equal the map's; the CSV has one row per cell with the same values (empty where
     unreachable); the heat map is a PNG image."""

@@ -43,6 +43,29 @@ def test_the_grounded_reach_at_each_placement_is_the_independent_lps(tmp_path):
         assert float(row["grounded_reach"]) == pytest.approx(ref, rel=1e-6)
 
 
+def test_a_grounded_direction_keeps_its_sign():
+    """Along -y the grounded reach at the placement is the independent LP's along (0, -1), written
+    here, and not its reach along +y. The placement turns the platform to face -y with the object
+    at its side, so world y is the platform's fore and aft, where the arms' folded postures are not
+    symmetric: on the floor the two reaches differ (21.5 and 23.9 m/s^2). Along +-x they agree to
+    rounding there, and a direction's sign read the wrong way could not be seen."""
+    from mobmanip.placement.site import Site, run_site
+
+    document = {"robot": "planar_dual_arm", "starts": 2, "positions": [[0.8, 0.0, 0.35]],
+                "objective": "dynamic:capacity:+x", "grounded": {"mu": 0.5, "direction": "-y"}}  # fmt: skip
+    result = run_site(Site.from_document(document))
+    assert result.reasons == ("",)
+    robot = mobmanip.load_robot("planar_dual_arm")
+    row = result.table[0]
+    q = np.array([row[result.columns.index(f"q.{name}")] for name in robot.coordinate_names])
+    held = mobmanip.analyze(robot, q, "planar", measures=("kinematic",)).held_object
+    problem = build_problem(robot, q, "planar", held, casters=PAPER_CASTERS)
+    down = straight_line(problem, np.array([0.0, -1.0]), mode="friction", mu=0.5, springs=True).value
+    up = straight_line(problem, np.array([0.0, 1.0]), mode="friction", mu=0.5, springs=True).value
+    assert abs(up - down) > 0.05 * down > 0.5  # the sign shows
+    assert row[result.columns.index("grounded_reach")] == pytest.approx(down, rel=1e-6)
+
+
 def test_where_the_robot_cannot_stand_the_reason_says_why(tmp_path):
     """The kinematic capacity along +x stretches the arms: the centre of mass (robot and 2 kg held
     level) leaves the core of the six equally stiff contacts, so the set on the floor is empty. It
