@@ -57,7 +57,8 @@ def _stl_points(data: bytes) -> np.ndarray | None:
 def _obj_points(text: str) -> np.ndarray | None:
     """The ``v X Y Z`` vertices of a Wavefront OBJ file that its faces use (all of them when it
     has no faces)."""
-    vertices, used = [], []
+    vertices: list[list[str]] = []
+    used: list[int] = []
     for line in text.splitlines():
         if line.startswith("v "):
             vertices.append(line.split()[1:4])
