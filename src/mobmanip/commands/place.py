@@ -220,6 +220,9 @@ def _run(args, executor) -> int:
         from ..robot.collision import SelfCollision
 
         collision = SelfCollision(robot, margin=args.avoid_collision)
+    # With --map the map comes first: its best cells are more starts of the placement, which is
+    # then at least as good as any cell of its own map.
+    grid = _compute_map(args, robot, target, extent, yaw, collision, reference, executor) if args.map else None
     result = place(
         robot,
         target,
@@ -232,6 +235,7 @@ def _run(args, executor) -> int:
         reference=reference,
         hold_turn=yaw,
         collision=collision,
+        seeds=() if grid is None else grid.best_cells(MAP_SEEDS),
     )
     x, y, heading = result.platform
     print(f"robot {robot.name}: object at ({target[0]:g}, {target[1]:g}, {target[2]:g}) m, {result.objective.name}")
@@ -241,7 +245,8 @@ def _run(args, executor) -> int:
     print(f"{result.objective.name} = {result.value:.6g}")
     _warn_if_collapsed(robot, result, args)
     if result.start_value is not None:
-        print(f"best start (reference hold placed at the object): {result.start_value:.6g}")
+        where = "reference hold placed at the object" + (", or one of the map's best cells" if grid else "")
+        print(f"best start ({where}): {result.start_value:.6g}")
     print(
         f"{result.evaluations} measure evaluations, {len(result.runs)} starts, hold error {result.residual:.1e}, "
         f"{result.seconds:.2f} s"
@@ -282,8 +287,8 @@ def _run(args, executor) -> int:
 
         path = placement_figure(robot, result, args.figure, args.task, object_mass=args.mass, decoupled=args.decoupled)
         print(f"wrote {path}")
-    if args.map:
-        _write_map(args, robot, target, result, extent, yaw, collision, reference, executor)
+    if grid is not None:
+        _write_map(args, grid, result)
     if args.view or args.export:
         _show(args, robot, result)
     return 0
@@ -436,14 +441,17 @@ def _check_extent_reaches(args, robot, target, extent, reference) -> None:
         )
 
 
-def _write_map(args, robot, target, result, extent, yaw, collision, reference, executor) -> None:
+#: The map's best cells that seed ``place --map`` (each one more start).
+MAP_SEEDS = 3
+
+
+def _compute_map(args, robot, target, extent, yaw, collision, reference, executor):
+    """The placement map --map asks for (:func:`mobmanip.placement.map_jobs.run_map`)."""
     import numpy as np
 
     from ..placement.map_jobs import MapJob, run_map
     from ..placement.maps import default_extent
-    from ..support.files import output_directory
     from .common import robot_for_workers
-    from .outputs import placement_map_outputs
 
     x0, x1, y0, y1 = extent if extent is not None else default_extent(robot, target)
     xs, ys = np.linspace(x0, x1, args.map_cells), np.linspace(y0, y1, args.map_cells)
@@ -460,14 +468,23 @@ def _write_map(args, robot, target, result, extent, yaw, collision, reference, e
         hold_turn=yaw,
         avoid_collision=None if collision is None else collision.margin,
     )
-    grid = run_map(job, executor, progress=show_progress(args))
+    return run_map(job, executor, progress=show_progress(args))
+
+
+def _write_map(args, grid, result) -> None:
+    import numpy as np
+
+    from ..support.files import output_directory
+    from .outputs import placement_map_outputs
+
     written = placement_map_outputs(grid, output_directory(args.map, "--map"))
     value, q, _ = grid.best()
     reachable = int(np.sum(~np.isnan(grid.values)))
     print(
         f"map: {reachable} of {grid.values.size} platform positions hold the object; best {value:.6g} at "
         f"x {q[0]:.4f} m, y {q[1]:.4f} m, heading {math.degrees(math.atan2(q[3], q[2])):.2f} deg "
-        f"(place: {result.value:.6g}); {grid.evaluations} evaluations, {grid.seconds:.2f} s"
+        f"(place, started also from the map's {MAP_SEEDS} best cells: {result.value:.6g}); "
+        f"{grid.evaluations} evaluations, {grid.seconds:.2f} s"
     )
     print(f"wrote {', '.join(str(path) for path in written)}")
 

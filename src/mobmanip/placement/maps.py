@@ -94,6 +94,19 @@ class PlacementMap:
         index = np.unravel_index(k, self.values.shape)
         return float(self.values[index]), self.configurations[index], tuple(int(i) for i in index)
 
+    def best_cells(self, count: int) -> list[tuple[np.ndarray, float]]:
+        """The ``count`` best cells that hold the object, best first, each (configuration, hold
+        turn psi): starts for :func:`mobmanip.placement.optimize.place` (``seeds``)."""
+        order = np.argsort(np.where(np.isnan(self.values), -np.inf, self.values), axis=None)[::-1]
+        cells = []
+        for k in order[: max(int(count), 0)]:
+            index = np.unravel_index(int(k), self.values.shape)
+            if np.isnan(self.values[index]):
+                break
+            turn = 0.0 if self.hold_turn is None else float(self.hold_turn[index])
+            cells.append((self.configurations[index].copy(), turn))
+        return cells
+
     def best_over_headings(self) -> tuple[np.ndarray, np.ndarray]:
         """(values, headings) per position, (Ny, Nx): the best layer's where headings are fixed."""
         if self.headings is None:

@@ -34,6 +34,7 @@ import functools
 import logging
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -505,6 +506,7 @@ def place(
     tolerance: float = 1e-9,
     hold_turn: float | None = None,
     collision: SelfCollision | None = None,
+    seeds: Sequence[tuple[np.ndarray, float]] = (),
 ) -> Placement:
     """The platform pose and arm posture that hold the object at ``target`` and maximise ``objective``.
 
@@ -525,6 +527,9 @@ def place(
             orientation (the reference hold's turned by psi); default free.
         collision: a :class:`mobmanip.robot.collision.SelfCollision`: keep its shape pairs at least its
             margin apart (inequality constraints with their distance gradients); default none.
+        seeds: more starts, each (configuration (nq,), hold turn psi): e.g. the best cells of a
+            map of this request (:func:`mobmanip.placement.maps.placement_map`), so that the
+            placement is at least as good as the best of them (a run never ends below its start).
 
     Returns:
         The best placement found (see :class:`Placement`).
@@ -538,6 +543,7 @@ def place(
     target = check_target(target)
     if isinstance(starts, bool) or not isinstance(starts, int) or starts < 1:
         raise ArgumentError(f"starts must be a positive integer, got {starts!r}")
+    seeds = tuple(seeds)
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to choose")
     problem = PlacementProblem.of_objective(
@@ -565,6 +571,11 @@ def place(
         if hold_turn is not None:  # the object's orientation fixed: the arms turn it from the start's
             z0[-1] = hold_turn
         firsts.append(z0)
+    for q_seed, psi in seeds:
+        z0 = problem.variables(robot.check_configuration(q_seed), float(psi))
+        if hold_turn is not None:
+            z0[-1] = hold_turn
+        firsts.append(z0)
 
     def run(z0: np.ndarray) -> tuple[float | None, np.ndarray | None, tuple[float, np.ndarray, float] | None]:
         """(start value, start configuration, (value, z, residual) of the run's result or None)."""
@@ -582,6 +593,10 @@ def place(
         value, ok = problem.value_at(problem.configuration(z))
         if residual > CONSTRAINT_TOLERANCE or not ok:
             return start_value, z0, None
+        if start_value is not None and start_value > value:  # SLSQP ended below its (held) start
+            start_residual = problem.residual(z0)
+            if start_residual <= CONSTRAINT_TOLERANCE:
+                return start_value, z0, (float(start_value), z0, start_residual)
         return start_value, z0, (float(value), z, residual)
 
     # The starts run together: their evaluations are batched, each start's run as on its own.
