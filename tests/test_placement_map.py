@@ -238,3 +238,32 @@ def test_place_is_never_worse_than_its_maps_best_cell(name, objective, mass, tar
         assert found.value >= best - 1e-9 * abs(best), (target, found.value, best)
         again, _, ok = GradientEvaluator(robot, objective, object_mass=mass)(found.q)
         assert ok and again == pytest.approx(found.value, rel=1e-9)
+
+
+def test_gaps_next_to_holds_are_solved_again_and_hold_placed_at_their_cell():
+    """Issue 39: TIAGo++'s map marked a cell as holding nothing where a placement confined to it
+    holds the object. The gaps next to held cells are solved again from the held neighbours: each
+    cell filled is a hold (an independent `place` confined to 2 cm around the cell holds the
+    object there, no better than the cell's value by more than its search's tolerance), and the
+    cell nearest place's optimum holds the object."""
+    from mobmanip.placement.maps import default_extent, fill_gaps
+    from mobmanip.placement.optimize import PlacementProblem, Region
+
+    robot = mobmanip.load_robot("tiago_dual")
+    target, objective = np.array([1.5, 0.5, 0.85]), "dynamic:log_volume"
+    x0, x1, y0, y1 = default_extent(robot, target)
+    xs, ys = np.linspace(x0, x1, 9), np.linspace(y0, y1, 9)  # 15 x 15 has 3 such gaps, 9 x 9 one
+    grid = placement_map(robot, target, objective, xs, ys, object_mass=1.0, rows_per_band=3, fill=False)
+    before = np.isnan(grid.values).copy()
+    problem = PlacementProblem.of_objective(robot, objective, None, target, None, None, object_mass=1.0)
+    assert fill_gaps(grid, problem) >= 1
+    filled = np.argwhere(before & ~np.isnan(grid.values))
+    for iy, ix in filled:
+        region = Region(xs[ix] - 0.01, xs[ix] + 0.01, ys[iy] - 0.01, ys[iy] + 0.01)
+        alone = place(robot, target, objective, object_mass=1.0, region=region, starts=4)
+        assert alone.value > -np.inf  # it holds the object there
+        assert grid.values[iy, ix] >= alone.value - 0.05 * abs(alone.value)  # the gap's value is no poor one
+    best = place(robot, target, objective, object_mass=1.0, seeds=grid.best_cells(3))
+    x, y, _ = best.platform
+    nearest = (int(np.argmin(np.abs(ys - y))), int(np.argmin(np.abs(xs - x))))
+    assert not np.isnan(grid.values[nearest])

@@ -15,6 +15,7 @@ cells' evaluations; the cells come out the same. The band boundaries are fixed b
 from __future__ import annotations
 
 import concurrent.futures as cf
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -22,7 +23,8 @@ import numpy as np
 
 from ..errors import ArgumentError, UnreachableObjectError
 from ..robot.model import robot_in_process
-from .maps import PlacementMap, placement_map
+from .maps import PlacementMap, fill_gaps, placement_map
+from .optimize import PlacementProblem, check_turn
 
 #: Rows of the grid per task by default.
 ROWS_PER_TASK = 3
@@ -91,6 +93,7 @@ def _rows(job: MapJob, start: int, stop: int, progress=None) -> PlacementMap | N
             hold_turn=job.hold_turn,
             collision=collision,
             rows_per_band=job.rows_per_task,
+            fill=False,  # the whole map's gaps are filled once its bands are together
             progress=progress,
         )
     except UnreachableObjectError:
@@ -145,7 +148,7 @@ def run_map(job: MapJob, executor: cf.Executor | None = None, progress: bool = F
         values[rows], heading[rows], configurations[rows] = band.values, band.heading, band.configurations
         if band.hold_turn is not None:
             turns[rows] = band.hold_turn
-    return PlacementMap(
+    grid = PlacementMap(
         objective=first.objective,
         target=first.target,
         x=np.array(job.x, dtype=float),
@@ -159,3 +162,20 @@ def run_map(job: MapJob, executor: cf.Executor | None = None, progress: bool = F
         hold_turn=turns,
         task=first.task,
     )
+    problem = _problem(job)
+    fill_gaps(grid, problem, None if job.hold_turn is None else check_turn(job.hold_turn))
+    return dataclasses.replace(grid, evaluations=grid.evaluations + problem.ev.evaluations,
+                               seconds=time.perf_counter() - started)  # fmt: skip
+
+
+def _problem(job: MapJob) -> PlacementProblem:
+    """The placement problem of the job's request (in this process), for filling the map's gaps."""
+    robot = robot_in_process(job.robot)
+    collision = None
+    if job.avoid_collision is not None:
+        from ..robot.collision import SelfCollision
+
+        collision = SelfCollision(robot, margin=job.avoid_collision)
+    reference = None if job.reference is None else np.array(job.reference)
+    return PlacementProblem.of_objective(robot, job.objective, job.task, np.array(job.target), None, reference,
+                                         collision, object_mass=job.object_mass, decoupled=job.decoupled)  # fmt: skip

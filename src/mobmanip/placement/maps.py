@@ -18,6 +18,7 @@ one layer per heading.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -179,6 +180,7 @@ def placement_map(
     collision: SelfCollision | None = None,
     rows_per_band: int | None = None,
     progress: Callable[[int], None] | None = None,
+    fill: bool = True,
 ) -> PlacementMap:
     """The best achievable objective at every platform position (x, y) of a grid.
 
@@ -198,6 +200,9 @@ def placement_map(
             row before), so a band's cells are the same whether the band is solved here with
             the others or alone (e.g. on a cluster worker). All bands' rows advance together.
         progress: called with 1 after each cell.
+        fill: then solve again, from every solved neighbour, each cell within reach that found no
+            hold (:func:`fill_gaps`); off for a band of a larger map (the map fills its gaps once
+            its bands are together).
 
     Raises:
         ArgumentError: a malformed target or grid; a fixed platform.
@@ -284,6 +289,9 @@ def placement_map(
         hold_turn=turns,
         task=task.name,
     )
+    if fill and layers is None:
+        fill_gaps(out, problem, turn, max_iterations, tolerance)
+        out = dataclasses.replace(out, evaluations=evaluator.evaluations, seconds=time.perf_counter() - started)
     if np.all(np.isnan(values)):
         raise UnreachableObjectError(
             f"no platform position of the map holds the object at {target.tolist()} m "
@@ -292,10 +300,67 @@ def placement_map(
     return out
 
 
-def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance):
+#: Rounds of :func:`fill_gaps` (each solves every gap next to a cell that holds the object).
+FILL_ROUNDS = 3
+#: The neighbours (the best ones) that seed a gap in :func:`fill_gaps`.
+FILL_SEEDS = 3
+
+
+def fill_gaps(grid: PlacementMap, problem: PlacementProblem, turn=None, max_iterations: int = 60,
+              tolerance: float = 1e-7) -> int:  # fmt: skip
+    """Solve again each cell of a heading-free map that found no hold but lies within reach and
+    next to one that did, seeded from its best :data:`FILL_SEEDS` such neighbours only (the
+    bands' continuation seeded it from one or two, and from the reference hold): a gap can be
+    where continuation failed, not where nothing holds the object (TIAGo++ at (1.5, 0.5, 0.85) m
+    had a gap where a placement confined to the cell held it). In place; cells in row-major
+    order; after the first round only the gaps next to a cell filled in the round before, for
+    :data:`FILL_ROUNDS` rounds at most. Returns the cells filled.
+
+    Raises:
+        ArgumentError: a map with fixed headings.
+    """
+    if grid.headings is not None:
+        raise ArgumentError("gaps are filled in maps whose heading is free")
+    reach = reach_bound(problem.robot, problem.q_ref)
+    ny, nx = grid.values.shape
+    turns = grid.hold_turn if grid.hold_turn is not None else np.zeros_like(grid.values)
+    filled = 0
+    fresh: set[tuple[int, int]] | None = None  # the cells filled in the round before (None: every cell)
+    for _ in range(FILL_ROUNDS):
+        found: set[tuple[int, int]] = set()
+        for iy in range(ny):
+            for ix in range(nx):
+                p = np.array([grid.x[ix], grid.y[iy]])
+                if not np.isnan(grid.values[iy, ix]) or np.hypot(*(grid.target[:2] - p)) > reach:
+                    continue
+                around = [(jy, jx) for jy in range(iy - 1, iy + 2) for jx in range(ix - 1, ix + 2)
+                          if 0 <= jy < ny and 0 <= jx < nx and not np.isnan(grid.values[jy, jx])]  # fmt: skip
+                if not around or (fresh is not None and not fresh.intersection(around)):
+                    continue  # no neighbour holds it, or none new since this gap was last tried
+                around.sort(key=lambda n: -grid.values[n])  # the best neighbours first, at most FILL_SEEDS
+                seeds = [problem.variables(grid.configurations[n], float(turns[n])) for n in around[:FILL_SEEDS]]
+                result = _solve_cell(problem, p, None, turn, seeds, max_iterations, tolerance, own=False)
+                if result is None:
+                    continue
+                value, z = result
+                grid.values[iy, ix] = value
+                grid.heading[iy, ix] = math.atan2(math.sin(z[2]), math.cos(z[2]))
+                turns[iy, ix] = z[-1]
+                grid.configurations[iy, ix] = problem.configuration(z)
+                found.add((iy, ix))
+        filled += len(found)
+        if not found:
+            break
+        fresh = found
+    return filled
+
+
+def _solve_cell(
+    problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, seeds, max_iterations, tolerance, own=True
+):
     """(value, z) of the best run at platform position p, or None where nothing holds the object:
-    from each seed (a neighbouring cell's optimum), then from the reference hold at four
-    platform headings; the first run that holds the object is kept."""
+    from each seed (a neighbouring cell's optimum), then (``own``) from the reference hold at
+    four platform headings; the first run that holds the object is kept."""
     bounds = problem.bounds()
     if turn is not None:
         bounds[-1] = (turn, turn)
@@ -306,7 +371,7 @@ def _solve_cell(problem: PlacementProblem, p: np.ndarray, fixed_heading, turn, s
     toward = math.atan2(problem.target[1] - p[1], problem.target[0] - p[0])
     hold = problem.hold
     starts: list = []
-    for offset in (0.0, math.pi / 2, -math.pi / 2, math.pi):
+    for offset in (0.0, math.pi / 2, -math.pi / 2, math.pi) if own else ():
         toward_hold = toward - math.atan2(hold.center[1], hold.center[0])
         heading = toward_hold + offset if fixed_heading is None else fixed_heading
         z = problem.start(heading, np.random.default_rng(len(starts)))
