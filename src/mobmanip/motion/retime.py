@@ -260,6 +260,8 @@ def _polygon(rows: PathRows) -> Polygon:
     moving = scale > 0.0
     ca, cb, d = (v[moving] / scale[moving] for v in (rows.ca, rows.cb, rows.d))
     d_tol = d + ROW_TOLERANCE * (1.0 + np.abs(d))
+    if not len(d):  # nothing moves at this grid point (a path standing still): no row cuts
+        return polygon
     for _ in range(len(d) + 1):
         a, b = np.array([vertex[0] for vertex in polygon]), np.array([vertex[1] for vertex in polygon])
         broken = (ca[:, None] * a + cb[:, None] * b).max(axis=1) - d_tol
