@@ -211,7 +211,8 @@ def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_along_
 
 def test_a_ramp_from_the_command_line(tmp_path):
     """``analyze --slope 5 --uphill 90``: the JSON's reaches are the Python API's and its model names
-    the ramp; the summary says it; a ramp where it is not modelled (``--hold``, ``carry``) and an
+    the ramp; the summary says it; a ramp where it is not modelled (``--hold``), ``carry`` on a ramp
+    holding the object level (modelled at rest only) and an
     ``--uphill`` without a slope are one-line errors; ``check_physics.py --slope`` replays the
     maxima in MuJoCo with gravity leaning, and each holds."""
     import json
@@ -241,7 +242,7 @@ def test_a_ramp_from_the_command_line(tmp_path):
         (("analyze", "tiago_dual", "--uphill", "30"), "--uphill says where a ramp rises: give its --slope too"),
         (("analyze", "tiago_dual", "--slope", "45"), "the floor's slope must be from 0 to 30 deg, got 45.0"),
         (("analyze", "tiago_dual", "--slope", "5", "--hold", "0.02"), "a ramp (--slope) is not modelled there"),
-        (("carry", "planar_dual_arm", "--path", str(path), "--slope", "3"), "carry keeps a level floor"),
+        (("carry", "planar_dual_arm", "--path", str(path), "--slope", "3", "--level"), "--level (the object held"),
     ):
         bad = cli(*args)
         assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and message in bad.stderr, bad.stderr

@@ -341,7 +341,6 @@ def test_command_writes_a_trajectory_that_trajectory_reads(tiago, tmp_path, capf
     "options, message",
     [
         (["--level"], "--level"),
-        (["--slope", "5"], "--slope"),
         (["--load", "any"], "--load any"),
         (["--zmp-margin", "-1"], "--zmp-margin"),
     ],

@@ -41,7 +41,10 @@ load as equally stiff springs) and, unless --no-traction, each driven wheel's tr
 its friction pyramid (mu: the spec's [support] mu, else 0.5). These are rows of the QP, exact for
 the step's floor wrench with the velocity terms at the previous step's rates; a step they make
 infeasible is reported with the floor's row that binds. The baseline ignores the floor. Check a
-result with `mobmanip trajectory OUT/trajectory.csv --ground --mu MU`.
+result with `mobmanip trajectory OUT/trajectory.csv --ground --mu MU`. --slope DEG (--uphill DEG)
+puts the floor on a ramp: the path's x, y and z are the ramp's own (z its normal) and gravity
+leans in the QP motion's efforts and floor rows (the objective and the baseline are as on a
+level floor; `trajectory --ground` checks a level floor only).
 
 A constraint option registered in Python (mobmanip.terms.constraints.options, e.g. a share of
 the effort limits) is kept at every step of the QP motion, its rows written over the step's

@@ -474,9 +474,9 @@ def add_motion_floor_options(parser: argparse.ArgumentParser) -> None:
 
 def motion_floor(args, command: str):
     """The floor of a motion (:class:`mobmanip.motion.carry_floor.CarryFloor`) that --ground, --mu,
-    --no-traction, --reserve and --zmp-margin ask for, or ``None``. The options a motion's floor
-    does not model (a ramp, the object held level, a load shared any way) are refused, naming
-    ``command``, never dropped.
+    --no-traction, --reserve, --zmp-margin, --slope and --uphill ask for, or ``None``. The options
+    a motion's floor does not model (the object held level, a load shared any way) are refused,
+    naming ``command``, never dropped.
 
     Raises:
         UsageError: a bad --zmp-margin or an option the motion's floor does not model.
@@ -490,11 +490,7 @@ def motion_floor(args, command: str):
     if args.load not in (None, "auto", "compliant"):
         raise UsageError(f"{command}'s floor shares the load as equally stiff contacts (compliant); --load {args.load} "
                          "is for the capacity sets")  # fmt: skip
-    chosen = floor_constraints(args)
-    if chosen and chosen[0].slope:
-        raise UsageError(
-            f"{command} keeps a level floor: a ramp (--slope) is modelled in the capacity sets, not in {command}"
-        )
+    chosen = floor_constraints(args)  # the ramp's angles checked once, by the floor at rest
     if chosen and chosen[0].level:
         raise UsageError(
             f"{command} keeps the object as its task holds it: --level (the object held level on the floor) is "
@@ -503,8 +499,9 @@ def motion_floor(args, command: str):
     if not chosen and margin is None:
         return None
     mu = None if args.no_traction else ("spec" if args.mu is None else args.mu)
+    slope, uphill = (chosen[0].slope, chosen[0].uphill) if chosen else (0.0, 0.0)
     return CarryFloor(mu=mu, zmp_margin=DEFAULT_ZMP_MARGIN if margin is None else margin,
-                      reserve=float(args.reserve or 0.0))  # fmt: skip
+                      reserve=float(args.reserve or 0.0), slope=slope, uphill=uphill)  # fmt: skip
 
 
 def polytope_measures(wanted: tuple[str, ...] = ()) -> tuple[str, ...]:

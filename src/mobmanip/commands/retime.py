@@ -30,7 +30,9 @@ velocity and effort limits (efforts of the motion with the object held between t
 paper's policy) and, with --ground, the floor of `carry --ground`: the zero-moment point
 --zmp-margin inside the support polygon, every support loaded (with --reserve R: at least R of
 its equal share), each driven wheel within friction (mu; --no-traction: no traction rows). The
-floor covers every platform on wheels (a skid-steer's path must keep its heading). Solved exactly
+floor covers every platform on wheels (a skid-steer's path must keep its heading). --slope DEG
+(--uphill DEG) puts it on a ramp: the path's x, y and z are the ramp's own (z its normal), gravity
+leans in the efforts and the floor's rows. Solved exactly
 on the samples by reachability analysis (as TOPP-RA): a constant s'' between samples.
 
 --out DIR writes retimed.csv (the path at its fastest timing, an input of `mobmanip trajectory`),
@@ -145,7 +147,9 @@ def run(args) -> int:
 def _floor_text(floor, robot) -> str:
     mu = floor.resolve(robot)[1]
     traction = "no traction limit" if mu is None else f"traction mu {mu:g}"
-    return f"on the floor (zero-moment point {floor.zmp_margin:g} m inside, {traction}, reserve {floor.reserve:g})"
+    ramp = f", a ramp of {floor.slope:g} deg rising towards {floor.uphill:g} deg" if floor.slope else ""
+    return (f"on the floor (zero-moment point {floor.zmp_margin:g} m inside, {traction}, reserve {floor.reserve:g}"
+            f"{ramp})")  # fmt: skip
 
 
 def binding_shares(result) -> str:

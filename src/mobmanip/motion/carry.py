@@ -429,6 +429,8 @@ def _run(
     effort_limits = np.asarray(robot.effort_limits, dtype=float)
     window = max(1, int(round(PREPARE_WINDOW / dt)))
     resolved = None if floor is None or method == "pinv" else floor.resolve(robot)
+    # on a ramp the efforts hold the leaning weights too (the floor's axes are the world's)
+    gravity = None if resolved is None or not floor.slope else floor.gravity()
     with progress_bar(n, desc=f"carry {method}", unit="step", show=progress) as bar:
         for k in range(n):
             bar.update(1)
@@ -457,7 +459,7 @@ def _run(
                     norm = float(np.linalg.norm(np.sqrt(D2) * g))
                     weight = gain / norm if norm > 0 else 0.0
                 lo, hi = velocity_bounds(robot, q, h)
-                effort_map = _effort_map(robot, q, x_prev, h, task, object_mass)
+                effort_map = _effort_map(robot, q, x_prev, h, task, object_mass, gravity)
                 G, g_hi = effort_rows_of(effort_map, effort_limits)
                 extra = None
                 if constraints:
@@ -483,7 +485,9 @@ def _run(
                     elif constraint is not None:
                         diagnosis = CarryDiagnosis(k, float(times[k]), constraint, "constraint")
                     else:
-                        diagnosis = diagnose_step(robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]))
+                        diagnosis = diagnose_step(
+                            robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]), gravity
+                        )
                     partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
                                        hand[: k + 1])  # fmt: skip
                     raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)

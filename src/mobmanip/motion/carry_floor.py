@@ -26,6 +26,14 @@ N(x) = (z_f F_x - M_y, M_x + z_f F_y), also affine. So, exactly for that wrench:
 - a skid-steer turns only by sliding its wheels sideways, so on the floor it keeps its heading
   (:data:`NO_TURN`: two rows hold its turn rate at zero).
 
+On a ramp (``CarryFloor(slope=, uphill=)``) the world's axes are the ramp's, as for the floor at
+rest (:class:`mobmanip.terms.constraints.floor.Floor`): the platform moves in the ramp's plane
+(z = z_f), z is its normal and gravity leans downhill (:meth:`CarryFloor.gravity`). The rows
+above then hold unchanged on the ramp: F_z is the normal load, N the moment about the ramp's
+plane (the zero-moment point is the ramp's), the traction is (F_x, F_y, M_z) in its plane; the
+weights' lean enters through the wrench (and the efforts), and the reserve is a share of the
+weight's normal part, (m + m_o) g cos s.
+
 Every platform that rolls on wheels is covered (differential drive, skid-steer, steered,
 omnidirectional on ``[support] wheels``); a fixed base is refused.
 
@@ -46,8 +54,7 @@ from ..platforms.base import BASE_V
 from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
-from ..terms.constraints.floor import compliant_sharing, pyramid_faces
-from ..terms.grasp import GRAVITY
+from ..terms.constraints.floor import check_ramp, compliant_sharing, pyramid_faces, ramp_gravity
 from .ground import floor_wrench
 
 #: Default distance (m) the carry keeps its zero-moment point inside the support polygon.
@@ -66,6 +73,13 @@ class CarryFloor:
             weight, each wheel uses at most 1 - reserve of its friction pyramid.
         faces: faces of the friction pyramid (default: the support's).
         support: the contacts (default: the robot's own).
+        slope: the floor's inclination (deg, 0 to 30): a ramp, with the conventions and checks of
+            :class:`mobmanip.terms.constraints.floor.Floor`'s. The platform's plane is the ramp's,
+            so the world's x, y and z are the ramp's own axes (z its normal) and gravity leans
+            (:meth:`gravity`): the zero-moment point is taken on the ramp's plane, the supports'
+            loads along its normal, the wheels' traction in its plane, and the efforts hold the
+            leaning weights.
+        uphill: the direction (deg, in the floor's x, y) in which the ramp rises; 0: along +x.
     """
 
     mu: float | str | None = "spec"
@@ -73,6 +87,8 @@ class CarryFloor:
     reserve: float = 0.0
     faces: int | None = None
     support: Support | None = None
+    slope: float = 0.0
+    uphill: float = 0.0
 
     def __post_init__(self):
         if self.mu != "spec":
@@ -88,6 +104,12 @@ class CarryFloor:
             raise ArgumentError(f"the zero-moment point's margin must be a finite distance >= 0 m, got {margin!r}")
         if not (isinstance(self.reserve, (int, float)) and 0.0 <= self.reserve < 1.0):
             raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
+        check_ramp(self.slope, self.uphill, "the carry floor")
+
+    def gravity(self) -> np.ndarray:
+        """Gravity in the floor's axes (m/s^2), (3,): straight down on a level floor, leaning
+        downhill on a ramp (:func:`mobmanip.terms.constraints.floor.ramp_gravity`)."""
+        return ramp_gravity(self.slope, self.uphill)
 
     def resolve(self, robot: Robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces for ``robot``."""
@@ -108,7 +130,10 @@ class CarryFloor:
         return support, (None if mu is None else float(mu)), int(faces)
 
     def describe(self) -> dict:
-        return {"mu": self.mu, "zmp_margin": self.zmp_margin, "reserve": self.reserve, "load": "compliant"}
+        out = {"mu": self.mu, "zmp_margin": self.zmp_margin, "reserve": self.reserve, "load": "compliant"}
+        if self.slope:
+            out |= {"slope": self.slope, "uphill": self.uphill, "gravity": self.gravity().tolist()}
+        return out
 
 
 def floor_rows(
@@ -136,7 +161,7 @@ def floor_rows(
     a0, a1 = np.zeros(6), np.zeros((6, robot.nx))
     a0[rows] = to_object @ (terms.drift - terms.grasp_drift)
     a1[rows] = to_object @ terms.J_u
-    offset, linear = floor_wrench(robot, q, x_prev, mass_o, a0, a1)
+    offset, linear = floor_wrench(robot, q, x_prev, mass_o, a0, a1, gravity=floor.gravity())
     # over x: wrench = w0 + w1 x (xdot = (x - x_prev) / h)
     w1 = linear / h
     w0 = offset - w1 @ x_prev
@@ -241,7 +266,8 @@ def _platform_rows(
     n = len(points)
     system = np.vstack([np.ones(n), points.T, compliant_sharing(points, support.stiffness)])
     fn = np.linalg.inv(system)[:, :3] @ np.vstack([Fz, N])  # fn = fn @ wrench
-    least = floor.reserve * (float(robot_mass(robot)) + object_mass) * float(-GRAVITY[2]) / n
+    # the weight's share along the floor's normal (on a ramp: m g cos s), as the floor at rest keeps it
+    least = floor.reserve * (float(robot_mass(robot)) + object_mass) * float(-floor.gravity()[2]) / n
     for c, contact in enumerate(support.contacts):
         R_rows.append(-fn[c])
         r_rows.append(-least)

@@ -124,6 +124,7 @@ def diagnose_step(
     b: np.ndarray,
     step: int,
     t: float,
+    gravity: np.ndarray | None = None,
 ) -> CarryDiagnosis:
     """Which limit makes the step's QP infeasible: each limit of each wheel and joint relaxed
     alone (position bounds widened to the velocity limits, a velocity limit lifted, an effort
@@ -136,12 +137,13 @@ def diagnose_step(
         task, object_mass: as :func:`carry`.
         J_u, b: the step's tracking equality J_u x = b.
         step, t: the step's index and time (s), reported.
+        gravity: gravity in the floor's axes, (3,) m/s^2 (default: a level floor), as :func:`_effort_map`.
     """
     nx = robot.nx
     vel = np.asarray(robot.velocity_limits, dtype=float)
     effort = np.asarray(robot.effort_limits, dtype=float)
     lo, hi = velocity_bounds(robot, q, h)
-    A, offset = _effort_map(robot, q, x_prev, h, task, object_mass)
+    A, offset = _effort_map(robot, q, x_prev, h, task, object_mass, gravity)
     H = np.diag(1.0 / vel**2)
     c = np.zeros(nx)
     names = robot.reduced_velocity_names
@@ -291,11 +293,12 @@ def effort_rows_of(effort_map: tuple[np.ndarray, np.ndarray], limits: np.ndarray
     return np.vstack([A, -A]), np.concatenate([bound - offset, bound + offset])
 
 
-def _effort_map(robot, q, x_prev, dt, task, object_mass) -> tuple[np.ndarray, np.ndarray]:
-    """(A, offset) with the step's efforts tau = A x + offset (see :func:`_effort_rows`)."""
+def _effort_map(robot, q, x_prev, dt, task, object_mass, gravity=None) -> tuple[np.ndarray, np.ndarray]:
+    """(A, offset) with the step's efforts tau = A x + offset (see :func:`_effort_rows`); on a ramp
+    ``gravity`` is the floor's (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`), default straight down."""
     from .in_motion import motion_terms
 
-    terms = motion_terms(robot, q, x_prev, task, object_mass=object_mass)
+    terms = motion_terms(robot, q, x_prev, task, object_mass=object_mass, gravity=gravity)
     c = terms.torques(np.zeros(robot.nx))
     # d tau / d xdot = Q^-1 (P + J_u^T W^+ M_o (W^T)^+ J_u)
     inertia = terms.P + terms.J_u.T @ terms.W_pinv @ terms.M_o @ np.linalg.pinv(terms.W.T) @ terms.J_u

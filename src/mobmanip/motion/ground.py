@@ -64,6 +64,8 @@ def floor_wrench(
     object_mass: float,
     object_acceleration: np.ndarray,
     object_acceleration_rate: np.ndarray,
+    *,
+    gravity: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The floor's resultant wrench on the robot and its object, affine in the reduced
     accelerations: (offset (6,), linear (6, nx)) with [force; moment about the world origin] =
@@ -74,8 +76,13 @@ def floor_wrench(
         object_mass: the object's mass (kg), held between the hands.
         object_acceleration, object_acceleration_rate: the object's 6-D acceleration (linear, then
             angular; world) as ``object_acceleration + object_acceleration_rate @ xdot``, (6,) and (6, nx).
+        gravity: gravity in the floor's axes (m/s^2), (3,); default straight down (a level floor).
+            On a ramp the world's axes are the ramp's (z its normal) and gravity leans
+            (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`).
     """
-    offset, linear, _ = floor_wrench_terms(robot, q, x, object_mass, object_acceleration, object_acceleration_rate)
+    offset, linear, _ = floor_wrench_terms(
+        robot, q, x, object_mass, object_acceleration, object_acceleration_rate, gravity=gravity
+    )
     return offset, linear
 
 
@@ -86,10 +93,12 @@ def floor_wrench_terms(
     object_mass: float,
     object_acceleration: np.ndarray,
     object_acceleration_rate: np.ndarray,
+    *,
+    gravity: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`floor_wrench`'s (offset, linear) and the offset's weight part alone, (6,): the
     wrench at rest (the offset less every velocity term and the given object acceleration)."""
-    g = np.asarray(GRAVITY, dtype=float)
+    g = np.asarray(GRAVITY if gravity is None else gravity, dtype=float)
     model, data = robot.model, robot.data
     mass = float(pin.computeTotalMass(model))
     S = robot.null_space(q)
@@ -128,6 +137,7 @@ def ground_along(
     *,
     object_mass: float | None = None,
     support: Support | None = None,
+    gravity: np.ndarray | None = None,
 ) -> GroundAlong:
     """The zero-moment point and stability margin at every sample (see the module's docstring).
 
@@ -140,6 +150,7 @@ def ground_along(
         task: task-space name (default: the spec's).
         object_mass: the object held between the hands (kg; default: the spec's).
         support: the contacts (default: the robot's own, :func:`mobmanip.robot.support.robot_support`).
+        gravity: gravity in the floor's axes, (3,) (default: a level floor), as :func:`floor_wrench`.
     """
     task = get_task(task or robot.spec.default_task)
     support = robot_support(robot) if support is None else support
@@ -152,7 +163,7 @@ def ground_along(
     z_floor = support.floor_z
     for i in range(n):
         q, x, xdot = trajectory.q[i], trajectory.x[i], trajectory.xdot[i]
-        offset, linear = floor_wrench(robot, q, x, mass_o, full[i], np.zeros((6, robot.nx)))
+        offset, linear = floor_wrench(robot, q, x, mass_o, full[i], np.zeros((6, robot.nx)), gravity=gravity)
         wrench = offset + linear @ xdot
         force, moment = wrench[:3], wrench[3:]
         normal[i] = force[2]

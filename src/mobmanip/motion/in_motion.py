@@ -40,6 +40,7 @@ from ..errors import ConfigurationError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.ellipsoid import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
+from ..terms.constraints.floor import weight_lean
 from ..terms.dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
 from ..terms.grasp import HeldObject, checked_object_mass, skew
 
@@ -159,6 +160,7 @@ def motion_terms(
     object_mass: float | None = None,
     held_object: HeldObject | None = None,
     decoupled: bool = False,
+    gravity: np.ndarray | None = None,
 ) -> MotionTerms:
     """The terms of the measures at configuration q moving with reduced velocity x.
 
@@ -169,6 +171,9 @@ def motion_terms(
         task, object_mass, held_object, decoupled: as :func:`mobmanip.analysis.analyze`. The
             default object sits between the hands, its grasp offsets moving with them; an
             explicit object's offsets turn with the object's angular velocity.
+        gravity: gravity in the floor's axes (m/s^2), (3,); default straight down. On a ramp
+            (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`) the world's axes are the
+            ramp's and the weights of robot and object lean: xi, xi_rest and g_o take the lean.
 
     Raises:
         ConfigurationError: q or x of the wrong size or not finite.
@@ -203,6 +208,7 @@ def motion_terms(
     hand_linear = np.array(hand_linear)
     obj = held_object if held_object is not None else HeldObject.between(positions, float(mass))
     W = obj.grasp_matrix(task)
+    lean = np.zeros(model.nv) if gravity is None else weight_lean(robot, q, gravity)  # a ramp's, in g(q)
     v_o = np.linalg.lstsq(W.T, J_u @ x, rcond=None)[0]
     omega = np.zeros(3)
     for i, r in enumerate(task.rows):
@@ -225,15 +231,15 @@ def motion_terms(
         drift=drift,
         P=P,
         Q=robot.Q,
-        xi=dyn.xi,
-        xi_rest=-S.T @ g,
+        xi=dyn.xi - S.T @ lean,
+        xi_rest=-S.T @ (g + lean),
         held_object=obj,
         W=W,
         W_rate=W_rate,
         v_o=v_o,
         M_o=obj.inertia_matrix(task),
         c_o=c_full[task.index],
-        g_o=obj.gravity_vector(task),
+        g_o=obj.gravity_vector(task) if gravity is None else obj.gravity_vector(task, gravity),
         velocity_limits=np.asarray(robot.velocity_limits, dtype=float),
         effort_limits=np.asarray(robot.effort_limits, dtype=float),
     )

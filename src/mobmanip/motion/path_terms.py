@@ -28,6 +28,7 @@ from ..engine.stacked_linalg import cross3
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace
 from ..support.progress import progress_bar
+from ..terms.constraints.floor import weight_lean
 from ..terms.grasp import GRAVITY, checked_object_mass
 from .trajectory import Trajectory
 
@@ -82,11 +83,17 @@ def path_terms(
     *,
     wrench: bool = False,
     progress: bool = False,
+    gravity: np.ndarray | None = None,
 ) -> PathTerms:
     """The efforts (and, with ``wrench``, the floor's wrench) at every sample of ``trajectory``'s
     path, over (s'', s'^2) (see the module's docstring). The object is held between the hands as
     :meth:`mobmanip.terms.grasp.HeldObject.between` makes it (a sphere reaching the farthest hand).
+    ``gravity``: gravity in the floor's axes, (3,) m/s^2, default straight down; on a ramp
+    (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`) the weights of robot and object lean
+    in the efforts and in the floor's wrench alike.
     """
+    g = np.asarray(GRAVITY if gravity is None else gravity, dtype=float)
+    leans = gravity is not None and bool(np.any(g != np.asarray(GRAVITY, dtype=float)))
     model, data = robot.model, robot.data
     mass_o = checked_object_mass(object_mass)
     n, nv, nx, k = len(trajectory), model.nv, robot.nx, len(robot.arms)
@@ -111,6 +118,8 @@ def path_terms(
             gravity[i] = pin.computeGeneralizedGravity(model, data, q)
             force_a[i] = pin.rnea(model, data, q, zero, v) - gravity[i]
             force_b[i] = pin.rnea(model, data, q, v, S_i @ x_ss + turning) - gravity[i]
+            if leans:  # the ramp's lean of g(q) (the efforts that hold the robot still there)
+                gravity[i] += weight_lean(robot, q, g)
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
             for a, frame in enumerate(frames):
@@ -151,7 +160,7 @@ def path_terms(
     spin = np.zeros((n, 6))
     spin[:, 3:] = cross3(omega, np.einsum("nij,nj->ni", inertia, omega))
     g_o = np.zeros(6)
-    g_o[:3] = -mass_o * np.asarray(GRAVITY, dtype=float)
+    g_o[:3] = -mass_o * g
 
     # the object's acceleration a_o = acc_a a + acc_b b, and its wrench
     acc_a = np.einsum("nij,nj->ni", to_object, np.einsum("nij,nj->ni", J_u, x_s))
@@ -172,7 +181,6 @@ def path_terms(
     # the floor's wrench: the robot's momentum rate and the object's, less the weight of both
     full_a, full_b = np.zeros((n, 6)), np.zeros((n, 6))
     full_a[:, rows], full_b[:, rows] = acc_a, acc_b
-    g = np.asarray(GRAVITY, dtype=float)
     mass = float(pin.computeTotalMass(model))
     rate_a = np.einsum("nij,nj->ni", A_G @ S, x_s)  # momentum rate per s'' (about the centre of mass)
     rate_b = np.einsum("nij,nj->ni", A_G @ S, x_ss) + momentum_0

@@ -91,7 +91,8 @@ def path_rows(
         trajectory: the path, its time stamps the path parameter s.
         task, object_mass: the task space and the object held between the hands (default: the
             spec's), as :func:`mobmanip.motion.trajectory_analysis.analyze_trajectory`.
-        floor: also keep the robot on its floor (as ``carry``'s floor, every platform on wheels).
+        floor: also keep the robot on its floor (as ``carry``'s floor, every platform on wheels);
+            on a ramp (``floor.slope``) the efforts and the floor's wrench take its leaning gravity.
         progress: a progress bar over the grid points on standard error.
         constraints: constraints of the sets at rest kept at every grid point, their rows over the
             reduced velocities or efforts written over (s'', s'^2)
@@ -106,7 +107,9 @@ def path_rows(
     floor_rows = None if floor is None else FloorRows.build(robot, mass, floor, floor.resolve(robot))
     if floor_rows is not None:
         _check_no_turn(robot, trajectory)
-    terms = path_terms(robot, trajectory, task_space, mass, wrench=floor_rows is not None, progress=progress)
+    gravity = None if floor is None or not floor.slope else floor.gravity()  # a ramp: the weights lean
+    terms = path_terms(robot, trajectory, task_space, mass, wrench=floor_rows is not None, progress=progress,
+                       gravity=gravity)  # fmt: skip
     vlim = np.asarray(robot.velocity_limits, dtype=float)
     elim = np.asarray(robot.effort_limits, dtype=float)
     names = robot.reduced_velocity_names
@@ -257,6 +260,8 @@ def _polygon(rows: PathRows) -> Polygon:
     moving = scale > 0.0
     ca, cb, d = (v[moving] / scale[moving] for v in (rows.ca, rows.cb, rows.d))
     d_tol = d + ROW_TOLERANCE * (1.0 + np.abs(d))
+    if not len(d):  # nothing moves at this grid point (a path standing still): no row cuts
+        return polygon
     for _ in range(len(d) + 1):
         a, b = np.array([vertex[0] for vertex in polygon]), np.array([vertex[1] for vertex in polygon])
         broken = (ca[:, None] * a + cb[:, None] * b).max(axis=1) - d_tol

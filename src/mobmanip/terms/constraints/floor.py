@@ -127,6 +127,45 @@ LEVEL_WRENCHES = "level_wrenches"
 _Equations = tuple[dict[str, np.ndarray], np.ndarray]
 
 
+def check_ramp(slope, uphill, who: str) -> None:
+    """Refuse a ramp the floor does not model: ``slope`` (deg) a finite angle from 0 to
+    :data:`MAX_SLOPE`, ``uphill`` (deg) a finite angle; ``who`` names the floor in the message
+    (``"the floor"``: "the floor's slope must be ...").
+
+    Raises:
+        ArgumentError: either angle not a finite number, or the slope out of range.
+    """
+    for value, what in ((slope, "slope"), (uphill, "uphill direction")):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ArgumentError(f"{who}'s {what} must be a finite angle in degrees, got {value!r}")
+    if not 0.0 <= slope <= MAX_SLOPE:
+        raise ArgumentError(f"{who}'s slope must be from 0 to {MAX_SLOPE:g} deg, got {slope!r}")
+
+
+def ramp_gravity(slope: float, uphill: float) -> np.ndarray:
+    """Gravity in a ramp's axes (m/s^2), (3,): the platform's plane is the ramp's (z its normal),
+    the ramp rises ``slope`` deg towards ``uphill`` deg from its +x, so gravity leans downhill:
+    g (-sin s cos u, -sin s sin u, -cos s); straight down on a level floor (slope 0). The one home
+    of the lean for the floor at rest (:meth:`Floor.gravity`) and in motion
+    (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`)."""
+    if slope == 0.0:
+        return np.array([0.0, 0.0, -_G])
+    s, u = math.radians(slope), math.radians(uphill)
+    return _G * np.array([-math.sin(s) * math.cos(u), -math.sin(s) * math.sin(u), -math.cos(s)])
+
+
+def weight_lean(robot: Robot, q: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """What a leaning ``gravity`` (the floor's axes, (3,) m/s^2; :func:`ramp_gravity`) adds to the
+    robot's generalized gravity forces g(q) (Pinocchio's, gravity straight down), (nv,):
+    g(q) = -m J_c^T g, so the lean adds -m J_c^T (gravity - g_level). Zeros on a level floor.
+    Updates ``robot.data``'s centre of mass."""
+    lean = np.asarray(gravity, dtype=float) - np.array([0.0, 0.0, -_G])
+    if not lean.any():
+        return np.zeros(robot.model.nv)
+    J_c = pin.jacobianCenterOfMass(robot.model, robot.data, q)
+    return -float(pin.computeTotalMass(robot.model)) * (J_c.T @ lean)
+
+
 def _skew(r: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
@@ -189,23 +228,16 @@ class Floor(Constraint):
             raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
         if self.load not in LOADS:
             raise ArgumentError(f"the floor's load must be one of {', '.join(LOADS)}, got {self.load!r}")
-        for value, what in ((self.slope, "slope"), (self.uphill, "uphill direction")):
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ArgumentError(f"the floor's {what} must be a finite angle in degrees, got {value!r}")
+        check_ramp(self.slope, self.uphill, "the floor")
         if not isinstance(self.level, bool):
             raise ArgumentError(f"the floor's level must be True or False, got {self.level!r}")
         tol = self.level_tolerance
         if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not (math.isfinite(tol) and tol > 0.0):
             raise ArgumentError(f"the floor's level tolerance must be a positive number (m/s^2, rad/s^2), got {tol!r}")
-        if not 0.0 <= self.slope <= MAX_SLOPE:
-            raise ArgumentError(f"the floor's slope must be from 0 to {MAX_SLOPE:g} deg, got {self.slope!r}")
 
     def gravity(self) -> np.ndarray:
         """Gravity in the floor's axes (m/s^2), (3,): straight down on a level floor."""
-        if self.slope == 0.0:
-            return np.array([0.0, 0.0, -_G])
-        s, u = math.radians(self.slope), math.radians(self.uphill)
-        return _G * np.array([-math.sin(s) * math.cos(u), -math.sin(s) * math.sin(u), -math.cos(s)])
+        return ramp_gravity(self.slope, self.uphill)
 
     def resolve(self, robot: Robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces this floor uses for ``robot``."""
@@ -354,8 +386,7 @@ class Floor(Constraint):
         shifts = {}
         if self.slope:  # the weights lean with the ramp: the reduced dynamics' and the object's own
             lean = gravity - np.array([0.0, 0.0, -_G])
-            J_c = pin.jacobianCenterOfMass(robot.model, robot.data, q)
-            shifts["dynamics"] = mass * S.T @ (J_c.T @ lean)  # xi = m S^T J_c^T g
+            shifts["dynamics"] = -S.T @ weight_lean(robot, q, gravity)  # xi = -S^T g(q)
             shifts["object"] = np.r_[-object_mass * lean, np.zeros(3)][rows]  # g_o = -m_o g
         return shifts
 
