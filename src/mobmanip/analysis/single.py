@@ -26,7 +26,7 @@ from ..sets.taskset import TaskSet
 from ..terms.builder import MeasureTerms, assemble_terms, terms_at
 from ..terms.constraints.base import Constraint
 from ..terms.dynamics import decouple, placed_end_effectors
-from ..terms.grasp import HeldObject, checked_object_mass
+from ..terms.grasp import HeldObject, object_mass_of
 
 
 @dataclass(frozen=True)
@@ -258,9 +258,7 @@ def default_object(robot: Robot, q: np.ndarray, mass: float | None = None) -> He
 
     With one arm the end effector itself is the task point (W = I).
     """
-    mass = robot.spec.object_mass if mass is None else mass
-    checked_object_mass(mass)
-    return HeldObject.between(_end_effectors(robot, q), float(mass))
+    return HeldObject.between(_end_effectors(robot, q), object_mass_of(robot, mass))
 
 
 def _end_effectors(robot: Robot, q: np.ndarray) -> np.ndarray:
@@ -320,8 +318,7 @@ def analyze(
     q = robot.check_configuration(q)
     task = get_task(task or robot.spec.default_task)
     if held_object is None:
-        mass = robot.spec.object_mass if object_mass is None else object_mass
-        checked_object_mass(mass)
+        mass = object_mass_of(robot, object_mass)
     else:
         mass = held_object.mass
         if held_object.offsets.shape != (len(robot.arms), 3):

@@ -72,7 +72,7 @@ def _obj_points(text: str) -> np.ndarray | None:
     index = np.array(used, dtype=np.int64)
     index = np.where(index < 0, len(points) + index, index - 1)  # 1-based, negative from the end
     if index.min() < 0 or index.max() >= len(points):
-        raise ValueError("a face names a vertex the mesh does not have")
+        return None  # a face names a vertex the mesh does not have
     return points[np.unique(index)]
 
 
@@ -172,7 +172,7 @@ def _geometry_positions(geometry, strip) -> np.ndarray | None:
         return points
     index = np.unique(np.concatenate(used))
     if len(index) and (index.min() < 0 or index.max() >= len(points)):
-        raise ValueError("a face names a vertex the mesh does not have")
+        return None  # a face names a vertex the mesh does not have
     return points[index]
 
 

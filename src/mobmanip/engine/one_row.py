@@ -11,7 +11,7 @@ from ..errors import ModelError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.ellipsoid import Ellipsoid
-from ..terms.grasp import HeldObject
+from ..terms.grasp import HeldObject, object_mass_of
 from .compiled import kernel_available, run_kernel
 from .numpy_path import dynamic_fast, kinematic_fast
 from .probed import Workspace
@@ -108,7 +108,7 @@ def evaluate_one(
             raise TaskError(
                 f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
             )
-    mass = held_object.mass if held_object is not None else (robot.spec.object_mass if mass is None else mass)
+    mass = held_object.mass if held_object is not None else object_mass_of(robot, mass)
     setup, ws = _single_setup(robot, task, mass)
     t = chunk_terms(setup, q[None, :], ws)
     m = setup.m

@@ -16,7 +16,7 @@ from ..platforms import a_platform
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..support.tolerances import RANK_RTOL
-from ..terms.grasp import GRAVITY, checked_object_mass
+from ..terms.grasp import GRAVITY, checked_object_mass, object_mass_of
 from .probed import ProbedModel
 
 
@@ -93,7 +93,7 @@ class BatchSetup:
         positions: bool = False,
     ):
         task = get_task(task or robot.spec.default_task)
-        mass = robot.spec.object_mass if object_mass is None else object_mass
+        mass = object_mass_of(robot, object_mass)
         mass = checked_object_mass(mass)  # a number within mobmanip.support.ranges.OBJECT_MASS
         self.robot = robot
         self.task = task

@@ -46,7 +46,7 @@ import numpy as np
 from ..errors import ArgumentError, MeasureError, ModelError, TaskError
 from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
-from ..terms.grasp import HeldObject, checked_object_mass
+from ..terms.grasp import HeldObject, object_mass_of
 from .adjoint import gradient_chunk
 from .derivatives import ConfigurationDerivatives, DerivativeWorkspace
 from .rank import guarded
@@ -255,8 +255,7 @@ class GradientEvaluator:
                 )
             mass = held_object.mass
         else:
-            mass = robot.spec.object_mass if object_mass is None else object_mass
-            checked_object_mass(mass)
+            mass = object_mass_of(robot, object_mass)
         self.mass = float(mass)
         self.held_object = held_object
         #: W, M_o, g_o of a constant object per chunk size (:meth:`_object_terms`), with its key.

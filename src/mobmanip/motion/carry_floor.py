@@ -55,6 +55,7 @@ from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
 from ..terms.constraints.floor import check_ramp, compliant_sharing, pyramid_faces, ramp_gravity
+from ..terms.grasp import object_mass_of
 from .ground import floor_wrench
 
 #: Default distance (m) the carry keeps its zero-moment point inside the support polygon.
@@ -154,7 +155,7 @@ def floor_rows(
     from .in_motion import motion_terms
 
     resolved = floor.resolve(robot) if resolved is None else resolved
-    mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
+    mass_o = object_mass_of(robot, object_mass)
     terms = motion_terms(robot, q, x_prev, task, object_mass=mass_o)
     to_object = np.linalg.pinv(terms.W.T)  # a_o = (W^T)^+ (J_u xdot + drift - grasp drift)
     rows = list(task.rows)

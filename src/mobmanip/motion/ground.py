@@ -28,7 +28,7 @@ from ..robot.model import Robot
 from ..robot.support import Support, polygon_margin, robot_support
 from ..robot.tasks import get_task
 from ..terms.dynamics import placed_end_effectors
-from ..terms.grasp import GRAVITY, HeldObject, skew
+from ..terms.grasp import GRAVITY, HeldObject, object_mass_of, skew
 from .trajectory import Trajectory
 
 
@@ -154,7 +154,7 @@ def ground_along(
     """
     task = get_task(task or robot.spec.default_task)
     support = robot_support(robot) if support is None else support
-    mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
+    mass_o = object_mass_of(robot, object_mass)
     n = len(trajectory)
     zmp, margin, normal = np.zeros((n, 2)), np.zeros(n), np.zeros(n)
     forces, moments = np.zeros((n, 3)), np.zeros((n, 3))

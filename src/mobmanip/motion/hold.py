@@ -46,7 +46,7 @@ from ..robot.tasks import TaskSpace, get_task
 from ..sets.lifted import Witness
 from ..sets.linear_programs import LinearProgram
 from ..terms.constraints.floor import LEVEL_ROWS, Floor, compliant_sharing, pyramid_faces
-from ..terms.grasp import GRAVITY
+from ..terms.grasp import GRAVITY, object_mass_of
 from .ground import floor_wrench
 from .in_motion import motion_terms
 from .traction import contact_forces
@@ -168,7 +168,7 @@ def _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, keep)
     if mu is None:
         raise TaskError("a replay checks the wheels' traction: the floor needs a friction coefficient mu")
     task_space = get_task(task or robot.spec.default_task)
-    mass_o = float(robot.spec.object_mass if object_mass is None else object_mass)
+    mass_o = object_mass_of(robot, object_mass)
     driven = np.array([c.driven for c in support.contacts])
     stiffness = np.array([c.stiffness for c in support.contacts], dtype=float)
     weight = (float(pin.computeTotalMass(robot.model)) + mass_o) * float(-GRAVITY[2])
@@ -574,7 +574,7 @@ class _HoldingProgram:
 
     def __init__(self, robot, polytope, d, object_mass, floor: Floor, heading: float):
         self.polytope, self.d = polytope, d
-        mass = float(robot.spec.object_mass if object_mass is None else object_mass)
+        mass = object_mass_of(robot, object_mass)
         self.support, mu, faces = floor.resolve(robot)
         if mu is None:
             raise TaskError("a held reach checks the wheels' traction: the floor needs a friction coefficient mu")

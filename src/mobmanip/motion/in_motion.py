@@ -42,7 +42,7 @@ from ..robot.tasks import TaskSpace, get_task
 from ..sets.ellipsoid import Ellipsoid, dynamic_ellipsoid, kinematic_ellipsoid
 from ..terms.constraints.floor import weight_lean
 from ..terms.dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
-from ..terms.grasp import HeldObject, checked_object_mass, skew
+from ..terms.grasp import HeldObject, checked_object_mass, object_mass_of, skew
 
 
 @dataclass(frozen=True)
@@ -187,7 +187,7 @@ def motion_terms(
             f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
         )
     if held_object is None:
-        mass = robot.spec.object_mass if object_mass is None else object_mass
+        mass = object_mass_of(robot, object_mass)
         checked_object_mass(mass)
     dyn = reduced_dynamics_unchecked(robot, q, x, False)
     P = decouple(robot, dyn.P) if decoupled else dyn.P

@@ -33,6 +33,7 @@ import numpy as np
 
 from ..errors import ArgumentError, SpecError
 from ..terms.constraints.floor import compliant_sharing
+from ..terms.grasp import object_mass_of
 from .ground import GroundAlong
 from .trajectory import Trajectory
 
@@ -242,7 +243,7 @@ def floor_time_scaling(
 
     support = ground.support
     mu, force, moment = _checked_floor(ground, mu, "the floor's time-scaling")
-    mass = float(robot.spec.object_mass if object_mass is None else object_mass)
+    mass = object_mass_of(robot, object_mass)
     driven = np.array([c.driven for c in support.contacts])
     wheels = [c.name for c in support.contacts if c.driven]
     z = support.floor_z

@@ -306,8 +306,8 @@ FILL_ROUNDS = 3
 FILL_SEEDS = 3
 
 
-def fill_gaps(grid: PlacementMap, problem: PlacementProblem, turn=None, max_iterations: int = 60,
-              tolerance: float = 1e-7) -> int:  # fmt: skip
+def fill_gaps(grid: PlacementMap, problem: PlacementProblem, turn: float | None = None,
+              max_iterations: int = 60, tolerance: float = 1e-7) -> int:  # fmt: skip
     """Solve again each cell of a heading-free map that found no hold but lies within reach and
     next to one that did, seeded from its best :data:`FILL_SEEDS` such neighbours only (the
     bands' continuation seeded it from one or two, and from the reference hold): a gap can be

@@ -21,7 +21,7 @@ from ..robot.tasks import get_task
 from .constraints.base import Constraint, ConstraintRows
 from .constraints.joint_limits import JOINT_BOXES
 from .dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
-from .grasp import HeldObject, checked_object_mass
+from .grasp import HeldObject, object_mass_of
 
 if TYPE_CHECKING:
     from ..robot.model import Robot
@@ -149,17 +149,15 @@ def terms_at(
     """
     q = robot.check_configuration(q) if check else q
     task = get_task(task or robot.spec.default_task)
-    if held_object is None:
-        checked_object_mass(robot.spec.object_mass if object_mass is None else object_mass)
-    elif held_object.offsets.shape != (len(robot.arms), 3):
+    mass = object_mass_of(robot, object_mass) if held_object is None else held_object.mass
+    if held_object is not None and held_object.offsets.shape != (len(robot.arms), 3):
         raise TaskError(
             f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
         )
     dyn = reduced_dynamics_unchecked(robot, q, None, False)
     J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
     positions = placed_end_effectors(robot)  # the frame placements were updated with the Jacobians
-    mass = robot.spec.object_mass if object_mass is None else object_mass
-    obj = held_object if held_object is not None else HeldObject.between(positions, float(mass))
+    obj = held_object if held_object is not None else HeldObject.between(positions, mass)
     return assemble_terms(robot, q, task.name, decoupled, J_u, dyn.P, dyn.xi, positions, obj, constraints=constraints)
 
 

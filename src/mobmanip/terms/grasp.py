@@ -9,12 +9,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import TaskError
 from ..robot.tasks import TaskSpace, get_task
 from ..support.ranges import OBJECT_MASS, check_in_range
+
+if TYPE_CHECKING:
+    from ..robot.model import Robot
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame (z up), as Pinocchio's default
 
@@ -124,6 +128,17 @@ class HeldObject:
     def grasp_matrix(self, task: str | TaskSpace) -> np.ndarray:
         """W for this object's grasp points, (m, m k)."""
         return grasp_matrix(task, self.offsets)
+
+
+def object_mass_of(robot: Robot, object_mass: object = None) -> float:
+    """The mass of the object a call holds (kg): ``object_mass``, else the robot's spec's
+    ``[object] mass``; checked (:func:`checked_object_mass`). The one place a call's object mass
+    is defaulted.
+
+    Raises:
+        TaskError, RangeError: as :func:`checked_object_mass`.
+    """
+    return checked_object_mass(robot.spec.object_mass if object_mass is None else object_mass)
 
 
 def checked_object_mass(value: object) -> float:
