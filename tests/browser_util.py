@@ -135,11 +135,13 @@ def scene_objects(page) -> dict[str, dict]:
 
 def exported_scene(path, timeout: float = 90.0) -> tuple[set[str], str]:
     """An exported page opened in Chromium (800 x 600): the scene's object paths and the page's
-    text (its legend and notes), once the scene has settled."""
+    text (its legend and notes, the folded notes opened as a click would), once the scene has
+    settled."""
     with chromium() as browser:
         view = browser.new_page(viewport={"width": 800, "height": 600})
         view.goto(Path(path).as_uri())
         wait_for_scene(view, timeout=timeout)
+        view.evaluate("() => document.querySelectorAll('#mobmanip-legend details').forEach(d => { d.open = true; })")
         return set(scene_objects(view)), view.inner_text("body")
 
 
@@ -151,6 +153,43 @@ def world_matrix(page, path: str, node: bool = False) -> np.ndarray | None:
         return None
     scene, obj = (np.array(m, dtype=float).reshape(4, 4).T for m in result)  # three.js is column-major
     return np.linalg.solve(scene, obj)
+
+
+_GEOMETRY_BOX_JS = """(path) => {
+  let node = viewer.scene_tree;
+  for (const name of path) {
+    node = node.children[name];
+    if (node === undefined) return null;
+  }
+  const geometry = node.object.geometry;
+  geometry.computeBoundingBox();
+  return [geometry.boundingBox.min.toArray(), geometry.boundingBox.max.toArray()];
+}"""
+
+_LEGEND_SHARE_JS = """() => {
+  const box = document.getElementById("mobmanip-legend");
+  if (!box) return null;
+  const r = box.getBoundingClientRect();
+  return r.width * r.height / (window.innerWidth * window.innerHeight);
+}"""
+
+
+def geometry_corners(page, path: str) -> np.ndarray | None:
+    """The 8 corners (8, 3), meshcat's z-up world, of the bounding box of the geometry drawn at
+    a scene path, as three.js computes it from the geometry's own vertices, placed by the
+    object's world transform."""
+    box = page.evaluate(_GEOMETRY_BOX_JS, path.split("/") + ["<object>"])
+    if box is None:
+        return None
+    lo, hi = (np.array(v, dtype=float) for v in box)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    T = world_matrix(page, path)
+    return corners @ T[:3, :3].T + T[:3, 3]
+
+
+def legend_share(page) -> float | None:
+    """The share of the view (the window's area) the legend's box covers, or None without one."""
+    return page.evaluate(_LEGEND_SHARE_JS)
 
 
 def project(page, points) -> np.ndarray:

@@ -138,9 +138,13 @@ def test_exported_page_keeps_the_moving_robot_in_view(tmp_path):
                 G = scales[name] * np.eye(3)[:, :2] @ e.generator
                 ring = np.array([[np.cos(a), np.sin(a)] for a in np.linspace(0, 2 * np.pi, 16)])
                 points.append(centre + scales[name] * np.r_[e.center, 0.0] + ring @ G.T)
+            page.evaluate("() => mobmanipFollow()")  # the following camera's step, at once
             xy = project(page, np.vstack(points))
             w, h = VIEWPORT["width"], VIEWPORT["height"]
             assert np.all((xy[:, 0] >= 0) & (xy[:, 0] <= w) & (xy[:, 1] >= 0) & (xy[:, 1] <= h)), (times[k], xy)
+            # the robot itself inside the central 80 % of the view (issue 39)
+            robot_xy = project(page, points[0]) / [w, h]
+            assert np.all((robot_xy >= 0.1) & (robot_xy <= 0.9)), (times[k], robot_xy.min(0), robot_xy.max(0))
             span = max(np.ptp(xy[:, 0]) / w, np.ptp(xy[:, 1]) / h)
             assert span >= MIN_SPAN, (times[k], span)
         page.close()

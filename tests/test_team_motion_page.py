@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import re
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from browser_util import VIEWPORT, chromium, missing_browser, project, wait_for_scene, world_matrix
+from browser_util import VIEWPORT, chromium, geometry_corners, missing_browser, project, wait_for_scene, world_matrix
 from mobmanip.cli import main
 from mobmanip.motion.carry import read_path
 from mobmanip.motion.trajectory import read_trajectory
@@ -34,6 +35,8 @@ SCALE = 2.0
 STEP = 0.1  # s: 121 samples, every one a frame of the page
 M = "meshcat/"
 TEAM_PATH = "mobmanip/team"
+#: The beam's size as its description gives it (m, along its length, across, up).
+BEAM_SIZE = tomllib.loads(TEAM.read_text())["object"]["size"]
 TOL = 1e-5  # m: the page's keyframes against the written motion (as the single robot's test)
 #: How far the carried object may be from its path (m): the QP holds every hand within a
 #: millimetre of its target (test_team_carry), so the object, rigid between them, within twice that.
@@ -119,6 +122,16 @@ def test_the_team_page_plays_every_robot_the_object_and_the_set_in_view(exported
                 assert np.linalg.norm(obj[:2, 3] - on_path[k]) <= ON_PATH, (t[k], obj[:3, 3], on_path[k])
                 assert np.arctan2(obj[1, 0], obj[0, 0]) == pytest.approx(turn[k], abs=ON_PATH / 0.75)
                 points.append(centre[None, :])
+                # the beam drawn as a box of its described size, along the line from the south
+                # robot's hands to the north robot's (its ends, 1.5 m apart)
+                hands = np.vstack([hand_positions(m) for m in members])
+                u = hands[2:].mean(axis=0) - hands[:2].mean(axis=0)
+                u = np.array([u[0], u[1], 0.0]) / np.linalg.norm(u[:2])
+                local = (geometry_corners(page, f"{M}{TEAM_PATH}/object/body") - centre) @ np.array(
+                    [u, [-u[1], u[0], 0.0], [0.0, 0.0, 1.0]]
+                ).T
+                np.testing.assert_allclose(np.ptp(local, axis=0), BEAM_SIZE, atol=ON_PATH)
+                np.testing.assert_allclose(local.mean(axis=0), 0.0, atol=ON_PATH)
                 # the team's kinematic ellipsoid there, its (x, y) shadow drawn at the legend's scale
                 rebuilt = Team.holding(members, team.held_object.mass, task=team.task, center=centre)
                 G = analyze_team(rebuilt, ["kinematic"]).measures["kinematic"].generator[:2]

@@ -52,6 +52,26 @@ def test_a_box_inertia_is_the_textbook_one():
     np.testing.assert_allclose(I, [0.0, 1.0, 1.0])
 
 
+def test_a_cylinder_is_drawn_and_weighed_as_one(example_data):
+    """A beam given as a cylinder along its x axis: its inertia the textbook solid cylinder's
+    (m r^2 / 2 about the axis, m (3 r^2 + L^2) / 12 across), turned with the beam (long axis along
+    world y); its shape kept for the drawings, with its length and diameter as extents."""
+    data = copy.deepcopy(example_data)
+    obj = data["object"]
+    obj.pop("size")
+    obj.update(shape="cylinder", length=1.5, radius=0.04)
+    team = team_from_dict(data, EXAMPLE.parent)
+    m, r, L = obj["mass"], 0.04, 1.5
+    across = m * (3 * r * r + L * L) / 12
+    np.testing.assert_allclose(np.diag(team.held_object.inertia), [across, m * r * r / 2, across], atol=1e-12)
+    assert team.object_shape.kind == "cylinder" and team.object_shape.size == (1.5, 0.08, 0.08)
+    assert team.object_shape.describe() == "cylinder 1.5 m long, 0.04 m radius"
+    # the box of the example keeps its size; a team built in Python has no shape to draw
+    assert load_team(EXAMPLE).object_shape.size == tuple(example_data["object"]["size"])
+    corners = load_team(EXAMPLE).object_shape.corners(np.zeros(3), math.radians(90.0))
+    np.testing.assert_allclose(np.ptp(corners, axis=0), [0.08, 1.5, 0.08], atol=1e-12)
+
+
 def _broken(data, edit):
     data = copy.deepcopy(data)
     edit(data)
@@ -81,6 +101,13 @@ def _set(path, value):
         (_set(("object", "colour"), "red"), ["[object]", "colour"]),
         (lambda d: d["object"].update(inertia=[1.0, 2.0]) or d["object"].pop("size"), ["inertia", "[1.0, 2.0]"]),
         (_set(("object", "inertia"), [1.0, 2.0, 3.0]), ["either size or inertia"]),
+        (_set(("object", "shape"), "sphere"), ["[object]", "'sphere'", "cylinder"]),
+        (_set(("object", "radius"), 0.04), ["[object]", "radius", 'shape = "cylinder"']),
+        (_set(("object", "shape"), "cylinder"), ["[object]", "length and radius", "['size']"]),
+        (
+            lambda d: d["object"].update(shape="cylinder", length=1.5, radius=-0.1) or d["object"].pop("size"),
+            ["[object] radius", "-0.1"],
+        ),  # fmt: skip
         (_set(("robots", 0, "posture"), "dance"), ["south", "'dance'"]),
         (_set(("robots", 0, "posture"), "hold"), ["south", "no [hold]"]),
         (_set(("robots", 0, "yaw_deg"), float("nan")), ["south", "yaw_deg", "nan"]),

@@ -54,11 +54,14 @@ rates (and --fastest keeps it at every sample); the baseline ignores it.
 as in q.json, then capacity, baseline_capacity, tracking_error), baseline.csv (the baseline's
 motion), preparation.csv (the self-motion), carry.json (summary, with what each run started
 from) and capacity.png (the capacity profiles). trajectory.csv is a
-valid input of `mobmanip trajectory`.
+valid input of `mobmanip trajectory`. --export PAGE.html writes a self-contained page that plays
+the QP motion (the self-motion first) with its kinematic and in-motion dynamic ellipsoids; the
+camera follows the robot when it drives off (--every K draws every K-th sample).
 
 examples:
   mobmanip carry planar_dual_arm --path examples/carry_turn.csv --out results/
   mobmanip carry tiago_dual --path examples/carry_line.csv --objective dynamic:minor_axis
+  mobmanip carry tiago_dual --path examples/carry_turn.csv --export carry.html
 """
 
 
@@ -92,6 +95,15 @@ def register(sub) -> None:
         help="longest self-motion before the path (s, default 30; 0: none)",
     )
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    parser.add_argument(
+        "--export",
+        metavar="PAGE.html",
+        help="write a self-contained page that plays the QP motion (the self-motion first) with its in-motion "
+        "ellipsoids, the camera following the robot",
+    )
+    parser.add_argument(
+        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    )
     add_progress_option(parser)
     add_motion_floor_options(parser)
     parser.add_argument(
@@ -134,6 +146,18 @@ def _check_work(args, path) -> None:
     detail = f"path {duration:g} s + --prepare {args.prepare:g} s, step {args.step:g} s"
     from ..gradients.readings import is_reading_objective
 
+    if args.every is not None and args.export is None:
+        raise UsageError("--every thins the frames of --export's page: give --export PAGE.html too")
+    if args.every is not None and args.every < 1:
+        raise UsageError(f"--every must be a whole number of samples >= 1, got {args.every}")
+    if args.export is not None:  # refuse an unwritable page before the motion is computed
+        from pathlib import Path
+
+        from ..support.files import check_output
+
+        check_output(args.export)
+        if not Path(args.export).resolve().parent.is_dir():
+            raise UsageError(f"--export {args.export}: its directory does not exist")
     per_step = SECONDS_PER_READING_STEP if is_reading_objective(args.objective) else SECONDS_PER_STEP
     check_work(WorkEstimate("carry", "QP steps", steps, per_step, detail), _bound(args.max_work, MAX_STEPS))
 
@@ -248,6 +272,11 @@ def run(args) -> int:
 
             for written in retime_outputs(robot, fastest, args.out, CARRY_FASTEST_FILES):
                 print(f"wrote {written}")
+    if args.export:
+        from ..viz.trajectory_page import export_carry_page
+
+        page = export_carry_page(robot, result, args.export, every=args.every, object_mass=args.object_mass)
+        print(f"wrote {page}")
     return 0
 
 

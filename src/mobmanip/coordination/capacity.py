@@ -15,6 +15,7 @@ whose matrix is the sum of the robots' own forms A_i = W_i (J_hat_i J_hat_i^T)^-
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -118,7 +119,7 @@ class TeamCapacity:
         """The objective of the team's stacked terms (the measure's own set, as ``mobmanip team``)."""
         self.evaluations += 1
         team = self.team
-        at = Team(team.name, team.task, team.members, held, team.grasp_points, team.object_yaw, team.decoupled)
+        at = dataclasses.replace(team, held_object=held)
         return ellipsoid_index(self.objective, self.measure.compute(stack_terms(at, parts)))
 
     def value(self, qs: Sequence[np.ndarray], held: HeldObject) -> float:

@@ -22,7 +22,11 @@ A team is described by a TOML file::
     mass = 4.0                     # kg
     position = [0.0, 0.0, 0.35]    # m, world: the object's centre (and centre of mass)
     yaw_deg = 90.0                 # its heading about the vertical (default 0)
-    size = [1.5, 0.08, 0.08]       # optional: a uniform box (m) in the object frame, for the inertia
+    size = [1.5, 0.08, 0.08]       # optional: a uniform box (m) in the object frame, for the
+                                   # inertia and the drawing
+    # shape = "cylinder"           # or a uniform cylinder along the object's x axis:
+    # length = 1.5                 # m
+    # radius = 0.04                # m
     # inertia = [0.75, 0.01, 0.75] # or its principal moments (kg m^2) along the object axes,
                                    # or a 3 x 3 matrix; default: a solid sphere reaching the
                                    # farthest grasp point, as for one robot
@@ -67,8 +71,10 @@ from ..terms.grasp import HeldObject
 __all__ = [
     "DEFAULT_TOLERANCE",
     "Member",
+    "ObjectShape",
     "Team",
     "box_inertia",
+    "cylinder_inertia",
     "hand_positions",
     "load_team",
     "team_from_dict",
@@ -106,6 +112,50 @@ class Member:
 
 
 @dataclass(frozen=True)
+class ObjectShape:
+    """The held object's solid, as its description gives it (``size``, or ``shape = "cylinder"``
+    with ``length`` and ``radius``), in the object's own frame (x along its heading).
+
+    Attributes:
+        kind: ``"box"`` or ``"cylinder"`` (its axis along the object's x).
+        size: the solid's extent along the object's x, y and z axes (m): a box's edges; a
+            cylinder's length, then its diameter twice.
+    """
+
+    kind: str
+    size: tuple[float, float, float]
+
+    def __post_init__(self):
+        if self.kind not in ("box", "cylinder"):
+            raise TeamError(f"object shape must be 'box' or 'cylinder', got {self.kind!r}")
+        size = tuple(float(v) for v in self.size)
+        if len(size) != 3 or not all(math.isfinite(v) and v >= 0.0 for v in size):
+            raise TeamError(f"object size must be three lengths (m), got {self.size!r}")
+        if self.kind == "cylinder" and size[1] != size[2]:
+            raise TeamError(f"a cylinder's extents across its axis must be equal (its diameter), got {size!r}")
+        object.__setattr__(self, "size", size)
+
+    def moments(self, mass: float) -> np.ndarray:
+        """Principal moments of the uniform solid of ``mass`` (kg) along the object's axes (kg m^2), (3,)."""
+        if self.kind == "box":
+            return box_inertia(mass, self.size)
+        return cylinder_inertia(mass, self.size[0], 0.5 * self.size[1])
+
+    def corners(self, center: np.ndarray, yaw: float) -> np.ndarray:
+        """The corners (8, 3) of the box around the solid, centred at ``center`` (m, world) and
+        turned by ``yaw`` (rad) about the vertical: x, then y, then z from its lower side."""
+        half = 0.5 * np.array(self.size)
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+        return np.asarray(center, dtype=float) + (signs * half) @ _rot_z(yaw).T
+
+    def describe(self) -> str:
+        """``box 1.5 x 0.08 x 0.08 m`` or ``cylinder 1.5 m long, 0.04 m radius``."""
+        if self.kind == "box":
+            return "box " + " x ".join(f"{v:g}" for v in self.size) + " m"
+        return f"cylinder {self.size[0]:g} m long, {0.5 * self.size[1]:g} m radius"
+
+
+@dataclass(frozen=True)
 class Team:
     """Robots holding one rigid object.
 
@@ -118,6 +168,8 @@ class Team:
         grasp_points: the nominal grasp points in the world (m), (n_hands, 3).
         object_yaw: the object's heading (rad).
         decoupled: neglect each robot's platform-arm interaction in the dynamics.
+        object_shape: the object's solid (drawn by the viewers), or ``None`` when its
+            description gives none (the object is then drawn through its grasps only).
     """
 
     name: str
@@ -127,6 +179,7 @@ class Team:
     grasp_points: np.ndarray
     object_yaw: float = 0.0
     decoupled: bool = False
+    object_shape: ObjectShape | None = None
     hands: tuple[tuple[int, int], ...] = field(init=False)
 
     def __post_init__(self):
@@ -217,6 +270,12 @@ def box_inertia(mass: float, size: Sequence[float]) -> np.ndarray:
     return mass / 12.0 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
 
 
+def cylinder_inertia(mass: float, length: float, radius: float) -> np.ndarray:
+    """Principal moments of a uniform solid cylinder along its own axes, its axis along x (kg m^2), (3,)."""
+    across = mass * (3.0 * radius * radius + length * length) / 12.0
+    return np.array([0.5 * mass * radius * radius, across, across])
+
+
 def _rot_z(yaw: float) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
@@ -244,7 +303,7 @@ def load_team(path: str | Path) -> Team:
 MAX_TEAM_BYTES = 4 * 1024 * 1024
 
 _TOP = {"name", "task", "tolerance", "decoupled", "object", "robots"}
-_OBJECT = {"mass", "position", "yaw_deg", "size", "inertia"}
+_OBJECT = {"mass", "position", "yaw_deg", "size", "inertia", "shape", "length", "radius"}
 _ROBOT = {"name", "robot", "position", "yaw_deg", "posture", "reach", "platform", "joints", "grasps"}
 _GRASP = {"arm", "point"}
 
@@ -300,11 +359,12 @@ def team_from_dict(data: Mapping, base_dir: Path | str = ".", where: str = "team
 
     points = np.vstack(grasp_points)
     hands = np.vstack([hand_positions(m) for m in members])
-    inertia = _inertia(obj, mass, R, f"{where} [object]")
+    shape = _shape(obj, f"{where} [object]")
+    inertia = _inertia(obj, mass, R, f"{where} [object]") if shape is None else R @ np.diag(shape.moments(mass)) @ R.T
     if inertia is None:
         inertia = _sphere(mass, hands - center)
     held = HeldObject(mass, inertia, center, hands - center)
-    return Team(name, task.name, tuple(members), held, points, yaw, decoupled)
+    return Team(name, task.name, tuple(members), held, points, yaw, decoupled, shape)
 
 
 def _sphere(mass: float, offsets: np.ndarray) -> np.ndarray:
@@ -426,19 +486,50 @@ def _reach(member: Member, points: np.ndarray, task, here: str) -> Member:
     return Member(member.name, robot, q, member.arms)
 
 
-def _inertia(obj: Mapping, mass: float, R: np.ndarray, here: str) -> np.ndarray | None:
-    if "size" in obj and "inertia" in obj:
-        raise TeamError(f"{here}: give either size or inertia, not both")
-    if "size" in obj:
-        size = _vector(obj["size"], 3, f"{here} size")
-        from ..support.ranges import LINK_OFFSET
+def _shape(obj: Mapping, here: str) -> ObjectShape | None:
+    """The object's solid: a box of ``size``, a cylinder of ``length`` and ``radius``, or none."""
+    from ..support.ranges import LINK_OFFSET
 
+    kind = _get(obj, "shape", str, here, "box" if "size" in obj else None)
+    if kind is None:
+        for key in ("length", "radius"):
+            if key in obj:
+                raise TeamError(f'{here}: {key} describes a cylinder: give shape = "cylinder" too')
+        return None
+    given = [key for key in ("size", "length", "radius", "inertia") if key in obj]
+    if "inertia" in obj:
+        raise TeamError(
+            f"{here}: give either size or inertia, not both (nor a cylinder's length and radius with inertia)"
+        )
+    if kind == "box":
+        if given != ["size"]:
+            raise TeamError(
+                f'{here}: a box is given by its size alone (a cylinder by shape = "cylinder", length and radius), '
+                f"got {given}"
+            )
+        size = _vector(obj["size"], 3, f"{here} size")
         if np.any(size < 0) or np.any(size > LINK_OFFSET):
             raise TeamError(
                 f"{here}: size must be three lengths from 0 to {LINK_OFFSET:g} m (the supported range), "
                 f"got {obj['size']!r}"
             )
-        return R @ np.diag(box_inertia(mass, [float(v) for v in size])) @ R.T
+        return ObjectShape("box", (float(size[0]), float(size[1]), float(size[2])))
+    if kind == "cylinder":
+        if sorted(given) != ["length", "radius"]:
+            raise TeamError(
+                f"{here}: a cylinder is given by its length and radius alone (its inertia follows), got {given}"
+            )
+        length = _number(obj["length"], f"{here} length (m)", positive=False)
+        radius = _number(obj["radius"], f"{here} radius (m)", positive=False)
+        if not (0.0 <= length <= LINK_OFFSET and 0.0 <= 2.0 * radius <= LINK_OFFSET):
+            raise TeamError(
+                f"{here}: length and diameter must be from 0 to {LINK_OFFSET:g} m, got {length!r}, {radius!r}"
+            )
+        return ObjectShape("cylinder", (length, 2.0 * radius, 2.0 * radius))
+    raise TeamError(f"{here}: shape must be 'box' or 'cylinder', got {kind!r}")
+
+
+def _inertia(obj: Mapping, mass: float, R: np.ndarray, here: str) -> np.ndarray | None:
     if "inertia" not in obj:
         return None
     value = obj["inertia"]

@@ -5,7 +5,9 @@ Both :meth:`mobmanip.viz.scene.EllipsoidViewer.animate` (one robot) and
 :meth:`mobmanip.viz.team_scene.TeamViewer.animate` (a team) build their meshcat animation from
 these pieces: a keyframe is a list of :data:`Pose` (a scene path, its 4x4 transform and, for a
 set, its scale) written at one time; the camera frames the robots, the object and the sets at up
-to :data:`CAMERA_FRAMES` frames of the animation (:func:`camera_samples`).
+to :data:`CAMERA_FRAMES` frames of the animation (:func:`camera_samples`), or follows the robots
+through up to :data:`FOLLOW_FRAMES` of them when they travel far
+(:func:`mobmanip.viz.page.animation_request`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ from .shapes import DRAWINGS, ellipsoid_matrix
 
 #: Frames an animation's camera frames at most (evenly spread, the last included).
 CAMERA_FRAMES = 25
+#: Frames a following camera keeps its target on at most (evenly spread, the last included).
+FOLLOW_FRAMES = 100
 #: The scale, along each axis, of a set hidden in a keyframe (a set without points, or absent,
 #: then): it shrinks to nothing.
 HIDDEN_SCALE = 1e-6
@@ -30,12 +34,12 @@ HIDDEN_SCALE = 1e-6
 Pose = tuple[str, np.ndarray, np.ndarray | None]
 
 
-def camera_samples(n: int) -> np.ndarray:
-    """Indices of the frames (of ``n``) the camera frames: all, or :data:`CAMERA_FRAMES` evenly
-    spread with the first and the last."""
-    if n <= CAMERA_FRAMES:
+def camera_samples(n: int, limit: int = CAMERA_FRAMES) -> np.ndarray:
+    """Indices of the frames (of ``n``) the camera frames: all, or ``limit`` evenly spread with
+    the first and the last."""
+    if n <= limit:
         return np.arange(n)
-    return np.unique(np.linspace(0, n - 1, CAMERA_FRAMES).round().astype(int))
+    return np.unique(np.linspace(0, n - 1, limit).round().astype(int))
 
 
 def geometry_paths(visualizer, geometry: pin.GeometryModel) -> list[str]:

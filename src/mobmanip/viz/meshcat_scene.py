@@ -124,6 +124,16 @@ class MeshcatScene:
             self._send_page(camera=request)
         return request
 
+    def _send_animation_camera(self, frames: list[np.ndarray], times: list, heading: float) -> dict:
+        """Ask the page to frame an animation whose frames draw ``frames`` (points (n_k, 3) each)
+        at ``times`` (each frame's keyframe times, s), framed whole or followed
+        (:func:`mobmanip.viz.page.animation_request`); returns the camera request sent."""
+        self._camera_serial += 1
+        request = _page.animation_request(frames, times, heading, self._camera_serial)
+        with self._commands():
+            self._send_page(camera=request)
+        return request
+
     # ----- output and shutdown
 
     def static_html(self) -> str:

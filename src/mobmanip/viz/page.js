@@ -8,8 +8,15 @@
 (function () {
   "use strict";
   const PROPERTY = "mobmanip_page";
+  // The legend never covers more than LEGEND_WIDTH % x LEGEND_HEIGHT % of the view (it scrolls
+  // beyond); its notes fold under one line when, shown, the legend would cover more than
+  // NOTES_SHARE of the view (a click shows them).
+  const LEGEND_WIDTH = 38;
+  const LEGEND_HEIGHT = 50;
+  const NOTES_SHARE = 0.12;
   let legendKey = null;
   let cameraSerial = null;
+  let notesToggled = false; // the user opened or closed the notes: leave them so
 
   function pageData() {
     if (typeof viewer === "undefined" || !viewer.scene_tree) return null;
@@ -21,15 +28,17 @@
   function style() {
     const css = document.createElement("style");
     css.textContent = `
-      #mobmanip-legend { position: absolute; left: 8px; bottom: 8px; z-index: 10; max-width: 46vw;
-        background: rgba(255, 255, 255, 0.88); color: #111; border-radius: 4px; padding: 6px 9px;
-        font: 12px/1.35 system-ui, sans-serif; pointer-events: none; }
-      #mobmanip-legend .mm-title { font-weight: 600; margin-bottom: 3px; }
-      #mobmanip-legend .mm-row { display: flex; align-items: center; gap: 6px; white-space: nowrap; }
-      #mobmanip-legend .mm-key { flex: none; width: 14px; height: 10px; box-sizing: border-box; }
+      #mobmanip-legend { position: absolute; left: 8px; bottom: 8px; z-index: 10;
+        max-width: ${LEGEND_WIDTH}vw; max-height: ${LEGEND_HEIGHT}vh; overflow-y: auto;
+        box-sizing: border-box; background: rgba(255, 255, 255, 0.88); color: #111;
+        border-radius: 4px; padding: 4px 7px; font: 11px/1.3 system-ui, sans-serif; }
+      #mobmanip-legend .mm-title { font-weight: 600; margin-bottom: 2px; }
+      #mobmanip-legend .mm-row { display: flex; align-items: center; gap: 5px; }
+      #mobmanip-legend .mm-key { flex: none; width: 12px; height: 9px; box-sizing: border-box; }
       #mobmanip-legend .mm-ring { border: 2px solid; border-radius: 50%; background: transparent; }
-      #mobmanip-legend .mm-dot { width: 10px; border-radius: 50%; border: 1px solid #666; }
-      #mobmanip-legend .mm-note { color: #444; white-space: normal; }`;
+      #mobmanip-legend .mm-dot { width: 9px; border-radius: 50%; border: 1px solid #666; }
+      #mobmanip-legend .mm-note { color: #444; white-space: normal; }
+      #mobmanip-legend summary { color: #444; cursor: pointer; }`;
     document.head.appendChild(css);
   }
 
@@ -58,13 +67,34 @@
       line.append(key, text);
       box.appendChild(line);
     }
-    for (const note of data.notes || []) {
-      const line = document.createElement("div");
-      line.className = "mm-row mm-note";
-      line.textContent = note;
-      box.appendChild(line);
+    const notes = data.notes || [];
+    if (notes.length) {
+      const fold = document.createElement("details");
+      const summary = document.createElement("summary");
+      summary.textContent = notes.length === 1 ? "1 note" : `${notes.length} notes`;
+      summary.addEventListener("click", () => { notesToggled = true; });
+      fold.appendChild(summary);
+      for (const note of notes) {
+        const line = document.createElement("div");
+        line.className = "mm-row mm-note";
+        line.textContent = note;
+        fold.appendChild(line);
+      }
+      box.appendChild(fold);
     }
+    fitLegend();
   }
+
+  function fitLegend() {
+    // Show the notes when the legend stays small with them, else fold them.
+    const box = document.getElementById("mobmanip-legend");
+    const fold = box && box.querySelector("details");
+    if (!fold || notesToggled) return;
+    fold.open = true;
+    const r = box.getBoundingClientRect();
+    fold.open = r.width * r.height <= NOTES_SHARE * window.innerWidth * window.innerHeight;
+  }
+  window.addEventListener("resize", fitLegend);
 
   // meshcat's world (z up) -> the camera's frame (three.js y up).
   const toThree = (p) => [p[0], p[2], -p[1]];
@@ -90,14 +120,69 @@
     return distance;
   }
 
+  // A camera that follows an animation: request.targets[k] (world) at request.times[k] (s of
+  // the animation), each frame's points request.frames[k] within `margin` of the view around its
+  // own target; between keyframes the target moves linearly, as meshcat moves the robot.
+  let follow = null;
+
+  function animationTime() {
+    const animator = viewer.animator;
+    return animator && animator.actions.length ? animator.actions[0].time : 0;
+  }
+
+  function followTarget(t) {
+    const times = follow.times;
+    const targets = follow.targets;
+    if (t <= times[0]) return targets[0];
+    const last = times.length - 1;
+    if (t >= times[last]) return targets[last];
+    let k = 0;
+    while (times[k + 1] < t) k += 1;
+    const s = (t - times[k]) / (times[k + 1] - times[k] || 1);
+    return targets[k].map((c, i) => c + s * (targets[k + 1][i] - c));
+  }
+
+  function followStep() {
+    updateFollow();
+    requestAnimationFrame(followStep);
+  }
+
+  function updateFollow() {
+    // Move the camera and its orbit target together by the target's motion: the user's own
+    // orbit, zoom and pan are kept, only carried along.
+    if (follow && viewer.controls) {
+      const target = toThree(followTarget(animationTime()));
+      const shift = target.map((c, i) => c - follow.last[i]);
+      if (shift.some((c) => c !== 0)) {
+        viewer.camera.position.set(...shift.map((c, i) => c + viewer.camera.position.getComponent(i)));
+        viewer.controls.target.set(...shift.map((c, i) => c + viewer.controls.target.getComponent(i)));
+        viewer.controls.update();
+        viewer.set_dirty();
+        follow.last = target;
+      }
+    }
+  }
+  // For a test or a script that seeks the animation: bring the camera to the time now, at once.
+  window.mobmanipFollow = updateFollow;
+
   function applyCamera(request) {
     const camera = viewer.camera;
     if (!camera || !viewer.controls) return false;
     let position = request.position;
-    const target = request.target;
+    let target = request.target;
+    follow = null;
     if (request.mode === "fit") {
       const d = fitDistance(camera, target, request.direction, request.points, request.margin || 0.95);
       position = target.map((c, i) => c + d * request.direction[i]);
+    } else if (request.mode === "follow") {
+      let d = 0;
+      request.frames.forEach((points, k) => {
+        d = Math.max(d, fitDistance(camera, request.targets[k], request.direction, points, request.margin));
+      });
+      follow = { times: request.times, targets: request.targets };
+      target = followTarget(animationTime());
+      position = target.map((c, i) => c + d * request.direction[i]);
+      follow.last = toThree(target);
     }
     camera.position.set(...toThree(position));
     viewer.controls.target.set(...toThree(target));
@@ -119,4 +204,5 @@
   }
 
   setInterval(tick, 100);
+  requestAnimationFrame(followStep);
 })();

@@ -15,8 +15,17 @@ live and the exported page show the same legend and camera. The property is a di
 - ``camera``: ``{"mode": "fit", "box": [lower, upper], "points", "target", "direction",
   "margin", "serial"}`` (the page places the camera along ``direction`` from ``target``, the
   box's centre, at the smallest distance at which all ``points`` fall within ``margin`` of the
-  view, for the page's own aspect ratio) or ``{"mode": "look", "position", "target", "serial"}``; world coordinates
-  (z up), metres. The page applies each serial once, so a user's own camera moves are kept.
+  view, for the page's own aspect ratio), ``{"mode": "follow", "box", "times", "targets",
+  "frames", "direction", "margin", "serial"}`` (an animation: the camera keeps its direction
+  and moves with the target, the centre of each frame's box ``targets[k]`` at the animation's
+  time ``times[k]`` s, linear in between; its distance is the smallest at which every frame's
+  box corners ``frames[k]`` fall within ``margin`` of the view about their own target; the
+  user's orbit and zoom are carried along) or ``{"mode": "look", "position", "target",
+  "serial"}``; world coordinates (z up), metres. The page applies each serial once, so a
+  user's own camera moves are kept.
+- the legend never covers more than 38 % of the view's width by 50 % of its height (it scrolls
+  beyond); its notes fold under one line ("6 notes", a click shows them) when, shown, the legend
+  would cover more than 12 % of the view.
 
 Magnification: within one quantity, the sets share one scale (the largest drawn extent is the
 viewer's ``size``); a set whose drawn extent is below :data:`MAGNIFY_BELOW` of ``size`` would be
@@ -45,6 +54,11 @@ MAGNIFY_TO = 0.3  # of the viewer's size: at least this long once magnified
 CAMERA_ELEVATION_DEG = 25.0  # above the horizon
 CAMERA_AZIMUTH_DEG = -50.0  # from the platform heading (front right of the robot)
 CAMERA_MARGIN = 0.95  # of the view the framed box may fill
+#: An animation whose whole motion spans at most this many times its largest frame is framed
+#: whole (within :data:`ANIMATION_MARGIN`); a longer one is followed (:func:`animation_request`).
+FOLLOW_ABOVE = 1.5
+ANIMATION_MARGIN = 0.8  # of the view a whole animation framed at once may fill (its central 80 %)
+FOLLOW_MARGIN = 0.7  # of the view each frame fills, about its own centre, when the camera follows
 
 
 def page_script() -> str:
@@ -85,7 +99,8 @@ def format_factor(factor: float) -> str:
 # --------------------------------------------------------------------------- framing
 
 
-def _corners(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+def box_corners(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The 8 corners (8, 3) of the box from ``lower`` to ``upper``."""
     return np.array(list(itertools.product(*zip(lower, upper))), dtype=float)
 
 
@@ -108,7 +123,7 @@ def visual_points(model: pin.Model, visual: pin.GeometryModel, q: np.ndarray) ->
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
             continue
         placement = geometry_data.oMg[index]
-        points.extend(_corners(lo, hi) @ placement.rotation.T + placement.translation)
+        points.extend(box_corners(lo, hi) @ placement.rotation.T + placement.translation)
     return np.array(points, dtype=float).reshape(-1, 3)
 
 
@@ -130,7 +145,7 @@ def fit_request(
     upper), seen from :data:`CAMERA_ELEVATION_DEG` above the horizon and
     :data:`CAMERA_AZIMUTH_DEG` from the platform ``heading`` (rad), aimed at the centre of
     their bounding box."""
-    every = np.vstack([np.asarray(points, dtype=float).reshape(-1, 3), *(_corners(*box) for box in boxes)])
+    every = np.vstack([np.asarray(points, dtype=float).reshape(-1, 3), *(box_corners(*box) for box in boxes)])
     lower, upper = every.min(axis=0), every.max(axis=0)
     el = math.radians(CAMERA_ELEVATION_DEG)
     az = heading + math.radians(CAMERA_AZIMUTH_DEG)
@@ -144,6 +159,37 @@ def fit_request(
         "margin": float(margin),
         "serial": int(serial),
     }
+
+
+def animation_request(
+    frames: Sequence[np.ndarray], times: Sequence[Sequence[float]], heading: float, serial: int
+) -> dict:
+    """The camera of an animation: the points (n_k, 3) each frame draws, ``frames``, at the
+    animation's times ``times`` (each frame's keyframe times, s: one, or two for a frame held).
+
+    A motion that stays within :data:`FOLLOW_ABOVE` times its largest frame is framed whole, its
+    points within :data:`ANIMATION_MARGIN` of the view (a ``fit`` request); a longer one (a robot
+    driving off) is followed: a ``follow`` request whose targets are the centres of each frame's
+    box, the distance such that every frame's box fills at most :data:`FOLLOW_MARGIN` of the
+    view about its own centre, so that the robot stays at one readable size in the middle of the
+    view. Seen as :func:`fit_request` sees, from the platform ``heading`` (rad).
+    """
+    boxes = [(np.min(p, axis=0), np.max(p, axis=0)) for p in frames]
+    every = np.vstack(frames)
+    whole = float(np.linalg.norm(np.ptp(every, axis=0)))
+    largest = max(float(np.linalg.norm(hi - lo)) for lo, hi in boxes)
+    if whole <= FOLLOW_ABOVE * largest:
+        return fit_request(every, [], heading, serial, ANIMATION_MARGIN)
+    request = fit_request(np.vstack([box_corners(*box) for box in boxes]), [], heading, serial, FOLLOW_MARGIN)
+    stamps, targets, corners = [], [], []
+    for (lo, hi), at in zip(boxes, times):
+        for t in at:
+            stamps.append(float(t))
+            targets.append([float(v) for v in 0.5 * (lo + hi)])
+            corners.append(np.round(box_corners(lo, hi), 4).tolist())
+    del request["points"]
+    request.update(mode="follow", times=stamps, targets=targets, frames=corners)
+    return request
 
 
 def look_request(position, target, serial: int) -> dict:

@@ -88,7 +88,7 @@ from ..robot.model import Robot
 from ..sets.taskset import TaskSet
 from . import page as _page
 from .animation import CAMERA_FRAMES as CAMERA_FRAMES
-from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
+from .animation import FOLLOW_FRAMES, camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
 from .meshcat_scene import MeshcatScene
 from .meshes import visual_model as visual_model
 from .nesting import nested, outlined
@@ -331,19 +331,31 @@ class EllipsoidViewer(MeshcatScene):
             self._vis["/Cameras/default/rotated/<object>"].set_property("position", local)
             self._send_page(camera=_page.look_request(position, target, self._camera_serial))
 
-    def frame_camera(self, frame: Frame | Sequence[Frame]) -> dict:
+    def frame_camera(self, frame: Frame | Sequence[Frame], times: Sequence[Sequence[float]] | None = None) -> dict:
         """Frame the robot at ``frame.q`` (its visual geometry), the held object and the drawn
         sets: the page places the camera so that their bounding box fills most of its view, seen
         from the front right of the platform and 25 deg above the horizon. Given several frames
         (an animation), the box holds them all (up to :data:`CAMERA_FRAMES` of them, evenly
         spread, the last included), seen from the first frame's platform heading: the camera
-        frames the whole path, so the robot stays in view while it moves.
+        frames the whole path, so the robot stays in view while it moves. Given their
+        ``times`` too (each frame's keyframe times in the animation, s), a motion that travels
+        far is followed instead (:func:`mobmanip.viz.page.animation_request`, up to
+        :data:`~mobmanip.viz.animation.FOLLOW_FRAMES` frames).
 
         Returns:
             The camera request sent (see :mod:`mobmanip.viz.page`); its ``box`` is the framed
             box (lower, upper), m.
         """
         frames = [frame] if isinstance(frame, Frame) else list(frame)
+        if times is not None and len(frames) > 1:
+            picked = camera_samples(len(frames), FOLLOW_FRAMES)
+            extents = []
+            for i in picked:
+                points, boxes = self._frame_extent(frames[i])
+                extents.append(np.vstack([points, *(_page.box_corners(*box) for box in boxes)]))
+            first = frames[0]
+            heading = math.atan2(first.q[3], first.q[2]) if self.model.nq >= 4 else 0.0
+            return self._send_animation_camera(extents, [times[i] for i in picked], heading)
         frames = [frames[i] for i in camera_samples(len(frames))]
         all_points, all_boxes = [], []
         for one in frames:
@@ -536,7 +548,14 @@ class EllipsoidViewer(MeshcatScene):
     # ----- animations
 
     def animate(
-        self, frames: Sequence[Frame], *, step: float = 0.1, fps: int = 30, play: bool = True, repetitions: int = 1
+        self,
+        frames: Sequence[Frame],
+        *,
+        step: float = 0.1,
+        fps: int = 30,
+        play: bool = True,
+        repetitions: int = 1,
+        notes: Sequence[str] = (),
     ) -> list[tuple[float, float, str]]:
         """Send the frames as one meshcat animation (play / pause / time slider in the panel).
 
@@ -561,13 +580,17 @@ class EllipsoidViewer(MeshcatScene):
         kinds = {key: sets[key].kind for sets in per_frame for key in sets}
         first = frames[0]
         self._show(first.q, first.analysis, first.locked, self._outlined(frames))
-        if len(frames) > 1:  # frame the whole motion, not only its start
-            self.frame_camera(frames)
+        if len(frames) > 1:  # frame the whole motion, not only its start, or follow it
+            starts, t = [], 0.0
+            for frame in frames:
+                starts.append([t] if frame.hold <= 0 else [t, t + frame.hold])
+                t = starts[-1][-1] + step
+            self.frame_camera(frames, starts)
         shown: dict = {}  # each set as drawn in the legend: its first non-empty frame
         for key in keys:
             shown[key] = next((s[key] for s in per_frame if key in s and not s[key].empty), None)
             shown[key] = shown[key] or next(s[key] for s in per_frame if key in s)
-        self._legend(shown, f"{self._title(first.analysis)}, {len(frames)} frames (play them in Animations)")
+        self._legend(shown, f"{self._title(first.analysis)}, {len(frames)} frames (play them in Animations)", notes)
         if any_locked and not self._locked_visible:
             self.set_locked_visible(True)
         with self._commands():  # a set empty (or absent) in the first frame may appear later: scale hides it

@@ -51,6 +51,10 @@ def team_figure_of(analysis: TeamAnalysis, sweep: TeamSweep | None = None, *, sc
     ax.plot(hands[:, 0], hands[:, 1], "-", color="#8c6d31", lw=6, alpha=0.6, solid_capstyle="round", zorder=2,
             label="object (through its grasps)")  # fmt: skip
     center = team.held_object.center
+    if team.object_shape is not None:  # its solid's footprint (the box around a cylinder's)
+        footprint = team.object_shape.corners(center, team.object_yaw)[[0, 2, 6, 4, 0], :2]
+        ax.fill(footprint[:, 0], footprint[:, 1], color="#c49a5a", alpha=0.45, zorder=1,
+                label=f"object: {team.object_shape.describe()}")  # fmt: skip
     ax.plot(*center[:2], "k+", ms=10, zorder=5, label="object centre")
     velocity = [n for n in analysis.measures if get_measure(n).quantity.limits == "velocity"]
     sets = {n: analysis.measure(n) for n in velocity}

@@ -5,8 +5,10 @@ Scene paths (under meshcat's root ``/meshcat``):
 ================================== ==============================================================
 ``mobmanip/team/robots/NAME``      robot ``NAME``'s visual geometry (Pinocchio's
                                    ``MeshcatVisualizer``), at its configuration
-``mobmanip/team/object``           the object: a white sphere at its centre and a brown segment
-                                   from it to each grasping hand
+``mobmanip/team/object``           the object: a white sphere at its centre, a brown segment
+                                   from it to each grasping hand and, when the team's description
+                                   gives its solid (:class:`~mobmanip.team.members.ObjectShape`),
+                                   that box or cylinder (``body``) at the object's pose
 ``mobmanip/team/sets/K``           the team's set of measure ``K``, drawn at the object's centre
                                    by the drawing of its kind (:mod:`mobmanip.viz.shapes`), in the
                                    measure's colour, at the scale of its quantity
@@ -37,8 +39,9 @@ from numpy.typing import ArrayLike
 
 from ..measures import get_measure
 from ..team.analysis import TeamAnalysis
+from ..team.members import ObjectShape
 from . import page as _page
-from .animation import camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
+from .animation import FOLLOW_FRAMES, camera_samples, geometry_paths, robot_poses, set_extent, set_pose, write_keyframe
 from .meshcat_scene import MeshcatScene
 from .nesting import nested, outlined
 from .scene import DEFAULT_SIZE, FLOOR_COLOR, OBJECT_COLOR, OBJECT_RADIUS, planar_thickness, scene_color, visual_model
@@ -49,6 +52,23 @@ __all__ = ["TEAM_PATH", "TeamFrame", "TeamViewer", "team_scales"]
 
 TEAM_PATH = "mobmanip/team"
 OBJECT_LINK_COLOR = 0x8C6D31
+#: The object's solid: see-through, so that the sets drawn at its centre stay visible.
+OBJECT_BODY_COLOR = 0xC49A5A
+OBJECT_BODY_OPACITY = 0.45
+
+
+def object_body(shape: ObjectShape, yaw: float):
+    """The meshcat geometry of an object's solid and its pose (4x4) about the object's centre,
+    ``yaw`` (rad) its heading: a box of its size, or a cylinder (meshcat's along its y axis,
+    turned onto the object's x)."""
+    import meshcat.geometry as mg
+
+    pose = np.eye(4)
+    pose[:3, :3] = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
+    if shape.kind == "box":
+        return mg.Box(list(shape.size)), pose
+    pose[:3, :3] = pose[:3, :3] @ pin.rpy.rpyToMatrix(0.0, 0.0, -0.5 * math.pi)
+    return mg.Cylinder(shape.size[0], 0.5 * shape.size[1]), pose
 
 
 @dataclass(frozen=True)
@@ -152,6 +172,12 @@ class TeamViewer(MeshcatScene):
         self._vis[f"{path}/grasps"].set_object(
             mg.LineSegments(mg.PointsGeometry(segments), line_material(OBJECT_LINK_COLOR))
         )
+        shape = self.analysis.team.object_shape
+        if shape is not None:
+            geometry, pose = object_body(shape, self.analysis.team.object_yaw)
+            material = mg.MeshLambertMaterial(color=OBJECT_BODY_COLOR, opacity=OBJECT_BODY_OPACITY, transparent=True)
+            self._vis[f"{path}/body"].set_object(geometry, material)
+            self._vis[f"{path}/body"].set_transform(pose)
         self._vis[path].set_transform(translation(obj.center))
 
     def _draw_sets(self, scales: dict[str, float]) -> dict[str, float]:
@@ -223,38 +249,54 @@ class TeamViewer(MeshcatScene):
         rows, notes = _page.legend_rows(
             {(False, name): s for name, s in self._sets.items()}, scales, {}, OBJECT_COLOR, inner
         )
+        shape = self.analysis.team.object_shape
+        if shape is not None:
+            rows.append(
+                {"color": _page.color_hex(OBJECT_BODY_COLOR), "style": "solid", "text": f"object: {shape.describe()}"}
+            )
         with self._commands():
             self._send_page(title=title, rows=rows, notes=[*notes, *more])
 
-    def frame_camera(self, frames: Sequence[TeamFrame]) -> dict:
+    def frame_camera(self, frames: Sequence[TeamFrame], times: Sequence[float] | None = None) -> dict:
         """Frame every robot (its visual geometry), the object and the drawn sets of the frames (up
         to :data:`~mobmanip.viz.animation.CAMERA_FRAMES` of them, evenly spread, the last
         included), seen as the single robot's page sees its robot, from the first robot's platform
-        heading in the first frame.
+        heading in the first frame. Given the frames' ``times`` (s) in an animation, a motion
+        that travels far is followed instead (:func:`mobmanip.viz.page.animation_request`, up to
+        :data:`~mobmanip.viz.animation.FOLLOW_FRAMES` frames).
 
         Returns:
             The camera request sent (see :mod:`mobmanip.viz.page`).
         """
-        points, boxes = [np.zeros((0, 3))], []
-        for i in camera_samples(len(frames)):
-            analysis = frames[i].analysis
-            team = analysis.team
-            for member in team.members:
-                viz = self._robots[member.name]
-                points.append(_page.visual_points(viz.model, viz.visual_model, member.q))
-            center = team.held_object.center
-            points.append(center + team.held_object.offsets)  # the grasp segments' ends
-            boxes.append(_page.sphere_box(center, OBJECT_RADIUS))
-            for name, task_set in analysis.measures.items():
-                if name in self._sets and not task_set.empty:
-                    more, around = set_extent(
-                        task_set, team.task, center, self._set_scale(name), planar_thickness(name)
-                    )
-                    points.append(more)
-                    boxes.extend(around)
         first = frames[0].analysis.team.members[0]
         heading = math.atan2(first.q[3], first.q[2]) if first.robot.model.nq >= 4 else 0.0
-        return self._send_fit(np.vstack(points), boxes, heading)
+        if times is not None and len(frames) > 1:
+            picked = camera_samples(len(frames), FOLLOW_FRAMES)
+            extents = [self._frame_extent(frames[i]) for i in picked]
+            return self._send_animation_camera(extents, [[float(times[i])] for i in picked], heading)
+        return self._send_fit(
+            np.vstack([self._frame_extent(frames[i]) for i in camera_samples(len(frames))]), [], heading
+        )
+
+    def _frame_extent(self, frame: TeamFrame) -> np.ndarray:
+        """Points (n, 3) whose box holds what one frame draws: the robots, the object, the sets."""
+        points, boxes = [np.zeros((0, 3))], []
+        analysis = frame.analysis
+        team = analysis.team
+        for member in team.members:
+            viz = self._robots[member.name]
+            points.append(_page.visual_points(viz.model, viz.visual_model, member.q))
+        center = team.held_object.center
+        points.append(center + team.held_object.offsets)  # the grasp segments' ends
+        if team.object_shape is not None:
+            points.append(team.object_shape.corners(center, team.object_yaw))
+        boxes.append(_page.sphere_box(center, OBJECT_RADIUS))
+        for name, task_set in analysis.measures.items():
+            if name in self._sets and not task_set.empty:
+                more, around = set_extent(task_set, team.task, center, self._set_scale(name), planar_thickness(name))
+                points.append(more)
+                boxes.extend(around)
+        return np.vstack([*points, *(_page.box_corners(*box) for box in boxes)])
 
     # ----- animation
 
@@ -278,7 +320,7 @@ class TeamViewer(MeshcatScene):
         if not frames or len(frames) != len(times):
             raise ViewerError(f"an animation needs one time per frame, got {len(frames)} frames, {len(times)} times")
         self._legend(f"{self._title()}, {len(frames)} frames (play them in Animations)", notes)
-        self.frame_camera(frames)
+        self.frame_camera(frames, times)
         animation = ma.Animation(default_framerate=fps)
         paths = {name: geometry_paths(viz, viz.visual_model) for name, viz in self._robots.items()}
         previous: dict = {}  # set name -> (pose, semi-axes) of the last frame drawn

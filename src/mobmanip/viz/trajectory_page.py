@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import types
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,6 +22,9 @@ from ..motion.trajectory import Trajectory
 from ..robot.model import Robot
 from ..terms.grasp import HeldObject
 from .scene import Frame
+
+if TYPE_CHECKING:
+    from ..motion.carry import CarryResult
 
 #: Frames drawn at most: a longer trajectory is thinned to about this many.
 MAX_FRAMES = 200
@@ -88,11 +92,12 @@ def trajectory_frames(
     return frames, trajectory.t[picked] - trajectory.t[0]
 
 
-def animate_trajectory(viewer, frames: list[Frame], times: np.ndarray, *, play: bool = True):
+def animate_trajectory(viewer, frames: list[Frame], times: np.ndarray, *, play: bool = True, notes=()):
     """Send the frames to an :class:`~mobmanip.viz.scene.EllipsoidViewer` as one animation at
-    the trajectory's pace (frames equally spaced in time; the last at the trajectory's end)."""
+    the trajectory's pace (frames equally spaced in time; the last at the trajectory's end);
+    ``notes`` go under the legend."""
     step = float(times[-1] / (len(times) - 1)) if len(times) > 1 else 0.1
-    return viewer.animate(frames, step=step, play=play)
+    return viewer.animate(frames, step=step, play=play, notes=notes)
 
 
 def export_trajectory_page(
@@ -117,4 +122,41 @@ def export_trajectory_page(
     )
     with EllipsoidViewer(robot) as viewer:
         animate_trajectory(viewer, frames, times)
+        return viewer.export_html(path)
+
+
+def export_carry_page(
+    robot: Robot,
+    result: CarryResult,
+    path: str | Path,
+    *,
+    every: int | None = None,
+    object_mass: float | None = None,
+) -> Path:
+    """Write the page of ``mobmanip carry ... --export PAGE.html``: the QP motion (the self-motion
+    before the path first, when there is one) played with its in-motion ellipsoids, as
+    :func:`export_trajectory_page` plays a trajectory; the camera follows the robot when it drives
+    off (:func:`mobmanip.viz.page.animation_request`).
+
+    Returns:
+        The page's path.
+    """
+    from ..motion.trajectory import trajectory_from_samples
+    from .scene import EllipsoidViewer
+
+    runs = [run for run in (result.preparation, result.motion) if run is not None]
+    # the self-motion's last sample is the motion's first
+    t = np.concatenate([run.t[:-1] for run in runs[:-1]] + [runs[-1].t])
+    q = np.concatenate([run.q[:-1] for run in runs[:-1]] + [runs[-1].q])
+    trajectory = trajectory_from_samples(robot, t, q)
+    frames, times = trajectory_frames(robot, trajectory, result.task, every=every, object_mass=object_mass)
+    notes = []
+    if result.preparation is not None:
+        prep = result.preparation
+        notes.append(
+            f"0 to {prep.t[-1] - prep.t[0]:.2f} s: the self-motion to a better posture, the object held still; "
+            "then the path"
+        )
+    with EllipsoidViewer(robot) as viewer:
+        animate_trajectory(viewer, frames, times, notes=notes)
         return viewer.export_html(path)
