@@ -73,3 +73,79 @@ def test_a_map_extent_around_the_object_is_not_refused(tmp_path, capfd):
     )  # fmt: skip
     assert code == 0, err
     assert "platform positions hold the object" in out
+
+
+# --- Round 3 (issue 40): what the fuzzers of team-carry, collision-matrix, site, xacro and MJCF
+# found. -------------------------------------------------------------------------------------
+
+SITE_HEAD = 'robot = "planar_dual_arm"\nobjective = "kinematic:capacity:+x"\nstarts = 1\n'
+
+
+@pytest.mark.parametrize(
+    ("positions", "needles"),
+    [
+        ("[[1.0, " + "9" * 400 + ", 0.35]]", ("positions[0][1] is an integer of 400 digits",)),
+        ("[[1.0, 0.5, 0.35], [-" + "9" * 309 + ", 0.5, 0.35]]", ("positions[1][0] is an integer of 309 digits",)),
+        ("[[1.0, 0.5, 0.35], [1.5, nan, 0.35]]", ("positions[1][1] = nan must be finite",)),
+        ("[[1.0, 0.5, -inf]]", ("positions[0][2] = -inf must be finite",)),
+    ],
+)
+def test_a_site_position_no_float_holds_is_named(tmp_path, capfd, positions, needles):
+    """An integer of hundreds of digits among a site's positions was an internal error
+    (OverflowError); now one line names the entry, as a non-finite one is named."""
+    site = tmp_path / "site.toml"
+    site.write_text(SITE_HEAD + f"positions = {positions}\n")
+    code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out", "--no-progress")
+    assert_one_line_error(code, err, str(site), *needles)
+    assert out == "" and not (tmp_path / "out").exists()
+
+
+def test_a_site_position_of_a_large_but_finite_integer_is_not_an_overflow(tmp_path):
+    """10**300 m is a float: it is read (and the placement then finds the object out of reach),
+    not refused as too large for a float."""
+    from mobmanip.placement.site import Site
+
+    site = tmp_path / "site.toml"
+    site.write_text(SITE_HEAD + f"positions = [[1.0, {10**300}, 0.35]]\n")
+    assert Site.read(site).positions[0, 1] == 1e300
+
+
+MJCF = """<mujoco model="m">
+  <worldbody>
+    <body name="base"><freejoint/><inertial pos="0 0 0" mass="10" diaginertia="0.1 0.2 0.25"/>
+      <body name="arm" pos="0 0 0.3"><joint name="j" axis="0 1 0" range="-1 1"/>
+        <geom type="{kind}" size="{size}" mass="1"/><site name="tool" pos="0.3 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize(
+    ("kind", "size", "needle"),
+    [
+        ("box", "0.1 0.2", "a box needs 3 size numbers, got size='0.1 0.2'"),
+        ("box", "1e309", "a box needs 3 size numbers, got size='1e309'"),
+        ("capsule", "0.03", "a capsule needs 2 size numbers"),
+        ("ellipsoid", "0.1", "an ellipsoid needs 3 size numbers"),
+        ("sphere", "abc", "size is not numeric: 'abc'"),
+    ],
+)
+def test_an_mjcf_geom_with_too_few_or_unreadable_sizes_is_named(tmp_path, capfd, kind, size, needle):
+    """A box of one size number was an internal error (IndexError); now one line names the file,
+    the body and what the geom's type needs."""
+    path = tmp_path / "robot.xml"
+    path.write_text(MJCF.format(kind=kind, size=size))
+    code, out, err = run_cli(capfd, "analyze", "--urdf", path, "--ee", "tool")
+    assert_one_line_error(code, err, f"MJCF {path}", "body 'arm'", needle)
+    assert out == ""
+
+
+def test_an_mjcf_geom_with_its_sizes_is_read(tmp_path):
+    from mobmanip.descriptions import read_description
+
+    path = tmp_path / "robot.xml"
+    path.write_text(MJCF.format(kind="box", size="0.1 0.2 0.3"))
+    (shape,) = [s for link in read_description(path).links.values() for s in link.collisions + link.visuals][:1]
+    assert shape.size == pytest.approx((0.2, 0.4, 0.6))

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import math
+import sys
 import time
 import tomllib
 from collections.abc import Callable, Mapping
@@ -181,6 +182,15 @@ def _check_count(count: int, detail: str, check_count: CountCheck | None) -> Non
         check_count(count, detail)
 
 
+def _unrepresentable(raw) -> str:
+    """Where ``raw`` (the positions as read) holds an integer too large for a float, and its size."""
+    for i, row in enumerate(raw):
+        for j, value in enumerate(row if isinstance(row, list) else [row]):
+            if isinstance(value, int) and not isinstance(value, bool) and abs(value) > sys.float_info.max:
+                return f"positions[{i}][{j}] is an integer of {len(str(abs(value)))} digits, too large for metres"
+    return "'positions' holds a number too large for metres"
+
+
 def _positions(
     document: Mapping, where: str, check_count: CountCheck | None = None
 ) -> tuple[np.ndarray, tuple[int, int, int] | None]:
@@ -194,12 +204,15 @@ def _positions(
             _check_count(len(raw), f"'positions' in {where}", check_count)
         try:
             positions = np.array(raw, dtype=float)
+        except OverflowError:  # an integer of hundreds of digits: no float holds it
+            raise SpecError(f"{where}: {_unrepresentable(raw)}") from None
         except (TypeError, ValueError):
             positions = np.zeros((0, 0))
         if positions.ndim != 2 or positions.shape[1] != 3 or positions.shape[0] == 0:
             raise SpecError(f"{where}: 'positions' must be a non-empty list of [x, y, z] in metres")
         if not np.all(np.isfinite(positions)):
-            raise SpecError(f"{where}: 'positions' must be finite")
+            i, j = np.argwhere(~np.isfinite(positions))[0]
+            raise SpecError(f"{where}: positions[{i}][{j}] = {positions[i, j]} must be finite")
         shape = None
     else:
         grid = document["grid"]
