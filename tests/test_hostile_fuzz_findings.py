@@ -149,3 +149,62 @@ def test_an_mjcf_geom_with_its_sizes_is_read(tmp_path):
     path.write_text(MJCF.format(kind="box", size="0.1 0.2 0.3"))
     (shape,) = [s for link in read_description(path).links.values() for s in link.collisions + link.visuals][:1]
     assert shape.size == pytest.approx((0.2, 0.4, 0.6))
+
+
+@pytest.mark.parametrize(
+    ("grid", "needle"),
+    [
+        (
+            "x = [1.0, " + "9" * 400 + ", 2]\ny = 0.5\nz = 0.35",
+            "[grid] x must be finite, got 1.0, an integer of 400 digits",
+        ),
+        ("x = 1.0\ny = -" + "9" * 400 + "\nz = 0.35", "[grid] y must be finite, got an integer of 400 digits"),
+        ("x = 1.0\ny = 0.5\nz = [0.1, inf, 2]", "[grid] z must be finite, got 0.1, inf"),
+    ],
+)
+def test_a_site_grid_axis_no_float_holds_is_named(tmp_path, capfd, grid, needle):
+    """The longer run (seed 7): a grid axis ending at an integer of 400 digits was an internal
+    error (OverflowError); now the axis and the value are named."""
+    site = tmp_path / "site.toml"
+    site.write_text(SITE_HEAD + f"[grid]\n{grid}\n")
+    code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out", "--no-progress")
+    assert_one_line_error(code, err, str(site), needle)
+    assert out == "" and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("mass", "shown"), [("inf", "inf"), ("nan", "nan"), ("9" * 400, "an integer of 400 digits"), ("-1", "-1")]
+)
+def test_a_site_mass_that_is_not_finite_is_refused(tmp_path, capfd, mass, shown):
+    """The longer run (seed 7): ``mass = inf`` ran every position, wrote a table whose every row
+    gave the same reason and exited 0; a mass that is no finite number is refused on reading."""
+    site = tmp_path / "site.toml"
+    site.write_text(SITE_HEAD + f"mass = {mass}\npositions = [[1.0, 0.5, 0.35]]\n")
+    code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out", "--no-progress")
+    assert_one_line_error(code, err, str(site), f"'mass' must be a finite non-negative number of kg, got {shown}")
+    assert out == "" and not (tmp_path / "out").exists()
+
+
+def test_a_work_count_no_float_holds_is_refused_by_its_length(tmp_path, capfd):
+    """The longer run (seed 7): ``collision-matrix --samples`` with 400 digits was an internal
+    error (OverflowError) while the work bound described it; now the bound refuses it by its
+    length."""
+    code, out, err = run_cli(capfd, "collision-matrix", "planar_dual_arm", "--samples", "9" * 400,
+                             "--out", tmp_path / "m.json")  # fmt: skip
+    assert_one_line_error(code, err, "a number of 400 digits of", "--max-work")
+    assert out == "" and list(tmp_path.iterdir()) == []
+
+
+def test_an_inertia_warning_against_a_geometry_of_absurd_size_prints_no_infinity(tmp_path, capfd):
+    """The longer run (seed 7): a xacro wheel 1e308 m long gave the warning "trace inf kg m^2, inf
+    times more", in the terminal and in the JSON; it now says the trace is beyond any float."""
+    from hostile_util import NON_FINITE
+    from test_hostile_fuzz_commands import XACRO_TEXT
+
+    robot = tmp_path / "robot.urdf.xacro"
+    robot.write_text(XACRO_TEXT.replace('length="0.04"', 'length="1e308"'))
+    out_json = tmp_path / "a.json"
+    code, out, err = run_cli(capfd, "analyze", "--urdf", robot, "--ee", "tool", "--json", out_json)
+    assert code == 0, err
+    assert "has a trace beyond any float" in err
+    assert NON_FINITE.search(out + err + out_json.read_text()) is None

@@ -45,10 +45,18 @@ class WorkEstimate:
 
     @property
     def seconds(self) -> float:
-        return self.count * self.seconds_each
+        try:
+            return self.count * self.seconds_each
+        except OverflowError:  # a count of hundreds of digits, typed on the command line
+            return math.inf
 
     def describe(self) -> str:
-        count = f"{self.count:,.0f}" if self.count < 1e15 else f"{self.count:.3g}"
+        if self.count < 1e15:
+            count = f"{self.count:,.0f}"
+        elif self.count <= sys.float_info.max:
+            count = f"{self.count:.3g}"
+        else:  # an integer no float holds
+            count = f"a number of {len(str(abs(int(self.count))))} digits of"
         detail = f" ({self.detail})" if self.detail else ""
         return f"{count} {self.units}{detail}, about {duration(self.seconds)}"
 
