@@ -208,3 +208,24 @@ def test_an_inertia_warning_against_a_geometry_of_absurd_size_prints_no_infinity
     assert code == 0, err
     assert "has a trace beyond any float" in err
     assert NON_FINITE.search(out + err + out_json.read_text()) is None
+
+
+@pytest.mark.parametrize("command", ["carry", "team-carry"])
+def test_a_preparation_longer_than_any_float_counts_is_refused_by_the_work_bound(tmp_path, capfd, command):
+    """The longer run (seed 11): ``--prepare 1e308`` makes a step count of infinity, which the
+    work bound's description turned into an internal error (OverflowError)."""
+    target = ["planar_dual_arm"] if command == "carry" else ["examples/beam_team.toml"]
+    code, out, err = run_cli(capfd, command, *target, "--path", "examples/carry_line.csv", "--prepare", "1e308",
+                             "--out", tmp_path / "out")  # fmt: skip
+    assert_one_line_error(code, err, "more than any float counts of", "--max-work")
+    assert out == "" and list(tmp_path.iterdir()) == []
+
+
+def test_a_friction_coefficient_no_float_holds_is_named(tmp_path, capfd):
+    """The longer run (seed 11): a site's ``[grounded] mu`` of 400 digits was an internal error
+    (OverflowError in math.isfinite); it is now above the largest friction coefficient."""
+    site = tmp_path / "site.toml"
+    site.write_text(SITE_HEAD + "positions = [[1.0, 0.5, 0.35]]\n[grounded]\nmu = " + "9" * 400 + "\n")
+    code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out", "--no-progress")
+    assert_one_line_error(code, err, "[grounded] mu 9999", "is above 10")
+    assert out == "" and not (tmp_path / "out").exists()

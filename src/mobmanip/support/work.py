@@ -55,8 +55,10 @@ class WorkEstimate:
             count = f"{self.count:,.0f}"
         elif self.count <= sys.float_info.max:
             count = f"{self.count:.3g}"
-        else:  # an integer no float holds
-            count = f"a number of {len(str(abs(int(self.count))))} digits of"
+        elif isinstance(self.count, int):  # an integer no float holds
+            count = f"a number of {len(str(abs(self.count)))} digits of"
+        else:  # e.g. --prepare 1e308 s over a step of 0.02 s
+            count = "more than any float counts of"
         detail = f" ({self.detail})" if self.detail else ""
         return f"{count} {self.units}{detail}, about {duration(self.seconds)}"
 
