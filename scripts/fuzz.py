@@ -2,13 +2,14 @@
 
 The test suite runs each fuzzer on a few fixed cases (``tests/test_hostile_fuzz.py`` for
 ``analyze``: mutated URDFs, specs and configurations; ``tests/test_hostile_fuzz_commands.py`` for
-``carry``, ``trajectory``, ``place`` and ``team``). This runs the same tests with
+``carry``, ``trajectory``, ``place``, ``team``, ``team-carry``, ``collision-matrix`` and ``site``,
+and for the robot-file readers: ``xacro`` and ``mjcf``, analysed). This runs the same tests with
 ``MOBMANIP_FUZZ_CASES`` cases per command from ``MOBMANIP_FUZZ_SEED``, goes on past a broken case,
 and prints per command the cases run, how they ended (one error line or a finite result) and
 every case that broke the promise, with its command line. Exit code 1 when any did.
 
     python scripts/fuzz.py --cases 1000 --seed 7
-    python scripts/fuzz.py --cases 100000 --seconds 600 --commands carry,team
+    python scripts/fuzz.py --cases 100000 --seconds 600 --commands carry,team,xacro
 
 Each case runs in this process (a tenth to half a second each); ``--seconds`` bounds each
 command's share. Run it from the repository's root, with mobmanip importable.
@@ -25,7 +26,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-COMMANDS = ("analyze", "carry", "trajectory", "place", "team")
+COMMANDS = ("analyze", "carry", "trajectory", "place", "team", "team-carry", "collision-matrix", "site",
+            "xacro", "mjcf")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -63,9 +65,9 @@ def main(argv: list[str] | None = None) -> int:
         print("no fuzz test reported (did pytest fail to start?)", file=sys.stderr)
         return 1
     print(f"\nseed {args.seed}, up to {args.cases} cases each")
-    print(f"{'test':<16}{'cases':>8}{'error':>8}{'result':>8}{'broken':>8}")
+    print(f"{'test':<18}{'cases':>8}{'error':>8}{'result':>8}{'broken':>8}")
     for line in lines:
-        print(f"{line['test']:<16}{line['cases']:>8}{line['error']:>8}{line['result']:>8}{len(line['problems']):>8}")
+        print(f"{line['test']:<18}{line['cases']:>8}{line['error']:>8}{line['result']:>8}{len(line['problems']):>8}")
     broken = [(line["test"], problem) for line in lines for problem in line["problems"]]
     for test, problem in broken:
         print(f"{test}: {problem}")

@@ -761,3 +761,19 @@ def _linprog(cost, A_ub: list, rows: list, rhs: list, bounds: list, what: str, b
     if result.status != 0:
         raise RuntimeError(f"{what} failed: {result.message}")
     return result
+
+
+def ramp_gravity(ramp) -> np.ndarray:
+    """Gravity in the axes of a ramp ``(slope, uphill)`` (degrees), m/s^2, (3,), from first
+    principles and not from the floor under test (shared by the ramp references: a gravity leaning
+    the wrong way in the code must not lean the reference alike): the ramp is the level floor
+    turned by its slope s about the horizontal axis u x z, u the uphill direction (cos a, sin a,
+    0), so that u rises (to u cos s + z sin s); the world's gravity (0, 0, -9.81) seen in the
+    turned axes is R^T g, R from Rodrigues' formula."""
+    s, a = np.radians(ramp[0]), np.radians(ramp[1])
+    u, z = np.array([np.cos(a), np.sin(a), 0.0]), np.array([0.0, 0.0, 1.0])
+    k = np.cross(u, z)
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    R = np.eye(3) + np.sin(s) * K + (1.0 - np.cos(s)) * K @ K
+    np.testing.assert_allclose(R @ u, np.cos(s) * u + np.sin(s) * z, atol=1e-15)  # uphill rises
+    return R.T @ np.array([0.0, 0.0, -9.81])

@@ -5,8 +5,8 @@ Checked three ways: against the independent whole-robot LP (tests/floor_referenc
 generalized gravity from Pinocchio's own model with gravity leaning), against the statics of the
 whole robot at rest (the floor carries the weight, the wheels alone hold it along the ramp), and
 in MuJoCo with gravity leaning (tests/mujoco_referee.py), whose floor is level. Every reference's
-gravity is worked out here from the ramp's slope and uphill direction (``_gravity``), never read
-from the floor under test: a gravity leaning the wrong way would lean both sides alike.
+gravity is worked out from the ramp's slope and uphill direction (``floor_reference.ramp_gravity``),
+never read from the floor under test: a gravity leaning the wrong way would lean both sides alike.
 
 The paper robot's object is held level here (``Floor(level=True)``), as MuJoCo's weld holds it.
 """
@@ -18,7 +18,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from floor_reference import PAPER_CASTERS, build_problem, force_support, straight_line, support
+from floor_reference import PAPER_CASTERS, build_problem, force_support, ramp_gravity, straight_line, support
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.errors import MobmanipError
 from mobmanip.postures.named import named_configuration
@@ -40,20 +40,6 @@ def _case(name):
         return robot, named_configuration(robot, "hold"), "spatial", None
     robot = mobmanip.load_robot("planar_dual_arm")
     return robot, configuration_at(robot, optimal_posture(robot), 0.0), "planar", PAPER_CASTERS
-
-
-def _gravity(ramp):
-    """Gravity in a ramp's axes (m/s^2), (3,), from first principles and not from the floor under
-    test: the ramp is the level floor turned by its slope s about the horizontal axis u x z, u
-    the uphill direction (cos a, sin a, 0), so that u rises (to u cos s + z sin s); the world's
-    gravity (0, 0, -9.81) seen in the turned axes is R^T g, R from Rodrigues' formula."""
-    s, a = np.radians(ramp[0]), np.radians(ramp[1])
-    u, z = np.array([np.cos(a), np.sin(a), 0.0]), np.array([0.0, 0.0, 1.0])
-    k = np.cross(u, z)
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    R = np.eye(3) + np.sin(s) * K + (1.0 - np.cos(s)) * K @ K
-    np.testing.assert_allclose(R @ u, np.cos(s) * u + np.sin(s) * z, atol=1e-15)  # uphill rises
-    return R.T @ np.array([0.0, 0.0, -9.81])
 
 
 def _axes(m):
@@ -86,7 +72,8 @@ def test_on_a_ramp_the_reaches_equal_the_independent_lp(case, ramp, floor):
     constraint = Floor(level=True, **options, slope=ramp[0], uphill=ramp[1])
     analysis = mobmanip.analyze(robot, q, task, object_mass=MASS, constraints=(constraint,),
                                 measures=("dynamic_polytope", "dynamic_polytope_min_norm"))  # fmt: skip
-    problem = build_problem(robot, q, task, analysis.held_object, casters=casters, gravity=_gravity(ramp), level=True)
+    gravity = ramp_gravity(ramp)
+    problem = build_problem(robot, q, task, analysis.held_object, casters=casters, gravity=gravity, level=True)
     P, policy = analysis.measures["dynamic_polytope"], analysis.measures["dynamic_polytope_min_norm"]
     for e in _axes(P.dim):
         ref = straight_line(problem, e, mode=mode, mu=mu, springs=springs, reserve=reserve).value
@@ -104,7 +91,7 @@ def test_the_force_capacity_on_a_ramp_equals_the_independent_lp(case):
                                 constraints=(constraint,))  # fmt: skip
     F = analysis.measures["force_polytope"]
     problem = build_problem(
-        robot, q, task, analysis.held_object, casters=casters, gravity=_gravity((8.0, 30.0)), level=True
+        robot, q, task, analysis.held_object, casters=casters, gravity=ramp_gravity((8.0, 30.0)), level=True
     )
     for e in _axes(F.dim):
         ref = force_support(problem, e, mode="friction", mu=0.5, springs=True).value
@@ -149,7 +136,7 @@ def test_at_rest_on_a_ramp_the_floor_carries_the_weight_and_the_wheels_hold_it(c
         total += f
         if not contact["driven"]:
             assert b - a == 1  # a caster: its normal only
-    weight = (pin.computeTotalMass(robot.model) + MASS) * _gravity(ramp)
+    weight = (pin.computeTotalMass(robot.model) + MASS) * ramp_gravity(ramp)
     np.testing.assert_allclose(total, -weight, atol=1e-7 * np.linalg.norm(weight))
     assert np.hypot(*total[:2]) == pytest.approx(np.linalg.norm(weight) * np.sin(np.radians(ramp[0])), rel=1e-9)
     reaction = ground_reaction(info, forces)
@@ -185,7 +172,7 @@ def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
     P = mobmanip.analyze(robot, q, task, object_mass=MASS, measures=("dynamic_polytope",),
                          constraints=(constraint,)).measures["dynamic_polytope"]  # fmt: skip
     referee = build(robot, q, support_points=casters, object=_object(robot, q, task), mu=0.5,
-                    gravity=_gravity(ramp))  # fmt: skip
+                    gravity=ramp_gravity(ramp))  # fmt: skip
     gave_way = []
     for e in _axes(base):
         target = P.straight_line_reach(e) * e
@@ -197,7 +184,7 @@ def test_on_a_ramp_each_maximum_is_mujocos(name, ramp, reserve):
 
 
 @pytest.mark.parametrize("ramp", [(0.0, 0.0), (5.0, 0.0), (5.0, 90.0), (3.0, -135.0)])
-def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_along_gravity(ramp):
+def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_alongramp_gravity(ramp):
     """Statics in closed form: with no motion at all (the force problem at f = 0), the centre of
     pressure of the normal forces is where the line through the centre of mass (robot and object)
     along gravity meets the floor: downhill of the level floor's by h tan s."""
@@ -205,7 +192,7 @@ def test_standing_still_on_a_ramp_the_zmp_is_the_centre_of_mass_projected_along_
     F = analysis.measures["force_polytope"]
     reaction = ground_reaction(F.model["floor"], F.witness_at(np.zeros(6)).variables[CONTACT_FORCES])
     z0 = np.mean([contact["point"][2] for contact in F.model["floor"]["contacts"]])
-    seen = _seen_along_gravity(robot, q, analysis, z0, _gravity(ramp))
+    seen = _seen_along_gravity(robot, q, analysis, z0, ramp_gravity(ramp))
     np.testing.assert_allclose(reaction["zmp"], seen, atol=1e-9)
 
 
@@ -267,7 +254,7 @@ def test_an_empty_set_on_a_ramp_says_where_the_weight_presses():
                                 constraints=(constraint,))  # fmt: skip
     assert analysis.measures["dynamic_polytope"].empty
     z0 = np.mean([p["point"][2] for p in analysis.measures["dynamic_polytope"].model["floor"]["contacts"]])
-    seen = _seen_along_gravity(robot, q, analysis, z0, _gravity((5.0, 30.0)))
+    seen = _seen_along_gravity(robot, q, analysis, z0, ramp_gravity((5.0, 30.0)))
     level = _seen_along_gravity(robot, q, analysis, z0, np.array([0.0, 0.0, -9.81]))
     warning = next(w for w in analysis.warnings if "on the floor is empty" in w)
     assert "would bring below its reserve (0.3 of an equal share)" in warning
@@ -288,7 +275,7 @@ def test_the_zmp_at_rest_is_the_statics_where_the_robot_can_stand_still(ramp, st
     P = analysis.measures["dynamic_polytope"]
     found = floor_at_rest(P)
     assert found["still"] is still
-    statics = _seen_along_gravity(robot, q, analysis, found["floor_z"], _gravity(ramp))
+    statics = _seen_along_gravity(robot, q, analysis, found["floor_z"], ramp_gravity(ramp))
     if still:
         np.testing.assert_allclose(found["zmp"], statics, atol=1e-9)
     else:

@@ -265,10 +265,83 @@ def test_grounded_force_polytope_equals_the_whole_robot_lp(which, floor, request
     assert max(errors) <= LP_RTOL, max(errors)
 
 
+def _binding_rows_of_its_own_lp(polytope, e, robot) -> tuple[float, set]:
+    """The straight-line push along ``e`` solved here with HiGHS over the set's rows (max s with
+    the task point s e, every equation and inequality row, every bound) and the inequality rows
+    whose multipliers (``res.ineqlin.marginals``) are not zero, each named from its contents, not
+    from the set's labels: a row on one effort tau_k with bound the robot's limit k is that joint's
+    effort limit (its sign the coefficient's); a row -lambda_n <= 0 on one contact force is that
+    contact lifting off; a row on a wheel's forces with a negative coefficient on its normal
+    force is that wheel slipping. The contacts are named in the order the reference reads them
+    from the robot (floor_reference: driven wheels, then casters), their columns told apart by
+    those rows: a wheel's normal force is the one column all its friction rows weigh."""
+    from scipy.optimize import linprog
+
+    rows = polytope.lifted_rows()
+    n = len(rows.lower)
+    entries = np.abs(rows.A_ub) > 1e-12 * np.abs(rows.A_ub).max(axis=1, keepdims=True)  # cos(pi/2) is not 0
+    tau, contact = polytope.variables["tau"], polytope.variables["contact_forces"]
+    A_eq = np.vstack([np.hstack([rows.A_eq, np.zeros((len(rows.b_eq), 1))]),
+                      np.hstack([np.eye(n)[rows.task], -np.asarray(e, dtype=float)[:, None]])])  # fmt: skip
+    b_eq = np.r_[rows.b_eq, np.zeros(len(rows.task))]
+    A_ub = np.hstack([rows.A_ub, np.zeros((len(rows.b_ub), 1))])
+    bounds = [
+        (lo if np.isfinite(lo) else None, hi if np.isfinite(hi) else None) for lo, hi in zip(rows.lower, rows.upper)
+    ]
+    res = linprog(np.r_[np.zeros(n), -1.0], A_ub=A_ub, b_ub=rows.b_ub, A_eq=A_eq, b_eq=b_eq,
+                  bounds=[*bounds, (0.0, None)], method="highs")  # fmt: skip
+    assert res.status == 0, res.message
+    multipliers = res.ineqlin.marginals
+    nonzero = np.abs(multipliers) > 1e-9 * np.abs(multipliers).max()
+
+    columns = np.arange(n)
+    on_tau, on_contact = np.isin(columns, columns[tau]), np.isin(columns, columns[contact])
+    friction = [set(np.flatnonzero(used).tolist()) for used in entries
+                if used.any() and not used[~on_contact].any() and used.sum() > 1]  # fmt: skip
+    wheels: list[list[set]] = []  # the friction rows of each wheel: rows sharing a column
+    for used in friction:
+        group = next((g for g in wheels if used & set().union(*g)), None)
+        wheels.append([used]) if group is None else group.append(used)
+    normals = [set.intersection(*group) for group in wheels]  # a wheel's normal force: in all its rows
+    assert all(len(normal) == 1 for normal in normals), normals
+    wheel_normals = sorted(normal.pop() for normal in normals)
+    caster_normals = sorted(set(columns[contact].tolist()) - set().union(*friction))
+    names = dict(zip(wheel_normals, [c.name for c in fr.driven_wheels(robot)], strict=True))
+    names |= dict(zip(caster_normals, [c.name for c in fr.urdf_casters(robot)], strict=True))
+    assert len(wheel_normals) == 2 and len(caster_normals) == 4, (wheel_normals, caster_normals)
+
+    found = set()
+    for row, bound, where in zip(rows.A_ub[nonzero], rows.b_ub[nonzero], entries[nonzero]):
+        used = np.flatnonzero(where)
+        if len(used) == 1 and on_tau[used[0]]:
+            k = int(used[0] - tau.start)
+            assert bound == pytest.approx(robot.effort_limits[k], rel=1e-12)
+            found.add(("effort", robot.reduced_velocity_names[k], "+" if row[used[0]] > 0 else "-"))
+        elif len(used) == 1 and on_contact[used[0]] and row[used[0]] < 0 and bound == 0.0:
+            found.add(("lifts off", names[int(used[0])]))
+        elif on_contact[used].all():
+            (normal,) = set(used.tolist()) & set(wheel_normals)
+            assert row[normal] == pytest.approx(-0.5 * np.cos(np.pi / 8), rel=1e-12) and bound == 0.0
+            found.add(("slips", names[normal]))
+        else:
+            raise AssertionError(f"a binding row of unknown kind: {dict(zip(used, row[used]))} <= {bound}")
+    return -res.fun, found
+
+
+def _read_label(label: str) -> tuple:
+    effort = re.fullmatch(r"(\S+) effort limit \(([+-])\)", label)
+    if effort:
+        return ("effort", effort.group(1), effort.group(2))
+    contact = re.match(r"(\S+) (lifts off|slips) ", label)
+    assert contact, label
+    return (contact.group(2), contact.group(1))
+
+
 def test_what_stops_a_grounded_push(tiago):
     """TIAGo++ in its hold posture with 2 kg, on the floor with mu = 0.5: the floor never makes the
-    robot stronger (each grounded reach <= the ideal one), and where it binds the witness says
-    which contact lifts or slips."""
+    robot stronger (each grounded reach <= the ideal one), and what the witness says stops the
+    push (which effort limit, which contact lifts or slips) is what the LP's own multipliers,
+    computed here, say binds (:func:`_binding_rows_of_its_own_lp`)."""
     robot, q = tiago
     ideal = _force_sets(robot, q, "spatial", mass=MASS)[2]
     grounded = _force_sets(robot, q, "spatial", mass=MASS, constraints=(Floor(mu=0.5),))[2]
@@ -276,9 +349,12 @@ def test_what_stops_a_grounded_push(tiago):
     for e in np.vstack([np.eye(6)[:3], -np.eye(6)[:3]]):
         reach = grounded.straight_line_reach(e)
         assert reach <= ideal.straight_line_reach(e) * (1.0 + 1e-9)
+        value, binding_here = _binding_rows_of_its_own_lp(grounded, e, robot)
+        assert reach == pytest.approx(value, rel=1e-7), e
         binding = grounded.straight_line_witness(e).binding
         assert binding
-        if any("lifts off" in b or "slips" in b for b in binding):
+        assert {_read_label(label) for label in binding} == binding_here, e
+        if any(kind in ("lifts off", "slips") for kind, *_ in binding_here):
             stopped_by_floor += 1
     assert stopped_by_floor >= 1
 

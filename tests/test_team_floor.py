@@ -19,7 +19,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from floor_reference import GRAVITY, PAPER_CASTERS, build_problem, team_straight_line
+from floor_reference import GRAVITY, PAPER_CASTERS, build_problem, ramp_gravity, team_straight_line
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.postures.named import named_configuration
 from mobmanip.team import Member, Team, load_team, team_from_dict
@@ -224,12 +224,12 @@ def test_without_friction_no_robot_limits_a_reach_the_floor_forbids():
 def test_the_beam_team_on_a_ramp_equals_the_independent_lp():
     """Both robots on one ramp (6 deg, rising towards 45 deg): each robot's weight and the beam's
     lean, and the beam's own load is counted once although every robot's floor states it."""
-    constraint = Floor(level=True, mu=0.5, slope=6.0, uphill=45.0)
+    ramp = (6.0, 45.0)  # slope, uphill (deg)
+    constraint = Floor(level=True, mu=0.5, slope=ramp[0], uphill=ramp[1])
     P = analyze_team(BEAM, ("dynamic_polytope",), constraints=(constraint,)).measure("dynamic_polytope")
+    gravity = ramp_gravity(ramp)  # from the ramp itself, never from the floor under test
     problems = [
-        build_problem(
-            m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS, gravity=constraint.gravity(), level=True
-        )
+        build_problem(m.robot, m.q, BEAM.task, BEAM.held_object, casters=PAPER_CASTERS, gravity=gravity, level=True)
         for m in BEAM.members
     ]
     level = analyze_team(BEAM, ("dynamic_polytope",), constraints=(Floor(level=True, mu=0.5),)).measure(

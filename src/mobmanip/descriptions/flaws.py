@@ -53,6 +53,7 @@ read) is not judged.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -208,11 +209,15 @@ def implausible_inertia(link: str, mass: float, inertia: np.ndarray, extents: np
     if mass <= 0.0 or box <= 0.0 or trace >= PLAUSIBLE_TRACE_FRACTION * box:
         return None
     moments = ", ".join(f"{m:.3g}" for m in np.linalg.eigvalsh(0.5 * (inertia + inertia.T)))
+    ratio = box / trace if trace > 0 else math.inf
+    if math.isfinite(ratio):
+        than = f"has trace {box:.3g} kg m^2, {ratio:.3g} times more"
+    else:  # a geometry of absurd size (1e308 m) or a zero trace: no number to print
+        than = "has a trace beyond any float" if not math.isfinite(box) else f"has trace {box:.3g} kg m^2"
     problem = (
         f"rotational inertia implausibly small for its mass: {mass:.4g} kg with principal moments {moments} kg m^2 "
         f"(trace {trace:.3g}), where a solid box of that mass filling its geometry's {a:.3g} x {b:.3g} x {c:.3g} m "
-        f"bounding box has trace {box:.3g} kg m^2, {box / trace if trace > 0 else float('inf'):.3g} times more "
-        f"(below 1/{round(1 / PLAUSIBLE_TRACE_FRACTION)} of it)"
+        f"bounding box {than} (below 1/{round(1 / PLAUSIBLE_TRACE_FRACTION)} of it)"
     )
     return ImplausibleInertia(
         subject=f"link {link!r}",

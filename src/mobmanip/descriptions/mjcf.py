@@ -818,8 +818,13 @@ class _Tree:
         where = f"a geom of body {body!r}"
         # the geom's name, else its class's: what it is (Stretch's caster is a geom of class "caster")
         label = geom.get("name") or geom.get("class")
-        size = [float(v) for v in (attrs.get("size") or "0 0 0").split()]
-        if "fromto" in attrs and kind in ("capsule", "cylinder", "box", "ellipsoid"):
+        size = _floats(attrs.get("size") or "0 0 0", f"{where} size") or []
+        along = "fromto" in attrs and kind in ("capsule", "cylinder", "box", "ellipsoid")
+        needed = 1 if along else {"sphere": 1, "cylinder": 2, "capsule": 2, "box": 3, "ellipsoid": 3}.get(kind, 0)
+        if len(size) < needed:
+            article = "an" if kind[0] in "aeiou" else "a"
+            raise r.fail(f"{where}: {article} {kind} needs {needed} size numbers, got size={attrs.get('size')!r}")
+        if along:
             a, b = np.split(np.array(_floats(attrs["fromto"], f"{where} fromto", 6)), 2)
             axis = b - a
             length = float(np.linalg.norm(axis))

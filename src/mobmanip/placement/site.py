@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import math
+import sys
 import time
 import tomllib
 from collections.abc import Callable, Mapping
@@ -126,8 +127,9 @@ class Site:
         if robot.endswith(".toml") and spec_path.is_file():
             robot = str(spec_path.resolve())
         mass = document.get("mass")
-        if mass is not None and (isinstance(mass, bool) or not isinstance(mass, (int, float)) or not mass >= 0):
-            raise SpecError(f"{where}: 'mass' must be a non-negative number of kg, got {mass!r}")
+        number = isinstance(mass, (int, float)) and not isinstance(mass, bool)
+        if mass is not None and (not number or not 0 <= mass < math.inf or not math.isfinite(_float(mass))):
+            raise SpecError(f"{where}: 'mass' must be a finite non-negative number of kg, got {_shown(mass)}")
         starts = document.get("starts", DEFAULT_STARTS)
         if isinstance(starts, bool) or not isinstance(starts, int) or not 1 <= starts <= 64:
             raise SpecError(f"{where}: 'starts' must be an integer from 1 to 64, got {starts!r}")
@@ -158,17 +160,18 @@ class Site:
 def _axis(value, name: str, where: str) -> tuple[float, float, int]:
     """``(start, stop, count)`` of one grid axis, checked; nothing is allocated here."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        start = stop = float(value)
+        start = stop = _float(value)
         count = 1
     elif isinstance(value, list) and len(value) == 3 and all(isinstance(v, (int, float)) for v in value):
         start, stop, count = value
         if isinstance(count, bool) or not isinstance(count, int) or count < 1 or (count == 1 and start != stop):
             raise SpecError(f"{where}: [grid] {name} = [start, stop, count] needs a whole count >= 1")
-        start, stop = float(start), float(stop)
+        start, stop = _float(start), _float(stop)
     else:
         raise SpecError(f"{where}: [grid] {name} must be a number or [start, stop, count]")
     if not (math.isfinite(start) and math.isfinite(stop)):
-        raise SpecError(f"{where}: [grid] {name} must be finite")
+        shown = ", ".join(_shown(v) for v in (value if isinstance(value, list) else [value])[:2])
+        raise SpecError(f"{where}: [grid] {name} must be finite, got {shown}")
     return start, stop, count
 
 
@@ -179,6 +182,30 @@ def _check_count(count: int, detail: str, check_count: CountCheck | None) -> Non
         raise SpecError(f"{detail} gives {count:,} object positions, more than the {MAX_POSITIONS:,} any site may hold")
     if check_count is not None:
         check_count(count, detail)
+
+
+def _float(value: int | float) -> float:
+    """``float(value)``, or infinity for an integer no float holds (hundreds of digits)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf
+
+
+def _shown(value) -> str:
+    """A value for a message: an integer of hundreds of digits by its length."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > sys.float_info.max:
+        return f"an integer of {len(str(abs(value)))} digits"
+    return repr(value)
+
+
+def _unrepresentable(raw) -> str:
+    """Where ``raw`` (the positions as read) holds an integer too large for a float, and its size."""
+    for i, row in enumerate(raw):
+        for j, value in enumerate(row if isinstance(row, list) else [row]):
+            if isinstance(value, int) and not isinstance(value, bool) and abs(value) > sys.float_info.max:
+                return f"positions[{i}][{j}] is an integer of {len(str(abs(value)))} digits, too large for metres"
+    return "'positions' holds a number too large for metres"
 
 
 def _positions(
@@ -194,12 +221,15 @@ def _positions(
             _check_count(len(raw), f"'positions' in {where}", check_count)
         try:
             positions = np.array(raw, dtype=float)
+        except OverflowError:  # an integer of hundreds of digits: no float holds it
+            raise SpecError(f"{where}: {_unrepresentable(raw)}") from None
         except (TypeError, ValueError):
             positions = np.zeros((0, 0))
         if positions.ndim != 2 or positions.shape[1] != 3 or positions.shape[0] == 0:
             raise SpecError(f"{where}: 'positions' must be a non-empty list of [x, y, z] in metres")
         if not np.all(np.isfinite(positions)):
-            raise SpecError(f"{where}: 'positions' must be finite")
+            i, j = np.argwhere(~np.isfinite(positions))[0]
+            raise SpecError(f"{where}: positions[{i}][{j}] = {positions[i, j]} must be finite")
         shape = None
     else:
         grid = document["grid"]

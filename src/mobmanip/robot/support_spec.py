@@ -141,7 +141,8 @@ def check_mu(mu: object, what: str = "mu") -> None:
     """A friction coefficient: a finite number from 0 to :data:`MAX_MU` (or ``None``)."""
     if mu is None:
         return
-    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not math.isfinite(mu) or mu < 0:
+    # (compared, not math.isfinite: a TOML integer of 400 digits overflows a float)
+    if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not -math.inf < mu < math.inf or mu < 0:
         raise SpecError(f"{what} must be a finite friction coefficient >= 0, got {mu!r}")
     if mu > MAX_MU:
         raise SpecError(

@@ -45,10 +45,20 @@ class WorkEstimate:
 
     @property
     def seconds(self) -> float:
-        return self.count * self.seconds_each
+        try:
+            return self.count * self.seconds_each
+        except OverflowError:  # a count of hundreds of digits, typed on the command line
+            return math.inf
 
     def describe(self) -> str:
-        count = f"{self.count:,.0f}" if self.count < 1e15 else f"{self.count:.3g}"
+        if self.count < 1e15:
+            count = f"{self.count:,.0f}"
+        elif self.count <= sys.float_info.max:
+            count = f"{self.count:.3g}"
+        elif isinstance(self.count, int):  # an integer no float holds
+            count = f"a number of {len(str(abs(self.count)))} digits of"
+        else:  # e.g. --prepare 1e308 s over a step of 0.02 s
+            count = "more than any float counts of"
         detail = f" ({self.detail})" if self.detail else ""
         return f"{count} {self.units}{detail}, about {duration(self.seconds)}"
 
