@@ -101,13 +101,15 @@ def test_a_site_position_no_float_holds_is_named(tmp_path, capfd, positions, nee
 
 
 def test_a_site_position_of_a_large_but_finite_integer_is_not_an_overflow(tmp_path):
-    """10**300 m is a float: it is read (and the placement then finds the object out of reach),
-    not refused as too large for a float."""
+    """10**300 m is a float: it is refused as beyond the positions a floor holds (+-1e6 m, as a
+    platform's), naming the entry, not as too large for a float (a figure could not draw it)."""
+    from mobmanip.errors import SpecError
     from mobmanip.placement.site import Site
 
     site = tmp_path / "site.toml"
     site.write_text(SITE_HEAD + f"positions = [[1.0, {10**300}, 0.35]]\n")
-    assert Site.read(site).positions[0, 1] == 1e300
+    with pytest.raises(SpecError, match=r"positions\[0\]\[1\] = 1e\+300 m is beyond \+-1e\+06 m"):
+        Site.read(site)
 
 
 MJCF = """<mujoco model="m">
@@ -160,6 +162,9 @@ def test_an_mjcf_geom_with_its_sizes_is_read(tmp_path):
         ),
         ("x = 1.0\ny = -" + "9" * 400 + "\nz = 0.35", "[grid] y must be finite, got an integer of 400 digits"),
         ("x = 1.0\ny = 0.5\nz = [0.1, inf, 2]", "[grid] z must be finite, got 0.1, inf"),
+        # the longer run (seed 11): a finite axis far beyond any floor reached the figure as limits
+        # it refused, an internal error after the table was computed
+        ("x = 1.0\ny = -1e308\nz = 0.35", "[grid] y from -1e+308 to -1e+308 m goes beyond +-1e+06 m"),
     ],
 )
 def test_a_site_grid_axis_no_float_holds_is_named(tmp_path, capfd, grid, needle):
@@ -229,3 +234,13 @@ def test_a_friction_coefficient_no_float_holds_is_named(tmp_path, capfd):
     code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out", "--no-progress")
     assert_one_line_error(code, err, "[grounded] mu 9999", "is above 10")
     assert out == "" and not (tmp_path / "out").exists()
+
+
+def test_a_map_extent_narrower_than_a_millimetre_is_refused(tmp_path, capfd):
+    """The longer run (seed 11): ``--map-extent 0,1e-200,0,1`` reached the map's figure as an axis
+    it could not draw, an internal error after the map was computed."""
+    code, out, err = run_cli(capfd, "place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective",
+                             "kinematic:capacity:+x", "--map", tmp_path / "m",
+                             "--map-extent", "0,1e-200,0,1")  # fmt: skip
+    assert_one_line_error(code, err, "--map-extent", "at least 0.001 m", "0,1e-200,0,1")
+    assert out == "" and not (tmp_path / "m").exists()

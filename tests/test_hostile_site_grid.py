@@ -124,4 +124,4 @@ def test_the_bound_counts_before_the_grid_is_made():
 def test_a_grid_whose_step_overflows_is_one_line(capfd, tmp_path, axis):
     site = _site(tmp_path, f"[grid]\nx = {axis}\ny = 0.0\nz = 0.35\n")
     code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out")
-    assert_one_line_error(code, err, site.name, "[grid] x must be finite")
+    assert_one_line_error(code, err, site.name, "[grid] x from", "goes beyond +-1e+06 m")

@@ -416,12 +416,17 @@ def _check_map_options(args):
     if (
         len(values) != 4
         or not all(math.isfinite(v) and abs(v) <= PLATFORM_POSITION for v in values)
-        or values[0] >= values[1]
-        or values[2] >= values[3]
+        or values[1] - values[0] < MIN_MAP_WIDTH
+        or values[3] - values[2] < MIN_MAP_WIDTH
     ):
-        raise UsageError(f"--map-extent must be XMIN,XMAX,YMIN,YMAX in metres with XMIN < XMAX, YMIN < YMAX, "
-                         f"each within +-{PLATFORM_POSITION:g} m, got {args.map_extent!r}")  # fmt: skip
+        raise UsageError(f"--map-extent must be XMIN,XMAX,YMIN,YMAX in metres with XMAX - XMIN and YMAX - YMIN "
+                         f"at least {MIN_MAP_WIDTH:g} m, each within +-{PLATFORM_POSITION:g} m, "
+                         f"got {args.map_extent!r}")  # fmt: skip
     return values
+
+
+#: The narrowest side of a map (m): a figure draws no narrower axis, and a map of it says nothing.
+MIN_MAP_WIDTH = 1e-3
 
 
 def _check_extent_reaches(args, robot, target, extent, reference) -> None:

@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import ArgumentError, MobmanipError, SpecError, TaskError
 from ..robot.model import Robot, load_robot, robot_in_process
 from ..robot.support_spec import check_mu
+from ..support.ranges import PLATFORM_POSITION
 from .optimize import DEFAULT_STARTS, place
 
 #: Most object positions one site may hold, whatever the work bound (a list or a grid).
@@ -172,6 +173,8 @@ def _axis(value, name: str, where: str) -> tuple[float, float, int]:
     if not (math.isfinite(start) and math.isfinite(stop)):
         shown = ", ".join(_shown(v) for v in (value if isinstance(value, list) else [value])[:2])
         raise SpecError(f"{where}: [grid] {name} must be finite, got {shown}")
+    if max(abs(start), abs(stop)) > PLATFORM_POSITION:  # a figure cannot even draw such an axis
+        raise SpecError(f"{where}: [grid] {name} from {start:g} to {stop:g} m goes beyond +-{PLATFORM_POSITION:g} m")
     return start, stop, count
 
 
@@ -230,6 +233,9 @@ def _positions(
         if not np.all(np.isfinite(positions)):
             i, j = np.argwhere(~np.isfinite(positions))[0]
             raise SpecError(f"{where}: positions[{i}][{j}] = {positions[i, j]} must be finite")
+        if np.any(np.abs(positions) > PLATFORM_POSITION):
+            i, j = np.argwhere(np.abs(positions) > PLATFORM_POSITION)[0]
+            raise SpecError(f"{where}: positions[{i}][{j}] = {positions[i, j]:g} m is beyond +-{PLATFORM_POSITION:g} m")
         shape = None
     else:
         grid = document["grid"]
