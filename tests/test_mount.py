@@ -204,3 +204,35 @@ def test_list_frames_of_a_mounted_arm(tmp_path, capfd):
     assert f"{IIWA} on {HUSKY}" in out
     code, out, err = run_cli(capfd, "init-spec", HUSKY, "--list-frames")
     assert "--mount ARM.urdf --on" in out  # the base alone says how to add an arm
+
+
+def test_package_meshes_travel_too_and_the_page_draws_both_robots(tmp_path, capfd):
+    """Issue 39: a UR10 from example-robot-data (its meshes named ``package://example-robot-data/
+    robots/...``) on a Husky: the arm's meshes were left behind and the page drew a Husky alone.
+    Every visual mesh of both is copied byte for byte, and the exported page holds each distinct
+    mesh file once: the Husky's 5 and the UR10's 7."""
+    import json
+    import re
+    import xml.etree.ElementTree as ET
+
+    from mobmanip.descriptions.resources import example_robot_data_share
+
+    share = example_robot_data_share()
+    ur10 = share / "example-robot-data" / "robots" / "ur_description" / "urdf" / "ur10_robot.urdf"
+    spec = tmp_path / "husky_ur10.toml"
+    code, _, err = run_cli(capfd, "init-spec", "--mount", ur10, "--on", HUSKY, "--at", "0,0,0.3,0", "--ee", "tool0",
+                           "--wheel-velocity-limit", "10", "--wheel-effort-limit", "50", "--out", spec)  # fmt: skip
+    assert code == 0, err
+    composed = ET.parse(tmp_path / "husky_ur10.urdf").getroot()
+    visual = {m.get("filename") for link in composed.iter("link") for v in link.iter("visual") for m in v.iter("mesh")}
+    arm = {f for f in visual if "/arm/" in f}
+    assert len(arm) == 7 and len(visual - arm) == 5
+    for name in arm:
+        package_path = name.split("/_packages/", 1)[1]  # example-robot-data/robots/ur_description/...
+        assert (tmp_path / name).read_bytes() == (share / package_path).read_bytes()
+    page = tmp_path / "page.html"
+    code, out, err = run_cli(capfd, "view", spec, "--export", page, "--no-locked")
+    assert code == 0, err
+    assert "not drawn" not in out and "not drawn" not in err
+    table = json.loads(re.search(r'id="mobmanip-scene-table">(.*?)</script>', page.read_text()).group(1))
+    assert len(table["meshes"]) == len(visual) == 12

@@ -222,7 +222,8 @@ def _run_mounted(args, read_options) -> int:
             if Path(given).resolve() == target:
                 raise UsageError(f"the composed URDF would be written over {option} {given}: choose another --out")
     meshes = f"{final.stem}_meshes" if final is not None else "meshes"
-    mounted = mount_urdf(args.mount, args.on, pose, meshes, on_link=args.on_link, prefix=args.prefix)
+    mounted = mount_urdf(args.mount, args.on, pose, meshes, on_link=args.on_link, prefix=args.prefix,
+                         package_paths=read_options["package_paths"])  # fmt: skip
     options = read_options
     with tempfile.TemporaryDirectory(prefix=".mobmanip-mount-", dir=out_dir if final is not None else None) as tmp:
         draft = Path(tmp) / f"{(final.stem if final is not None else 'mounted')}.urdf"

@@ -16,17 +16,23 @@ Meshes: a mesh file named by a relative path is copied beside the composed URDF,
 written as ``_up``), and the filename rewritten to match, so that the composed robot carries its
 meshes as a URDF of its own does (the viewer reads meshes only inside a robot's folder,
 :mod:`mobmanip.viz.meshes`); a Collada file's textures named by relative paths travel with it.
-``package://`` and ``file://`` URIs and absolute paths are kept as written.
+A ``package://NAME/REST`` mesh found under the package roots (:func:`package_roots`: the
+``--package-path`` folders, example-robot-data's, the URDF's own folders) is copied too, into
+``<meshes>/<role>/_packages/NAME/REST`` (example-robot-data's UR arms name their meshes so);
+one not found, ``file://`` URIs and absolute paths are kept as written.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import ArgumentError, UrdfError
+from ..errors import ArgumentError, MobmanipError, UrdfError
+from .resources import example_robot_data_share
 
 #: Name of the fixed joint that carries the arm (prefixed like the arm's names if the base uses it).
 MOUNT_JOINT = "arm_mount_joint"
@@ -119,17 +125,51 @@ def _textures(mesh: Path) -> list[str]:
     return found
 
 
-def _rewrite_meshes(robot: ET.Element, source_dir: Path, folder: Path, copies: dict[Path, Path]) -> None:
-    """Relative mesh filenames of ``robot`` rewritten into ``folder`` (relative to the composed
-    URDF), each existing file (and its Collada textures) recorded in ``copies``."""
+def package_roots(urdf: Path, package_paths: Sequence[str | Path] = ()) -> list[Path]:
+    """Where a URDF's ``package://NAME/REST`` meshes are looked for, as ``ROOT/NAME/REST``: the
+    folders given (``--package-path``), example-robot-data's share folder when the file lies in
+    it (its URDFs name ``package://example-robot-data/robots/...``), then the file's folder and
+    the folders above it (a package's own folder holds its URDF a level or two down)."""
+    roots = [Path(p) for p in package_paths]
+    here = urdf.resolve()
+    with contextlib.suppress(MobmanipError):
+        share = example_robot_data_share().resolve()
+        if share in here.parents:
+            roots.append(share)
+    roots += list(here.parents)[:4]
+    return list(dict.fromkeys(roots))
+
+
+def _source(filename: str, source_dir: Path, roots: Sequence[Path]) -> tuple[Path | None, list[str]]:
+    """The file a mesh reference names and the path parts it is copied under, or ``(None, [])``
+    (a URI of another scheme, an absolute path, a file not found: left as written)."""
+    if filename.startswith("package://"):
+        rest = filename[len("package://") :]
+        for root in roots:
+            candidate = root / rest
+            if candidate.is_file():
+                return candidate, ["_packages", *_relative_parts(rest)]
+        return None, []
+    if "://" in filename or Path(filename).is_absolute():
+        return None, []
+    source = source_dir / filename
+    return (source, _relative_parts(filename)) if source.is_file() else (None, [])
+
+
+def _rewrite_meshes(
+    robot: ET.Element, source_dir: Path, folder: Path, copies: dict[Path, Path], roots: Sequence[Path] = ()
+) -> None:
+    """Mesh filenames of ``robot`` (relative, or ``package://`` found under ``roots``) rewritten
+    into ``folder`` (relative to the composed URDF), each existing file (and its Collada
+    textures) recorded in ``copies``."""
     for mesh in robot.iter("mesh"):
         filename = mesh.get("filename")
-        if not filename or "://" in filename or Path(filename).is_absolute():
+        if not filename:
             continue
-        source = source_dir / filename
-        if not source.is_file():
+        source, parts = _source(filename, source_dir, roots)
+        if source is None:
             continue  # left as written: the viewer says it is missing
-        target = folder.joinpath(*_relative_parts(filename))
+        target = folder.joinpath(*parts)
         copies[source] = target
         mesh.set("filename", target.as_posix())
         for texture in _textures(source):
@@ -146,6 +186,7 @@ def mount_urdf(
     on_link: str | None = None,
     prefix: str = "arm_",
     name: str | None = None,
+    package_paths: Sequence[str | Path] = (),
 ) -> Mounted:
     """Compose ``arm`` mounted on ``base`` into one URDF text (see the module's description).
 
@@ -157,6 +198,8 @@ def mount_urdf(
         on_link: the base's link the arm is fixed to (default: the base's root link).
         prefix: put before an arm name the base already uses.
         name: the composed robot's name (default ``<base>_<arm>``, from their ``<robot name>``).
+        package_paths: folders where ``package://`` meshes are looked for first
+            (:func:`package_roots`); each one found is copied as a relative mesh is.
 
     Raises:
         ArgumentError: a file that is not a URDF, ``on_link`` not a link of the base, a prefixed
@@ -219,8 +262,8 @@ def mount_urdf(
             element.set("reference", rename["link"][element.get("reference", "")])
 
     copies: dict[Path, Path] = {}
-    _rewrite_meshes(base_robot, base.parent, Path(meshes, "base"), copies)
-    _rewrite_meshes(arm_robot, arm.parent, Path(meshes, "arm"), copies)
+    _rewrite_meshes(base_robot, base.parent, Path(meshes, "base"), copies, package_roots(base, package_paths))
+    _rewrite_meshes(arm_robot, arm.parent, Path(meshes, "arm"), copies, package_roots(arm, package_paths))
     skipped = sorted({e.tag for e in arm_robot if e.tag not in TAKEN})
     if skipped:
         notes.append(f"the arm's {', '.join(f'<{t}>' for t in skipped)} left out (only its robot's parts are taken)")
