@@ -88,6 +88,8 @@ def test_a_missing_mesh_is_reported_and_the_robot_drawn_without_it(tmp_path, cap
     code, out, err, page = _export(tmp_path, capfd, "package://nowhere/meshes/base.stl")
     assert code == 0, err
     assert "'package://nowhere/meshes/base.stl' of link 'base_link' not drawn: no such file" in out
+    # and what to do about it (issue 39: the lines did not point at --package-path)
+    assert "give the folder that holds package 'nowhere' with --package-path DIR" in out
     assert page.stat().st_size > 0
 
 

@@ -77,9 +77,13 @@ def resolve_mesh(filename: str, urdf_dir: Path, roots: Sequence[Path]) -> tuple[
         if os.path.isfile(real):
             return Path(real), ""
     roots_text = ", ".join(str(r) for r in roots) or "none"
+    hint = ""
+    if filename.startswith("package://"):
+        package = filename[len("package://") :].split("/", 1)[0]
+        hint = f"; give the folder that holds package {package!r} with --package-path DIR (or the spec's package_paths)"
     if outside:
-        return None, f"it lies outside the robot's package directories ({roots_text})"
-    return None, f"no such file in the robot's package directories ({roots_text})"
+        return None, f"it lies outside the robot's package directories ({roots_text}){hint}"
+    return None, f"no such file in the robot's package directories ({roots_text}){hint}"
 
 
 #: Largest mesh file whose references are read (bytes).
