@@ -170,3 +170,14 @@ def test_bad_options_are_refused_at_registration():
     with pytest.raises(ArgumentError, match="no constraint option '--never' is registered"):
         unregister_constraint_option("--never")
     assert "--twice" not in CONSTRAINT_OPTIONS
+
+
+def test_an_option_that_builds_a_constraint_of_another_problem_is_refused(capfd):
+    """An option declared for the acceleration problem whose constraint bounds velocities would
+    reach commands that cannot honour it: refused in one line naming both problems."""
+    register_constraint_option(ConstraintOption("--mislabelled", SpeedShare, "declared wrongly"))
+    try:
+        code, _, err = run_cli(capfd, "analyze", "planar_dual_arm", "--mislabelled", "0.5")
+        assert_one_line_error(code, err, "--mislabelled declares the acceleration problem", "velocity problem")
+    finally:
+        unregister_constraint_option("--mislabelled")

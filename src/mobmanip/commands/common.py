@@ -434,7 +434,7 @@ def registered_constraints(args, problems: tuple[str, ...] = ("velocity", "accel
         ArgumentError: a bad value (the constraint's own message).
         UsageError: an option of a problem the command does not solve.
     """
-    from ..errors import UsageError
+    from ..errors import ArgumentError, UsageError
 
     given = given_constraint_options(args)
     built = []
@@ -443,7 +443,11 @@ def registered_constraints(args, problems: tuple[str, ...] = ("velocity", "accel
             command = getattr(args, "command", None) or "this command"
             raise UsageError(f"{command} cannot honour {option.flag}: its rows are of the {option.problem} problem, "
                              f"and {command} solves the {' and '.join(problems)} problem")  # fmt: skip
-        built.append(option.build(value))
+        constraint = option.build(value)
+        if getattr(constraint, "problem", None) != option.problem:
+            raise ArgumentError(f"constraint option {option.flag} declares the {option.problem} problem, but builds "
+                                f"a constraint of the {getattr(constraint, 'problem', None)} problem")  # fmt: skip
+        built.append(constraint)
     return tuple(built), _without_constraint_options(args, given)
 
 
