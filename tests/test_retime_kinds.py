@@ -25,6 +25,7 @@ from mobmanip.errors import MobmanipError
 from mobmanip.motion.carry_floor import CarryFloor
 from mobmanip.motion.ground import ground_along
 from mobmanip.motion.retime import retime
+from mobmanip.motion.traction import traction_along
 from mobmanip.motion.trajectory import trajectory_from_samples
 from mobmanip.motion.trajectory_analysis import analyze_trajectory
 from mobmanip.robot.support import robot_support
@@ -131,12 +132,17 @@ def test_the_floor_holds_at_every_grid_point_on_every_kind(case):
     support = robot_support(robot)
     total = (pin.computeTotalMass(robot.model) + mass) * 9.81
     least = FLOOR.reserve * total / len(support.contacts)
+    # trajectory --ground's reading of the same motion: the floor of motion's one sharing
+    reading = traction_along(along, motion, 0.5)
     lowest, use = np.inf, 0.0
     for i in range(len(motion)):
         pose = (motion.q[i, 0], motion.q[i, 1], math.atan2(motion.q[i, 3], motion.q[i, 2]))
         loads = _contact_loads(support, pose, along.force[i], along.moment[i])
         lowest = min(lowest, float(loads.min() - least))
         pushes = _traction(support, pose, along.force[i], along.moment[i], _directions(robot, support, pose[2]))
+        np.testing.assert_allclose(reading.normal[i], loads, rtol=0, atol=1e-9 * total)
+        assert [reading.wheels.index(support.contacts[k].name) for k in pushes] == list(range(len(pushes)))
+        np.testing.assert_allclose(reading.tangential[i], np.array(list(pushes.values())), rtol=0, atol=1e-9 * total)
         for k, t in pushes.items():  # within the cone (the rows keep a pyramid inscribed in it, or the cone itself
             use = max(use, float(np.linalg.norm(t) / (0.5 * (1 - FLOOR.reserve) * loads[k])))  # where one way only)
     assert lowest >= -1e-6 * total

@@ -37,8 +37,10 @@ weight's normal part, (m + m_o) g cos s.
 Every platform that rolls on wheels is covered (differential drive, skid-steer, steered,
 omnidirectional on ``[support] wheels``); a fixed base is refused.
 
-The rows are over (x, s); :func:`floor_rows` gives them with a label per row naming what it
-keeps (the zero-moment point, a support, a wheel's traction) for the diagnosis.
+The rows over the wrench are built once, for every motion, by
+:class:`mobmanip.terms.constraints.floor_wrench.FloorRows` (:meth:`CarryFloor.rows`); here they
+are written over the step's (x, s): :func:`floor_rows` gives them with a label per row naming what
+it keeps (the zero-moment point, a support, a wheel's traction) for the diagnosis.
 """
 
 from __future__ import annotations
@@ -50,13 +52,26 @@ import numpy as np
 
 from ..errors import ArgumentError, SpecError
 from ..platforms import a_platform
-from ..platforms.base import BASE_V
 from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
-from ..terms.constraints.floor import check_ramp, compliant_sharing, pyramid_faces, ramp_gravity
+from ..terms.constraints.floor import check_ramp, ramp_gravity
+from ..terms.constraints.floor_wrench import NO_TURN, FloorRows, traction_components, turning_row
 from ..terms.grasp import object_mass_of
 from .ground import floor_wrench
+
+__all__ = [
+    "DEFAULT_ZMP_MARGIN",
+    "NO_TURN",
+    "CarryFloor",
+    "FloorRows",
+    "floor_binding",
+    "floor_rows",
+    "solve_with_floor",
+    "traction_components",
+    "turning_row",
+    "wrench_rows",
+]
 
 #: Default distance (m) the carry keeps its zero-moment point inside the support polygon.
 DEFAULT_ZMP_MARGIN = 0.02
@@ -130,6 +145,18 @@ class CarryFloor:
         faces = support.faces if self.faces is None else self.faces
         return support, (None if mu is None else float(mu)), int(faces)
 
+    def rows(
+        self, robot: Robot, object_mass: float, resolved: tuple[Support, float | None, int] | None = None
+    ) -> FloorRows:
+        """This floor's rows for ``robot`` holding ``object_mass`` kg
+        (:class:`mobmanip.terms.constraints.floor_wrench.FloorRows`): the reserve is a share of
+        the weight's normal part, robot and object."""
+        support, mu, faces = self.resolve(robot) if resolved is None else resolved
+        weight = (robot_mass(robot) + float(object_mass)) * float(-self.gravity()[2])
+        return FloorRows.build(
+            robot, support, mu, faces, zmp_margin=self.zmp_margin, reserve=self.reserve, weight=weight
+        )
+
     def describe(self) -> dict:
         out = {"mu": self.mu, "zmp_margin": self.zmp_margin, "reserve": self.reserve, "load": "compliant"}
         if self.slope:
@@ -178,50 +205,6 @@ def floor_rows(
     return G, g, labels
 
 
-@dataclass(frozen=True)
-class FloorRows:
-    """The floor's rows over its resultant wrench on the robot and its object, ``R @ wrench <= r``:
-    the zero-moment point ``floor.zmp_margin`` inside the support polygon, every support loaded
-    (its compliant share at least the reserve's part of the weight) and each driven wheel's
-    traction within its friction pyramid scaled by 1 - reserve.
-
-    Built once per robot and floor (:meth:`build`) in the platform's frame, where the contacts do
-    not move; :meth:`at` turns them to the world at a configuration.
-
-    Attributes:
-        R: (r, 6) over the wrench in the platform's axes, its moment about the platform's origin.
-        r: (r,).
-        labels: what each row keeps, (r,).
-        kinds: ``"tip-over"``, ``"contact"`` or ``"traction"`` per row, (r,).
-    """
-
-    R: np.ndarray
-    r: np.ndarray
-    labels: tuple[str, ...]
-    kinds: tuple[str, ...]
-
-    @classmethod
-    def build(
-        cls, robot: Robot, object_mass: float, floor: CarryFloor, resolved: tuple[Support, float | None, int]
-    ) -> FloorRows:
-        return cls(*_platform_rows(robot, object_mass, floor, resolved))
-
-    def at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(R, r) over the wrench as :func:`mobmanip.motion.ground.floor_wrench` gives it: force
-        then moment about the world origin, world axes, for the platform at ``q``."""
-        c, s = float(q[2]), float(q[3])
-        norm = math.hypot(c, s)
-        c, s = c / norm, s / norm
-        x, y = float(q[0]), float(q[1])
-        turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # world to platform axes
-        origin = np.array([[0.0, 0.0, y], [0.0, 0.0, -x], [-y, x, 0.0]])  # M_p = M_O - p x F
-        T = np.zeros((6, 6))
-        T[:3, :3] = turn
-        T[3:, 3:] = turn
-        T[3:, :3] = -turn @ origin
-        return self.R @ T, self.r
-
-
 def wrench_rows(
     robot: Robot,
     q: np.ndarray,
@@ -229,113 +212,11 @@ def wrench_rows(
     floor: CarryFloor,
     resolved: tuple[Support, float | None, int],
 ) -> tuple[np.ndarray, np.ndarray, list[str], list[str]]:
-    """:class:`FloorRows` at ``q``: (R (r, 6), r (r,), labels, kinds) over the floor's wrench as
+    """The floor's rows at ``q``: (R (r, 6), r (r,), labels, kinds) over the floor's wrench as
     :func:`mobmanip.motion.ground.floor_wrench` gives it (world axes, moment about the world origin)."""
-    rows = FloorRows.build(robot, object_mass, floor, resolved)
+    rows = floor.rows(robot, object_mass, resolved)
     R, r = rows.at(q)
     return R, r, list(rows.labels), list(rows.kinds)
-
-
-def _platform_rows(
-    robot: Robot, object_mass: float, floor: CarryFloor, resolved: tuple[Support, float | None, int]
-) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], tuple[str, ...]]:
-    """:class:`FloorRows`' rows in the platform's frame (the platform at the world's origin)."""
-    support, mu, faces = resolved
-    z = support.floor_z
-    # the moment about the floor point under the origin, times F_z: N = (z F_x - M_y, M_x + z F_y)
-    N = np.zeros((2, 6))
-    N[0, 0], N[0, 4] = z, -1.0
-    N[1, 3], N[1, 1] = 1.0, z
-    Fz = np.zeros(6)
-    Fz[2] = 1.0
-
-    pose = (0.0, 0.0, 0.0)
-    points = support.world_points(pose)[:, :2]
-    R_rows, r_rows, labels, kinds = [], [], [], []
-    polygon = support.polygon(pose)
-    edges = np.roll(polygon, -1, axis=0) - polygon
-    normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]
-    for n_e, p_e in zip(normals, polygon):
-        # n_e . N <= (n_e . p_e - margin) F_z
-        reach = float(n_e @ p_e) - floor.zmp_margin
-        R_rows.append(n_e @ N - reach * Fz)
-        r_rows.append(0.0)
-        labels.append(f"the zero-moment point {floor.zmp_margin:g} m inside the support polygon")
-        kinds.append("tip-over")
-
-    # compliant normal forces: [balance; sharing] fn = [F_z, N_x, N_y, 0...]
-    n = len(points)
-    system = np.vstack([np.ones(n), points.T, compliant_sharing(points, support.stiffness)])
-    fn = np.linalg.inv(system)[:, :3] @ np.vstack([Fz, N])  # fn = fn @ wrench
-    # the weight's share along the floor's normal (on a ramp: m g cos s), as the floor at rest keeps it
-    least = floor.reserve * (float(robot_mass(robot)) + object_mass) * float(-floor.gravity()[2]) / n
-    for c, contact in enumerate(support.contacts):
-        R_rows.append(-fn[c])
-        r_rows.append(-least)
-        labels.append(f"support {contact.name} loaded")
-        kinds.append("contact")
-
-    if mu is not None:
-        components = traction_components(robot, support)
-        B = np.zeros((3, len(components)))
-        for k, (c, direction) in enumerate(components):
-            x, y = points[c]
-            B[:, k] = direction[0], direction[1], x * direction[1] - y * direction[0]
-        if np.linalg.matrix_rank(B) < 3:
-            raise SpecError(
-                f"{robot.name}'s wheels cannot hold the floor's sideways force and turning moment together "
-                f"(contacts {', '.join(support.contacts[c].name for c, _ in components)})"
-            )
-        H = np.zeros((3, 6))
-        H[0, 0], H[1, 1], H[2, 5] = 1.0, 1.0, 1.0
-        traction = np.linalg.pinv(B) @ H  # equally stiff tyres: the minimum-norm split
-        for c in dict.fromkeys(c for c, _ in components):
-            mine = [k for k, (owner, _) in enumerate(components) if owner == c]
-            label = f"traction of {support.contacts[c].name} within friction (mu = {mu:g})"
-            if len(mine) == 2:  # along the floor both ways: the pyramid inscribed in the cone
-                tilt = mu * math.cos(math.pi / faces) * (1.0 - floor.reserve)
-                rows = [u @ traction[mine] - tilt * fn[c] for u in pyramid_faces(faces, pose[2])]
-            else:  # one way only (rollers, or a wheel rolling free): the cone is a segment
-                reach = mu * (1.0 - floor.reserve)
-                rows = [traction[mine[0]] - reach * fn[c], -traction[mine[0]] - reach * fn[c]]
-            R_rows += rows
-            r_rows += [0.0] * len(rows)
-            labels += [label] * len(rows)
-            kinds += ["traction"] * len(rows)
-    return np.array(R_rows), np.array(r_rows, dtype=float), tuple(labels), tuple(kinds)
-
-
-#: Why a base whose wheels scrub as it turns keeps its heading on the floor.
-NO_TURN = "no turn: a skid-steer turns only by sliding its wheels sideways, and on the floor no wheel slides"
-
-
-def turning_row(robot: Robot, q: np.ndarray) -> np.ndarray | None:
-    """The base's turn rate as a row over the reduced velocities (rad/s per unit of x), (nx,),
-    for a platform whose wheels scrub as it turns (a skid-steer's); ``None`` for the others, which
-    turn on rolling wheels."""
-    if not robot.platform.scrubs:
-        return None
-    return np.asarray(robot.null_space(q)[BASE_V[2]], dtype=float).copy()
-
-
-def traction_components(robot: Robot, support: Support) -> list[tuple[int, np.ndarray]]:
-    """The floor's tangential force components the contacts take, as (contact index, unit
-    direction in the platform frame): both axes for a wheel the floor may push any way along the
-    floor (a driven wheel's rolling force is its torque's, its sideways one a constraint force);
-    only the direction across a free direction for a mecanum wheel's rollers (``[support]
-    rollers``) or a wheel rolling free (:meth:`~mobmanip.platforms.base.Platform.free_rolling`,
-    a steered base's rear wheels); none for a caster."""
-    rolling = robot.platform.free_rolling()
-    out = []
-    for c, contact in enumerate(support.contacts):
-        if not contact.driven:
-            continue
-        free = contact.free if contact.free is not None else rolling.get(contact.name)
-        if free is None:
-            out += [(c, np.array([1.0, 0.0])), (c, np.array([0.0, 1.0]))]
-        else:
-            out.append((c, np.array([-free[1], free[0]]) / math.hypot(free[0], free[1])))
-    return out
 
 
 def robot_mass(robot: Robot) -> float:

@@ -27,6 +27,7 @@ from ..errors import NumericalError
 from ..robot.model import Robot
 from ..robot.support import Support, polygon_margin, robot_support
 from ..robot.tasks import get_task
+from ..terms.constraints.floor_wrench import WrenchSharing
 from ..terms.dynamics import placed_end_effectors
 from ..terms.grasp import GRAVITY, HeldObject, object_mass_of, skew
 from .trajectory import Trajectory
@@ -43,6 +44,8 @@ class GroundAlong:
         support: the contacts used.
         force: the floor's resultant force on the robot and its object (N, world), (N, 3).
         moment: its moment about the world origin (N m, world), (N, 3).
+        sharing: how the robot's contacts share the floor's wrench (the floor of motion's one
+            model, :class:`mobmanip.terms.constraints.floor_wrench.WrenchSharing`).
     """
 
     zmp: np.ndarray
@@ -51,6 +54,7 @@ class GroundAlong:
     support: Support
     force: np.ndarray | None = None
     moment: np.ndarray | None = None
+    sharing: WrenchSharing | None = None
 
     def worst(self) -> int:
         """The sample with the smallest margin."""
@@ -177,4 +181,4 @@ def ground_along(
         x0, y0, c0, s0 = q[0], q[1], q[2], q[3]
         pose = (float(x0), float(y0), math.atan2(float(s0), float(c0)))
         margin[i] = polygon_margin(support.polygon(pose), zmp[i])
-    return GroundAlong(zmp, margin, normal, support, forces, moments)
+    return GroundAlong(zmp, margin, normal, support, forces, moments, WrenchSharing.build(robot, support))

@@ -45,7 +45,8 @@ from ..robot.model import Robot
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.lifted import Witness
 from ..sets.linear_programs import LinearProgram
-from ..terms.constraints.floor import LEVEL_ROWS, Floor, compliant_sharing, pyramid_faces
+from ..terms.constraints.floor import LEVEL_ROWS, Floor, pyramid_faces
+from ..terms.constraints.floor_wrench import WrenchSharing, both_ways
 from ..terms.grasp import GRAVITY, object_mass_of
 from .ground import floor_wrench
 from .in_motion import motion_terms
@@ -328,29 +329,15 @@ def _affine_state(robot: Robot, q: np.ndarray, x: np.ndarray, task: TaskSpace, o
 def _contact_maps(state: _AffineState, q: np.ndarray, support, stiffness: np.ndarray | None) -> ContactMaps:
     """The contact forces of :func:`contact_maps` from one state's affine wrench."""
     G, g = state.wrench
-    z = support.floor_z
-    moments = np.zeros((3, 6))  # (f_z, f_z x_zmp, f_z y_zmp) from the wrench
-    moments[0, 2] = 1.0
-    moments[1, 0], moments[1, 4] = z, -1.0
-    moments[2, 3], moments[2, 1] = 1.0, z
     pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
-    xy = support.world_points(pose)[:, :2]
-    n = len(xy)
-    balance = np.vstack([np.ones(n), xy.T, compliant_sharing(xy, stiffness)])
-    to_normals = np.linalg.solve(balance, np.eye(n)[:, :3]) @ moments
-    driven = np.array([c.driven for c in support.contacts])
-    w = xy[driven]
-    d = len(w)
-    B = np.zeros((3, 2 * d))
-    B[0, 0::2], B[1, 1::2] = 1.0, 1.0
-    B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
-    horizontal = np.zeros((3, 6))  # (f_x, f_y, m_z)
-    horizontal[0, 0], horizontal[1, 1], horizontal[2, 5] = 1.0, 1.0, 1.0
-    to_tangential = np.linalg.pinv(B) @ horizontal
+    components = both_ways([contact.driven for contact in support.contacts])
+    # the floor of motion's one sharing, in the world's frame (the wrench's)
+    sharing = WrenchSharing.of(support.world_points(pose), components, support.floor_z, stiffness)
+    to_tangential = sharing.require_traction()
     return ContactMaps(
-        normal=(to_normals @ G, to_normals @ g),
+        normal=(sharing.normal @ G, sharing.normal @ g),
         tangential=(to_tangential @ G, to_tangential @ g),
-        split=np.zeros((2 * d, 0)),
+        split=np.zeros((len(components), 0)),
     )
 
 

@@ -43,7 +43,7 @@ from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..terms.builder import terms_at
 from ..terms.grasp import object_mass_of
-from .carry_floor import NO_TURN, CarryFloor, FloorRows, turning_row
+from .carry_floor import NO_TURN, CarryFloor, turning_row
 from .path_terms import path_terms
 from .step_constraints import check_constraints, path_timing_rows
 from .trajectory import Trajectory
@@ -105,7 +105,7 @@ def path_rows(
     constraints = check_constraints(constraints)
     task_space = get_task(task or robot.spec.default_task)
     mass = object_mass_of(robot, object_mass)
-    floor_rows = None if floor is None else FloorRows.build(robot, mass, floor, floor.resolve(robot))
+    floor_rows = None if floor is None else floor.rows(robot, mass)
     if floor_rows is not None:
         _check_no_turn(robot, trajectory)
     gravity = None if floor is None or not floor.slope else floor.gravity()  # a ramp: the weights lean

@@ -11,13 +11,15 @@ as the floor constraint (:class:`mobmanip.terms.constraints.floor.Floor`) shares
   with three contacts every sharing is this one). A normal force of 0 or less is a support that
   unloads (the compliant model keeps every support loaded; the robot may still stand, on fewer
   supports);
-- tangential forces: the casters are frictionless, so the driven wheels carry the resultant's
-  horizontal force and its moment about the vertical: three equations over two components per
-  wheel. For a differential drive (two wheels on one axle) the longitudinal forces are fixed;
-  the split of the lateral force between the two wheels is not (both act along the axle's
-  line): the floor constraint's compliant sharing gives each tyre half (equal tyres under a
-  rigid platform, :func:`~mobmanip.terms.constraints.floor.lateral_sharing`), and so does this
-  reading (the least-squares share, which splits an axle's lateral force equally).
+- tangential forces: the casters are frictionless, so the wheels carry the resultant's
+  horizontal force and its moment about the vertical, each along the floor where its mechanism
+  lets it (a wheel with a motor both ways, a mecanum wheel across its rollers, a free-rolling
+  wheel across its rolling direction), shared as equally stiff tyres under a rigid platform share
+  them: the least-norm split (a differential drive's two wheels: half the lateral force each, as
+  the floor constraint's :func:`~mobmanip.terms.constraints.floor.lateral_sharing` gives).
+
+Both rules are :class:`mobmanip.terms.constraints.floor_wrench.WrenchSharing`'s, the one home of
+the floor of motion (``carry``, ``retime`` and ``hold`` read the floor through it too).
 
 A wheel's *traction use* is ``|f_t| / (mu f_n)`` (the friction cone itself; the floor constraint's
 inscribed pyramid is conservative by 1 - cos(pi / faces)): above 1 the wheel slips; an unloaded
@@ -31,14 +33,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ArgumentError, SpecError
-from ..terms.constraints.floor import compliant_sharing
+from ..errors import ArgumentError
+from ..terms.constraints.floor_wrench import UNLOADED, FloorRows, WrenchSharing, both_ways, to_platform
 from ..terms.grasp import object_mass_of
 from .ground import GroundAlong
 from .trajectory import Trajectory
-
-#: A normal force at most this (N) counts as unloaded.
-UNLOADED = 1e-9
 
 
 @dataclass(frozen=True)
@@ -84,7 +83,8 @@ def contact_forces(
     mu: float,
     stiffness: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The contacts' forces for one resultant (see the module's docstring).
+    """The contacts' forces for one resultant (see the module's docstring), every driven contact
+    taking a tangential force both ways along the floor.
 
     Args:
         points: the contacts' points in the world (m), (n, 2 or 3).
@@ -97,57 +97,15 @@ def contact_forces(
 
     Returns:
         (normal forces (n,), the driven wheels' tangential forces (d, 2), their traction use (d,)).
+
+    Raises:
+        SpecError: the driven wheels cannot carry the horizontal force and moment (one wheel).
     """
-    driven = np.asarray(driven, dtype=bool)
-    pressure = float(force[2]) * np.array([1.0, zmp[0], zmp[1]])
-    normal, tangential = contact_shares(points, driven, pressure, np.array([force[0], force[1], moment[2]]), stiffness)
-    weight = mu * normal[driven]
-    loaded = weight > mu * UNLOADED
-    use = np.full(len(tangential), math.inf)
-    use[loaded] = np.linalg.norm(tangential[loaded], axis=1) / weight[loaded]
-    return normal, tangential, use
-
-
-def contact_shares(
-    points: np.ndarray,
-    driven: np.ndarray,
-    pressure: np.ndarray,
-    horizontal: np.ndarray,
-    stiffness: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The contacts' normal forces and the driven wheels' tangential forces, linear in the
-    resultant (see the module's docstring).
-
-    Args:
-        points, driven, stiffness: as :func:`contact_forces`.
-        pressure: the resultant's normal force F_z and its moments F_z x_zmp, F_z y_zmp (N, N m), (3,).
-        horizontal: its horizontal force F_x, F_y and its moment about the vertical through the
-            world origin M_z (N, N m), (3,).
-
-    Returns:
-        (normal forces (n,), tangential forces (d, 2)).
-    """
-    xy = np.asarray(points, dtype=float)[:, :2]
-    driven = np.asarray(driven, dtype=bool)
-    n = len(xy)
-    balance = np.vstack([np.ones(n), xy.T])
-    sharing = compliant_sharing(xy, stiffness)
-    normal = np.linalg.solve(np.vstack([balance, sharing]), np.concatenate([pressure, np.zeros(len(sharing))]))
-
-    w = xy[driven]
-    d = len(w)
-    B = np.zeros((3, 2 * d))
-    B[0, 0::2] = 1.0
-    B[1, 1::2] = 1.0
-    B[2, 0::2], B[2, 1::2] = -w[:, 1], w[:, 0]
-    particular, *_ = np.linalg.lstsq(B, horizontal, rcond=None)
-    _, sigma, vt = np.linalg.svd(B)
-    rank = int(np.sum(sigma > 1e-12 * sigma[0]))
-    if np.linalg.norm(B @ particular - horizontal) > 1e-9 * max(1.0, float(np.linalg.norm(horizontal))):
-        raise SpecError("the driven wheels cannot carry the floor's horizontal force and moment (one wheel?)")
-    if 2 * d - rank > 1:
-        raise SpecError(f"traction along a motion covers two driven wheels on one axle; this support has {d}")
-    return normal, particular.reshape(d, 2)  # each tyre of the axle half of its lateral force
+    force, moment = np.asarray(force, dtype=float), np.asarray(moment, dtype=float)
+    # the same wrench about the floor point under the origin: its horizontal moments F_z * zmp
+    about_floor = np.array([force[2] * float(zmp[1]), -force[2] * float(zmp[0]), moment[2]])
+    sharing = WrenchSharing.of(np.asarray(points, dtype=float)[:, :2], both_ways(driven), 0.0, stiffness)
+    return sharing.loads(np.r_[force, about_floor], mu)
 
 
 def _checked_floor(ground: GroundAlong, mu: float | None, what: str) -> tuple[float, np.ndarray, np.ndarray]:
@@ -176,20 +134,30 @@ def traction_along(ground: GroundAlong, trajectory: Trajectory, mu: float | None
     Raises:
         ArgumentError: ``mu`` not a positive finite number.
     """
-    support = ground.support
     mu, force, moment = _checked_floor(ground, mu, "the traction along a motion")
-    driven = np.array([c.driven for c in support.contacts])
-    n, d = len(trajectory), int(driven.sum())
-    normal, tangential, use = np.zeros((n, len(driven))), np.zeros((n, d, 2)), np.zeros((n, d))
+    sharing = _sharing(ground)
+    wheels = sharing.wheels()
+    n = len(trajectory)
+    normal = np.zeros((n, len(ground.support.contacts)))
+    tangential, use = np.zeros((n, len(wheels), 2)), np.zeros((n, len(wheels)))
     for i in range(n):
         q = trajectory.q[i]
-        points = support.world_points((float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))))
-        normal[i], tangential[i], use[i] = contact_forces(
-            points, driven, force[i], moment[i], ground.zmp[i], mu, support.stiffness
-        )
-    names = tuple(c.name for c in support.contacts)
-    wheels = tuple(c.name for c in support.contacts if c.driven)
-    return TractionAlong(float(mu), names, wheels, normal, tangential, use)
+        normal[i], along, use[i] = sharing.loads(to_platform(q) @ np.r_[force[i], moment[i]], mu)
+        c, s = float(q[2]), float(q[3])
+        turn = np.array([[c, -s], [s, c]]) / math.hypot(c, s)  # the platform's axes to the world's
+        tangential[i] = along @ turn.T
+    names = tuple(c.name for c in ground.support.contacts)
+    return TractionAlong(float(mu), names, tuple(names[c] for c in wheels), normal, tangential, use)
+
+
+def _sharing(ground: GroundAlong) -> WrenchSharing:
+    """How ``ground``'s contacts share its wrench: the robot's own (:func:`ground_along` keeps it),
+    else every driven contact pushed both ways along the floor."""
+    if ground.sharing is not None:
+        return ground.sharing
+    support = ground.support
+    components = both_ways([contact.driven for contact in support.contacts])
+    return WrenchSharing.of(support.world_points((0.0, 0.0, 0.0)), components, support.floor_z, support.stiffness)
 
 
 @dataclass(frozen=True)
@@ -244,38 +212,23 @@ def floor_time_scaling(
     support = ground.support
     mu, force, moment = _checked_floor(ground, mu, "the floor's time-scaling")
     mass = object_mass_of(robot, object_mass)
-    driven = np.array([c.driven for c in support.contacts])
-    wheels = [c.name for c in support.contacts if c.driven]
-    z = support.floor_z
+    sharing = _sharing(ground)
+    rows = FloorRows.build(robot, support, None, support.faces, zmp_margin=zmp_margin, reserve=0.0, weight=0.0)
+    wheels = sharing.wheels()
     best, where, limit = math.inf, -1, ""
-
-    def parts(wrench: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        pressure = np.array([wrench[2], z * wrench[0] - wrench[4], wrench[3] + z * wrench[1]])
-        return pressure, np.array([wrench[0], wrench[1], wrench[5]]), pressure[1:]
-
     for i in range(len(trajectory)):
         q = trajectory.q[i]
-        pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
         rest = floor_wrench_terms(robot, q, np.zeros(robot.nx), mass, np.zeros(6), np.zeros((6, robot.nx)))[2]
-        moving = np.r_[force[i], moment[i]] - rest
-        points = support.world_points(pose)
-        bounds: list[tuple[float, str]] = []
-        # the zero-moment point: n . N <= (n . p - margin) F_z, linear in b = k^2
-        (p0, h0, N0), (p1, h1, N1) = parts(rest), parts(moving)
-        polygon = support.polygon(pose)
-        edges = np.roll(polygon, -1, axis=0) - polygon
-        normals = np.c_[edges[:, 1], -edges[:, 0]] / np.linalg.norm(edges, axis=1)[:, None]
-        for n_e, p_e in zip(normals, polygon):
-            reach = float(n_e @ p_e) - zmp_margin
-            bounds.append((_linear_bound(reach * p0[0] - n_e @ N0, reach * p1[0] - n_e @ N1),
-                           f"the zero-moment point {zmp_margin:g} m inside the support polygon"))  # fmt: skip
-        normal0, tangential0 = contact_shares(points, driven, p0, h0, support.stiffness)
-        normal1, tangential1 = contact_shares(points, driven, p1, h1, support.stiffness)
-        for c, contact in enumerate(support.contacts):
-            bounds.append((_linear_bound(normal0[c], normal1[c]), f"support {contact.name} loaded"))
-        for w, c in enumerate(np.flatnonzero(driven)):
+        T = to_platform(q)
+        W0, W1 = T @ rest, T @ (np.r_[force[i], moment[i]] - rest)
+        # the zero-moment point's and the supports' rows, R (W0 + b W1) <= r: linear in b = k^2
+        bounds = [(_linear_bound(float(r - R @ W0), float(-R @ W1)), label)
+                  for R, r, label in zip(rows.R, rows.r, rows.labels)]  # fmt: skip
+        normal0, normal1 = sharing.normal @ W0, sharing.normal @ W1
+        tangential0, tangential1 = sharing.tangential(W0), sharing.tangential(W1)
+        for w, c in enumerate(wheels):
             bound = _cone_bound(tangential0[w], tangential1[w], mu * normal0[c], mu * normal1[c])
-            bounds.append((bound, f"traction of {wheels[w]} within friction (mu = {mu:g})"))
+            bounds.append((bound, f"traction of {support.contacts[c].name} within friction (mu = {mu:g})"))
         b, label = min(bounds, key=lambda pair: pair[0])
         if b < best:
             best, where, limit = b, i, label
