@@ -12,13 +12,10 @@ interleaved rounds (``time.process_time``), wall time beside them:
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
 #: The issue's bounds (s of CPU): one program at a posture, and the 15 x 15 map.
 POSTURE_BOUND, MAP_BOUND = 0.010, 2.0
 
@@ -68,9 +65,6 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT / "src"))
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--rounds", type=int)
-    arguments = parser.parse_args()
-    sys.exit(run(quick=arguments.quick, rounds=arguments.rounds))
+    from benchmark_retime import main
+
+    sys.exit(main(run, __doc__))
