@@ -128,22 +128,32 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
         if theirs is not None:
             cases["Panda, limits only (toppra)"] = theirs
         medians, durations = interleaved(cases, rounds)
-    print(f"retime, {n} samples, medians of {rounds} interleaved rounds (one BLAS thread)")
-    print(f"{'case':32s} {'CPU ms':>8s} {'wall ms':>8s} {'duration s':>11s}")
-    for name, (cpu, wall) in medians.items():
-        print(f"{name:32s} {1e3 * cpu:8.1f} {1e3 * wall:8.1f} {durations[name]:11.6f}")
-    medians = {name: cpu for name, (cpu, _) in medians.items()}
+    title = f"retime, {n} samples, medians of {rounds} interleaved rounds (one BLAS thread)"
+    medians = print_medians(title, medians, durations, "duration s", ".6f")
     if "Panda, limits only (toppra)" in medians:
         ratio = medians["Panda, limits only"] / medians["Panda, limits only (toppra)"]
         gap = durations["Panda, limits only"] / durations["Panda, limits only (toppra)"] - 1.0
         print(f"Panda: mobmanip / toppra CPU {ratio:.1f}x; durations apart by {gap:.1e}")
     if not quick:
-        cpu = medians["TIAGo++ 2 kg, floor"]
-        verdict = "within" if cpu <= BOUND else "ABOVE"
-        print(
-            f"TIAGo++ with the floor, {n} samples: {1e3 * cpu:.0f} ms of CPU, {verdict} the {1e3 * BOUND:.0f} ms bound"
-        )
+        print_bound(f"TIAGo++ with the floor, {n} samples", medians["TIAGo++ 2 kg, floor"], BOUND)
     return 0
+
+
+def print_medians(title: str, timed: dict, values: dict, value: str, form: str) -> dict[str, float]:
+    """Print the medians of :func:`interleaved` as a table under ``title``, each case's last value
+    in the column ``value`` (formatted by ``form``); return the CPU medians by case."""
+    width = max(32, *(len(name) for name in timed))
+    print(title)
+    print(f"{'case':{width}s} {'CPU ms':>9s} {'wall ms':>9s} {value:>12s}")
+    for name, (cpu, wall) in timed.items():
+        print(f"{name:{width}s} {1e3 * cpu:9.1f} {1e3 * wall:9.1f} {values[name]:12{form}}")
+    return {name: cpu for name, (cpu, _) in timed.items()}
+
+
+def print_bound(what: str, cpu: float, bound: float) -> None:
+    """One line: the CPU time (s) of ``what`` and whether it is within its bound (s)."""
+    verdict = "within" if cpu <= bound else "ABOVE"
+    print(f"{what}: {1e3 * cpu:.1f} ms of CPU, {verdict} the {1e3 * bound:.0f} ms bound")
 
 
 def main(run, doc: str) -> int:
