@@ -12,20 +12,17 @@ interleaved rounds (``time.process_time``), wall time beside them:
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
 #: The issue's bounds (s of CPU): one program at a posture, and the 15 x 15 map.
 POSTURE_BOUND, MAP_BOUND = 0.010, 2.0
 
 
 def run(quick: bool = False, rounds: int | None = None) -> int:
     import mobmanip
-    from benchmark_retime import interleaved
+    from benchmark_retime import interleaved, print_bound, print_medians
     from mobmanip.analysis.payload import payload
     from mobmanip.support.threads import limit_threads
     from mobmanip.sweep.payload_map import payload_map
@@ -52,25 +49,15 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
             ),
         }
         timed, values = interleaved(cases, rounds)
-    print(f"payload, medians of {rounds} interleaved rounds (one BLAS thread)")
-    print(f"{'case':36s} {'CPU ms':>9s} {'wall ms':>9s} {'heaviest kg':>12s}")
-    for name, (cpu, wall) in timed.items():
-        print(f"{name:36s} {1e3 * cpu:9.1f} {1e3 * wall:9.1f} {values[name]:12.4f}")
-    medians = {name: cpu for name, (cpu, _) in timed.items()}
+    title = f"payload, medians of {rounds} interleaved rounds (one BLAS thread)"
+    medians = print_medians(title, timed, values, "heaviest kg", ".4f")
     if not quick:
-        posture = max(medians[name] for name in list(cases)[:3])
-        whole = medians[f"paper robot map {side} x {side}, floor"]
-        for what, cpu, bound in (("slowest program at a posture", posture, POSTURE_BOUND),
-                                 ("15 x 15 map", whole, MAP_BOUND)):  # fmt: skip
-            verdict = "within" if cpu <= bound else "ABOVE"
-            print(f"{what}: {1e3 * cpu:.1f} ms of CPU, {verdict} the {1e3 * bound:.0f} ms bound")
+        print_bound("slowest program at a posture", max(medians[name] for name in list(cases)[:3]), POSTURE_BOUND)
+        print_bound("15 x 15 map", medians[f"paper robot map {side} x {side}, floor"], MAP_BOUND)
     return 0
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT / "src"))
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--rounds", type=int)
-    arguments = parser.parse_args()
-    sys.exit(run(quick=arguments.quick, rounds=arguments.rounds))
+    from benchmark_retime import main
+
+    sys.exit(main(run, __doc__))

@@ -46,24 +46,21 @@ def _tiago_path(robot, n: int):
 
 
 def _panda_case(n: int):
-    """(our call, toppra's call) on the same sine path of the Panda's seven joints."""
+    """(our call, toppra's call) on the same sine path of the Panda's seven joints (the reference
+    of ``tests/test_retime.py``)."""
     import pinocchio as pin
 
     from mobmanip import load_robot
     from mobmanip.motion.retime import retime
     from mobmanip.motion.trajectory import trajectory_from_samples
 
+    sys.path.insert(0, str(ROOT / "tests"))
+    from retime_util import arm_indices, sine_path, toppra_duration
+
     robot = load_robot("panda")
     model = robot.model
-    iq = [model.joints[model.getJointId(name)].idx_q for name in robot.reduced_velocity_names]
-    iv = [model.joints[model.getJointId(name)].idx_v for name in robot.reduced_velocity_names]
-    home = robot.hold_configuration()
-    amplitude = np.array([0.8, 0.5, 0.6, 0.5, 0.9, 0.6, 1.0])
-    s = np.linspace(0.0, 1.0, n)
-    q = np.tile(home, (n, 1))
-    q[:, iq] += amplitude * np.sin(math.pi * s)[:, None]
-    x_s = amplitude * (math.pi * np.cos(math.pi * s))[:, None]
-    x_ss = amplitude * (-(math.pi**2) * np.sin(math.pi * s))[:, None]
+    iq, iv = arm_indices(robot)
+    s, q, x_s, x_ss = sine_path(robot, n)
     path = trajectory_from_samples(robot, s, q, x_s, x_ss)
 
     def ours():
@@ -71,33 +68,11 @@ def _panda_case(n: int):
 
     try:
         import toppra
-        from toppra import algorithm, constraint
     except ImportError:
         return ours, None
     toppra.setup_logging("WARNING")
     data = model.createData()
-    arm_home = home[iq]
-
-    class SinePath(toppra.interpolator.AbstractGeometricPath):
-        def __call__(self, ss, order=0):
-            ss = np.atleast_1d(np.asarray(ss, dtype=float))
-            if order == 0:
-                return arm_home + amplitude * np.sin(math.pi * ss)[:, None]
-            if order == 1:
-                return amplitude * (math.pi * np.cos(math.pi * ss))[:, None]
-            return amplitude * (-(math.pi**2) * np.sin(math.pi * ss))[:, None]
-
-        @property
-        def dof(self):
-            return 7
-
-        @property
-        def path_interval(self):
-            return np.array([0.0, 1.0])
-
-        @property
-        def waypoints(self):
-            return None
+    home = robot.hold_configuration()
 
     def inverse_dynamics(qq, qd, qdd):
         full, v, a = home.copy(), np.zeros(model.nv), np.zeros(model.nv)
@@ -107,17 +82,7 @@ def _panda_case(n: int):
     vlim, elim = np.asarray(robot.velocity_limits), np.asarray(robot.effort_limits)
 
     def theirs():
-        limits = [
-            constraint.JointVelocityConstraint(np.c_[-vlim, vlim]),
-            constraint.JointTorqueConstraint(
-                inverse_dynamics,
-                np.c_[-elim, elim],
-                np.zeros(7),
-                discretization_scheme=constraint.DiscretizationType.Interpolation,  # as retime's default
-            ),
-        ]
-        solver = algorithm.TOPPRA(limits, SinePath(), gridpoints=s, parametrizer="ParametrizeConstAccel")
-        return solver.compute_trajectory(0, 0).duration
+        return toppra_duration(home[iq], s, vlim, elim, inverse_dynamics)
 
     return ours, theirs
 
@@ -163,28 +128,43 @@ def run(quick: bool = False, rounds: int | None = None) -> int:
         if theirs is not None:
             cases["Panda, limits only (toppra)"] = theirs
         medians, durations = interleaved(cases, rounds)
-    print(f"retime, {n} samples, medians of {rounds} interleaved rounds (one BLAS thread)")
-    print(f"{'case':32s} {'CPU ms':>8s} {'wall ms':>8s} {'duration s':>11s}")
-    for name, (cpu, wall) in medians.items():
-        print(f"{name:32s} {1e3 * cpu:8.1f} {1e3 * wall:8.1f} {durations[name]:11.6f}")
-    medians = {name: cpu for name, (cpu, _) in medians.items()}
+    title = f"retime, {n} samples, medians of {rounds} interleaved rounds (one BLAS thread)"
+    medians = print_medians(title, medians, durations, "duration s", ".6f")
     if "Panda, limits only (toppra)" in medians:
         ratio = medians["Panda, limits only"] / medians["Panda, limits only (toppra)"]
         gap = durations["Panda, limits only"] / durations["Panda, limits only (toppra)"] - 1.0
         print(f"Panda: mobmanip / toppra CPU {ratio:.1f}x; durations apart by {gap:.1e}")
     if not quick:
-        cpu = medians["TIAGo++ 2 kg, floor"]
-        verdict = "within" if cpu <= BOUND else "ABOVE"
-        print(
-            f"TIAGo++ with the floor, {n} samples: {1e3 * cpu:.0f} ms of CPU, {verdict} the {1e3 * BOUND:.0f} ms bound"
-        )
+        print_bound(f"TIAGo++ with the floor, {n} samples", medians["TIAGo++ 2 kg, floor"], BOUND)
     return 0
 
 
-if __name__ == "__main__":
+def print_medians(title: str, timed: dict, values: dict, value: str, form: str) -> dict[str, float]:
+    """Print the medians of :func:`interleaved` as a table under ``title``, each case's last value
+    in the column ``value`` (formatted by ``form``); return the CPU medians by case."""
+    width = max(32, *(len(name) for name in timed))
+    print(title)
+    print(f"{'case':{width}s} {'CPU ms':>9s} {'wall ms':>9s} {value:>12s}")
+    for name, (cpu, wall) in timed.items():
+        print(f"{name:{width}s} {1e3 * cpu:9.1f} {1e3 * wall:9.1f} {values[name]:12{form}}")
+    return {name: cpu for name, (cpu, _) in timed.items()}
+
+
+def print_bound(what: str, cpu: float, bound: float) -> None:
+    """One line: the CPU time (s) of ``what`` and whether it is within its bound (s)."""
+    verdict = "within" if cpu <= bound else "ABOVE"
+    print(f"{what}: {1e3 * cpu:.1f} ms of CPU, {verdict} the {1e3 * bound:.0f} ms bound")
+
+
+def main(run, doc: str) -> int:
+    """The command line of a benchmark run directly: ``--quick`` and ``--rounds N``."""
     sys.path.insert(0, str(ROOT / "src"))
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--rounds", type=int)
     arguments = parser.parse_args()
-    sys.exit(run(quick=arguments.quick, rounds=arguments.rounds))
+    return run(quick=arguments.quick, rounds=arguments.rounds)
+
+
+if __name__ == "__main__":
+    sys.exit(main(run, __doc__))

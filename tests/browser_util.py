@@ -51,6 +51,17 @@ def chromium():
             browser.close()
 
 
+@contextlib.contextmanager
+def opened_page(browser, url: str):
+    """A page of ``browser`` (:data:`VIEWPORT`) at ``url``, closed on leaving."""
+    page = browser.new_page(viewport=VIEWPORT)
+    try:
+        page.goto(url)
+        yield page
+    finally:
+        page.close()
+
+
 # Every scene path that holds an object: [path, three.js type of the object, uuid, visible].
 _PATHS_JS = """() => {
   const out = [];

@@ -42,6 +42,12 @@ def _random_offsets(rng, k):
     return rng.uniform(-1.0, 1.0, size=(k, 3))
 
 
+def _random_grasps(rng, count=20):
+    """The offsets of ``count`` random grasps of one to three points each."""
+    for _ in range(count):
+        yield _random_offsets(rng, int(rng.integers(1, 4)))
+
+
 def _twist_with_task_components(rng, rows):
     """A 6-D twist whose non-task components are zero (the object only moves in the task)."""
     twist = np.zeros(6)
@@ -70,9 +76,7 @@ def test_grasp_velocity_is_the_rigid_body_velocity_of_each_grasp_point(task, rng
     """v_i = W_i^T v_o equals [v + w x r_i; w] of the grasp point, restricted to the task."""
     rows = list(TASK_ROWS[task])
     m = len(rows)
-    for _ in range(20):
-        k = int(rng.integers(1, 4))
-        offsets = _random_offsets(rng, k)
+    for offsets in _random_grasps(rng):
         twist = _twist_with_task_components(rng, rows)
         v, w = twist[:3], twist[3:]
         W = grasp_matrix(task, offsets)
@@ -88,9 +92,8 @@ def test_W_maps_grasp_wrenches_to_the_net_wrench(task, rng):
     """W h = (sum f_i, sum r_i x f_i + n_i) restricted to the task."""
     rows = list(TASK_ROWS[task])
     m = len(rows)
-    for _ in range(20):
-        k = int(rng.integers(1, 4))
-        offsets = _random_offsets(rng, k)
+    for offsets in _random_grasps(rng):
+        k = len(offsets)
         wrenches = [_twist_with_task_components(rng, rows) for _ in range(k)]  # f, then n
         net = np.zeros(6)
         for r, h in zip(offsets, wrenches):

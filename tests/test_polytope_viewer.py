@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import mobmanip
-from browser_util import VIEWPORT, scene_objects, wait_for_scene, world_matrix
+from browser_util import opened_page, scene_objects, wait_for_scene, world_matrix
 from conftest import random_configurations
 from mobmanip.casestudy import configuration_at, optimal_posture
 from mobmanip.measures import POLYTOPE_KINDS, get_measure
@@ -139,9 +139,7 @@ def test_polytopes_are_drawn_in_the_browser_live_and_exported(browser, tmp_path,
     base = f"{M}mobmanip/polytopes/kinematic_polytope"
     with EllipsoidViewer(robot) as viewer:
         viewer.show(q, analysis, locked)
-        page = browser.new_page(viewport=VIEWPORT)
-        try:
-            page.goto(viewer.url)
+        with opened_page(browser, viewer.url) as page:
             required = (f"{base}/edges", f"{M}mobmanip/locked/kinematic_polytope/edges")
             wait_for_scene(page, required)
             objects = scene_objects(page)
@@ -166,19 +164,13 @@ def test_polytopes_are_drawn_in_the_browser_live_and_exported(browser, tmp_path,
             for d in _unit(rng, 10, 3):
                 assert float(np.max((points - origin) @ d)) / k == pytest.approx(lp(d), rel=1e-5)
             exported = viewer.export_html(tmp_path / "scene.html")
-            offline = browser.new_page(viewport=VIEWPORT)
-            try:
-                offline.goto(exported.as_uri())
+            with opened_page(browser, exported.as_uri()) as offline:
                 wait_for_scene(offline, (f"{base}/shape", f"{base}/edges"))
                 theirs = scene_objects(offline)
                 for path in (f"{base}/shape", f"{base}/edges"):
                     assert theirs[path]["type"] == objects[path]["type"]
                 again, _ = _drawn_points(offline, f"{base}/shape")
                 np.testing.assert_allclose(again, points, rtol=0, atol=1e-6)
-            finally:
-                offline.close()
-        finally:
-            page.close()
 
 
 def test_planar_outline_in_the_browser(browser):
@@ -190,13 +182,9 @@ def test_planar_outline_in_the_browser(browser):
     path = f"{M}mobmanip/polytopes/kinematic_polytope/edges"
     with EllipsoidViewer(robot) as viewer:
         viewer.show(q, analysis, locked)
-        page = browser.new_page(viewport=VIEWPORT)
-        try:
-            page.goto(viewer.url)
+        with opened_page(browser, viewer.url) as page:
             wait_for_scene(page, (path,))
             points, _ = _drawn_points(page, path)
-        finally:
-            page.close()
         origin, k = analysis.held_object.center, viewer.scales["kinematic"]
     np.testing.assert_allclose(points[:, 2], origin[2] + planar_thickness("kinematic_polytope"), atol=1e-6)
     vertices = origin[:2] + k * analysis.measure("kinematic_polytope").vertices

@@ -25,6 +25,7 @@ from mobmanip.motion.retime import retime, stops_along
 from mobmanip.motion.trajectory import read_trajectory, trajectory_from_samples
 from mobmanip.motion.trajectory_analysis import analyze_trajectory
 from mobmanip.robot.support import robot_support
+from retime_util import arm_indices, sine_path, toppra_duration
 
 GRAVITY_Z = 9.81
 
@@ -34,40 +35,16 @@ def panda():
     return load_robot("panda")
 
 
-def _arm_indices(robot):
-    model = robot.model
-    ids = [model.getJointId(name) for name in robot.reduced_velocity_names]
-    return [model.joints[j].idx_q for j in ids], [model.joints[j].idx_v for j in ids]
-
-
-AMPLITUDE = np.array([0.8, 0.5, 0.6, 0.5, 0.9, 0.6, 1.0])
-
-
-def _sine_path(robot, n):
-    """q(s) = home + A sin(pi s) on the arm's joints, s in [0, 1], with its exact derivatives."""
-    iq, _ = _arm_indices(robot)
-    home = robot.hold_configuration()
-    s = np.linspace(0.0, 1.0, n)
-    w = math.pi
-    q = np.tile(home, (n, 1))
-    q[:, iq] = home[iq] + AMPLITUDE * np.sin(w * s)[:, None]
-    x_s = AMPLITUDE * (w * np.cos(w * s))[:, None]
-    x_ss = AMPLITUDE * (-w * w * np.sin(w * s))[:, None]
-    return s, q, x_s, x_ss
-
-
 @pytest.mark.parametrize("discretization", ["interpolation", "collocation"])
 def test_equals_toppra_with_joint_velocity_and_effort_limits(panda, discretization):
     """The same path, grid and limits as TOPP-RA's own implementation, in both of its
     discretizations (measured: 7e-9 and 3e-7 apart)."""
     toppra = pytest.importorskip("toppra")
-    from toppra import algorithm, constraint
-
     from mobmanip.descriptions.resources import example_robot_data_share
 
     toppra.setup_logging("WARNING")
     n = 201
-    s, q, x_s, x_ss = _sine_path(panda, n)
+    s, q, x_s, x_ss = sine_path(panda, n)
     ours = retime(
         panda, trajectory_from_samples(panda, s, q, x_s, x_ss), object_mass=0.0, discretization=discretization
     )
@@ -78,30 +55,8 @@ def test_equals_toppra_with_joint_velocity_and_effort_limits(panda, discretizati
     fingers = [full.getJointId(name) for name in ("panda_finger_joint1", "panda_finger_joint2")]
     model = pin.buildReducedModel(full, fingers, pin.neutral(full))
     data = model.createData()
-    iq, _ = _arm_indices(panda)
+    iq, _ = arm_indices(panda)
     home = q[0, iq]
-
-    class SinePath(toppra.interpolator.AbstractGeometricPath):
-        def __call__(self, ss, order=0):
-            ss = np.atleast_1d(np.asarray(ss, dtype=float))
-            w = math.pi
-            if order == 0:
-                return home + AMPLITUDE * np.sin(w * ss)[:, None]
-            if order == 1:
-                return AMPLITUDE * (w * np.cos(w * ss))[:, None]
-            return AMPLITUDE * (-w * w * np.sin(w * ss))[:, None]
-
-        @property
-        def dof(self):
-            return 7
-
-        @property
-        def path_interval(self):
-            return np.array([0.0, 1.0])
-
-        @property
-        def waypoints(self):
-            return None
 
     def inverse_dynamics(qq, qd, qdd):
         return pin.rnea(model, data, qq, qd, qdd)
@@ -109,17 +64,7 @@ def test_equals_toppra_with_joint_velocity_and_effort_limits(panda, discretizati
     velocity = model.velocityLimit
     effort = model.effortLimit
     assert np.allclose(velocity, panda.velocity_limits) and np.allclose(effort, panda.effort_limits)
-    limits = [
-        constraint.JointVelocityConstraint(np.c_[-velocity, velocity]),
-        constraint.JointTorqueConstraint(
-            inverse_dynamics,
-            np.c_[-effort, effort],
-            np.zeros(7),
-            discretization_scheme=getattr(constraint.DiscretizationType, discretization.capitalize()),
-        ),
-    ]
-    reference = algorithm.TOPPRA(limits, SinePath(), gridpoints=s, parametrizer="ParametrizeConstAccel")
-    duration = reference.compute_trajectory(0, 0).duration
+    duration = toppra_duration(home, s, velocity, effort, inverse_dynamics, discretization)
     assert ours.duration == pytest.approx(duration, rel=1e-6)
     assert ours.duration < 0.9 * (s[-1] - s[0])  # the input's timing is far from its limits here
 
@@ -129,7 +74,7 @@ def test_one_joint_turning_about_the_vertical_is_bang_coast_bang(panda):
     gravity and no velocity term on it. The fastest turn by D within |qd| <= v, |tau| <= T is
     D / v + v / alpha (alpha = T / I) when it reaches v, else 2 sqrt(D / alpha)."""
     robot = panda.with_limits(effort={name: 1e6 for name in panda.reduced_velocity_names[1:]})
-    iq, iv = _arm_indices(robot)
+    iq, iv = arm_indices(robot)
     home = robot.hold_configuration()
     model = robot.model
     data = model.createData()
@@ -152,7 +97,7 @@ def test_one_joint_turning_about_the_vertical_is_bang_coast_bang(panda):
 
 def test_the_inputs_own_timing_does_not_matter(panda):
     n = 101
-    s, q, x_s, x_ss = _sine_path(panda, n)
+    s, q, x_s, x_ss = sine_path(panda, n)
     first = retime(panda, trajectory_from_samples(panda, s, q, x_s, x_ss), object_mass=0.5)
     for k in (0.4, 3.0):  # the same path run k times faster: s -> s / k
         again = retime(panda, trajectory_from_samples(panda, s / k, q, x_s * k, x_ss * k * k), object_mass=0.5)
@@ -165,7 +110,7 @@ def test_the_inputs_own_timing_does_not_matter(panda):
 
 def test_profile_properties(panda):
     n = 101
-    s, q, x_s, x_ss = _sine_path(panda, n)
+    s, q, x_s, x_ss = sine_path(panda, n)
     result = retime(panda, trajectory_from_samples(panda, s, q, x_s, x_ss), object_mass=0.5)
     assert result.speed[0] == 0.0 and result.speed[-1] == 0.0
     assert np.all(np.diff(result.t) > 0.0)
@@ -303,7 +248,7 @@ def _planar_path(robot, n=21):
 def test_a_posture_that_cannot_be_held_is_named(panda):
     weak = panda.with_limits(effort={"panda_joint2": 1e-3})
     n = 21
-    s, q, x_s, x_ss = _sine_path(weak, n)
+    s, q, x_s, x_ss = sine_path(weak, n)
     with pytest.raises(NumericalError, match="panda_joint2"):
         retime(weak, trajectory_from_samples(weak, s, q, x_s, x_ss), object_mass=0.0)
 

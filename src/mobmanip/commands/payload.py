@@ -143,7 +143,6 @@ def _force(value: float) -> str:
 
 def run_map(args) -> int:
     """``--map``: the payload over a polar grid of object positions."""
-    from ..support.files import check_output, output_directory
     from ..sweep.payload_map import CELL_STATUSES, payload_map
     from ..sweep.spec import SweepGrid, parse_grid
     from .common import cluster_executor, robot_for_workers, robot_spec_from_args
@@ -154,10 +153,7 @@ def run_map(args) -> int:
 
     robot = load_robot(robot_spec_from_args(args))
     grid = SweepGrid(parse_grid(args.angle, "--angle"), parse_grid(args.distance, "--distance", positive=True))
-    if args.out:  # refuse an unwritable output before the map is computed
-        out = output_directory(args.out)
-        for name in ("payload_map.csv", "payload_map.json", "payload_map.png"):
-            check_output(out / name)
+    _check_outputs(args.out, ("payload_map.csv", "payload_map.json", "payload_map.png"))
     source = None
     if args.dask is not None:
         if args.robot is None:
@@ -179,18 +175,14 @@ def run_map(args) -> int:
         bounded = found.mass[found.status == "bounded"]
         print(f"heaviest object: {found.mass[best]:.6g} kg at {found.angle_deg[best[0]]:g} deg, "
               f"{found.distance[best[1]]:g} m; the lightest of the positions: {bounded.min():.6g} kg")  # fmt: skip
-        print(f"what stops it there: {binding_summary(found.limit[best].split('; '))}")
-    if args.out:
-        for written in write_payload_map(found, args.out):
-            print(f"wrote {written}")
-    return 0
+    return _stops_and_outputs(found, best, write_payload_map, args.out)
 
 
 def run_along(args) -> int:
     """``--trajectory``: the payload at every sample of a motion."""
     from ..motion.trajectory import read_trajectory
     from ..robot.model import load_robot
-    from ..support.files import check_output, note_input, output_directory
+    from ..support.files import note_input
     from ..sweep.payload_map import payload_along
     from .common import robot_spec_from_args
     from .outputs import write_payload_along
@@ -199,10 +191,7 @@ def run_along(args) -> int:
     note_input(args.trajectory)
     robot = load_robot(robot_spec_from_args(args))
     motion = read_trajectory(robot, args.trajectory)
-    if args.out:  # refuse an unwritable output before the payloads are computed
-        out = output_directory(args.out)
-        for name in ("payload_along.csv", "payload_along.json"):
-            check_output(out / name)
+    _check_outputs(args.out, ("payload_along.csv", "payload_along.json"))
     found = payload_along(robot, motion, args.task, acceleration=parse_acceleration(args.accel),
                           constraints=constraints_from_args(args, ACCELERATION), static=args.static)  # fmt: skip
     print(f"robot {robot.name}, task {found.task}: {len(found.t)} samples")
@@ -212,9 +201,26 @@ def run_along(args) -> int:
     else:
         print(f"lightest payload along the path: {found.mass[k]:.6g} kg at sample {k} (t = {found.t[k]:g} s); "
               f"the heaviest sample's {np.nanmax(found.mass):.6g} kg")  # fmt: skip
-        print(f"what stops it there: {binding_summary(found.limit[k].split('; '))}")
-    if args.out:
-        for written in write_payload_along(found, args.out):
+    return _stops_and_outputs(found, k, write_payload_along, args.out)
+
+
+def _check_outputs(out: str | None, names: tuple[str, ...]) -> None:
+    """Refuse an unwritable output file in ``--out`` before any payload is computed."""
+    from ..support.files import check_output, output_directory
+
+    if out:
+        directory = output_directory(out)
+        for name in names:
+            check_output(directory / name)
+
+
+def _stops_and_outputs(found, at, write, out: str | None) -> int:
+    """What stops the payload at the index ``at`` of a map or a path (where one is bounded), then
+    the files ``write`` puts in ``out``."""
+    if at is not None:
+        print(f"what stops it there: {binding_summary(found.limit[at].split('; '))}")
+    if out:
+        for written in write(found, out):
             print(f"wrote {written}")
     return 0
 

@@ -118,16 +118,26 @@ class Flaw:
         """The message under ``strict``: the problem, then the way forward."""
         return (
             f"{self.subject} {self.problem}; correct it in the file, or drop --strict (strict = false in the spec) "
-            f"to have mobmanip repair it by {self.repair} with a warning"
+            f"to {self.lenient} with a warning"
         )
 
     @property
     def note(self) -> str:
         """What ``init-spec`` says of it among the detection notes."""
         return (
-            f"{self.subject}: {self.problem}; repaired at load by {self.repair}, with a warning (list the link in "
-            "accepted_repairs once reviewed, or set strict = true to refuse it)"
+            f"{self.subject}: {self.problem}; {self.at_load} (list the link in accepted_repairs once reviewed, "
+            "or set strict = true to refuse it)"
         )
+
+    @property
+    def lenient(self) -> str:
+        """What happens to it without ``strict``, as the refusal offers it."""
+        return f"have mobmanip repair it by {self.repair}"
+
+    @property
+    def at_load(self) -> str:
+        """What happens to it at load without ``strict``, as the detection notes say it."""
+        return f"repaired at load by {self.repair}, with a warning"
 
 
 @dataclass(frozen=True)
@@ -185,18 +195,12 @@ class ImplausibleInertia(Flaw):
         )
 
     @property
-    def refusal(self) -> str:
-        return (
-            f"{self.subject} {self.problem}; correct it in the file, or drop --strict (strict = false in the spec) "
-            "to analyse it as written with a warning"
-        )
+    def lenient(self) -> str:
+        return "analyse it as written"
 
     @property
-    def note(self) -> str:
-        return (
-            f"{self.subject}: {self.problem}; kept as written, with a warning at load (list the link in "
-            "accepted_repairs once reviewed, or set strict = true to refuse it)"
-        )
+    def at_load(self) -> str:
+        return "kept as written, with a warning at load"
 
 
 def implausible_inertia(link: str, mass: float, inertia: np.ndarray, extents: np.ndarray) -> ImplausibleInertia | None:

@@ -72,13 +72,7 @@ def run_band(job: MapJob, start: int, stop: int) -> tuple[int, PlacementMap | No
 
 def _rows(job: MapJob, start: int, stop: int, progress=None) -> PlacementMap | None:
     """Rows [start, stop) of the map in bands of ``job.rows_per_task`` rows, solved together."""
-    robot = robot_in_process(job.robot)
-    collision = None
-    if job.avoid_collision is not None:
-        from ..robot.collision import SelfCollision
-
-        collision = SelfCollision(robot, margin=job.avoid_collision)
-    reference = None if job.reference is None else np.array(job.reference)
+    robot, collision, reference = _loaded(job)
     try:
         return placement_map(
             robot,
@@ -168,14 +162,20 @@ def run_map(job: MapJob, executor: cf.Executor | None = None, progress: bool = F
                                seconds=time.perf_counter() - started)  # fmt: skip
 
 
-def _problem(job: MapJob) -> PlacementProblem:
-    """The placement problem of the job's request (in this process), for filling the map's gaps."""
+def _loaded(job: MapJob):
+    """The job's robot in this process, its self-collision check (None: not checked) and its
+    reference configuration (None: the spec's hold)."""
     robot = robot_in_process(job.robot)
     collision = None
     if job.avoid_collision is not None:
         from ..robot.collision import SelfCollision
 
         collision = SelfCollision(robot, margin=job.avoid_collision)
-    reference = None if job.reference is None else np.array(job.reference)
+    return robot, collision, None if job.reference is None else np.array(job.reference)
+
+
+def _problem(job: MapJob) -> PlacementProblem:
+    """The placement problem of the job's request (in this process), for filling the map's gaps."""
+    robot, collision, reference = _loaded(job)
     return PlacementProblem.of_objective(robot, job.objective, job.task, np.array(job.target), None, reference,
                                          collision, object_mass=job.object_mass, decoupled=job.decoupled)  # fmt: skip

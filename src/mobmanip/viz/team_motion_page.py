@@ -20,7 +20,7 @@ import numpy as np
 from ..coordination.carry import TeamCarryResult
 from ..team.analysis import analyze_team
 from .team_scene import TeamFrame, TeamViewer, team_scales
-from .trajectory_page import frame_samples
+from .trajectory_page import frame_samples, joined_runs, self_motion_notes
 
 __all__ = ["MEASURES", "export_team_motion_page", "team_motion_frames"]
 
@@ -37,11 +37,8 @@ def team_motion_frames(result: TeamCarryResult, *, every: int | None = None) -> 
             :data:`~mobmanip.viz.trajectory_page.MAX_FRAMES` frames).
     """
     runs = [run for run in (result.preparation, result.motion) if run is not None]
-    # the self-motion's last sample is the motion's first
-    t = np.concatenate([run.t[:-1] for run in runs[:-1]] + [runs[-1].t])
-    qs = [
-        np.concatenate([run.q[i][:-1] for run in runs[:-1]] + [runs[-1].q[i]]) for i in range(len(result.team.members))
-    ]
+    t = joined_runs([run.t for run in runs])
+    qs = [joined_runs([run.q[i] for run in runs]) for i in range(len(result.team.members))]
     picked = frame_samples(len(t), every)
     frames = []
     for k in picked:
@@ -60,13 +57,7 @@ def export_team_motion_page(
         The page's path and one note per mesh left out of the drawing.
     """
     frames, times = team_motion_frames(result, every=every)
-    notes = []
-    if result.preparation is not None:
-        prep = result.preparation
-        notes.append(
-            f"0 to {prep.t[-1] - prep.t[0]:.2f} s: the self-motion to a better posture, the object held still; "
-            "then the path"
-        )
+    notes = self_motion_notes(None if result.preparation is None else result.preparation.t)
     with TeamViewer(frames[0].analysis, scales=team_scales(f.analysis for f in frames)) as viewer:
         viewer.animate(frames, times, notes=notes)
         return viewer.export_html(path), list(viewer.mesh_notes)

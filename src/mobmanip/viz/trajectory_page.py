@@ -52,6 +52,22 @@ def motion_analysis(
     return dataclasses.replace(analysis, measures=types.MappingProxyType(measures))
 
 
+def joined_runs(parts: list[np.ndarray]) -> np.ndarray:
+    """Samples of consecutive runs joined in one array: each run's last sample is the next one's
+    first, so it is kept once."""
+    return np.concatenate([part[:-1] for part in parts[:-1]] + [parts[-1]])
+
+
+def self_motion_notes(preparation_t: np.ndarray | None) -> list[str]:
+    """The page's note on the self-motion before the path (its time stamps, s), none without one."""
+    if preparation_t is None:
+        return []
+    return [
+        f"0 to {preparation_t[-1] - preparation_t[0]:.2f} s: the self-motion to a better posture, the object "
+        "held still; then the path"
+    ]
+
+
 def frame_samples(n: int, every: int | None = None) -> np.ndarray:
     """The sample indices drawn: every ``every``-th (default: about :data:`MAX_FRAMES` in all),
     always the last."""
@@ -145,18 +161,10 @@ def export_carry_page(
     from .scene import EllipsoidViewer
 
     runs = [run for run in (result.preparation, result.motion) if run is not None]
-    # the self-motion's last sample is the motion's first
-    t = np.concatenate([run.t[:-1] for run in runs[:-1]] + [runs[-1].t])
-    q = np.concatenate([run.q[:-1] for run in runs[:-1]] + [runs[-1].q])
+    t, q = joined_runs([run.t for run in runs]), joined_runs([run.q for run in runs])
     trajectory = trajectory_from_samples(robot, t, q)
     frames, times = trajectory_frames(robot, trajectory, result.task, every=every, object_mass=object_mass)
-    notes = []
-    if result.preparation is not None:
-        prep = result.preparation
-        notes.append(
-            f"0 to {prep.t[-1] - prep.t[0]:.2f} s: the self-motion to a better posture, the object held still; "
-            "then the path"
-        )
+    notes = self_motion_notes(None if result.preparation is None else result.preparation.t)
     with EllipsoidViewer(robot) as viewer:
         animate_trajectory(viewer, frames, times, notes=notes)
         return viewer.export_html(path)
