@@ -56,7 +56,7 @@ AREAS: dict[str, tuple[str, ...]] = {
         "src/mobmanip/motion/carry_floor.py",
         "src/mobmanip/motion/ground.py",
     ),
-    "descriptions": ("src/mobmanip/descriptions/",),
+    "descriptions": ("src/mobmanip/descriptions/", "src/mobmanip/platforms/wheels.py"),
     "recordings": ("src/mobmanip/motion/recordings.py",),
     "teams": ("src/mobmanip/coordination/", "src/mobmanip/team/"),
     "placement": ("src/mobmanip/placement/",),
@@ -97,6 +97,8 @@ URDF = "src/mobmanip/descriptions/urdf.py"
 MJCF = "src/mobmanip/descriptions/mjcf.py"
 FLAWS = "src/mobmanip/descriptions/flaws.py"
 XACRO = "src/mobmanip/descriptions/xacro.py"
+MJCF_BUILDER = "src/mobmanip/descriptions/mjcf_builder.py"
+WHEELS = "src/mobmanip/platforms/wheels.py"
 RECORDINGS = "src/mobmanip/motion/recordings.py"
 MEMBERS = "src/mobmanip/team/members.py"
 TEAM_ANALYSIS = "src/mobmanip/team/analysis.py"
@@ -357,6 +359,49 @@ MUTANTS: tuple[Mutant, ...] = (
         "known |= set(_DECLARED.findall(text))",
         "an argument the files use but do not declare is refused as unknown",
         "tests/test_xacro.py",
+    ),
+    _m(
+        "D18", "descriptions", MJCF,
+        "out.append((element, 7, 0.0))",
+        "out.append((element, 6, 0.0))",
+        "a keyframe's qpos gives a free joint six numbers (its velocities' count) where its quaternion makes seven",
+        "tests/test_mjcf_keyframes.py",
+    ),
+    _m(
+        "D19", "descriptions", MJCF,
+        'first.set("pos", " ".join(repr(float(v)) for v in offsets[1] - axis))',
+        'first.set("pos", " ".join(repr(float(v)) for v in offsets[1] + axis))',
+        "the body below a nested planar base's root is moved by its yaw axis's offset, not by the opposite: the "
+        "platform turns about another point than MuJoCo's hinge",
+        "tests/test_mjcf_planar_base.py",
+    ),
+    _m(
+        "D20", "descriptions", WHEELS,
+        "return float(np.linalg.norm(d - float(d @ axis) * axis))",
+        "return float(np.linalg.norm(d))",
+        "a wheel's offset from its steering joint is measured from the joint's origin, not its axis: a steered drive "
+        "unit steered from above its wheel is taken for a caster",
+        "tests/test_mjcf_steered_drive.py",
+    ),
+    _m(
+        "D21", "descriptions", MJCF,
+        'joints[role] = self.joint(jname, kind, attrs, chain[k][1], chain[k][1], Origin())\n'
+        '            self.base_armature[role] = float(attrs.get("armature", 0.0))',
+        'joints[role] = self.joint(jname, kind, attrs, chain[k][1], chain[k][1], Origin())\n'
+        '            self.base_armature[role] = float(element.get("armature", 0.0))',
+        "a nested planar base's armature is read from the joint's own attributes, its class's default ignored",
+        "tests/test_mjcf_planar_base.py",
+    ),
+    _m(
+        "D22", "descriptions", MJCF_BUILDER,
+        "armature[root.idx_v : root.idx_v + 3] = (0.0, 0.0, yaw)\n"
+        "            model.armature = armature\n"
+        "            model.inertias[1] = model.inertias[1] + pin.Inertia(along, np.zeros(3), np.zeros((3, 3)))",
+        "armature[root.idx_v : root.idx_v + 3] = (along, along, yaw)\n"
+        "            model.armature = armature",
+        "the planar base's slide armature is put on the platform joint's diagonal instead of as a point mass on the "
+        "yaw axis: the same mass matrix, but the bias loses its omega x a v",
+        "tests/test_mjcf_planar_base.py",
     ),
     # ----- ROS recordings
     _m(

@@ -29,6 +29,7 @@ from mobmanip.errors import (
 )
 from mobmanip.robot.detect import detect_spec, spec_from_urdf, spec_to_toml, wheel_candidates
 from mobmanip.robot.spec import ArmSpec, RobotSpec, WheelSpec, find_spec, load_spec
+from mobmanip.robot.support_spec import SupportSpec
 from mobmanip.terms.dynamics import end_effector_positions, unified_jacobian
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
@@ -419,6 +420,15 @@ def test_spec_to_toml_round_trips_every_field(tmp_path):
         object_mass=3.5,
         reference={"arm_right_1_joint": math.pi / 7},
         torso=(),
+        support=SupportSpec(
+            casters=((0.3, 0.1), (-0.25, -0.125, 0.01)),
+            mu=0.7,
+            faces=6,
+            urdf_casters=False,
+            stiffness={"caster_0": 0.4, "wheel_right_joint": 2.5},
+            wheels=((0.5, 0.5),),
+            rollers=(45.0,),
+        ),
     )
     path = tmp_path / "a" / "spec.toml"
     path.parent.mkdir()

@@ -209,9 +209,11 @@ def test_analyze_and_the_viewer_export_run_on_the_spec(robot, tmp_path, capfd):
 
 
 def test_analyze_on_the_ground(robot, capfd):
-    """Stretch stands on its two wheels and the caster geom of its base (class ``caster``);
-    TidyBot and the FR3 Duo move on planar joints, with no wheel under
-    the platform's control: ``--ground`` says so in one line and names what to give."""
+    """Stretch stands on its two wheels and the caster geom of its base (class ``caster``). The
+    FR3 Duo moves on planar joints but stands on two steered drive units and two casters:
+    init-spec wrote the units as the base's driven contacts ([support] wheels) and the floor
+    model finds the casters by name. TidyBot moves on planar joints and has no wheel at all:
+    ``--ground`` says so in one line and names what to give."""
     name, _, spec, _, _ = robot
     if name == "tiago_dual":  # its four wheels work: about 15 s (18 velocities)
         pytest.skip("Menagerie's TIAGo++ on its floor is checked in tests/test_floor_task.py")
@@ -219,6 +221,9 @@ def test_analyze_on_the_ground(robot, capfd):
     if name == "stretch":
         assert code == 0, err
         assert "base_link/caster" in out
+    elif name == "fr3_duo":
+        assert code == 0, err
+        assert "contacts wheel_0, wheel_1, caster_front_left_link, caster_rear_right_link" in out
     else:  # TidyBot's base inertia is also warned of (test_inertia_plausibility.py)
         errors = "\n".join(line for line in err.splitlines() if not line.startswith("warning: "))
         assert_one_line_error(code, errors, "has no wheels on the floor", "[support] wheels")

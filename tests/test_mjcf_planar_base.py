@@ -21,7 +21,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from mjcf_util import mujoco_terms, platform_map
+from mjcf_util import mujoco_terms, platform_map, platform_map_rate
 from mobmanip.descriptions import read_description
 from mobmanip.robot.detect import detect_spec
 from mobmanip.terms.dynamics import mass_matrix
@@ -102,7 +102,9 @@ def test_the_nested_planar_joints_are_the_platform_not_arm_or_torso_joints(model
     assert explicit.torso == () and explicit.arms[0].joints == ARM
 
 
-def test_mass_matrix_gravity_and_hand_jacobian_equal_mujocos(models):
+def test_mass_matrix_gravity_bias_and_hand_jacobian_equal_mujocos(models):
+    """At rest (gravity) and at random velocities (the bias: Coriolis, centrifugal and gravity,
+    where the slides' armature, a point mass on the yaw axis, adds its omega x a v)."""
     _, _, robot, mj_model = models
     assert mj_model.nq == mj_model.nv == 7  # x, y, theta, then the arm
     rng = np.random.default_rng(38)
@@ -120,6 +122,11 @@ def test_mass_matrix_gravity_and_hand_jacobian_equal_mujocos(models):
         M = mass_matrix(robot, q)
         np.testing.assert_allclose(M, T.T @ M_mj @ T, rtol=0, atol=1e-9)
         np.testing.assert_allclose(pin.computeGeneralizedGravity(model, data, q), T.T @ g_mj, rtol=0, atol=1e-9)
+        v = rng.normal(size=7)
+        _, bias_mj, _, _ = mujoco_terms(mj_model, [x, y, theta, *arm], T @ v, [])
+        # MuJoCo's acceleration is T v' + dT/dt v: its bias seen from the platform's velocities
+        expected = T.T @ (bias_mj + M_mj @ platform_map_rate(theta, v, (0, 1, 2), 7))
+        np.testing.assert_allclose(pin.nonLinearEffects(model, data, q, v), expected, rtol=0, atol=1e-9)
         J = pin.computeFrameJacobian(model, data, q, hand, pin.LOCAL_WORLD_ALIGNED)
         np.testing.assert_allclose(J, J_mj @ T, rtol=0, atol=1e-9)
         np.testing.assert_allclose(data.oMf[hand].translation, hand_mj, rtol=0, atol=1e-12)  # x = x_file + AXIS

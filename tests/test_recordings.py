@@ -337,8 +337,9 @@ def test_a_recording_given_as_the_trajectory_is_read_as_one(robot, tmp_path, cap
 
 @pytest.mark.parametrize("kind, share", [("ros1", 0.6), ("ros1", 0.95), ("mcap", 0.6)])
 def test_a_bag_cut_short_is_one_line_that_says_how_to_repair_it(robot, tmp_path, capfd, kind, share):
-    """A recorder stopped mid-chunk (60 %) or before writing its index (95 %: the chunks whole,
-    the index gone): one line naming the file, why, and the tool that repairs it."""
+    """A recorder stopped mid-chunk (at 60 % and at 95 % of the file: this bag's messages fill one
+    chunk, its index the last 1 %): one line naming the file, why, and the tool that repairs it.
+    A bag whose chunks are whole but whose index is missing is the next test's."""
     t = np.arange(200) * 0.025
     records, _ = motion_records(kind, t, motion(t))
     bag = write_bag(tmp_path / "run", kind, records)
@@ -348,6 +349,66 @@ def test_a_bag_cut_short_is_one_line_that_says_how_to_repair_it(robot, tmp_path,
     code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", cut)
     repair = "rosbag reindex" if kind == "ros1" else "mcap recover"
     assert_one_line_error(code, err, str(cut), "cannot read it as a ROS bag", repair)
+
+
+def _ros1_header_fields(data: bytes) -> dict[bytes, tuple[int, int]]:
+    """The ROS 1 bag's header record (after the 13-byte ``#ROSBAG V2.0`` line), as the format
+    writes it: each field a 4-byte little-endian length, then ``name=value``. Returns name ->
+    (offset of the value in the file, its length)."""
+    import struct
+
+    length = struct.unpack_from("<I", data, 13)[0]
+    fields, i = {}, 17
+    while i < 17 + length:
+        size = struct.unpack_from("<I", data, i)[0]
+        name = data[i + 4 : i + 4 + size].split(b"=", 1)[0]
+        fields[name] = (i + 4 + len(name) + 1, size - len(name) - 1)
+        i += 4 + size
+    return fields
+
+
+@pytest.mark.parametrize("header", ["kept", "zeroed"])
+def test_a_ros1_bag_without_its_index_is_one_line_that_says_how_to_repair_it(robot, tmp_path, capfd, header):
+    """Every chunk whole, the index records after them gone: cut where the header says the index
+    starts, the header kept (a copy that stopped there) or zeroed (index_pos, conn_count and
+    chunk_count 0: what a recorder killed before closing its bag leaves). One line naming the file
+    and the tool that rebuilds the index."""
+    import struct
+
+    t = np.arange(200) * 0.025
+    records, _ = motion_records("ros1", t, motion(t))
+    whole = bytearray(write_bag(tmp_path / "run", "ros1", records).read_bytes())
+    fields = _ros1_header_fields(bytes(whole))
+    at, size = fields[b"index_pos"]
+    index_pos = struct.unpack_from("<Q", whole, at)[0]
+    assert size == 8 and 0 < index_pos < len(whole)
+    cut = whole[:index_pos]
+    if header == "zeroed":
+        struct.pack_into("<Q", cut, at, 0)
+        for name in (b"conn_count", b"chunk_count"):
+            struct.pack_into("<I", cut, fields[name][0], 0)
+    bag = tmp_path / "unindexed.bag"
+    bag.write_bytes(bytes(cut))
+    code, _, err = run_cli(capfd, "trajectory", ROBOT, "--bag", bag)
+    assert_one_line_error(code, err, str(bag), "cannot read it as a ROS bag", "rosbag reindex")
+
+
+def test_a_ros2_bag_with_several_topics_picks_joint_states_and_odometry_by_type(robot, tmp_path):
+    """A ROS 2 (SQLite) bag with five topics: joint states and odometry under other names, beside
+    three string topics: the JointState and Odometry topics are picked by their types, the report
+    names them, and the motion is the one under the conventional names."""
+    t = np.arange(60) * 0.025
+    records, m = motion_records("db3", t, motion(t))
+    renamed = {"/joint_states": "/arm_base/joint_states", "/odom": "/wheel/odometry"}
+    noise = [(topic, T0 * 1_000_000_000 + k * 50_000_000, m.string(f"{topic} {k}"))
+             for topic in ("/chatter", "/diagnostics_text", "/operator/notes") for k in range(20)]  # fmt: skip
+    several = [(renamed[topic], received, message) for topic, received, message in records] + noise
+    plain = read_recording(robot, write_bag(tmp_path / "plain", "db3", records))
+    found = read_recording(robot, write_bag(tmp_path / "several", "db3", several))
+    np.testing.assert_array_equal(found.trajectory.q, plain.trajectory.q)
+    np.testing.assert_array_equal(found.trajectory.t, plain.trajectory.t)
+    notes = " ".join(found.report.notes)
+    assert "read '/arm_base/joint_states'" in notes and "read '/wheel/odometry'" in notes
 
 
 def test_a_ros2_bag_with_other_topic_names_is_read_by_message_type(robot, tmp_path, capfd):

@@ -348,6 +348,9 @@ class RobotDescription:
         keyframes: the file's own named postures (an MJCF file's ``<keyframe>``), name ->
             (joint -> position, rad or m) for every one-degree-of-freedom joint the file moves;
             empty when it has none.
+        actuated: the joints the file's own actuators drive (an MJCF file's ``<actuator>`` on a
+            joint, the planar base's included), ``None`` when the format does not say (a URDF):
+            what tells a wheel the file drives from one that only rolls along.
     """
 
     name: str
@@ -362,6 +365,7 @@ class RobotDescription:
     notes: tuple[str, ...] = field(default=(), compare=False, repr=False)
     planar_base: tuple[JointDescription, ...] = field(default=(), compare=False, repr=False)
     keyframes: Mapping[str, Mapping[str, float]] = field(default_factory=dict, compare=False, repr=False)
+    actuated: frozenset[str] | None = field(default=None, compare=False, repr=False)
 
     # ----- the tree -----
 

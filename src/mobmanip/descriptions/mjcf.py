@@ -39,7 +39,9 @@ root is ``<robot>`` is read as a URDF) reads what mobmanip needs and says what i
   actuators on it: ``gear`` times the largest ``forcerange`` bound, or for a ``motor`` without
   one, ``gear`` times the largest ``ctrlrange`` bound; velocity from a ``velocity`` actuator's
   ``ctrlrange`` (divided by its ``gear``). MJCF has no velocity limit of its own: a joint without
-  such an actuator has none (``init-spec`` asks for it);
+  such an actuator has none (``init-spec`` asks for it). The joints the actuators drive are the
+  description's ``actuated``: a wheel none drives only rolls along (the mobile FR3 Duo's steered
+  drive units, whose base the file moves on actuated planar joints);
 - keyframes: each ``<key>``'s ``qpos`` read by the file's own joint layout (a free root joint's
   seven numbers included) into the description's ``keyframes``, joint name -> position, which
   ``init-spec`` offers as ``[postures.NAME]``; a key of the wrong size is left out with a note.
@@ -361,6 +363,8 @@ class _Tree:
         #: Bodies above a nested planar base's yaw joint, lumped into the platform: (name, mass
         #: kg, slides along x, slides along y), for the notes.
         self.lumped: list[tuple[str, float, bool, bool]] = []
+        #: The joints an actuator of the file drives (its ``joint`` attribute).
+        self.actuated: set[str] = set()
 
     def name(self, element: ElementTree.Element, prefix: str) -> str:
         name = element.get("name")
@@ -869,6 +873,7 @@ class _Tree:
                 if joint is None:
                     through += 1
                     continue
+                self.actuated.add(joint)
                 gear = abs((_floats(attrs.get("gear"), f"actuator on {joint!r} gear") or [1.0])[0]) or 1.0
                 entry = self.limits.setdefault(joint, {})
                 force = _floats(attrs.get("forcerange"), f"actuator on {joint!r} forcerange", 2)
@@ -1081,7 +1086,11 @@ def read_mjcf(path: str | Path, *, package_dirs: Iterable[str | Path] | None = N
     import dataclasses
 
     return dataclasses.replace(
-        description, notes=tuple(reader.notes), planar_base=tree.planar_base, keyframes=keyframes
+        description,
+        notes=tuple(reader.notes),
+        planar_base=tree.planar_base,
+        keyframes=keyframes,
+        actuated=frozenset(tree.actuated),
     )
 
 

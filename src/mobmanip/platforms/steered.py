@@ -27,7 +27,7 @@ import pinocchio as pin
 
 from ..errors import SpecError, WheelError
 from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string
-from .wheels import LATERAL, radius_of, wheel_geometry
+from .wheels import LATERAL, ON_AXIS, radius_of, wheel_geometry
 
 if TYPE_CHECKING:
     from ..descriptions import RobotDescription
@@ -209,7 +209,7 @@ class SteeredKind(PlatformKind):
         if abs(axis[2]) < LATERAL:
             raise WheelError(f"steering joint {wheels.steer!r} turns about {np.round(axis, 3).tolist()}; expected +-z")
         pivot = data.oMi[steer_id].translation
-        if float(np.linalg.norm(pivot[:2] - drive.center[:2])) > 1e-6:
+        if float(np.linalg.norm(pivot[:2] - drive.center[:2])) > ON_AXIS:
             raise WheelError(
                 f"drive wheel {wheels.drive!r} is not on the steering axis of {wheels.steer!r} "
                 f"(offset {np.round(drive.center[:2] - pivot[:2], 4).tolist()} m); a caster offset is not modelled"
@@ -242,8 +242,9 @@ class SteeredKind(PlatformKind):
         )
 
     def detect(self, description: RobotDescription, candidates: Sequence, path: str) -> Detected | None:
-        """One driven wheel on a vertical steering joint, and free lateral wheels on one axle."""
-        steered = [c for c in candidates if c.steering_joint is not None and c.driven]
+        """One driven wheel on a vertical steering joint through its centre (a steered drive unit,
+        not a caster), and free lateral wheels on one axle."""
+        steered = [c for c in candidates if c.steered_unit and c.driven]
         rear = [c for c in candidates if c.lateral and not c.carried_by_rotating_joint and not c.driven]
         if len(steered) != 1 or len(rear) < 1:
             return None

@@ -26,6 +26,10 @@ LATERAL = 0.99
 #: A continuous joint (or its child link) whose name matches this is named like a wheel.
 WHEEL_NAME = re.compile(r"wheel", re.IGNORECASE)
 
+#: m: a wheel whose centre lies this close to its steering joint's axis is on it (a steered
+#: drive unit); farther, the swivel trails it (a caster).
+ON_AXIS = 1e-6
+
 
 def named_like_wheel(description: RobotDescription, joint_name: str) -> bool:
     """Whether a joint or its child link is named like a wheel (contains "wheel")."""
@@ -72,6 +76,9 @@ class WheelCandidate:
         driven: whether the URDF gives it a positive effort limit.
         steering_joint: the nearest revolute/continuous joint above it with a vertical axis
             (a steering or caster swivel), or ``None``.
+        steering_offset: with a steering joint, the wheel centre's distance from that joint's
+            axis (m): within :data:`ON_AXIS`, the joint steers the wheel about its own centre (a
+            steered drive unit); farther, the swivel trails it (a caster). ``None`` without one.
     """
 
     name: str
@@ -82,6 +89,13 @@ class WheelCandidate:
     driven: bool
     steering_joint: str | None = None
     shape: str = "cylinder"
+    steering_offset: float | None = None
+
+    @property
+    def steered_unit(self) -> bool:
+        """Whether it is a steered drive unit: on a steering joint whose axis passes through its
+        centre (not a caster, whose swivel trails the wheel)."""
+        return self.steering_joint is not None and self.steering_offset is not None and self.steering_offset <= ON_AXIS
 
     @property
     def lateral(self) -> bool:
@@ -102,7 +116,12 @@ class WheelCandidate:
         else:
             size = "named like a wheel, mesh geometry (no cylinder or sphere to read a radius from)"
         axis = "lateral axis" if self.lateral else f"axis {np.round(self.axis, 3).tolist()}"
-        extra = f", on swivel {self.steering_joint!r}" if self.steering_joint else ""
+        extra = ""
+        if self.steered_unit:
+            extra = f", on steering joint {self.steering_joint!r} through its centre (a steered drive unit)"
+        elif self.steering_joint:
+            trail = "" if self.steering_offset is None else f", {self.steering_offset:.3g} m off its axis"
+            extra = f", on swivel {self.steering_joint!r}{trail} (a caster)"
         driven = "driven (positive effort limit)" if self.driven else "no effort limit"
         return f"{self.describe()}: {size}, {axis}, {driven}{extra}"
 
@@ -125,12 +144,13 @@ def wheel_candidates(
         pose = placements[joint.name]
         ancestors = description.chain(joint.parent)
         effort = joint.effort_limit
-        steering = None
+        steering, offset = None, None
         for above in reversed(ancestors):
             if above.type in ("revolute", "continuous"):
                 axis = description.axis_in_root(above.name)
                 if abs(float(axis[2])) >= LATERAL:
                     steering = above.name
+                    offset = _off_axis(pose[:3, 3], placements[above.name][:3, 3], axis)
                 break
         out.append(
             WheelCandidate(
@@ -142,9 +162,16 @@ def wheel_candidates(
                 driven=effort is not None and effort > 0.0,
                 steering_joint=steering,
                 shape=shape,
+                steering_offset=offset,
             )
         )
     return out
+
+
+def _off_axis(point: np.ndarray, origin: np.ndarray, axis: np.ndarray) -> float:
+    """The distance (m) from ``point`` to the line through ``origin`` along the unit ``axis``."""
+    d = np.asarray(point, dtype=float) - np.asarray(origin, dtype=float)
+    return float(np.linalg.norm(d - float(d @ axis) * axis))
 
 
 @dataclass(frozen=True)

@@ -51,6 +51,7 @@ from ..platforms.wheels import WheelCandidate, wheel_candidates
 from ..support.toml import toml_array, toml_comment, toml_key, toml_string
 from .detect_report import Missing, choice_reason, explain_wheels, platform_reasons
 from .spec import ArmSpec, RobotSpec
+from .support_spec import DEFAULT_FACES, SupportSpec
 
 __all__ = [
     "Detection",
@@ -259,7 +260,8 @@ def detect_spec(
     kind, wheel_spec = _choose_platform(description, candidates, wheels, platform, path, notes)
     drive = set(wheels or ()) | set(wheel_spec.joint_names if wheel_spec is not None else ())
     how = "wheels" if wheels is not None else ("platform" if platform is not None else "detected")
-    considered = _considered(description, candidates, kind, drive, on_arms, how, path)
+    support, contacts = _drive_unit_contacts(description, candidates, kind, drive, notes)
+    considered = _considered(description, candidates, kind, drive, on_arms, how, path, contacts)
     wheel_spec, unmeasured = _given_radius(wheel_spec, wheel_radius, candidates, drive)
     extra = [c.name for c in candidates if c.name not in drive]
     if extra and kind.takes_wheels:
@@ -297,6 +299,7 @@ def detect_spec(
         strict=strict,
         xacro_args=read_options.get("xacro_args") or {},
         package_paths=tuple(Path(p).resolve() for p in read_options.get("package_paths") or ()),
+        support=support,
     )
     missing = _missing(spec, kind, urdf_limits, unmeasured)
     source_format = FORMAT_NAMES.get(description.format, description.format)
@@ -413,6 +416,54 @@ def _choose_platform(
     return kind, wheel_spec
 
 
+def _drive_unit_contacts(
+    description: RobotDescription,
+    candidates: Sequence[WheelCandidate],
+    kind: PlatformKind,
+    drive: set[str],
+    notes: list[str],
+) -> tuple[SupportSpec | None, dict[str, int]]:
+    """The spec's ``[support]`` of a base with no wheel joints of its own (``omnidirectional``:
+    a file that moves its base on planar joints, the mobile FR3 Duo) that stands on steered drive
+    units: one driven contact (``[support] wheels``) per unit, below its wheel's centre by the
+    radius, in the root frame (m). A steered unit pushes the floor in any direction (it steers,
+    then drives), so the rows have no rollers. The casters beside them (a wheel on a swivel that
+    trails it) are passive supports: the floor model takes those whose link is named like a
+    caster; the others are written as ``[support] casters`` rows, below their centres likewise.
+
+    Returns:
+        The table (``None`` when there is no unit) and each unit's wheel joint -> its row.
+    """
+    if kind.name != "omnidirectional":
+        return None, {}
+
+    def floor(c: WheelCandidate) -> tuple[float, float, float]:
+        x, y, z = (float(v) for v in c.position)
+        return round(x, 9), round(y, 9), round(z - float(c.radius or 0.0), 9)
+
+    def rolling(c: WheelCandidate) -> bool:
+        return c.name not in drive and c.radius is not None and abs(float(c.axis[2])) < 1e-6
+
+    units = [c for c in candidates if c.steered_unit and rolling(c)]
+    if not units:
+        return None, {}
+    casters = [c for c in candidates if c.steering_joint and not c.steered_unit and rolling(c)]
+    unnamed = [c for c in casters if "caster" not in description.joints[c.name].child.lower()]
+    named = [description.joints[c.name].child for c in casters if c not in unnamed]
+    parts = [
+        "the base's floor contacts: its steered drive units "
+        + ", ".join(f"{c.steering_joint}/{c.name}" for c in units)
+        + " as [support] wheels (driven: the base's efforts are their traction)"
+    ]
+    if named:
+        parts.append(f"the casters {', '.join(named)} (found by their names)")
+    if unnamed:
+        parts.append(f"the casters of {', '.join(c.name for c in unnamed)} as [support] casters")
+    notes.append("; ".join(parts))
+    support = SupportSpec(wheels=tuple(floor(c) for c in units), casters=tuple(floor(c) for c in unnamed))
+    return support, {c.name: k for k, c in enumerate(units)}
+
+
 def _considered(
     description: RobotDescription,
     candidates: Sequence[WheelCandidate],
@@ -421,11 +472,13 @@ def _considered(
     on_arms: Mapping[str, str],
     how: str,
     path: Path,
+    contacts: Mapping[str, int] | None = None,
 ) -> list[str]:
     """What detection looked at and why it chose ``kind`` (:attr:`Detection.considered`): every
-    wheel-like joint and what became of it, each wheeled kind's verdict when the kind was
-    detected (``how``: ``"wheels"``, ``"platform"`` or ``"detected"``), and the choice."""
-    considered = explain_wheels(description, candidates, drive if kind.takes_wheels else (), on_arms)
+    wheel-like joint and what became of it (``contacts``: the ones whose floor contact is a row of
+    ``[support] wheels``), each wheeled kind's verdict when the kind was detected (``how``:
+    ``"wheels"``, ``"platform"`` or ``"detected"``), and the choice."""
+    considered = explain_wheels(description, candidates, drive if kind.takes_wheels else (), on_arms, contacts)
     if candidates and how == "detected":
         considered += platform_reasons(description, candidates, str(path))
     considered.append(choice_reason(kind.name, how, candidates))
@@ -801,7 +854,33 @@ def spec_to_toml(
     for posture, joints in spec.postures.items():
         out += ["", toml_comment(f"# Posture {posture!r} (`--posture {posture}`)."), f"[postures.{_key(posture)}]"]
         out += [f"{_key(joint)} = {_number(value)}" for joint, value in joints.items()]
+    if spec.support is not None:
+        out += ["", *_support_lines(spec.support)]
     if spec.xacro_args:
         out += ["", "# The xacro file's $(arg NAME) values.", "[xacro_args]"]
         out += [f"{_key(name)} = {_string(value)}" for name, value in spec.xacro_args.items()]
     return "\n".join(out) + "\n"
+
+
+def _rows(rows: Sequence[Sequence[float]]) -> str:
+    return "[" + ", ".join("[" + ", ".join(_number(v) for v in row) + "]" for row in rows) + "]"
+
+
+def _support_lines(support: SupportSpec) -> list[str]:
+    """The spec's ``[support]`` table: every key whose value is not the default."""
+    out = ["# Where the robot touches the floor (analyze --ground; see mobmanip.robot.support).", "[support]"]
+    if support.mu is not None:
+        out.append(f"mu = {_number(support.mu)}")
+    if support.faces != DEFAULT_FACES:
+        out.append(f"faces = {support.faces}")
+    if not support.urdf_casters:
+        out.append("urdf_casters = false")
+    if support.casters:
+        out.append(f"casters = {_rows(support.casters)}  # passive supports (m, root frame)")
+    if support.wheels:
+        out.append(f"wheels = {_rows(support.wheels)}  # driven contacts (m, root frame)")
+    if support.rollers:
+        out.append(f"rollers = [{', '.join(_number(v) for v in support.rollers)}]  # deg")
+    if support.stiffness:
+        out += ["", "[support.stiffness]", *(f"{_key(k)} = {_number(v)}" for k, v in support.stiffness.items())]
+    return out

@@ -37,8 +37,25 @@ def _is_site(description: RobotDescription, link: str) -> bool:
     return description.format == "mjcf" and joint is not None and joint.type == "fixed" and joint.name == f"{link}_site"
 
 
+def _actuation(description: RobotDescription, steer: str, wheel: str) -> str:
+    """What the file's own actuators do to a steered drive unit's two joints ("" when the format
+    does not say: a URDF)."""
+    if description.actuated is None:
+        return ""
+    driven = [name for name in (steer, wheel) if name in description.actuated]
+    if not driven:
+        return "the file actuates neither its steering nor its rolling joint"
+    if len(driven) == 2:
+        return "the file actuates both its joints"
+    return f"the file actuates only {driven[0]}"
+
+
 def explain_wheels(
-    description: RobotDescription, candidates: Sequence, drive: Iterable[str], on_arms: Mapping[str, str]
+    description: RobotDescription,
+    candidates: Sequence,
+    drive: Iterable[str],
+    on_arms: Mapping[str, str],
+    contacts: Mapping[str, int] | None = None,
 ) -> list[str]:
     """One line per wheel-like joint: what it is and what became of it.
 
@@ -47,14 +64,29 @@ def explain_wheels(
         candidates: the wheel candidates (off the arms' paths).
         drive: the joints the platform drives.
         on_arms: wheel-like joints on an arm's path -> that arm's end effector.
+        contacts: wheel joints whose floor contact is a row of the spec's ``[support] wheels``
+            -> that row (a steered drive unit of a base the file moves on planar joints).
     """
     drive = set(drive)
+    contacts = contacts or {}
     lines = []
     for c in candidates:
         if c.name in drive:
             fate = "platform wheel"
+        elif c.steered_unit:
+            acted = _actuation(description, c.steering_joint, c.name)
+            if description.planar_base:
+                base = ", ".join(j.name for j in description.planar_base)
+                why = f"{acted}: it" if acted else "the file"
+                fate = f"a steered drive unit, not the platform's ({why} moves the base on its planar joints {base})"
+            else:
+                fate = "a steered drive unit this platform does not drive" + (f" ({acted})" if acted else "")
+            fate += ": locked"
+            if c.name in contacts:
+                k = contacts[c.name]
+                fate += f"; its floor contact is row {k} of [support] wheels (contact wheel_{k})"
         elif c.steering_joint:
-            fate = "not driven by the platform model: on a swivel (a caster), locked"
+            fate = "not driven by the platform model: a caster, locked"
         else:
             fate = "not a drive wheel of this platform: locked (extra wheel)"
         lines.append(f"wheel-like joint {c.explain()} -> {fate}")
