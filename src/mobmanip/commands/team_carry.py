@@ -3,7 +3,14 @@
 from __future__ import annotations
 
 from ..support.reading import decimal
-from .common import add_guided_command, add_work_option, report_partial_carry
+from .common import (
+    add_guided_command,
+    add_motion_floor_options,
+    add_work_option,
+    motion_floor,
+    refuse_constraint_options,
+    report_partial_carry,
+)
 
 TEAM_CARRY_HELP = """\
 TEAM.toml is a team description (as for `mobmanip team`): the robots, where they stand, their
@@ -18,6 +25,14 @@ every hand follows the object, every robot's joint position, velocity and effort
 object, and the team's capacity is climbed. The baseline tracks the same path with the weighted
 pseudo-inverse from the team's posture. As in `carry`, the QP motion first moves to a better
 posture with the object held still (--prepare seconds at most; 0: none).
+
+--ground keeps every robot on its floor in the self-motion and the QP motion (a level floor;
+--mu, --no-traction, --reserve and --zmp-margin as for `carry`): each robot's zero-moment point
+stays inside its support polygon by the margin, every support stays loaded and every wheel within
+friction, under the robot's own motion and what its hands push on the object with (the load's
+least-norm share; the object's weight shared equally where the task leaves the vertical out). The
+least margin and the largest traction use of each robot are printed for both motions (the
+baseline only reads the floor).
 
 --out DIR writes trajectory_ROBOT.csv for each robot (t, platform_x, platform_y, platform_yaw,
 joints, then the team's capacity, the baseline's and the object's tracking error; a valid
@@ -80,6 +95,7 @@ def register(sub) -> None:
     parser.add_argument(
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
+    add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")
     parser.set_defaults(func=run)
 
@@ -121,6 +137,8 @@ def run(args) -> int:
     from .outputs import team_carry_outputs, team_carry_page, team_carry_partial_outputs, team_carry_paths
     from .team import _read_checked
 
+    refuse_constraint_options(args)
+    floor = motion_floor(args, "team-carry")
     note_input(args.path)
     path = read_path(args.path)
     data = _read_checked(args, None)  # the robots counted against their bound before any is loaded
@@ -153,7 +171,9 @@ def run(args) -> int:
             for file in paths:
                 check_output(file)
     try:
-        result = team_carry(team, path, args.objective, frame=args.frame, step=args.step, prepare=args.prepare)
+        result = team_carry(
+            team, path, args.objective, frame=args.frame, step=args.step, prepare=args.prepare, floor=floor
+        )
     except CarryFailed as failure:
         if not args.out:
             raise
@@ -185,6 +205,8 @@ def run(args) -> int:
             f"rates up to {100 * s['max_velocity_share']:.1f}% of their limits, "
             f"{s['samples_beyond_a_joint_range']} of {len(motion.t)} samples with a joint beyond its range"
         )
+    if floor is not None:
+        _print_floor(summary, result.robots())
     ratio = summary["min_capacity_ratio"]
     if ratio is not None:
         print(f"min capacity ratio (QP / baseline): {ratio:.3f}")
@@ -200,3 +222,19 @@ def run(args) -> int:
             print(f"note: {note}")
         print(f"wrote {page}")
     return 0
+
+
+def _print_floor(summary: dict, robots: tuple[str, ...]) -> None:
+    """Each robot's least zero-moment point margin and largest traction use, per motion."""
+    for method, label in (("qp", "QP with capacity"), ("pinv", "pseudo-inverse baseline")):
+        floor = summary[method].get("floor")
+        if floor is None:
+            continue
+        parts = []
+        for name in robots:
+            margin, use = floor["min_zmp_margin"][name], floor["max_traction_use"][name]
+            where = f"at least {margin:.4f} m inside" if margin >= 0 else f"{-margin:.4f} m outside (it tips)"
+            traction = "" if use is None else (f", traction use up to {use:.3f}" if use != "unloaded" else
+                                               ", a wheel unloads")  # fmt: skip
+            parts.append(f"{name} zero-moment point {where}{traction}")
+        print(f"floor, {label}: " + "; ".join(parts))

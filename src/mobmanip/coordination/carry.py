@@ -69,13 +69,15 @@ from ..motion.carry import (
     TIME_DECIMALS,
     ObjectPath,
 )
-from ..motion.carry_step import solve_step_qp, velocity_bounds
+from ..motion.carry_floor import CarryFloor
+from ..motion.carry_step import CarryDiagnosis, solve_step_qp, velocity_bounds
 from ..motion.trajectory import tangent_integrate
 from ..robot.tasks import get_task
 from ..team import Member, Team
 from ..terms.grasp import HeldObject
 from .capacity import TeamCapacity
-from .effort import diagnose_team_step, effort_rows, team_effort_map
+from .effort import diagnose_team_step, effort_rows, team_step_maps
+from .floor import TeamFloor
 from .platform_task import PlatformTask
 
 __all__ = ["FRAMES", "TeamCarryResult", "TeamCarryRun", "lateral_slip", "team_carry"]
@@ -101,6 +103,10 @@ class TeamCarryRun:
         grasp_strain: largest change of a distance between two hands from the run's start (m), (N,).
         effort: largest modelled effort of any wheel or joint over its limit during each step,
             (N - 1,) (the policy's efforts; the QP keeps it within 0.99).
+        zmp_margin: on the floor, each robot's zero-moment point margin to its support polygon
+            during each step (m), (N - 1, robots); ``None`` off the floor.
+        traction_use: on the floor, each robot's largest wheel traction use during each step,
+            (N - 1, robots) (NaN without a friction coefficient); ``None`` off the floor.
     """
 
     method: str
@@ -113,13 +119,21 @@ class TeamCarryRun:
     turn_error: np.ndarray
     grasp_strain: np.ndarray
     effort: np.ndarray
+    zmp_margin: np.ndarray | None = None
+    traction_use: np.ndarray | None = None
 
     def shifted(self, dt: float) -> TeamCarryRun:
         """The run with its time stamps moved by dt (s)."""
-        return TeamCarryRun(
-            self.method, np.round(self.t + dt, TIME_DECIMALS), self.q, self.x, self.capacity, self.tracking_error,
-            self.hand_error, self.turn_error, self.grasp_strain, self.effort,
-        )  # fmt: skip
+        return dataclasses.replace(self, t=np.round(self.t + dt, TIME_DECIMALS))
+
+
+def _largest_use(uses: np.ndarray) -> float | str | None:
+    """A robot's largest traction use along a run, JSON-ready: ``None`` without a friction
+    coefficient, ``"unloaded"`` where a wheel lost its load (its use is unbounded)."""
+    if np.isnan(uses).all():
+        return None
+    largest = float(np.nanmax(uses))
+    return largest if math.isfinite(largest) else "unloaded"
 
 
 def lateral_slip(robot: Any, t: np.ndarray, qs: np.ndarray) -> np.ndarray:
@@ -148,6 +162,8 @@ class TeamCarryResult:
         preparation: the self-motion before the path, or ``None`` (``prepare=0``).
         frame: the path's frame (``"object"`` or ``"world"``).
         start: the posture both runs set out from, in words.
+        floor: the floor the QP motion kept (:meth:`mobmanip.motion.carry_floor.CarryFloor.describe`),
+            or ``None``.
     """
 
     team: Team
@@ -157,6 +173,7 @@ class TeamCarryResult:
     preparation: TeamCarryRun | None = None
     frame: str = "object"
     start: str = "the team's posture"
+    floor: dict | None = None
 
     @property
     def task(self) -> str:
@@ -258,6 +275,14 @@ class TeamCarryResult:
                 "min_platform_distance": self.platform_distance(run),
                 "seconds": float(run.t[-1] - run.t[0]),
             }
+            if run.zmp_margin is not None and run.traction_use is not None and run.zmp_margin.size:
+                uses = run.traction_use
+                out[run.method]["floor"] = {
+                    "min_zmp_margin": dict(zip(self.robots(), run.zmp_margin.min(axis=0).tolist())),
+                    "max_traction_use": dict(zip(self.robots(), [_largest_use(u) for u in uses.T])),
+                }
+        if self.floor is not None:
+            out["floor"] = self.floor
         out["pinv"]["start"] = {"posture": self.start, "capacity": float(self.baseline.capacity[0])}
         posture = self.start if self.preparation is None else f"the end of a self-motion from {self.start}"
         out["qp"]["start"] = {"posture": posture, "capacity": float(self.motion.capacity[0])}
@@ -391,8 +416,10 @@ def _run(
     weight: float | None = None,
     converge: bool = False,
     x_start: np.ndarray | None = None,
+    floor: TeamFloor | None = None,
 ) -> tuple[TeamCarryRun, float]:
-    """One motion of the team along ``path`` from ``qs0``; returns it and the capacity term's weight."""
+    """One motion of the team along ``path`` from ``qs0``; returns it and the capacity term's weight
+    (``floor``: every robot keeps it, but for the pseudo-inverse baseline, which only reads it)."""
     team = problem.team
     n = int(math.floor((path.t[-1] - path.t[0]) / dt + 1e-9)) + 1
     times = np.round(path.t[0] + dt * np.arange(n), TIME_DECIMALS)
@@ -406,6 +433,8 @@ def _run(
     X = np.zeros((n - 1, nx))
     capacity, track, hand, turn, strain = (np.zeros(n) for _ in range(5))
     effort = np.zeros(max(n - 1, 0))
+    margins = None if floor is None else np.zeros((max(n - 1, 0), len(team.members)))
+    uses = None if floor is None else np.zeros((max(n - 1, 0), len(team.members)))
     qs = [np.array(q, dtype=float) for q in qs0]
     p0 = np.array([h.translation for h in _hand_poses(team, qs)])
     start_distances = np.linalg.norm(p0[:, None] - p0[None], axis=2)
@@ -417,6 +446,7 @@ def _run(
         return TeamCarryRun(
             method, times[: k + 1], tuple(q[: k + 1] for q in Q), tuple(X[:k, s] for s in problem.slices),
             capacity[: k + 1], track[: k + 1], hand[: k + 1], turn[: k + 1], strain[: k + 1], effort[:k],
+            None if margins is None else margins[:k], None if uses is None else uses[:k],
         )  # fmt: skip
 
     for k in range(n):
@@ -450,7 +480,9 @@ def _run(
             )
             / h
         )
-        A, offset = team_effort_map(team, qs, x_prev, h, problem.task, held)
+        maps = team_step_maps(team, qs, x_prev, h, problem.task, held)
+        A, offset = maps.efforts
+        wrenches = None
         if method == "pinv":
             D2 = problem.D2
             x = D2 * (J.T @ np.linalg.solve((J * D2) @ J.T, b))
@@ -465,7 +497,18 @@ def _run(
             if platforms is not None:
                 H_p, c_p = platforms.cost(qs, k, h)
                 H_k, c_k = H + H_p, c_k + c_p
-            x = solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi)
+            if floor is not None:  # the baseline only reads it
+                wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
+                floor_G, floor_g, labels = floor.step_rows(team, qs, wrenches)
+                x = solve_step_qp(H_k, c_k, J, b, lo, hi, np.vstack([G, floor_G]), np.r_[g_hi, floor_g])
+                if x is None and solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi) is not None:
+                    binding = _floor_binding(H_k, c_k, J, b, lo, hi, G, g_hi, floor_G, floor_g, labels)
+                    turning = "no turn" in binding
+                    diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=not turning)
+                    raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
+                                      partial(k))  # fmt: skip
+            else:
+                x = solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi)
             if x is None:
                 pos, low, up, units = problem.joint_positions(qs)
                 diagnosis = diagnose_team_step(
@@ -475,12 +518,27 @@ def _run(
                 raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis, partial(k))
         X[k] = x
         effort[k] = float(np.max(np.abs(A @ x + offset) / problem.effort_limits))
+        if floor is not None and margins is not None and uses is not None:
+            if wrenches is None:
+                wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
+            margins[k], uses[k] = floor.readings(team, qs, wrenches, x)
         x_prev = x
         qs = [
             tangent_integrate(m.robot.model, q, m.robot.null_space(q) @ x[s] * h)
             for m, q, s in zip(team.members, qs, problem.slices)
         ]
     return partial(n - 1), (0.0 if weight is None else weight)
+
+
+def _floor_binding(H, c, J, b, lo, hi, G, g, floor_G, floor_g, labels: list[str]) -> str:
+    """The label of the first group of floor rows whose removal alone makes the step feasible, or
+    ``"the floor's rows together"``."""
+    labels_ = np.asarray(labels)
+    for label in dict.fromkeys(labels):
+        keep = labels_ != label
+        if solve_step_qp(H, c, J, b, lo, hi, np.vstack([G, floor_G[keep]]), np.r_[g, floor_g[keep]]) is not None:
+            return str(label)
+    return "the floor's rows together"
 
 
 def team_carry(
@@ -492,6 +550,7 @@ def team_carry(
     step: float = DEFAULT_STEP,
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
+    floor: CarryFloor | None = None,
 ) -> TeamCarryResult:
     """Synthesise the team's capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -504,9 +563,14 @@ def team_carry(
         frame: ``"object"`` (the path's x along the object's start heading) or ``"world"``.
         step: time step (s); gain: the capacity term's share of the velocity limits at the
             first step; prepare: longest self-motion before the path (s), 0 for none.
+        floor: keep every robot on its floor (:class:`mobmanip.motion.carry_floor.CarryFloor`, a
+            level one; :mod:`mobmanip.coordination.floor`) in the self-motion and the QP motion:
+            each robot's zero-moment point inside its support polygon by the margin, every support
+            loaded, every wheel within friction. The baseline ignores it (its readings say where
+            it would break). ``None``: no floor rows.
 
     Raises:
-        ArgumentError: a bad step, gain, prepare, frame or path.
+        ArgumentError: a bad step, gain, prepare, frame, path or floor (a ramp).
         MeasureError: the objective is not defined along a motion.
         CarryFailed: the QP has no solution at some step; the error names the binding limit
             (``"robot/joint"``) and holds the part of the motion that succeeded.
@@ -526,19 +590,22 @@ def team_carry(
     if objective is None or isinstance(objective, str):
         objective = Objective.parse(objective or "kinematic:minor_axis", team.task)
     problem = _Problem(team, objective)
+    grounded = None if floor is None else TeamFloor.build(team, floor)
     q0 = [m.robot.check_configuration(m.q) for m in team.members]
     step, gain = float(step), float(gain)
     preparation, weight, q_path, x_start = None, None, q0, None
     if prepare > 0.0 and gain > 0.0:
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
-        run, weight = _run(problem, q0, still, frame, step, "self-motion", gain, converge=True)
+        run, weight = _run(problem, q0, still, frame, step, "self-motion", gain, converge=True, floor=grounded)
         preparation = run.shifted(path.t[0] - run.t[-1])
         q_path = [q[-1] for q in preparation.q]
         x_start = np.concatenate([x[-1] for x in preparation.x]) if len(preparation.t) > 1 else None
     try:
-        motion, _ = _run(problem, q_path, path, frame, step, "qp", gain, weight=weight, x_start=x_start)
+        motion, _ = _run(problem, q_path, path, frame, step, "qp", gain, weight=weight, x_start=x_start,
+                         floor=grounded)  # fmt: skip
     except CarryFailed as exc:
         exc.preparation = preparation
         raise
-    baseline, _ = _run(problem, q0, path, frame, step, "pinv", 0.0)
-    return TeamCarryResult(team, objective, motion, baseline, preparation, frame)
+    baseline, _ = _run(problem, q0, path, frame, step, "pinv", 0.0, floor=grounded)
+    described = None if floor is None else floor.describe()
+    return TeamCarryResult(team, objective, motion, baseline, preparation, frame, floor=described)

@@ -17,6 +17,7 @@ xdot = (x - x_prev) / dt, tau = A x + offset.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg
@@ -27,7 +28,7 @@ from ..robot.tasks import TaskSpace
 from ..team import Team
 from ..terms.grasp import HeldObject
 
-__all__ = ["team_effort_map", "diagnose_team_step"]
+__all__ = ["TeamStepMaps", "diagnose_team_step", "team_effort_map", "team_step_maps"]
 
 
 def team_effort_map(
@@ -46,6 +47,33 @@ def team_effort_map(
         x_prev: the team's reduced velocity over the previous step, (nx,).
         dt: the step (s); task: the team's task; held: the object as it is held now.
     """
+    maps = team_step_maps(team, qs, x_prev, dt, task, held)
+    return maps.efforts
+
+
+class TeamStepMaps(NamedTuple):
+    """A step's affine maps over the team's reduced velocities x (see :func:`team_step_maps`).
+
+    Attributes:
+        efforts: (A (nx, nx), offset (nx,)): tau = A x + offset.
+        hand_wrenches: (F (m h, nx), f0 (m h,)): the wrenches the h hands apply to the object, on
+            the task's m rows each (at the hand, world axes), F x + f0.
+    """
+
+    efforts: tuple[np.ndarray, np.ndarray]
+    hand_wrenches: tuple[np.ndarray, np.ndarray]
+
+
+def team_step_maps(
+    team: Team,
+    qs: Sequence[np.ndarray],
+    x_prev: np.ndarray,
+    dt: float,
+    task: TaskSpace,
+    held: HeldObject,
+) -> TeamStepMaps:
+    """The team's efforts and its hands' wrenches on the object over the step, affine in x (see
+    the module's docstring; arguments as :func:`team_effort_map`)."""
     m = task.dim
     J, drift, P, Q, xi = [], [], [], [], []
     for member, q, s in zip(team.members, qs, team.member_slices()):
@@ -71,10 +99,11 @@ def team_effort_map(
     c_full = np.zeros(6)
     c_full[3:] = np.cross(omega, held.inertia @ omega)
     wrench = M_o @ (Wt_pinv @ (np.concatenate(drift) - grasp_drift)) + c_full[task.index] + held.gravity_vector(task)
-    inertia = P_t + J_u.T @ W_pinv @ M_o @ Wt_pinv @ J_u
-    A = np.linalg.solve(Q_t, inertia) / dt
+    loads = W_pinv @ M_o @ Wt_pinv @ J_u  # the hands' wrenches per unit of xdot
+    A = np.linalg.solve(Q_t, P_t + J_u.T @ loads) / dt
     base = np.linalg.solve(Q_t, -np.concatenate(xi) + J_u.T @ (W_pinv @ wrench))
-    return A, base - A @ x_prev
+    F = loads / dt
+    return TeamStepMaps((A, base - A @ x_prev), (F, W_pinv @ wrench - F @ x_prev))
 
 
 def effort_rows(A: np.ndarray, offset: np.ndarray, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
