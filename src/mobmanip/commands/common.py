@@ -334,6 +334,7 @@ def floor_constraints(args) -> tuple:
         UsageError: a registered constraint option the command cannot honour.
     """
     from ..errors import ArgumentError
+    from ..robot.support import check_reserve
     from ..terms.constraints.floor import Floor
 
     refuse_constraint_options(args)
@@ -350,8 +351,8 @@ def floor_constraints(args) -> tuple:
         return ()
     if mu is not None and no_traction:
         raise ArgumentError("--mu and --no-traction contradict each other: choose one")
-    if reserve is not None and not (math.isfinite(reserve) and 0.0 <= reserve < 1.0):
-        raise ArgumentError(f"--reserve must be a fraction in [0, 1), got {reserve!r}")
+    if reserve is not None:
+        check_reserve(reserve, "--reserve")
     mu_used = None if no_traction else ("spec" if mu is None else mu)
     return (
         Floor(

@@ -53,7 +53,7 @@ import numpy as np
 from ..errors import ArgumentError, SpecError
 from ..platforms import a_platform
 from ..robot.model import Robot
-from ..robot.support import Support, check_faces, check_mu, deepest_margin, robot_support
+from ..robot.support import Support, check_faces, check_mu, check_reserve, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
 from ..terms.constraints.floor import check_ramp, ramp_gravity
 from ..terms.constraints.floor_wrench import NO_TURN, FloorRows, traction_components, turning_row
@@ -118,8 +118,7 @@ class CarryFloor:
             or not (math.isfinite(margin) and margin >= 0)
         ):
             raise ArgumentError(f"the zero-moment point's margin must be a finite distance >= 0 m, got {margin!r}")
-        if not (isinstance(self.reserve, (int, float)) and 0.0 <= self.reserve < 1.0):
-            raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
+        check_reserve(self.reserve)
         check_ramp(self.slope, self.uphill, "the carry floor")
 
     def gravity(self) -> np.ndarray:

@@ -46,6 +46,7 @@ from .support_spec import (  # noqa: F401  # the spec's [support] table (read be
     SupportSpec,
     check_faces,
     check_mu,
+    check_reserve,
     support_spec_from_table,
 )
 

@@ -30,7 +30,7 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from ..errors import SpecError
+from ..errors import ArgumentError, SpecError
 
 #: Friction coefficient of driven wheels when the spec gives none.
 DEFAULT_MU = 0.5
@@ -149,6 +149,13 @@ def check_mu(mu: object, what: str = "mu") -> None:
             f"{what} {mu!r} is above {MAX_MU:g}, more than any floor gives (a tyre on dry concrete: about 1); "
             "for traction without a limit, give no friction coefficient (--no-traction)"
         )
+
+
+def check_reserve(reserve: object, what: str = "the floor's reserve") -> None:
+    """A floor's safety reserve: a fraction in [0, 1) (the one check of every reserve: the
+    floor at rest's, the floor of motion's and ``--reserve``'s)."""
+    if isinstance(reserve, bool) or not isinstance(reserve, (int, float)) or not 0.0 <= reserve < 1.0:
+        raise ArgumentError(f"{what} must be a fraction in [0, 1), got {reserve!r}")
 
 
 def check_faces(faces: object, what: str = "faces") -> None:

@@ -92,7 +92,7 @@ import pinocchio as pin
 
 from ...errors import ArgumentError, SpecError
 from ...platforms import a_platform
-from ...robot.support import Support, check_faces, check_mu, polygon_margin, robot_support
+from ...robot.support import Support, check_faces, check_mu, check_reserve, polygon_margin, robot_support
 from ...robot.tasks import get_task
 from ..grasp import GRAVITY, HeldObject
 
@@ -224,8 +224,7 @@ class Floor(Constraint):
             check_mu(self.mu, "the floor's mu")
         if self.faces is not None:
             check_faces(self.faces, "the floor's faces")
-        if not (isinstance(self.reserve, (int, float)) and 0.0 <= self.reserve < 1.0):
-            raise ArgumentError(f"the floor's reserve must be a fraction in [0, 1), got {self.reserve!r}")
+        check_reserve(self.reserve)
         if self.load not in LOADS:
             raise ArgumentError(f"the floor's load must be one of {', '.join(LOADS)}, got {self.load!r}")
         check_ramp(self.slope, self.uphill, "the floor")
