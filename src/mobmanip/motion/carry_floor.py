@@ -55,7 +55,7 @@ from ..platforms import a_platform
 from ..robot.model import Robot
 from ..robot.support import Support, check_faces, check_mu, check_reserve, deepest_margin, robot_support
 from ..robot.tasks import TaskSpace
-from ..terms.constraints.floor import check_ramp, ramp_gravity
+from ..terms.constraints.floor import check_ramp, friction_of, ramp_gravity
 from ..terms.constraints.floor_wrench import NO_TURN, FloorRows, traction_components, turning_row
 from ..terms.grasp import object_mass_of
 from .ground import floor_wrench
@@ -140,9 +140,7 @@ class CarryFloor:
                 f"gives (no point of it is farther than {deepest:.4g} m from its edges; contacts "
                 f"{', '.join(support.names)})"
             )
-        mu = support.mu if self.mu == "spec" else self.mu
-        faces = support.faces if self.faces is None else self.faces
-        return support, (None if mu is None else float(mu)), int(faces)
+        return (support, *friction_of(support, self.mu, self.faces))
 
     def rows(
         self, robot: Robot, object_mass: float, resolved: tuple[Support, float | None, int] | None = None

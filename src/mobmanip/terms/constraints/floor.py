@@ -241,9 +241,7 @@ class Floor(Constraint):
     def resolve(self, robot: Robot) -> tuple[Support, float | None, int]:
         """The support, friction coefficient and faces this floor uses for ``robot``."""
         support = self.support if self.support is not None else _robot_support(robot)
-        mu = support.mu if self.mu == "spec" else self.mu
-        faces = support.faces if self.faces is None else self.faces
-        return support, (None if mu is None else float(mu)), faces
+        return (support, *friction_of(support, self.mu, self.faces))
 
     def sharing(self, mu: float | None) -> str | None:
         """The load sharing used with friction coefficient ``mu`` (``None``: no traction limit):
@@ -823,6 +821,14 @@ def _springs(support: Support) -> str:
     """How the compliant model sees the contacts, for messages."""
     k = support.stiffness
     return "equally stiff contacts" if np.all(k == k[0]) else "contacts as springs of the spec's stiffness"
+
+
+def friction_of(support: Support, mu: float | str | None, faces: int | None) -> tuple[float | None, int]:
+    """The friction coefficient and pyramid faces a floor uses on ``support``: ``mu`` (``"spec"``:
+    the support's own; ``None``: no traction limit) and ``faces`` (``None``: the support's). The
+    one place a floor's friction is resolved (the floor at rest's and the floor of motion's)."""
+    mu = support.mu if mu == "spec" else mu
+    return (None if mu is None else float(mu)), int(support.faces if faces is None else faces)
 
 
 def _robot_support(robot) -> Support:
