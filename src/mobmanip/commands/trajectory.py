@@ -10,6 +10,7 @@ import numpy as np
 from ..support.reading import decimal
 from .common import (
     ROBOT_HELP,
+    add_constraint_options,
     add_guided_command,
     add_object_mass_option,
     add_progress_option,
@@ -19,6 +20,7 @@ from .common import (
     add_work_option,
     check_trajectory_source,
     read_recorded,
+    refuse_constraint_options,
     show_progress,
 )
 
@@ -96,6 +98,7 @@ def register(sub) -> None:
     parser.add_argument(
         "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
     )
+    add_constraint_options(parser)
     add_progress_option(parser)
     add_work_option(parser, f"samples (rows of TRAJ.csv, or joint-state messages of --bag; default {MAX_SAMPLES:,})")
     parser.set_defaults(func=run)
@@ -186,6 +189,7 @@ def run(args) -> int:
     from ..support.files import check_output, note_input, output_directory
     from .outputs import trajectory_outputs
 
+    refuse_constraint_options(args)
     check_trajectory_source(args)
     if args.mu is not None:
         if not (math.isfinite(args.mu) and args.mu > 0.0):
