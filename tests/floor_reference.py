@@ -672,15 +672,53 @@ def _solve(
 
 
 def team_straight_line(
+    problems: list[FloorProblem], e, mode="ideal", mu=None, faces=8, springs=False, reserve=0.0, start=None
+) -> float:
+    """max s such that the object's acceleration ``start + s e`` is reachable by a team: several
+    robots, each on its own floor with its own efforts and contact forces (one :func:`build_problem`
+    per robot, all with the one object), holding one object. Each robot's whole-body equation and
+    grasp kinematics are its own; the object's equations sum the wrenches of every robot's hands
+    (task rows and omitted level rows alike). ``start`` (default: rest, the origin) is where the
+    line starts; ``mode``, ``mu``, ``faces``, ``springs`` (``True``: equally stiff) and ``reserve``
+    as in :func:`support`, for every robot."""
+    e = np.asarray(e, dtype=float)
+    start = np.zeros_like(e) if start is None else np.asarray(start, dtype=float)
+    program = _team_program(problems, mode, mu, faces, springs, reserve)
+    A, S_, n = program["A"], program["S"], program["n"]
+    row = np.zeros((len(e), n))
+    row[:, A], row[:, S_] = np.eye(len(e)), -e[:, None]
+    cost = np.zeros(n)
+    cost[S_] = -1.0
+    return float(-_team_solve(program, cost, row, start, mode).fun)
+
+
+def team_support(problems: list[FloorProblem], e, mode="ideal", mu=None, faces=8, springs=False, reserve=0.0) -> float:
+    """max e.a_o over the object's accelerations the team reaches (arguments as
+    :func:`team_straight_line`)."""
+    e = np.asarray(e, dtype=float)
+    program = _team_program(problems, mode, mu, faces, springs, reserve)
+    cost = np.zeros(program["n"])
+    cost[program["A"]] = -e
+    return float(-_team_solve(program, cost, np.zeros((0, program["n"])), np.zeros(0), mode).fun)
+
+
+def team_ray_radius(
     problems: list[FloorProblem], e, mode="ideal", mu=None, faces=8, springs=False, reserve=0.0
 ) -> float:
-    """max s such that the object's acceleration s e is reachable by a team: several robots, each on
-    its own floor with its own efforts and contact forces (one :func:`build_problem` per robot,
-    all with the one object), holding one object. Each robot's whole-body equation and grasp
-    kinematics are its own; the object's equations sum the wrenches of every robot's hands (task
-    rows and omitted level rows alike). ``mode``, ``mu``, ``faces``, ``springs`` (``True``:
-    equally stiff) and ``reserve`` as in :func:`support`, for every robot."""
+    """The largest t >= 0 with ``c + t e / |e|`` reachable by the team, c the centre of the box
+    that bounds its accelerations along the task axes: per axis the midpoint of the supports along
+    it and against it (arguments as :func:`team_straight_line`)."""
     e = np.asarray(e, dtype=float)
+    options = {"mode": mode, "mu": mu, "faces": faces, "springs": springs, "reserve": reserve}
+    axes = np.eye(len(e))
+    centre = np.array([0.5 * (team_support(problems, u, **options) - team_support(problems, -u, **options))
+                       for u in axes])  # fmt: skip
+    return team_straight_line(problems, e / np.linalg.norm(e), start=centre, **options)
+
+
+def _team_program(problems: list[FloorProblem], mode, mu, faces, springs, reserve) -> dict:
+    """The team's LP without its objective: its equations, inequalities and bounds over z =
+    [per robot (xdot, tau, lambda, h, h_level, springs), a_o, s], and where a_o and s are."""
     m = problems[0].W.shape[0]
     blocks = []  # per robot: (xdot, tau, lambda, h, h_level, springs) slices
     start = 0
@@ -739,10 +777,13 @@ def team_straight_line(
         + [(V, P.level_grasp[1]) for P, (_, _, (_, _, _, _, V, _)) in zip(problems, blocks)],
         first.level_load,
     )
-    equation([(A, np.eye(m)), (S_, -e[:, None])], np.zeros(m))
-    cost = np.zeros(n)
-    cost[S_] = -1.0
-    return float(-_linprog(cost, A_ub, rows, rhs, bounds, f"team floor LP ({mode})", b_ub).fun)
+    return {"rows": rows, "rhs": rhs, "A_ub": A_ub, "b_ub": b_ub, "bounds": bounds, "A": A, "S": S_, "n": n}
+
+
+def _team_solve(program: dict, cost: np.ndarray, extra: np.ndarray, value: np.ndarray, mode: str):
+    """HiGHS on the team's program with ``cost`` and the equations ``extra z = value`` added."""
+    rows, rhs = [*program["rows"], extra], [*program["rhs"], value]
+    return _linprog(cost, program["A_ub"], rows, rhs, program["bounds"], f"team floor LP ({mode})", program["b_ub"])
 
 
 def _linprog(cost, A_ub: list, rows: list, rhs: list, bounds: list, what: str, b_ub: list):

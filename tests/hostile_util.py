@@ -151,17 +151,20 @@ def mutate_number(text: str, rng, values=HOSTILE) -> str:
     return text[: match.start()] + value + text[match.end() :]
 
 
-def mutate_lines(text: str, rng) -> str:
-    """One line deleted or duplicated, or the text cut anywhere."""
+def mutate_lines(text: str, rng, delete: float = 0.4, duplicate: float = 0.8, edit=None) -> str:
+    """One line deleted (a draw below ``delete``) or duplicated (below ``duplicate``), else the
+    text cut anywhere, or with ``edit`` the line replaced by ``edit(line)``."""
     lines = text.splitlines(keepends=True)
     k = int(rng.integers(len(lines)))
     choice = rng.random()
-    if choice < 0.4:
+    if choice < delete:
         del lines[k]
-    elif choice < 0.8:
+    elif choice < duplicate:
         lines.insert(k, lines[k])
-    else:
+    elif edit is None:
         return text[: int(rng.integers(len(text)))]  # cut
+    else:
+        lines[k] = edit(lines[k])
     return "".join(lines)
 
 

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from shared_texts import grid_site
+
 distributed = pytest.importorskip("distributed")
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -143,14 +145,7 @@ def test_a_team_sweep_on_a_cluster_survives_a_killed_worker(cluster, tmp_path):
         assert (tmp_path / f"dask.{name}").read_bytes() == (tmp_path / f"serial.{name}").read_bytes(), name
 
 
-SITE = """robot = "planar_dual_arm"
-objective = "kinematic:capacity:+x"
-starts = 2
-[grid]
-x = [0.0, 2.0, 3]
-y = [0.0, 1.0, 2]
-z = 0.35
-"""
+SITE = grid_site(starts=2, x_count=3)
 
 
 def test_site_on_a_cluster_equals_the_serial_run(cluster, tmp_path):

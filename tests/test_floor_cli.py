@@ -12,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import floor_reference as fr
 import mobmanip
 from mobmanip.postures.named import named_configuration
 from mobmanip.terms.constraints.floor import Floor
@@ -110,19 +111,40 @@ def test_a_fixed_base_has_no_floor(tmp_path):
     )
 
 
+def _reference_polygon(robot) -> np.ndarray:
+    """The support polygon of a robot standing at the origin, heading along x: the hull of the
+    reference's contacts (its wheels below their axles, its URDF's casters: tests/floor_reference.py)."""
+    return fr.support_polygon(np.array([c.point for c in fr.driven_wheels(robot) + fr.urdf_casters(robot)]))
+
+
+def _centre_of_mass(robot, q, object_mass: float) -> np.ndarray:
+    """The robot's and its held object's centre of mass (Pinocchio's centerOfMass, the object at
+    the hands' midpoint), (3,)."""
+    mass = pin.computeTotalMass(robot.model)
+    center = mobmanip.analyze(robot, q, object_mass=object_mass).held_object.center
+    return (mass * pin.centerOfMass(robot.model, robot.model.createData(), q) + object_mass * center) / (
+        mass + object_mass
+    )
+
+
 def test_the_viewer_draws_the_support_and_the_zmp_at_rest(tmp_path):
+    """At rest the zero-moment point is below the centre of mass of the robot and its object, and
+    the support polygon is the hull of the robot's contacts (both worked out here); the page draws
+    them and says the margin."""
     from mobmanip.analysis.reaches import floor_at_rest
-    from mobmanip.robot.support import polygon_margin, robot_support
 
     robot = mobmanip.load_robot("tiago_dual")
     q = named_configuration(robot, "hold")
+    assert robot.configuration_dict(q)["platform"] == [0.0, 0.0, 0.0]
     grounded = mobmanip.analyze(
         robot, q, "spatial", object_mass=2.0, measures=("dynamic_polytope",), constraints=(Floor(mu=0.5),)
     ).measures["dynamic_polytope"]
     found = floor_at_rest(grounded)
-    polygon = robot_support(robot).polygon((0.0, 0.0, 0.0))
+    polygon = _reference_polygon(robot)
     assert sorted(map(tuple, np.round(found["polygon"], 12))) == sorted(map(tuple, np.round(polygon, 12)))
-    assert found["margin"] == pytest.approx(polygon_margin(polygon, found["zmp"]), abs=1e-12) and found["margin"] > 0
+    np.testing.assert_allclose(found["zmp"][:2], _centre_of_mass(robot, q, 2.0)[:2], rtol=0, atol=1e-9)
+    assert found["margin"] == pytest.approx(fr.polygon_margin(polygon, found["zmp"]), abs=1e-12)
+    assert found["margin"] > 0
     page = tmp_path / "floor.html"
     run = _cli("view", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--mu", "0.5",
                "--no-locked", "--export", str(page))  # fmt: skip
@@ -141,10 +163,7 @@ def test_trajectory_ground_reports_the_margin_per_sample(tmp_path):
     and the object's centre of mass (Pinocchio's centerOfMass), inside the support."""
     import csv
 
-    import pinocchio as pin
-
     from mobmanip.motion.trajectory import trajectory_table
-    from mobmanip.robot.support import polygon_margin, robot_support
 
     robot = mobmanip.load_robot("tiago_dual")
     q = named_configuration(robot, "hold")
@@ -159,13 +178,10 @@ def test_trajectory_ground_reports_the_margin_per_sample(tmp_path):
     run = _cli("trajectory", "tiago_dual", str(path), "--object-mass", "2", "--ground", "--out", str(out))
     assert run.returncode == 0, run.stderr
     doc = json.loads((out / "analysis.json").read_text())
-    data = robot.model.createData()
-    mass = pin.computeTotalMass(robot.model)
-    center = mobmanip.analyze(robot, q, object_mass=2.0).held_object.center
-    both = (mass * pin.centerOfMass(robot.model, data, q) + 2.0 * center) / (mass + 2.0)
+    both = _centre_of_mass(robot, q, 2.0)
     np.testing.assert_allclose(doc["columns"]["zmp_x"], both[0], atol=1e-9)
     np.testing.assert_allclose(doc["columns"]["zmp_y"], both[1], atol=1e-9)
-    margin = polygon_margin(robot_support(robot).polygon((0.0, 0.0, 0.0)), both)
+    margin = fr.polygon_margin(_reference_polygon(robot), both)
     assert doc["min_stability_margin"] == pytest.approx(margin, abs=1e-9) and margin > 0
     assert f"smallest stability margin {margin:.4f} m" in run.stdout
 

@@ -13,7 +13,15 @@ import numpy as np
 import pytest
 
 import mobmanip
-from hostile_util import NON_FINITE, PAPER_SPEC_TEXT, PAPER_URDF_TEXT, FuzzRun, assert_one_line_error, run_cli
+from hostile_util import (
+    NON_FINITE,
+    PAPER_SPEC_TEXT,
+    PAPER_URDF_TEXT,
+    FuzzRun,
+    assert_one_line_error,
+    mutate_lines,
+    run_cli,
+)
 
 HOSTILE_NUMBERS = ("nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "1e-300", "1e12", "-0.5", "abc", "")
 NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?![\w.])")
@@ -40,16 +48,8 @@ def _mutate_element(text: str, rng) -> str:
 
 
 def _mutate_lines(text: str, rng) -> str:
-    lines = text.splitlines(keepends=True)
-    k = int(rng.integers(len(lines)))
-    choice = rng.random()
-    if choice < 0.3:
-        del lines[k]
-    elif choice < 0.6:
-        lines.insert(k, lines[k])
-    else:
-        lines[k] = lines[k].lstrip("# ")  # uncomment an override (radius, limits, ...)
-    return "".join(lines)
+    """A spec's line deleted, duplicated or uncommented (an override: radius, limits, ...)."""
+    return mutate_lines(text, rng, 0.3, 0.6, edit=lambda line: line.lstrip("# "))
 
 
 def _mutated_q(rng) -> str:

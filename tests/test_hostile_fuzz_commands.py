@@ -33,6 +33,7 @@ from hostile_util import (
     mutate_xml,
     run_cli,
 )
+from shared_texts import XACRO_HEADER, XACRO_MACROS, planar_base_mjcf, xacro_body
 
 COMMANDS = ["carry", "trajectory", "place", "team", "team-carry", "collision-matrix", "site", "xacro", "mjcf"]
 #: Cases per command in the test suite (``MOBMANIP_FUZZ_CASES`` overrides them all). The fuzzers
@@ -58,71 +59,17 @@ SITE_TEXTS = (
     '[grid]\nx = [1.0, 1.5, 2]\ny = 0.5\nz = 0.35\n[grounded]\nmu = 0.5\ndirection = "+x"\n',
 )
 #: A xacro robot in one file: properties, macros with parameters and a block, expressions.
-XACRO_TEXT = """<?xml version="1.0"?>
-<robot name="xbot" xmlns:xacro="http://www.ros.org/wiki/xacro">
-  <xacro:property name="wheel_radius" value="0.08"/>
-  <xacro:property name="L" value="0.4"/>
-  <xacro:macro name="box_inertia" params="m x y z">
-    <inertia ixx="${m*(y*y+z*z)/12}" ixy="0" ixz="0" iyy="${m*(x*x+z*z)/12}" iyz="0" izz="${m*(x*x+y*y)/12}"/>
-  </xacro:macro>
-  <xacro:macro name="wheel" params="side y">
-    <link name="wheel_${side}_link">
-      <inertial><mass value="2.0"/>
-        <inertia ixx="0.004" ixy="0" ixz="0" iyy="0.0064" iyz="0" izz="0.004"/></inertial>
-      <collision><origin xyz="0 0 0" rpy="${-pi/2} 0 0"/>
-        <geometry><cylinder radius="${wheel_radius}" length="0.04"/></geometry></collision>
-    </link>
-    <joint name="wheel_${side}_joint" type="continuous">
-      <parent link="base_link"/><child link="wheel_${side}_link"/>
-      <origin xyz="0 ${y} ${wheel_radius}"/><axis xyz="0 1 0"/>
-      <limit effort="20" velocity="12"/>
-    </joint>
-  </xacro:macro>
-  <xacro:macro name="arm_link" params="name parent length mass axis *origin">
-    <link name="${name}_link">
-      <inertial><origin xyz="${length/2} 0 0"/><mass value="${mass}"/>
-        <xacro:box_inertia m="${mass}" x="${length}" y="0.06" z="0.06"/></inertial>
-    </link>
-    <joint name="${name}_joint" type="revolute">
-      <parent link="${parent}"/><child link="${name}_link"/>
-      <xacro:insert_block name="origin"/><axis xyz="${axis}"/>
-      <limit lower="-2.5" upper="2.5" effort="${40*mass}" velocity="2.0"/>
-    </joint>
-  </xacro:macro>
-  <link name="base_link">
-    <inertial><origin xyz="0 0 0.15"/><mass value="30"/>
-      <xacro:box_inertia m="30" x="0.6" y="0.5" z="0.2"/></inertial>
-  </link>
-  <xacro:wheel side="right" y="-0.22"/>
-  <xacro:wheel side="left" y="0.22"/>
-  <xacro:arm_link name="shoulder" parent="base_link" length="0.1" mass="3.0" axis="0 0 1">
-    <origin xyz="0.1 0 0.3"/>
-  </xacro:arm_link>
-  <xacro:arm_link name="upper" parent="shoulder_link" length="${L}" mass="2.0" axis="0 1 0">
-    <origin xyz="0.1 0 0.05"/>
-  </xacro:arm_link>
-  <xacro:arm_link name="fore" parent="upper_link" length="0.3" mass="1.0" axis="0 1 0">
-    <origin xyz="${L} 0 0"/>
-  </xacro:arm_link>
-  <link name="tool"/>
-  <joint name="tool_joint" type="fixed"><parent link="fore_link"/><child link="tool"/>
-    <origin xyz="0.3 0 0"/></joint>
-</robot>
-"""
+XACRO_TEXT = (
+    XACRO_HEADER.format(name=' name="xbot"')
+    + '  <xacro:property name="wheel_radius" value="0.08"/>\n  <xacro:property name="L" value="0.4"/>\n'
+    + XACRO_MACROS
+    + xacro_body("1.0", "tool")
+)
 #: An MJCF robot: a base on planar joints, a default class, a rotated body, a full inertia, geoms
 #: that carry the mass, a site, actuators with gears other than 1.
-MJCF_TEXT = """<mujoco model="fuzz">
-  <compiler angle="radian"/>
-  <default>
-    <default class="arm"><joint axis="0 1 0" range="-2 2" damping="1"/></default>
-  </default>
-  <worldbody>
-    <body name="base_link">
-      <joint name="joint_x" type="slide" axis="1 0 0"/>
-      <joint name="joint_y" type="slide" axis="0 1 0"/>
-      <joint name="joint_th" type="hinge" axis="0 0 1"/>
-      <inertial pos="0 0 0.2" mass="20" diaginertia="0.5 0.5 0.6"/>
-      <body name="link1" pos="0.1 0 0.4" quat="0.9238795 0 0.3826834 0" childclass="arm">
+MJCF_TEXT = planar_base_mjcf(
+    "fuzz",
+    arm="""      <body name="link1" pos="0.1 0 0.4" quat="0.9238795 0 0.3826834 0" childclass="arm">
         <joint name="j1" axis="0 0 1" actuatorfrcrange="-40 40"/>
         <inertial pos="0.12 0.02 -0.01" mass="1.3" fullinertia="0.02 0.03 0.04 0.001 0.004 -0.006"/>
         <body name="link2" pos="0.2 0 0" euler="0 0 0.5">
@@ -132,19 +79,17 @@ MJCF_TEXT = """<mujoco model="fuzz">
           <site name="grasp" pos="0.25 0 0"/>
         </body>
       </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <velocity joint="joint_x" kv="100" ctrlrange="-1 1" forcerange="-300 300"/>
-    <velocity joint="joint_y" kv="100" ctrlrange="-0.8 0.8" forcerange="-300 300"/>
-    <velocity joint="joint_th" kv="50" ctrlrange="-1.5 1.5" forcerange="-100 100"/>
-    <motor joint="j1" gear="40" ctrlrange="-1 1"/>
+""",
+    actuators="""    <motor joint="j1" gear="40" ctrlrange="-1 1"/>
     <velocity joint="j1" kv="10" ctrlrange="-6 6" gear="3"/>
     <position joint="j2" kp="100" forcerange="-30 30" gear="2"/>
     <velocity joint="j2" kv="10" ctrlrange="-2.5 2.5" gear="0.5"/>
-  </actuator>
-</mujoco>
-"""
+""",
+    defaults="""  <default>
+    <default class="arm"><joint axis="0 1 0" range="-2 2" damping="1"/></default>
+  </default>
+""",
+)
 
 
 def _case(command: str, rng, directory):

@@ -3,6 +3,8 @@
 - ``1_0`` was read as 10: Python's ``float`` takes underscores between digits (and digits of
   other scripts). A command line or a table that says ``1_0`` holds a typing error; numbers are
   read in decimal notation only, everywhere a number is read from text the user typed.
+- An MJCF number attribute of ``1_0`` was read as 10 by mobmanip and as garbage by Pinocchio's
+  own MJCF parser (the model built from the same text): they are read in decimal notation too.
 - ``place --map`` with a ``--map-extent`` wholly out of the arms' reach from the object ran the
   whole placement, printed its results and warnings, and only then failed on the map: more than
   one line for bad input, and the work thrown away. Such an extent is now refused first.
@@ -151,6 +153,28 @@ def test_an_mjcf_geom_with_its_sizes_is_read(tmp_path):
     path.write_text(MJCF.format(kind="box", size="0.1 0.2 0.3"))
     (shape,) = [s for link in read_description(path).links.values() for s in link.collisions + link.visuals][:1]
     assert shape.size == pytest.approx((0.2, 0.4, 0.6))
+
+
+@pytest.mark.parametrize("typo", TYPOS[:2])
+@pytest.mark.parametrize(
+    ("old", "new"),
+    [('pos="0 0 0.3"', 'pos="0 0 {}"'), ('mass="1"', 'mass="{}"'), ('range="-1 1"', 'range="-1 {}"'),
+     ('size="0.1 0.2 0.3"', 'size="0.1 0.2 {}"'), ('mass="10"', 'mass="{}"')],
+    ids=["body pos", "geom mass", "joint range", "geom size", "inertial mass"],
+)  # fmt: skip
+def test_numbers_in_an_mjcf_file_are_decimal_only(tmp_path, capfd, typo, old, new):
+    """A body at ``pos="1_0 0 0"`` was read as 10 m by mobmanip and as 1.9e227 m by Pinocchio's
+    own MJCF parser, which builds the model from the same text: the analysis stopped with an
+    internal error (LinAlgError: SVD did not converge; the fuzz run of seed 23, MJCF case 1498).
+    A number attribute is read in decimal notation only, as MuJoCo reads it: one line naming the
+    file and the value."""
+    path = tmp_path / "robot.xml"
+    text = MJCF.format(kind="box", size="0.1 0.2 0.3")
+    assert text.count(old) == 1
+    path.write_text(text.replace(old, new.format(typo)), encoding="utf-8")
+    code, out, err = run_cli(capfd, "analyze", "--urdf", path, "--ee", "tool")
+    assert_one_line_error(code, err, f"MJCF {path}", typo)
+    assert out == ""
 
 
 @pytest.mark.parametrize(

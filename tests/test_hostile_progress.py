@@ -18,16 +18,11 @@ from pathlib import Path
 
 import pytest
 
+from shared_texts import grid_site
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
-SITE = """robot = "planar_dual_arm"
-objective = "kinematic:capacity:+x"
-starts = 1
-[grid]
-x = [0.0, 2.0, 2]
-y = [0.0, 1.0, 2]
-z = 0.35
-"""
+SITE = grid_site(starts=1, x_count=2)
 MOTION = (
     "t,platform_x,platform_y,platform_yaw,arm_right_2_joint\n"
     "0,0,0,0,0.5\n0.1,0.01,0,0,0.51\n0.2,0.02,0,0.01,0.52\n0.3,0.03,0,0.02,0.53\n"

@@ -29,6 +29,7 @@ from mobmanip.descriptions.resources import example_robot_data_share
 from mobmanip.errors import MjcfError
 from mobmanip.robot.detect import spec_from_urdf
 from mobmanip.robot.spec import load_spec
+from shared_texts import planar_base_mjcf
 
 DATA = Path(__file__).resolve().parent / "data"
 TIAGO_MJCF = DATA / "menagerie_tiago_dual" / "tiago_dual.xml"
@@ -251,15 +252,9 @@ def test_an_xml_file_that_is_a_urdf_is_read_as_one(tmp_path):
     assert read_description(path).format == "urdf"
 
 
-HOLONOMIC = """<mujoco model="holonomic">
-  <compiler angle="radian"/>
-  <worldbody>
-    <body name="base_link">
-      <joint name="joint_x" type="slide" axis="1 0 0"/>
-      <joint name="joint_y" type="slide" axis="0 1 0"/>
-      <joint name="joint_th" type="hinge" axis="0 0 1"/>
-      <inertial pos="0 0 0.2" mass="20" diaginertia="0.5 0.5 0.6"/>
-      <body name="link1" pos="0.1 0 0.4">
+HOLONOMIC = planar_base_mjcf(
+    "holonomic",
+    arm="""      <body name="link1" pos="0.1 0 0.4">
         <joint name="j1" axis="0 0 1" range="-2 2" actuatorfrcrange="-40 40"/>
         <geom type="cylinder" size="0.04 0.1" pos="0.1 0 0" euler="0 1.5707963267948966 0" mass="2"/>
         <body name="link2" pos="0.2 0 0">
@@ -268,17 +263,11 @@ HOLONOMIC = """<mujoco model="holonomic">
           <site name="grasp" pos="0.25 0 0"/>
         </body>
       </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <velocity joint="joint_x" kv="100" ctrlrange="-1 1" forcerange="-300 300"/>
-    <velocity joint="joint_y" kv="100" ctrlrange="-0.8 0.8" forcerange="-300 300"/>
-    <velocity joint="joint_th" kv="50" ctrlrange="-1.5 1.5" forcerange="-100 100"/>
-    <velocity joint="j1" kv="10" ctrlrange="-2 2"/>
+""",
+    actuators="""    <velocity joint="j1" kv="10" ctrlrange="-2 2"/>
     <velocity joint="j2" kv="10" ctrlrange="-2.5 2.5"/>
-  </actuator>
-</mujoco>
-"""
+""",
+)
 
 
 def test_a_base_on_planar_joints_is_an_omnidirectional_platform(tmp_path, capfd):

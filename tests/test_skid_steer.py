@@ -24,7 +24,6 @@ import pytest
 import mobmanip
 from mobmanip.errors import MissingLimitError, WheelError
 from mobmanip.robot.detect import detect_spec, spec_to_toml
-from mobmanip.sets.ellipsoid import kinematic_ellipsoid
 
 pybullet_data = pytest.importorskip("pybullet_data", reason="the Husky and iiwa URDFs ship with pybullet")
 
@@ -235,16 +234,20 @@ def test_kinematic_ellipsoid_platform_contribution_is_the_hand_derived_skid_stee
         p_ee = result.end_effector_positions[0]
         hand = hand_platform_columns(q, p_ee)
         np.testing.assert_allclose(result.unified_jacobian[:, :2], hand, atol=1e-12)
-        # The arm's columns from a plain frame Jacobian; the ellipsoid from the hand-built J_u.
+        # The arm's columns from a plain frame Jacobian; the ellipsoid from the hand-built J_u: one
+        # hand (W = I), J_hat = J_u diag(qdot_max) of full row rank, so the set is v^T (J_hat
+        # J_hat^T)^-1 v <= 1 and its semi-axes are J_hat's singular values.
         pin.computeJointJacobians(husky.model, husky.data, q)
         pin.updateFramePlacements(husky.model, husky.data)
         J = pin.getFrameJacobian(husky.model, husky.data, husky.frame_id(EE), pin.LOCAL_WORLD_ALIGNED)[:3]
         arm_columns = J[:, [husky.model.joints[husky.model.getJointId(n)].idx_v for n in IIWA_JOINTS]]
-        J_hand = np.hstack([hand, arm_columns])
-        expected = kinematic_ellipsoid(J_hand, result.grasp_matrix, husky.velocity_limits)
-        scale = expected.semi_axes[0]
-        np.testing.assert_allclose(result.kinematic.semi_axes, expected.semi_axes, rtol=0, atol=1e-10 * scale)
-        np.testing.assert_allclose(result.kinematic.matrix * scale**2, expected.matrix * scale**2, atol=1e-8)
+        J_hat = np.hstack([hand, arm_columns]) * husky.velocity_limits
+        np.testing.assert_array_equal(result.grasp_matrix, np.eye(3))
+        semi_axes = np.linalg.svd(J_hat, compute_uv=False)
+        scale = semi_axes[0]
+        np.testing.assert_allclose(result.kinematic.semi_axes, semi_axes, rtol=0, atol=1e-10 * scale)
+        matrix = np.linalg.inv(J_hat @ J_hat.T)
+        np.testing.assert_allclose(result.kinematic.matrix * scale**2, matrix * scale**2, atol=1e-8)
         locked = mobmanip.analyze(husky.with_platform("fixed"), q, task="translational")
         assert result.kinematic.semi_axes[0] > locked.kinematic.semi_axes[0]
 

@@ -15,71 +15,29 @@ from hostile_util import assert_one_line_error, run_cli
 from mobmanip.descriptions import find_package, read_description
 from mobmanip.errors import XacroError
 from mobmanip.robot.spec import load_spec
+from shared_texts import XACRO_HEADER, XACRO_MACROS, xacro_body
 
 WHEEL_RADIUS = 0.08
 HALF_TRACK = 0.22
 
 #: A package of macros, found by $(find xbot_description): a wheel and an arm link.
-MACROS = """<?xml version="1.0"?>
-<robot xmlns:xacro="http://www.ros.org/wiki/xacro">
-  <xacro:property name="wheel_radius" value="0.08"/>
-  <xacro:macro name="box_inertia" params="m x y z">
-    <inertia ixx="${m*(y*y+z*z)/12}" ixy="0" ixz="0" iyy="${m*(x*x+z*z)/12}" iyz="0" izz="${m*(x*x+y*y)/12}"/>
-  </xacro:macro>
-  <xacro:macro name="wheel" params="side y">
-    <link name="wheel_${side}_link">
-      <inertial><mass value="2.0"/>
-        <inertia ixx="0.004" ixy="0" ixz="0" iyy="0.0064" iyz="0" izz="0.004"/></inertial>
-      <collision><origin xyz="0 0 0" rpy="${-pi/2} 0 0"/>
-        <geometry><cylinder radius="${wheel_radius}" length="0.04"/></geometry></collision>
-    </link>
-    <joint name="wheel_${side}_joint" type="continuous">
-      <parent link="base_link"/><child link="wheel_${side}_link"/>
-      <origin xyz="0 ${y} ${wheel_radius}"/><axis xyz="0 1 0"/>
-      <limit effort="20" velocity="12"/>
-    </joint>
-  </xacro:macro>
-  <xacro:macro name="arm_link" params="name parent length mass axis *origin">
-    <link name="${name}_link">
-      <inertial><origin xyz="${length/2} 0 0"/><mass value="${mass}"/>
-        <xacro:box_inertia m="${mass}" x="${length}" y="0.06" z="0.06"/></inertial>
-    </link>
-    <joint name="${name}_joint" type="revolute">
-      <parent link="${parent}"/><child link="${name}_link"/>
-      <xacro:insert_block name="origin"/><axis xyz="${axis}"/>
-      <limit lower="-2.5" upper="2.5" effort="${40*mass}" velocity="2.0"/>
-    </joint>
-  </xacro:macro>
-</robot>
-"""
+MACROS = (
+    XACRO_HEADER.format(name="")
+    + '  <xacro:property name="wheel_radius" value="0.08"/>\n'
+    + XACRO_MACROS
+    + "</robot>\n"
+)
 
 #: The robot: args for the arm's length and mass, the macros included through $(find).
-ROBOT = """<?xml version="1.0"?>
-<robot name="xbot" xmlns:xacro="http://www.ros.org/wiki/xacro">
-  <xacro:arg name="upper_length" default="0.4"/>
+ROBOT = (
+    XACRO_HEADER.format(name=' name="xbot"')
+    + """  <xacro:arg name="upper_length" default="0.4"/>
   <xacro:arg name="payload_mass" default="1.0"/>
   <xacro:include filename="$(find xbot_description)/urdf/macros.xacro"/>
   <xacro:property name="L" value="$(arg upper_length)"/>
-  <link name="base_link">
-    <inertial><origin xyz="0 0 0.15"/><mass value="30"/>
-      <xacro:box_inertia m="30" x="0.6" y="0.5" z="0.2"/></inertial>
-  </link>
-  <xacro:wheel side="right" y="-0.22"/>
-  <xacro:wheel side="left" y="0.22"/>
-  <xacro:arm_link name="shoulder" parent="base_link" length="0.1" mass="3.0" axis="0 0 1">
-    <origin xyz="0.1 0 0.3"/>
-  </xacro:arm_link>
-  <xacro:arm_link name="upper" parent="shoulder_link" length="${L}" mass="2.0" axis="0 1 0">
-    <origin xyz="0.1 0 0.05"/>
-  </xacro:arm_link>
-  <xacro:arm_link name="fore" parent="upper_link" length="0.3" mass="$(arg payload_mass)" axis="0 1 0">
-    <origin xyz="${L} 0 0"/>
-  </xacro:arm_link>
-  <link name="$(arg tool_name)"/>
-  <joint name="tool_joint" type="fixed"><parent link="fore_link"/><child link="$(arg tool_name)"/>
-    <origin xyz="0.3 0 0"/></joint>
-</robot>
 """
+    + xacro_body("$(arg payload_mass)", "$(arg tool_name)")
+)
 
 
 def _box(m, x, y, z):

@@ -67,7 +67,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ..errors import MjcfError
-from ..support.reading import MAX_ROBOT_FILE_BYTES, read_bounded
+from ..support.reading import MAX_ROBOT_FILE_BYTES, decimal, read_bounded
 from .checks import assemble
 from .description import (
     Inertial,
@@ -98,11 +98,18 @@ SKIPPED = {
 _DENSITY = 1000.0  # kg/m^3, MuJoCo's default
 
 
+def _float(value: str | float) -> float:
+    """A number attribute's value, written in decimal notation only: Python's ``float`` also reads
+    ``"1_0"`` as ten and digits of other scripts, which MuJoCo and Pinocchio's own MJCF parser
+    (which builds the model from the same text) do not; a ValueError otherwise."""
+    return decimal(value) if isinstance(value, str) else float(value)
+
+
 def _floats(text: str | None, what: str, count: int | None = None) -> list[float] | None:
     if text is None:
         return None
     try:
-        values = [float(v) for v in text.split()]
+        values = [_float(v) for v in text.split()]
     except ValueError:
         raise MjcfError("", f"{what} is not numeric: {text!r}") from None  # the caller names the file
     if count is not None and len(values) != count:
@@ -315,7 +322,7 @@ def _geom_mass_properties(kind: str, size: list[float], attrs: dict[str, str]) -
         volume, shape = 4 / 3 * math.pi * a * b * c, np.array([b * b + c * c, a * a + c * c, a * a + b * b]) / 5
     else:
         return None
-    mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * volume
+    mass = _float(attrs["mass"]) if "mass" in attrs else _float(attrs.get("density", _DENSITY)) * volume
     return mass, np.diag(mass * shape)
 
 
@@ -330,7 +337,7 @@ def _shell_mass_properties(mesh, attrs: dict[str, str]) -> tuple[float, np.ndarr
     area = float(areas.sum())
     if area <= 0.0:
         return None
-    mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * area
+    mass = _float(attrs["mass"]) if "mass" in attrs else _float(attrs.get("density", _DENSITY)) * area
     if mass == 0.0:
         return 0.0, np.zeros(3), np.zeros((3, 3))
     if mass < 0.0:
@@ -486,7 +493,7 @@ class _Tree:
                     "hinge about z)"
                 )
             found[role] = self.joint(jname, kind, attrs, body, body, Origin())
-            self.base_armature[role] = float(attrs.get("armature", 0.0))
+            self.base_armature[role] = _float(attrs.get("armature", 0.0))
         if set(found) != {"x", "y", "yaw"}:
             raise self.r.fail(
                 f"the root body {body!r} has joints {', '.join(j.name for j in found.values())}: a planar base "
@@ -590,7 +597,7 @@ class _Tree:
             holder = chain[k][0]
             holder.remove(element)
             joints[role] = self.joint(jname, kind, attrs, chain[k][1], chain[k][1], Origin())
-            self.base_armature[role] = float(attrs.get("armature", 0.0))
+            self.base_armature[role] = _float(attrs.get("armature", 0.0))
         self.planar_base = (joints["x"], joints["y"], joints["yaw"])
         # the bodies above the hinge: point masses on the yaw axis
         where = np.zeros(3)
@@ -681,8 +688,8 @@ class _Tree:
             effort = from_actuators.get("effort")
         urdf_type = "prismatic" if kind == "slide" else ("revolute" if bounded else "continuous")
         limits = JointLimits(lower, upper, from_actuators.get("velocity"), effort)
-        damping = float(attrs["damping"]) if "damping" in attrs else None
-        friction = float(attrs["frictionloss"]) if "frictionloss" in attrs else None
+        damping = _float(attrs["damping"]) if "damping" in attrs else None
+        friction = _float(attrs["frictionloss"]) if "frictionloss" in attrs else None
         return JointDescription(name, urdf_type, parent, child, origin, axis, limits, None, damping, friction)  # type: ignore[arg-type]
 
     def link(self, body, name: str, childclass: str, shift: np.ndarray | None) -> LinkDescription:
@@ -702,7 +709,7 @@ class _Tree:
             geom_masses.append((shape, attrs))
         if element is not None:
             attrs = dict(element.attrib)
-            mass = float(attrs.get("mass", 0.0))
+            mass = _float(attrs.get("mass", 0.0))
             where = f"link {name!r} <inertial>"
             if "fullinertia" in attrs:
                 xx, yy, zz, xy, xz, yz = _floats(attrs["fullinertia"], f"{where} fullinertia", 6)  # type: ignore[misc]
@@ -715,7 +722,7 @@ class _Tree:
             inertial, meshed = self.geom_inertial(name, geom_masses)
             self.from_geometry.append(name)
             visual_mass = any(
-                a.get("contype", "1") == "0" and a.get("conaffinity", "1") == "0" and float(a.get("mass", 1.0)) > 0
+                a.get("contype", "1") == "0" and a.get("conaffinity", "1") == "0" and _float(a.get("mass", 1.0)) > 0
                 for _, a in geom_masses
             )
             # Pinocchio builds from the file: it reads this one. It integrates no mesh, and leaves out
@@ -739,7 +746,7 @@ class _Tree:
             else:
                 size = [shape.radius or 0.0] * 3
             if kind == "ellipsoid":
-                size = [float(v) for v in (attrs.get("size") or "0 0 0").split()][:3]
+                size = [_float(v) for v in (attrs.get("size") or "0 0 0").split()][:3]
             R = shape.origin.rotation
             if kind == "mesh":
                 found = self.mesh_mass_properties(name, shape, attrs)
@@ -751,7 +758,7 @@ class _Tree:
                     continue
             props = _geom_mass_properties(kind, size, attrs) if kind != "mesh" else None
             if props is None:
-                mass = float(attrs.get("mass", 0.0))
+                mass = _float(attrs.get("mass", 0.0))
                 if kind == "mesh":
                     self.mesh_notes.append(name)
                 props = (mass, np.zeros((3, 3)))
@@ -807,7 +814,7 @@ class _Tree:
                 'inertia="exact" in its <mesh> makes MuJoCo agree'
             )
         volume = float(mesh.volume)
-        mass = float(attrs["mass"]) if "mass" in attrs else float(attrs.get("density", _DENSITY)) * volume
+        mass = _float(attrs["mass"]) if "mass" in attrs else _float(attrs.get("density", _DENSITY)) * volume
         if mass == 0.0:
             return 0.0, np.zeros(3), np.zeros((3, 3))
         if mass < 0.0 or volume <= 0.0:
@@ -909,7 +916,7 @@ def _qpos_layout(
         elif element.tag == "joint":
             attrs = reader.attributes(element, "joint", childclass)
             kind = attrs.get("type", "hinge")
-            ref = float(attrs.get("ref", 0.0))
+            ref = _float(attrs.get("ref", 0.0))
             out.append((element, {"free": 7, "ball": 4}.get(kind, 1), reader.angle(ref) if kind == "hinge" else ref))
     for child in body.findall("body"):
         out += _qpos_layout(reader, child, childclass)
@@ -946,7 +953,7 @@ def _keyframes(reader: _Reader, layout: list[tuple[ElementTree.Element, int, flo
             reader.notes.append(f"keyframe {name!r} gives no qpos: not a posture, left out")
             continue
         try:
-            qpos = [float(v) for v in text.split()]
+            qpos = [_float(v) for v in text.split()]
         except ValueError:
             qpos = [math.nan]
         if not all(math.isfinite(v) for v in qpos):
