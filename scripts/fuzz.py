@@ -58,7 +58,8 @@ def main(argv: list[str] | None = None) -> int:
         if others:
             tests += [f"tests/test_hostile_fuzz_commands.py::test_mutated_inputs_give_one_line_or_a_finite_result[{c}]"
                       for c in others]  # fmt: skip
-        subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *tests], cwd=ROOT, env=env)
+        command = [sys.executable, "-m", "pytest", "-n", "0", "-q", "-p", "no:cacheprovider", *tests]
+        subprocess.run(command, cwd=ROOT, env=env)
         lines = [json.loads(line) for line in report.read_text().splitlines()] if report.exists() else []
 
     if not lines:
