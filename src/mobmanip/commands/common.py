@@ -652,8 +652,8 @@ def limits_summary(limits: list[dict]) -> str:
         robot, sep, rest = label.partition(": ")
         if not sep or " " in robot:
             robot, rest = "", label
-        if kind == "tip-over" and "tips over " in rest:
-            name = rest.split("tips over ", 1)[-1]
+        if rest.startswith("the robot tips over "):
+            name = rest.removeprefix("the robot tips over ")
         elif kind == "user":
             name = rest
         else:

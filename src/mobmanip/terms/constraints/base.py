@@ -42,9 +42,10 @@ EQUATIONS: dict[str, tuple[str, ...]] = {
     "acceleration": ("dynamics", "grasp", "object"),
 }
 #: What an inequality row limits (:attr:`ConstraintRows.kinds`): a joint's effort or speed, a
-#: support's load (``"contact"``: it would unload before the robot tips, under a compliant
-#: sharing of the weight), the robot tipping over, a driven wheel's traction, the object held
-#: level, or a row of a user's own constraint.
+#: contact's load (``"contact"``: it may not pull), the robot tipping over (a row on the
+#: zero-moment point; a reading names contacts unloading with the zero-moment point on the
+#: support's edge so too), a driven wheel's traction, the object held level, or a row of a
+#: user's own constraint.
 ROW_KINDS = ("effort", "velocity", "contact", "tip-over", "traction", "level", "user")
 
 

@@ -416,9 +416,10 @@ class Floor(Constraint):
 
         Returns:
             ``(G, h, labels, kinds, scales)``: G by variable name (r, n_forces), h (r,), one label
-            per row, its kind (``"tip-over"`` where every sharing of the weight is allowed,
-            ``"contact"`` under the compliant one, ``"traction"``) and its scale (N: a contact's
-            equal share of the weight, or the friction that share gives a wheel's pyramid).
+            per row, its kind (``"contact"``: a contact's load; ``"traction"``) and its scale (N:
+            a contact's equal share of the weight, or the friction that share gives a wheel's
+            pyramid). Whether the robot tips is read where the rows bind, from the zero-moment
+            point (:func:`mobmanip.analysis.reaches.floor_limits`).
         """
         sharing_model, n_forces = self.sharing(mu), columns.size
         G_rows, h_rows, labels, kinds, scales = [], [], [], [], []
@@ -432,7 +433,7 @@ class Floor(Constraint):
             lifts = "normal force 0" if least == 0.0 else f"normal force at its reserve {least:.4g} N"
             why = "; the robot tips over" if sharing_model == "any" else f"; {_springs(support)}, before any tip-over"
             labels.append(f"{contact.name} lifts off the floor ({lifts}{why})")
-            kinds.append("tip-over" if sharing_model == "any" else "contact")
+            kinds.append("contact")  # tip-over is where such rows bind with the ZMP on the edge
             scales.append(share)
         if mu is not None and not self.lift:
             tilt = mu * math.cos(math.pi / faces) * (1.0 - self.reserve)
