@@ -162,6 +162,12 @@ class FloorSolution:
         h_level: the hands' wrenches on the object, omitted level rows, (k r,).
         forces: contact forces in world axes (N), (nc, 3); a caster's has only z.
         zmp: the zero-moment point on the floor plane (m), (3,).
+        sensitivities: HiGHS's own multipliers, as the optimum's growth per unit by which a limit
+            is relaxed (from scipy's ``marginals`` of the minimised -value): ``"tau_upper"`` and
+            ``"tau_lower"`` (nx,) per N m (or N) more of each effort limit, on its + and - side;
+            ``"normal"`` (nc,) per N by which a contact's normal force may go below its least;
+            ``"friction"`` (nc, faces) per N by which each face row of a driven wheel's pyramid
+            may be exceeded (zeros for a caster).
     """
 
     value: float
@@ -172,6 +178,7 @@ class FloorSolution:
     h_level: np.ndarray
     forces: np.ndarray
     zmp: np.ndarray
+    sensitivities: dict | None = None
 
 
 def _skew(r: np.ndarray) -> np.ndarray:
@@ -639,14 +646,15 @@ def _solve(
     bounds, cone = [(None, None)] * n, (mu or 0.0) * math.cos(math.pi / faces) * (1.0 - reserve)
     least = reserve * P.total_mass * -P.gravity[2] / len(P.contacts)
     bounds[T] = [(-limit, limit) for limit in P.tau_max]
-    A_ub = []
-    for contact, sl in zip(P.contacts, slices):
+    A_ub, pyramid_rows = [], []  # pyramid_rows: (contact, face) of each pyramid row of A_ub
+    for c, (contact, sl) in enumerate(zip(P.contacts, slices)):
         if mode != "ideal":
             bounds[L.start + sl.stop - 1] = (least, None)  # the normal is the last (z) component
         if contact.driven and mode == "friction":  # face k: (cos, sin) . f_t <= mu cos(pi / N) f_n
-            for angle in P.heading + 2.0 * math.pi * np.arange(faces) / faces:
+            for k, angle in enumerate(P.heading + 2.0 * math.pi * np.arange(faces) / faces):
                 A_ub.append(np.zeros(n))
                 A_ub[-1][L.start + sl.start : L.start + sl.stop] = (math.cos(angle), math.sin(angle), -cone)
+                pyramid_rows.append((c, k))
     b_ub = [0.0] * len(A_ub)
     for row in np.vstack([_band(P), -_band(P)]):  # the level band
         A_ub.append(np.zeros(n))
@@ -659,6 +667,15 @@ def _solve(
     forces = np.zeros((len(P.contacts), 3))
     for i, sl in enumerate(slices):
         forces[i, 3 - (sl.stop - sl.start) :] = z[L][sl]
+    friction = np.zeros((len(P.contacts), faces))
+    for (c, k), marginal in zip(pyramid_rows, result.ineqlin.marginals if A_ub else ()):
+        friction[c, k] = -marginal
+    sensitivities = {  # scipy's marginals are d(min -value)/d(bound): signs turned to growth of the value
+        "tau_upper": -result.upper.marginals[T],
+        "tau_lower": result.lower.marginals[T],
+        "normal": np.array([result.lower.marginals[L.start + sl.stop - 1] for sl in slices]),
+        "friction": friction,
+    }
     return FloorSolution(
         value=float(-result.fun),
         a_o=z[A].copy(),
@@ -668,6 +685,7 @@ def _solve(
         h_level=z[V].copy(),
         forces=forces,
         zmp=zero_moment_point(P.points, forces),
+        sensitivities=sensitivities,
     )
 
 

@@ -120,13 +120,12 @@ def test_warm_kernel_and_the_announcement():
     assert warm_kernel(panda, "translational") is True
     assert kernel_ready(1, 3)
     stream = io.StringIO()
-    started = compiled._before_first_call(9, 5, stream)  # a pair no test compiles
-    assert started is not None
-    compiled._READY.discard((9, 5))
-    compiled._after_first_call(9, 5, started, stream)
+    with compiled._first_call(9, 5, stream):  # a pair no test compiles
+        assert (9, 5) not in compiled._READY
+    assert (9, 5) in compiled._READY
     compiled._READY.discard((9, 5))
     lines = stream.getvalue().splitlines()
     assert len(lines) == 2
     assert "compiling" in lines[0] and "9 end effectors" in lines[0] and "5-D task" in lines[0]
-    assert f"about {compiled.expected_compile_seconds(9):.0f} s" in lines[0]
-    assert lines[1].startswith("mobmanip: kernel compiled in")
+    assert f"up to {compiled.expected_compile_seconds(9):.0f} s" in lines[0]
+    assert lines[1].startswith(f"mobmanip: {compiled.kernel_name(9, 5)} compiled in")

@@ -159,6 +159,32 @@ def test_bad_constraints_are_refused_with_their_name(paper):
         ConstraintRows("toy", "velocity", couplings={"dynamics": {}})
 
 
+def test_a_users_rows_are_ranked_as_the_limits_they_stand_for(paper):
+    """A constraint that gives no kinds or scales: its rows are of kind ``user``, each worth 1 % of
+    its own bound. EffortShare(0.5) binds where the joint boxes of a robot with half the effort
+    limits bind, and with the same gains, limit by limit, along each axis; bad kinds and scales are
+    refused naming the constraint."""
+    robot, q = paper
+    shared = mobmanip.analyze(robot, q, measures=("dynamic_polytope",), constraints=(EffortShare(0.5),))
+    halved = robot.with_limits(effort={name: 0.5 * v for name, v in robot.joint_effort_limits.items()})
+    halved = halved.with_wheel_limits(effort=0.5 * float(robot.effort_limits[0]))
+    # a share that never binds keeps the set one of linear programs, whose multipliers it reads
+    reference = mobmanip.analyze(halved, q, measures=("dynamic_polytope",), constraints=(EffortShare(2.0),))
+    for e in np.vstack([np.eye(2), -np.eye(2)]):
+        mine = shared.measures["dynamic_polytope"].straight_line_witness(e).limits
+        theirs = reference.measures["dynamic_polytope"].straight_line_witness(e).limits
+        assert mine and {lim.kind for lim in mine} == {"user"} and {lim.kind for lim in theirs} == {"effort"}
+        got = {lim.label.replace(" at 0.5 of its", ""): lim.gain for lim in mine}
+        want = {lim.label: lim.gain for lim in theirs}
+        assert set(got) == set(want)
+        for label, gain in want.items():
+            assert got[label] == pytest.approx(gain, rel=1e-6), label
+    with pytest.raises(ArgumentError, match="'toy': unknown row kinds \\['slip'\\]"):
+        ConstraintRows("toy", "acceleration", G={"tau": np.zeros((1, 8))}, h=np.ones(1), kinds=("slip",))
+    with pytest.raises(ArgumentError, match="'toy': its row scales must be 1 positive"):
+        ConstraintRows("toy", "acceleration", G={"tau": np.zeros((1, 8))}, h=np.ones(1), scales=(0.0,))
+
+
 def test_the_policy_at_a_singular_posture_keeps_only_what_the_hands_can_follow():
     """Arms stretched (the paper robot's home): J_u loses rank; the lifted policy set blocks the
     directions the hands cannot follow, as the closed form does."""

@@ -89,12 +89,17 @@ left_side = {SIDE_TORQUE!r}
 
 
 @pytest.fixture(scope="module")
-def husky(tmp_path_factory):
+def husky_spec(tmp_path_factory) -> Path:
     directory = tmp_path_factory.mktemp("husky")
     urdf = husky_with_arm(directory)
     spec = directory / "husky_iiwa.toml"
     spec.write_text(spec_text(urdf))
-    return mobmanip.load_robot(spec)
+    return spec
+
+
+@pytest.fixture(scope="module")
+def husky(husky_spec):
+    return mobmanip.load_robot(husky_spec)
 
 
 def random_q(robot, rng):
@@ -155,6 +160,28 @@ def test_a_wheel_limit_reaches_each_side_as_its_wheels_give_it(husky):
     np.testing.assert_allclose(limited.velocity_limits[:2], (3.0, 3.0))
     np.testing.assert_allclose(limited.effort_limits[:2], (2 * 5.0, 2 * 5.0))
     np.testing.assert_array_equal(limited.effort_limits[2:], husky.effort_limits[2:])  # the arm's are its own
+
+
+def test_the_wheel_limit_flags_reach_each_side(husky, husky_spec, tmp_path, capsys):
+    """``analyze --wheel-velocity-limit 3 --wheel-effort-limit 5`` on the Husky (issue 39: the flags
+    did not reach its sides): each side turns at 3 rad/s and pushes with its two wheels' 10 N m,
+    and the kinematic ellipsoid is the one of those limits."""
+    import json
+
+    from mobmanip.cli import main
+
+    out = tmp_path / "a.json"
+    argv = ["analyze", str(husky_spec), "--wheel-velocity-limit", "3", "--wheel-effort-limit", "5", "--json", str(out)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    doc = json.loads(out.read_text())
+    np.testing.assert_allclose(doc["velocity_limits"][:2], (3.0, 3.0), rtol=1e-15)
+    np.testing.assert_allclose(doc["effort_limits"][:2], (10.0, 10.0), rtol=1e-15)
+    np.testing.assert_allclose(doc["velocity_limits"][2:], husky.velocity_limits[2:], rtol=1e-15)
+    # the velocity ellipsoid of those limits: J_u diag(limits) mapped onto the unit ball, from the JSON's J_u
+    J = np.asarray(doc["unified_jacobian"], dtype=float) * np.r_[3.0, 3.0, husky.velocity_limits[2:]]
+    singular = np.linalg.svd(J, compute_uv=False)  # descending, the task's rows (a zero: a direction it cannot move)
+    np.testing.assert_allclose(doc["kinematic_ellipsoid"]["semi_axes"], singular, rtol=1e-9, atol=1e-9)
 
 
 def test_constraints_annihilate_s_and_s_spans_their_null_space(husky, rng):

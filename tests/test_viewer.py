@@ -487,7 +487,17 @@ def test_export_renders_the_same_scene(live, browser, tmp_path):
         offline.close()
 
 
+_CAPTION_JS = """(t) => {
+  viewer.animator.pause(); viewer.animator.seek(t); window.mobmanipTick();
+  const box = document.getElementById("mobmanip-caption");
+  return box ? box.textContent : null;
+}"""
+
+
 def test_animation_export_plays_the_sweep(robot, browser, tmp_path):
+    """The exported Fig. 3 sweep plays each held frame's ellipses, and every frame carries its
+    caption: the held ones their label, the ones between the paper's speeds the speed of their
+    own wheel limit (read from the frame's robot, to the caption's 3 digits)."""
     frames = fig3_frames(robot)
     with EllipsoidViewer(robot) as viewer:
         schedule = viewer.animate(frames, step=0.1)
@@ -508,7 +518,7 @@ def test_animation_export_plays_the_sweep(robot, browser, tmp_path):
             start, end, label = schedule[index]
             frame = held[index]
             assert label == held[index].label
-            page.evaluate(f"() => {{ viewer.animator.pause(); viewer.animator.seek({(start + end) / 2}); }}")
+            assert page.evaluate(_CAPTION_JS, (start + end) / 2) == label
             for (is_locked, kind), p in ELLIPSOID_PATHS.items():
                 source = frame.locked if is_locked else frame.analysis
                 e = getattr(source, kind)
@@ -519,6 +529,22 @@ def test_animation_export_plays_the_sweep(robot, browser, tmp_path):
                 G = scales[kind] * E @ e.generator
                 expected = G @ G.T + np.diag([0.0, 0.0, PLANAR_THICKNESS[is_locked, kind] ** 2])
                 np.testing.assert_allclose(drawn[:3, :3] @ drawn[:3, :3].T, expected, atol=TOL)
+        starts = np.cumsum([0.0] + [f.hold + 0.1 for f in frames[:-1]])
+        between = [i for i, f in enumerate(frames) if f.hold == 0 and "between" in f.caption]
+        turning = [i for i, f in enumerate(frames) if f.hold == 0 and "turning" in f.caption]
+        assert between and turning and len(between) + len(turning) + len(held) == len(frames)
+        radius = robot.platform.radius
+        for i in (between[0], between[-1], turning[0]):
+            caption = page.evaluate(_CAPTION_JS, starts[i] + 0.05)
+            assert caption == frames[i].caption
+            speed = float(re.search(r"platform speed <= ([0-9.e-]+) m/s", caption).group(1))
+            limit = float(frames[i].analysis.robot.velocity_limits[0]) * radius
+            assert speed == pytest.approx(limit, rel=5e-3)
+            angle = float(re.search(r"object at ([0-9.]+) deg", caption).group(1))
+            q = frames[i].q  # the object's direction from the platform's heading, in the world
+            rel = frames[i].analysis.held_object.center[:2] - q[:2]
+            seen = math.degrees(math.atan2(rel[1], rel[0]) - math.atan2(q[3], q[2]))
+            assert angle == pytest.approx(seen, abs=0.05)
     finally:
         page.close()
 

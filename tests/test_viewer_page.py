@@ -95,6 +95,32 @@ def test_visual_box_holds_every_point_of_the_geometry(name, rng):
         assert np.all(points.min(axis=0) - lower < 0.1) and np.all(upper - points.max(axis=0) < 0.1)
 
 
+def test_a_page_receives_the_sets_and_the_object_before_the_robots_meshes():
+    """meshcat sends the scene to a page (and writes it into an exported one) in the order of its
+    tree: every set and the object come before the robot's first mesh, so that a live page shows
+    what was computed while the heaviest part still streams in."""
+    import base64
+
+    import msgpack
+
+    robot = mobmanip.load_robot("planar_dual_arm")
+    q = robot.neutral()
+    analysis, locked = analyze_pair(robot, q)
+    with EllipsoidViewer(robot) as viewer:
+        viewer.show(q, analysis, locked)
+        html = viewer._vis.static_html()
+    order = []
+    for text in re.findall(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)", html):
+        command = msgpack.unpackb(base64.b64decode(text), raw=False, strict_map_key=False)
+        if isinstance(command, dict) and command.get("type") == "set_object":
+            order.append(command["path"])
+    first_mesh = next(i for i, path in enumerate(order) if path.startswith("/meshcat/mobmanip/robot/"))
+    sets = [scene_path(name, is_locked) for source, is_locked in ((analysis, False), (locked, True))
+            for name in source.measures]  # fmt: skip
+    for path in [*sets, "mobmanip/object"]:
+        assert any(p.startswith(f"/meshcat/{path}") for p in order[:first_mesh]), (path, order)
+
+
 def test_inject_puts_the_script_before_the_end_of_the_body():
     html = inject("<html><body><p>x</p></body></html>")
     assert html.index("mobmanip_page") < html.index("</body>") and html.endswith("</body></html>")
@@ -218,6 +244,34 @@ def test_robot_and_object_are_inside_the_frame(shown):
     drawn = [_check_framed(page, *args) for page in shown["pages"]]
     if len(drawn) == 2:
         np.testing.assert_allclose(drawn[0], drawn[1], atol=1.0)  # the exported page frames it as the live one
+
+
+# A part that never arrives added to what the page waits for: the banner it shows, then restored.
+_PLANT_JS = """() => {
+  const data = viewer.scene_tree.children.meshcat.children.mobmanip.object.mobmanip_page;
+  const expect = data.expect;
+  data.expect = [...expect, "mobmanip/never/sent"];
+  window.mobmanipTick();
+  const text = document.getElementById("mobmanip-progress").textContent;
+  data.expect = expect;
+  window.mobmanipTick();
+  return [text, document.getElementById("mobmanip-progress") === null];
+}"""
+
+
+def test_the_page_counts_the_parts_of_the_scene_until_they_have_arrived(shown):
+    """The page waits for every part drawn (each visual geometry, the object, each non-empty set)
+    and says how many have arrived until all have (the live page received TIAGo++'s sets 20-45 s
+    after its legend with no sign of work); loaded, it says nothing."""
+    viewer, analysis, locked = shown["viewer"], shown["analysis"], shown["locked"]
+    drawn = sum(not s.empty for a in (analysis, locked) if a is not None for s in a.measures.values())
+    expect = viewer._page["expect"]
+    assert len(expect) == len(set(expect)) == viewer.visual_model.ngeoms + 1 + drawn
+    for page in shown["pages"]:
+        assert page.evaluate("() => document.getElementById('mobmanip-progress')") is None
+        text, cleared = page.evaluate(_PLANT_JS)
+        assert text == f"receiving the scene: {len(expect)} of {len(expect) + 1} parts..."
+        assert cleared
 
 
 def test_magnified_small_set_is_drawn_larger_and_says_so(browser):

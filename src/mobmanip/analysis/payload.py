@@ -34,6 +34,7 @@ import numpy as np
 from ..errors import ArgumentError, ModelError
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from ..sets.lifted import ranked_limits
 from ..sets.linear_programs import LinearProgram
 from ..support.ranges import OBJECT_MASS
 from ..terms.builder import MeasureTerms, assemble_terms, terms_at
@@ -41,7 +42,7 @@ from ..terms.constraints.base import Constraint, ConstraintRows
 from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
 from ..terms.grasp import HeldObject
 from ..terms.problems import CapacityRows, capacity_rows
-from .reaches import tip_over_reading
+from .reaches import floor_limits, limit_entry, tip_over_reading
 from .single import default_object
 
 #: The masses (kg) the rows are stacked at: the first two give the line, the third checks it.
@@ -83,6 +84,10 @@ class Payload:
         reading: what stops it in words: ``binding``, with a robot about to tip (its zero-moment
             point on the support's edge, contacts unloaded) named as tip-over about that edge in
             place of the unloaded contacts' rows (as the floor's reaches read).
+        limits: what stops it ranked by the program's multipliers, the limit worth most first:
+            each ``{"label", "kind", "gain"}``, gain the mass (kg) 1 % more of that limit adds
+            (on the floor read as :func:`mobmanip.analysis.reaches.floor_limits` reads it);
+            empty unless bounded.
     """
 
     robot: str
@@ -97,6 +102,7 @@ class Payload:
     static: bool = False
     floor: Mapping[str, Any] | None = None
     reading: tuple[str, ...] = ()
+    limits: tuple[dict, ...] = ()
 
     @property
     def held_still(self) -> bool:
@@ -143,6 +149,7 @@ class Payload:
             "status": self.status,
             "mass": self.mass,
             "binding": list(self.binding),
+            "limits": [dict(entry) for entry in self.limits],
             "reduced_velocity_names": list(self.reduced_names),
             "variables": {name: value.tolist() for name, value in self.variables.items()},
             "constraints": [dict(c) for c in self.constraints],
@@ -275,12 +282,16 @@ def heaviest(
     variables = {name: z[where].copy() for name, where in first.columns.items()}
     info = first.model.get("floor")
     floor, reading = None, binding
+    ranked = ranked_limits(np.where(chosen, np.abs(duals), 0.0), labels, first.kinds, first.scales)
+    limits = tuple(limit_entry(lim.label, lim.kind, lim.gain) for lim in ranked)
     if info is not None and CONTACT_FORCES in variables:
         floor = ground_reaction(info, variables[CONTACT_FORCES])
         reading = tuple(tip_over_reading(list(binding), info, floor))
+        limits = tuple(floor_limits(ranked, info, floor))
     return Payload(
-        status="bounded", mass=mass, binding=binding, variables=variables, floor=floor, reading=reading, **common
-    )
+        status="bounded", mass=mass, binding=binding, variables=variables, floor=floor, reading=reading,
+        limits=limits, **common,
+    )  # fmt: skip
 
 
 def _terms(robot, q, task, shape, mass, decoupled, constraints) -> MeasureTerms:

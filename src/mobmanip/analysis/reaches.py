@@ -15,10 +15,14 @@ distance to the support polygon's edge.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..errors import MobmanipError
 from ..robot.tasks import get_task
+from ..sets.lifted import GAIN_STEP, Limit
 from ..sets.taskset import TaskSet
 from ..terms.constraints.floor import CONTACT_FORCES, ground_reaction
 
@@ -28,8 +32,10 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
 
     Returns:
         One dict per axis and sense (``axis``, ``straight_line``, ``support`` and, for a set of
-        linear programs, ``binding`` at the straight-line maximum, plus ``floor`` (ZMP, margin,
-        contact forces) on the floor, or for a team ``floors``, robot name -> its floor's);
+        linear programs, ``binding`` at the straight-line maximum and ``limits``, the binding
+        limits ranked by what 1 % more of each is worth (:func:`limit_entry` each; on the floor
+        :func:`floor_limits`), plus ``floor`` (ZMP, margin, contact forces) on the floor, or for
+        a team ``floors``, robot name -> its floor's);
         ``None`` for an ellipsoid, a set without straight-line reach or an empty set.
     """
     # an ellipsoid has a straight-line reach too (sweeps record it) but the paper's ellipsoids
@@ -60,11 +66,13 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                     w = None
                 if w is not None:
                     entry["binding"] = sorted(set(w.binding))
+                    entry["limits"] = [limit_entry(lim.label, lim.kind, lim.gain) for lim in w.limits]
                     model = getattr(task_set, "model", {})
                     floor = model.get("floor")
                     if floor is not None and CONTACT_FORCES in w.variables:
                         entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
                         entry["binding"] = tip_over_reading(entry["binding"], floor, entry["floor"])
+                        entry["limits"] = floor_limits(w.limits, floor, entry["floor"])
                     floors = {  # a team: each robot on its own floor, its forces under its name
                         name: ground_reaction(info["floor"], w.variables[f"{name}.{CONTACT_FORCES}"])
                         for name, info in model.items()
@@ -86,23 +94,83 @@ def tip_over_reading(binding: list[str], info: dict, reaction: dict) -> list[str
     is on the support polygon's edge and contacts carry nothing, the robot is about to tip about
     that edge (the unloaded contacts lift), whatever else the program's multipliers say: an
     unloaded wheel's friction rows are all tight at zero force, which read as "slips"."""
+    tipping = _tipping(info, reaction)
+    if tipping is None:
+        return binding
+    unloaded, label = tipping
+    # an unloaded wheel's friction rows and its lifting row are that same tip-over (not its
+    # joint's effort rows: a wheel's contact is named as its joint)
+    kept = [lab for lab in binding if _contact_row_of(lab, unloaded) is None]
+    return sorted({*kept, label})
+
+
+def _contact_row_of(label: str, names) -> str | None:
+    """The contact among ``names`` whose lifting or friction row ``label`` is, else ``None``."""
+    return next((n for n in names if label.startswith((f"{n} slips ", f"{n} lifts off "))), None)
+
+
+def limit_entry(label: str, kind: str, gain: float) -> dict:
+    """One limit that binds, JSON-ready: its ``label``, ``kind`` and ``gain`` (the maximum's growth,
+    in the task's units, per 1 % more of that limit; see :class:`mobmanip.sets.lifted.Limit`)."""
+    return {"label": label, "kind": kind, "gain": float(gain)}
+
+
+def floor_limits(limits: Sequence[Limit], info: dict, reaction: dict) -> list[dict]:
+    """The limits that bind at a maximum on the floor, ranked by what 1 % more of each is worth
+    (:func:`limit_entry` each, the largest gain first), read as the floor does:
+
+    - a loaded wheel's traction: the gain of 1 % more friction at that wheel, at the load it
+      carries there (its pyramid's rows relaxed by 1 % of ``mu cos(pi / faces) (1 - reserve)``
+      times its normal force);
+    - a robot about to tip (the zero-moment point on the support's edge, contacts unloaded: see
+      :func:`tip_over_reading`): one tip-over limit, named with its edge, in place of the
+      unloaded contacts' lifting and friction rows; its gain is that of ballast of 1 % of a
+      contact's equal share of the weight over each contact lifting (their rows relaxed by their
+      scales: the lifting row by that share, the friction rows by the friction it gives);
+    - every other limit as the set ranks it (1 % more of its own limit).
+
+    Args:
+        limits: the set's ranked limits at the maximum (:attr:`mobmanip.sets.lifted.Witness.limits`).
+        info: the floor's entry of the set's model; ``reaction``: :func:`ground_reaction` there.
+    """
+    tipping = _tipping(info, reaction)
+    unloaded, tip_label = tipping if tipping is not None else ([], "")
+    tilt = (info.get("mu") or 0.0) * math.cos(math.pi / info.get("faces", 8)) * (1.0 - info.get("reserve", 0.0))
+    contacts = reaction.get("contacts", {})
+    out, tip_gain = [], 0.0
+    for lim in limits:
+        owner = _contact_row_of(lim.label, contacts)
+        if owner is not None and owner in unloaded:
+            tip_gain += lim.gain
+            continue
+        gain = lim.gain
+        if lim.kind == "traction" and owner is not None:
+            gain = GAIN_STEP * lim.multiplier * tilt * max(contacts[owner]["normal"], 0.0)
+        out.append(limit_entry(lim.label, lim.kind, gain))
+    if tipping is not None:
+        out.append(limit_entry(tip_label, "tip-over", tip_gain))
+    return sorted(out, key=lambda entry: (-entry["gain"], entry["label"]))
+
+
+def _tipping(info: dict, reaction: dict) -> tuple[list[str], str] | None:
+    """Where a solution on the floor is about to tip (its zero-moment point on the support
+    polygon's edge, contacts carrying nothing): the unloaded contacts and the tip-over's label,
+    naming the edge (or the one contact still loaded); ``None`` otherwise."""
     margin = reaction.get("margin")
     contacts = reaction.get("contacts", {})
     total = sum(max(c["normal"], 0.0) for c in contacts.values())
     if margin is None or total <= 0.0 or abs(margin) > _ON_EDGE:
-        return binding
+        return None
     unloaded = [name for name, c in contacts.items() if c["normal"] <= _UNLOADED * total]
     if not unloaded:
-        return binding
+        return None
     loaded = [name for name in contacts if name not in unloaded]
     edge = _edge_of(info, reaction["zmp"]) if len(loaded) != 1 else None
-    # an unloaded wheel's friction rows and its lifting row are that same tip-over
-    kept = [label for label in binding if not any(label.startswith(f"{name} ") for name in unloaded)]
     if len(loaded) == 1:  # every weight on one contact: the zero-moment point at that corner
         about = f"about {loaded[0]}, the one contact still loaded"
     else:
         about = f"about the edge {edge[0]} to {edge[1]}" if edge else "about the support's edge"
-    return sorted({*kept, f"the robot tips over {about} ({', '.join(unloaded)} lifting off)"})
+    return unloaded, f"the robot tips over {about} ({', '.join(unloaded)} lifting off)"
 
 
 def _edge_of(info: dict, zmp) -> tuple[str, str] | None:

@@ -17,6 +17,7 @@ from . import (
     team_carry,
     trajectory,
     view,
+    warmup,
 )
 
 COMMANDS = (
@@ -36,4 +37,5 @@ COMMANDS = (
     payload,
     brake,
     retime,
+    warmup,
 )

@@ -630,6 +630,45 @@ def binding_summary(binding: list[str]) -> str:
     return "; ".join(f"{kind}: {', '.join(sorted(set(names)))}" for kind, names in groups.items())
 
 
+#: How each kind of limit is named in "what stops it" (:data:`mobmanip.terms.constraints.base.ROW_KINDS`).
+_KIND_NAMES = {
+    "effort": "joint effort",
+    "velocity": "joint speed",
+    "traction": "wheel traction",
+    "contact": "support lifting off",
+    "tip-over": "tip-over",
+    "level": "held level",
+    "user": "constraint",
+}
+#: At most this many limits are printed in a ranked "what stops it" (the JSON holds them all).
+RANKED_SHOWN = 6
+
+
+def limits_summary(limits: list[dict]) -> str:
+    """What stops a maximum, ranked: the limits (:func:`mobmanip.analysis.reaches.limit_entry`
+    each, the one worth most first) grouped by kind, the groups in the order of their best limit,
+    each limit with what 1 % more of it gives (in the reading's unit): the first is what to change.
+    At most :data:`RANKED_SHOWN` are printed, with how many more bind."""
+    groups: dict[str, list[str]] = {}
+    for entry in limits[:RANKED_SHOWN]:
+        label, kind = entry["label"], entry["kind"]
+        robot, sep, rest = label.partition(": ")
+        if not sep or " " in robot:
+            robot, rest = "", label
+        if rest.startswith("the robot tips over "):
+            name = rest.removeprefix("the robot tips over ")
+        elif kind == "user":
+            name = rest
+        else:
+            name = rest.split(" ", 1)[0]
+        name = f"{robot}/{name}" if robot else name
+        groups.setdefault(_KIND_NAMES.get(kind, kind), []).append(f"{name} +{entry['gain']:.3g}")
+    text = "; ".join(f"{kind}: {', '.join(names)}" for kind, names in groups.items())
+    if len(limits) > RANKED_SHOWN:
+        text += f"; and {len(limits) - RANKED_SHOWN} more, each under +{limits[RANKED_SHOWN - 1]['gain']:.3g}"
+    return text
+
+
 def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
     """Per task axis: straight-line reach and support, with what binds and where the ZMP is."""
     head = "  along the task axes, straight-line reach (from rest, exactly along it) and support (others free)"
@@ -639,7 +678,9 @@ def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
         if r.get("ideal_straight_line"):  # beside the ideal set's, with what the constraints take
             ideal = r["ideal_straight_line"]
             text += f" (ideal straight line {ideal:.4g}: {100.0 * (r['straight_line'] - ideal) / ideal:+.1f} %)"
-        if r.get("binding"):
+        if r.get("limits"):  # ranked by the program's multipliers: the first is what to change
+            text += f"; stops it (gain per 1 % more): {limits_summary(r['limits'])}"
+        elif r.get("binding"):
             text += f"; stops it: {binding_summary(r['binding'])}"
         ground = r.get("floor")
         if ground and ground.get("zmp") is not None:

@@ -14,6 +14,7 @@ from .common import (
     add_robot_options,
     binding_summary,
     constraints_from_args,
+    limits_summary,
     load_robot_and_configuration,
 )
 
@@ -119,7 +120,10 @@ def run(args) -> int:
     print(f"robot {robot.name} ({robot.platform.kind}), task {found.task} ({', '.join(document['task_axes'])})")
     print(found.summary())
     if found.status == "bounded":
-        print(f"what stops it: {binding_summary(list(found.reading))}")
+        if found.limits:  # ranked by the program's multipliers: the first is what to change
+            print(f"what stops it (kg gained per 1 % more): {limits_summary(list(found.limits))}")
+        else:
+            print(f"what stops it: {binding_summary(list(found.reading))}")
         print("  the program's binding rows:")
         for label in found.binding:
             print(f"    {label}")

@@ -16,15 +16,15 @@ caller pay it before a progress bar starts.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
-import sys
-import time
 from typing import NamedTuple
 
 import numpy as np
 
 from ..support import tolerances
+from ..support.compile_notice import compiling, up_to
 from .results import EllipsoidBatch
 from .setup import BatchSetup
 from .terms import ChunkTerms
@@ -52,10 +52,11 @@ def kernel_module():
 #: (end effectors, task dimension) pairs whose kernel has run in this process.
 _READY: set[tuple[int, int]] = set()
 
-#: Compile time of one pair on the project's 2-core machine (s): measured 9.4 s for one end
-#: effector (6-D task), 15.5 s and 16.2 s for two (2-D and 6-D tasks); the task dimension barely
-#: matters. Only printed, as an expectation.
-_COMPILE_SECONDS_BASE, _COMPILE_SECONDS_PER_ARM = 3.0, 6.5
+#: The most a compile of one pair may take (s), by its number of end effectors (the task dimension
+#: barely matters; :data:`mobmanip.support.compile_notice.UP_TO`): one arm's, and what each further
+#: arm adds. Only printed.
+_COMPILE_SECONDS_BASE = up_to("batch, 1 end effector")
+_COMPILE_SECONDS_PER_ARM = up_to("batch, 2 end effectors") - _COMPILE_SECONDS_BASE
 
 
 def kernel_ready(k: int, m: int) -> bool:
@@ -83,31 +84,32 @@ def kernel_cached(k: int, m: int) -> bool | None:
 
 
 def expected_compile_seconds(k: int) -> float:
-    """The printed expectation of one kernel compile for k end effectors (s)."""
-    return _COMPILE_SECONDS_BASE + _COMPILE_SECONDS_PER_ARM * k
+    """The most one kernel compile for k end effectors may take (s), printed."""
+    return _COMPILE_SECONDS_BASE + _COMPILE_SECONDS_PER_ARM * (k - 1)
 
 
-def _before_first_call(k: int, m: int, stream=None) -> float | None:
-    """Announce a compile on ``stream`` (standard error) if the pair is not cached on disk;
-    returns the start time of the announced compile, or ``None``."""
-    if kernel_cached(k, m):
-        return None
-    stream = sys.stderr if stream is None else stream
-    arms = f"{k} end effector{'s' if k != 1 else ''}"
-    print(
-        f"mobmanip: compiling the batch kernel for {arms} and a {m}-D task, once "
-        f"(about {expected_compile_seconds(k):.0f} s on 2 cores; kept in Numba's disk cache after)...",
-        file=stream,
-        flush=True,
+def kernel_name(k: int, m: int) -> str:
+    """The batch kernel of a pair, in words (its compile's notice names it so)."""
+    return f"the batch kernel for {k} end effector{'s' if k != 1 else ''} and a {m}-D task"
+
+
+def _first_call(k: int, m: int, stream=None):
+    """A context for the first call of the pair in this process: a compile announced on ``stream``
+    (standard error; :func:`mobmanip.support.compile_notice.compiling`) unless the pair is cached
+    on disk; the pair is ready after it."""
+    notice = (
+        contextlib.nullcontext()
+        if kernel_cached(k, m)
+        else compiling(kernel_name(k, m), expected_compile_seconds(k), stream)
     )
-    return time.perf_counter()
+    return _readied(k, m, notice)
 
 
-def _after_first_call(k: int, m: int, started: float | None, stream=None) -> None:
+@contextlib.contextmanager
+def _readied(k: int, m: int, notice):
+    with notice:
+        yield
     _READY.add((k, m))
-    if started is not None:
-        stream = sys.stderr if stream is None else stream
-        print(f"mobmanip: kernel compiled in {time.perf_counter() - started:.1f} s", file=stream, flush=True)
 
 
 class KernelOutcome(NamedTuple):
@@ -193,60 +195,58 @@ def run_kernel(
     bounds = np.empty((n, 2))
     ptr, idx, val = setup.S_csc
     probed = setup.probed
-    first = (k, m) not in _READY
-    started = _before_first_call(k, m) if first else None
-    kernel_module().run_chunk(
-        (0,) * k,  # sizes as tuple lengths: compile-time constants for the kernel
-        (0,) * m,
-        t.Ja,
-        t.Ma,
-        probed.vmap,
-        probed.gravity,
-        probed.probe_cols,
-        t.positions,
-        setup.supports,
-        setup.arm_cols,
-        setup.n_arm_cols,
-        setup.pair_cols,
-        setup.n_pair_cols,
-        setup.task_rows,
-        setup.n_linear,
-        ptr,
-        idx,
-        val,
-        *setup.P_plan,
-        setup.Q_inv_kernel,
-        _writable(vlim),
-        _writable(elim),
-        _NO_OFFSETS if offsets is None else _writable(offsets),
-        _NO_MO if Mo is None else _writable(Mo),
-        setup.mass,
-        _writable(setup.g_o),
-        setup.n_eta if decoupled else 0,
-        kinematic is not None,
-        dynamic is not None,
-        all_terms,
-        tolerances.kernel_tolerances(),
-        J_u,
-        P,
-        xi,
-        W,
-        Mo_rows,
-        kin.center[kin_b],
-        kin.semi_axes[kin_b],
-        kin.axes[kin_b],
-        kin.matrix[kin_b],
-        kin_ok,
-        dyn.center[dyn_b],
-        dyn.semi_axes[dyn_b],
-        dyn.axes[dyn_b],
-        dyn.matrix[dyn_b],
-        dyn_ok,
-        dyn_empty,
-        bounds,
-    )
-    if first:
-        _after_first_call(k, m, started)
+    first = _first_call(k, m) if (k, m) not in _READY else contextlib.nullcontext()
+    with first:
+        kernel_module().run_chunk(
+            (0,) * k,  # sizes as tuple lengths: compile-time constants for the kernel
+            (0,) * m,
+            t.Ja,
+            t.Ma,
+            probed.vmap,
+            probed.gravity,
+            probed.probe_cols,
+            t.positions,
+            setup.supports,
+            setup.arm_cols,
+            setup.n_arm_cols,
+            setup.pair_cols,
+            setup.n_pair_cols,
+            setup.task_rows,
+            setup.n_linear,
+            ptr,
+            idx,
+            val,
+            *setup.P_plan,
+            setup.Q_inv_kernel,
+            _writable(vlim),
+            _writable(elim),
+            _NO_OFFSETS if offsets is None else _writable(offsets),
+            _NO_MO if Mo is None else _writable(Mo),
+            setup.mass,
+            _writable(setup.g_o),
+            setup.n_eta if decoupled else 0,
+            kinematic is not None,
+            dynamic is not None,
+            all_terms,
+            tolerances.kernel_tolerances(),
+            J_u,
+            P,
+            xi,
+            W,
+            Mo_rows,
+            kin.center[kin_b],
+            kin.semi_axes[kin_b],
+            kin.axes[kin_b],
+            kin.matrix[kin_b],
+            kin_ok,
+            dyn.center[dyn_b],
+            dyn.semi_axes[dyn_b],
+            dyn.axes[dyn_b],
+            dyn.matrix[dyn_b],
+            dyn_ok,
+            dyn_empty,
+            bounds,
+        )
     t.J_u, t.P, t.xi = J_u, P, xi
     if setup.moving_grasp:
         t.W, t.Mo = W, np.diagonal(Mo_rows, axis1=1, axis2=2)

@@ -40,7 +40,7 @@ import pinocchio as pin
 from ..engine.probed import ProbedModel, frame_positions
 from ..engine.stacked_linalg import cross3
 from ..errors import ModelError
-from ..support.compile_notice import announced_compile
+from ..support.compile_notice import announced_compile, numba_cached, up_to
 
 #: Joint kinds whose configuration moves the joint frame by exp(v S) for a tangent v (what the
 #: closed forms here assume); other kinds (spherical, free flyer, mimic) take the Hessian path.
@@ -384,9 +384,10 @@ def _gamma(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.concatenate([_cross(wy, xl), _cross(vy, xl) + _cross(wy, xa)], axis=1)
 
 
-#: Compile time of each compiled loop on the project's 2-core machine with an empty cache (s),
-#: printed as the expectation when a first call compiles it.
-_COMPILE_SECONDS = {"world_inertias": 2.0, "mass_and_gravity": 3.0, "bilinear_rows": 3.0, "kinematic chain": 7.0}
+#: The most a compile of each compiled loop may take (s), printed when a first call compiles it.
+_COMPILE_SECONDS = {
+    name: up_to(name) for name in ("world_inertias", "mass_and_gravity", "bilinear_rows", "kinematic chain")
+}
 #: Loops compiled together, under one name: the kinematic measures' chain.
 _GROUPS = {"kinematic chain": ("tree_frames", "kinematic_shape", "kinematic_shape_adjoint", "frame_term")}
 #: The loops already called in this process (no compile, no announcement).
@@ -403,6 +404,19 @@ def _first_call(name: str):
     loops = [getattr(kernel, loop) for loop in _GROUPS.get(name, (name,))]
     what = f"the gradient tree kernel's {name} loops" if name in _GROUPS else f"the gradient tree kernel's {name} loop"
     return announced_compile(what, _COMPILE_SECONDS[name], loops)
+
+
+def loops_cached(name: str) -> bool | None:
+    """Whether Numba's disk cache holds the tree kernel's loop (or group of loops) ``name`` (a key
+    of its compile times): ``None`` where it cannot tell or Numba is missing."""
+    kernel = _kernel()
+    if kernel is None:
+        return None
+    return numba_cached([getattr(kernel, loop) for loop in _GROUPS.get(name, (name,))])
+
+
+#: The loops (or groups of loops) of the tree kernel, each compiled on its first call.
+LOOPS = tuple(_COMPILE_SECONDS)
 
 
 @functools.cache

@@ -58,6 +58,11 @@ class LiftedPolytope(TaskSet):
         model: what produced the set, for its JSON form (e.g. ``{"constraints": [...]}``).
         labels: what each inequality row stands for (e.g. ``"wheel_right_joint effort limit
             (+)"``), (r,): a maximiser's tight rows are reported by these.
+        kinds: what kind of limit each inequality row is (``"effort"``, ``"traction"``, ...),
+            (r,); default ``"user"`` for every row.
+        scales: the size of the limit each inequality row stands for, in its own units, (r,)
+            positive: a maximum's binding limits are ranked by their multipliers times these
+            (:class:`Limit`); default each row's ``|b_ub|``, 1 where it is 0.
     """
 
     kind = "polytope"
@@ -77,6 +82,8 @@ class LiftedPolytope(TaskSet):
         variables: Mapping[str, slice] | None = None,
         model: Mapping | None = None,
         labels: Sequence[str] | None = None,
+        kinds: Sequence[str] | None = None,
+        scales: ArrayLike | None = None,
     ):
         self._task = np.asarray(task, dtype=int)
         self._A_eq = np.asarray(A_eq, dtype=float).reshape(-1, np.shape(lower)[0])
@@ -88,6 +95,16 @@ class LiftedPolytope(TaskSet):
         self.variables = dict(variables or {})
         self.model = dict(model or {})
         self.labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(len(self._b_ub)))
+        self.kinds = tuple(kinds) if kinds else ("user",) * len(self._b_ub)
+        if scales is None or not len(np.atleast_1d(scales)):
+            self.scales = np.where(self._b_ub != 0.0, np.abs(self._b_ub), 1.0)
+        else:
+            self.scales = np.asarray(scales, dtype=float).reshape(-1)
+        if not (len(self.labels) == len(self.kinds) == len(self.scales) == len(self._b_ub)):
+            raise TaskError(
+                f"each inequality row needs one label, kind and scale: {len(self._b_ub)} rows, {len(self.labels)} "
+                f"labels, {len(self.kinds)} kinds, {len(self.scales)} scales"
+            )
         n = len(self._lower)
         for name, rows in (("A_eq", self._A_eq), ("A_ub", self._A_ub)):
             if rows.shape[1] != n or not np.all(np.isfinite(rows)):
@@ -217,7 +234,7 @@ class LiftedPolytope(TaskSet):
         A[:, where] = block
         return LiftedPolytope(
             self._task, np.vstack([self._A_eq, A]), np.r_[self._b_eq, rhs], self._A_ub, self._b_ub,
-            self._lower, self._upper, self.variables, self.model, self.labels,
+            self._lower, self._upper, self.variables, self.model, self.labels, self.kinds, self.scales,
         )  # fmt: skip
 
     def straight_line_reach(self, direction: ArrayLike) -> float:
@@ -425,21 +442,25 @@ class LiftedPolytope(TaskSet):
 
     def _derived(self, task, A_eq, b_eq) -> LiftedPolytope:
         return LiftedPolytope(
-            task, A_eq, b_eq, self._A_ub, self._b_ub, self._lower, self._upper, self.variables, self.model, self.labels
-        )
+            task, A_eq, b_eq, self._A_ub, self._b_ub, self._lower, self._upper, self.variables, self.model,
+            self.labels, self.kinds, self.scales,
+        )  # fmt: skip
 
     def _witness(self, value: float, z: np.ndarray, duals: np.ndarray | None) -> Witness:
         """The maximiser's parts; binding: the rows whose multiplier is not zero (the maximum moves
-        with their bounds), or without multipliers the rows that are tight."""
+        with their bounds), or without multipliers the rows that are tight; with multipliers, the
+        binding limits ranked (:func:`ranked_limits`)."""
         variables = {name: z[where].copy() for name, where in self.variables.items()}
+        limits: tuple[Limit, ...] = ()
         if duals is not None:
             scale = float(np.abs(duals).max(initial=0.0))
             chosen = np.abs(duals) > 1e-9 * max(scale, 1e-300)
+            limits = ranked_limits(np.where(chosen, np.abs(duals), 0.0), self.labels, self.kinds, self.scales)
         else:
             slack = self._b_ub - self._A_ub @ z
             chosen = slack <= 1e-7 * (np.maximum(np.abs(self._b_ub), np.abs(self._A_ub) @ np.abs(z)) + 1e-12)
         binding = tuple(label for label, c in zip(self.labels, chosen) if c)
-        return Witness(float(value), z[self._task].copy(), variables, binding)
+        return Witness(float(value), z[self._task].copy(), variables, binding, limits)
 
     # ------------------------------------------------------------------------------------------
     # vertices, halfspaces and indices (m <= 3)
@@ -658,12 +679,69 @@ class Witness:
         variables: every variable of the lifted problem at the maximiser, by name.
         binding: the labels of the inequality rows that limit the maximum (a non-zero multiplier:
             what stops it); for :meth:`LiftedPolytope.witness_at`, the rows that are tight.
+        limits: the limits that bind at a maximum, the one worth most first (:func:`ranked_limits`);
+            empty where no multipliers are known (:meth:`LiftedPolytope.witness_at`,
+            :meth:`LiftedPolytope.witness_of`).
     """
 
     value: float
     point: np.ndarray
     variables: Mapping[str, np.ndarray]
     binding: tuple[str, ...]
+    limits: tuple[Limit, ...] = ()
+
+
+#: A limit's gain is quoted for this relative change of its scale (1 %).
+GAIN_STEP = 0.01
+#: A binding limit worth less than this share of the first is the program's rounding.
+GAIN_ROUNDING = 1e-6
+
+
+@dataclass(frozen=True)
+class Limit:
+    """A limit that binds at a maximum, and what relaxing it is worth.
+
+    Attributes:
+        label: what it is (the rows' label: several rows may share one, e.g. a wheel's friction
+            pyramid).
+        kind: what kind of limit (``"effort"``, ``"traction"``, ``"tip-over"``, ...).
+        multiplier: the sum of its rows' multipliers: the growth of the maximum per unit by which
+            each of its rows is relaxed, in the task's units per the rows' unit (m/s^2 per N m).
+        gain: the growth of the maximum, to first order, when each of its rows is relaxed by
+            :data:`GAIN_STEP` (1 %) of its scale: ``GAIN_STEP * sum(multiplier_i * scale_i)``, in
+            the task's units. Comparable across kinds: the limits are ranked by it.
+    """
+
+    label: str
+    kind: str
+    multiplier: float
+    gain: float
+
+
+def ranked_limits(
+    multipliers: np.ndarray, labels: Sequence[str], kinds: Sequence[str], scales: ArrayLike
+) -> tuple[Limit, ...]:
+    """The limits of the rows whose multiplier is not zero, one per label, the largest gain first
+    (ties by label); a limit worth less than :data:`GAIN_ROUNDING` of the first is the program's
+    rounding (a multiplier of some 1e-9), left out.
+
+    Args:
+        multipliers: each inequality row's multiplier, >= 0 (zero where it does not bind), (r,).
+        labels, kinds: each row's label and kind, (r,).
+        scales: the size of the limit each row stands for, (r,) positive.
+    """
+    multipliers = np.asarray(multipliers, dtype=float)
+    scales = np.asarray(scales, dtype=float)
+    found: dict[str, list] = {}
+    for i in (int(k) for k in np.flatnonzero(multipliers > 0.0)):
+        entry = found.setdefault(labels[i], [kinds[i], 0.0, 0.0])
+        entry[1] += float(multipliers[i])
+        entry[2] += GAIN_STEP * float(multipliers[i] * scales[i])
+    limits = sorted(
+        (Limit(label, kind, multiplier, gain) for label, (kind, multiplier, gain) in found.items()),
+        key=lambda lim: (-lim.gain, lim.label),
+    )
+    return tuple(lim for lim in limits if lim.gain > GAIN_ROUNDING * limits[0].gain)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from ..support.compile_notice import announced_compile
+from ..support.compile_notice import announced_compile, numba_cached, up_to
 from . import zonotope
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
@@ -274,8 +274,8 @@ def _supports(V, nv, D, out):  # pragma: no cover - compiled
 
 _compiled: dict[str, Any] = {}
 _CALLED: list[bool] = []
-#: Compile time of the kernel on the project's 2-core machine with an empty cache (s), printed.
-_COMPILE_SECONDS = 8.0
+#: The most a compile of the kernel may take (s), printed.
+_COMPILE_SECONDS = up_to("planar sweep")
 
 
 _normals = zonotope._normals_kernel
@@ -294,6 +294,15 @@ def _compile():
 def available() -> bool:
     """Whether the compiled kernel can run (Numba is installed)."""
     return njit is not None
+
+
+def kernel_cached() -> bool | None:
+    """Whether Numba's disk cache holds the kernel: ``None`` where it cannot tell or Numba is missing."""
+    if njit is None:  # pragma: no cover - Numba is a default dependency
+        return None
+    if not _compiled:
+        _compile()
+    return numba_cached([_compiled["rows"], _compiled["supports"], _normals, _full_rank])
 
 
 def polygons(F: np.ndarray, c: np.ndarray, G: np.ndarray, centre: np.ndarray, is_zonotope: np.ndarray) -> dict:

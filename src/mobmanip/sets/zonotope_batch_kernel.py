@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..support.compile_notice import announced_compile
+from ..support.compile_notice import announced_compile, numba_cached, up_to
 from . import polygon_kernel, zonotope_kernel
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
@@ -84,8 +84,8 @@ def _zonotope_rows(c, G, cap, status, facets, nf, volume, inr, circ):  # pragma:
 
 _compiled: dict[str, Any] = {}
 _CALLED: list[bool] = []
-#: Compile time on the project's 2-core machine with an empty cache (s; the face kernel's included).
-_COMPILE_SECONDS = 12.0
+#: The most a compile may take (s; the face kernel's 3-D routine included), printed.
+_COMPILE_SECONDS = up_to("3-D sweep")
 
 
 def _compile():
@@ -101,6 +101,15 @@ def _compile():
 def available() -> bool:
     """Whether the compiled kernel can run (Numba is installed)."""
     return njit is not None
+
+
+def kernel_cached() -> bool | None:
+    """Whether Numba's disk cache holds the kernel: ``None`` where it cannot tell or Numba is missing."""
+    if njit is None:  # pragma: no cover - Numba is a default dependency
+        return None
+    if not _compiled:
+        _compile()
+    return numba_cached([_compiled["rows"], _faces, _full_rank])
 
 
 def zonotopes(c: np.ndarray, G: np.ndarray) -> dict:

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..support.compile_notice import announced_compile
+from ..support.compile_notice import announced_compile, numba_cached, up_to
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
     from numba import njit
@@ -382,9 +382,8 @@ def _faces_3d(center, G):
 _compiled: dict = {}
 #: Set dimensions whose kernel has been called in this process.
 _CALLED: set[int] = set()
-#: Compile time of the kernel for 2-D and 3-D sets on the project's 2-core machine with an
-#: empty cache (s), printed as the expectation.
-_COMPILE_SECONDS = {2: 8.0, 3: 9.0}
+#: The most a compile of the kernel for 2-D and 3-D sets may take (s), printed.
+_COMPILE_SECONDS = {2: up_to("faces 2-D"), 3: up_to("faces 3-D")}
 
 
 def _compile():
@@ -393,6 +392,16 @@ def _compile():
     jit = njit(cache=True, nogil=True)
     _empty_result, _merge, _vertices, _widths = (jit(f) for f in (_empty_result, _merge, _vertices, _widths))
     _compiled[2], _compiled[3] = jit(_faces_2d), jit(_faces_3d)
+
+
+def kernel_cached(m: int) -> bool | None:
+    """Whether Numba's disk cache holds the face kernel for ``m``-D sets (2 or 3): ``None`` where it
+    cannot tell or Numba is missing (:func:`mobmanip.support.compile_notice.numba_cached`)."""
+    if njit is None:  # pragma: no cover - Numba is a default dependency
+        return None
+    if not _compiled:
+        _compile()
+    return numba_cached([_compiled[m], _empty_result, _merge, _vertices, _widths])
 
 
 def faces(center: np.ndarray, G: np.ndarray) -> dict | None:

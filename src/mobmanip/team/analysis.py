@@ -629,9 +629,7 @@ def _stack_rows(
                     f"{team.members[given[0][0]].name} and {team.members[i].name}"
                 )
         shifts[equation] = own_load
-    labels = tuple(
-        f"{team.members[i].name}: {label}" for i, r in enumerate(rows) for label in (r.labels or (r.name,) * len(r.h))
-    )
+    labels = tuple(f"{team.members[i].name}: {label}" for i, r in enumerate(rows) for label in r.row_labels())
     return ConstraintRows(
         name=first.name,
         problem=first.problem,
@@ -646,4 +644,6 @@ def _stack_rows(
         shifts=shifts,
         labels=labels,
         info={f"{team.members[i].name}": dict(r.info) for i, r in enumerate(rows) if r.info},
+        kinds=tuple(kind for r in rows for kind in r.row_kinds()),
+        scales=tuple(float(v) for r in rows for v in r.row_scales()),
     )

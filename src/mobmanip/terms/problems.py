@@ -52,8 +52,9 @@ def capacity_polytope(
     stacked = capacity_rows(terms, problem, policy=policy, task=task, extra=extra)
     r = stacked.rows
     return LiftedPolytope(
-        r.task, r.A_eq, r.b_eq, r.A_ub, r.b_ub, r.lower, r.upper, stacked.columns, stacked.model, labels=stacked.labels
-    )
+        r.task, r.A_eq, r.b_eq, r.A_ub, r.b_ub, r.lower, r.upper, stacked.columns, stacked.model,
+        labels=stacked.labels, kinds=stacked.kinds, scales=stacked.scales,
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -66,12 +67,17 @@ class CapacityRows:
             variable a constraint declares), in column order.
         model: what produced the rows (JSON-ready), as the set's ``model``.
         labels: one label per inequality row (what binds when it is tight), (r,).
+        kinds: what each inequality row limits (:data:`~mobmanip.terms.constraints.base.ROW_KINDS`), (r,).
+        scales: the size of the limit each inequality row stands for, (r,) (see
+            :attr:`~mobmanip.terms.constraints.base.ConstraintRows.scales`).
     """
 
     rows: LiftedRows
     columns: Mapping[str, slice]
     model: Mapping[str, Any]
     labels: tuple[str, ...]
+    kinds: tuple[str, ...] = ()
+    scales: tuple[float, ...] = ()
 
 
 def capacity_rows(
@@ -140,7 +146,9 @@ def capacity_rows(
     equalities += [(dict(r.E), np.asarray(r.e, dtype=float)) for r in rows if len(r.e)]
     equalities += [(dict(r.object_E), np.asarray(r.object_e, dtype=float)) for r in rows if len(r.object_e)]
     inequalities = [(dict(r.G), np.asarray(r.h, dtype=float)) for r in rows if len(r.h)]
-    labels = [label for r in rows if len(r.h) for label in (r.labels or (r.name,) * len(r.h))]
+    labels = [label for r in rows if len(r.h) for label in r.row_labels()]
+    kinds = tuple(kind for r in rows if len(r.h) for kind in r.row_kinds())
+    scales = tuple(float(v) for r in rows if len(r.h) for v in r.row_scales())
 
     def stack(blocks: list[tuple[dict[str, np.ndarray], np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
         A = np.zeros((sum(len(b) for _, b in blocks), n))
@@ -168,7 +176,9 @@ def capacity_rows(
         "constraints": [c.describe() for c in (T.all_constraints) if c.problem == problem],
         **{key: value for r in rows for key, value in r.info.items()},
     }
-    return CapacityRows(LiftedRows(task_columns, A_eq, b_eq, A_ub, b_ub, lo, hi), columns, model, tuple(labels))
+    return CapacityRows(
+        LiftedRows(task_columns, A_eq, b_eq, A_ub, b_ub, lo, hi), columns, model, tuple(labels), kinds, scales
+    )
 
 
 def _policy_inverses(J_u: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -26,7 +26,9 @@
   }
 
   function style() {
+    if (document.getElementById("mobmanip-style")) return;
     const css = document.createElement("style");
+    css.id = "mobmanip-style";
     css.textContent = `
       #mobmanip-legend { position: absolute; left: 8px; bottom: 8px; z-index: 10;
         max-width: ${LEGEND_WIDTH}vw; max-height: ${LEGEND_HEIGHT}vh; overflow-y: auto;
@@ -38,7 +40,12 @@
       #mobmanip-legend .mm-ring { border: 2px solid; border-radius: 50%; background: transparent; }
       #mobmanip-legend .mm-dot { width: 9px; border-radius: 50%; border: 1px solid #666; }
       #mobmanip-legend .mm-note { color: #444; white-space: normal; }
-      #mobmanip-legend summary { color: #444; cursor: pointer; }`;
+      #mobmanip-legend summary { color: #444; cursor: pointer; }
+      .mobmanip-banner { position: absolute; left: 50%; transform: translateX(-50%); z-index: 10;
+        max-width: 70vw; box-sizing: border-box; background: rgba(255, 255, 255, 0.88); color: #111;
+        border-radius: 4px; padding: 3px 8px; font: 12px/1.3 system-ui, sans-serif; text-align: center; }
+      #mobmanip-caption { top: 8px; }
+      #mobmanip-progress { top: 34px; color: #444; }`;
     document.head.appendChild(css);
   }
 
@@ -164,6 +171,8 @@
   }
   // For a test or a script that seeks the animation: bring the camera to the time now, at once.
   window.mobmanipFollow = updateFollow;
+  // ... and the page's caption and progress.
+  window.mobmanipTick = () => tick();
 
   function applyCamera(request) {
     const camera = viewer.camera;
@@ -191,9 +200,65 @@
     return true;
   }
 
+  // A banner at the top of the view (the animation's caption, the scene's progress), or none.
+  function banner(id, text) {
+    let box = document.getElementById(id);
+    if (!text) {
+      if (box) box.remove();
+      return;
+    }
+    if (!box) {
+      style();
+      box = document.createElement("div");
+      box.id = id;
+      box.className = "mobmanip-banner";
+      document.body.appendChild(box);
+    }
+    if (box.textContent !== text) box.textContent = text;
+  }
+
+  // The caption of the animation's frame at its current time: captions.texts[k] from
+  // captions.times[k] (s) until the next one.
+  function showCaption(captions) {
+    if (!captions || !captions.times || !captions.times.length) {
+      banner("mobmanip-caption", "");
+      return;
+    }
+    const t = animationTime();
+    let k = 0;
+    while (k + 1 < captions.times.length && captions.times[k + 1] <= t + 1e-9) k += 1;
+    banner("mobmanip-caption", captions.texts[k]);
+  }
+
+  // Whether the scene node at `path` (under /meshcat) holds an object somewhere below it.
+  function holdsObject(node) {
+    if (!node) return false;
+    return Object.entries(node.children).some(([name, child]) => name === "<object>" || holdsObject(child));
+  }
+
+  function arrived(path) {
+    let node = viewer.scene_tree.children.meshcat;
+    for (const name of path.split("/")) node = node && node.children[name];
+    return holdsObject(node);
+  }
+
+  // Until every part the page expects has arrived (the live page receives the scene over a
+  // socket: the robot's meshes can take tens of seconds), say how many have.
+  function showProgress(expect) {
+    if (!expect || !expect.length) {
+      banner("mobmanip-progress", "");
+      return;
+    }
+    const got = expect.filter(arrived).length;
+    const text = got < expect.length ? `receiving the scene: ${got} of ${expect.length} parts...` : "";
+    banner("mobmanip-progress", text);
+  }
+
   function tick() {
     const data = pageData();
     if (!data) return;
+    showCaption(data.captions);
+    showProgress(data.expect);
     const key = JSON.stringify([data.title, data.rows, data.notes]);
     if (key !== legendKey) {
       showLegend(data);

@@ -23,6 +23,13 @@ live and the exported page show the same legend and camera. The property is a di
   user's orbit and zoom are carried along) or ``{"mode": "look", "position", "target",
   "serial"}``; world coordinates (z up), metres. The page applies each serial once, so a
   user's own camera moves are kept.
+- ``captions``: an animation's caption per frame, ``{"times": [s], "texts": [...]}``: the page
+  shows ``texts[k]`` at the top of the view from the animation's time ``times[k]`` until the next
+  one (what a sweep's frame holds: the object's direction, the wheels' limit);
+- ``expect``: the scene paths (under ``/meshcat``) of every part drawn (the robot's meshes, the
+  sets, the object): until each holds an object, the page says how many have arrived ("receiving
+  the scene: 12 of 40 parts..."). The live page receives them over meshcat's socket, the robot's
+  meshes last (they are the heaviest): on a busy machine tens of seconds.
 - the legend never covers more than 38 % of the view's width by 50 % of its height (it scrolls
   beyond); its notes fold under one line ("6 notes", a click shows them) when, shown, the legend
   would cover more than 12 % of the view.

@@ -180,6 +180,8 @@ class Frame:
         locked: the same configuration with the platform locked, or ``None``.
         hold: seconds the animation stays on this frame before moving on.
         label: what the frame shows (printed with the animation's schedule).
+        caption: what the page's caption says while the frame plays; default its label (a frame
+            with neither keeps the caption of the frame before it).
     """
 
     q: np.ndarray
@@ -187,6 +189,7 @@ class Frame:
     locked: Analysis | None = None
     hold: float = 0.0
     label: str = ""
+    caption: str = ""
 
 
 def analyze_pair(
@@ -262,8 +265,10 @@ class EllipsoidViewer(MeshcatScene):
             self._pin = MeshcatVisualizer(self.model, None, self.visual_model)
             with self._commands():
                 self._pin.initViewer(viewer=self._vis)
-                self._pin.loadViewerModel(rootNodeName=ROBOT_PATH)
+                # the sets and the object first: a page that connects receives the scene in this
+                # order, and the robot's meshes (the heaviest part) can take tens of seconds
                 self._load_static(resolve_measures(measures))
+                self._pin.loadViewerModel(rootNodeName=ROBOT_PATH)
         self._locked_visible: bool | None = None
         self.last: Frame | None = None
         if open_browser:
@@ -383,11 +388,15 @@ class EllipsoidViewer(MeshcatScene):
                 boxes.extend(around)
         return points, boxes
 
-    def _legend(self, sets: dict, title: str, notes: Sequence[str] = ()) -> None:
-        """Show the legend of the drawn ``sets`` (by (locked, measure name))."""
+    def _legend(self, sets: dict, title: str, notes: Sequence[str] = (), captions: dict | None = None) -> None:
+        """Show the legend of the drawn ``sets`` (by (locked, measure name)), the parts the page
+        waits for (the robot's meshes, the sets, the object) and an animation's ``captions``
+        (:mod:`mobmanip.viz.page`)."""
         rows, more = _page.legend_rows(sets, self.scales, self.magnified, OBJECT_COLOR, self.outlined)
+        expect = [*geometry_paths(self._pin, self.visual_model), OBJECT_PATH]
+        expect += [scene_path(name, locked) for (locked, name), task_set in sets.items() if not task_set.empty]
         with self._commands():
-            self._send_page(title=title, rows=rows, notes=[*more, *notes])
+            self._send_page(title=title, rows=rows, notes=[*more, *notes], expect=expect, captions=captions)
 
     def _title(self, analysis: Analysis) -> str:
         title = f"{self.robot.name} ({self.robot.platform.kind.replace('_', ' ')}), {analysis.task} task"
@@ -590,7 +599,9 @@ class EllipsoidViewer(MeshcatScene):
         for key in keys:
             shown[key] = next((s[key] for s in per_frame if key in s and not s[key].empty), None)
             shown[key] = shown[key] or next(s[key] for s in per_frame if key in s)
-        self._legend(shown, f"{self._title(first.analysis)}, {len(frames)} frames (play them in Animations)", notes)
+        captions = _captions(frames, step)
+        title = f"{self._title(first.analysis)}, {len(frames)} frames (play them in Animations)"
+        self._legend(shown, title, notes, captions)
         if any_locked and not self._locked_visible:
             self.set_locked_visible(True)
         with self._commands():  # a set empty (or absent) in the first frame may appear later: scale hides it
@@ -621,3 +632,16 @@ class EllipsoidViewer(MeshcatScene):
         with self._commands():
             self._vis.set_animation(animation, play=play, repetitions=repetitions)
         return schedule
+
+
+def _captions(frames: Sequence[Frame], step: float) -> dict | None:
+    """The page's captions of an animation whose frames follow each other ``step`` s apart (a
+    held frame stays its ``hold``): each frame's caption (or label; else the one before it) from
+    its start; ``None`` when no frame has one."""
+    times, texts, t, text = [], [], 0.0, ""
+    for frame in frames:
+        text = frame.caption or frame.label or text
+        times.append(round(t, 6))
+        texts.append(text)
+        t += frame.hold + step
+    return {"times": times, "texts": texts} if any(texts) else None

@@ -17,7 +17,10 @@
     dynamics as in the paper (unless ``decoupled=False`` is passed).
 
 Between the paper's values the frames are computed at intermediate speeds, torques and angles,
-so the animation morphs through real ellipsoids rather than interpolating shapes.
+so the animation morphs through real ellipsoids rather than interpolating shapes. Every frame
+carries a caption (:attr:`mobmanip.viz.scene.Frame.caption`) that the page shows while it plays:
+the object's direction and the wheels' limit of that frame, the paper's values held, the others
+marked as between them or turning.
 """
 
 from __future__ import annotations
@@ -92,7 +95,7 @@ def object_angle_frames(
             label = f"platform heading turned by {angle:g} deg"
         analysis, fixed = analyze_pair(robot, q_at, task, locked=locked, **options)
         hold = HOLD if any(abs(angle - a) < 1e-9 for a in ANGLES_DEG) else 0.0
-        frames.append(Frame(q_at, analysis, fixed, hold=hold, label=label if hold else ""))
+        frames.append(Frame(q_at, analysis, fixed, hold=hold, label=label if hold else "", caption=label))
     return frames
 
 
@@ -118,14 +121,18 @@ def _limit_sweep(
                 between = previous_angle + (angle - previous_angle) * s / _SUBSTEPS
                 q_between = configuration_at(robot, posture, between)
                 analysis, fixed = analyze_pair(variant, q_between, task, locked=locked, **options)
-                frames.append(Frame(q_between, analysis, fixed))
+                caption = f"object at {between:.3g} deg, {describe(order[0])} (turning to {angle:g} deg)"
+                frames.append(Frame(q_between, analysis, fixed, caption=caption))
         q = configuration_at(robot, posture, angle)
         for i, value in enumerate(order):
             if i > 0:  # morph from the previous value through computed intermediate ones
                 for s in range(1, _SUBSTEPS):
                     between = order[i - 1] + (value - order[i - 1]) * s / _SUBSTEPS
                     analysis, fixed = analyze_pair(make_robot(between), q, task, locked=locked, **options)
-                    frames.append(Frame(q, analysis, fixed))
+                    caption = (
+                        f"object at {angle:g} deg, {describe(float(f'{between:.3g}'))} (between the paper's values)"
+                    )
+                    frames.append(Frame(q, analysis, fixed, caption=caption))
             analysis, fixed = analyze_pair(make_robot(value), q, task, locked=locked, **options)
             frames.append(Frame(q, analysis, fixed, hold=HOLD, label=f"object at {angle:g} deg, {describe(value)}"))
         previous_angle = angle

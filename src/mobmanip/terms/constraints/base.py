@@ -41,6 +41,12 @@ EQUATIONS: dict[str, tuple[str, ...]] = {
     "velocity": ("grasp",),
     "acceleration": ("dynamics", "grasp", "object"),
 }
+#: What an inequality row limits (:attr:`ConstraintRows.kinds`): a joint's effort or speed, a
+#: contact's load (``"contact"``: it may not pull), the robot tipping over (a row on the
+#: zero-moment point; a reading names contacts unloading with the zero-moment point on the
+#: support's edge so too), a driven wheel's traction, the object held level, or a row of a
+#: user's own constraint.
+ROW_KINDS = ("effort", "velocity", "contact", "tip-over", "traction", "level", "user")
 
 
 class Terms(Protocol):
@@ -123,6 +129,12 @@ class ConstraintRows:
             the same, and it is added once).
         labels: one label per inequality row (what binds when the row is tight), (r,).
         info: what the constraint wants reported with the set (JSON-ready).
+        kinds: what each inequality row limits, one of :data:`ROW_KINDS`, (r,); empty: every
+            row ``"user"``.
+        scales: the size of the limit each inequality row stands for, in the row's units, (r,)
+            positive: what "1 % more of this limit" means when the limits that bind are ranked by
+            their multipliers (a joint box's: its limit; the floor's: a contact's equal share of
+            the weight, or the friction of that share). Empty: each row's ``|h|``, 1 where h is 0.
     """
 
     name: str
@@ -138,6 +150,8 @@ class ConstraintRows:
     shifts: Mapping[str, np.ndarray] = field(default_factory=dict)
     labels: tuple[str, ...] = ()
     info: Mapping[str, Any] = field(default_factory=dict)
+    kinds: tuple[str, ...] = ()
+    scales: tuple[float, ...] = ()
 
     def __post_init__(self):
         if self.problem not in PROBLEMS:
@@ -173,6 +187,35 @@ class ConstraintRows:
                 raise ArgumentError(f"constraint {self.name!r}: its {equation} shift must be finite and 1-D")
         if self.labels and len(self.labels) != len(self.h):
             raise ArgumentError(f"constraint {self.name!r}: {len(self.labels)} labels for {len(self.h)} rows")
+        if self.kinds and len(self.kinds) != len(self.h):
+            raise ArgumentError(f"constraint {self.name!r}: {len(self.kinds)} kinds for {len(self.h)} rows")
+        unknown_kinds = sorted(set(self.kinds) - set(ROW_KINDS))
+        if unknown_kinds:
+            raise ArgumentError(
+                f"constraint {self.name!r}: unknown row kinds {unknown_kinds}; expected some of {list(ROW_KINDS)}"
+            )
+        if self.scales:
+            scales = np.asarray(self.scales, dtype=float)
+            if scales.shape != (len(self.h),) or not np.all(np.isfinite(scales) & (scales > 0.0)):
+                raise ArgumentError(
+                    f"constraint {self.name!r}: its row scales must be {len(self.h)} positive finite numbers"
+                )
+
+    def row_kinds(self) -> tuple[str, ...]:
+        """What each inequality row limits (:attr:`kinds`, ``"user"`` where not given), (r,)."""
+        return tuple(self.kinds) or ("user",) * len(self.h)
+
+    def row_labels(self) -> tuple[str, ...]:
+        """Each inequality row's label (:attr:`labels`, the constraint's name where not given), (r,)."""
+        return tuple(self.labels) or (self.name,) * len(self.h)
+
+    def row_scales(self) -> np.ndarray:
+        """The size of the limit each inequality row stands for (:attr:`scales`; ``|h|`` where not
+        given, 1 where h is 0), (r,)."""
+        if self.scales:
+            return np.asarray(self.scales, dtype=float)
+        h = np.abs(np.asarray(self.h, dtype=float))
+        return np.where(h > 0.0, h, 1.0)
 
 
 class Constraint(ABC):

@@ -311,14 +311,18 @@ class Floor(Constraint):
         E, e = _stack(equations, sizes)
         shifts = self._slope_shifts(robot, q, S, mass, held.mass, gravity, rows)
 
-        G, h, labels = self._contact_inequalities(support, columns, mu, faces, mass + held.mass, gravity, pose[2])
+        G, h, labels, kinds, scales = self._contact_inequalities(
+            support, columns, mu, faces, mass + held.mass, gravity, pose[2]
+        )
         if nl:  # the hands keep the object level: their accelerations on the level rows in the band
             G, h, labels = self._level_band(G, h, labels, hands.kinematics, robot.arms, level, pose[2], nx)
+            added = len(h) - len(kinds)
+            kinds, scales = kinds + ["level"] * added, scales + [self.level_tolerance] * added
         info = self._report(support, mu, faces, pose, points, columns.slices, gravity)
         return ConstraintRows(
             self.name, self.problem, variables=variables, G=G, h=h, E=E, e=e, couplings=couplings,
             object_E=object_E, object_e=object_e, shifts=shifts,
-            labels=tuple(labels), info=info,
+            labels=tuple(labels), info=info, kinds=tuple(kinds), scales=tuple(scales),
         )  # fmt: skip
 
     def _sharing_equations(
@@ -396,7 +400,7 @@ class Floor(Constraint):
         carried: float,
         gravity: np.ndarray,
         heading: float,
-    ) -> tuple[dict[str, np.ndarray], np.ndarray, list[str]]:
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, list[str], list[str], list[float]]:
         """The floor's inequalities on the contact forces, each with its label: no contact lifts
         (its normal force at least its reserve), unless contacts may pull (``lift``), and, with a
         friction coefficient ``mu``, every driven wheel's traction inside its pyramid of ``faces``
@@ -408,11 +412,16 @@ class Floor(Constraint):
                 floor's axes, (3,) m/s^2: the reserve is a share of their weight.
 
         Returns:
-            ``(G, h, labels)``: G by variable name (r, n_forces), h (r,), one label per row.
+            ``(G, h, labels, kinds, scales)``: G by variable name (r, n_forces), h (r,), one label
+            per row, its kind (``"contact"``: a contact's load; ``"traction"``) and its scale (N:
+            a contact's equal share of the weight, or the friction that share gives a wheel's
+            pyramid). Whether the robot tips is read where the rows bind, from the zero-moment
+            point (:func:`mobmanip.analysis.reaches.floor_limits`).
         """
         sharing_model, n_forces = self.sharing(mu), columns.size
-        G_rows, h_rows, labels = [], [], []
-        least = self.reserve * carried * -gravity[2] / len(support.contacts)
+        G_rows, h_rows, labels, kinds, scales = [], [], [], [], []
+        share = carried * -gravity[2] / len(support.contacts)  # N: a contact's equal share of the weight
+        least = self.reserve * share
         for contact, col in zip(support.contacts if not self.lift else (), columns.normals):
             row = np.zeros(n_forces)
             row[col] = -1.0
@@ -421,6 +430,8 @@ class Floor(Constraint):
             lifts = "normal force 0" if least == 0.0 else f"normal force at its reserve {least:.4g} N"
             why = "; the robot tips over" if sharing_model == "any" else f"; {_springs(support)}, before any tip-over"
             labels.append(f"{contact.name} lifts off the floor ({lifts}{why})")
+            kinds.append("contact")  # tip-over is where such rows bind with the ZMP on the edge
+            scales.append(share)
         if mu is not None and not self.lift:
             tilt = mu * math.cos(math.pi / faces) * (1.0 - self.reserve)
             for contact, (a, b) in zip(support.contacts, columns.slices):
@@ -432,8 +443,10 @@ class Floor(Constraint):
                     G_rows.append(row)
                     h_rows.append(0.0)
                     labels.append(f"{contact.name} slips (traction at its friction limit, mu = {mu:g})")
+                    kinds.append("traction")
+                    scales.append(tilt * share if tilt > 0.0 else share)
         G = {CONTACT_FORCES: np.array(G_rows).reshape(-1, n_forces)}
-        return G, np.array(h_rows, dtype=float), labels
+        return G, np.array(h_rows, dtype=float), labels, kinds, scales
 
     def _level_band(
         self,

@@ -27,6 +27,7 @@ def _box(
         G={variable: np.vstack([np.eye(n), -np.eye(n)])},
         h=np.r_[limits, limits],
         labels=labels,
+        kinds=(kind,) * (2 * n),
     )
 
 
