@@ -115,6 +115,70 @@ def test_the_command_takes_a_registered_option(tmp_path, capfd):
         unregister_constraint_option("--effort-share")
 
 
+# --------------------------------------------------------------------------- a team
+
+TEAM = ROOT / "examples" / "beam_team.toml"
+
+
+def _quintic():
+    """The beam 0.3 m along its length in 1.5 s: with a large capacity gain the team's QP drives
+    the arms as hard as their effort limits allow (tests/test_team_carry.py)."""
+    t = np.linspace(0.0, 1.5, 16)
+    s = t / 1.5
+    return ObjectPath(t, np.c_[0.3 * (10 * s**3 - 15 * s**4 + 6 * s**5), np.zeros_like(t)])
+
+
+def test_team_carry_keeps_an_effort_share_as_every_robot_with_its_limits_scaled():
+    """team-carry with the effort share s equals team-carry of the same team whose robots' effort
+    limits are scaled by s / 0.99 (the team's own rows hold 0.99 of them), to 1e-9; the share
+    binds (without it the motion differs) and every modelled effort stays within it."""
+    import dataclasses
+
+    from mobmanip.coordination.carry import team_carry
+    from mobmanip.team import Member
+    from mobmanip.team.members import load_team
+
+    share = 0.5
+    team = load_team(TEAM)
+    kept = team_carry(team, _quintic(), prepare=0.0, gain=1e3, constraints=(EffortShare(share),))
+    members = tuple(
+        Member(m.name, m.robot.with_limits(effort={n: v * share / EFFORT_SHARE
+                                                   for n, v in m.robot.joint_effort_limits.items()}), m.q, m.arms)
+        for m in team.members
+    )  # fmt: skip
+    scaled = team_carry(dataclasses.replace(team, members=members), _quintic(), prepare=0.0, gain=1e3)
+    free = team_carry(team, _quintic(), prepare=0.0, gain=1e3)
+    for a, b in zip(kept.motion.x, scaled.motion.x):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)
+    assert max(float(np.abs(a - b).max()) for a, b in zip(kept.motion.x, free.motion.x)) > 1e-3  # it binds
+    assert kept.motion.effort.max() == pytest.approx(share, abs=1e-9)  # the share of the 1.0 limits
+
+
+def test_team_carry_takes_the_registered_option(tmp_path, capfd):
+    register_constraint_option(ConstraintOption("--effort-share", EffortShare, "keep every effort within a share"))
+    try:
+        path = _quintic()
+        csv = tmp_path / "quintic.csv"
+        csv.write_text("t,x,y\n" + "".join(f"{t:.17g},{x:.17g},{y:.17g}\n" for t, (x, y) in zip(path.t, path.xy)))
+        code, _, err = run_cli(capfd, "team-carry", TEAM, "--path", csv, "--prepare", "0", "--effort-share", "0.5",
+                               "--out", tmp_path / "run")  # fmt: skip
+        assert code == 0, err
+        document = json.loads((tmp_path / "run" / "team_carry.json").read_text())
+        assert document["constraints"] == [{"name": "effort_share", "share": 0.5, "problem": "acceleration"}]
+        assert document["qp"]["max_effort_share"] <= 0.5 + 1e-9
+    finally:
+        unregister_constraint_option("--effort-share")
+
+
+def test_a_team_step_the_constraint_makes_infeasible_names_the_robot_and_its_row():
+    from mobmanip.coordination.carry import team_carry
+    from mobmanip.team.members import load_team
+
+    with pytest.raises(CarryFailed, match=r"a constraint binds: (south|north): .* at 0.001 of its effort limit") as err:
+        team_carry(load_team(TEAM), _quintic(), prepare=0.0, gain=1e3, constraints=(EffortShare(0.001),))
+    assert err.value.diagnosis.kind == "constraint"
+
+
 # --------------------------------------------------------------------------- the fastest timing
 
 

@@ -138,8 +138,6 @@ def test_place_by_a_reading_honours_the_option(options, tmp_path, capfd):
          ("place cannot honour --effort-share (effort_share)", "an ellipsoid objective ignores")),
         (("trajectory", "planar_dual_arm", "examples/trajectory.csv"),
          ("trajectory cannot honour --effort-share (effort_share)", "a given motion")),
-        (("team-carry", "examples/beam_team.toml", "--path", "examples/carry_turn.csv"),
-         ("team-carry cannot honour --effort-share (effort_share)", "team's QP")),
     ],
 )  # fmt: skip
 def test_a_command_that_cannot_honour_it_refuses_it_in_one_line(options, capfd, argv, needles):

@@ -372,7 +372,6 @@ CANNOT_HONOUR = {
     "brake": "it stops the robot along a path, on rows only the floor has in motion",
     "referee": "it replays the floor in MuJoCo, which models no other constraint",
     "trajectory": "it reads a given motion; a constraint's rows shape the motions carry and retime decide",
-    "team-carry": "the team's QP takes its limits and the floor's rows (--ground), not yet a constraint's rows",
     "place": "an ellipsoid objective ignores every constraint beyond the joint boxes; give a measure's reading "
     "(e.g. dynamic_polytope:reach:+x)",
 }

@@ -8,7 +8,7 @@ from .common import (
     add_motion_floor_options,
     add_work_option,
     motion_floor,
-    refuse_constraint_options,
+    registered_constraints,
     report_partial_carry,
 )
 
@@ -137,8 +137,8 @@ def run(args) -> int:
     from .outputs import team_carry_outputs, team_carry_page, team_carry_partial_outputs, team_carry_paths
     from .team import _read_checked
 
-    refuse_constraint_options(args)
-    floor = motion_floor(args, "team-carry")
+    constraints, floor_args = registered_constraints(args)
+    floor = motion_floor(floor_args, "team-carry")
     note_input(args.path)
     path = read_path(args.path)
     data = _read_checked(args, None)  # the robots counted against their bound before any is loaded
@@ -172,7 +172,14 @@ def run(args) -> int:
                 check_output(file)
     try:
         result = team_carry(
-            team, path, args.objective, frame=args.frame, step=args.step, prepare=args.prepare, floor=floor
+            team,
+            path,
+            args.objective,
+            frame=args.frame,
+            step=args.step,
+            prepare=args.prepare,
+            floor=floor,
+            constraints=constraints,
         )
     except CarryFailed as failure:
         if not args.out:

@@ -71,9 +71,12 @@ from ..motion.carry import (
 )
 from ..motion.carry_floor import CarryFloor
 from ..motion.carry_step import CarryDiagnosis, solve_step_qp, velocity_bounds
+from ..motion.step_constraints import StepRows, check_constraints, step_rows
 from ..motion.trajectory import tangent_integrate
 from ..robot.tasks import get_task
 from ..team import Member, Team
+from ..terms.builder import terms_at
+from ..terms.constraints.base import Constraint
 from ..terms.grasp import HeldObject
 from .capacity import TeamCapacity
 from .effort import diagnose_team_step, effort_rows, team_step_maps
@@ -164,6 +167,7 @@ class TeamCarryResult:
         start: the posture both runs set out from, in words.
         floor: the floor the QP motion kept (:meth:`mobmanip.motion.carry_floor.CarryFloor.describe`),
             or ``None``.
+        constraints: the constraints every robot kept (each one's ``describe()``).
     """
 
     team: Team
@@ -174,6 +178,7 @@ class TeamCarryResult:
     frame: str = "object"
     start: str = "the team's posture"
     floor: dict | None = None
+    constraints: tuple[dict, ...] = ()
 
     @property
     def task(self) -> str:
@@ -283,6 +288,8 @@ class TeamCarryResult:
                 }
         if self.floor is not None:
             out["floor"] = self.floor
+        if self.constraints:
+            out["constraints"] = list(self.constraints)
         out["pinv"]["start"] = {"posture": self.start, "capacity": float(self.baseline.capacity[0])}
         posture = self.start if self.preparation is None else f"the end of a self-motion from {self.start}"
         out["qp"]["start"] = {"posture": posture, "capacity": float(self.motion.capacity[0])}
@@ -417,6 +424,7 @@ def _run(
     converge: bool = False,
     x_start: np.ndarray | None = None,
     floor: TeamFloor | None = None,
+    constraints: tuple[Constraint, ...] = (),
 ) -> tuple[TeamCarryRun, float]:
     """One motion of the team along ``path`` from ``qs0``; returns it and the capacity term's weight
     (``floor``: every robot keeps it, but for the pseudo-inverse baseline, which only reads it)."""
@@ -493,6 +501,10 @@ def _run(
                 weight = gain / norm if norm > 0 else 0.0
             lo, hi = problem.bounds(qs, h)
             G, g_hi = effort_rows(A, offset, problem.effort_limits)
+            extra = None
+            if constraints:  # every robot keeps them, on its own rows
+                extra = _constraint_rows(team, qs, x_prev, h, problem.task, (A, offset), constraints)
+                G, g_hi = np.vstack([G, extra.G]), np.r_[g_hi, extra.h]
             H_k, c_k = H, -weight * grad
             if platforms is not None:
                 H_p, c_p = platforms.cost(qs, k, h)
@@ -509,6 +521,14 @@ def _run(
                                       partial(k))  # fmt: skip
             else:
                 x = solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi)
+            if x is None and extra is not None:
+                own = len(g_hi) - len(extra.h)
+                free = solve_step_qp(H_k, c_k, J, b, lo, hi, G[:own], g_hi[:own])
+                if free is not None:  # the constraints bind: name the row the step breaks most without them
+                    label = extra.labels[int(np.argmax(extra.G @ free - extra.h))]
+                    diagnosis = CarryDiagnosis(k, float(times[k]), label, "constraint")
+                    raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
+                                      partial(k))  # fmt: skip
             if x is None:
                 pos, low, up, units = problem.joint_positions(qs)
                 diagnosis = diagnose_team_step(
@@ -528,6 +548,29 @@ def _run(
             for m, q, s in zip(team.members, qs, problem.slices)
         ]
     return partial(n - 1), (0.0 if weight is None else weight)
+
+
+def _constraint_rows(
+    team: Team,
+    qs: Sequence[np.ndarray],
+    x_prev: np.ndarray,
+    h: float,
+    task: Any,
+    efforts: tuple[np.ndarray, np.ndarray],
+    constraints: tuple[Constraint, ...],
+) -> StepRows:
+    """Every robot's rows of the ``constraints`` over the team's step (each robot's at its own
+    terms at rest, its efforts those of the team's policy), labelled ``"ROBOT: row"``."""
+    A, offset = efforts
+    share = team.held_object.mass / len(team.members)
+    G, g, labels = [], [], []
+    for member, q, s in zip(team.members, qs, team.member_slices()):
+        terms = terms_at(member.robot, q, task.name, object_mass=share, check=False)
+        rows = step_rows(constraints, terms, x_prev[s], h, (A[s], offset[s]), columns=s, width=len(x_prev))
+        G.append(rows.G)
+        g.append(rows.h)
+        labels += [f"{member.name}: {label}" for label in rows.labels]
+    return StepRows(np.vstack(G), np.concatenate(g), tuple(labels))
 
 
 def _floor_binding(H, c, J, b, lo, hi, G, g, floor_G, floor_g, labels: list[str]) -> str:
@@ -551,6 +594,7 @@ def team_carry(
     gain: float = DEFAULT_GAIN,
     prepare: float = DEFAULT_PREPARE,
     floor: CarryFloor | None = None,
+    constraints: Sequence[Constraint] = (),
 ) -> TeamCarryResult:
     """Synthesise the team's capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -568,6 +612,10 @@ def team_carry(
             each robot's zero-moment point inside its support polygon by the margin, every support
             loaded, every wheel within friction. The baseline ignores it (its readings say where
             it would break). ``None``: no floor rows.
+        constraints: constraints of the sets at rest that every robot keeps at every step of the
+            self-motion and the QP motion, over its own velocities and efforts
+            (:func:`mobmanip.motion.step_constraints.step_rows`; a constraint that cannot join a
+            step is refused by name).
 
     Raises:
         ArgumentError: a bad step, gain, prepare, frame, path or floor (a ramp).
@@ -591,21 +639,24 @@ def team_carry(
         objective = Objective.parse(objective or "kinematic:minor_axis", team.task)
     problem = _Problem(team, objective)
     grounded = None if floor is None else TeamFloor.build(team, floor)
+    constraints = check_constraints(constraints)
     q0 = [m.robot.check_configuration(m.q) for m in team.members]
     step, gain = float(step), float(gain)
     preparation, weight, q_path, x_start = None, None, q0, None
     if prepare > 0.0 and gain > 0.0:
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
-        run, weight = _run(problem, q0, still, frame, step, "self-motion", gain, converge=True, floor=grounded)
+        run, weight = _run(problem, q0, still, frame, step, "self-motion", gain, converge=True, floor=grounded,
+                           constraints=constraints)  # fmt: skip
         preparation = run.shifted(path.t[0] - run.t[-1])
         q_path = [q[-1] for q in preparation.q]
         x_start = np.concatenate([x[-1] for x in preparation.x]) if len(preparation.t) > 1 else None
     try:
         motion, _ = _run(problem, q_path, path, frame, step, "qp", gain, weight=weight, x_start=x_start,
-                         floor=grounded)  # fmt: skip
+                         floor=grounded, constraints=constraints)  # fmt: skip
     except CarryFailed as exc:
         exc.preparation = preparation
         raise
     baseline, _ = _run(problem, q0, path, frame, step, "pinv", 0.0, floor=grounded)
     described = None if floor is None else floor.describe()
-    return TeamCarryResult(team, objective, motion, baseline, preparation, frame, floor=described)
+    return TeamCarryResult(team, objective, motion, baseline, preparation, frame, floor=described,
+                           constraints=tuple(c.describe() for c in constraints))  # fmt: skip

@@ -90,6 +90,9 @@ def step_rows(
     x_prev: np.ndarray,
     dt: float,
     effort_map: tuple[np.ndarray, np.ndarray],
+    *,
+    columns: slice | None = None,
+    width: int | None = None,
 ) -> StepRows:
     """The constraints' rows over the step's x (see the module's docstring).
 
@@ -98,14 +101,19 @@ def step_rows(
         terms: the terms at rest at the step's configuration.
         x_prev: the previous step's reduced velocities, (nx,).
         dt: the step (s).
-        effort_map: (A, offset) with the step's efforts tau = A x + offset.
+        effort_map: (A, offset) with the step's efforts tau = A x + offset, A (nx, width).
+        columns, width: for one robot of a team, where its own x sits in the team's step
+            variable and how wide that is (its efforts, through the shared object, depend on
+            every robot's); default the robot's x alone.
 
     Raises:
         ArgumentError: a constraint that cannot join a step (:func:`joins_a_step`).
     """
     nx = len(x_prev)
+    width = nx if width is None else width
+    columns = slice(0, nx) if columns is None else columns
     if not constraints:
-        return StepRows.none(nx)
+        return StepRows.none(width)
     A, offset = effort_map
     G_rows: list[np.ndarray] = []
     h_rows: list[np.ndarray] = []
@@ -113,16 +121,16 @@ def step_rows(
     for constraint in constraints:
         rows = constraint.rows(terms)
         joins_a_step(rows)
-        G = np.zeros((len(rows.h), nx))
+        G = np.zeros((len(rows.h), width))
         h = np.asarray(rows.h, dtype=float).copy()
         for name, block in rows.G.items():
             block = np.asarray(block, dtype=float)
             if name == "x":
-                G += block
+                G[:, columns] += block
             elif name == "v":
-                G += block @ np.linalg.pinv(terms.W.T) @ terms.J_u
+                G[:, columns] += block @ np.linalg.pinv(terms.W.T) @ terms.J_u
             elif name == "xdot":
-                G += block / dt
+                G[:, columns] += block / dt
                 h += block @ x_prev / dt
             else:  # tau
                 G += block @ A
