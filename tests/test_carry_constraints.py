@@ -219,3 +219,28 @@ def test_retime_keeps_a_share_as_the_robot_with_its_limits_scaled(constraint, sc
     assert kept.duration > 1.2 * plain.duration  # it binds
     assert "constraint" in kept.binding_kind
     assert kept.to_dict()["constraints"] == [constraint.describe()]
+
+
+@pytest.mark.parametrize(
+    ("constraint", "scaled"),
+    [(EffortShare(0.3), "effort"), (SpeedShare(0.4), "velocity")],
+    ids=["effort share", "speed share"],
+)
+def test_the_time_scaling_margin_keeps_a_share_as_the_robot_with_its_limits_scaled(constraint, scaled):
+    """``trajectory``'s margin runs the same motion k times faster within |tau| <= tau_max and
+    |x| <= xdot_max: with a share s of either it is the margin of the robot with those limits
+    scaled by s (computed without the constraint), to round-off; the constraint decides it, and
+    it is smaller than without."""
+    from mobmanip.motion.trajectory_analysis import analyze_trajectory
+
+    panda, path = _panda_sine()
+    plain = analyze_trajectory(panda, path, object_mass=0.5).scaling
+    kept = analyze_trajectory(panda, path, object_mass=0.5, constraints=(constraint,)).scaling
+    limits = panda.joint_effort_limits if scaled == "effort" else panda.joint_velocity_limits
+    robot = panda.with_limits(**{scaled: {n: constraint.share * v for n, v in limits.items()}})
+    reference = analyze_trajectory(robot, path, object_mass=0.5).scaling
+    assert kept.k_max == pytest.approx(reference.k_max, rel=1e-12)
+    assert kept.k_min == pytest.approx(reference.k_min, rel=1e-12, abs=1e-12)
+    assert kept.sample == reference.sample
+    assert kept.limit.startswith("constraint ")  # measured: 1.499 against 1.731 (effort share 0.3)
+    assert kept.k_max < plain.k_max / 1.1

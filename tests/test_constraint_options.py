@@ -136,8 +136,6 @@ def test_place_by_a_reading_honours_the_option(options, tmp_path, capfd):
         (("brake", "planar_dual_arm"), ("brake cannot honour --effort-share (effort_share)",)),
         (("place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "dynamic:log_volume"),
          ("place cannot honour --effort-share (effort_share)", "an ellipsoid objective ignores")),
-        (("trajectory", "planar_dual_arm", "examples/trajectory.csv"),
-         ("trajectory cannot honour --effort-share (effort_share)", "a given motion")),
     ],
 )  # fmt: skip
 def test_a_command_that_cannot_honour_it_refuses_it_in_one_line(options, capfd, argv, needles):

@@ -371,7 +371,6 @@ def floor_constraints(args) -> tuple:
 CANNOT_HONOUR = {
     "brake": "it stops the robot along a path, on rows only the floor has in motion",
     "referee": "it replays the floor in MuJoCo, which models no other constraint",
-    "trajectory": "it reads a given motion; a constraint's rows shape the motions carry and retime decide",
     "place": "an ellipsoid objective ignores every constraint beyond the joint boxes; give a measure's reading "
     "(e.g. dynamic_polytope:reach:+x)",
 }

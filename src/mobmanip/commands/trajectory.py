@@ -20,7 +20,7 @@ from .common import (
     add_work_option,
     check_trajectory_source,
     read_recorded,
-    refuse_constraint_options,
+    registered_constraints,
     show_progress,
 )
 
@@ -44,7 +44,8 @@ messages are counted before any is decoded and held to --max-work like a file's 
 
 time-scaling margin: the largest factor k by which the whole motion can be sped up with every
 wheel and joint within its velocity and effort limits (efforts: RNEA in motion, the object
-carried by the hands with the paper's policy).
+carried by the hands with the paper's policy). A registered constraint option (e.g. one a
+contributor adds) joins it: its rows over the motion run k times faster, named where it decides.
 
 example:
   mobmanip trajectory tiago_dual motion.csv --out results/ --export motion.html
@@ -189,7 +190,7 @@ def run(args) -> int:
     from ..support.files import check_output, note_input, output_directory
     from .outputs import trajectory_outputs
 
-    refuse_constraint_options(args)
+    constraints, _ = registered_constraints(args)
     check_trajectory_source(args)
     if args.mu is not None:
         if not (math.isfinite(args.mu) and args.mu > 0.0):
@@ -214,6 +215,7 @@ def run(args) -> int:
         decoupled=args.decoupled,
         polytope=args.polytope,
         progress=show_progress(args),
+        constraints=constraints,
     )
     s = result.scaling
     duration = trajectory.t[-1] - trajectory.t[0]

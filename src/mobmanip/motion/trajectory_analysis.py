@@ -18,6 +18,7 @@ so the feasible speed-ups form one interval [k_min, k_max] found exactly; k_max 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,8 +28,11 @@ from ..robot.model import Robot
 from ..robot.tasks import get_task
 from ..sets.capacity import kinematic_polytope
 from ..support.progress import progress_bar
+from ..terms.builder import terms_at
+from ..terms.constraints.base import Constraint
 from ..terms.grasp import HeldObject
 from .in_motion import motion_terms
+from .step_constraints import check_constraints, path_timing_rows
 from .trajectory import Trajectory
 
 #: A sample's object acceleration is *impulsive* when it differs from its neighbours' mean
@@ -102,6 +106,7 @@ def time_scaling(
     velocity_limits: np.ndarray,
     effort_limits: np.ndarray,
     names: tuple[str, ...],
+    extra: Sequence[tuple[int, np.ndarray, np.ndarray, tuple[str, ...]]] = (),
 ) -> TimeScaling:
     """The exact interval of speed-ups (module doc).
 
@@ -110,6 +115,9 @@ def time_scaling(
         tau_dynamic: efforts that scale with k^2 (N, nx); tau_static: those that do not, (N, nx).
         velocity_limits, effort_limits: (nx,).
         names: reduced velocity names, (nx,).
+        extra: further rows ``c s <= d`` over s = k^2 at a sample, as (sample, c, d, labels)
+            (a constraint's rows, :func:`mobmanip.motion.step_constraints.path_timing_rows` with
+            s'' = 0); the limit they decide is named ``"constraint LABEL"``.
     """
     s_hi = np.full(x.shape, np.inf)
     s_lo = np.zeros(x.shape)
@@ -126,14 +134,23 @@ def time_scaling(
     s_hi = np.minimum(s_hi, eff_hi)
     s_lo = np.maximum(s_lo, down)
     hi, lo = float(s_hi.min()), float(s_lo.max())
+    i, j = np.unravel_index(int(np.argmin(s_hi)), s_hi.shape)
+    kind = "velocity" if vel_hi[i, j] <= eff_hi[i, j] else "effort"
+    where, limit = int(i), f"{kind} {names[j]}"
+    for sample, c, d, labels in extra:
+        for c_k, d_k, label in zip(c, d, labels):
+            bound = d_k / c_k if c_k != 0.0 else (math.inf if d_k >= 0.0 else -math.inf)
+            if c_k > 0.0 or (c_k == 0.0 and d_k < 0.0):
+                if bound < hi:
+                    hi, where, limit = bound, int(sample), f"constraint {label}"
+            else:
+                lo = max(lo, bound)
     feasible = hi >= lo and hi >= 0.0
     if not feasible:
         return TimeScaling(0.0, 0.0, False, -1, "")
     if math.isinf(hi):
         return TimeScaling(None, math.sqrt(max(lo, 0.0)), True, -1, "")
-    i, j = np.unravel_index(int(np.argmin(s_hi)), s_hi.shape)
-    kind = "velocity" if vel_hi[i, j] <= eff_hi[i, j] else "effort"
-    return TimeScaling(math.sqrt(hi), math.sqrt(max(lo, 0.0)), True, int(i), f"{kind} {names[j]}")
+    return TimeScaling(math.sqrt(hi), math.sqrt(max(lo, 0.0)), True, where, limit)
 
 
 def _reach(center: np.ndarray, G: np.ndarray, d: np.ndarray, empty: bool) -> float:
@@ -271,6 +288,7 @@ def analyze_trajectory(
     decoupled: bool = False,
     polytope: bool = False,
     progress: bool = False,
+    constraints: Sequence[Constraint] = (),
 ) -> TrajectoryAnalysis:
     """Both measures, the demands and the time-scaling margin along a trajectory.
 
@@ -284,9 +302,15 @@ def analyze_trajectory(
             (:attr:`TrajectoryAnalysis.velocity_polytope_capacity`; one LP-backed support query per
             sample).
         progress: show a progress bar over the samples on standard error.
+        constraints: constraints of the sets at rest the time-scaling margin also keeps: at each
+            sample their rows over the motion run k times faster (velocities k x, accelerations
+            k^2 xdot, efforts k^2 tau_dyn + tau_static;
+            :func:`mobmanip.motion.step_constraints.path_timing_rows`); a constraint that cannot
+            join a step of motion is refused by name.
     """
     if not isinstance(trajectory, Trajectory):
         raise ArgumentError(f"expected a Trajectory, got {type(trajectory).__name__}")
+    constraints = check_constraints(constraints)
     task = get_task(task or robot.spec.default_task)
     n, m, nx = len(trajectory), task.dim, robot.nx
     kin_axes, dyn_axes, dyn_center = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
@@ -325,7 +349,13 @@ def analyze_trajectory(
     vlim = np.asarray(robot.velocity_limits, dtype=float)
     elim = np.asarray(robot.effort_limits, dtype=float)
     names = robot.reduced_velocity_names
-    scaling = time_scaling(trajectory.x, tau - tau_static, tau_static, vlim, elim, names)
+    extra = []
+    for i in range(n) if constraints else ():  # run k times faster: s' = k, s'' = 0, b = k^2
+        at_rest = terms_at(robot, trajectory.q[i], task.name, object_mass=object_mass, check=False)
+        _, c, d, labels = path_timing_rows(constraints, at_rest, trajectory.x[i], trajectory.xdot[i],
+                                           (np.zeros(nx), tau[i] - tau_static[i], tau_static[i]))  # fmt: skip
+        extra.append((i, c, d, labels))
+    scaling = time_scaling(trajectory.x, tau - tau_static, tau_static, vlim, elim, names, extra)
     return TrajectoryAnalysis(
         robot_name=robot.name,
         task=task.name,
