@@ -124,7 +124,7 @@ def test_each_robots_floor_wrench_and_rows_are_the_free_flyer_rnea_and_the_hands
     for (w0, w1), ref, weight in zip(wrenches, reference, weights):
         np.testing.assert_allclose(w0 + w1 @ x, ref, rtol=0, atol=1e-9 * weight)
 
-    G_rows, g_rows, labels = grounded.step_rows(team, qs, wrenches)
+    G_rows, g_rows, labels, _ = grounded.step_rows(team, qs, wrenches)
     slack = g_rows - G_rows @ x
     margins, uses = grounded.readings(team, qs, wrenches, x)
     for i, (member, q, ref, weight) in enumerate(zip(team.members, qs, reference, weights)):

@@ -511,11 +511,12 @@ def _run(
                 H_k, c_k = H + H_p, c_k + c_p
             if floor is not None:  # the baseline only reads it
                 wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
-                floor_G, floor_g, labels = floor.step_rows(team, qs, wrenches)
+                floor_G, floor_g, labels, kinds = floor.step_rows(team, qs, wrenches)
                 x = solve_step_qp(H_k, c_k, J, b, lo, hi, np.vstack([G, floor_G]), np.r_[g_hi, floor_g])
                 if x is None and solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi) is not None:
                     binding = _floor_binding(H_k, c_k, J, b, lo, hi, G, g_hi, floor_G, floor_g, labels)
-                    turning = "no turn" in binding
+                    # a turn the base cannot make is no matter of speed
+                    turning = binding in labels and kinds[labels.index(binding)] == "no turn"
                     diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=not turning)
                     raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
                                       partial(k))  # fmt: skip

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArgumentError
-from ..motion.carry_floor import CarryFloor, turning_row
+from ..motion.carry_floor import NO_TURN, CarryFloor, turning_row
 from ..motion.ground import floor_wrench
 from ..robot.support import Support, polygon_margin
 from ..robot.tasks import TaskSpace
@@ -116,23 +116,26 @@ class TeamFloor:
 
     def step_rows(
         self, team: Team, qs: Sequence[np.ndarray], wrenches: list[tuple[np.ndarray, np.ndarray]]
-    ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    ) -> tuple[np.ndarray, np.ndarray, list[str], list[str]]:
         """Every robot's floor rows over the team's step, ``G x <= g``, with one label per row
-        (``"ROBOT: what it keeps"``)."""
-        G, g, labels = [], [], []
+        (``"ROBOT: what it keeps"``) and its kind (``"tip-over"``, ``"contact"``, ``"traction"`` or
+        ``"no turn"``)."""
+        G, g, labels, kinds = [], [], [], []
         for member, q, s, rows, (w0, w1) in zip(team.members, qs, team.member_slices(), self.rows, wrenches):
             R, r = rows.at(q)
             G.append(R @ w1)
             g.append(r - R @ w0)
             labels += [f"{member.name}: {label}" for label in rows.labels]
+            kinds += list(rows.kinds)
             turn = turning_row(member.robot, q)
             if turn is not None:  # a skid-steer keeps its heading: both senses of its turn rate at zero
                 row = np.zeros((2, w1.shape[1]))
                 row[0, s], row[1, s] = turn, -turn
                 G.append(row)
                 g.append(np.zeros(2))
-                labels += [f"{member.name}: no turn (a skid-steer turns only by sliding its wheels)"] * 2
-        return np.vstack(G), np.concatenate(g), labels
+                labels += [f"{member.name}: {NO_TURN}"] * 2
+                kinds += ["no turn"] * 2
+        return np.vstack(G), np.concatenate(g), labels, kinds
 
     def readings(
         self, team: Team, qs: Sequence[np.ndarray], wrenches: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray
