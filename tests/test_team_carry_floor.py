@@ -98,6 +98,14 @@ def _reference_wrenches(team, qs, x_prev, x, h):
     return out
 
 
+def _margin(polygon: np.ndarray, p: np.ndarray) -> float:
+    """Signed distance of p to a convex polygon's nearest edge (positive inside), by hand."""
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    area = np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1])
+    inward = np.c_[-edges[:, 1], edges[:, 0]] * np.sign(area) / np.linalg.norm(edges, axis=1)[:, None]
+    return float(np.min(np.einsum("ij,ij->i", inward, p - polygon)))
+
+
 def test_the_beam_is_the_box_the_reference_takes(team):
     held = team.held_object
     assert held.mass == MASS
@@ -135,11 +143,7 @@ def test_each_robots_floor_wrench_and_rows_are_the_free_flyer_rnea_and_the_hands
         force, moment = ref[:3], ref[3:]
         z = support.floor_z
         zmp = np.array([(z * force[0] - moment[1]) / force[2], (moment[0] + z * force[1]) / force[2]])
-        polygon = support.polygon(pose)
-        edges = np.roll(polygon, -1, axis=0) - polygon
-        area = np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1])
-        inward = np.c_[-edges[:, 1], edges[:, 0]] * np.sign(area) / np.linalg.norm(edges, axis=1)[:, None]
-        margin = float(np.min(np.einsum("ij,ij->i", inward, zmp - polygon)))
+        margin = _margin(support.polygon(pose), zmp)
         tip = slack[mine][[k == "tip-over" for k in kinds]]
         assert tip.min() / force[2] + floor.zmp_margin == pytest.approx(margin, abs=1e-9)
         assert margins[i] == pytest.approx(margin, abs=1e-9)
@@ -177,11 +181,7 @@ def _reference_readings(result, run, h, mu):
             use[i] = max(use[i], float(np.max(np.linalg.norm(pushes, axis=1) / (mu * loads[driven]))))
             z = support.floor_z
             zmp = np.array([(z * force[0] - moment[1]) / force[2], (moment[0] + z * force[1]) / force[2]])
-            polygon = support.polygon(pose)
-            edges = np.roll(polygon, -1, axis=0) - polygon
-            area = np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1])
-            inward = np.c_[-edges[:, 1], edges[:, 0]] * np.sign(area) / np.linalg.norm(edges, axis=1)[:, None]
-            margin[i] = min(margin[i], float(np.min(np.einsum("ij,ij->i", inward, zmp - polygon))))
+            margin[i] = min(margin[i], _margin(support.polygon(pose), zmp))
     return margin, use
 
 
