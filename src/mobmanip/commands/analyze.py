@@ -64,13 +64,21 @@ def _check_hold(args, constraints) -> float | None:
         return None
     if not (math.isfinite(hold) and 0.0 < hold <= LONGEST_HOLD):
         raise ArgumentError(f"--hold must be a duration in (0, {LONGEST_HOLD:g}] s, got {hold!r}")
-    if not constraints or constraints[0].lift or constraints[0].mu is None:
+    floor = _floor_of(constraints)
+    if floor is None or floor.lift or floor.mu is None:
         raise ArgumentError(
             "--hold replays efforts on the floor: it needs --ground with a traction limit (not --no-traction)"
         )
-    if constraints[0].slope:
+    if floor.slope:
         raise ArgumentError("--hold replays efforts on a level floor: a ramp (--slope) is not modelled there")
     return float(hold)
+
+
+def _floor_of(constraints):
+    """The floor among ``constraints`` (the options put it first when given), or None."""
+    from ..terms.constraints.floor import Floor
+
+    return next((c for c in constraints if isinstance(c, Floor)), None)
 
 
 def _add_held(robot, q, result, document, duration: float, floor) -> None:
@@ -248,7 +256,7 @@ def run(args) -> int:
     )
     document = result.to_dict()
     if hold is not None:
-        _add_held(robot, q, result, document, hold, constraints[0])
+        _add_held(robot, q, result, document, hold, _floor_of(constraints))
     require_finite(document)  # never a NaN or an infinity printed as a result
     print(f"robot {robot.name} ({robot.platform.kind}), task {result.task}, {robot.nx} reduced velocities")
     print("reduced velocities: " + ", ".join(robot.reduced_velocity_names))

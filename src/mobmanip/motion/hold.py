@@ -436,6 +436,7 @@ def held_reach(
     d = d / np.linalg.norm(d)
     if "tau" not in getattr(polytope, "variables", {}):
         raise TaskError("a held reach replays efforts: the set must be a polytope with the efforts tau as a variable")
+    _check_user_rows(polytope)
     if not (0.0 < fraction <= 1.0 and 0.0 < tolerance < 1.0):
         raise ArgumentError(f"fraction must be in (0, 1] and tolerance in (0, 1), got {fraction!r}, {tolerance!r}")
     if isinstance(iterations, bool) or not isinstance(iterations, int) or iterations < 1:
@@ -521,6 +522,25 @@ def held_reach(
     return HeldReach(
         d, best[0], instant, float(duration), best[1], instant_hold, fraction, best[2], bound, instant_witness
     )
+
+
+def _check_user_rows(polytope) -> None:
+    """Refuse a user constraint's row over anything but the efforts: the replay holds the efforts
+    constant, so rows over them hold throughout, but rows over the accelerations or the hands'
+    wrenches would be kept at the start only.
+
+    Raises:
+        ArgumentError: such a row, named by its label.
+    """
+    rows = polytope.lifted_rows()
+    others = np.ones(rows.A_ub.shape[1], dtype=bool)
+    others[polytope.variables["tau"]] = False
+    for k, kind in enumerate(polytope.kinds):
+        if kind == "user" and np.any(rows.A_ub[k, others] != 0.0):
+            raise ArgumentError(
+                f"a held reach replays constant efforts and keeps a constraint's rows over the efforts only: "
+                f"row {polytope.labels[k]!r} limits other variables too"
+            )
 
 
 def _longest(program, play, top, witness, hold, maps, held, limits, iterations) -> tuple[Witness, Hold]:
