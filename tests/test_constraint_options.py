@@ -130,6 +130,46 @@ def test_place_by_a_reading_honours_the_option(options, tmp_path, capfd):
     assert document["value"] == pytest.approx(closed.straight_line_reach(np.array([1.0, 0.0])), rel=1e-9)
 
 
+SITE = """robot = "planar_dual_arm"
+objective = "{objective}"
+budget = 30
+starts = 2
+positions = [[1.0, 0.5, 0.35], [1.4, 0.2, 0.35]]
+[grounded]
+mu = 0.5
+"""
+
+
+def test_site_by_a_reading_honours_the_option(options, tmp_path, capfd):
+    """Each position's value is the closed form's straight-line reach at the configuration the
+    site chose (the CSV's q), and its grounded reach is the robot's with its effort limits scaled,
+    on the same floor (no constraint machinery for the share)."""
+    site = tmp_path / "site.toml"
+    site.write_text(SITE.format(objective="dynamic_polytope:reach:+x"))
+    code, out, err = run_cli(capfd, "site", site, "-o", tmp_path / "out", "--effort-share", str(SHARE))
+    assert code == 0, err
+    assert "keeping effort_share" in out
+    robot = mobmanip.load_robot("planar_dual_arm")
+    scaled = robot.with_limits(effort={n: v * SHARE for n, v in robot.joint_effort_limits.items()})
+    lines = (tmp_path / "out" / "site.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    columns = [header.index(f"q.{name}") for name in robot.coordinate_names]
+    for line in lines[1:]:
+        row = line.split(",")
+        q = np.array([float(row[k]) for k in columns])
+        closed = _closed_form(robot, q, robot.spec.object_mass)
+        assert float(row[header.index("value")]) == pytest.approx(closed.straight_line_reach(np.array([1.0, 0.0])),
+                                                                   rel=1e-9)  # fmt: skip
+        whole = _closed_form(robot, q, robot.spec.object_mass, share=1.0)
+        assert whole.straight_line_reach(np.array([1.0, 0.0])) > 1.1 * closed.straight_line_reach(np.array([1.0, 0.0]))
+        grounded = mobmanip.analyze(scaled, q, constraints=(mobmanip.Floor(mu=0.5),), measures=("dynamic_polytope",))
+        reach = grounded.measure("dynamic_polytope").straight_line_reach(np.array([1.0, 0.0]))
+        assert float(row[header.index("grounded_reach")]) == pytest.approx(reach, rel=1e-9)
+    site.write_text(SITE.format(objective="kinematic:capacity:+x"))
+    code, _, err = run_cli(capfd, "site", site, "-o", tmp_path / "out2", "--effort-share", str(SHARE))
+    assert_one_line_error(code, err, "an ellipsoid's, which cannot honour the constraints (effort_share)")
+
+
 @pytest.mark.parametrize(
     ("argv", "needles"),
     [

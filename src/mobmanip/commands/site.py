@@ -11,6 +11,8 @@ or a grid:
   robot = "planar_dual_arm"            # built-in name or spec path (relative to SITE.toml)
   objective = "kinematic:capacity:+x"
   mass = 1.0                           # optional (kg); also task = "...", starts = 8
+                                       # a measure's reading (dynamic_polytope:reach:+x) as objective
+                                       # honours the constraint options; budget = 300 its search
   positions = [[1.0, 0.5, 0.35], [1.5, 0.5, 0.35]]
   # or instead of positions: [grid] with x, y, z each a value or [start, stop, count]
   [grounded]                           # optional: capacity on the floor at each optimum
@@ -43,7 +45,7 @@ SECONDS_PER_POSITION = 0.25
 
 
 def register(sub) -> None:
-    from .common import add_dask_option, add_progress_option, add_work_option
+    from .common import add_constraint_options, add_dask_option, add_progress_option, add_work_option
 
     parser = add_guided_command(
         sub,
@@ -58,6 +60,7 @@ def register(sub) -> None:
     add_progress_option(parser)
     add_dask_option(parser)
     add_work_option(parser, f"object positions (default {MAX_SITE_POSITIONS:,})")
+    add_constraint_options(parser)
     parser.set_defaults(func=run)
 
 
@@ -74,6 +77,7 @@ def _position_check(args):
 
 
 def run(args) -> int:
+    import dataclasses
     from pathlib import Path
 
     import numpy as np
@@ -81,10 +85,12 @@ def run(args) -> int:
     from ..errors import UsageError
     from ..placement.site import Site, run_site
     from ..support.files import check_output, output_directory
-    from .common import cluster_executor, show_progress
+    from .common import cluster_executor, registered_constraints, show_progress
     from .outputs import SITE_FILES, site_outputs
 
     site = Site.read(args.site, _position_check(args))
+    constraints, _ = registered_constraints(args)
+    site = dataclasses.replace(site, constraints=constraints)
     if args.positions_per_task < 1:
         raise UsageError(f"--positions-per-task must be at least 1, got {args.positions_per_task}")
     out = Path(args.output)
@@ -96,7 +102,9 @@ def run(args) -> int:
         from ..support.cluster import check_address
 
         check_address(args.dask)
-    print(f"site {args.site}: {len(site.positions)} object positions, robot {Path(site.robot).name}, {site.objective}")
+    kept = "".join(f", keeping {c.name}" for c in constraints)
+    print(f"site {args.site}: {len(site.positions)} object positions, robot {Path(site.robot).name}, "
+          f"{site.objective}{kept}")  # fmt: skip
     with cluster_executor(args) as executor:  # connected (or refused) before any work
         result = run_site(site, executor, args.positions_per_task, progress=show_progress(args))
     values = result.values

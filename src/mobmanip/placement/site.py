@@ -20,9 +20,15 @@ A site file (TOML) names the robot, the objective and the object positions::
     level = false                        # hold the object level on the floor (as --level)
 
 Each position is :func:`mobmanip.placement.place`'s problem on its own (the same starts, so
-the result does not depend on the order, the worker or a retry); with ``[grounded]`` the
+the result does not depend on the order, the worker or a retry). An objective that reads a
+measure (``MEASURE:READING:DIRECTION``, e.g. ``dynamic_polytope:reach:+x``) is placed by
+:func:`mobmanip.placement.grounded.place_polytope` instead (``budget`` evaluations of its
+search, default 300), with the site's ``constraints`` (a user's, e.g. from a registered
+command-line option): the value is the reading with them. An ellipsoid's objective cannot honour
+a constraint and is refused with one. With ``[grounded]`` the
 optimum is analysed with :class:`mobmanip.terms.constraints.floor.Floor` and the
-``dynamic_polytope`` measure, and the straight-line reach (m/s^2) along ``direction`` is recorded;
+``dynamic_polytope`` measure (and the site's constraints), and the straight-line reach (m/s^2)
+along ``direction`` is recorded;
 where that set is empty (the robot cannot stand still with every support loaded, e.g. arms
 stretched far out) the value is left out and the row's reason says which supports would unload.
 Positions run in tasks of ``positions_per_task`` through any :class:`concurrent.futures.Executor`
@@ -43,13 +49,17 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArgumentError, MobmanipError, SpecError, TaskError
+from ..gradients.readings import is_reading_objective
 from ..robot.model import Robot, load_robot, robot_in_process
 from ..robot.support_spec import check_mu
 from ..support.ranges import PLATFORM_POSITION
+from .grounded import DEFAULT_BUDGET, place_polytope
 from .optimize import DEFAULT_STARTS, place
 
 #: Most object positions one site may hold, whatever the work bound (a list or a grid).
 MAX_POSITIONS = 1_000_000
+#: The largest ``budget`` of a reading objective's search per position.
+MAX_BUDGET = 100_000
 
 #: A check of a site's number of positions before they are made: ``(count, how it follows from
 #: the file)``; raises to refuse.
@@ -74,6 +84,9 @@ class Site:
         direction: signed task axis of the grounded straight-line reach (e.g. ``"+x"``).
         grid_shape: (Nx, Ny, Nz) when the positions are a grid (x fastest), else None.
         level: the grounded capacity holds the object level (``Floor(level=True)``).
+        budget: evaluations of a reading objective's search (:func:`place_polytope`'s).
+        constraints: constraints every set honours (a reading objective's and the grounded
+            reach's); not read from the file: a user's come from Python or a command-line option.
     """
 
     robot: str
@@ -86,6 +99,8 @@ class Site:
     direction: str = "+x"
     grid_shape: tuple[int, int, int] | None = None
     level: bool = False
+    budget: int = DEFAULT_BUDGET
+    constraints: tuple = field(default=(), compare=False)
 
     @classmethod
     def read(cls, path: str | Path, check_count: CountCheck | None = None) -> Site:
@@ -115,7 +130,7 @@ class Site:
         cls, document: Mapping, base: Path = Path("."), where: str = "site", check_count: CountCheck | None = None
     ) -> Site:
         """A site from its TOML document (paths relative to ``base``; ``check_count`` as :meth:`read`)."""
-        known = {"robot", "objective", "mass", "task", "starts", "positions", "grid", "grounded"}
+        known = {"robot", "objective", "mass", "task", "starts", "budget", "positions", "grid", "grounded"}
         unknown = sorted(set(document) - known)
         if unknown:
             raise SpecError(f"{where}: unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
@@ -134,6 +149,9 @@ class Site:
         starts = document.get("starts", DEFAULT_STARTS)
         if isinstance(starts, bool) or not isinstance(starts, int) or not 1 <= starts <= 64:
             raise SpecError(f"{where}: 'starts' must be an integer from 1 to 64, got {starts!r}")
+        budget = document.get("budget", DEFAULT_BUDGET)
+        if isinstance(budget, bool) or not isinstance(budget, int) or not 1 <= budget <= MAX_BUDGET:
+            raise SpecError(f"{where}: 'budget' must be an integer from 1 to {MAX_BUDGET:,}, got {budget!r}")
         task = document.get("task")
         if task is not None and not isinstance(task, str):
             raise SpecError(f"{where}: 'task' must be a task space's name, got {task!r}")
@@ -155,7 +173,7 @@ class Site:
             if not isinstance(direction, str) or direction[:1] not in "+-" or len(direction) < 2:
                 raise SpecError(f'{where}: [grounded] direction must be a signed task axis like "+x"')
         return cls(robot, objective, positions, None if mass is None else float(mass), task, starts, mu, direction,
-                   shape, level)  # fmt: skip
+                   shape, level, budget)  # fmt: skip
 
 
 def _axis(value, name: str, where: str) -> tuple[float, float, int]:
@@ -290,7 +308,8 @@ def _grounded_reach(robot: Robot, q: np.ndarray, site: Site) -> float:
 
     task = get_task(site.task or robot.spec.default_task)
     e = _grounded_direction(site, task)
-    analysis = analyze(robot, q, task.name, object_mass=site.mass, constraints=(Floor(mu=site.mu, level=site.level),),
+    constraints = (Floor(mu=site.mu, level=site.level), *site.constraints)
+    analysis = analyze(robot, q, task.name, object_mass=site.mass, constraints=constraints,
                        measures=("dynamic_polytope",))  # fmt: skip
     polytope = analysis.measure("dynamic_polytope")
     reach = getattr(polytope, "straight_line_reach", None)
@@ -325,7 +344,11 @@ def solve_positions(site: Site, start: int, stop: int) -> tuple[int, np.ndarray,
     for k, position in enumerate(site.positions[start:stop]):
         rows[k, :3] = position
         try:
-            result = place(robot, position, site.objective, site.task, object_mass=site.mass, starts=site.starts)
+            if is_reading_objective(site.objective):
+                result = place_polytope(robot, position, site.objective, site.task, constraints=site.constraints,
+                                        object_mass=site.mass, starts=site.starts, budget=site.budget)  # fmt: skip
+            else:
+                result = place(robot, position, site.objective, site.task, object_mass=site.mass, starts=site.starts)
         except MobmanipError as exc:
             reasons.append(" ".join(str(exc).split()))
             continue
@@ -361,11 +384,21 @@ def run_site(
     started = time.perf_counter()
     robot = load_robot(site.robot)  # fail here, once, on a bad robot
     from ..gradients.evaluator import Objective
+    from ..gradients.readings import ReadingObjective
     from ..robot.tasks import get_task
 
     # a malformed objective or task fails here, once, not in every task
     task = get_task(site.task or robot.spec.default_task)
-    Objective.parse(site.objective, task)
+    if is_reading_objective(site.objective):
+        ReadingObjective.parse(site.objective, task)
+    else:
+        Objective.parse(site.objective, task)
+        if site.constraints:
+            names = ", ".join(getattr(c, "name", type(c).__name__) for c in site.constraints)
+            raise ArgumentError(
+                f"the site's objective {site.objective!r} is an ellipsoid's, which cannot honour the constraints "
+                f"({names}): give a measure's reading (e.g. dynamic_polytope:reach:+x)"
+            )
     if site.mu is not None:
         _grounded_direction(site, task)
     n = len(site.positions)

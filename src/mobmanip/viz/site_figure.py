@@ -18,11 +18,13 @@ def site_figure(result: SiteResult, title: str | None = None) -> Figure:
     """The figure (see the module's docstring); positions without a placement are grey crosses.
     The colour bar names the objective with its unit; the legend stands below the map."""
     from ..gradients.evaluator import Objective
+    from ..gradients.readings import ReadingObjective, is_reading_objective
     from .figures import plt
     from .labels import objective_label, objective_words
 
     task = result.task or result.site.task or "translational"
-    objective = Objective.parse(result.site.objective, task)
+    text = result.site.objective
+    objective = ReadingObjective.parse(text, task) if is_reading_objective(text) else Objective.parse(text, task)
 
     columns = result.columns
     table = result.table
