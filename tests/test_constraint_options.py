@@ -130,6 +130,31 @@ def test_place_by_a_reading_honours_the_option(options, tmp_path, capfd):
     assert document["value"] == pytest.approx(closed.straight_line_reach(np.array([1.0, 0.0])), rel=1e-9)
 
 
+def test_place_map_by_a_reading_honours_the_option(options, tmp_path, capfd):
+    """--map with a measure's reading: every cell's value is the closed form's straight-line reach
+    at the cell's configuration (map.npz), and the placement, seeded from the best cells, is at
+    least the best cell and equals the closed form at its own configuration."""
+    out = tmp_path / "place.json"
+    code, printed, err = run_cli(capfd, "place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective",
+                                 "dynamic_polytope:reach:+x", "--budget", "30", "--effort-share", str(SHARE),
+                                 "--map", tmp_path / "map", "--map-cells", "4", "--json", out)  # fmt: skip
+    assert code == 0, err
+    assert "at the hold that maximises dynamic:capacity:+x there" in printed
+    robot = mobmanip.load_robot("planar_dual_arm")
+    mass = robot.spec.object_mass
+    x = np.array([1.0, 0.0])
+    grid = np.load(tmp_path / "map" / "map.npz")
+    cells = list(zip(*np.nonzero(np.isfinite(grid["values"]))))
+    assert len(cells) >= 2
+    for cell in cells:
+        closed = _closed_form(robot, grid["configurations"][cell], mass)
+        assert grid["values"][cell] == pytest.approx(closed.straight_line_reach(x), rel=1e-9)
+    document = json.loads(out.read_text())
+    q = robot.configuration(tuple(document["q"]["platform"]), document["q"]["joints"])
+    assert document["value"] == pytest.approx(_closed_form(robot, q, mass).straight_line_reach(x), rel=1e-9)
+    assert document["value"] >= np.nanmax(grid["values"])
+
+
 SITE = """robot = "planar_dual_arm"
 objective = "{objective}"
 budget = 30

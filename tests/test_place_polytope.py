@@ -125,7 +125,10 @@ def _cli(*args):
             ("--objective", "dynamic_polytope:reach:+q"),
             "direction '+q' is neither a signed axis of the planar task (+x, -x, +y, -y) nor 2 numbers like 1,0",
         ),
-        (("--objective", "dynamic_polytope:reach:+x", "--map", "m"), "--map is not available with a measure's reading"),
+        (
+            ("--objective", "dynamic_polytope:reach:+x", "--figure", "f.png"),
+            "--figure is not available with a measure's reading",
+        ),
     ],
 )
 def test_bad_polytope_placements_are_one_line_errors(args, message):

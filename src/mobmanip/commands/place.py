@@ -21,9 +21,10 @@ or MEASURE:READING:DIRECTION, MEASURE any other registered measure (kinematic_po
 dynamic_polytope, dynamic_polytope_min_norm, force_ellipsoid, force_polytope, or one registered
 from Python), READING reach (straight-line reach from rest) or support: no closed-form gradient;
 the ellipsoid's capacity along DIRECTION (for a force measure the kinematic ellipsoid's volume)
-is optimised first (without the floor), then a derivative-free search (Nelder-Mead, --budget
-evaluations) maximises the reading from there. With --ground (--mu, --no-traction, --load,
---reserve) the reading is the grounded one.
+is optimised first (without the floor or any constraint), then a derivative-free search
+(Nelder-Mead, --budget evaluations) maximises the reading from there. With --ground (--mu,
+--no-traction, --load, --reserve) the reading is the grounded one; a registered constraint option
+is honoured by the reading too.
 
 The hands keep the grasp of the reference posture (the spec's [hold], else home), turned about
 the vertical; the object's centre is put at --object. Joint limits hold; --region keeps the
@@ -42,7 +43,9 @@ map.png. The map is solved in bands of 3 rows (continuation from neighbouring ce
 band), in this process (the bands advance together, their evaluations batched) or, with --dask
 ADDRESS (tcp://HOST:PORT, or local:N for a local cluster), as tasks on Dask's distributed
 scheduler: the same bands give the same map either way, and a band whose worker is lost is run
-again by Dask.
+again by Dask. With a measure's reading the map is the ellipsoid's, and each cell holds the
+reading (with the floor and constraints) at the hold the ellipsoid found best there: a lower
+bound of that cell's best reading; its best cells are more seeds of the search.
 
 --figure writes the result from above (PNG or SVG); --view serves it in the meshcat viewer,
 --export writes the viewer's scene as a self-contained HTML page.
@@ -90,7 +93,12 @@ def register(sub) -> None:
     parser.add_argument("--figure", metavar="OUT.png", help="write the start and the optimum from above (PNG or SVG)")
     parser.add_argument("--view", action="store_true", help="show the optimum in the meshcat viewer (Ctrl-C stops)")
     parser.add_argument("--export", metavar="PAGE.html", help="write the optimum's viewer scene as an HTML page")
-    parser.add_argument("--map", metavar="OUT_DIR", help="also map the best value over platform positions")
+    parser.add_argument(
+        "--map",
+        metavar="OUT_DIR",
+        help="also map the best value over platform positions (a measure's reading: "
+        "its value at each cell's best hold for the reading's ellipsoid)",
+    )
     parser.add_argument(
         "--map-extent", metavar="XMIN,XMAX,YMIN,YMAX", help="the map's platform positions (default: the arms' reach)"
     )
@@ -199,7 +207,7 @@ def _run(args, executor) -> int:
     robot = load_robot(find_spec(args.robot))
     target = _parse_point(args.object)
     if _polytope_objective(args):
-        return _run_polytope(args, robot, target)
+        return _run_polytope(args, robot, target, executor)
     refuse_constraint_options(args)  # an ellipsoid objective honours no constraint beyond the joint boxes
     if floor_constraints(args):
         from ..errors import UsageError
@@ -294,20 +302,21 @@ def _run(args, executor) -> int:
     return 0
 
 
-def _run_polytope(args, robot, target) -> int:
-    """``place`` with a measure's reading (:func:`mobmanip.placement.grounded.place_polytope`)."""
+def _run_polytope(args, robot, target, executor) -> int:
+    """``place`` with a measure's reading (:func:`mobmanip.placement.grounded.place_polytope`);
+    with ``--map``, the map of the reading at each cell's surrogate hold
+    (:func:`mobmanip.placement.grounded.reading_map`) first, its best cells more seeds."""
     from ..analysis.single import analyze
     from ..errors import UsageError
     from ..gradients.readings import ReadingObjective
-    from ..placement.grounded import place_polytope, surrogate
+    from ..placement.grounded import place_polytope, reading_map, surrogate
     from ..placement.optimize import Region
     from ..postures.named import named_configuration
     from ..robot.tasks import get_task
     from ..support.files import write_json
     from .common import constraints_from_args, print_warnings
 
-    for option, given in (("--map", args.map), ("--figure", args.figure),
-                          ("--avoid-collision", args.avoid_collision is not None)):  # fmt: skip
+    for option, given in (("--figure", args.figure), ("--avoid-collision", args.avoid_collision is not None)):
         if given:
             raise UsageError(f"{option} is not available with a measure's reading ({args.objective})")
     task = get_task(args.task or robot.spec.default_task)
@@ -315,11 +324,20 @@ def _run_polytope(args, robot, target) -> int:
     constraints = constraints_from_args(args)
     reference = None if args.posture is None else named_configuration(robot, args.posture)
     region = None if args.region is None else Region.parse(args.region)
+    extent = _check_map_options(args)
+    if args.map and extent is not None and not robot.platform_locked:
+        _check_extent_reaches(args, robot, target, extent, reference)
     _check_outputs(args)
     yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    grid = None
+    if args.map:
+        grid = _compute_map(args, robot, target, extent, yaw, None, reference, executor, surrogate(objective))
+        grid = reading_map(grid, robot, objective, constraints=constraints, object_mass=args.mass,
+                           decoupled=args.decoupled)  # fmt: skip
     result = place_polytope(robot, target, objective, task.name, constraints=constraints, object_mass=args.mass,
                             decoupled=args.decoupled, region=region, reference=reference, starts=args.starts,
-                            hold_turn=yaw, budget=args.budget)  # fmt: skip
+                            hold_turn=yaw, budget=args.budget,
+                            seeds=() if grid is None else grid.best_cells(MAP_SEEDS))  # fmt: skip
     x, y, heading = result.platform
     where = "on the floor" if constraints else "ideal"
     print(f"robot {robot.name}: object at ({target[0]:g}, {target[1]:g}, {target[2]:g}) m, {objective.name} ({where})")
@@ -328,7 +346,7 @@ def _run_polytope(args, robot, target) -> int:
     print("joints: " + ", ".join(f"{name} {value:.4f}" for name, value in joints.items()))
     print(f"{objective.name} = {result.value:.6g}")
     print(
-        f"at the optimum of {surrogate(objective)} ({result.ungrounded.value:.6g}, without the floor): "
+        f"at the optimum of {surrogate(objective)} ({result.ungrounded.value:.6g}, without the floor or constraints): "
         f"{objective.name} = {result.ungrounded_value:.6g}"
     )
     print(
@@ -364,6 +382,9 @@ def _run_polytope(args, robot, target) -> int:
         write_json(args.json, document)
         print_warnings(analysis)
         print(f"wrote {args.json}")
+    if grid is not None:
+        print(f"map: each cell's {objective.name} at the hold that maximises {surrogate(objective)} there")
+        _write_map(args, grid, result)
     if args.view or args.export:
         _show(args, robot, result)
     return 0
@@ -450,8 +471,9 @@ def _check_extent_reaches(args, robot, target, extent, reference) -> None:
 MAP_SEEDS = 3
 
 
-def _compute_map(args, robot, target, extent, yaw, collision, reference, executor):
-    """The placement map --map asks for (:func:`mobmanip.placement.map_jobs.run_map`)."""
+def _compute_map(args, robot, target, extent, yaw, collision, reference, executor, objective=None):
+    """The placement map --map asks for (:func:`mobmanip.placement.map_jobs.run_map`), of
+    ``objective`` (default --objective)."""
     import numpy as np
 
     from ..placement.map_jobs import MapJob, run_map
@@ -463,7 +485,7 @@ def _compute_map(args, robot, target, extent, yaw, collision, reference, executo
     job = MapJob(
         robot=robot_for_workers(args.robot),
         target=(float(target[0]), float(target[1]), float(target[2])),
-        objective=args.objective,
+        objective=objective or args.objective,
         x=tuple(float(v) for v in xs),
         y=tuple(float(v) for v in ys),
         task=args.task,

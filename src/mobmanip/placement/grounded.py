@@ -29,8 +29,10 @@ placements far away.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,11 +40,12 @@ from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
 from ..analysis.single import analyze
-from ..errors import ArgumentError, MobmanipError
+from ..errors import ArgumentError, MobmanipError, TaskError
 from ..gradients.readings import ReadingObjective, is_reading_objective
 from ..measures import get_measure
 from ..robot.model import Robot
 from ..robot.tasks import get_task
+from .maps import PlacementMap
 from .optimize import DEFAULT_STARTS, Placement, PlacementProblem, Region, _project, check_turn, place
 
 #: Default budget of the derivative-free stage (evaluations, each a projection and a set).
@@ -132,6 +135,7 @@ def place_polytope(
     starts: int = DEFAULT_STARTS,
     hold_turn: float | None = None,
     budget: int = DEFAULT_BUDGET,
+    seeds: Sequence[tuple[np.ndarray, float]] = (),
 ) -> PolytopePlacement:
     """The placement that maximises a polytope's reading (see the module's docstring).
 
@@ -141,6 +145,8 @@ def place_polytope(
         objective: ``POLYTOPE:READING:DIRECTION``, e.g. ``"dynamic_polytope:reach:+x"``.
         constraints: the analysis's constraints (e.g. ``(Floor(mu=0.5),)``: the grounded reading).
         budget: evaluations of the derivative-free stage (>= 1).
+        seeds: more seeds of stage 2, each (configuration (nq,), hold turn psi), e.g. the best
+            cells of :func:`reading_map`: the result is at least as good as each of them.
 
     Raises:
         ArgumentError, MeasureError: a malformed objective or budget.
@@ -188,8 +194,16 @@ def place_polytope(
         value = evaluate(z)[0]
         return 1e6 if value == -math.inf else -value
 
-    # the seeds: the ungrounded optimum and place's own starts (projected), best first
+    # the seeds: the ungrounded optimum, the caller's and place's own starts (projected), best first
+    given = list(seeds)
     seeds = [(start_value, z0)]
+    for q_seed, psi in given:
+        z_seed = problem.variables(robot.check_configuration(q_seed), psi)
+        count[0] += 1
+        value = value_at(problem.configuration(z_seed))
+        if value > best["value"]:
+            best["value"], best["z"] = value, z_seed
+        seeds.append((value, z_seed))
     rng = np.random.default_rng(0)
     for s in range(starts):
         if count[0] >= budget // 2:
@@ -220,3 +234,48 @@ def place_polytope(
         ungrounded_value=float(start_value), hold_turn=float(z[-1]), residual=problem.residual(z),
         evaluations=count[0], budget=budget, seconds=time.perf_counter() - started,
     )  # fmt: skip
+
+
+def reading_map(
+    grid: PlacementMap,
+    robot: Robot,
+    objective: str | ReadingObjective,
+    *,
+    constraints: tuple = (),
+    object_mass: float | None = None,
+    decoupled: bool = False,
+) -> PlacementMap:
+    """A measure's reading over a placement map of its surrogate: at each cell, the reading (with
+    ``constraints``) at the hold the map found best for the surrogate ellipsoid there (stage 1 and
+    2 of :func:`place_polytope`, cell by cell).
+
+    Each cell's value is therefore the reading at one hold, a lower bound of the best the reading
+    itself could reach from that platform position; NaN where the cell holds no object or the
+    set has no reading there (e.g. the floor cannot hold the robot still). Its best cells are
+    seeds for :func:`place_polytope`, which then ends at least as high.
+
+    Args:
+        grid: the surrogate's map (:func:`mobmanip.placement.maps.placement_map` of
+            :func:`surrogate` of the objective), on the objective's task.
+        robot, object_mass, decoupled: as the map's.
+        objective: the reading, e.g. ``"dynamic_polytope:reach:+x"``.
+        constraints: what the reading's sets honour (the floor, a user's constraint).
+    """
+    started = time.perf_counter()
+    task = get_task(grid.task)
+    if not isinstance(objective, ReadingObjective):
+        objective = ReadingObjective.parse(objective, task)
+    values = np.full(grid.values.shape, np.nan)
+    for index in zip(*np.nonzero(np.isfinite(grid.values))):
+        try:
+            value = polytope_value(robot, grid.configurations[index], objective, task.name, object_mass, constraints,
+                                   decoupled)  # fmt: skip
+        except MobmanipError:  # e.g. the floor cannot hold the robot still there
+            continue
+        if math.isfinite(value):
+            values[index] = value
+    if not np.isfinite(values).any():
+        raise TaskError(f"no cell of the map has a reading of {objective.name} (every set failed there)")
+    evaluations = int(np.isfinite(grid.values).sum())
+    return dataclasses.replace(grid, objective=objective, values=values, evaluations=grid.evaluations + evaluations,
+                               seconds=grid.seconds + time.perf_counter() - started)  # fmt: skip
