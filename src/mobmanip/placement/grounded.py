@@ -262,7 +262,7 @@ def reading_map(
         constraints: what the reading's sets honour (the floor, a user's constraint).
     """
     started = time.perf_counter()
-    task = get_task(grid.task)
+    task = get_task(grid.task or robot.spec.default_task)
     if not isinstance(objective, ReadingObjective):
         objective = ReadingObjective.parse(objective, task)
     values = np.full(grid.values.shape, np.nan)

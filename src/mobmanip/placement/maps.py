@@ -44,6 +44,7 @@ from .optimize import (
 )
 
 if TYPE_CHECKING:
+    from ..gradients.readings import ReadingObjective
     from ..robot.collision import SelfCollision
 
 _log = logging.getLogger(__name__)
@@ -57,7 +58,7 @@ class PlacementMap:
     """The best achievable objective over a grid of platform positions.
 
     Attributes:
-        objective: the objective.
+        objective: the objective (a measure's reading: :func:`mobmanip.placement.grounded.reading_map`).
         target: the object centre (m, world), (3,).
         x, y: the grid's platform positions (m, world), (Nx,), (Ny,).
         headings: the fixed headings of the layers (rad), (H,); ``None`` when the heading is free.
@@ -70,7 +71,7 @@ class PlacementMap:
         seconds: wall time (s).
     """
 
-    objective: Objective
+    objective: Objective | ReadingObjective
     target: np.ndarray
     x: np.ndarray
     y: np.ndarray
