@@ -44,6 +44,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import contextlib  # noqa: E402
+import importlib  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import resource  # noqa: E402
@@ -398,45 +399,36 @@ def verdict(value: float, bound: float, below: bool = True) -> str:
     return "met" if (value <= bound if below else value >= bound) else "NOT met"
 
 
+#: The benchmarks of their own, one flag each: (flag, module in scripts/, what it times, whether
+#: its run takes --rounds).
+ON_THEIR_OWN = (
+    ("polytopes", "benchmark_polytopes", "the capacity polytopes", False),
+    ("floor", "benchmark_floor", "the grounded capacity", False),
+    ("sweeps", "benchmark_sweeps", "the compiled polytope sweeps", False),
+    ("retime", "benchmark_retime", "the fastest timing of a path, beside toppra", True),
+    ("payload", "benchmark_payload", "the payload program and its map", True),
+)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes, for a fast smoke run")
     parser.add_argument("--rounds", type=int, help="interleaved measurement rounds (default 7; quick 2)")
     parser.add_argument("--memory-child", type=int, metavar="N", help=argparse.SUPPRESS)
-    parser.add_argument(
-        "--polytopes", action="store_true", help="only the capacity polytopes (scripts/benchmark_polytopes.py)"
+    for flag, module, what, _ in ON_THEIR_OWN:
+        parser.add_argument(f"--{flag}", action="store_true", help=f"only {what} (scripts/{module}.py)")
+    decisions = parser.add_argument_group(
+        "decisions",
+        "beside the code they replace, on one run (scripts/benchmark_decisions.py); or, with --as-commands, "
+        "only the placement decisions as the commands a user types (fresh processes)",
     )
-    parser.add_argument("--floor", action="store_true", help="only the grounded capacity (scripts/benchmark_floor.py)")
-    parser.add_argument(
-        "--decisions",
-        action="store_true",
-        help="decisions beside the code they replace, on one run (scripts/benchmark_decisions.py)",
-    )
-    parser.add_argument(
-        "--as-commands",
-        action="store_true",
-        help="with --decisions: only the placement decisions as the commands a user types (fresh processes)",
-    )
-    parser.add_argument("--only", metavar="TEXT", help="with --decisions: only the decisions whose name contains TEXT")
-    parser.add_argument(
-        "--sweeps", action="store_true", help="only the compiled polytope sweeps (scripts/benchmark_sweeps.py)"
-    )
-    parser.add_argument(
-        "--retime",
-        action="store_true",
-        help="only the fastest timing of a path, beside toppra (scripts/benchmark_retime.py)",
-    )
-    parser.add_argument(
-        "--payload", action="store_true", help="only the payload program and its map (scripts/benchmark_payload.py)"
-    )
+    decisions.add_argument("--decisions", action="store_true", help="only the decisions")
+    decisions.add_argument("--as-commands", action="store_true", help="with --decisions: as commands only")
+    decisions.add_argument("--only", metavar="TEXT", help="with --decisions: only those whose name contains TEXT")
     args = parser.parse_args(argv)
     if args.memory_child:
         memory_child(args.memory_child)
         return 0
-    if args.polytopes:
-        from benchmark_polytopes import run
-
-        return run(quick=args.quick)
     if args.decisions:
         if not args.as_commands:
             from benchmark_decisions import run as run_decisions
@@ -444,22 +436,10 @@ def main(argv=None) -> int:
             run_decisions(quick=args.quick, rounds=args.rounds, only=args.only)
             print()
         return time_commands(quick=args.quick, rounds=args.rounds, only=args.only)
-    if args.floor:
-        from benchmark_floor import run as run_floor
-
-        return run_floor(quick=args.quick)
-    if args.sweeps:
-        from benchmark_sweeps import run as run_sweeps
-
-        return run_sweeps(quick=args.quick)
-    if args.payload:
-        from benchmark_payload import run as run_payload
-
-        return run_payload(quick=args.quick, rounds=args.rounds)
-    if args.retime:
-        from benchmark_retime import run as run_retime
-
-        return run_retime(quick=args.quick, rounds=args.rounds)
+    for flag, module, _, with_rounds in ON_THEIR_OWN:
+        if getattr(args, flag):
+            run = importlib.import_module(module).run
+            return run(quick=args.quick, rounds=args.rounds) if with_rounds else run(quick=args.quick)
     quick = args.quick
     rounds = args.rounds or (2 if quick else 7)
     n_single, n_batch = (200, 2000) if quick else (1000, 10000)

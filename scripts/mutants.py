@@ -753,11 +753,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", nargs="+", metavar="ID", help="run these mutants only")
     parser.add_argument("--list", action="store_true", help="print the mutants and stop")
     parser.add_argument("--check", action="store_true", help="check every snippet is found once; run no tests")
-    parser.add_argument(
-        "--baseline",
-        action="store_true",
-        help="run the chosen mutants' tests once on an unmutated copy (they must all pass)",
-    )
+    parser.add_argument("--baseline", action="store_true", help="run the chosen mutants' tests, unmutated (must pass)")
     parser.add_argument("--timeout", type=float, default=TIMEOUT, help=f"seconds per mutant (default {TIMEOUT:g})")
     args = parser.parse_args(argv)
     chosen = _select(args.only)

@@ -1,11 +1,22 @@
-"""Helpers of the MJCF tests: a robot file read by mobmanip and by MuJoCo's own compiler, side by side."""
+"""Helpers of the MJCF tests: their small robot files (``tests/data/mjcf``), a robot file read by
+mobmanip and by MuJoCo's own compiler, side by side."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from mobmanip.descriptions import read_description
+
+#: The small MJCF robots the tests write, one a file (each file's comment says what it holds).
+MJCF_DATA = Path(__file__).resolve().parent / "data" / "mjcf"
+
+
+def mjcf_text(name: str) -> str:
+    """The text of the test robot ``tests/data/mjcf/<name>.xml``."""
+    return (MJCF_DATA / f"{name}.xml").read_text()
 
 
 def read_beside_mujoco(path):

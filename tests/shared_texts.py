@@ -1,7 +1,7 @@
-"""Input texts that several test files build from: a xacro robot's macros and links, an MJCF base
-on planar joints with its actuators, a site on a grid. Each file keeps its own variations (a
-xacro robot whose forearm's mass and tool frame come from arguments or are written out, the
-bodies carried by the MJCF base, the site's grid and starts)."""
+"""Input texts that several test files build from: a xacro robot's macros and links, a site on a
+grid. Each file keeps its own variations (a xacro robot whose forearm's mass and tool frame come
+from arguments or are written out, the site's grid and starts). The MJCF robots the tests write
+are files of their own, in ``tests/data/mjcf``."""
 
 from __future__ import annotations
 
@@ -67,34 +67,6 @@ def xacro_body(fore_mass: str, tool: str) -> str:
     ``fore_mass``, a tool frame named ``tool`` (both as written in the file: a number, a name or
     an ``$(arg ...)``)."""
     return _XACRO_BODY.replace("@FORE_MASS@", fore_mass).replace("@TOOL@", tool)
-
-
-_MJCF_PLANAR_BASE = """      <joint name="joint_x" type="slide" axis="1 0 0"/>
-      <joint name="joint_y" type="slide" axis="0 1 0"/>
-      <joint name="joint_th" type="hinge" axis="0 0 1"/>
-      <inertial pos="0 0 0.2" mass="20" diaginertia="0.5 0.5 0.6"/>
-"""
-_MJCF_PLANAR_ACTUATORS = """    <velocity joint="joint_x" kv="100" ctrlrange="-1 1" forcerange="-300 300"/>
-    <velocity joint="joint_y" kv="100" ctrlrange="-0.8 0.8" forcerange="-300 300"/>
-    <velocity joint="joint_th" kv="50" ctrlrange="-1.5 1.5" forcerange="-100 100"/>
-"""
-
-
-def planar_base_mjcf(model: str, arm: str, actuators: str, defaults: str = "") -> str:
-    """An MJCF robot (angles in radians) whose root body ``base_link`` moves on planar joints (a
-    slide along x, a slide along y, a hinge about z: the omnidirectional kind), 20 kg, driven by
-    velocity actuators; ``arm``: the bodies it carries, ``actuators``: theirs, ``defaults``: a
-    ``<default>`` block, each as written in the file (indented, one element a line)."""
-    return (
-        f'<mujoco model="{model}">\n  <compiler angle="radian"/>\n{defaults}'
-        + '  <worldbody>\n    <body name="base_link">\n'
-        + _MJCF_PLANAR_BASE
-        + arm
-        + "    </body>\n  </worldbody>\n  <actuator>\n"
-        + _MJCF_PLANAR_ACTUATORS
-        + actuators
-        + "  </actuator>\n</mujoco>\n"
-    )
 
 
 def grid_site(starts: int, x_count: int) -> str:

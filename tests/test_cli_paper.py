@@ -20,20 +20,17 @@ def paper_run(tmp_path_factory):
     return out
 
 
-FIGURES = (
-    "fig3_kinematic.png",
-    "fig4_dynamic.png",
-    "fig4_dynamic_coupled.png",
-    "fig3_kinematic_polytopes.png",
-    "fig4_dynamic_polytopes.png",
-)
+#: The paper's Fig. 3, Fig. 4 and its coupled twin, then each figure again with the polytopes.
+PAPER_FIGURES = ("fig3_kinematic", "fig4_dynamic", "fig4_dynamic_coupled")
+FIGURES = (*PAPER_FIGURES, "fig3_kinematic_polytopes", "fig4_dynamic_polytopes")
 
 
 def test_writes_json_and_the_figures(paper_run):
+    """Every figure as a PNG, with a PDF beside it (the file formats' own signatures)."""
     assert (paper_run / "case_study.json").stat().st_size > 0
     for name in FIGURES:
-        assert (paper_run / name).stat().st_size > 0
-        assert (paper_run / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (paper_run / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert (paper_run / f"{name}.pdf").read_bytes()[:5] == b"%PDF-"
 
 
 def test_json_lists_each_cases_polytopes_beside_its_ellipse(paper_run):

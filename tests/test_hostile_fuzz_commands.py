@@ -33,7 +33,8 @@ from hostile_util import (
     mutate_xml,
     run_cli,
 )
-from shared_texts import XACRO_HEADER, XACRO_MACROS, planar_base_mjcf, xacro_body
+from mjcf_util import mjcf_text
+from shared_texts import XACRO_HEADER, XACRO_MACROS, xacro_body
 
 COMMANDS = ["carry", "trajectory", "place", "team", "team-carry", "collision-matrix", "site", "xacro", "mjcf"]
 #: Cases per command in the test suite (``MOBMANIP_FUZZ_CASES`` overrides them all). The fuzzers
@@ -66,30 +67,9 @@ XACRO_TEXT = (
     + xacro_body("1.0", "tool")
 )
 #: An MJCF robot: a base on planar joints, a default class, a rotated body, a full inertia, geoms
-#: that carry the mass, a site, actuators with gears other than 1.
-MJCF_TEXT = planar_base_mjcf(
-    "fuzz",
-    arm="""      <body name="link1" pos="0.1 0 0.4" quat="0.9238795 0 0.3826834 0" childclass="arm">
-        <joint name="j1" axis="0 0 1" actuatorfrcrange="-40 40"/>
-        <inertial pos="0.12 0.02 -0.01" mass="1.3" fullinertia="0.02 0.03 0.04 0.001 0.004 -0.006"/>
-        <body name="link2" pos="0.2 0 0" euler="0 0 0.5">
-          <joint name="j2"/>
-          <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.03" mass="1"/>
-          <geom type="box" size="0.05 0.02 0.02" pos="0.2 0 0" density="500"/>
-          <site name="grasp" pos="0.25 0 0"/>
-        </body>
-      </body>
-""",
-    actuators="""    <motor joint="j1" gear="40" ctrlrange="-1 1"/>
-    <velocity joint="j1" kv="10" ctrlrange="-6 6" gear="3"/>
-    <position joint="j2" kp="100" forcerange="-30 30" gear="2"/>
-    <velocity joint="j2" kv="10" ctrlrange="-2.5 2.5" gear="0.5"/>
-""",
-    defaults="""  <default>
-    <default class="arm"><joint axis="0 1 0" range="-2 2" damping="1"/></default>
-  </default>
-""",
-)
+#: that carry the mass, a site, actuators with gears other than 1 (the file holds no comment: the
+#: fuzz runs mutate its text as it was first written here).
+MJCF_TEXT = mjcf_text("fuzz")
 
 
 def _case(command: str, rng, directory):

@@ -85,18 +85,10 @@ def _doubled_batch(request: BatchRequest) -> dict:
     return {"doubled": out}
 
 
-DOUBLED = Measure(
-    name="doubled",
-    json_key="doubled_ellipsoid",
-    quantity=VELOCITY,
-    label="doubled kinematic ellipsoid",
-    set_kind="ellipsoid",
-    color=0x3366FF,
-    locked_color=0x99BBFF,
-    compute=_doubled,
-    batch=_doubled_batch,
-    axis_indices=(("semi_axes", "semi_axis"),),
-)
+#: Measure's fields in order: name, JSON key, quantity, label, set kind, colour, locked colour,
+#: compute; then by keyword the batch form and the per-axis sweep indices.
+DOUBLED = Measure("doubled", "doubled_ellipsoid", VELOCITY, "doubled kinematic ellipsoid", "ellipsoid", 0x3366FF,
+                  0x99BBFF, _doubled, batch=_doubled_batch, axis_indices=(("semi_axes", "semi_axis"),))  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -158,16 +150,8 @@ def _bounding_box(terms: MeasureTerms) -> TaskSet:
     return Box(E.center, np.sqrt(np.diag(E.generator @ E.generator.T)))
 
 
-BOX = Measure(
-    name="kinematic_box",
-    json_key="kinematic_bounding_box",
-    quantity=VELOCITY,
-    label="kinematic bounding box",
-    set_kind="box",
-    color=0x777777,
-    locked_color=0xBBBBBB,
-    compute=_bounding_box,
-)
+BOX = Measure("kinematic_box", "kinematic_bounding_box", VELOCITY, "kinematic bounding box", "box", 0x777777, 0xBBBBBB,
+              _bounding_box)  # fmt: skip
 
 
 @pytest.fixture

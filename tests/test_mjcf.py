@@ -23,13 +23,12 @@ import pytest
 
 import mobmanip
 from hostile_util import assert_one_line_error, run_cli
-from mjcf_util import compiled_inertia, read_beside_mujoco
+from mjcf_util import compiled_inertia, mjcf_text, read_beside_mujoco
 from mobmanip.descriptions import read_description
 from mobmanip.descriptions.resources import example_robot_data_share
 from mobmanip.errors import MjcfError
 from mobmanip.robot.detect import spec_from_urdf
 from mobmanip.robot.spec import load_spec
-from shared_texts import planar_base_mjcf
 
 DATA = Path(__file__).resolve().parent / "data"
 TIAGO_MJCF = DATA / "menagerie_tiago_dual" / "tiago_dual.xml"
@@ -169,42 +168,14 @@ def test_the_mjcf_robot_analyses_from_the_command_line(tmp_path, capfd):
     assert load_spec(spec).urdf.resolve() == TIAGO_MJCF.resolve()
 
 
-MINIMAL = """<mujoco model="mini">
-  <compiler angle="{angle}"/>
-  <default>
-    <default class="arm"><joint axis="0 1 0" range="-90 90" damping="1"/></default>
-  </default>
-  <worldbody>
-    <geom type="plane" size="5 5 0.1"/>
-    <body name="base" pos="0 0 0.1">
-      <freejoint/>
-      <inertial pos="0 0 0" mass="10" diaginertia="0.1 0.2 0.25"/>
-      <body name="shoulder" pos="0 0 0.3" childclass="arm">
-        <joint name="pan" axis="0 0 1" range="-180 180"/>
-        <joint name="lift"/>
-        <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.03" mass="2"/>
-        <body name="forearm" pos="0.4 0 0" euler="0 0 45">
-          <joint name="elbow" actuatorfrcrange="-20 20"/>
-          <geom type="box" size="0.15 0.02 0.02" pos="0.15 0 0" mass="1"/>
-          <site name="tool" pos="0.3 0 0"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor joint="pan" gear="50" ctrlrange="-1 1"/>
-    <position joint="lift" kp="100" forcerange="-30 30" gear="2"/>
-    <velocity joint="lift" kv="10" ctrlrange="-1.5 1.5"/>
-    <velocity joint="pan" kv="10" ctrlrange="-2 2"/>
-    <velocity joint="elbow" kv="10" ctrlrange="-3 3"/>
-  </actuator>
-</mujoco>
-"""
+#: Angles in degrees, a default class, a body with two joints, geoms that carry the mass, a site,
+#: position and velocity actuators (the radians variant replaces the degrees).
+MINIMAL = mjcf_text("mini")
 
 
 def test_defaults_degrees_several_joints_per_body_sites_and_actuator_limits(tmp_path, capfd):
     path = tmp_path / "mini.xml"
-    path.write_text(MINIMAL.format(angle="degree"))
+    path.write_text(MINIMAL)
     d = read_description(path)
     assert [j.name for j in d.moving_joints()] == ["pan", "lift", "elbow"]
     assert d.joints["pan"].child == "shoulder__pan" and d.joints["lift"].parent == "shoulder__pan"
@@ -213,7 +184,7 @@ def test_defaults_degrees_several_joints_per_body_sites_and_actuator_limits(tmp_
     assert "tool" in d.links and d.frame_link("tool") == "tool"
     radians = tmp_path / "radians.xml"
     radians.write_text(
-        MINIMAL.format(angle="radian")
+        MINIMAL.replace('angle="degree"', 'angle="radian"')
         .replace('range="-90 90"', 'range="-1.5707963267948966 1.5707963267948966"')
         .replace('range="-180 180"', 'range="-3.141592653589793 3.141592653589793"')
         .replace('euler="0 0 45"', 'euler="0 0 0.7853981633974483"')
@@ -233,14 +204,12 @@ def test_defaults_degrees_several_joints_per_body_sites_and_actuator_limits(tmp_
 
 def test_what_mobmanip_cannot_model_is_refused_by_name(tmp_path, capfd):
     ball = tmp_path / "ball.xml"
-    ball.write_text(MINIMAL.format(angle="radian").replace('<joint name="elbow"', '<joint name="elbow" type="ball"'))
+    ball.write_text(MINIMAL.replace('<joint name="elbow"', '<joint name="elbow" type="ball"'))
     with pytest.raises(MjcfError, match="'elbow'.*ball"):
         read_description(ball)
     two = tmp_path / "two.xml"
     two.write_text(
-        MINIMAL.format(angle="radian").replace(
-            "</worldbody>", '<body name="table"><geom size="1 1 1" type="box"/></body></worldbody>'
-        )
+        MINIMAL.replace("</worldbody>", '<body name="table"><geom size="1 1 1" type="box"/></body></worldbody>')
     )
     code, _, err = run_cli(capfd, "init-spec", two, "--list-frames")
     assert_one_line_error(code, err, "'base', 'table'", "one robot body")
@@ -252,22 +221,8 @@ def test_an_xml_file_that_is_a_urdf_is_read_as_one(tmp_path):
     assert read_description(path).format == "urdf"
 
 
-HOLONOMIC = planar_base_mjcf(
-    "holonomic",
-    arm="""      <body name="link1" pos="0.1 0 0.4">
-        <joint name="j1" axis="0 0 1" range="-2 2" actuatorfrcrange="-40 40"/>
-        <geom type="cylinder" size="0.04 0.1" pos="0.1 0 0" euler="0 1.5707963267948966 0" mass="2"/>
-        <body name="link2" pos="0.2 0 0">
-          <joint name="j2" axis="0 1 0" range="-2 2" actuatorfrcrange="-20 20"/>
-          <geom type="sphere" size="0.05" pos="0.2 0 0" mass="1"/>
-          <site name="grasp" pos="0.25 0 0"/>
-        </body>
-      </body>
-""",
-    actuators="""    <velocity joint="j1" kv="10" ctrlrange="-2 2"/>
-    <velocity joint="j2" kv="10" ctrlrange="-2.5 2.5"/>
-""",
-)
+#: A base on planar joints of the root body, velocity actuators, a two-joint arm.
+HOLONOMIC = mjcf_text("holonomic")
 
 
 def test_a_base_on_planar_joints_is_an_omnidirectional_platform(tmp_path, capfd):
@@ -292,31 +247,8 @@ def test_a_base_on_planar_joints_is_an_omnidirectional_platform(tmp_path, capfd)
     assert code == 0, err
 
 
-FULL_INERTIA = """<mujoco model="full">
-  <compiler angle="radian"/>
-  <worldbody>
-    <body name="base">
-      <freejoint/>
-      <inertial pos="0 0 0.1" mass="10" diaginertia="0.1 0.2 0.25"/>
-      <body name="upper" pos="0 0 0.3" quat="0.9238795 0 0.3826834 0">
-        <joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
-        <inertial pos="0.12 0.02 -0.01" mass="1.3" fullinertia="0.02 0.03 0.04 0.001 0.004 -0.006"/>
-        <body name="lower" pos="0.3 0 0">
-          <joint name="elbow" axis="0 0 1" range="-2 2"/>
-          <inertial pos="0.1 0 0" mass="0.7" fullinertia="0.003 0.004 0.005 0.0002 -0.0003 0.0004"/>
-          <site name="tool" pos="0.25 0 0"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor joint="shoulder" gear="40" ctrlrange="-1 1"/>
-    <motor joint="elbow" gear="3" ctrlrange="-2 2"/>
-    <velocity joint="shoulder" kv="10" ctrlrange="-6 6" gear="4"/>
-    <velocity joint="elbow" kv="10" ctrlrange="-3 3" gear="0.5"/>
-  </actuator>
-</mujoco>
-"""
+#: Full inertias on bodies turned in their parents, motors and geared velocity actuators.
+FULL_INERTIA = mjcf_text("full")
 
 
 def test_full_inertias_and_geared_velocity_actuators_read_as_mujoco_reads_them(tmp_path):

@@ -16,50 +16,22 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
+from mjcf_util import mjcf_text
 from mobmanip.descriptions import read_description
 from mobmanip.postures.named import named_configuration, posture_names
 from mobmanip.robot.detect import detect_spec
 
 #: Degrees in the file (the keys' qpos are radians all the same), a free root joint, a body with
 #: two joints, a hinge with a ``ref``, a slide; keys of the right size, a short one (MuJoCo
-#: fills the rest with qpos0), and ``{bad}`` where a key of the wrong size can go.
-ROBOT = """<mujoco model="keyed">
-  <compiler angle="degree"/>
-  <default><joint damping="0.1"/></default>
-  <worldbody>
-    <body name="base" pos="0 0 0.2">
-      <freejoint/>
-      <inertial pos="0 0 0" mass="8" diaginertia="0.2 0.3 0.4"/>
-      <body name="column" pos="0.05 0 0.3">
-        <joint name="lift" type="slide" axis="0 0 1" range="-0.1 0.3"/>
-        <inertial pos="0 0 0.1" mass="2" diaginertia="0.02 0.02 0.01"/>
-        <body name="upper" pos="0 0 0.2">
-          <joint name="pan" axis="0 0 1" range="-170 170"/>
-          <joint name="tilt" axis="0 1 0" range="-100 100"/>
-          <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1.5"/>
-          <body name="lower" pos="0.3 0 0">
-            <joint name="elbow" axis="0 1 0" range="-120 120" ref="20"/>
-            <geom type="box" size="0.12 0.02 0.02" pos="0.12 0 0" mass="0.8"/>
-            <site name="tool" pos="0.25 0 0.01"/>
-          </body>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-  <keyframe>
-    <key name="home" qpos="0 0 0.2 1 0 0 0  0.1  0.3 -0.4 0.5"/>
-    <key name="reach" qpos="1 2 0.2 0.7071067811865476 0 0 0.7071067811865476  0.25  -1.2 0.9"/>
-    {bad}
-  </keyframe>
-</mujoco>
-"""
+#: fills the rest with qpos0); a key of the wrong size can be added at the end of ``<keyframe>``.
+ROBOT = mjcf_text("keyed")
 
 JOINTS = ("lift", "pan", "tilt", "elbow")
 
 
 def _write(tmp_path: Path, bad: str = "") -> Path:
     path = tmp_path / "keyed.xml"
-    path.write_text(ROBOT.format(bad=bad))
+    path.write_text(ROBOT.replace("  </keyframe>", f"    {bad}\n  </keyframe>"))
     return path
 
 

@@ -11,37 +11,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mjcf_util import compiled_inertia, read_beside_mujoco
+from mjcf_util import compiled_inertia, mjcf_text, read_beside_mujoco
 from mobmanip.descriptions import read_description
 
 trimesh = pytest.importorskip("trimesh")
 mujoco = pytest.importorskip("mujoco")
 
-ROBOT = """<mujoco model="meshed">
-  <compiler angle="radian"/>
-  <asset>
-    <mesh name="block" file="block.obj" scale="1 1.5 0.8"/>
-    <mesh name="ell" file="ell.obj" inertia="exact"/>
-    <mesh name="ell_legacy" file="ell.obj"/>
-  </asset>
-  <worldbody>
-    <body name="base">
-      <freejoint/>
-      <geom type="mesh" mesh="block" pos="0.1 -0.05 0.2" quat="0.9 0.1 0.3 0.2"/>
-      <body name="upper" pos="0 0 0.4" quat="0.9238795 0 0.3826834 0">
-        <joint name="shoulder" axis="0 1 0" range="-1.5 1.5"/>
-        <geom type="mesh" mesh="ell" density="700" pos="0.05 0.02 0" euler="0.3 0.2 0.1"/>
-        <geom type="box" size="0.05 0.02 0.01" pos="0.3 0 0" mass="0.4"/>
-        <body name="lower" pos="0.4 0 0">
-          <joint name="elbow" axis="0 0 1" range="-2 2"/>
-          <geom type="mesh" mesh="block" mass="1.7" pos="0.1 0 0"/>
-          <site name="tool" pos="0.25 0 0"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
+#: Three bodies with no <inertial> whose geoms carry the mass: meshes (one scaled, one given a
+#: density, one a mass), a box with a mass; the mesh files are written beside it.
+ROBOT = mjcf_text("meshed")
 
 
 def _write(tmp_path, text=ROBOT):

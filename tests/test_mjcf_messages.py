@@ -5,46 +5,14 @@ comments and notes name the file's format, not "the URDF"."""
 from __future__ import annotations
 
 from hostile_util import run_cli
+from mjcf_util import mjcf_text
 from mobmanip.descriptions import read_description
 from mobmanip.robot.detect import spec_to_toml
 from mobmanip.robot.detect_report import candidate_frames
 
 #: An arm ending in a bracelet with a pinch site, and a two-finger gripper below it whose links
 #: are leaves further from the root (more actuated joints) than the site, as in TidyBot.
-GRIPPER = """<mujoco model="pincher">
-  <compiler angle="radian"/>
-  <worldbody>
-    <body name="base_link">
-      <inertial pos="0 0 0.1" mass="20" diaginertia="0.5 0.5 0.6"/>
-      <body name="shoulder_link" pos="0 0 0.4">
-        <joint name="joint_1" axis="0 0 1" range="-3 3"/>
-        <inertial pos="0 0 0.05" mass="1" diaginertia="0.01 0.01 0.01"/>
-        <body name="bracelet_link" pos="0.3 0 0">
-          <joint name="joint_2" axis="0 1 0" range="-2 2"/>
-          <inertial pos="0.05 0 0" mass="0.5" diaginertia="0.001 0.001 0.001"/>
-          <site name="pinch_site" pos="0.2 0 0"/>
-          <body name="right_driver" pos="0.1 0.02 0">
-            <joint name="right_driver_joint" axis="1 0 0" range="0 0.8"/>
-            <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
-            <body name="right_coupler" pos="0.03 0 0">
-              <joint name="right_coupler_joint" axis="1 0 0" range="-1.57 0"/>
-              <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
-            </body>
-          </body>
-          <body name="left_driver" pos="0.1 -0.02 0">
-            <joint name="left_driver_joint" axis="1 0 0" range="0 0.8"/>
-            <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
-            <body name="left_finger_pad" pos="0.03 0 0">
-              <joint name="left_coupler_joint" axis="1 0 0" range="-1.57 0"/>
-              <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
-            </body>
-          </body>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
+GRIPPER = mjcf_text("pincher")
 
 
 def test_a_pinch_site_ranks_above_the_grippers_links(tmp_path, capfd):

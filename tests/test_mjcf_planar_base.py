@@ -21,7 +21,7 @@ import pinocchio as pin
 import pytest
 
 import mobmanip
-from mjcf_util import mujoco_terms, platform_map, platform_map_rate
+from mjcf_util import mjcf_text, mujoco_terms, platform_map, platform_map_rate
 from mobmanip.descriptions import read_description
 from mobmanip.robot.detect import detect_spec
 from mobmanip.terms.dynamics import mass_matrix
@@ -31,48 +31,9 @@ from mobmanip.terms.dynamics import mass_matrix
 AXIS = np.array([0.06, 0.02, 0.0])
 VIRTUAL_X_MASS = 0.25
 
-NESTED = f"""<mujoco model="nested_base">
-  <compiler angle="radian"/>
-  <default>
-    <default class="robot">
-      <joint damping="0.003" armature="0.195" frictionloss="0.2"/>
-    </default>
-  </default>
-  <worldbody>
-    <body name="base" childclass="robot">
-      <body name="virtual_x" pos="0.05 0 0">
-        <inertial pos="0 0 0.3" mass="{VIRTUAL_X_MASS}" diaginertia="0.01 0.02 0.03"/>
-        <joint name="planar_x" type="slide" axis="1 0 0" range="-10 10"/>
-        <body name="virtual_y">
-          <inertial pos="0.1 -0.2 0" mass="0.5" diaginertia="0.04 0.05 0.06"/>
-          <joint name="planar_y" type="slide" axis="0 1 0" range="-10 10"/>
-          <body name="base_link" pos="0 0.02 0.1">
-            <joint name="planar_theta" axis="0 0 1" range="-3.14159 3.14159" armature="0.05" pos="0.01 0 0"/>
-            <inertial pos="0.02 -0.01 0.2" quat="0.9 0.1 -0.2 0.3" mass="60" diaginertia="4 3 2"/>
-            <body name="column" pos="0.1 0 0.4">
-              <joint name="lift" type="slide" axis="0 0 1" range="0 0.5" armature="0.4"/>
-              <inertial pos="0 0.01 0.1" mass="5" fullinertia="0.2 0.25 0.1 0.01 -0.02 0.005"/>
-              <body name="shoulder" pos="0 0.1 0.2" quat="0.8 0 0.2 0.1">
-                <joint name="j1" axis="0 0 1" range="-3 3"/>
-                <inertial pos="0.03 0 0.05" quat="0.7 0.1 0.1 0.2" mass="2.5" diaginertia="0.03 0.025 0.02"/>
-                <body name="upper" pos="0.1 0 0.1" euler="0.3 0 0.2">
-                  <joint name="j2" axis="0 1 0" range="-2 2" armature="0.02"/>
-                  <inertial pos="0.15 0 0" mass="1.8" diaginertia="0.002 0.02 0.02"/>
-                  <body name="fore" pos="0.3 0 0">
-                    <joint name="j3" axis="0 1 0" range="-2.5 2.5"/>
-                    <inertial pos="0.1 0.01 0" quat="0.9 0 0.3 0" mass="1.1" diaginertia="0.001 0.01 0.01"/>
-                    <site name="hand" pos="0.2 0 0.01"/>
-                  </body>
-                </body>
-              </body>
-            </body>
-          </body>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
+#: The base's three joints on nested bodies, armature from a default class, a lift and three arm
+#: joints below; ``virtual_x`` weighs VIRTUAL_X_MASS (the fixture checks the file's value).
+NESTED = mjcf_text("nested_base")
 
 ARM = ("lift", "j1", "j2", "j3")
 
@@ -85,6 +46,7 @@ def models(tmp_path_factory):
     found = detect_spec(path, ["hand"], limits=limits)
     robot = mobmanip.load_robot(found.spec)
     mj_model = mujoco.MjModel.from_xml_path(str(path))
+    assert mj_model.body("virtual_x").mass[0] == VIRTUAL_X_MASS
     return path, found, robot, mj_model
 
 
@@ -174,29 +136,7 @@ def test_a_chain_that_is_not_a_planar_base_stays_in_the_tree(tmp_path):
 
 #: The planar joints on the root body itself (as TidyBot), armature from the file-wide default
 #: and from joints, and a body with two joints (which mobmanip splits into a chain of bodies).
-ROOT_BASE = """<mujoco model="root_base">
-  <compiler angle="radian"/>
-  <default><joint armature="0.1"/></default>
-  <worldbody>
-    <body name="base_link">
-      <joint name="joint_x" type="slide" axis="1 0 0"/>
-      <joint name="joint_y" type="slide" axis="0 1 0"/>
-      <joint name="joint_th" axis="0 0 1" armature="0.7"/>
-      <inertial pos="0.05 0.02 0.2" quat="0.9 0.1 0 0.2" mass="40" diaginertia="2 1.5 1"/>
-      <body name="shoulder" pos="0.1 0 0.5">
-        <joint name="pan" axis="0 0 1" range="-3 3" armature="0.3"/>
-        <joint name="pitch" axis="0 1 0" range="-2 2"/>
-        <inertial pos="0.1 0 0.02" quat="0.8 0.2 0.1 0" mass="2" diaginertia="0.01 0.03 0.03"/>
-        <body name="forearm" pos="0.3 0 0">
-          <joint name="elbow" axis="0 1 0" range="-2 2" armature="0.05"/>
-          <inertial pos="0.12 0 0" mass="1" diaginertia="0.001 0.01 0.01"/>
-          <site name="hand" pos="0.25 0 0"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
+ROOT_BASE = mjcf_text("root_base")
 
 
 def test_armature_of_every_joint_with_the_base_on_the_root_body_equals_mujocos(tmp_path):

@@ -1,15 +1,15 @@
 """Steered drive units in MJCF (issue 38): a steering hinge about the vertical whose axis passes
 through the centre of the wheel below it, told apart from a caster, whose swivel trails its wheel.
 
-Two files. A tricycle written here: a free root, a steered drive unit ahead (the steering hinge
-on a fork 0.14 m above the wheel's centre, both joints driven by motors) and a free rear axle;
-mobmanip makes it a ``steered`` platform, and MuJoCo, given the velocities of that platform's
-S(q), finds every wheel's contact point at rest (rolling without slipping, from ``mj_jac`` at the
-point below each wheel's centre). And Menagerie's mobile FR3 Duo, whose base the file moves on
-actuated planar joints while two steered drive units and two casters stand under it, none of
-them actuated: the units are named as such (not as casters), the casters' trail is MuJoCo's,
-and the units' floor contacts, which ``init-spec`` writes as ``[support] wheels``, are where
-MuJoCo puts the bottoms of their wheels.
+Two files. A tricycle (``tests/data/mjcf/tricycle.xml``): a free root, a steered drive unit
+ahead (the steering hinge on a fork 0.14 m above the wheel's centre, both joints driven by
+motors) and a free rear axle; mobmanip makes it a ``steered`` platform, and MuJoCo, given the
+velocities of that platform's S(q), finds every wheel's contact point at rest (rolling without
+slipping, from ``mj_jac`` at the point below each wheel's centre). And Menagerie's mobile FR3
+Duo, whose base the file moves on actuated planar joints while two steered drive units and two
+casters stand under it, none of them actuated: the units are named as such (not as casters), the
+casters' trail is MuJoCo's, and the units' floor contacts, which ``init-spec`` writes as
+``[support] wheels``, are where MuJoCo puts the bottoms of their wheels.
 """
 
 from __future__ import annotations
@@ -21,60 +21,16 @@ import numpy as np
 import pytest
 
 import mobmanip
+from mjcf_util import mjcf_text
 from mobmanip.descriptions import read_description
 from mobmanip.platforms.wheels import wheel_candidates
 from mobmanip.robot.detect import detect_spec
 
-R_DRIVE, R_REAR, FORK = 0.16, 0.12, 0.14
+TRICYCLE = mjcf_text("tricycle")
 
-TRICYCLE = f"""<mujoco model="tricycle">
-  <compiler angle="radian"/>
-  <worldbody>
-    <body name="base" pos="0 0 0.3">
-      <freejoint/>
-      <inertial pos="0.4 0 0.3" mass="60" diaginertia="3 5 6"/>
-      <geom type="box" size="0.6 0.35 0.1" pos="0.4 0 0.3" contype="0" conaffinity="0"/>
-      <body name="rear_right" pos="0 -0.35 {R_REAR}">
-        <joint name="rear_right_wheel" axis="0 1 0"/>
-        <inertial pos="0 0 0" mass="1.5" diaginertia="0.006 0.011 0.006"/>
-        <geom type="cylinder" size="{R_REAR} 0.025" quat="0.7071067811865476 0.7071067811865476 0 0"/>
-      </body>
-      <body name="rear_left" pos="0 0.35 {R_REAR}">
-        <joint name="rear_left_wheel" axis="0 -1 0"/>
-        <inertial pos="0 0 0" mass="1.5" diaginertia="0.006 0.011 0.006"/>
-        <geom type="cylinder" size="{R_REAR} 0.025" quat="0.7071067811865476 0.7071067811865476 0 0"/>
-      </body>
-      <body name="fork" pos="0.9 0.05 {R_DRIVE + FORK}">
-        <joint name="steer" axis="0 0 1" range="-1.4 1.4"/>
-        <inertial pos="0 0 -0.07" mass="2" diaginertia="0.01 0.01 0.005"/>
-        <body name="drive" pos="0 0 -{FORK}">
-          <joint name="drive_wheel" axis="0 1 0"/>
-          <inertial pos="0 0 0" mass="3" diaginertia="0.02 0.04 0.02"/>
-          <geom type="cylinder" size="{R_DRIVE} 0.03" quat="0.7071067811865476 0.7071067811865476 0 0"/>
-        </body>
-      </body>
-      <body name="link1" pos="0.4 0 0.5">
-        <joint name="arm_1" axis="0 0 1" range="-3 3"/>
-        <inertial pos="0 0 0.1" mass="4" diaginertia="0.02 0.02 0.01"/>
-        <body name="link2" pos="0 0 0.2">
-          <joint name="arm_2" axis="0 1 0" range="-2 2"/>
-          <inertial pos="0.25 0 0" mass="3" diaginertia="0.003 0.06 0.06"/>
-          <site name="tool" pos="0.5 0 0"/>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor joint="drive_wheel" ctrlrange="-60 60"/>
-    <motor joint="steer" ctrlrange="-40 40"/>
-    <motor joint="arm_1" ctrlrange="-80 80"/>
-    <motor joint="arm_2" ctrlrange="-60 60"/>
-  </actuator>
-</mujoco>
-"""
+#: The wheels' joints and bodies (their radii are MuJoCo's reading of the cylinders).
+WHEELS = {"drive_wheel": "drive", "rear_right_wheel": "rear_right", "rear_left_wheel": "rear_left"}
 
-WHEELS = {"drive_wheel": ("drive", R_DRIVE), "rear_right_wheel": ("rear_right", R_REAR),
-          "rear_left_wheel": ("rear_left", R_REAR)}  # fmt: skip
 
 FR3_DUO = Path(__file__).resolve().parent / "data" / "menagerie_franka_mobile_fr3_duo" / "mobile_fr3_duo.xml"
 
@@ -114,8 +70,9 @@ def test_an_mjcf_steered_drive_unit_makes_a_steered_platform_that_rolls_as_mujoc
             data.qvel[joint.dofadr[0]] = v[model.joints[model.getJointId(name)].idx_v]
         mujoco.mj_forward(theirs, data)
         assert np.linalg.norm(data.qvel[:6]) > 0.1  # the base does move
-        for body, radius in WHEELS.values():
+        for body in WHEELS.values():
             b = theirs.body(body).id
+            radius = theirs.geom_size[theirs.body_geomadr[b], 0]
             contact = data.xpos[b] - np.array([0.0, 0.0, radius])  # below the wheel's centre
             jacp, jacr = np.zeros((3, theirs.nv)), np.zeros((3, theirs.nv))
             mujoco.mj_jac(theirs, data, jacp, jacr, contact, b)

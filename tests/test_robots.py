@@ -82,11 +82,6 @@ def tiago_torso():
     return mobmanip.load_robot("tiago_dual_torso")
 
 
-@pytest.fixture
-def rng():
-    return np.random.default_rng(7)
-
-
 # ----- TIAGo++ -----
 
 

@@ -240,17 +240,9 @@ def test_empty_sets_record_nan():
     from mobmanip import Measure, register_measure, unregister_measure
     from mobmanip.measures import VELOCITY
 
-    measure = Measure(
-        name="half_empty",
-        json_key="half_empty",
-        quantity=VELOCITY,
-        label="half-empty disc",
-        set_kind="ellipsoid",
-        color=0x123456,
-        locked_color=0x654321,
-        compute=_no_set,
-        batch=_empty_batch,
-    )
+    # name, JSON key, quantity, label, set kind, colour, locked colour, compute (never called), batch form
+    measure = Measure("half_empty", "half_empty", VELOCITY, "half-empty disc", "ellipsoid", 0x123456, 0x654321,
+                      _no_set, batch=_empty_batch)  # fmt: skip
     register_measure(measure)
     try:
         grid = SweepGrid(angle_deg=[0.0, 90.0], distance=[1.0])

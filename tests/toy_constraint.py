@@ -1,13 +1,15 @@
-"""A constraint written the way a user would write one: one file, one class, nothing else edited.
+"""A constraint written the way a user would write one: one file, nothing else edited.
 
 ``EffortShare(share)`` keeps every reduced effort within ``share`` of its limit, ``SpeedShare``
-every reduced velocity within ``share`` of its speed limit. Their sets can be computed a second
-way, by scaling the robot's limits, which is what the tests compare against.
+every reduced velocity within ``share`` of its velocity limit. Their sets can be computed a second
+way, by scaling the robot's limits, which is what the tests compare against. Both are one
+``Share`` of a kind of limit: the base class writes the rows, each subclass says which.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -15,35 +17,41 @@ from mobmanip.terms.constraints import Constraint, ConstraintRows, Terms
 
 
 @dataclass(frozen=True)
-class EffortShare(Constraint):
-    """|tau_i| <= share * tau_max_i for every reduced effort."""
+class Share(Constraint):
+    """|v_i| <= share * limit_i for every reduced value v of the problem's variable: the rows
+    [I; -I] v <= [bound; bound], each labelled by its joint and side. A subclass names the
+    variable, the robot's limits and what they limit (an effort limit by default)."""
 
     share: float = 0.5
-    name: str = "effort_share"
-    problem: str = "acceleration"
+
+    #: The problem's variable it bounds ("tau": the reduced efforts, "x": the reduced velocities).
+    variable: ClassVar[str] = "tau"
+    #: What the variable's limits are called: ``terms.<limit>_limits`` holds them.
+    limit: ClassVar[str] = "effort"
 
     def rows(self, terms: Terms) -> ConstraintRows:
-        n = len(terms.effort_limits)
-        limit = self.share * terms.effort_limits
+        bound = self.share * getattr(terms, f"{self.limit}_limits")
+        n = len(bound)
         labels = tuple(
-            f"{joint} at {self.share:g} of its effort limit ({s})" for s in "+-" for joint in terms.reduced_names
+            f"{joint} at {self.share:g} of its {self.limit} limit ({s})" for s in "+-" for joint in terms.reduced_names
         )
-        return ConstraintRows(
-            self.name, self.problem, G={"tau": np.vstack([np.eye(n), -np.eye(n)])}, h=np.r_[limit, limit], labels=labels
-        )
+        G = {self.variable: np.vstack([np.eye(n), -np.eye(n)])}
+        return ConstraintRows(self.name, self.problem, G=G, h=np.r_[bound, bound], labels=labels)
 
 
 @dataclass(frozen=True)
-class SpeedShare(Constraint):
+class EffortShare(Share):
+    """|tau_i| <= share * tau_max_i for every reduced effort."""
+
+    name: str = "effort_share"
+    problem: str = "acceleration"
+
+
+@dataclass(frozen=True)
+class SpeedShare(Share):
     """|x_i| <= share * xdot_max_i for every reduced velocity."""
 
-    share: float = 0.5
     name: str = "speed_share"
     problem: str = "velocity"
-
-    def rows(self, terms: Terms) -> ConstraintRows:
-        n = len(terms.velocity_limits)
-        limit = self.share * terms.velocity_limits
-        return ConstraintRows(
-            self.name, self.problem, G={"x": np.vstack([np.eye(n), -np.eye(n)])}, h=np.r_[limit, limit]
-        )
+    variable: ClassVar[str] = "x"
+    limit: ClassVar[str] = "velocity"
