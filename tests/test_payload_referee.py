@@ -28,8 +28,8 @@ pytest.importorskip("mujoco")
 
 
 #: Both arms bent, the hands 0.30 m apart (as at ``hold``, their tool frames in the same
-#: orientations) holding the object's centre 0.18 m ahead of the base's origin and 0.60 m high,
-#: over the front casters (rad; found by inverse kinematics, rounded).
+#: orientations) holding the object's centre 0.18 m ahead of the base's origin (the front casters
+#: are 0.15 m ahead) and 0.60 m high (rad; found by inverse kinematics, rounded).
 CLOSE = {
     f"arm_{side}_{k + 1}_joint": value
     for side, values in (
@@ -123,9 +123,8 @@ def test_clamped_motors_give_at_most_their_limits(tiago):
     clipped = referee.rollout(np.clip(tau, -limits, limits), 0.005)
     assert np.array_equal(referee.data.qpos, state)
     assert np.array_equal(clamped.normal, clipped.normal)
-    loose = referee.rollout(tau, 0.005)
+    referee.rollout(tau, 0.005)
     assert not np.array_equal(referee.data.qpos, state)  # unclamped, the efforts beyond the limits act
-    assert loose.time[-1] == clamped.time[-1]
 
 
 def test_the_close_posture_is_held_by_its_arms_not_its_reserve(tiago, close):
