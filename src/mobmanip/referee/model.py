@@ -972,9 +972,10 @@ class Referee:
         self._nx = robot.nx
         self._actuation = [(int(model.joint(name).dofadr[0]), row) for name, row in pairs]
         self._actuated = tuple(name for name, _ in pairs)
-        # each driven joint's largest force: its row of B against the efforts' limits
+        # each driven joint's largest force: its row of B against the limits of the efforts in it
+        # (only those: an unlimited effort elsewhere, inf times 0, is no term)
         limits = np.asarray(robot.effort_limits, dtype=float)
-        self._force_limits = np.array([float(np.abs(row) @ limits) for _, row in pairs])
+        self._force_limits = np.array([float(np.abs(row[row != 0]) @ limits[row != 0]) for _, row in pairs])
         self.reset()
 
     #: Per omnidirectional wheel's driven slide: (contact name, MuJoCo dof, axis in the root frame (2,)).
