@@ -972,6 +972,10 @@ class Referee:
         self._nx = robot.nx
         self._actuation = [(int(model.joint(name).dofadr[0]), row) for name, row in pairs]
         self._actuated = tuple(name for name, _ in pairs)
+        # each driven joint's largest force: its row of B against the limits of the efforts in it
+        # (only those: an unlimited effort elsewhere, inf times 0, is no term)
+        limits = np.asarray(robot.effort_limits, dtype=float)
+        self._force_limits = np.array([float(np.abs(row[row != 0]) @ limits[row != 0]) for _, row in pairs])
         self.reset()
 
     #: Per omnidirectional wheel's driven slide: (contact name, MuJoCo dof, axis in the root frame (2,)).
@@ -1185,6 +1189,7 @@ class Referee:
         traction: Mapping[str, np.ndarray] | None = None,
         velocity: np.ndarray | None = None,
         feedback: tuple[float, float] | None = None,
+        clamp: bool = False,
     ) -> Rollout:
         """Hold reduced efforts ``tau`` (nx,) for ``duration`` (s) from rest (semi-implicit Euler).
 
@@ -1198,6 +1203,10 @@ class Referee:
             feedback: ``(kp, kd)``: a joint-space tracking feedback on every joint but the
                 platform's, ``-kp (q - q_0) - kd qdot`` (N m/rad, N m s/rad), added to the efforts;
                 its largest torque is :attr:`Rollout.feedback`.
+            clamp: the motors give no more than their limits: at every step, each joint B drives
+                gets at most its effort limit (efforts and feedback together, clipped; a joint
+                driven by one effort ``tau_k`` with ``Q_j = b tau_k`` gets at most ``|b|`` times
+                its limit). Off: whatever ``tau`` and the feedback ask.
             duration: how long (s).
             slip_speed: contact-point speed along the floor above which a driven wheel slips (m/s).
             at_limit: friction use at or above which a driven wheel slides.
@@ -1211,6 +1220,7 @@ class Referee:
         held = self._held_joints() if feedback is not None else np.zeros(0, dtype=int)
         kp, kd = feedback if feedback is not None else (0.0, 0.0)
         q_held = np.array([d.qpos[m.jnt_qposadr[m.dof_jntid[dof]]] for dof in held])
+        driven = np.array([dof for dof, _ in self._actuation], dtype=int) if clamp else np.zeros(0, dtype=int)
         largest = 0.0
         rows: dict[str, list] = {k: [] for k in ("t", "f", "slip", "pen", "pos", "rpy", "acc")}
         for _ in range(int(round(duration / m.opt.timestep)) + 1):
@@ -1220,6 +1230,8 @@ class Referee:
                 push = -kp * (positions - q_held) - kd * d.qvel[held]
                 d.qfrc_applied[held] += push
                 largest = max(largest, float(np.abs(push).max()))
+            if len(driven):
+                d.qfrc_applied[driven] = np.clip(d.qfrc_applied[driven], -self._force_limits, self._force_limits)
             mujoco.mj_forward(m, d)
             forces, slip, pen = self._support_state()
             rows["t"].append(d.time)
