@@ -35,6 +35,7 @@ import pytest
 import mobmanip
 from floor_reference import GRAVITY, build_problem, polygon_margin, straight_line, support_polygon
 from mobmanip.analysis.reaches import axis_reaches
+from mobmanip.commands.common import describe_reaches
 from mobmanip.postures.named import named_configuration
 from mobmanip.robot.tasks import get_task
 from mobmanip.terms.constraints.floor import Floor
@@ -142,6 +143,34 @@ def test_stretch_readings_name_the_limit_the_physics_finds(grounded):
     assert reaches["-z"]["limits"][0]["label"].startswith(
         "the robot tips over about the edge joint_left_wheel to caster_link (joint_right_wheel lifting off)"
     )
+
+
+def test_where_traction_binds_millimetres_from_the_edge_the_reading_names_that_edge(grounded):
+    """+y and -y stop at traction with the zero-moment point 2.6 and 4.6 mm inside: the reading
+    names tip-over as the next limit, about the edge the reference's zero-moment point is nearest
+    (the reference's own hull of its contact points), at the reference's distance. -z (tipping)
+    and +x (4 cm inside) name none."""
+    robot, task, reaches, problem = grounded["stretch"]
+    names = [c.name for c in problem.contacts]
+    xy = np.asarray(problem.points)[:, :2]
+    for axis in ("+y", "-y"):
+        found = _reference(problem, _direction(task, axis))
+        p = np.asarray(found.zmp, dtype=float)[:2]
+        polygon = support_polygon(problem.points)
+        distances = []
+        for a, b in zip(polygon, np.roll(polygon, -1, axis=0)):
+            t = np.clip(np.dot(p - a, b - a) / np.dot(b - a, b - a), 0.0, 1.0)
+            distances.append((float(np.linalg.norm(p - a - t * (b - a))), a, b))
+        distance, a, b = min(distances, key=lambda item: item[0])
+        edge = {names[int(np.argmin(np.linalg.norm(xy - v, axis=1)))] for v in (a, b)}
+        ground = reaches[axis]["floor"]
+        assert set(ground["next_tip_over_edge"]) == edge, axis
+        assert ground["margin"] == pytest.approx(distance, abs=1e-6) and 2e-3 < distance < 5e-3
+    for axis in ("-z", "+x"):
+        assert "next_tip_over_edge" not in reaches[axis]["floor"], axis
+    a, b = reaches["+y"]["floor"]["next_tip_over_edge"]
+    printed = describe_reaches([reaches["+y"]], "m/s^2", None)
+    assert f"(tip-over next: 2.6 mm from tipping about the edge {a} to {b})" in printed
 
 
 def test_a_planted_label_fails(grounded):

@@ -73,6 +73,9 @@ def axis_reaches(task_set: TaskSet, task: str) -> list[dict] | None:
                         entry["floor"] = ground_reaction(floor, w.variables[CONTACT_FORCES])
                         entry["binding"] = tip_over_reading(entry["binding"], floor, entry["floor"])
                         entry["limits"] = floor_limits(w.limits, floor, entry["floor"])
+                        near = near_edge(floor, entry["floor"])
+                        if near is not None:
+                            entry["floor"]["next_tip_over_edge"] = list(near)
                     floors = {  # a team: each robot on its own floor, its forces under its name
                         name: ground_reaction(info["floor"], w.variables[f"{name}.{CONTACT_FORCES}"])
                         for name, info in model.items()
@@ -171,6 +174,21 @@ def _tipping(info: dict, reaction: dict) -> tuple[list[str], str] | None:
     else:
         about = f"about the edge {edge[0]} to {edge[1]}" if edge else "about the support's edge"
     return unloaded, f"the robot tips over {about} ({', '.join(unloaded)} lifting off)"
+
+
+#: A zero-moment point closer than this to the support polygon's edge (m), the robot not tipping
+#: yet, is named with that edge: tip-over is the next limit, millimetres away.
+NEAR_EDGE = 0.01
+
+
+def near_edge(info: dict, reaction: dict) -> tuple[str, str] | None:
+    """The support polygon's edge nearest the zero-moment point where the robot is within
+    :data:`NEAR_EDGE` of tipping over about it but not yet tipping (every contact loaded, or the
+    point inside); ``None`` otherwise (far inside, or tipping: :func:`tip_over_reading` names it)."""
+    margin = reaction.get("margin")
+    if margin is None or not 0.0 <= margin < NEAR_EDGE or _tipping(info, reaction) is not None:
+        return None
+    return _edge_of(info, reaction["zmp"])
 
 
 def _edge_of(info: dict, zmp) -> tuple[str, str] | None:

@@ -684,6 +684,9 @@ def describe_reaches(reaches: list[dict], unit: str, floor: dict | None) -> str:
         if ground and ground.get("zmp") is not None:
             zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
             text += f"; ZMP ({zmp}) m, margin {round(ground['margin'], 3) + 0.0:.3f} m"
+            if ground.get("next_tip_over_edge"):  # tip-over is the next limit, millimetres away
+                a, b = ground["next_tip_over_edge"]
+                text += f" (tip-over next: {1e3 * ground['margin']:.1f} mm from tipping about the edge {a} to {b})"
         for robot, ground in (r.get("floors") or {}).items():  # a team: each robot's own floor
             if ground.get("zmp") is not None:
                 zmp = ", ".join(f"{v:.3f}" for v in ground["zmp"])
