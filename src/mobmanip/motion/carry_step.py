@@ -3,6 +3,7 @@ limit binds (:func:`diagnose_step`)."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -99,19 +100,7 @@ class CarryDiagnosis:
         return text + "; slowing the path down likely helps (accelerations' efforts fall with the speed squared)"
 
     def to_dict(self) -> dict:
-        return {
-            "step": self.step,
-            "t": self.t,
-            "joint": self.joint,
-            "kind": self.kind,
-            "asked": self.asked,
-            "allowed": self.allowed,
-            "position": self.position,
-            "position_limit": self.position_limit,
-            "slowing_helps": self.slowing_helps,
-            "unit": self.unit,
-            "message": self.message(),
-        }
+        return {**dataclasses.asdict(self), "message": self.message()}
 
 
 def diagnose_step(
