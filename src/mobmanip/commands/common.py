@@ -120,12 +120,13 @@ def add_strict_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_posture_option(parser: argparse.ArgumentParser, what: str) -> None:
-    """--posture NAME: home, hold or a [postures.NAME] of the spec."""
+def add_posture_option(parser: Options, what: str, default: str = "home") -> None:
+    """--posture NAME: home, hold or a [postures.NAME] of the spec; ``default`` says which is
+    taken without it."""
     parser.add_argument(
         "--posture",
         metavar="NAME",
-        help=f"{what} (home, hold, or any [postures.NAME] of the spec; default: home)",
+        help=f"{what} (home, hold, or any [postures.NAME] of the spec; default: {default})",
     )
 
 
