@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from ..support.reading import decimal
 from .common import (
     ROBOT_HELP,
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
     add_progress_option,
+    add_step_options,
     add_task_option,
     add_work_option,
     motion_floor,
@@ -86,14 +86,7 @@ def register(sub) -> None:
     add_task_option(parser)
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
     add_object_mass_option(parser)
-    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
-    parser.add_argument(
-        "--prepare",
-        type=decimal,
-        default=30.0,
-        metavar="S",
-        help="longest self-motion before the path (s, default 30; 0: none)",
-    )
+    add_step_options(parser)
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
     parser.add_argument(
         "--export",

@@ -578,6 +578,19 @@ def cluster_executor(args):
     return dask_executor(args.dask)
 
 
+def add_step_options(parser: argparse.ArgumentParser) -> None:
+    """--step S and --prepare S: a carry's time step and its longest self-motion before the path
+    (``carry``, ``team-carry``)."""
+    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument(
+        "--prepare",
+        type=decimal,
+        default=30.0,
+        metavar="S",
+        help="longest self-motion before the path (s, default 30; 0: none)",
+    )
+
+
 def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
     """--max-work N: raise the bound on the command's work (see :mod:`mobmanip.support.work`)."""
     parser.add_argument(

@@ -6,6 +6,7 @@ from ..support.reading import decimal
 from .common import (
     add_guided_command,
     add_motion_floor_options,
+    add_step_options,
     add_work_option,
     motion_floor,
     registered_constraints,
@@ -84,10 +85,7 @@ def register(sub) -> None:
         "--frame", choices=("object", "world"), default="object", help="the path's axes (default: the object's)"
     )
     parser.add_argument("--scale", type=decimal, default=1.0, metavar="S", help="multiply the path's positions by S")
-    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
-    parser.add_argument(
-        "--prepare", type=decimal, default=30.0, metavar="S", help="longest self-motion before the path (s, default 30)"
-    )
+    add_step_options(parser)
     parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
     parser.add_argument(
         "--export", metavar="PAGE.html", help="write a self-contained page that plays the team's motion (see below)"
