@@ -12,6 +12,7 @@ from .common import (
     add_task_option,
     add_work_option,
     motion_floor,
+    print_self_motion,
     registered_constraints,
     report_partial_carry,
     show_progress,
@@ -224,13 +225,7 @@ def run(args) -> int:
         return report_partial_carry(failure, carry_partial_outputs(robot, failure, args.out))
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
-    prep = result.preparation
-    if prep is not None:
-        print(
-            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
-            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
-            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the start posture"
-        )
+    print_self_motion(result, "the start posture")
     labels = {
         "qp": "QP with capacity",
         "pinv": "pseudo-inverse baseline from the start posture",

@@ -783,6 +783,18 @@ def read_recorded(robot, args, work):
     return recording.trajectory
 
 
+def print_self_motion(result, posture: str) -> None:
+    """A carry's self-motion before the path, when it made one: how long, how closely the object
+    was held and the objective before and after; ``posture``: where the baseline starts."""
+    prep = result.preparation
+    if prep is not None:
+        print(
+            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
+            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
+            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from {posture}"
+        )
+
+
 def report_partial_carry(failure, written: list[str]) -> int:
     """After a carry that failed part-way, with --out: name the files kept of what succeeded
     (flagged partial) and the error in one line; the exit status 2. Returning instead of raising

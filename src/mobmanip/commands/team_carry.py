@@ -9,6 +9,7 @@ from .common import (
     add_step_options,
     add_work_option,
     motion_floor,
+    print_self_motion,
     registered_constraints,
     report_partial_carry,
 )
@@ -191,13 +192,7 @@ def run(args) -> int:
         f"{path.t[-1] - path.t[0]:g} s, turning {np.degrees(path.sample(path.t[-1:])[1][0]):.1f} deg "
         f"(axes: the {args.frame}'s)"
     )
-    prep = result.preparation
-    if prep is not None:
-        print(
-            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
-            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
-            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the team's posture"
-        )
+    print_self_motion(result, "the team's posture")
     for method, label, motion in (
         ("qp", "QP with capacity", result.motion),
         ("pinv", "pseudo-inverse baseline", result.baseline),
