@@ -7,6 +7,7 @@ from .common import (
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
+    add_page_options,
     add_progress_option,
     add_step_options,
     add_task_option,
@@ -89,14 +90,8 @@ def register(sub) -> None:
     add_object_mass_option(parser)
     add_step_options(parser)
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
-    parser.add_argument(
-        "--export",
-        metavar="PAGE.html",
-        help="write a self-contained page that plays the QP motion (the self-motion first) with its in-motion "
-        "ellipsoids, the camera following the robot",
-    )
-    parser.add_argument(
-        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    add_page_options(
+        parser, "the QP motion (the self-motion first) with its in-motion ellipsoids, the camera following the robot"
     )
     add_progress_option(parser)
     add_motion_floor_options(parser)

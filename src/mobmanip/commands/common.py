@@ -591,6 +591,15 @@ def add_step_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_page_options(parser: argparse.ArgumentParser, plays: str) -> None:
+    """--export PAGE.html and --every K: a self-contained page that plays a motion (``plays``: what
+    it shows), drawn every K-th sample."""
+    parser.add_argument("--export", metavar="PAGE.html", help=f"write a self-contained page that plays {plays}")
+    parser.add_argument(
+        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    )
+
+
 def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
     """--max-work N: raise the bound on the command's work (see :mod:`mobmanip.support.work`)."""
     parser.add_argument(

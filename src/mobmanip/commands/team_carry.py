@@ -6,6 +6,7 @@ from ..support.reading import decimal
 from .common import (
     add_guided_command,
     add_motion_floor_options,
+    add_page_options,
     add_step_options,
     add_work_option,
     motion_floor,
@@ -88,12 +89,7 @@ def register(sub) -> None:
     parser.add_argument("--scale", type=decimal, default=1.0, metavar="S", help="multiply the path's positions by S")
     add_step_options(parser)
     parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
-    parser.add_argument(
-        "--export", metavar="PAGE.html", help="write a self-contained page that plays the team's motion (see below)"
-    )
-    parser.add_argument(
-        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
-    )
+    add_page_options(parser, "the team's motion (see below)")
     add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")
     parser.set_defaults(func=run)
