@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
-from ..support.reading import decimal
 from .common import (
     ROBOT_HELP,
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
+    add_page_options,
     add_progress_option,
+    add_step_options,
     add_task_option,
     add_work_option,
     motion_floor,
+    print_self_motion,
     registered_constraints,
     report_partial_carry,
     show_progress,
@@ -86,23 +88,10 @@ def register(sub) -> None:
     add_task_option(parser)
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
     add_object_mass_option(parser)
-    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
-    parser.add_argument(
-        "--prepare",
-        type=decimal,
-        default=30.0,
-        metavar="S",
-        help="longest self-motion before the path (s, default 30; 0: none)",
-    )
+    add_step_options(parser)
     parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
-    parser.add_argument(
-        "--export",
-        metavar="PAGE.html",
-        help="write a self-contained page that plays the QP motion (the self-motion first) with its in-motion "
-        "ellipsoids, the camera following the robot",
-    )
-    parser.add_argument(
-        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    add_page_options(
+        parser, "the QP motion (the self-motion first) with its in-motion ellipsoids, the camera following the robot"
     )
     add_progress_option(parser)
     add_motion_floor_options(parser)
@@ -231,13 +220,7 @@ def run(args) -> int:
         return report_partial_carry(failure, carry_partial_outputs(robot, failure, args.out))
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
-    prep = result.preparation
-    if prep is not None:
-        print(
-            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
-            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
-            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the start posture"
-        )
+    print_self_motion(result, "the start posture")
     labels = {
         "qp": "QP with capacity",
         "pinv": "pseudo-inverse baseline from the start posture",

@@ -120,12 +120,13 @@ def add_strict_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_posture_option(parser: argparse.ArgumentParser, what: str) -> None:
-    """--posture NAME: home, hold or a [postures.NAME] of the spec."""
+def add_posture_option(parser: Options, what: str, default: str = "home") -> None:
+    """--posture NAME: home, hold or a [postures.NAME] of the spec; ``default`` says which is
+    taken without it."""
     parser.add_argument(
         "--posture",
         metavar="NAME",
-        help=f"{what} (home, hold, or any [postures.NAME] of the spec; default: home)",
+        help=f"{what} (home, hold, or any [postures.NAME] of the spec; default: {default})",
     )
 
 
@@ -577,6 +578,28 @@ def cluster_executor(args):
     return dask_executor(args.dask)
 
 
+def add_step_options(parser: argparse.ArgumentParser) -> None:
+    """--step S and --prepare S: a carry's time step and its longest self-motion before the path
+    (``carry``, ``team-carry``)."""
+    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
+    parser.add_argument(
+        "--prepare",
+        type=decimal,
+        default=30.0,
+        metavar="S",
+        help="longest self-motion before the path (s, default 30; 0: none)",
+    )
+
+
+def add_page_options(parser: argparse.ArgumentParser, plays: str) -> None:
+    """--export PAGE.html and --every K: a self-contained page that plays a motion (``plays``: what
+    it shows), drawn every K-th sample."""
+    parser.add_argument("--export", metavar="PAGE.html", help=f"write a self-contained page that plays {plays}")
+    parser.add_argument(
+        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
+    )
+
+
 def add_work_option(parser: argparse.ArgumentParser, what: str) -> None:
     """--max-work N: raise the bound on the command's work (see :mod:`mobmanip.support.work`)."""
     parser.add_argument(
@@ -770,6 +793,18 @@ def read_recorded(robot, args, work):
     for text in recording.report.warnings:
         notice(text)
     return recording.trajectory
+
+
+def print_self_motion(result, posture: str) -> None:
+    """A carry's self-motion before the path, when it made one: how long, how closely the object
+    was held and the objective before and after; ``posture``: where the baseline starts."""
+    prep = result.preparation
+    if prep is not None:
+        print(
+            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
+            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
+            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from {posture}"
+        )
 
 
 def report_partial_carry(failure, written: list[str]) -> int:

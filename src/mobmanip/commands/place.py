@@ -59,6 +59,8 @@ examples:
 
 
 def register(sub) -> None:
+    from .common import add_dask_option, add_floor_options, add_posture_option
+
     parser = add_guided_command(
         sub,
         "place",
@@ -75,12 +77,7 @@ def register(sub) -> None:
     parser.add_argument("--region", metavar="XMIN,XMAX,YMIN,YMAX", help="rectangle for the platform origin (m)")
     parser.add_argument("--starts", type=int, default=8, help="number of starts (default 8)")
     parser.add_argument("--decoupled", action="store_true", help="neglect platform-arm dynamic interaction")
-    parser.add_argument(
-        "--posture",
-        metavar="NAME",
-        help="the posture whose grasp the hands keep: home, hold or a [postures.NAME] of the spec "
-        "(default: hold where the spec gives one, else home)",
-    )
+    add_posture_option(parser, "the posture whose grasp the hands keep", "hold, else home")
     parser.add_argument("--json", metavar="OUT.json", help="write the result and its analysis as JSON")
     parser.add_argument("--save-q", metavar="Q.json", help="write the configuration for `analyze --q`")
     parser.add_argument(
@@ -104,8 +101,6 @@ def register(sub) -> None:
     )
     parser.add_argument("--map-cells", type=int, default=15, metavar="N", help="map cells per axis (default 15)")
     add_progress_option(parser, "--map")
-    from .common import add_dask_option, add_floor_options
-
     add_floor_options(parser)
     parser.add_argument(
         "--budget",

@@ -61,7 +61,7 @@ examples:
 
 
 def register(sub) -> None:
-    from .common import add_dask_option, add_floor_options, add_measure_option, add_progress_option
+    from .common import add_dask_option, add_floor_options, add_measure_option, add_posture_option, add_progress_option
 
     parser = add_guided_command(
         sub,
@@ -106,11 +106,7 @@ def register(sub) -> None:
         metavar="Q.json",
         help='reference posture for ik, {"joints": {NAME: value}} (platform ignored; default: [hold] of the spec)',
     )
-    postures.add_argument(
-        "--posture",
-        metavar="NAME",
-        help="reference posture for ik by name: home, hold or a [postures.NAME] of the spec (instead of --reference)",
-    )
+    add_posture_option(postures, "reference posture for ik by name, instead of --reference", "hold, else home")
     run = parser.add_argument_group("execution and output")
     run.add_argument("--workers", type=int, metavar="N", help="worker processes (default: the usable cores)")
     add_dask_option(run)

@@ -6,8 +6,11 @@ from ..support.reading import decimal
 from .common import (
     add_guided_command,
     add_motion_floor_options,
+    add_page_options,
+    add_step_options,
     add_work_option,
     motion_floor,
+    print_self_motion,
     registered_constraints,
     report_partial_carry,
 )
@@ -84,17 +87,9 @@ def register(sub) -> None:
         "--frame", choices=("object", "world"), default="object", help="the path's axes (default: the object's)"
     )
     parser.add_argument("--scale", type=decimal, default=1.0, metavar="S", help="multiply the path's positions by S")
-    parser.add_argument("--step", type=decimal, default=0.02, metavar="S", help="time step (s, default 0.02)")
-    parser.add_argument(
-        "--prepare", type=decimal, default=30.0, metavar="S", help="longest self-motion before the path (s, default 30)"
-    )
+    add_step_options(parser)
     parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
-    parser.add_argument(
-        "--export", metavar="PAGE.html", help="write a self-contained page that plays the team's motion (see below)"
-    )
-    parser.add_argument(
-        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
-    )
+    add_page_options(parser, "the team's motion (see below)")
     add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")
     parser.set_defaults(func=run)
@@ -193,13 +188,7 @@ def run(args) -> int:
         f"{path.t[-1] - path.t[0]:g} s, turning {np.degrees(path.sample(path.t[-1:])[1][0]):.1f} deg "
         f"(axes: the {args.frame}'s)"
     )
-    prep = result.preparation
-    if prep is not None:
-        print(
-            f"self-motion before the path ({prep.t[-1] - prep.t[0]:.2f} s, object held within "
-            f"{1e3 * prep.tracking_error.max():.3f} mm): {result.objective.name} {prep.capacity[0]:.4g} -> "
-            f"{prep.capacity[-1]:.4g}; the QP motion starts there, the baseline from the team's posture"
-        )
+    print_self_motion(result, "the team's posture")
     for method, label, motion in (
         ("qp", "QP with capacity", result.motion),
         ("pinv", "pseudo-inverse baseline", result.baseline),

@@ -13,6 +13,7 @@ from .common import (
     add_constraint_options,
     add_guided_command,
     add_object_mass_option,
+    add_page_options,
     add_progress_option,
     add_recording_options,
     add_strict_option,
@@ -91,14 +92,7 @@ def register(sub) -> None:
     )
     parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
     add_strict_option(parser)
-    parser.add_argument(
-        "--export",
-        metavar="PAGE.html",
-        help="write a self-contained page that plays the motion with its ellipsoids (in motion) moving along",
-    )
-    parser.add_argument(
-        "--every", type=int, metavar="K", help="with --export: draw every K-th sample (default: about 200 frames)"
-    )
+    add_page_options(parser, "the motion with its ellipsoids (in motion) moving along")
     add_constraint_options(parser)
     add_progress_option(parser)
     add_work_option(parser, f"samples (rows of TRAJ.csv, or joint-state messages of --bag; default {MAX_SAMPLES:,})")

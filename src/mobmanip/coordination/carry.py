@@ -68,6 +68,7 @@ from ..motion.carry import (
     PREPARE_WINDOW,
     TIME_DECIMALS,
     ObjectPath,
+    check_step_settings,
 )
 from ..motion.carry_floor import CarryFloor
 from ..motion.carry_step import CarryDiagnosis, solve_step_qp, velocity_bounds
@@ -624,12 +625,7 @@ def team_carry(
         CarryFailed: the QP has no solution at some step; the error names the binding limit
             (``"robot/joint"``) and holds the part of the motion that succeeded.
     """
-    if not (isinstance(step, (int, float)) and math.isfinite(step) and 0.0 < step <= 1.0):
-        raise ArgumentError(f"step must be a time in (0, 1] s, got {step!r}")
-    if not (isinstance(gain, (int, float)) and math.isfinite(gain) and gain >= 0.0):
-        raise ArgumentError(f"gain must be a finite non-negative number, got {gain!r}")
-    if not (isinstance(prepare, (int, float)) and math.isfinite(prepare) and prepare >= 0.0):
-        raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
+    check_step_settings(step, gain, prepare)
     if frame not in FRAMES:
         raise ArgumentError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
     if not isinstance(path, ObjectPath):

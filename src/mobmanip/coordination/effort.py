@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 
 from ..motion import grasp_matrix_rate, motion_terms
-from ..motion.carry_step import EFFORT_SHARE, CarryDiagnosis, solve_step_qp
+from ..motion.carry_step import EFFORT_SHARE, CarryDiagnosis, diagnose_alone, solve_step_qp
 from ..robot.tasks import TaskSpace
 from ..team import Team
 from ..terms.grasp import HeldObject
@@ -146,7 +146,6 @@ def diagnose_team_step(
     """
     nx = len(names)
     c = np.zeros(nx)
-    big = 1e6 * np.maximum(velocity_limits, 1.0)
 
     def solve(lo_, hi_, keep):
         if not len(keep):
@@ -154,33 +153,15 @@ def diagnose_team_step(
         G, h = effort_rows(A[keep], offset[keep], effort_limits[keep])
         return solve_step_qp(H, c, J_u, b, lo_, hi_, G, h)
 
-    everything = np.arange(nx)
-    if solve(-big, big, []) is None:
-        return CarryDiagnosis(step, t, "", "singular", slowing_helps=False)
-    vel = velocity_limits
-    for k in range(nx):
-        if lo[k] > -vel[k] or hi[k] < vel[k]:
-            lo_, hi_ = lo.copy(), hi.copy()
-            lo_[k], hi_[k] = -vel[k], vel[k]
-            x = solve(lo_, hi_, everything)
-            if x is not None:
-                upper = x[k] > hi[k]
-                allowed = hi[k] if upper else lo[k]
-                limit = position_limits[1][k] if upper else position_limits[0][k]
-                return CarryDiagnosis(step, t, names[k], "position", float(x[k]), float(allowed),
-                                      float(positions[k]), float(limit), False, units[k][0])  # fmt: skip
-    for k in range(nx):
-        lo_, hi_ = lo.copy(), hi.copy()
-        lo_[k], hi_[k] = -big[k], big[k]
-        x = solve(lo_, hi_, everything)
-        if x is not None:
-            allowed = vel[k] if x[k] > 0 else -vel[k]
-            return CarryDiagnosis(step, t, names[k], "velocity", float(x[k]), float(allowed), slowing_helps=True,
-                                  unit=units[k][0])  # fmt: skip
-    for k in range(nx):
-        x = solve(lo, hi, np.delete(everything, k))
-        if x is not None:
-            tau = float(A[k] @ x + offset[k])
-            allowed = float(np.copysign(EFFORT_SHARE * effort_limits[k], tau))
-            return CarryDiagnosis(step, t, names[k], "effort", tau, allowed, slowing_helps=True, unit=units[k][1])
+    def position_and_limit(k: int, upper: bool) -> tuple[float | None, float | None]:
+        return float(positions[k]), float(position_limits[1][k] if upper else position_limits[0][k])
+
+    def unit(k: int, kind: str) -> str:
+        return units[k][1] if kind == "effort" else units[k][0]
+
+    alone = diagnose_alone(
+        solve, names, lo, hi, velocity_limits, effort_limits, (A, offset), position_and_limit, unit, step, t
+    )
+    if alone is not None:
+        return alone
     return CarryDiagnosis(step, t, "", "limits together", slowing_helps=None)

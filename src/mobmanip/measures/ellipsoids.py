@@ -14,7 +14,7 @@ from ..batch import EllipsoidBatch, ellipsoids_from_terms
 from ..sets.ellipsoid import dynamic_ellipsoid, kinematic_ellipsoid
 from ..sets.taskset import TaskSet, TaskSetBatch
 from ..terms.builder import MeasureTerms
-from .registry import ACCELERATION, VELOCITY, BatchRequest, Measure, register_measure
+from .registry import ACCELERATION, VELOCITY, BatchRequest, Compute, Measure, Quantity, register_measure
 
 
 def _kinematic(terms: MeasureTerms) -> TaskSet:
@@ -52,35 +52,42 @@ def _ellipsoids_batch(request: BatchRequest) -> Mapping[str, TaskSetBatch]:
 
 _ELLIPSOID_AXES = (("semi_axes", "semi_axis"),)
 
-KINEMATIC = register_measure(
-    Measure(
-        name="kinematic",
-        json_key="kinematic_ellipsoid",
-        quantity=VELOCITY,
-        label="kinematic ellipsoid",
-        set_kind="ellipsoid",
-        color=0x1FBF3F,  # green
-        locked_color=0xF2D21B,  # yellow
-        compute=_kinematic,
-        default=True,
-        batch=_ellipsoids_batch,
-        axis_indices=_ELLIPSOID_AXES,
-        description="unified kinematic ellipsoid of object velocities (Eq. 23-26, consistent form)",
+
+def _register_ellipsoid(
+    name: str, quantity: Quantity, colors: tuple[int, int], compute: Compute, description: str
+) -> Measure:
+    """Register one of the paper's ellipsoids (JSON key ``<name>_ellipsoid``), computed by default,
+    both swept by :func:`_ellipsoids_batch`; ``colors``: its own and its locked counterpart's in
+    the viewer."""
+    return register_measure(
+        Measure(
+            name=name,
+            json_key=f"{name}_ellipsoid",
+            quantity=quantity,
+            label=f"{name} ellipsoid",
+            set_kind="ellipsoid",
+            color=colors[0],
+            locked_color=colors[1],
+            compute=compute,
+            default=True,
+            batch=_ellipsoids_batch,
+            axis_indices=_ELLIPSOID_AXES,
+            description=description,
+        )
     )
+
+
+KINEMATIC = _register_ellipsoid(
+    "kinematic",
+    VELOCITY,
+    (0x1FBF3F, 0xF2D21B),  # green, yellow
+    _kinematic,
+    "unified kinematic ellipsoid of object velocities (Eq. 23-26, consistent form)",
 )
-DYNAMIC = register_measure(
-    Measure(
-        name="dynamic",
-        json_key="dynamic_ellipsoid",
-        quantity=ACCELERATION,
-        label="dynamic ellipsoid",
-        set_kind="ellipsoid",
-        color=0xD81BD8,  # magenta
-        locked_color=0xE0301E,  # red
-        compute=_dynamic,
-        default=True,
-        batch=_ellipsoids_batch,
-        axis_indices=_ELLIPSOID_AXES,
-        description="unified dynamic ellipsoid of object accelerations at rest (Eq. 27-38)",
-    )
+DYNAMIC = _register_ellipsoid(
+    "dynamic",
+    ACCELERATION,
+    (0xD81BD8, 0xE0301E),  # magenta, red
+    _dynamic,
+    "unified dynamic ellipsoid of object accelerations at rest (Eq. 27-38)",
 )

@@ -26,7 +26,7 @@ from ..sets.taskset import TaskSet, TaskSetBatch
 from ..terms.builder import MeasureTerms
 from ..terms.force import force_problem
 from .polytopes import sets_one_at_a_time
-from .registry import BatchRequest, Measure, Quantity, get_measure, register_measure
+from .registry import BatchRequest, Compute, Measure, Quantity, get_measure, register_measure
 
 #: Wrenches exerted on the environment: limited by the efforts, independent of the inertia.
 FORCE = Quantity("force", "force", "N", "N, N m", limits="effort", inertial=False)
@@ -84,34 +84,41 @@ def _force_batch(request: BatchRequest) -> Mapping[str, TaskSetBatch]:
     return out
 
 
-FORCE_ELLIPSOID = register_measure(
-    Measure(
-        name="force_ellipsoid",
-        json_key="force_ellipsoid",
-        quantity=FORCE,
-        label="force ellipsoid",
-        set_kind="ellipsoid",
-        color=0x1565C0,  # blue
-        locked_color=0x64B5F6,  # light blue
-        compute=_ellipsoid,
-        batch=_force_batch,
-        axis_indices=(("semi_axes", "semi_axis"),),
-        description="wrenches the object exerts on the environment at rest, Euclidean norm of the efforts",
+#: The per-axis arrays of each kind of force set's batch (its sweep indices).
+_AXES = {"ellipsoid": (("semi_axes", "semi_axis"),), "polytope": (("widths", "width"),)}
+
+
+def _register_force(kind: str, colors: tuple[int, int], compute: Compute, description: str) -> Measure:
+    """Register the force set of one kind (``"ellipsoid"`` or ``"polytope"``, named
+    ``force_<kind>``), swept by :func:`_force_batch`; only the polytope honours the constraints;
+    ``colors``: its own and its locked counterpart's in the viewer."""
+    return register_measure(
+        Measure(
+            name=f"force_{kind}",
+            json_key=f"force_{kind}",
+            quantity=FORCE,
+            label=f"force {kind}",
+            set_kind=kind,
+            color=colors[0],
+            locked_color=colors[1],
+            compute=compute,
+            batch=_force_batch,
+            axis_indices=_AXES[kind],
+            honours_constraints=kind == "polytope",
+            description=description,
+        )
     )
+
+
+FORCE_ELLIPSOID = _register_force(
+    "ellipsoid",
+    (0x1565C0, 0x64B5F6),  # blue, light blue
+    _ellipsoid,
+    "wrenches the object exerts on the environment at rest, Euclidean norm of the efforts",
 )
-FORCE_POLYTOPE = register_measure(
-    Measure(
-        name="force_polytope",
-        json_key="force_polytope",
-        quantity=FORCE,
-        label="force polytope",
-        set_kind="polytope",
-        color=0x283593,  # indigo
-        locked_color=0x9E9D24,  # olive
-        compute=_polytope,
-        batch=_force_batch,
-        axis_indices=(("widths", "width"),),
-        honours_constraints=True,
-        description="exact set of wrenches the object exerts on the environment at rest, every effort within its limit",
-    )
+FORCE_POLYTOPE = _register_force(
+    "polytope",
+    (0x283593, 0x9E9D24),  # indigo, olive
+    _polytope,
+    "exact set of wrenches the object exerts on the environment at rest, every effort within its limit",
 )

@@ -27,26 +27,14 @@ _PROBLEM = {"kinematic": "velocity", "dynamic": "acceleration", "dynamic_min_nor
 
 def _polytope_compute(kind: str) -> Compute:
     def compute(terms: MeasureTerms) -> TaskSet:
-        from ..sets.capacity import polytopes
+        from ..sets.capacity import POLYTOPE_TERMS, polytopes
 
         problem = _PROBLEM[kind]
         if terms.constrained(problem):  # constraints beyond the joint boxes: the linear programs
             from ..terms.problems import capacity_polytope
 
             return capacity_polytope(terms, problem, policy=kind == "dynamic_min_norm")
-        if kind == "kinematic":
-            return polytopes(kind, J_u=terms.J_u, W=terms.W, velocity_limits=terms.velocity_limits)
-        return polytopes(
-            kind,
-            J_u=terms.J_u,
-            W=terms.W,
-            P=terms.P,
-            Q=terms.Q,
-            xi=terms.xi,
-            M_o=terms.M_o,
-            g_o=terms.g_o,
-            effort_limits=terms.effort_limits,
-        )
+        return polytopes(kind, **{name: getattr(terms, name) for name in POLYTOPE_TERMS[kind]})
 
     return compute
 

@@ -177,29 +177,17 @@ def read_path(path: str | Path) -> ObjectPath:
             number (naming line and column), too few rows or time stamps that do not increase.
     """
     from ..support.ranges import PLATFORM_POSITION
-    from ..support.reading import TIME_STAMP, check_time_stamps, parse_cell, read_csv_rows
+    from ..support.reading import TIME_STAMP, check_time_stamps, parse_csv_body, read_csv_header
 
     path = Path(path)
-    numbered = read_csv_rows(path, "object path")
-    if not numbered:
-        raise ArgumentError(f"object path {path} is empty")
-    lines = [line for line, _ in numbered]
-    rows = [row for _, row in numbered]
-    header = [c.strip() for c in rows[0]]
+    header, body = read_csv_header(path, "object path")
     unknown = [c for c in header if c not in PATH_COLUMNS]
     if unknown or not {"t", "x", "y"} <= set(header) or len(set(header)) != len(header):
         raise ArgumentError(f"object path {path}: header {header} must name t, x, y and optionally z, yaw (each once)")
     bounds = {"t": (TIME_STAMP, "s"), "yaw": (1e4, "rad")}
-    values = np.zeros((len(rows) - 1, len(header)))
-    for k, (i, row) in enumerate(zip(lines[1:], rows[1:], strict=True)):
-        if len(row) != len(header):
-            raise ArgumentError(f"object path {path} line {i}: {len(row)} cells, the header has {len(header)}")
-        for j, cell in enumerate(row):
-            bound, unit = bounds.get(header[j], (PLATFORM_POSITION, "m"))
-            where = f"object path {path} line {i}, column {header[j]!r}"
-            values[k, j] = parse_cell(cell, where, bound=bound, unit=unit)
+    values = parse_csv_body(path, "object path", header, body, lambda name: bounds.get(name, (PLATFORM_POSITION, "m")))
     if "t" in header:
-        check_time_stamps(values[:, header.index("t")], f"object path {path}", lines[1:])
+        check_time_stamps(values[:, header.index("t")], f"object path {path}", [i for i, _ in body])
     col = {name: values[:, k] for k, name in enumerate(header)}
     try:
         return ObjectPath(col["t"], np.column_stack([col["x"], col["y"]]), col.get("z"), col.get("yaw"))
@@ -518,6 +506,17 @@ def _jacobian(robot: Robot, q: np.ndarray, rows: list[int]) -> np.ndarray:
     )
 
 
+def check_step_settings(step: float, gain: float, prepare: float) -> None:
+    """Refuse a carry's time step (s, in (0, 1]), capacity gain (>= 0) or self-motion time
+    (s, >= 0) that is not a finite number in its range (one robot's carry and a team's)."""
+    if not (isinstance(step, (int, float)) and math.isfinite(step) and 0.0 < step <= 1.0):
+        raise ArgumentError(f"step must be a time in (0, 1] s, got {step!r}")
+    if not (isinstance(gain, (int, float)) and math.isfinite(gain) and gain >= 0.0):
+        raise ArgumentError(f"gain must be a finite non-negative number, got {gain!r}")
+    if not (isinstance(prepare, (int, float)) and math.isfinite(prepare) and prepare >= 0.0):
+        raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
+
+
 def carry(
     robot: Robot,
     path: ObjectPath,
@@ -566,12 +565,7 @@ def carry(
         CarryFailed: the QP has no solution at some step; the error names the binding limit
             (:class:`CarryDiagnosis`) and holds the part of the motion that succeeded.
     """
-    if not (isinstance(step, (int, float)) and math.isfinite(step) and 0.0 < step <= 1.0):
-        raise ArgumentError(f"step must be a time in (0, 1] s, got {step!r}")
-    if not (isinstance(gain, (int, float)) and math.isfinite(gain) and gain >= 0.0):
-        raise ArgumentError(f"gain must be a finite non-negative number, got {gain!r}")
-    if not (isinstance(prepare, (int, float)) and math.isfinite(prepare) and prepare >= 0.0):
-        raise ArgumentError(f"prepare must be a finite non-negative time (s), got {prepare!r}")
+    check_step_settings(step, gain, prepare)
     if not isinstance(path, ObjectPath):
         raise ArgumentError(f"path must be an ObjectPath, got {type(path).__name__}")
     if floor is not None and not isinstance(floor, CarryFloor):

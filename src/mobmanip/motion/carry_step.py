@@ -3,6 +3,8 @@ limit binds (:func:`diagnose_step`)."""
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,19 +100,7 @@ class CarryDiagnosis:
         return text + "; slowing the path down likely helps (accelerations' efforts fall with the speed squared)"
 
     def to_dict(self) -> dict:
-        return {
-            "step": self.step,
-            "t": self.t,
-            "joint": self.joint,
-            "kind": self.kind,
-            "asked": self.asked,
-            "allowed": self.allowed,
-            "position": self.position,
-            "position_limit": self.position_limit,
-            "slowing_helps": self.slowing_helps,
-            "unit": self.unit,
-            "message": self.message(),
-        }
+        return {**dataclasses.asdict(self), "message": self.message()}
 
 
 def diagnose_step(
@@ -163,36 +153,12 @@ def diagnose_step(
             return "N" if linear else "N m"
         return "m/s" if linear else "rad/s"
 
-    if solve(-big, big, np.zeros(0, dtype=int)) is None:
-        return CarryDiagnosis(step, t, "", "singular", slowing_helps=False)
-    for k in range(nx):
-        # the position limit: the joint's bound narrower than its velocity limit
-        if lo[k] > -vel[k] or hi[k] < vel[k]:
-            lo_, hi_ = lo.copy(), hi.copy()
-            lo_[k], hi_[k] = -vel[k], vel[k]
-            x = solve(lo_, hi_, everything)
-            if x is not None:
-                allowed = hi[k] if x[k] > hi[k] else lo[k]
-                position, limit = _joint_position_and_limit(robot, q, k, upper=x[k] > hi[k])
-                return CarryDiagnosis(
-                    step, t, names[k], "position", float(x[k]), float(allowed), position, limit, False,
-                    unit(k, "position"),
-                )  # fmt: skip
-    for k in range(nx):
-        lo_, hi_ = lo.copy(), hi.copy()
-        lo_[k], hi_[k] = -big[k], big[k]
-        x = solve(lo_, hi_, everything)
-        if x is not None:
-            allowed = vel[k] if x[k] > 0 else -vel[k]
-            return CarryDiagnosis(
-                step, t, names[k], "velocity", float(x[k]), float(allowed), slowing_helps=True, unit=unit(k, "velocity")
-            )
-    for k in range(nx):
-        x = solve(lo, hi, np.delete(everything, k))
-        if x is not None:
-            tau = float(A[k] @ x + offset[k])
-            allowed = float(np.copysign(EFFORT_SHARE * effort[k], tau))
-            return CarryDiagnosis(step, t, names[k], "effort", tau, allowed, slowing_helps=True, unit=unit(k, "effort"))
+    def position_and_limit(k: int, upper: bool) -> tuple[float | None, float | None]:
+        return _joint_position_and_limit(robot, q, k, upper)
+
+    alone = diagnose_alone(solve, names, lo, hi, vel, effort, (A, offset), position_and_limit, unit, step, t)
+    if alone is not None:
+        return alone
     # no single limit: each kind of limit lifted for every joint at once; the joint the relaxed
     # step asks the most of (relative to its limit) is named
     wide_lo, wide_hi = np.maximum(lo, -vel), np.minimum(hi, vel)
@@ -223,6 +189,73 @@ def diagnose_step(
             step, t, names[k], "effort", float(tau[k]), allowed, slowing_helps=True, unit=unit(k, "effort")
         )
     return CarryDiagnosis(step, t, "", "limits together", slowing_helps=None)
+
+
+def diagnose_alone(
+    solve: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray | None],
+    names: Sequence[str],
+    lo: np.ndarray,
+    hi: np.ndarray,
+    vel: np.ndarray,
+    effort: np.ndarray,
+    effort_map: tuple[np.ndarray, np.ndarray],
+    position_and_limit: Callable[[int, bool], tuple[float | None, float | None]],
+    unit: Callable[[int, str], str],
+    step: int,
+    t: float,
+) -> CarryDiagnosis | None:
+    """The limit whose relaxation alone makes an infeasible step feasible (one robot's or a
+    team's): ``"singular"`` where none at all would, then each position bound widened to its
+    velocity limit, each velocity limit lifted and each effort row dropped, in that order;
+    ``None`` where no single one does.
+
+    Args:
+        solve: the step's QP over velocity bounds (lower, upper), keeping the effort rows of the
+            reduced velocities given; ``None`` where infeasible.
+        names: each reduced velocity's name in the report.
+        lo, hi: the step's velocity bounds (position limits included); vel: the velocity limits;
+            effort: the effort limits, (nx,) each.
+        effort_map: (A, offset) with the step's efforts A x + offset.
+        position_and_limit: reduced velocity k's joint position and its upper (True) or lower
+            limit.
+        unit: reduced velocity k's unit of a ``"position"``, ``"velocity"`` or ``"effort"``.
+        step, t: the step's index and time (s), reported.
+    """
+    A, offset = effort_map
+    big = 1e6 * np.maximum(vel, 1.0)
+    nx = len(names)
+    everything = np.arange(nx)
+    if solve(-big, big, np.zeros(0, dtype=int)) is None:
+        return CarryDiagnosis(step, t, "", "singular", slowing_helps=False)
+    for k in range(nx):
+        # the position limit: the joint's bound narrower than its velocity limit
+        if lo[k] > -vel[k] or hi[k] < vel[k]:
+            lo_, hi_ = lo.copy(), hi.copy()
+            lo_[k], hi_[k] = -vel[k], vel[k]
+            x = solve(lo_, hi_, everything)
+            if x is not None:
+                allowed = hi[k] if x[k] > hi[k] else lo[k]
+                position, limit = position_and_limit(k, x[k] > hi[k])
+                return CarryDiagnosis(
+                    step, t, names[k], "position", float(x[k]), float(allowed), position, limit, False,
+                    unit(k, "position"),
+                )  # fmt: skip
+    for k in range(nx):
+        lo_, hi_ = lo.copy(), hi.copy()
+        lo_[k], hi_[k] = -big[k], big[k]
+        x = solve(lo_, hi_, everything)
+        if x is not None:
+            allowed = vel[k] if x[k] > 0 else -vel[k]
+            return CarryDiagnosis(
+                step, t, names[k], "velocity", float(x[k]), float(allowed), slowing_helps=True, unit=unit(k, "velocity")
+            )
+    for k in range(nx):
+        x = solve(lo, hi, np.delete(everything, k))
+        if x is not None:
+            tau = float(A[k] @ x + offset[k])
+            allowed = float(np.copysign(EFFORT_SHARE * effort[k], tau))
+            return CarryDiagnosis(step, t, names[k], "effort", tau, allowed, slowing_helps=True, unit=unit(k, "effort"))
+    return None
 
 
 def _is_prismatic(robot: Robot, q: np.ndarray, k: int) -> bool:

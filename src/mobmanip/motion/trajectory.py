@@ -241,15 +241,10 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
         JointNotFoundError: a column that is not a joint of the robot.
     """
     from ..support.ranges import JOINT_POSITION, PLATFORM_POSITION
-    from ..support.reading import TIME_STAMP, check_time_stamps, parse_cell, read_csv_rows
+    from ..support.reading import TIME_STAMP, check_time_stamps, parse_csv_body, read_csv_header
 
     path = Path(path)
-    numbered = read_csv_rows(path, "trajectory")
-    if not numbered:
-        raise ArgumentError(f"trajectory {path} is empty")
-    lines = [line for line, _ in numbered]
-    rows = [row for _, row in numbered]
-    header = [cell.strip() for cell in rows[0]]
+    header, body = read_csv_header(path, "trajectory")
     for needed in ("t",) + PLATFORM_COLUMNS:
         if needed not in header:
             raise ArgumentError(f"trajectory {path}: no column {needed!r} in the header {header}")
@@ -263,15 +258,12 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
             raise JointNotFoundError(name, robot.joint_names, where=f"robot {robot.name} (trajectory {path})")
     bounds = {"t": (TIME_STAMP, "s"), PLATFORM_COLUMNS[0]: (PLATFORM_POSITION, "m"),
               PLATFORM_COLUMNS[1]: (PLATFORM_POSITION, "m")}  # fmt: skip
-    values = np.zeros((len(rows) - 1, len(header)))
-    for k, (i, row) in enumerate(zip(lines[1:], rows[1:], strict=True)):
-        if len(row) != len(header):
-            raise ArgumentError(f"trajectory {path} line {i}: {len(row)} cells, the header has {len(header)}")
-        for j, cell in enumerate(row):
-            bound, unit = bounds.get(header[j], (JOINT_POSITION if header[j] in known else math.inf, ""))
-            values[k, j] = parse_cell(cell, f"trajectory {path} line {i}, column {header[j]!r}", bound=bound,
-                                      unit=unit)  # fmt: skip
-    check_time_stamps(values[:, header.index("t")], f"trajectory {path}", lines[1:])
+
+    def bound_of(name: str) -> tuple[float, str]:
+        return bounds.get(name, (JOINT_POSITION if name in known else math.inf, ""))
+
+    values = parse_csv_body(path, "trajectory", header, body, bound_of)
+    check_time_stamps(values[:, header.index("t")], f"trajectory {path}", [i for i, _ in body])
     column = {name: values[:, k] for k, name in enumerate(header)}
     qs = np.array(
         [

@@ -17,6 +17,7 @@ so the feasible speed-ups form one interval [k_min, k_max] found exactly; k_max 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -90,13 +91,7 @@ class TimeScaling:
     limit: str
 
     def to_dict(self) -> dict:
-        return {
-            "k_max": self.k_max,
-            "k_min": self.k_min,
-            "feasible": self.feasible,
-            "sample": self.sample,
-            "limit": self.limit,
-        }
+        return dataclasses.asdict(self)
 
 
 def time_scaling(

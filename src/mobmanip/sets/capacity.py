@@ -53,6 +53,11 @@ if TYPE_CHECKING:
     from .capacity_batch import CompiledPolytopeBatch
 
 KINDS = ("kinematic", "dynamic", "dynamic_min_norm")
+_DYNAMIC_TERMS = ("J_u", "W", "P", "Q", "xi", "M_o", "g_o", "effort_limits")
+#: The terms each kind is computed from: the keyword arguments :func:`polytopes` needs (the
+#: names of :class:`mobmanip.terms.builder.MeasureTerms`).
+POLYTOPE_TERMS = {"kinematic": ("J_u", "W", "velocity_limits"), "dynamic": _DYNAMIC_TERMS,
+                  "dynamic_min_norm": _DYNAMIC_TERMS}  # fmt: skip
 
 
 def kinematic_polytope(J_u: np.ndarray, W: np.ndarray, velocity_limits: np.ndarray) -> Polytope:
@@ -181,7 +186,7 @@ def polytopes(kind: str, **terms: Any) -> Polytope:
         return kinematic_polytope(terms["J_u"], terms["W"], terms["velocity_limits"])
     if kind in ("dynamic", "dynamic_min_norm"):
         fn = dynamic_polytope if kind == "dynamic" else min_norm_dynamic_polytope
-        names = ("J_u", "W", "P", "Q", "xi", "M_o", "g_o", "effort_limits")
+        names = POLYTOPE_TERMS[kind]
         missing = [k for k in names if k not in terms]
         if missing:
             raise TaskError(f"the {kind} polytope needs {', '.join(missing)}")

@@ -18,6 +18,7 @@ import re
 import stat
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from ..errors import ArgumentError, MobmanipError, NotDecimalError
 from .files import note_input
@@ -41,6 +42,8 @@ MAX_ROBOT_FILE_BYTES = 64 * 1024 * 1024
 MAX_RECORDING_BYTES = 64 * 1024**3
 
 ErrorFactory = Callable[[str], MobmanipError]
+#: A CSV file's rows as (line number, cells).
+CsvBody = list[tuple[int, list[str]]]
 
 #: A number in decimal notation (ASCII digits, optional sign, point and exponent), or a
 #: not-a-number or infinity word (left for the caller to refuse with its own message).
@@ -192,6 +195,42 @@ def read_csv_rows(path: str | Path, what: str, *, error: ErrorFactory = Argument
     finally:
         csv.field_size_limit(limit)
     return rows
+
+
+def read_csv_header(path: Path, what: str, *, error: ErrorFactory = ArgumentError) -> tuple[list[str], CsvBody]:
+    """A user CSV table's header (its cells stripped) and the rows below it as :func:`read_csv_rows`
+    gives them (``what`` names the file in messages: ``"trajectory"``).
+
+    Raises:
+        MobmanipError: (from ``error``) as :func:`read_csv_rows`, or a file with no row at all.
+    """
+    numbered = read_csv_rows(path, what, error=error)
+    if not numbered:
+        raise error(f"{what} {path} is empty")
+    return [cell.strip() for cell in numbered[0][1]], numbered[1:]
+
+
+def parse_csv_body(path: Path, what: str, header: list[str], body: CsvBody,
+                   bound_of: Callable[[str], tuple[float, str]], *,
+                   error: ErrorFactory = ArgumentError) -> Any:  # fmt: skip
+    """The numbers of a table's rows below its header, (rows, columns) as a NumPy array; each
+    cell by :func:`parse_cell` with the bound and unit ``bound_of`` gives for its column's name.
+
+    Raises:
+        MobmanipError: (from ``error``) a row with another number of cells than the header, or
+            a cell :func:`parse_cell` refuses (naming the line and column).
+    """
+    import numpy as np
+
+    values = np.zeros((len(body), len(header)))
+    for k, (i, row) in enumerate(body):
+        if len(row) != len(header):
+            raise error(f"{what} {path} line {i}: {len(row)} cells, the header has {len(header)}")
+        for j, cell in enumerate(row):
+            bound, unit = bound_of(header[j])
+            where = f"{what} {path} line {i}, column {header[j]!r}"
+            values[k, j] = parse_cell(cell, where, bound=bound, unit=unit, error=error)
+    return values
 
 
 def parse_cell(cell: str, where: str, *, bound: float = math.inf, unit: str = "",
