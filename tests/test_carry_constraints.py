@@ -11,7 +11,6 @@ scaled robot's own rows when its limits are scaled by s / EFFORT_SHARE.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -21,13 +20,12 @@ import mobmanip
 from hostile_util import run_cli
 from mobmanip.errors import ArgumentError, CarryFailed
 from mobmanip.motion.carry import EFFORT_SHARE, ObjectPath, carry, read_path
-from mobmanip.terms.constraints import Constraint, ConstraintRows
 from mobmanip.terms.constraints.options import (
     ConstraintOption,
     register_constraint_option,
     unregister_constraint_option,
 )
-from toy_constraint import EffortShare, SpeedShare
+from toy_constraint import EffortShare, ObjectAccelerationCap, SpeedShare
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The example line (2 m in 12 s) after a self-motion of at most 5 s: on the paper robot the
@@ -76,18 +74,6 @@ def test_a_step_the_constraint_makes_infeasible_names_its_row(robot):
     assert diagnosis.kind == "constraint"
     assert "at 0.001 of its effort limit" in diagnosis.joint
     assert "a constraint binds" in str(failed.value)
-
-
-@dataclass(frozen=True)
-class ObjectAccelerationCap(Constraint):
-    """A row over the object's acceleration: not over a step's rates alone."""
-
-    name: str = "object_acceleration_cap"
-    problem: str = "acceleration"
-
-    def rows(self, terms) -> ConstraintRows:
-        m = terms.W.shape[0]
-        return ConstraintRows(self.name, self.problem, G={"a": np.eye(m)}, h=np.ones(m))
 
 
 def test_a_constraint_that_cannot_join_a_step_is_refused_before_any_work(robot):

@@ -9,8 +9,6 @@ start only, and are refused by name.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pytest
 
@@ -19,14 +17,13 @@ from hostile_util import assert_one_line_error, run_cli
 from mobmanip.errors import ArgumentError
 from mobmanip.motion.hold import held_reach
 from mobmanip.postures.named import named_configuration
-from mobmanip.terms.constraints import Constraint, ConstraintRows
 from mobmanip.terms.constraints.floor import Floor
 from mobmanip.terms.constraints.options import (
     ConstraintOption,
     register_constraint_option,
     unregister_constraint_option,
 )
-from toy_constraint import EffortShare
+from toy_constraint import EffortShare, ObjectAccelerationCap
 
 SHARE = 0.02  # binds along +-x: the reach at rest falls from 1.4893 to 0.7328 m/s^2
 FLOOR = Floor(mu=0.5)
@@ -62,19 +59,6 @@ def test_a_held_reach_keeps_an_effort_share_as_the_robot_with_its_limits_scaled(
     assert np.all(np.abs(tau) <= SHARE * robot.effort_limits * (1.0 + 1e-9))
     plain = _held(robot, q, (FLOOR,), direction)
     assert plain.instant > ours.instant * (1.0 + 1e-3) or plain.reach > ours.reach * (1.0 + 1e-3)  # it binds
-
-
-@dataclass(frozen=True)
-class ObjectAccelerationCap(Constraint):
-    """Rows over the object's acceleration: they would be kept at the replay's start only."""
-
-    name: str = "object_acceleration_cap"
-    problem: str = "acceleration"
-
-    def rows(self, terms) -> ConstraintRows:
-        m = terms.W.shape[0]
-        labels = tuple(f"object acceleration {k} at most 10" for k in range(m))
-        return ConstraintRows(self.name, self.problem, G={"a": np.eye(m)}, h=np.full(m, 10.0), labels=labels)
 
 
 def test_rows_over_other_variables_are_refused_by_name(home):

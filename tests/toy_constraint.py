@@ -4,6 +4,8 @@
 every reduced velocity within ``share`` of its velocity limit. Their sets can be computed a second
 way, by scaling the robot's limits, which is what the tests compare against. Both are one
 ``Share`` of a kind of limit: the base class writes the rows, each subclass says which.
+``ObjectAccelerationCap`` bounds the object's acceleration: a constraint of the sets at rest that
+the commands over steps of motion must refuse.
 """
 
 from __future__ import annotations
@@ -55,3 +57,17 @@ class SpeedShare(Share):
     problem: str = "velocity"
     variable: ClassVar[str] = "x"
     limit: ClassVar[str] = "velocity"
+
+
+@dataclass(frozen=True)
+class ObjectAccelerationCap(Constraint):
+    """a_k <= 10 for every task component of the object's acceleration: rows of the sets at rest
+    only (a step of motion or a replay of constant efforts cannot keep them)."""
+
+    name: str = "object_acceleration_cap"
+    problem: str = "acceleration"
+
+    def rows(self, terms: Terms) -> ConstraintRows:
+        m = terms.W.shape[0]
+        labels = tuple(f"object acceleration {k} at most 10" for k in range(m))
+        return ConstraintRows(self.name, self.problem, G={"a": np.eye(m)}, h=np.full(m, 10.0), labels=labels)

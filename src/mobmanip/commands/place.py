@@ -191,8 +191,7 @@ def run(args) -> int:
 
 def _run(args, executor) -> int:
     from ..analysis.single import analyze
-    from ..placement.optimize import Region, place, placement_document
-    from ..postures.named import named_configuration
+    from ..placement.optimize import place, placement_document
     from ..robot.model import load_robot
     from ..robot.spec import find_spec
     from ..support.files import write_json
@@ -211,13 +210,7 @@ def _run(args, executor) -> int:
             f"--ground needs a measure's reading (e.g. dynamic_polytope:reach:+x): the ellipsoid of "
             f"{args.objective!r} ignores the floor"
         )
-    reference = None if args.posture is None else named_configuration(robot, args.posture)
-    region = None if args.region is None else Region.parse(args.region)
-    extent = _check_map_options(args)
-    if args.map and extent is not None and not robot.platform_locked:
-        _check_extent_reaches(args, robot, target, extent, reference)
-    _check_outputs(args)
-    yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    reference, region, extent, yaw = _request(args, robot, target)
     collision = None
     if args.avoid_collision is not None:
         from ..robot.collision import SelfCollision
@@ -305,8 +298,6 @@ def _run_polytope(args, robot, target, executor) -> int:
     from ..errors import UsageError
     from ..gradients.readings import ReadingObjective
     from ..placement.grounded import place_polytope, reading_map, surrogate
-    from ..placement.optimize import Region
-    from ..postures.named import named_configuration
     from ..robot.tasks import get_task
     from ..support.files import write_json
     from .common import constraints_from_args, print_warnings
@@ -317,13 +308,7 @@ def _run_polytope(args, robot, target, executor) -> int:
     task = get_task(args.task or robot.spec.default_task)
     objective = ReadingObjective.parse(args.objective, task)
     constraints = constraints_from_args(args)
-    reference = None if args.posture is None else named_configuration(robot, args.posture)
-    region = None if args.region is None else Region.parse(args.region)
-    extent = _check_map_options(args)
-    if args.map and extent is not None and not robot.platform_locked:
-        _check_extent_reaches(args, robot, target, extent, reference)
-    _check_outputs(args)
-    yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    reference, region, extent, yaw = _request(args, robot, target)
     grid = None
     if args.map:
         grid = _compute_map(args, robot, target, extent, yaw, None, reference, executor, surrogate(objective))
@@ -383,6 +368,22 @@ def _run_polytope(args, robot, target, executor) -> int:
     if args.view or args.export:
         _show(args, robot, result)
     return 0
+
+
+def _request(args, robot, target):
+    """(reference configuration, region, map extent, object yaw) of the request, each checked
+    (the outputs too) before any work."""
+    from ..placement.optimize import Region
+    from ..postures.named import named_configuration
+
+    reference = None if args.posture is None else named_configuration(robot, args.posture)
+    region = None if args.region is None else Region.parse(args.region)
+    extent = _check_map_options(args)
+    if args.map and extent is not None and not robot.platform_locked:
+        _check_extent_reaches(args, robot, target, extent, reference)
+    _check_outputs(args)
+    yaw = None if args.object_yaw is None else _check_yaw(args.object_yaw)
+    return reference, region, extent, yaw
 
 
 def _check_outputs(args) -> None:
