@@ -40,7 +40,7 @@ import os
 #: The environment as the user started this script: the commands timed as a user types them get
 #: it, with Python's bytecode cache allowed (warm caches: an installed mobmanip has its bytecode
 #: compiled at install, a source checkout writes it on its first run, the warm-up here; without
-#: it every command compiles mobmanip's modules again, some 0.3 s).
+#: it every command compiles mobmanip's modules again, 0.2 to 0.4 s).
 USER_ENVIRONMENT = {name: value for name, value in os.environ.items() if name != "PYTHONDONTWRITEBYTECODE"}
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
