@@ -45,7 +45,7 @@ def pools():
 
 build_parser = cli.build_parser
 
-def spying_build_parser():
+def spying_build_parser(*args, **kwargs):
     from mobmanip.commands import analyze
     run = analyze.run
 
@@ -55,7 +55,7 @@ def spying_build_parser():
         return run(args)
 
     analyze.run = spy
-    return build_parser()
+    return build_parser(*args, **kwargs)
 
 cli.build_parser = spying_build_parser
 if numpy_first:

@@ -27,12 +27,18 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"mobmanip: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from .commands import COMMANDS
-    from .support.version import installed_version
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``mobmanip`` parser: every subcommand, or only ``command`` (a name as typed).
+
+    A command line names one command, and its parser is all :func:`main` needs: the other
+    commands' modules (and what they import) are then not imported, which keeps a command's
+    start-up short. Without a command (``--help``, ``--version``, a typo) every command is
+    registered, so the help lists them all and an unknown name is refused with the full list.
+    """
+    from .commands import NAMES, command_module
 
     parser = _Parser(prog="mobmanip", description="What a wheeled mobile manipulator can do at the end effector.")
-    parser.add_argument("--version", action="version", version=f"mobmanip {installed_version()}")
+    parser.add_argument("--version", action=_VersionAction, help="show program's version number and exit")
     parser.add_argument(
         "-v",
         "--verbose",
@@ -42,9 +48,34 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    for module in COMMANDS:
-        module.register(sub)
+    for name in [command] if command in NAMES else NAMES:
+        command_module(name).register(sub)
     return parser
+
+
+class _VersionAction(argparse.Action):
+    """``--version``: the installed version, read only when asked for (reading the installed
+    distribution's metadata costs every other command line its time)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings=option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .support.version import installed_version
+
+        parser._print_message(f"mobmanip {installed_version()}\n", sys.stdout)
+        parser.exit()
+
+
+def _command_named(argv: list[str]) -> str | None:
+    """The command an argument list names: its first word when only ``-v``/``--verbose`` come
+    before it (``None`` otherwise, e.g. ``--help`` first: then every command is registered)."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word
+        if word != "--verbose" and not (len(word) > 1 and set(word[1:]) == {"v"}):
+            return None
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -148,7 +179,7 @@ def _redeliver_interrupts(previous):
 
 
 def _main(argv: list[str] | None) -> int:
-    parser = build_parser()
+    parser = build_parser(_command_named(sys.argv[1:] if argv is None else argv))
     with _escaped_output():
         args = parser.parse_args(argv)
         _configure_logging(args.verbose)

@@ -3,11 +3,14 @@ Hello Robot's hello-robot-stretch-urdf package."""
 
 from __future__ import annotations
 
-import importlib.metadata
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import SpecError
+
+if TYPE_CHECKING:
+    import importlib.metadata
 
 #: URDF paths in a spec may start with this prefix to point into example-robot-data's robots.
 EXAMPLE_ROBOT_DATA_PREFIX = "example-robot-data:"
@@ -40,6 +43,8 @@ def _installed(name: str) -> importlib.metadata.Distribution:
     Raises:
         SpecError: it is not installed (naming the pip command that installs it).
     """
+    import importlib.metadata  # here: every command loads a robot, few need an installed distribution's files
+
     try:
         return importlib.metadata.distribution(name)
     except importlib.metadata.PackageNotFoundError as exc:

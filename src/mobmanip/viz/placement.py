@@ -212,21 +212,38 @@ def placement_figure(
     return save_and_close(fig, path, dpi=110, bbox_inches="tight")
 
 
+#: The map figure's layout, inches: the sides of the map's box (the longer one the largest; the
+#: shorter one at least the least, the data's limits widened to keep their aspect), and the
+#: margins around it (tick labels and axis label on the left and below, the colour bar and its
+#: label on the right, the legend under the x axis label, the title's lines above).
+MAP_BOX, MAP_BOX_LEAST, MAP_LEFT, MAP_BOTTOM, MAP_LEGEND, MAP_TITLE_LINE = 4.6, 3.0, 0.85, 0.62, 0.3, 0.19
+MAP_BAR_GAP, MAP_BAR_WIDTH, MAP_BAR_LABELS = 0.2, 0.22, 0.85
+
+
 def placement_map_figure(placement_map: PlacementMap, title: str | None = None) -> Figure:
     """A heat map of a :class:`mobmanip.placement.maps.PlacementMap`'s best value over headings,
     arrows for the best heading, the object (star) and the best cell (circle); the colour bar
-    names the objective with its unit, the legend stands below the map."""
+    names the objective with its unit, the legend stands below the map.
+
+    The layout is set here, in inches (:data:`MAP_BOX` and the margins after it): the map's box
+    has the grid's aspect, its longer side :data:`MAP_BOX`, and the page is sized around it. No
+    layout engine runs when the figure is drawn, and it is drawn once when written (a layout
+    engine and a cropped page draw it twice): the command writes this figure with every map.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     from ..robot.tasks import get_task
-    from .figures import plt
     from .labels import objective_label, objective_words
 
     grid = placement_map
     task = grid.task or _task_of(grid.objective)
     values, heading = grid.best_over_headings()
-    fig, ax = plt.subplots(figsize=(6.6, 6.0), layout="constrained")
+    fig = Figure()
+    FigureCanvasAgg(fig)  # drawn and written without pyplot
+    ax = fig.add_subplot()
     masked = np.ma.masked_invalid(values)
     mesh = ax.pcolormesh(grid.x, grid.y, masked, shading="nearest", cmap="viridis")
-    fig.colorbar(mesh, ax=ax, label=objective_label(grid.objective, get_task(task)))
     ok = ~np.isnan(values)
     X, Y = np.meshgrid(grid.x, grid.y)
     step = max(1, max(len(grid.x), len(grid.y)) // 15)
@@ -243,9 +260,47 @@ def placement_map_figure(placement_map: PlacementMap, title: str | None = None) 
     ax.set_xlabel("platform $x$ (m)")
     ax.set_ylabel("platform $y$ (m)")
     ax.set_aspect("equal")
-    ax.set_title(title or f"best {objective_words(grid.objective, task)} over heading and posture", fontsize=10)
-    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+    # the box at the data's aspect (within its least and largest sides), on a page sized around it
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    ratio = (y1 - y0) / (x1 - x0)
+    width, height = (MAP_BOX, MAP_BOX * ratio) if ratio <= 1.0 else (MAP_BOX / ratio, MAP_BOX)
+    if min(width, height) < MAP_BOX_LEAST:  # a strip: the limits widen along its short side instead
+        width, height = max(width, MAP_BOX_LEAST), max(height, MAP_BOX_LEAST)
+        ax.set_aspect("equal", adjustable="datalim")
+    lines = _title_lines(fig, title or f"best {objective_words(grid.objective, task)} over heading and posture", width)
+    page_width = MAP_LEFT + width + MAP_BAR_GAP + MAP_BAR_WIDTH + MAP_BAR_LABELS
+    bottom = MAP_BOTTOM + MAP_LEGEND
+    page_height = bottom + height + 0.12 + MAP_TITLE_LINE * len(lines)
+    fig.set_size_inches(page_width, page_height)
+    ax.set_position((MAP_LEFT / page_width, bottom / page_height, width / page_width, height / page_height))
+    cax = fig.add_axes(((MAP_LEFT + width + MAP_BAR_GAP) / page_width, bottom / page_height,
+                        MAP_BAR_WIDTH / page_width, height / page_height), label="<colorbar>")  # fmt: skip
+    fig.colorbar(mesh, cax=cax, label=objective_label(grid.objective, get_task(task)))
+    ax.set_title("\n".join(lines), fontsize=10)
+    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=3, fontsize=8,
+               frameon=False)  # fmt: skip
     return fig
+
+
+def _title_lines(fig: Figure, text: str, width: float) -> list[str]:
+    """``text`` in as few lines as keep each within ``width`` inches (10 pt, measured)."""
+    import textwrap
+
+    from matplotlib.text import Text
+
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    probe = Text(0, 0, "", fontsize=10, figure=fig)
+
+    def inches(line: str) -> float:
+        probe.set_text(line)
+        return probe.get_window_extent(renderer).width / fig.dpi
+
+    chars = len(text)
+    lines = [text]
+    while chars > 12 and max(map(inches, lines)) > width:
+        chars = int(chars * 0.85)
+        lines = textwrap.wrap(text, chars)
+    return lines
 
 
 def _task_of(objective) -> str:
@@ -256,7 +311,10 @@ def _task_of(objective) -> str:
 
 
 def plot_placement_map(placement_map: PlacementMap, path: str | Path, title: str | None = None) -> Path:
-    """Write :func:`placement_map_figure` (PNG or SVG by the file's suffix) atomically; returns the path."""
-    from .figures import save_and_close
+    """Write :func:`placement_map_figure` (PNG or SVG by the file's suffix) atomically; returns the path.
 
-    return save_and_close(placement_map_figure(placement_map, title), path, dpi=110, bbox_inches="tight")
+    Written through the figure's own canvas: neither pyplot nor :mod:`mobmanip.viz.figures` is
+    imported (``place --map`` writes this figure and no other)."""
+    from ..support.files import save_figure
+
+    return save_figure(placement_map_figure(placement_map, title), path, dpi=110)
