@@ -90,11 +90,11 @@ def test_every_command_is_registered_under_its_module_name():
 def test_the_command_is_read_past_the_verbosity_options_only():
     """``-v``/``-vv``/``--verbose`` may come before the command; any other option first (``--help``,
     ``--version``) leaves the command unnamed, and the parser then registers every command."""
-    from mobmanip.cli import _command_named
+    from mobmanip.cli import command_named
 
-    assert _command_named(["place", "tiago_dual", "-v"]) == "place"
-    assert _command_named(["-vv", "--verbose", "-v", "team-carry", "--help"]) == "team-carry"
-    assert _command_named(["--help", "place"]) is None
-    assert _command_named(["--version"]) is None
-    assert _command_named(["-", "place"]) is None
-    assert _command_named([]) is None
+    assert command_named(["place", "tiago_dual", "-v"]) == "place"
+    assert command_named(["-vv", "--verbose", "-v", "team-carry", "--help"]) == "team-carry"
+    assert command_named(["--help", "place"]) is None
+    assert command_named(["--version"]) is None
+    assert command_named(["-", "place"]) is None
+    assert command_named([]) is None

@@ -67,7 +67,7 @@ class _VersionAction(argparse.Action):
         parser.exit()
 
 
-def _command_named(argv: list[str]) -> str | None:
+def command_named(argv: list[str]) -> str | None:
     """The command an argument list names: its first word when only ``-v``/``--verbose`` come
     before it (``None`` otherwise, e.g. ``--help`` first: then every command is registered)."""
     for word in argv:
@@ -179,7 +179,7 @@ def _redeliver_interrupts(previous):
 
 
 def _main(argv: list[str] | None) -> int:
-    parser = build_parser(_command_named(sys.argv[1:] if argv is None else argv))
+    parser = build_parser(command_named(sys.argv[1:] if argv is None else argv))
     with _escaped_output():
         args = parser.parse_args(argv)
         _configure_logging(args.verbose)
