@@ -277,7 +277,14 @@ def placement_map_figure(placement_map: PlacementMap, title: str | None = None) 
                         MAP_BAR_WIDTH / page_width, height / page_height), label="<colorbar>")  # fmt: skip
     fig.colorbar(mesh, cax=cax, label=objective_label(grid.objective, get_task(task)))
     ax.set_title("\n".join(lines), fontsize=10)
-    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=3, fontsize=8,
+    handles, labels = ax.get_legend_handles_labels()
+    # the arrows are white on the heat map: on the white page their legend entry is an arrow in grey
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color="0.3", marker=r"$\rightarrow$", markersize=12, linestyle="none")
+               if label == "best heading" else handle for handle, label in zip(handles, labels)]  # fmt: skip
+    labels = ["best heading (white arrows)" if label == "best heading" else label for label in labels]
+    fig.legend(handles, labels, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=3, fontsize=8,
                frameon=False)  # fmt: skip
     return fig
 
