@@ -33,7 +33,7 @@ print(json.dumps(seen))
 def _imported(tmp_path, *commands: list[str]) -> list[tuple[int, set[str]]]:
     """For each command, run in turn in one fresh interpreter: its exit code and the watched
     modules imported so far."""
-    watched = [*NEVER, "matplotlib", *(f"mobmanip.commands.{name}" for name in OTHER_COMMANDS)]
+    watched = [*NEVER, "matplotlib", "numba", *(f"mobmanip.commands.{name}" for name in OTHER_COMMANDS)]
     proc = subprocess.run(
         [sys.executable, "-c", _SCRIPT, json.dumps(watched), json.dumps(commands)],
         env={**os.environ, "PYTHONPATH": str(ROOT / "src")},
@@ -49,7 +49,9 @@ def _imported(tmp_path, *commands: list[str]) -> list[tuple[int, set[str]]]:
 def test_a_command_imports_neither_other_commands_nor_what_it_does_not_draw_with(tmp_path):
     """``place`` without --figure draws nothing: no matplotlib at all; with --map it writes the
     map's PNG through matplotlib's Agg canvas, without pyplot or the robot-drawing figures. No
-    other command's module is imported, nor the viewer, meshes, MuJoCo or Dask."""
+    other command's module is imported, nor the viewer, meshes, MuJoCo or Dask. A placement of
+    a few starts runs the gradients' NumPy forms and never loads Numba; the map's thousands of
+    evaluations run the compiled loops."""
     (placed, after_place), (mapped, after_map) = _imported(
         tmp_path,
         ["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x"],
@@ -68,7 +70,7 @@ def test_a_command_imports_neither_other_commands_nor_what_it_does_not_draw_with
     )
     assert placed == 0 and mapped == 0
     assert after_place == set(), after_place
-    assert after_map == {"matplotlib"}, after_map
+    assert after_map == {"matplotlib", "numba"}, after_map
     assert (tmp_path / "map" / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

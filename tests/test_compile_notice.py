@@ -1,6 +1,6 @@
 """Every Numba compile announces itself on standard error, with up to how long it may take,
 before it runs: the polytope/zonotope face kernel (``analyze --polytope``) and the gradient tree
-kernel (``place --objective dynamic:...``), as the batch engine's kernel already did
+kernel (``place --objective dynamic:...`` with enough starts to use it), as the batch engine's kernel already did
 (tests/test_compile_policy.py). Checked in fresh processes with an empty cache
 (``NUMBA_CACHE_DIR``): the cold run announces each compile and reports its time, the warm run
 (the cache filled) prints nothing, and ``mobmanip warmup`` finds those kernels cached. On a
@@ -24,7 +24,9 @@ from conftest import ROOT
 from mobmanip.support.compile_notice import announced_compile, numba_cached
 
 ANALYZE = ["analyze", "tiago_dual", "--posture", "hold", "--object-mass", "2", "--task", "spatial", "--polytope"]
-PLACE = ["place", "tiago_dual", "--object", "2,1,0.9", "--mass", "3", "--objective", "dynamic:capacity:+z"]
+#: Ten starts: a placement of fewer runs the gradients' NumPy forms (COMPILED_FROM_ROUNDS).
+PLACE = ["place", "tiago_dual", "--object", "2,1,0.9", "--mass", "3", "--objective", "dynamic:capacity:+z",
+         "--starts", "10"]  # fmt: skip
 ANNOUNCE = re.compile(r"^mobmanip: compiling (.+), once \(up to (\d+) s on a busy 2-core machine")
 DONE = re.compile(r"^mobmanip: (.+) compiled in ([\d.]+) s$")
 

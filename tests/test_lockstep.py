@@ -202,16 +202,20 @@ def test_a_map_solved_in_one_call_equals_its_bands_solved_alone():
         ("stretch", "dynamic:log_volume", False),
     ],
 )
-def test_a_batch_row_equals_the_same_configuration_alone_bit_for_bit(name, objective, decoupled):
+@pytest.mark.parametrize("compiled", [None, False], ids=["loops", "numpy"])
+def test_a_batch_row_equals_the_same_configuration_alone_bit_for_bit(name, objective, decoupled, compiled):
     """What lets batching leave results unchanged: the gradient chain computes every row of a
     batch exactly as it computes that configuration alone (no product whose summation depends
-    on the batch's size)."""
+    on the batch's size), in the compiled loops and in the NumPy forms a placement of a few
+    starts runs (each product one matrix per configuration, never one over the stacked rows)."""
     import pinocchio as pin
 
     from mobmanip.gradients.evaluator import GradientEvaluator
 
     robot = mobmanip.load_robot(name)
-    evaluator = GradientEvaluator(robot, objective, robot.spec.default_task, object_mass=1.0, decoupled=decoupled)
+    evaluator = GradientEvaluator(
+        robot, objective, robot.spec.default_task, object_mass=1.0, decoupled=decoupled, compiled=compiled
+    )
     rng = np.random.default_rng(7)
     q0 = robot.hold_configuration()
     qs = np.array([pin.integrate(robot.model, q0, rng.normal(scale=0.4, size=robot.model.nv)) for _ in range(7)])

@@ -221,6 +221,9 @@ class GradientEvaluator:
             spec's); ignored with ``held_object``.
         held_object: an explicit object, taken as constant.
         decoupled: the decoupled P (no platform-arm interaction) for the dynamic ellipsoid.
+        compiled: the reverse chain's compiled row loops (``True``), its NumPy forms
+            (``False``), or the loops where Numba is available (``None``); as
+            :class:`mobmanip.gradients.tree_adjoint.TreeAdjoint`'s. The two agree to round-off.
 
     Raises:
         ModelError: a platform whose S depends on the configuration (``steered``).
@@ -236,6 +239,7 @@ class GradientEvaluator:
         object_mass: float | None = None,
         held_object: HeldObject | None = None,
         decoupled: bool = False,
+        compiled: bool | None = None,
     ):
         if not robot.constant_null_space:
             raise ModelError(
@@ -270,7 +274,7 @@ class GradientEvaluator:
         self.evaluations = 0
         self.tree: TreeAdjoint | None
         try:  # the reverse chain's closed forms, where every joint kind has them
-            self.tree = TreeAdjoint(robot.model, [arm.frame_id for arm in robot.arms])
+            self.tree = TreeAdjoint(robot.model, [arm.frame_id for arm in robot.arms], compiled=compiled)
         except ModelError:
             self.tree = None
 

@@ -232,7 +232,10 @@ class TreeAdjoint:
                     t.g,
                 )
             return
-        Ic = (I.reshape(n, nj, 36).transpose(0, 2, 1).reshape(-1, nj) @ self.desc).reshape(n, 36, nj)
+        # every product here is one matrix per configuration, as a stack: one product over the
+        # stacked rows lets BLAS sum a row in an order that depends on the chunk's size, and a
+        # batched placement would then differ from its starts run alone (tests/test_lockstep.py)
+        Ic = I.reshape(n, nj, 36).transpose(0, 2, 1) @ self.desc  # (n, 36, nj)
         Ic = Ic[..., self.dof_joint].reshape(n, 6, 6, self.nv)  # (n, 6, 6, nv): Ic of each dof's joint
         F = np.einsum("nxyk,nyk->nxk", Ic, t.xi)  # (n, 6, nv)
         X = np.swapaxes(t.xi, 1, 2) @ F  # X[i, k] = xi_i . Ic_joint(k) xi_k
@@ -281,7 +284,7 @@ class TreeAdjoint:
         gamma = np.empty((n, k, 6, nv))
         gamma[:, :, :3] = w_bl
         gamma[:, :, 3:] = _cross_frames_both(v, bl) + _cross_frames_both(w, ba)
-        G = (gamma.reshape(-1, nv) @ self.suffix).reshape(n, k, 6, nv)
+        G = (gamma.reshape(n, k * 6, nv) @ self.suffix).reshape(n, k, 6, nv)
         rho = -w_bl.sum(axis=3)  # (n, k, 3)
         if p_bar is not None:
             rho = rho + p_bar
@@ -321,10 +324,10 @@ class TreeAdjoint:
                 self.kernel.bilinear_rows(xi, coef, offset, I, self.parent0, self.dof_start, self.dof_count, R, out)
             return out
         # twists of every joint's body (n, 6, 2R, nj): V_j = offset + sum_(i <= j) xi_i c_i
-        V = ((xi[:, :, None, :] * coef[:, None, :, :]).reshape(-1, nv) @ self.anc).reshape(n, 6, 2 * R, nj)
+        V = ((xi[:, :, None, :] * coef[:, None, :, :]).reshape(n, -1, nv) @ self.anc).reshape(n, 6, 2 * R, nj)
         V += offset[None, :, :, None]
         h = I @ V.transpose(0, 3, 1, 2)  # (n, nj, 6, 2R) momenta of the bodies
-        H = (h.transpose(0, 2, 3, 1).reshape(-1, nj) @ self.desc).reshape(n, 6, 2 * R, nj)  # of the subtrees
+        H = (h.transpose(0, 2, 3, 1).reshape(n, -1, nj) @ self.desc).reshape(n, 6, 2 * R, nj)  # of the subtrees
         pre = np.concatenate([np.broadcast_to(offset[None, :, :, None], (n, 6, 2 * R, 1)), V], axis=3)
         pre = pre[..., self.joint_parent]  # twists of each joint's parent, (n, 6, 2R, nj)
         swap = np.r_[R : 2 * R, 0:R]  # pair each a with its b: gamma(V^a_pre, H^b) + gamma(V^b_pre, H^a)

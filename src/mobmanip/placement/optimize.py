@@ -61,6 +61,12 @@ AGREEMENT_RTOL = 1e-6
 CONSTRAINT_TOLERANCE = 1e-6
 #: Default number of starts (platform headings around the object).
 DEFAULT_STARTS = 8
+#: A placement whose starts times iterations stay below this runs the gradients' NumPy forms, not
+#: the compiled row loops: in a fresh process loading Numba and the loops' cached code costs about
+#: 0.5 s of CPU, and on TIAGo++ the loops save about 0.5 ms per round of at most 8 evaluations
+#: (1.1-1.4x; `dynamic:log_volume`, measured here), so they pay for themselves after about a
+#: thousand rounds. Maps and batches keep the loops.
+COMPILED_FROM_ROUNDS = 1000
 #: How many of the closest shape pairs a placement passes to SLSQP as constraints.
 CLOSEST_PAIRS = 100
 
@@ -155,13 +161,16 @@ class PlacementProblem:
     @classmethod
     def of_objective(
         cls, robot, objective, task, target, region=None, reference=None, collision=None, *,
-        object_mass=None, decoupled=False,
+        object_mass=None, decoupled=False, compiled=None,
     ) -> PlacementProblem:  # fmt: skip
         """The problem of placing ``robot`` to hold the object at ``target``: the objective's
         :class:`~mobmanip.gradients.GradientEvaluator` on ``task`` (a name or a task; ``None``: the
-        spec's default task), the hold of ``reference`` (``None``: the spec's hold configuration)."""
+        spec's default task), the hold of ``reference`` (``None``: the spec's hold configuration);
+        ``compiled`` as the evaluator's."""
         task = get_task(task or robot.spec.default_task)
-        evaluator = GradientEvaluator(robot, objective, task, object_mass=object_mass, decoupled=decoupled)
+        evaluator = GradientEvaluator(
+            robot, objective, task, object_mass=object_mass, decoupled=decoupled, compiled=compiled
+        )
         q_ref = robot.hold_configuration() if reference is None else robot.check_configuration(reference).copy()
         return cls(robot, evaluator, target, region, q_ref, collision)
 
@@ -546,9 +555,11 @@ def place(
     seeds = tuple(seeds)
     if robot.platform_locked:
         raise ArgumentError(f"robot {robot.name!r} has a fixed platform: there is no base placement to choose")
+    compiled = None if (starts + len(seeds)) * max_iterations >= COMPILED_FROM_ROUNDS else False
     problem = PlacementProblem.of_objective(
-        robot, objective, task, target, region, reference, collision, object_mass=object_mass, decoupled=decoupled
-    )
+        robot, objective, task, target, region, reference, collision, object_mass=object_mass, decoupled=decoupled,
+        compiled=compiled,
+    )  # fmt: skip
     evaluator = problem.ev
     bounds = problem.bounds()
     if hold_turn is not None:
