@@ -1,7 +1,7 @@
 """``mobmanip site`` with ``[grounded]``: the straight-line reach on the floor at each position's
 placement, checked against the independent whole-robot LP (tests/floor_reference.py); where the
-robot cannot stand on its floor the value is left out and the reason says why; a bad ``mu`` or
-direction is one error before any work."""
+robot cannot stand on its floor the value is left out and the reason says why; a bad ``mu``,
+direction or objective is one error before any work or output."""
 
 from __future__ import annotations
 
@@ -79,13 +79,19 @@ def test_where_the_robot_cannot_stand_the_reason_says_why(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "grounded, message",
+    "body, message",
     [
-        ('mu = 50\ndirection = "+x"', "[grounded] mu 50 is above 10"),
-        ('mu = 0.5\ndirection = "+q"', "[grounded] direction '+q': the planar task's axes are +x, -x, +y, -y"),
+        ('objective = "dynamic:capacity:+x"\n[grounded]\nmu = 50\ndirection = "+x"', "[grounded] mu 50 is above 10"),
+        ('objective = "dynamic:capacity:+x"\n[grounded]\nmu = 0.5\ndirection = "+q"',
+         "[grounded] direction '+q': the planar task's axes are +x, -x, +y, -y"),
+        ('objective = "dynamic_polytope:bogus:+x"', "the reading must be one of reach, support"),
+        ('objective = "kinematic:capacity:+q"', "+q"),
     ],
-)
-def test_a_bad_grounded_table_is_one_error_before_any_work(tmp_path, grounded, message):
-    run, _ = _site(tmp_path, f'objective = "dynamic:capacity:+x"\n[grounded]\n{grounded}\n')
+    ids=["mu", "direction", "reading", "axis"],
+)  # fmt: skip
+def test_a_bad_site_is_one_error_before_any_work_or_output(tmp_path, body, message):
+    """Nothing is printed before the error: not even the site's header line."""
+    run, _ = _site(tmp_path, body + "\n")
     assert run.returncode == 2 and run.stderr.count("\n") == 1 and message in run.stderr, run.stderr
+    assert run.stderr.startswith("mobmanip: error: ") and run.stdout == "", run.stdout
     assert not (tmp_path / "o").exists()

@@ -83,7 +83,7 @@ def run(args) -> int:
     import numpy as np
 
     from ..errors import UsageError
-    from ..placement.site import Site, run_site
+    from ..placement.site import Site, check_site, run_site
     from ..support.files import check_output, output_directory
     from .common import cluster_executor, registered_constraints, show_progress
     from .outputs import SITE_FILES, site_outputs
@@ -102,6 +102,7 @@ def run(args) -> int:
         from ..support.cluster import check_address
 
         check_address(args.dask)
+    check_site(site)  # a bad robot, objective or direction says so before the header
     kept = "".join(f", keeping {c.name}" for c in constraints)
     print(f"site {args.site}: {len(site.positions)} object positions, robot {Path(site.robot).name}, "
           f"{site.objective}{kept}")  # fmt: skip

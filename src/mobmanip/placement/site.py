@@ -50,8 +50,9 @@ import numpy as np
 
 from ..errors import ArgumentError, MobmanipError, SpecError, TaskError
 from ..gradients.readings import is_reading_objective
-from ..robot.model import Robot, load_robot, robot_in_process
+from ..robot.model import Robot, robot_in_process
 from ..robot.support_spec import check_mu
+from ..robot.tasks import TaskSpace, get_task
 from ..support.ranges import PLATFORM_POSITION
 from .grounded import DEFAULT_BUDGET, place_polytope
 from .optimize import DEFAULT_STARTS, place
@@ -303,7 +304,6 @@ class SiteResult:
 def _grounded_reach(robot: Robot, q: np.ndarray, site: Site) -> float:
     from ..analysis.plausibility import floor_warnings
     from ..analysis.single import analyze
-    from ..robot.tasks import get_task
     from ..terms.constraints.floor import Floor
 
     task = get_task(site.task or robot.spec.default_task)
@@ -370,24 +370,19 @@ def solve_positions(site: Site, start: int, stop: int) -> tuple[int, np.ndarray,
     return start, rows, reasons
 
 
-def run_site(
-    site: Site, executor: cf.Executor | None = None, positions_per_task: int = 1, progress: bool = False
-) -> SiteResult:
-    """Every position's placement, in this process or on ``executor``; the same result either way.
+def check_site(site: Site) -> tuple[Robot, TaskSpace]:
+    """The site's robot and task, once its robot, objective, task, constraints and grounded
+    direction are checked (what :func:`run_site` checks before any work; a command calls it
+    before it prints).
 
     Raises:
-        ArgumentError: ``positions_per_task`` below 1.
-        MobmanipError: the robot cannot be loaded or the objective is malformed (checked here first).
+        MobmanipError: the robot cannot be loaded, the objective or the task is malformed, an
+            ellipsoid's objective with constraints, a grounded direction not of the task.
     """
-    if isinstance(positions_per_task, bool) or not isinstance(positions_per_task, int) or positions_per_task < 1:
-        raise ArgumentError(f"positions per task must be a positive integer, got {positions_per_task!r}")
-    started = time.perf_counter()
-    robot = load_robot(site.robot)  # fail here, once, on a bad robot
     from ..gradients.evaluator import Objective
     from ..gradients.readings import ReadingObjective
-    from ..robot.tasks import get_task
 
-    # a malformed objective or task fails here, once, not in every task
+    robot = robot_in_process(site.robot)  # a bad robot fails here, once; the tasks here reuse it
     task = get_task(site.task or robot.spec.default_task)
     if is_reading_objective(site.objective):
         ReadingObjective.parse(site.objective, task)
@@ -401,6 +396,22 @@ def run_site(
             )
     if site.mu is not None:
         _grounded_direction(site, task)
+    return robot, task
+
+
+def run_site(
+    site: Site, executor: cf.Executor | None = None, positions_per_task: int = 1, progress: bool = False
+) -> SiteResult:
+    """Every position's placement, in this process or on ``executor``; the same result either way.
+
+    Raises:
+        ArgumentError: ``positions_per_task`` below 1.
+        MobmanipError: as :func:`check_site` (checked here first, once, not in every task).
+    """
+    if isinstance(positions_per_task, bool) or not isinstance(positions_per_task, int) or positions_per_task < 1:
+        raise ArgumentError(f"positions per task must be a positive integer, got {positions_per_task!r}")
+    started = time.perf_counter()
+    robot, task = check_site(site)
     n = len(site.positions)
     # the configuration's columns, named (not q_0..) and apart from the placement's own platform_x, platform_y
     names = tuple(f"q.{name}" for name in robot.coordinate_names)
