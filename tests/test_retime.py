@@ -401,9 +401,9 @@ def test_path_terms_equal_the_reduced_dynamics_at_every_sample(tiago, name, task
 
 
 def assert_path_terms_match(robot, path, task, mass):
-    """path_terms (stacked Newton-Euler) against motion_terms' effort map and floor_wrench_terms
-    (the reduced dynamics P, xi and the grasp), sample by sample, to 1e-10 of their scale."""
-    from mobmanip.motion.ground import floor_wrench_terms
+    """path_terms (stacked Newton-Euler) against motion_terms' effort map, floor_wrench and
+    rest_wrench (the reduced dynamics P, xi and the grasp), sample by sample, to 1e-10 of their scale."""
+    from mobmanip.motion.ground import floor_wrench, rest_wrench
     from mobmanip.motion.in_motion import motion_terms
     from mobmanip.motion.path_terms import path_terms
     from mobmanip.robot.tasks import get_task
@@ -422,7 +422,8 @@ def assert_path_terms_match(robot, path, task, mass):
         a0, a1 = np.zeros(6), np.zeros((6, robot.nx))
         a0[rows] = reference.W_pinv.T @ (reference.drift - reference.grasp_drift)
         a1[rows] = reference.W_pinv.T @ reference.J_u
-        offset, linear, weight = floor_wrench_terms(robot, q, x_s, mass, a0, a1)
+        offset, linear = floor_wrench(robot, q, x_s, mass, a0, a1)
+        weight = rest_wrench(robot, q, mass)
         size = np.abs(weight).max()
         assert np.allclose(terms.wrench_0[i], weight, rtol=0, atol=1e-10 * size)
         assert np.allclose(terms.wrench_a[i], linear @ x_s, rtol=0, atol=1e-10 * size)

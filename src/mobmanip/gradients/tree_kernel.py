@@ -14,6 +14,15 @@ from numba import njit
 _jit = njit(cache=True, nogil=True)
 
 
+@njit(inline="always")
+def _entry(A, B, x, i):
+    """The (x, i) entry of the product A @ B of two matrices, summed in the order of j."""
+    s = 0.0
+    for j in range(A.shape[1]):
+        s += A[x, j] * B[j, i]
+    return s
+
+
 @_jit
 def world_inertias(R, origins, mass, lever, rot_inertia, out):
     """Bodies' spatial inertias in the world frame at its origin (linear, angular rows).
@@ -86,10 +95,7 @@ def mass_and_gravity(xi, I, parent, dof_start, dof_count, A0, armature, M, g):
         for j in range(nj):
             for k in range(dof_start[j], dof_start[j] + dof_count[j]):
                 for x in range(6):
-                    s = 0.0
-                    for y in range(6):
-                        s += Ic[j, x, y] * xi[r, y, k]
-                    F[x, k] = s
+                    F[x, k] = _entry(Ic[j], xi[r], x, k)
                 gk = 0.0
                 for x in range(6):
                     s = 0.0
@@ -327,10 +333,7 @@ def frame_term(xi, positions, frames, supports, suffix, J_bar, p_bar, out):
             rho2 += p_bar[r, a, 2]
             for x in range(6):
                 for i in range(nv):
-                    s = 0.0
-                    for j in range(nv):
-                        s += gamma[x, j] * suffix[j, i]
-                    G[x, i] = s
+                    G[x, i] = _entry(gamma, suffix, x, i)
             for i in range(nv):
                 turn = 0.0
                 for x in range(6):

@@ -473,9 +473,7 @@ def _run(
                     elif constraint is not None:
                         diagnosis = CarryDiagnosis(k, float(times[k]), constraint, "constraint")
                     else:
-                        diagnosis = diagnose_step(
-                            robot, q, x_prev, h, task, object_mass, J_u, b, k, float(times[k]), gravity
-                        )
+                        diagnosis = diagnose_step(robot, q, h, effort_map, J_u, b, k, float(times[k]))
                     partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
                                        hand[: k + 1])  # fmt: skip
                     raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..robot.model import Robot
-from ..robot.tasks import TaskSpace
 
 #: A joint approaches a position limit at most at (distance to the limit) / this (s): it slows
 #: down smoothly (exponentially) instead of stopping within one step.
@@ -106,15 +105,12 @@ class CarryDiagnosis:
 def diagnose_step(
     robot: Robot,
     q: np.ndarray,
-    x_prev: np.ndarray,
     h: float,
-    task: TaskSpace,
-    object_mass: float | None,
+    effort_map: tuple[np.ndarray, np.ndarray],
     J_u: np.ndarray,
     b: np.ndarray,
     step: int,
     t: float,
-    gravity: np.ndarray | None = None,
 ) -> CarryDiagnosis:
     """Which limit makes the step's QP infeasible: each limit of each wheel and joint relaxed
     alone (position bounds widened to the velocity limits, a velocity limit lifted, an effort
@@ -123,17 +119,16 @@ def diagnose_step(
 
     Args:
         robot, q: the robot and its configuration at the step, (nq,).
-        x_prev: the previous step's reduced velocity, (nx,); h: the step's duration (s).
-        task, object_mass: as :func:`carry`.
+        h: the step's duration (s).
+        effort_map: (A, offset), the step's efforts tau = A x + offset (:func:`_effort_map`).
         J_u, b: the step's tracking equality J_u x = b.
         step, t: the step's index and time (s), reported.
-        gravity: gravity in the floor's axes, (3,) m/s^2 (default: a level floor), as :func:`_effort_map`.
     """
     nx = robot.nx
     vel = np.asarray(robot.velocity_limits, dtype=float)
     effort = np.asarray(robot.effort_limits, dtype=float)
     lo, hi = velocity_bounds(robot, q, h)
-    A, offset = _effort_map(robot, q, x_prev, h, task, object_mass, gravity)
+    A, offset = effort_map
     H = np.diag(1.0 / vel**2)
     c = np.zeros(nx)
     names = robot.reduced_velocity_names

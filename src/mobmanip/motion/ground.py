@@ -84,24 +84,6 @@ def floor_wrench(
             On a ramp the world's axes are the ramp's (z its normal) and gravity leans
             (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`).
     """
-    offset, linear, _ = floor_wrench_terms(
-        robot, q, x, object_mass, object_acceleration, object_acceleration_rate, gravity=gravity
-    )
-    return offset, linear
-
-
-def floor_wrench_terms(
-    robot: Robot,
-    q: np.ndarray,
-    x: np.ndarray,
-    object_mass: float,
-    object_acceleration: np.ndarray,
-    object_acceleration_rate: np.ndarray,
-    *,
-    gravity: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`floor_wrench`'s (offset, linear) and the offset's weight part alone, (6,): the
-    wrench at rest (the offset less every velocity term and the given object acceleration)."""
     g = np.asarray(GRAVITY if gravity is None else gravity, dtype=float)
     model, data = robot.model, robot.data
     mass = float(pin.computeTotalMass(model))
@@ -121,16 +103,21 @@ def floor_wrench_terms(
     offset[:3] = rate0[:3] + object_mass * a0[:3] - (mass + object_mass) * g
     linear[:3] = rate1[:3] + object_mass * a1[:3]
     offset[3:] = rate0[3:] + cross3(c, rate0[:3]) + object_mass * cross3(c_o, a0[:3])
-    weight = np.zeros(6)
-    weight[:3] = -(mass + object_mass) * g
-    weight[3:] = -(cross3(c, mass * g) + cross3(c_o, object_mass * g))
-    offset[3:] += weight[3:]
+    offset[3:] -= cross3(c, mass * g) + cross3(c_o, object_mass * g)  # the weights' moments
     linear[3:] = rate1[3:] + skew(c) @ rate1[:3] + object_mass * skew(c_o) @ a1[:3]
     if object_mass > 0.0:
         inertia = HeldObject.between(hands, object_mass).inertia
         offset[3:] += inertia @ a0[3:]
         linear[3:] += inertia @ a1[3:]
-    return offset, linear, weight
+    return offset, linear
+
+
+def rest_wrench(robot: Robot, q: np.ndarray, object_mass: float, *, gravity: np.ndarray | None = None) -> np.ndarray:
+    """The floor's wrench at rest, (6,): :func:`floor_wrench`'s offset with the robot still and
+    the object not accelerating, the robot's and the object's weights alone (N, N m; world axes,
+    moment about the world origin)."""
+    zero = np.zeros(robot.nx)
+    return floor_wrench(robot, q, zero, object_mass, np.zeros(6), np.zeros((6, robot.nx)), gravity=gravity)[0]
 
 
 def ground_along(

@@ -9,11 +9,11 @@ Along a path q(s) run with a timing s(t), the reduced velocities and acceleratio
   algorithm: ``Q tau = S^T f + J_u^T W^+ w_o`` with the joint-space forces
   ``f = M qdd + C(q, v) v + g`` and the object's wrench ``w_o = M_o a_o + c_o + g_o``;
 - the floor's resultant wrench on the robot and its object (as
-  :func:`mobmanip.motion.ground.floor_wrench_terms`), from the centroidal momentum's rate.
+  :func:`mobmanip.motion.ground.floor_wrench`), from the centroidal momentum's rate.
 
 Only Pinocchio runs per sample (a few passes each); the algebra runs once on the stacks, so a
 200-sample path costs a few milliseconds more than Pinocchio's passes. This is the same
-mathematics as :func:`mobmanip.motion.in_motion.motion_terms` and ``floor_wrench_terms`` by a
+mathematics as :func:`mobmanip.motion.in_motion.motion_terms` and ``floor_wrench`` by a
 second route (Newton-Euler here, the reduced P and xi there); the tests hold the two together.
 """
 

@@ -19,7 +19,7 @@ equalities, and terms added to the problem's equations.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,6 +84,17 @@ def joins_a_step(rows: ConstraintRows) -> None:
         )
 
 
+def _joining_rows(
+    constraints: Sequence[Constraint], terms: MeasureTerms
+) -> Iterator[tuple[ConstraintRows, tuple[str, ...]]]:
+    """Each constraint's rows at ``terms``, checked to join a step (:func:`joins_a_step`), with
+    one label per row (the constraint's own, else its name and the row's index)."""
+    for constraint in constraints:
+        rows = constraint.rows(terms)
+        joins_a_step(rows)
+        yield rows, tuple(rows.labels or (f"{rows.name} row {i}" for i in range(len(rows.h))))
+
+
 def step_rows(
     constraints: Sequence[Constraint],
     terms: MeasureTerms,
@@ -118,9 +129,7 @@ def step_rows(
     G_rows: list[np.ndarray] = []
     h_rows: list[np.ndarray] = []
     labels: list[str] = []
-    for constraint in constraints:
-        rows = constraint.rows(terms)
-        joins_a_step(rows)
+    for rows, names in _joining_rows(constraints, terms):
         G = np.zeros((len(rows.h), width))
         h = np.asarray(rows.h, dtype=float).copy()
         for name, block in rows.G.items():
@@ -137,7 +146,7 @@ def step_rows(
                 h -= block @ offset
         G_rows.append(G)
         h_rows.append(h)
-        labels.extend(rows.labels or [f"{rows.name} row {i}" for i in range(len(h))])
+        labels.extend(names)
     return StepRows(np.vstack(G_rows), np.concatenate(h_rows), tuple(labels))
 
 
@@ -174,10 +183,7 @@ def path_timing_rows(
     cb: list[np.ndarray] = []
     d: list[np.ndarray] = []
     labels: list[str] = []
-    for constraint in constraints:
-        rows = constraint.rows(terms)
-        joins_a_step(rows)
-        names = rows.labels or tuple(f"{rows.name} row {i}" for i in range(len(rows.h)))
+    for rows, names in _joining_rows(constraints, terms):
         h = np.asarray(rows.h, dtype=float)
         if rows.problem == "acceleration":
             G_xdot = np.asarray(rows.G.get("xdot", np.zeros((len(h), len(x_s)))), dtype=float)

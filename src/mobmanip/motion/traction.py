@@ -207,7 +207,7 @@ def floor_time_scaling(
         object_mass: the held object's mass, as ``ground`` was read (default: the spec's).
         zmp_margin: how far inside the support polygon the zero-moment point must stay (m).
     """
-    from .ground import floor_wrench_terms
+    from .ground import rest_wrench
 
     support = ground.support
     mu, force, moment = _checked_floor(ground, mu, "the floor's time-scaling")
@@ -218,7 +218,7 @@ def floor_time_scaling(
     best, where, limit = math.inf, -1, ""
     for i in range(len(trajectory)):
         q = trajectory.q[i]
-        rest = floor_wrench_terms(robot, q, np.zeros(robot.nx), mass, np.zeros(6), np.zeros((6, robot.nx)))[2]
+        rest = rest_wrench(robot, q, mass)
         T = to_platform(q)
         W0, W1 = T @ rest, T @ (np.r_[force[i], moment[i]] - rest)
         # the zero-moment point's and the supports' rows, R (W0 + b W1) <= r: linear in b = k^2

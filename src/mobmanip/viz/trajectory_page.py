@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import types
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -125,8 +126,10 @@ def export_trajectory_page(
     every: int | None = None,
     object_mass: float | None = None,
     decoupled: bool = False,
+    notes: Sequence[str] = (),
 ) -> Path:
-    """Write a self-contained HTML page that plays the trajectory with its ellipsoids moving along.
+    """Write a self-contained HTML page that plays the trajectory with its ellipsoids moving along
+    (:func:`trajectory_frames`'s frames at its pace), ``notes`` under the legend.
 
     Returns:
         The page's path.
@@ -137,7 +140,7 @@ def export_trajectory_page(
         robot, trajectory, task, every=every, object_mass=object_mass, decoupled=decoupled
     )
     with EllipsoidViewer(robot) as viewer:
-        animate_trajectory(viewer, frames, times)
+        animate_trajectory(viewer, frames, times, notes=notes)
         return viewer.export_html(path)
 
 
@@ -158,13 +161,9 @@ def export_carry_page(
         The page's path.
     """
     from ..motion.trajectory import trajectory_from_samples
-    from .scene import EllipsoidViewer
 
     runs = [run for run in (result.preparation, result.motion) if run is not None]
     t, q = joined_runs([run.t for run in runs]), joined_runs([run.q for run in runs])
-    trajectory = trajectory_from_samples(robot, t, q)
-    frames, times = trajectory_frames(robot, trajectory, result.task, every=every, object_mass=object_mass)
     notes = self_motion_notes(None if result.preparation is None else result.preparation.t)
-    with EllipsoidViewer(robot) as viewer:
-        animate_trajectory(viewer, frames, times, notes=notes)
-        return viewer.export_html(path)
+    return export_trajectory_page(robot, trajectory_from_samples(robot, t, q), path, result.task, every=every,
+                                  object_mass=object_mass, notes=notes)  # fmt: skip
