@@ -75,6 +75,38 @@ def test_analyze_takes_the_option_and_honours_it(options, tmp_path, capfd):
     assert document["dynamic_polytope"]["volume"] == pytest.approx(closed.volume, rel=1e-9)
 
 
+def test_analyze_on_tiago_keeps_the_share_along_every_spatial_axis(options, tmp_path, capfd):
+    """On TIAGo++ (joint frames turned, its file's numbers rounded), 6-D spatial task at the hold
+    posture: each axis's support and straight-line reach with the option equal the zonotope of
+    the halved effort limits, its support c.u + sum_i |g_i.u| in closed form and its reach by an
+    LP over the generators' weights (scipy's HiGHS), to 1e-9."""
+    from scipy.optimize import linprog
+
+    out = tmp_path / "t.json"
+    argv = ["analyze", "tiago_dual", "--posture", "hold", "--task", "spatial", "--measure", "dynamic_polytope",
+            "--object-mass", "1", "--effort-share", str(SHARE), "--json", out]  # fmt: skip
+    code, _, err = run_cli(capfd, *argv)
+    assert code == 0, err
+    document = json.loads(out.read_text())
+    robot = mobmanip.load_robot("tiago_dual")
+    closed = _closed_form(robot, robot.hold_configuration(), 1.0)
+    G, c = np.asarray(closed.generators), np.asarray(closed.center)
+    axes = document["task_axes"]
+    reaches = document["dynamic_polytope"]["reaches"]
+    assert len(reaches) == 12
+    for entry in reaches:
+        u = np.zeros(6)
+        u[axes.index(entry["axis"][1:])] = 1.0 if entry["axis"][0] == "+" else -1.0
+        assert entry["support"] == pytest.approx(c @ u + np.abs(G.T @ u).sum(), rel=1e-9)
+        n = G.shape[1]  # max t: t u = c + G s, |s| <= 1
+        lp = linprog(np.r_[-1.0, np.zeros(n)], A_eq=np.column_stack([u, -G]), b_eq=c,
+                     bounds=[(0.0, None)] + [(-1.0, 1.0)] * n, method="highs")  # fmt: skip
+        assert lp.status == 0
+        assert entry["straight_line"] == pytest.approx(lp.x[0], rel=1e-9)
+        assert entry["straight_line"] < 0.6 * entry["ideal_straight_line"]  # the share binds
+        assert entry["binding"] and all("at 0.5 of its effort limit" in label for label in entry["binding"])
+
+
 def test_payload_takes_the_option_and_equals_a_bisection_over_the_closed_form(options, tmp_path, capfd):
     """The heaviest object the paper robot can accelerate at 2 m/s^2 along +x with its efforts
     within half their limits: the payload program against a bisection on the mass over the closed
