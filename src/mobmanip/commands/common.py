@@ -29,6 +29,37 @@ def add_guided_command(sub, name: str, summary: str, description: str, guide: st
     )
 
 
+def add_configuration_command(sub, name: str, summary: str) -> argparse.ArgumentParser:
+    """A subcommand's parser about one configuration of a robot: which robot and where it stands
+    (:func:`add_robot_options`), what is computed there (:func:`add_analysis_options`) and on
+    what floor (:func:`add_floor_options`)."""
+    parser = sub.add_parser(name, help=summary)
+    add_robot_options(parser)
+    add_analysis_options(parser)
+    add_floor_options(parser)
+    return parser
+
+
+def configuration_from_command(args) -> tuple:
+    """For a command of :func:`add_configuration_command`: (the robot with its analysis options
+    applied, its configuration, the keywords of :func:`mobmanip.analysis.single.analyze` the
+    options give: ``object_mass``, ``decoupled``, ``measures`` and ``constraints``)."""
+    robot, q = load_robot_and_configuration(args)
+    robot = apply_analysis_options(robot, args)
+    options = {
+        "object_mass": args.object_mass,
+        "decoupled": args.decoupled,
+        "measures": requested_measures(args),
+        "constraints": constraints_from_args(args),
+    }
+    return robot, q, options
+
+
+def add_json_option(parser: Options, what: str) -> None:
+    """--json OUT.json: write ``what`` (e.g. "the result") as JSON."""
+    parser.add_argument("--json", metavar="OUT.json", help=f"write {what} as JSON")
+
+
 def add_task_option(parser: Options) -> None:
     """--task NAME: one of the task spaces, else the spec's default."""
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")

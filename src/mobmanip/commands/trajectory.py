@@ -153,26 +153,22 @@ def _report_traction(traction, trajectory) -> None:
         f"largest traction use {use:.4f} ({traction.wheels[k]} at sample {i}, t = {trajectory.t[i]:g} s; "
         f"mu = {traction.mu:g}, compliant load sharing)"
     )
-    slipping = traction.slipping()
-    if slipping.size:
-        j = int(slipping[0])
-        w = int(np.argmax(traction.use[j]))
-        print(
-            f"warning: a driven wheel slips (traction use above 1) at {slipping.size} of {len(trajectory)} samples: "
-            f"first {traction.wheels[w]} at sample {j} (t = {trajectory.t[j]:g} s, use {traction.use[j, w]:.4g}); "
-            f"the worst {traction.wheels[k]} at sample {i} (t = {trajectory.t[i]:g} s)",
-            file=sys.stderr,
-        )
-    unloaded = traction.unloaded()
-    if unloaded.size:
-        j = int(unloaded[0])
-        c = int(np.argmin(traction.normal[j]))
-        print(
-            f"warning: a support unloads (normal force 0 or less with the contacts equally stiff) at {unloaded.size} "
-            f"of {len(trajectory)} samples: first {traction.contacts[c]} at sample {j} (t = {trajectory.t[j]:g} s, "
-            f"{traction.normal[j, c]:.4g} N)",
-            file=sys.stderr,
-        )
+    worst = f"; the worst {traction.wheels[k]} at sample {i} (t = {trajectory.t[i]:g} s)"
+    # (what happens, at which samples, who: names and the amount per sample, the one picked, its unit)
+    for what, found, names, amounts, pick, unit, tail in (
+        ("a driven wheel slips (traction use above 1)", traction.slipping(), traction.wheels, traction.use,
+         np.argmax, "use {:.4g}", worst),
+        ("a support unloads (normal force 0 or less with the contacts equally stiff)", traction.unloaded(),
+         traction.contacts, traction.normal, np.argmin, "{:.4g} N", ""),
+    ):  # fmt: skip
+        if found.size:
+            j = int(found[0])
+            c = int(pick(amounts[j]))
+            print(
+                f"warning: {what} at {found.size} of {len(trajectory)} samples: first {names[c]} at sample {j} "
+                f"(t = {trajectory.t[j]:g} s, {unit.format(amounts[j, c])}){tail}",
+                file=sys.stderr,
+            )
 
 
 def run(args) -> int:
