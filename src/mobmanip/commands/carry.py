@@ -7,6 +7,7 @@ from .common import (
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
+    add_out_dir_option,
     add_page_options,
     add_progress_option,
     add_step_options,
@@ -89,7 +90,7 @@ def register(sub) -> None:
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
     add_object_mass_option(parser)
     add_step_options(parser)
-    parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    add_out_dir_option(parser, "trajectory.csv, baseline.csv, carry.json, capacity.png")
     add_page_options(
         parser, "the QP motion (the self-motion first) with its in-motion ellipsoids, the camera following the robot"
     )

@@ -60,6 +60,11 @@ def add_json_option(parser: Options, what: str) -> None:
     parser.add_argument("--json", metavar="OUT.json", help=f"write {what} as JSON")
 
 
+def add_out_dir_option(parser: Options, files: str) -> None:
+    """--out DIR: the folder the command writes ``files`` (e.g. "a.csv, a.json") to."""
+    parser.add_argument("--out", metavar="DIR", help=f"write {files}")
+
+
 def add_task_option(parser: Options) -> None:
     """--task NAME: one of the task spaces, else the spec's default."""
     parser.add_argument("--task", choices=list(TASKS), help="task space (default: the spec's default_task)")

@@ -10,6 +10,7 @@ from .common import (
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
+    add_out_dir_option,
     add_progress_option,
     add_recording_options,
     add_task_option,
@@ -74,7 +75,7 @@ def register(sub) -> None:
         help="also, at every sample, the highest speed from which the robot still stops within D metres of its "
         "platform's travel along the path, on the same rows (the lowest is printed; retime.json has them all)",
     )
-    parser.add_argument("--out", metavar="DIR", help="write retimed.csv, retime.json, retime.png, profile.csv")
+    add_out_dir_option(parser, "retimed.csv, retime.json, retime.png, profile.csv")
     add_motion_floor_options(parser)
     add_progress_option(parser)
     add_work_option(parser, f"samples (default {MAX_SAMPLES:,})")

@@ -6,6 +6,7 @@ from ..support.reading import decimal
 from .common import (
     add_guided_command,
     add_motion_floor_options,
+    add_out_dir_option,
     add_page_options,
     add_step_options,
     add_work_option,
@@ -88,7 +89,7 @@ def register(sub) -> None:
     )
     parser.add_argument("--scale", type=decimal, default=1.0, metavar="S", help="multiply the path's positions by S")
     add_step_options(parser)
-    parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
+    add_out_dir_option(parser, "one trajectory per robot, the baseline's, a summary")
     add_page_options(parser, "the team's motion (see below)")
     add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")

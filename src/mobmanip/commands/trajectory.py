@@ -13,6 +13,7 @@ from .common import (
     add_constraint_options,
     add_guided_command,
     add_object_mass_option,
+    add_out_dir_option,
     add_page_options,
     add_progress_option,
     add_recording_options,
@@ -90,7 +91,7 @@ def register(sub) -> None:
         help="with --ground: friction coefficient of the driven wheels (implies --ground; default: the spec's "
         "[support] mu, else 0.5)",
     )
-    parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
+    add_out_dir_option(parser, "analysis.csv, analysis.json and analysis.png there")
     add_strict_option(parser)
     add_page_options(parser, "the motion with its ellipsoids (in motion) moving along")
     add_constraint_options(parser)
