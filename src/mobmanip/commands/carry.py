@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 from .common import (
-    ROBOT_HELP,
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
     add_out_dir_option,
     add_page_options,
     add_progress_option,
+    add_robot_argument,
     add_step_options,
     add_task_option,
     add_work_option,
@@ -77,7 +77,7 @@ def register(sub) -> None:
         "maximising a measure, and compare with a pseudo-inverse baseline.",
         CARRY_HELP,
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument("--path", required=True, metavar="PATH.csv", help="the object's path (see below)")
     parser.add_argument(
         "--objective",

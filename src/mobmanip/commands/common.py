@@ -17,6 +17,11 @@ Options = argparse._ActionsContainer
 ROBOT_HELP = "built-in robot name or path of a robot spec (.toml)"
 
 
+def add_robot_argument(parser: Options) -> None:
+    """ROBOT: the positional of a command that takes a built-in robot or a spec (not a bare URDF)."""
+    parser.add_argument("robot", help=ROBOT_HELP)
+
+
 def add_guided_command(sub, name: str, summary: str, description: str, guide: str) -> argparse.ArgumentParser:
     """A subcommand's parser whose ``--help`` ends with ``guide`` (file formats, examples) printed
     as written, line breaks kept."""

@@ -9,7 +9,6 @@ import numpy as np
 
 from ..support.reading import decimal
 from .common import (
-    ROBOT_HELP,
     add_constraint_options,
     add_guided_command,
     add_object_mass_option,
@@ -17,6 +16,7 @@ from .common import (
     add_page_options,
     add_progress_option,
     add_recording_options,
+    add_robot_argument,
     add_strict_option,
     add_task_option,
     add_work_option,
@@ -64,7 +64,7 @@ def register(sub) -> None:
         "by how much the motion could be sped up.",
         TRAJECTORY_HELP,
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument("trajectory", metavar="TRAJ.csv", nargs="?", help="the trajectory (see below), or --bag")
     add_recording_options(parser)
     add_task_option(parser)
