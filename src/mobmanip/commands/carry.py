@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 from .common import (
     add_guided_command,
     add_motion_floor_options,
@@ -216,9 +218,7 @@ def run(args) -> int:
             constraints=constraints,
         )
     except CarryFailed as failure:
-        if not args.out:
-            raise
-        return report_partial_carry(failure, carry_partial_outputs(robot, failure, args.out))
+        return report_partial_carry(failure, args.out, functools.partial(carry_partial_outputs, robot))
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
     print_self_motion(result, "the start posture")

@@ -848,13 +848,16 @@ def print_self_motion(result, posture: str) -> None:
         )
 
 
-def report_partial_carry(failure, written: list[str]) -> int:
-    """After a carry that failed part-way, with --out: name the files kept of what succeeded
-    (flagged partial) and the error in one line; the exit status 2. Returning instead of raising
-    lets the command's outputs be published."""
+def report_partial_carry(failure, out: str | None, write_partial) -> int:
+    """After a carry that failed part-way: without --out (``out`` None) the failure goes on up;
+    with it, write what succeeded (``write_partial(failure, out)`` returns the paths), name the
+    files kept (flagged partial) and the error in one line; the exit status 2. Returning instead
+    of raising lets the command's outputs be published."""
     import sys
 
-    for path in written:
+    if not out:
+        raise failure
+    for path in write_partial(failure, out):
         print(f"wrote {path} (partial: up to t = {failure.partial.t[-1]:g} s)")
     print(f"mobmanip: error: {failure}", file=sys.stderr)
     return 2

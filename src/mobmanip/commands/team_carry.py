@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 from ..support.reading import decimal
 from .common import (
     add_guided_command,
@@ -178,9 +180,7 @@ def run(args) -> int:
             constraints=constraints,
         )
     except CarryFailed as failure:
-        if not args.out:
-            raise
-        return report_partial_carry(failure, team_carry_partial_outputs(team, failure, args.out))
+        return report_partial_carry(failure, args.out, functools.partial(team_carry_partial_outputs, team))
     summary = result.summary()
     require_finite(summary)
     names = ", ".join(f"{m.name} ({m.robot.name})" for m in team.members)
