@@ -17,7 +17,7 @@ import numpy as np
 
 from ..engine import evaluate_one
 from ..engine.compiled import kernel_ready
-from ..errors import ArgumentError, MeasureError, MobmanipError, TaskError
+from ..errors import ArgumentError, MeasureError, MobmanipError
 from ..measures import DYNAMIC, KINEMATIC, Measure, get_measure, resolve_measures
 from ..robot.model import Robot
 from ..robot.tasks import get_task
@@ -26,7 +26,7 @@ from ..sets.taskset import TaskSet
 from ..terms.builder import MeasureTerms, assemble_terms, terms_at
 from ..terms.constraints.base import Constraint
 from ..terms.dynamics import decouple, placed_end_effectors
-from ..terms.grasp import HeldObject, object_mass_of
+from ..terms.grasp import HeldObject, held_mass, object_mass_of
 
 
 @dataclass(frozen=True)
@@ -317,14 +317,7 @@ def analyze(
         raise ArgumentError(f"method must be 'auto' or 'exact', got {method!r}")
     q = robot.check_configuration(q)
     task = get_task(task or robot.spec.default_task)
-    if held_object is None:
-        mass = object_mass_of(robot, object_mass)
-    else:
-        mass = held_object.mass
-        if held_object.offsets.shape != (len(robot.arms), 3):
-            raise TaskError(
-                f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
-            )
+    mass = held_mass(robot, object_mass, held_object)
     fast = method == "auto" and robot.constant_null_space  # the fast paths freeze S
     ellipsoids = any(m.name in (KINEMATIC.name, DYNAMIC.name) for m in wanted)
     if fast and ellipsoids and kernel_ready(len(robot.arms), task.dim):

@@ -22,24 +22,17 @@ import numpy as np
 
 from ..support.reading import decimal
 from .common import (
-    add_analysis_options,
-    add_floor_options,
-    add_robot_options,
-    apply_analysis_options,
-    constraints_from_args,
+    add_configuration_command,
+    add_json_option,
+    configuration_from_command,
     describe_reaches,
     format_matrix,
-    load_robot_and_configuration,
     print_warnings,
-    requested_measures,
 )
 
 
 def register(sub) -> None:
-    parser = sub.add_parser("analyze", help="analyse one configuration")
-    add_robot_options(parser)
-    add_analysis_options(parser)
-    add_floor_options(parser)
+    parser = add_configuration_command(sub, "analyze", "analyse one configuration")
     parser.add_argument(
         "--hold",
         type=decimal,
@@ -47,7 +40,7 @@ def register(sub) -> None:
         help="on the floor: also the straight-line reach along each axis whose efforts, held constant from rest, "
         "keep every support loaded and every wheel within friction for SECONDS (e.g. 0.02; at most 1)",
     )
-    parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
+    add_json_option(parser, "the full result")
     parser.set_defaults(func=run)
 
 
@@ -237,23 +230,12 @@ def run(args) -> int:
     from ..measures import get_measure
     from ..support.files import require_finite, write_json
 
-    robot, q = load_robot_and_configuration(args)
-    robot = apply_analysis_options(robot, args)
-    measures = requested_measures(args)
+    robot, q, options = configuration_from_command(args)
+    constraints = options["constraints"]
+    hold = _check_hold(args, constraints)
     # one configuration: the reference path, which needs no compiled kernel and gives the same
     # numbers whatever this process ran before
-    constraints = constraints_from_args(args)
-    hold = _check_hold(args, constraints)
-    result = analyze(
-        robot,
-        q,
-        task=args.task,
-        object_mass=args.object_mass,
-        decoupled=args.decoupled,
-        measures=measures,
-        method="exact",
-        constraints=constraints,
-    )
+    result = analyze(robot, q, task=args.task, method="exact", **options)
     document = result.to_dict()
     if hold is not None:
         _add_held(robot, q, result, document, hold, _floor_of(constraints))

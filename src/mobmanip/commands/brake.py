@@ -12,6 +12,7 @@ import math
 from ..support.reading import decimal
 from .common import (
     add_floor_options,
+    add_json_option,
     add_object_mass_option,
     add_robot_options,
     binding_summary,
@@ -32,7 +33,7 @@ def register(sub) -> None:
         "--within", type=decimal, metavar="M", help="also the highest speed from which the robot stops within M metres"
     )
     add_floor_options(parser)
-    parser.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
+    add_json_option(parser, "the result")
     parser.set_defaults(func=run)
 
 

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import functools
+
 from .common import (
-    ROBOT_HELP,
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
+    add_out_dir_option,
     add_page_options,
     add_progress_option,
+    add_robot_argument,
     add_step_options,
     add_task_option,
     add_work_option,
@@ -76,7 +79,7 @@ def register(sub) -> None:
         "maximising a measure, and compare with a pseudo-inverse baseline.",
         CARRY_HELP,
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument("--path", required=True, metavar="PATH.csv", help="the object's path (see below)")
     parser.add_argument(
         "--objective",
@@ -89,7 +92,7 @@ def register(sub) -> None:
     parser.add_argument("--start", metavar="Q.json", help="start configuration (default: the spec's hold posture)")
     add_object_mass_option(parser)
     add_step_options(parser)
-    parser.add_argument("--out", metavar="DIR", help="write trajectory.csv, baseline.csv, carry.json, capacity.png")
+    add_out_dir_option(parser, "trajectory.csv, baseline.csv, carry.json, capacity.png")
     add_page_options(
         parser, "the QP motion (the self-motion first) with its in-motion ellipsoids, the camera following the robot"
     )
@@ -215,9 +218,7 @@ def run(args) -> int:
             constraints=constraints,
         )
     except CarryFailed as failure:
-        if not args.out:
-            raise
-        return report_partial_carry(failure, carry_partial_outputs(robot, failure, args.out))
+        return report_partial_carry(failure, args.out, functools.partial(carry_partial_outputs, robot))
     summary = result.summary()
     print(f"robot {robot.name}, task {result.task}: {path.length():.3f} m in {path.t[-1] - path.t[0]:g} s")
     print_self_motion(result, "the start posture")

@@ -16,7 +16,7 @@ SECONDS_PER_SAMPLE = 2e-4
 
 def register(sub) -> None:
     from ..robot.collision_matrix import DEFAULT_NEVER_CLOSER_THAN, DEFAULT_SAMPLES, DEFAULT_SEED
-    from .common import ROBOT_HELP, add_work_option
+    from .common import add_robot_argument, add_work_option
 
     parser = sub.add_parser(
         "collision-matrix",
@@ -25,7 +25,7 @@ def register(sub) -> None:
         "always in contact or never near (an allowed-collision matrix, as MoveIt's setup assistant makes) "
         "as NAME.collision.json beside the spec.",
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument(
         "--samples", type=int, default=DEFAULT_SAMPLES, help=f"configurations sampled (default {DEFAULT_SAMPLES})"
     )

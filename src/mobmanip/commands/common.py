@@ -17,6 +17,11 @@ Options = argparse._ActionsContainer
 ROBOT_HELP = "built-in robot name or path of a robot spec (.toml)"
 
 
+def add_robot_argument(parser: Options) -> None:
+    """ROBOT: the positional of a command that takes a built-in robot or a spec (not a bare URDF)."""
+    parser.add_argument("robot", help=ROBOT_HELP)
+
+
 def add_guided_command(sub, name: str, summary: str, description: str, guide: str) -> argparse.ArgumentParser:
     """A subcommand's parser whose ``--help`` ends with ``guide`` (file formats, examples) printed
     as written, line breaks kept."""
@@ -27,6 +32,42 @@ def add_guided_command(sub, name: str, summary: str, description: str, guide: st
         epilog=guide,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+
+
+def add_configuration_command(sub, name: str, summary: str) -> argparse.ArgumentParser:
+    """A subcommand's parser about one configuration of a robot: which robot and where it stands
+    (:func:`add_robot_options`), what is computed there (:func:`add_analysis_options`) and on
+    what floor (:func:`add_floor_options`)."""
+    parser = sub.add_parser(name, help=summary)
+    add_robot_options(parser)
+    add_analysis_options(parser)
+    add_floor_options(parser)
+    return parser
+
+
+def configuration_from_command(args) -> tuple:
+    """For a command of :func:`add_configuration_command`: (the robot with its analysis options
+    applied, its configuration, the keywords of :func:`mobmanip.analysis.single.analyze` the
+    options give: ``object_mass``, ``decoupled``, ``measures`` and ``constraints``)."""
+    robot, q = load_robot_and_configuration(args)
+    robot = apply_analysis_options(robot, args)
+    options = {
+        "object_mass": args.object_mass,
+        "decoupled": args.decoupled,
+        "measures": requested_measures(args),
+        "constraints": constraints_from_args(args),
+    }
+    return robot, q, options
+
+
+def add_json_option(parser: Options, what: str) -> None:
+    """--json OUT.json: write ``what`` (e.g. "the result") as JSON."""
+    parser.add_argument("--json", metavar="OUT.json", help=f"write {what} as JSON")
+
+
+def add_out_dir_option(parser: Options, files: str) -> None:
+    """--out DIR: the folder the command writes ``files`` (e.g. "a.csv, a.json") to."""
+    parser.add_argument("--out", metavar="DIR", help=f"write {files}")
 
 
 def add_task_option(parser: Options) -> None:
@@ -807,13 +848,16 @@ def print_self_motion(result, posture: str) -> None:
         )
 
 
-def report_partial_carry(failure, written: list[str]) -> int:
-    """After a carry that failed part-way, with --out: name the files kept of what succeeded
-    (flagged partial) and the error in one line; the exit status 2. Returning instead of raising
-    lets the command's outputs be published."""
+def report_partial_carry(failure, out: str | None, write_partial) -> int:
+    """After a carry that failed part-way: without --out (``out`` None) the failure goes on up;
+    with it, write what succeeded (``write_partial(failure, out)`` returns the paths), name the
+    files kept (flagged partial) and the error in one line; the exit status 2. Returning instead
+    of raising lets the command's outputs be published."""
     import sys
 
-    for path in written:
+    if not out:
+        raise failure
+    for path in write_partial(failure, out):
         print(f"wrote {path} (partial: up to t = {failure.partial.t[-1]:g} s)")
     print(f"mobmanip: error: {failure}", file=sys.stderr)
     return 2

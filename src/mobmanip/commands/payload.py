@@ -11,6 +11,7 @@ import numpy as np
 from .common import (
     add_dask_option,
     add_floor_options,
+    add_json_option,
     add_robot_options,
     binding_summary,
     constraints_from_args,
@@ -41,7 +42,7 @@ def register(sub) -> None:
         "while); by default only the object is still and the joints may accelerate, an instant's capacity",
     )
     add_floor_options(parser)
-    parser.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
+    add_json_option(parser, "the result")
     mapping = parser.add_argument_group("a map over object positions (instead of one posture)")
     mapping.add_argument(
         "--map",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from ..support.reading import decimal
-from .common import ROBOT_HELP, add_guided_command, add_progress_option, add_work_option, show_progress
+from .common import add_guided_command, add_progress_option, add_robot_argument, add_work_option, show_progress
 
 PLACE_HELP = """\
 objective: ELLIPSOID:INDEX[:DIRECTION], ELLIPSOID kinematic or dynamic, INDEX one of
@@ -69,7 +69,7 @@ def register(sub) -> None:
         "maximise a measure (gradient-based, several starts).",
         PLACE_HELP,
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument("--object", required=True, metavar="X,Y,Z", help="object centre in the world (m)")
     parser.add_argument("--objective", required=True, metavar="ELLIPSOID:INDEX[:DIR]", help="what to maximise")
     parser.add_argument("--mass", type=decimal, metavar="KG", help="object mass (default: the spec's)")

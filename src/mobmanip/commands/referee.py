@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 
 from ..support.reading import decimal
-from .common import add_floor_options, add_object_mass_option, add_robot_options
+from .common import add_floor_options, add_json_option, add_object_mass_option, add_robot_options
 
 #: MuJoCo's friction coefficient of the driven wheels when the floor does not limit traction.
 UNLIMITED_FRICTION = 10.0
@@ -58,7 +58,7 @@ def register(sub) -> None:
         help="replay, per axis, the efforts that hold --fraction of the maximum longest, and compare how long "
         "they hold in MuJoCo with mobmanip's prediction",
     )
-    parser.add_argument("--json", metavar="OUT.json", help="write every axis's numbers as JSON")
+    add_json_option(parser, "every axis's numbers")
     parser.set_defaults(func=run)
 
 

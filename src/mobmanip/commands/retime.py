@@ -6,12 +6,13 @@ from __future__ import annotations
 
 from ..support.reading import decimal
 from .common import (
-    ROBOT_HELP,
     add_guided_command,
     add_motion_floor_options,
     add_object_mass_option,
+    add_out_dir_option,
     add_progress_option,
     add_recording_options,
+    add_robot_argument,
     add_task_option,
     add_work_option,
     check_trajectory_source,
@@ -60,7 +61,7 @@ def register(sub) -> None:
         "loaded, traction within friction).",
         RETIME_HELP,
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument(
         "trajectory", metavar="TRAJ.csv", nargs="?", help="the path: a whole-body trajectory (see below), or --bag"
     )
@@ -74,7 +75,7 @@ def register(sub) -> None:
         help="also, at every sample, the highest speed from which the robot still stops within D metres of its "
         "platform's travel along the path, on the same rows (the lowest is printed; retime.json has them all)",
     )
-    parser.add_argument("--out", metavar="DIR", help="write retimed.csv, retime.json, retime.png, profile.csv")
+    add_out_dir_option(parser, "retimed.csv, retime.json, retime.png, profile.csv")
     add_motion_floor_options(parser)
     add_progress_option(parser)
     add_work_option(parser, f"samples (default {MAX_SAMPLES:,})")

@@ -18,6 +18,7 @@ import numpy as np
 from .common import (
     add_dask_option,
     add_floor_options,
+    add_json_option,
     add_measure_option,
     add_progress_option,
     add_work_option,
@@ -79,7 +80,7 @@ def register(sub) -> None:
         help="also the heaviest object the team can hold still where it stands (the object's shape per kilogram "
         "as given; with --ground, every robot on its own floor) and what stops it",
     )
-    parser.add_argument("--json", metavar="OUT.json", help="write the full result as JSON")
+    add_json_option(parser, "the full result")
     parser.add_argument("--plot", metavar="FILE", help="write a figure (top view; with a sweep, its curves too)")
     parser.add_argument(
         "--export", metavar="SCENE.html", help="write the 3-D scene (robots, object, sets) as a self-contained page"

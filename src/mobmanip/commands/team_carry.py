@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import functools
+
 from ..support.reading import decimal
 from .common import (
     add_guided_command,
     add_motion_floor_options,
+    add_out_dir_option,
     add_page_options,
     add_step_options,
     add_work_option,
@@ -88,7 +91,7 @@ def register(sub) -> None:
     )
     parser.add_argument("--scale", type=decimal, default=1.0, metavar="S", help="multiply the path's positions by S")
     add_step_options(parser)
-    parser.add_argument("--out", metavar="DIR", help="write one trajectory per robot, the baseline's, a summary")
+    add_out_dir_option(parser, "one trajectory per robot, the baseline's, a summary")
     add_page_options(parser, "the team's motion (see below)")
     add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")
@@ -177,9 +180,7 @@ def run(args) -> int:
             constraints=constraints,
         )
     except CarryFailed as failure:
-        if not args.out:
-            raise
-        return report_partial_carry(failure, team_carry_partial_outputs(team, failure, args.out))
+        return report_partial_carry(failure, args.out, functools.partial(team_carry_partial_outputs, team))
     summary = result.summary()
     require_finite(summary)
     names = ", ".join(f"{m.name} ({m.robot.name})" for m in team.members)

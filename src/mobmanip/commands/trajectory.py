@@ -9,13 +9,14 @@ import numpy as np
 
 from ..support.reading import decimal
 from .common import (
-    ROBOT_HELP,
     add_constraint_options,
     add_guided_command,
     add_object_mass_option,
+    add_out_dir_option,
     add_page_options,
     add_progress_option,
     add_recording_options,
+    add_robot_argument,
     add_strict_option,
     add_task_option,
     add_work_option,
@@ -63,7 +64,7 @@ def register(sub) -> None:
         "by how much the motion could be sped up.",
         TRAJECTORY_HELP,
     )
-    parser.add_argument("robot", help=ROBOT_HELP)
+    add_robot_argument(parser)
     parser.add_argument("trajectory", metavar="TRAJ.csv", nargs="?", help="the trajectory (see below), or --bag")
     add_recording_options(parser)
     add_task_option(parser)
@@ -90,7 +91,7 @@ def register(sub) -> None:
         help="with --ground: friction coefficient of the driven wheels (implies --ground; default: the spec's "
         "[support] mu, else 0.5)",
     )
-    parser.add_argument("--out", metavar="DIR", help="write analysis.csv, analysis.json and analysis.png there")
+    add_out_dir_option(parser, "analysis.csv, analysis.json and analysis.png there")
     add_strict_option(parser)
     add_page_options(parser, "the motion with its ellipsoids (in motion) moving along")
     add_constraint_options(parser)
@@ -153,26 +154,22 @@ def _report_traction(traction, trajectory) -> None:
         f"largest traction use {use:.4f} ({traction.wheels[k]} at sample {i}, t = {trajectory.t[i]:g} s; "
         f"mu = {traction.mu:g}, compliant load sharing)"
     )
-    slipping = traction.slipping()
-    if slipping.size:
-        j = int(slipping[0])
-        w = int(np.argmax(traction.use[j]))
-        print(
-            f"warning: a driven wheel slips (traction use above 1) at {slipping.size} of {len(trajectory)} samples: "
-            f"first {traction.wheels[w]} at sample {j} (t = {trajectory.t[j]:g} s, use {traction.use[j, w]:.4g}); "
-            f"the worst {traction.wheels[k]} at sample {i} (t = {trajectory.t[i]:g} s)",
-            file=sys.stderr,
-        )
-    unloaded = traction.unloaded()
-    if unloaded.size:
-        j = int(unloaded[0])
-        c = int(np.argmin(traction.normal[j]))
-        print(
-            f"warning: a support unloads (normal force 0 or less with the contacts equally stiff) at {unloaded.size} "
-            f"of {len(trajectory)} samples: first {traction.contacts[c]} at sample {j} (t = {trajectory.t[j]:g} s, "
-            f"{traction.normal[j, c]:.4g} N)",
-            file=sys.stderr,
-        )
+    worst = f"; the worst {traction.wheels[k]} at sample {i} (t = {trajectory.t[i]:g} s)"
+    # (what happens, at which samples, who: names and the amount per sample, the one picked, its unit)
+    for what, found, names, amounts, pick, unit, tail in (
+        ("a driven wheel slips (traction use above 1)", traction.slipping(), traction.wheels, traction.use,
+         np.argmax, "use {:.4g}", worst),
+        ("a support unloads (normal force 0 or less with the contacts equally stiff)", traction.unloaded(),
+         traction.contacts, traction.normal, np.argmin, "{:.4g} N", ""),
+    ):  # fmt: skip
+        if found.size:
+            j = int(found[0])
+            c = int(pick(amounts[j]))
+            print(
+                f"warning: {what} at {found.size} of {len(trajectory)} samples: first {names[c]} at sample {j} "
+                f"(t = {trajectory.t[j]:g} s, {unit.format(amounts[j, c])}){tail}",
+                file=sys.stderr,
+            )
 
 
 def run(args) -> int:

@@ -16,25 +16,13 @@ import sys
 import time
 
 from ..support.reading import decimal
-from .common import (
-    add_analysis_options,
-    add_floor_options,
-    add_robot_options,
-    apply_analysis_options,
-    constraints_from_args,
-    load_robot_and_configuration,
-    print_warnings,
-    requested_measures,
-)
+from .common import add_configuration_command, configuration_from_command, print_warnings
 
 
 def register(sub) -> None:
     from ..viz.sweeps import SWEEPS
 
-    parser = sub.add_parser("view", help="show the robot and its ellipsoids in the meshcat web viewer")
-    add_robot_options(parser)
-    add_analysis_options(parser)
-    add_floor_options(parser)
+    parser = add_configuration_command(sub, "view", "show the robot and its ellipsoids in the meshcat web viewer")
     parser.add_argument(
         "--sweep",
         choices=SWEEPS,
@@ -110,14 +98,7 @@ def run(args) -> int:
     from ..viz.sweeps import sweep_frames
 
     _check(args)
-    robot, q = load_robot_and_configuration(args)
-    robot = apply_analysis_options(robot, args)
-    options = {
-        "object_mass": args.object_mass,
-        "decoupled": args.decoupled,
-        "measures": requested_measures(args),
-        "constraints": constraints_from_args(args),
-    }
+    robot, q, options = configuration_from_command(args)
     frames = None
     if args.sweep:
         given = args.q or args.posture

@@ -56,7 +56,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -105,13 +105,21 @@ class Flaw:
     problem: str
     repair: str
 
+    #: What the messages say happens to it without ``strict`` (``{repair}`` and ``{strict}`` filled
+    #: in): after the problem in the warning, as the refusal offers it, as the detection notes say it.
+    WITHOUT_STRICT: ClassVar[tuple[str, str, str]] = (
+        "repaired by {repair}; kinematic results unaffected ({strict} refuses instead)",
+        "have mobmanip repair it by {repair}",
+        "repaired at load by {repair}, with a warning",
+    )
+
+    def _without_strict(self, which: int) -> str:
+        return self.WITHOUT_STRICT[which].format(repair=self.repair, strict=STRICT_HINT)
+
     @property
     def warning(self) -> str:
         """One line naming the subject, the values and the repair (stderr and the JSON's ``"warnings"``)."""
-        return (
-            f"{self.subject}: {self.problem}; repaired by {self.repair}; kinematic results unaffected "
-            f"({STRICT_HINT} refuses instead)"
-        )
+        return f"{self.subject}: {self.problem}; {self._without_strict(0)}"
 
     @property
     def refusal(self) -> str:
@@ -132,12 +140,12 @@ class Flaw:
     @property
     def lenient(self) -> str:
         """What happens to it without ``strict``, as the refusal offers it."""
-        return f"have mobmanip repair it by {self.repair}"
+        return self._without_strict(1)
 
     @property
     def at_load(self) -> str:
         """What happens to it at load without ``strict``, as the detection notes say it."""
-        return f"repaired at load by {self.repair}, with a warning"
+        return self._without_strict(2)
 
 
 @dataclass(frozen=True)
@@ -187,20 +195,12 @@ class ImplausibleInertia(Flaw):
     extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
     box_trace: float = 0.0
 
-    @property
-    def warning(self) -> str:
-        return (
-            f"{self.subject}: {self.problem}; kept as written, so the dynamic measures may be far too large "
-            f"(kinematic results unaffected; {STRICT_HINT} refuses instead)"
-        )
-
-    @property
-    def lenient(self) -> str:
-        return "analyse it as written"
-
-    @property
-    def at_load(self) -> str:
-        return "kept as written, with a warning at load"
+    WITHOUT_STRICT = (
+        "kept as written, so the dynamic measures may be far too large (kinematic results unaffected; "
+        "{strict} refuses instead)",
+        "analyse it as written",
+        "kept as written, with a warning at load",
+    )
 
 
 def implausible_inertia(link: str, mass: float, inertia: np.ndarray, extents: np.ndarray) -> ImplausibleInertia | None:

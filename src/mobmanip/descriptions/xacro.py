@@ -108,9 +108,7 @@ class _Guard:
         self.top = top
         self.started = time.monotonic()
         self.deadline = self.started + MAX_SECONDS
-        self.macros = 0
-        self.elements = 0
-        self.chars = 0
+        self.counts = {"macros": 0, "elements": 0, "chars": 0}  # made by the expansion so far
         self.steps = 0
         self.refused: str | None = None
         self._saved: list[tuple[Any, str, Any]] = []
@@ -168,12 +166,17 @@ class _Guard:
                 setattr(owner, name, value)
         self._saved.clear()
 
+    def exceeds(self, what: str, amount: int, limit: int) -> bool:
+        """Count ``amount`` more ``what`` (a key of :attr:`counts`); whether there are now more
+        than ``limit``."""
+        self.counts[what] += amount
+        return self.counts[what] > limit
+
     # -- xacro's steps ---------------------------------------------------------------------
     def _eval_all(self, original):
         def eval_all(node, macros, symbols):
             self.tick()
-            self.elements += 1
-            if self.elements > MAX_ELEMENTS:
+            if self.exceeds("elements", 1, MAX_ELEMENTS):
                 self.refuse(f"it expands to more than {MAX_ELEMENTS:,} elements")
             return original(node, macros, symbols)
 
@@ -182,8 +185,7 @@ class _Guard:
     def _handle_macro_call(self, original):
         def handle_macro_call(node, macros, symbols):
             if node.tagName.startswith("xacro:") and node.tagName != "xacro:call":
-                self.macros += 1
-                if self.macros > MAX_MACRO_EXPANSIONS:
+                if self.exceeds("macros", 1, MAX_MACRO_EXPANSIONS):
                     self.refuse(f"it expands more than {MAX_MACRO_EXPANSIONS:,} macro calls (at {node.tagName})")
             return original(node, macros, symbols)
 
@@ -201,8 +203,7 @@ class _Guard:
                     shown = " ".join(str(text).split())[:60]
                     self.refuse(f"{shown!r} evaluates to {len(value):,} characters, more than the {MAX_VALUE_CHARS:,} "
                                 "one value may take")  # fmt: skip
-                self.chars += len(value)
-                if self.chars > MAX_EXPANDED_CHARS:
+                if self.exceeds("chars", len(value), MAX_EXPANDED_CHARS):
                     self.refuse(f"its evaluated texts come to more than {MAX_EXPANDED_CHARS:,} characters")
             return value
 

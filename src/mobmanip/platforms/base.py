@@ -213,20 +213,35 @@ class PlatformKind(ABC):
     name: ClassVar[str]
     #: One line for help texts.
     summary: ClassVar[str]
-    #: Whether the spec needs a ``[wheels]`` table (True), takes none (False).
-    takes_wheels: ClassVar[bool] = False
-    #: Keys its ``[wheels]`` table accepts.
+    #: Keys its ``[wheels]`` table accepts; none for a kind that takes no such table.
     wheel_keys: ClassVar[tuple[str, ...]] = ()
 
+    @property
+    def takes_wheels(self) -> bool:
+        """Whether the spec needs a ``[wheels]`` table: the kind accepts keys in one."""
+        return bool(self.wheel_keys)
+
     def parse_wheels(self, table: Mapping, where: str) -> WheelsSpec:
-        """The kind's ``[wheels]`` spec from a parsed TOML table.
+        """The kind's ``[wheels]`` spec from a parsed TOML table (its keys checked, then
+        :meth:`read_wheels`).
 
         Raises:
-            SpecError: unknown keys or wrong types (naming ``where``).
+            SpecError: a kind without wheels, unknown keys or wrong types (naming ``where``).
         """
         from ..errors import SpecError
 
-        raise SpecError(f"{where}: a {self.name} platform takes no [wheels] table")
+        if not self.takes_wheels:
+            raise SpecError(f"{where}: a {self.name} platform takes no [wheels] table")
+        self.check_wheel_keys(table, where)
+        return self.read_wheels(table, where)
+
+    def read_wheels(self, table: Mapping, where: str) -> WheelsSpec:
+        """The ``[wheels]`` spec from a table of known keys (a kind with :attr:`wheel_keys`).
+
+        Raises:
+            SpecError: missing keys or wrong types (naming ``where``).
+        """
+        raise NotImplementedError(f"the {self.name} platform kind reads no [wheels] table")
 
     def check_wheel_keys(self, table: Mapping, where: str) -> None:
         """Refuse keys of a ``[wheels]`` table that the kind does not know.
@@ -282,11 +297,19 @@ class PlatformKind(ABC):
         return []
 
     @staticmethod
-    def length_overrides(lengths: Sequence[tuple[str, float | None]]) -> list[str]:
-        """Lines of :meth:`toml_lines` for lengths the URDF gives unless set: ``key = value`` for
-        each one set, a commented placeholder for each left to the URDF."""
-        return [f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF"
-                for key, value in lengths]  # fmt: skip
+    def wheels_section(
+        comment: str, joints: Mapping[str, str | Sequence[str]], lengths: Mapping[str, float | None]
+    ) -> list[str]:
+        """The lines of :meth:`toml_lines`: ``comment`` (each of its lines commented out), the table's
+        header, ``key = joint`` (or a list of joints) for each of ``joints``, then the lengths the
+        URDF gives unless set: ``key = value`` for each one set, a commented placeholder for each
+        left to the URDF."""
+        from ..support.toml import toml_array
+
+        lines = [f"# {line}" for line in comment.split("\n")] + ["[wheels]"]
+        lines += [f"{key} = {toml_string(v) if isinstance(v, str) else toml_array(v)}" for key, v in joints.items()]
+        return lines + [f"{key} = {float(value)!r}" if value is not None else f"# {key} = ...  # m, overrides the URDF"
+                        for key, value in lengths.items()]  # fmt: skip
 
     #: Whether the wheel joints themselves take limits (False: the kind's own names do).
     limits_by_joint: ClassVar[bool] = True

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string, unicycle_rows
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, unicycle_rows
 from .wheels import radius_of, side_by_side_message, wheel_geometry
 
 if TYPE_CHECKING:
@@ -142,11 +142,9 @@ class DifferentialDrive(Platform):
 class DifferentialDriveKind(PlatformKind):
     name = "differential_drive"
     summary = "two driven wheels on one axle (the paper's platform)"
-    takes_wheels = True
     wheel_keys = ("right", "left", "radius", "half_track")
 
-    def parse_wheels(self, table: Mapping, where: str) -> WheelSpec:
-        self.check_wheel_keys(table, where)
+    def read_wheels(self, table: Mapping, where: str) -> WheelSpec:
         names = []
         for key in ("right", "left"):
             if key not in table:
@@ -219,13 +217,11 @@ class DifferentialDriveKind(PlatformKind):
         return Detected(WheelSpec(right=right.name, left=left.name), (note,))
 
     def toml_lines(self, wheels: WheelSpec) -> list[str]:  # type: ignore[override]
-        out = [
-            "# Right and left drive wheel; radius and half-track are read from the URDF unless set.",
-            "[wheels]",
-            f"right = {toml_string(wheels.right)}",
-            f"left = {toml_string(wheels.left)}",
-        ]
-        return out + self.length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
+        return self.wheels_section(
+            "Right and left drive wheel; radius and half-track are read from the URDF unless set.",
+            {"right": wheels.right, "left": wheels.left},
+            {"radius": wheels.radius, "half_track": wheels.half_track},
+        )
 
 
 KIND = DifferentialDriveKind()

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string, unicycle_rows
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, unicycle_rows
 from .wheels import radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -169,11 +169,9 @@ def _names(table: Mapping, key: str, where: str) -> tuple[str, ...]:
 class SkidSteerKind(PlatformKind):
     name = "skid_steer"
     summary = "two or more wheels per side, each side at one speed (e.g. Clearpath's Husky)"
-    takes_wheels = True
     wheel_keys = ("right", "left", "radius", "half_track")
 
-    def parse_wheels(self, table: Mapping, where: str) -> SkidSteerWheels:
-        self.check_wheel_keys(table, where)
+    def read_wheels(self, table: Mapping, where: str) -> SkidSteerWheels:
         return SkidSteerWheels(
             right=_names(table, "right", where),
             left=_names(table, "left", where),
@@ -249,14 +247,12 @@ class SkidSteerKind(PlatformKind):
         return Detected(wheels, (note,))
 
     def toml_lines(self, wheels: SkidSteerWheels) -> list[str]:  # type: ignore[override]
-        out = [
-            "# Skid steer: each side's wheels turn at one speed. Radius and the effective half-track are",
-            "# read from the URDF (half the distance between the sides) unless set.",
-            "[wheels]",
-            f"right = [{', '.join(toml_string(n) for n in wheels.right)}]",
-            f"left = [{', '.join(toml_string(n) for n in wheels.left)}]",
-        ]
-        return out + self.length_overrides((("radius", wheels.radius), ("half_track", wheels.half_track)))
+        return self.wheels_section(
+            "Skid steer: each side's wheels turn at one speed. Radius and the effective half-track are\n"
+            "read from the URDF (half the distance between the sides) unless set.",
+            {"right": wheels.right, "left": wheels.left},
+            {"radius": wheels.radius, "half_track": wheels.half_track},
+        )
 
     limits_by_joint = False
 

@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SpecError, WheelError
-from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec, toml_string
+from .base import BASE_V, Detected, Platform, PlatformKind, WheelsSpec
 from .wheels import LATERAL, ON_AXIS, radius_of, wheel_geometry
 
 if TYPE_CHECKING:
@@ -181,11 +181,9 @@ def _name(table: Mapping, key: str, where: str) -> str:
 class SteeredKind(PlatformKind):
     name = "steered"
     summary = "a tricycle: one steered drive wheel ahead of a free rear axle (S depends on q)"
-    takes_wheels = True
     wheel_keys = ("drive", "steer", "rear", "radius", "rear_radius")
 
-    def parse_wheels(self, table: Mapping, where: str) -> SteeredWheels:
-        self.check_wheel_keys(table, where)
+    def read_wheels(self, table: Mapping, where: str) -> SteeredWheels:
         rear = table.get("rear")
         if not isinstance(rear, list) or not rear or not all(isinstance(v, str) for v in rear):
             raise SpecError(f"{where} [wheels]: 'rear' must be a non-empty list of wheel joint names, got {rear!r}")
@@ -258,14 +256,11 @@ class SteeredKind(PlatformKind):
         return Detected(wheels, (note,))
 
     def toml_lines(self, wheels: SteeredWheels) -> list[str]:  # type: ignore[override]
-        out = [
-            "# Steered base: the drive wheel, its steering joint and the free rear wheels (one axle).",
-            "[wheels]",
-            f"drive = {toml_string(wheels.drive)}",
-            f"steer = {toml_string(wheels.steer)}",
-            f"rear = [{', '.join(toml_string(n) for n in wheels.rear)}]",
-        ]
-        return out + self.length_overrides((("radius", wheels.radius), ("rear_radius", wheels.rear_radius)))
+        return self.wheels_section(
+            "Steered base: the drive wheel, its steering joint and the free rear wheels (one axle).",
+            {"drive": wheels.drive, "steer": wheels.steer, "rear": wheels.rear},
+            {"radius": wheels.radius, "rear_radius": wheels.rear_radius},
+        )
 
 
 KIND = SteeredKind()

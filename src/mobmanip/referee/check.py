@@ -140,13 +140,9 @@ class AxisReplay:
             normal_error=self.normal_error,
             normal_error_of_weight=self.normal_error / self.weight,
             normals_judged=self.judge_normals,
-            rise=self.rise,
-            slide=self.slide,
-            agrees=self.agrees,
-            holds=self.holds,
-            first_failure=self.first_failure,
-            passed=self.passed,
         )
+        verdict = ("rise", "slide", "agrees", "holds", "first_failure", "passed")
+        out.update({name: getattr(self, name) for name in verdict})
         return {**out, **self.extra}
 
 

@@ -26,13 +26,12 @@ reference path.
 
 from __future__ import annotations
 
-import contextlib
 import math
 from typing import Any
 
 import numpy as np
 
-from ..support.compile_notice import announced_compile, numba_cached, up_to
+from ..support.compile_notice import first_call_notice, numba_cached, up_to
 from . import zonotope
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
@@ -273,7 +272,7 @@ def _supports(V, nv, D, out):  # pragma: no cover - compiled
 
 
 _compiled: dict[str, Any] = {}
-_CALLED: list[bool] = []
+_CALLED: set[str] = set()
 #: The most a compile of the kernel may take (s), printed.
 _COMPILE_SECONDS = up_to("planar sweep")
 
@@ -291,6 +290,13 @@ def _compile():
     _compiled["supports"] = jit(_supports)
 
 
+def _kernels() -> list:
+    """The compiled functions (compiled first if need be): what the disk cache must hold."""
+    if not _compiled:
+        _compile()
+    return [_compiled["rows"], _compiled["supports"], _normals, _full_rank]
+
+
 def available() -> bool:
     """Whether the compiled kernel can run (Numba is installed)."""
     return njit is not None
@@ -298,11 +304,15 @@ def available() -> bool:
 
 def kernel_cached() -> bool | None:
     """Whether Numba's disk cache holds the kernel: ``None`` where it cannot tell or Numba is missing."""
-    if njit is None:  # pragma: no cover - Numba is a default dependency
-        return None
-    if not _compiled:
-        _compile()
-    return numba_cached([_compiled["rows"], _compiled["supports"], _normals, _full_rank])
+    return None if njit is None else numba_cached(_kernels())
+
+
+def facet_outputs(N: int, cap: int, width: int, size: str) -> dict[str, np.ndarray]:
+    """The zeroed arrays a sweep kernel fills last, in its arguments' order: ``facets``
+    (N, cap, width) and ``facet_count`` (N,), then ``size`` (the area or the volume),
+    ``inradius`` and ``circumradius`` (N,)."""
+    measures = {name: np.zeros(N) for name in (size, "inradius", "circumradius")}
+    return {"facets": np.zeros((N, cap, width)), "facet_count": np.zeros(N, dtype=np.int64), **measures}
 
 
 def polygons(F: np.ndarray, c: np.ndarray, G: np.ndarray, centre: np.ndarray, is_zonotope: np.ndarray) -> dict:
@@ -330,21 +340,10 @@ def polygons(F: np.ndarray, c: np.ndarray, G: np.ndarray, centre: np.ndarray, is
         "status": np.ones(N, dtype=np.int64),
         "vertices": np.zeros((N, cap, 2)),
         "count": np.zeros(N, dtype=np.int64),
-        "facets": np.zeros((N, cap, 3)),
-        "facet_count": np.zeros(N, dtype=np.int64),
-        "area": np.zeros(N),
-        "inradius": np.zeros(N),
-        "circumradius": np.zeros(N),
+        **facet_outputs(N, cap, 3, "area"),
     }
-    notice, first = contextlib.nullcontext(), not _CALLED
-    if first:
-        _CALLED.append(True)
-        notice = announced_compile(
-            "the planar polytope sweep kernel",
-            _COMPILE_SECONDS,
-            [_compiled["rows"], _compiled["supports"], _normals, _full_rank],
-        )
-    with notice:
+    first = "rows" not in _CALLED
+    with first_call_notice(_CALLED, "rows", "the planar polytope sweep kernel", _COMPILE_SECONDS, _kernels):
         _compiled["rows"](
             np.ascontiguousarray(F, dtype=float),
             np.ascontiguousarray(c, dtype=float),
@@ -352,14 +351,7 @@ def polygons(F: np.ndarray, c: np.ndarray, G: np.ndarray, centre: np.ndarray, is
             np.ascontiguousarray(centre, dtype=float),
             np.ascontiguousarray(is_zonotope, dtype=np.bool_),
             subsets,
-            out["status"],
-            out["vertices"],
-            out["count"],
-            out["facets"],
-            out["facet_count"],
-            out["area"],
-            out["inradius"],
-            out["circumradius"],
+            *out.values(),
         )
         if first:  # compile the small query kernel inside the notice too
             supports(np.zeros((1, 1, 2)), np.zeros(1, dtype=np.int64), np.ones((1, 2)))

@@ -11,13 +11,12 @@ one at a time) when its generators nearly lose rank (the planar kernel's test) o
 
 from __future__ import annotations
 
-import contextlib
 import math
 from typing import Any
 
 import numpy as np
 
-from ..support.compile_notice import announced_compile, numba_cached, up_to
+from ..support.compile_notice import first_call_notice, numba_cached, up_to
 from . import polygon_kernel, zonotope_kernel
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
@@ -83,7 +82,7 @@ def _zonotope_rows(c, G, cap, status, facets, nf, volume, inr, circ):  # pragma:
 
 
 _compiled: dict[str, Any] = {}
-_CALLED: list[bool] = []
+_CALLED: set[str] = set()
 #: The most a compile may take (s; the face kernel's 3-D routine included), printed.
 _COMPILE_SECONDS = up_to("3-D sweep")
 
@@ -98,18 +97,20 @@ def _compile():
     _compiled["rows"] = jit(_zonotope_rows)
 
 
-def available() -> bool:
-    """Whether the compiled kernel can run (Numba is installed)."""
-    return njit is not None
+def _kernels() -> list:
+    """The compiled functions (compiled first if need be): what the disk cache must hold."""
+    if not _compiled:
+        _compile()
+    return [_compiled["rows"], _faces, _full_rank]
+
+
+#: Whether the compiled kernel can run: as for the planar kernel, Numba is installed.
+available = polygon_kernel.available
 
 
 def kernel_cached() -> bool | None:
     """Whether Numba's disk cache holds the kernel: ``None`` where it cannot tell or Numba is missing."""
-    if njit is None:  # pragma: no cover - Numba is a default dependency
-        return None
-    if not _compiled:
-        _compile()
-    return numba_cached([_compiled["rows"], _faces, _full_rank])
+    return None if njit is None else numba_cached(_kernels())
 
 
 def zonotopes(c: np.ndarray, G: np.ndarray) -> dict:
@@ -128,30 +129,12 @@ def zonotopes(c: np.ndarray, G: np.ndarray) -> dict:
         _compile()
     N, _, n = G.shape
     cap = max(2 * n * (n - 1) // 2, 1)  # every pair of generators, both sides
-    out = {
-        "status": np.ones(N, dtype=np.int64),
-        "facets": np.zeros((N, cap, 4)),
-        "facet_count": np.zeros(N, dtype=np.int64),
-        "volume": np.zeros(N),
-        "inradius": np.zeros(N),
-        "circumradius": np.zeros(N),
-    }
-    notice = contextlib.nullcontext()
-    if not _CALLED:
-        _CALLED.append(True)
-        notice = announced_compile(
-            "the 3-D zonotope sweep kernel", _COMPILE_SECONDS, [_compiled["rows"], _faces, _full_rank]
-        )
-    with notice:
+    out = {"status": np.ones(N, dtype=np.int64), **polygon_kernel.facet_outputs(N, cap, 4, "volume")}
+    with first_call_notice(_CALLED, "rows", "the 3-D zonotope sweep kernel", _COMPILE_SECONDS, _kernels):
         _compiled["rows"](
             np.ascontiguousarray(c, dtype=float),
             np.ascontiguousarray(G, dtype=float),
             cap,
-            out["status"],
-            out["facets"],
-            out["facet_count"],
-            out["volume"],
-            out["inradius"],
-            out["circumradius"],
+            *out.values(),
         )
     return out

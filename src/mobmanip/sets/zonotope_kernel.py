@@ -20,12 +20,11 @@ support value, in R^3), otherwise the caller takes the general route, as with th
 
 from __future__ import annotations
 
-import contextlib
 import math
 
 import numpy as np
 
-from ..support.compile_notice import announced_compile, numba_cached, up_to
+from ..support.compile_notice import first_call_notice, numba_cached, up_to
 
 try:  # pragma: no cover - exercised when Numba is installed (the default)
     from numba import njit
@@ -394,14 +393,19 @@ def _compile():
     _compiled[2], _compiled[3] = jit(_faces_2d), jit(_faces_3d)
 
 
+def _kernels(m: int) -> list:
+    """The compiled functions for m-D sets (compiled first if need be): what the disk cache must hold."""
+    if not _compiled:
+        _compile()
+    return [_compiled[m], _empty_result, _merge, _vertices, _widths]
+
+
 def kernel_cached(m: int) -> bool | None:
     """Whether Numba's disk cache holds the face kernel for ``m``-D sets (2 or 3): ``None`` where it
     cannot tell or Numba is missing (:func:`mobmanip.support.compile_notice.numba_cached`)."""
     if njit is None:  # pragma: no cover - Numba is a default dependency
         return None
-    if not _compiled:
-        _compile()
-    return numba_cached([_compiled[m], _empty_result, _merge, _vertices, _widths])
+    return numba_cached(_kernels(m))
 
 
 def faces(center: np.ndarray, G: np.ndarray) -> dict | None:
@@ -421,12 +425,8 @@ def faces(center: np.ndarray, G: np.ndarray) -> dict | None:
         return None
     if not _compiled:
         _compile()
-    notice = contextlib.nullcontext()
-    if m not in _CALLED:
-        _CALLED.add(m)
-        what = f"the zonotope/polytope face kernel for {m}-D sets"
-        notice = announced_compile(what, _COMPILE_SECONDS[m], [_compiled[m], _empty_result, _merge, _vertices, _widths])
-    with notice:
+    what = f"the zonotope/polytope face kernel for {m}-D sets"
+    with first_call_notice(_CALLED, m, what, _COMPILE_SECONDS[m], lambda: _kernels(m)):
         status, width, V, Y, normals, offsets, widths, ptr, idx = _compiled[m](
             np.ascontiguousarray(center, dtype=float), np.ascontiguousarray(G, dtype=float)
         )

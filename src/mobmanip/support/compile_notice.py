@@ -20,7 +20,8 @@ import contextlib
 import sys
 import threading
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Hashable, Iterable, Iterator
+from contextlib import AbstractContextManager
 from typing import Any, TextIO
 
 #: Compiles of each kernel measured on the project's 2-core machine (s), with an empty Numba cache
@@ -146,3 +147,15 @@ def announced_compile(what: str, seconds: float, dispatchers: Iterable[Any], str
         return
     with compiling(what, seconds, stream):
         yield
+
+
+def first_call_notice(
+    called: set, key: Hashable, what: str, seconds: float, dispatchers: Callable[[], Iterable[Any]]
+) -> AbstractContextManager[None]:
+    """:func:`announced_compile` around the first call for ``key`` (then noted in ``called``), and
+    a context that does nothing around every later one; ``dispatchers`` gives the dispatchers
+    the first call runs."""
+    if key in called:
+        return contextlib.nullcontext()
+    called.add(key)
+    return announced_compile(what, seconds, dispatchers())

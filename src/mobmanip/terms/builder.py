@@ -16,12 +16,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import ArgumentError, TaskError
+from ..errors import ArgumentError
 from ..robot.tasks import get_task
 from .constraints.base import Constraint, ConstraintRows
 from .constraints.joint_limits import JOINT_BOXES
 from .dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
-from .grasp import HeldObject, object_mass_of
+from .grasp import HeldObject, held_mass
 
 if TYPE_CHECKING:
     from ..robot.model import Robot
@@ -149,11 +149,7 @@ def terms_at(
     """
     q = robot.check_configuration(q) if check else q
     task = get_task(task or robot.spec.default_task)
-    mass = object_mass_of(robot, object_mass) if held_object is None else held_object.mass
-    if held_object is not None and held_object.offsets.shape != (len(robot.arms), 3):
-        raise TaskError(
-            f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
-        )
+    mass = held_mass(robot, object_mass, held_object)
     dyn = reduced_dynamics_unchecked(robot, q, None, False)
     J_u = frame_jacobians(robot, q, task) @ robot.null_space(q)
     positions = placed_end_effectors(robot)  # the frame placements were updated with the Jacobians

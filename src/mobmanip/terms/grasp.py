@@ -141,6 +141,22 @@ def object_mass_of(robot: Robot, object_mass: object = None) -> float:
     return checked_object_mass(robot.spec.object_mass if object_mass is None else object_mass)
 
 
+def held_mass(robot: Robot, object_mass: object = None, held_object: HeldObject | None = None) -> float:
+    """The mass of the object a call holds (kg): ``held_object``'s, which must have one grasp
+    offset per arm of ``robot``, else :func:`object_mass_of`'s.
+
+    Raises:
+        TaskError: a held object with another number of grasp offsets; as :func:`object_mass_of`.
+    """
+    if held_object is None:
+        return object_mass_of(robot, object_mass)
+    if held_object.offsets.shape != (len(robot.arms), 3):
+        raise TaskError(
+            f"the object needs one grasp offset per arm ({len(robot.arms)}), got {held_object.offsets.shape}"
+        )
+    return held_object.mass
+
+
 def checked_object_mass(value: object) -> float:
     """An object mass (kg): a real number in :data:`mobmanip.support.ranges.OBJECT_MASS`.
 
