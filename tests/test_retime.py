@@ -378,8 +378,8 @@ def _driving(path, robot):
 )
 def test_path_terms_equal_the_reduced_dynamics_at_every_sample(tiago, name, task, mass):
     """Two routes to the rows: the stacked Newton-Euler terms retime uses (path_terms) against the
-    reduced dynamics P, xi and the grasp of :func:`motion_terms` with :func:`floor_wrench_terms`,
-    sample by sample, on a path that drives along an arc (S changes with the heading) while the
+    reduced dynamics P, xi and the grasp of :func:`motion_terms` with :func:`floor_wrench` and
+    :func:`rest_wrench`, sample by sample, on a path that drives along an arc (S changes with the heading) while the
     arms move."""
     robot = tiago if name == "tiago_dual" else load_robot(name)
     if name == "tiago_dual":
