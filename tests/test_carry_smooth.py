@@ -158,3 +158,25 @@ def test_time_stamps_print_as_written(tmp_path):
     for name in ("trajectory.csv", "baseline.csv", "preparation.csv"):
         cells = [line.split(",")[0] for line in (out / name).read_text().splitlines()[1:]]
         assert cells and all(len(c.split(".")[-1]) <= 9 for c in cells), [c for c in cells if len(c) > 12][:3]
+
+
+def test_a_path_that_ends_moving_is_said_with_its_speed(tmp_path, capfd):
+    """A path cut while the object moves makes the motion stop it within one step: carry says so,
+    with the speed the spline ends at. The samples follow x = 0.1 t^3, y = 0.05 t^2, which the
+    not-a-knot spline reproduces exactly: it starts at rest and ends at (0.3, 0.1) m/s, 0.3162
+    m/s. The examples' paths slow to rest and draw no warning."""
+    t = np.linspace(0.0, 1.0, 11)
+    path = ObjectPath(t, np.column_stack([0.1 * t**3, 0.05 * t**2]))
+    start, end = path.end_speeds()
+    assert start == pytest.approx(0.0, abs=1e-12) and end == pytest.approx(np.hypot(0.3, 0.1), rel=1e-12)
+    csv = tmp_path / "cut.csv"
+    csv.write_text("t,x,y\n" + "".join(f"{a!r},{x!r},{y!r}\n" for a, (x, y) in zip(t.tolist(), path.xy.tolist())))
+    assert main(["carry", "planar_dual_arm", "--path", str(csv), "--prepare", "0", "--step", "0.02"]) == 0
+    warnings = [line for line in capfd.readouterr().err.splitlines() if "path" in line]
+    assert warnings == [
+        "warning: the object path ends moving, at 0.316 m/s (t = 1 s): the motion makes its stop within one step "
+        "of 0.02 s, about 15.8 m/s^2; let the path's samples bring it to rest there (as examples/carry_turn.csv does)"
+    ]
+    for name in ("carry_turn.csv", "carry_line.csv"):
+        example = read_path(EXAMPLES / name)
+        assert example.moving_ends(0.02) == [] and max(example.end_speeds()) < 1e-4

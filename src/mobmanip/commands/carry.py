@@ -16,6 +16,7 @@ from .common import (
     add_task_option,
     add_work_option,
     motion_floor,
+    print_path_warnings,
     print_self_motion,
     registered_constraints,
     report_partial_carry,
@@ -261,6 +262,7 @@ def run(args) -> int:
 
         page = export_carry_page(robot, result, args.export, every=args.every, object_mass=args.object_mass)
         print(f"wrote {page}")
+    print_path_warnings(path, args.step)
     return 0
 
 

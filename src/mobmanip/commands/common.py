@@ -251,6 +251,17 @@ def configuration_from_args(robot, args):
     return named_configuration(robot, posture or "home")
 
 
+def print_path_warnings(path, step: float) -> None:
+    """An object path's ends at which the object still moves (:meth:`ObjectPath.moving_ends`),
+    one warning line each on standard error, once the motion has been planned."""
+    import sys
+
+    from ..support.notices import notice
+
+    for text in path.moving_ends(step):
+        notice(text, stream=sys.stderr)
+
+
 def print_warnings(analysis, stream=None) -> None:
     """The analysis's warnings, one line each, on standard error (each once per command: a
     repair already reported when the robot was loaded is not repeated). A measure that ignores a

@@ -13,6 +13,7 @@ from .common import (
     add_step_options,
     add_work_option,
     motion_floor,
+    print_path_warnings,
     print_self_motion,
     registered_constraints,
     report_partial_carry,
@@ -218,6 +219,7 @@ def run(args) -> int:
         for note in notes:
             print(f"note: {note}")
         print(f"wrote {page}")
+    print_path_warnings(path, args.step)
     return 0
 
 

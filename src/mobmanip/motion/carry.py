@@ -81,6 +81,10 @@ PREPARE_TOLERANCE = 1e-4
 PREPARE_WINDOW = 1.0
 
 
+#: Below this speed (m/s) a path's end counts as at rest (:meth:`ObjectPath.moving_ends`).
+REST_SPEED = 1e-3
+
+
 @dataclass(frozen=True)
 class ObjectPath:
     """Where the object should be over time.
@@ -137,6 +141,29 @@ class ObjectPath:
             turn = self._heading_turn(times)
         return d, turn
 
+    def end_speeds(self) -> tuple[float, float]:
+        """The object's speed (m/s, in space) at the path's start and at its end, as
+        :meth:`sample` moves it: the derivative of its splines there."""
+        coordinates = [self.xy[:, 0], self.xy[:, 1]] + ([self.z] if self.z is not None else [])
+        rates = np.array([_end_rates(self.t, values) for values in coordinates])  # (coordinates, 2)
+        start, end = np.linalg.norm(rates, axis=0)
+        return float(start), float(end)
+
+    def moving_ends(self, step: float, rest_speed: float = REST_SPEED) -> list[str]:
+        """A sentence for each end of the path at which the object still moves (its speed above
+        ``rest_speed``, m/s): a motion sampled every ``step`` seconds starts or stops the object
+        within one step there, an acceleration of about speed / step no robot gives."""
+        out = []
+        for speed, time_s, verb, noun in zip(self.end_speeds(), (self.t[0], self.t[-1]), ("starts", "ends"),
+                                             ("start", "stop")):  # fmt: skip
+            if speed > rest_speed:
+                out.append(
+                    f"the object path {verb} moving, at {speed:.3g} m/s (t = {time_s:g} s): the motion makes its "
+                    f"{noun} within one step of {step:g} s, about {speed / step:.3g} m/s^2; let the path's "
+                    f"samples bring it to rest there (as examples/carry_turn.csv does)"
+                )
+        return out
+
     def _heading_turn(self, times: np.ndarray) -> np.ndarray:
         steps = np.diff(self.xy, axis=0)
         moving = np.linalg.norm(steps, axis=1) > 1e-12
@@ -152,6 +179,17 @@ class ObjectPath:
         heading = np.unwrap(heading)
         mids = 0.5 * (self.t[1:] + self.t[:-1])
         return smooth(mids, heading, np.clip(times, mids[0], mids[-1])) - heading[0]
+
+
+def _end_rates(t: np.ndarray, values: np.ndarray) -> tuple[float, float]:
+    """d values / dt at t[0] and t[-1] of :func:`smooth`'s curve through them."""
+    from scipy.interpolate import CubicSpline
+
+    if t.shape[0] == 2:
+        rate = float((values[1] - values[0]) / (t[1] - t[0]))
+        return rate, rate
+    slope = CubicSpline(t, values).derivative()
+    return float(slope(t[0])), float(slope(t[-1]))
 
 
 def smooth(t: np.ndarray, values: np.ndarray, times: np.ndarray) -> np.ndarray:
