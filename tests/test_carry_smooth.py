@@ -20,6 +20,7 @@ from scipy.interpolate import CubicSpline
 
 import mobmanip
 from mobmanip.cli import main
+from mobmanip.errors import ArgumentError
 from mobmanip.motion.carry import ObjectPath, read_path
 from mobmanip.motion.trajectory import read_trajectory, trajectory_from_samples
 from mobmanip.motion.trajectory_analysis import acceleration_deviation, analyze_trajectory, time_scaling
@@ -177,6 +178,9 @@ def test_a_path_that_ends_moving_is_said_with_its_speed(tmp_path, capfd):
         "warning: the object path ends moving, at 0.316 m/s (t = 1 s): the motion makes its stop within one step "
         "of 0.02 s, about 15.8 m/s^2; let the path's samples bring it to rest there (as examples/carry_turn.csv does)"
     ]
+    for bad in (0.0, -0.02, float("nan"), float("inf")):
+        with pytest.raises(ArgumentError, match="the step must be a positive number"):
+            path.moving_ends(bad)
     for name in ("carry_turn.csv", "carry_line.csv"):
         example = read_path(EXAMPLES / name)
         assert example.moving_ends(0.02) == [] and max(example.end_speeds()) < 1e-4

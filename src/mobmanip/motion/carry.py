@@ -152,7 +152,14 @@ class ObjectPath:
     def moving_ends(self, step: float, rest_speed: float = REST_SPEED) -> list[str]:
         """A sentence for each end of the path at which the object still moves (its speed above
         ``rest_speed``, m/s): a motion sampled every ``step`` seconds starts or stops the object
-        within one step there, an acceleration of about speed / step no robot gives."""
+        within one step there, an acceleration of about speed / step no robot gives.
+
+        Raises:
+            ArgumentError: ``step`` or ``rest_speed`` not a positive finite number.
+        """
+        for name, value in (("step", step), ("rest speed", rest_speed)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
+                raise ArgumentError(f"the {name} must be a positive number, got {value!r}")
         out = []
         for speed, time_s, verb, noun in zip(self.end_speeds(), (self.t[0], self.t[-1]), ("starts", "ends"),
                                              ("start", "stop")):  # fmt: skip
