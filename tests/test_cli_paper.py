@@ -105,3 +105,15 @@ def test_unwritable_output_is_one_line_exit_2(tmp_path, capsys):
     assert main(["paper", "--out", str(blocker / "sub")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mobmanip: error:") and "sub" in err[0]
+
+
+def test_case_study_on_another_platform_is_one_line_exit_2(tmp_path, capsys):
+    """The arms' posture is any platform's (``carry`` starts the omnidirectional base from it), but
+    the case study varies the wheels' limits: on the holonomic base it is one line, not an
+    internal error, and nothing is written."""
+    assert main(["paper", "--robot", "planar_dual_arm_omni", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "mobmanip: error: the case study needs a differential drive with two arms; 'planar_dual_arm_omni' does not fit"
+    ]
+    assert not (tmp_path / "out").exists()

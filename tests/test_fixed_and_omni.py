@@ -13,6 +13,7 @@ from pycapacity.robot import acceleration_ellipsoid, velocity_ellipsoid
 import mobmanip
 from mobmanip.analysis import analyze
 from mobmanip.casestudy import configuration_at, optimal_posture
+from mobmanip.motion.carry import ObjectPath, carry
 
 
 def _same_axes(a: np.ndarray, b: np.ndarray, atol: float) -> None:
@@ -138,3 +139,23 @@ def test_omnidirectional_contains_differential_drive_on_random_configurations(pa
         holonomic = analyze(omni, _same_pose(diff, q, omni), "planar").kinematic
         for d in _directions(90):
             assert holonomic.support(d) >= wheels.support(d) * (1 - 1e-12)
+
+
+def test_omnidirectional_carry_along_the_heading_is_the_differential_drives(pair):
+    """``carry`` on the holonomic base starts, as on the wheels, from the case-study posture (it
+    was refused: its home posture, the arms stretched, is singular). Along a straight path ahead,
+    the mirrored arms keep the smallest semi-axis along the heading, where the base's sideways
+    column adds nothing: the motion's capacity equals the differential drive's, and the base
+    never moves sideways (both to 1e-12)."""
+    diff, omni = pair
+    t = np.linspace(0.0, 2.0, 21)
+    ahead = 0.3 * (3.0 * (t / 2.0) ** 2 - 2.0 * (t / 2.0) ** 3)  # from rest to rest
+    path = ObjectPath(t, np.column_stack([ahead, np.zeros_like(t)]))
+    wheels, holonomic = (carry(robot, path, prepare=0.0) for robot in pair)
+    assert holonomic.start == wheels.start
+    assert "case-study posture" in holonomic.start
+    for run in ("motion", "baseline"):
+        np.testing.assert_allclose(getattr(holonomic, run).capacity, getattr(wheels, run).capacity, rtol=0, atol=1e-12)
+    sideways = omni.reduced_velocity_names.index("base_y")
+    assert np.max(np.abs(holonomic.motion.x[:, sideways])) < 1e-12
+    assert np.min(holonomic.motion.capacity) > 1.0  # the posture is far from singular all along

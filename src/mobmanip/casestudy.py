@@ -20,7 +20,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from .analysis.single import Analysis, analyze
+from .errors import SpecError
 from .measures import DYNAMIC, KINEMATIC, get_measure
+from .platforms import DifferentialDrive
 from .postures.planar import ArmPosture, arm_measure, configuration_at, optimal_posture
 from .robot.model import Robot
 
@@ -139,7 +141,12 @@ def run_case_study(
         progress: called with a short message after each step.
         measures: measures to compute besides the kinematic and dynamic ellipsoids (names, see
             :mod:`mobmanip.measures`); ``None``: the default ones.
+
+    Raises:
+        SpecError: not a differential drive with two 3-joint arms with vertical axes.
     """
+    if not isinstance(robot.platform, DifferentialDrive):  # the sweeps vary its wheels' limits
+        raise SpecError(f"the case study needs a differential drive with two arms; {robot.name!r} does not fit")
     note = progress or (lambda message: None)
     if measures is not None:
         measures = (KINEMATIC.name, DYNAMIC.name, *measures)
@@ -148,7 +155,7 @@ def run_case_study(
         f"optimal arm posture q2 = {posture.q[1]:.4f}, q3 = {posture.q[2]:.4f} rad, "
         f"manipulability {posture.manipulability:.4f} m^2, reach {posture.reach:.4f} m"
     )
-    radius = robot.platform.radius  # type: ignore[attr-defined]  # a differential drive (checked)
+    radius = robot.platform.radius
     kinematic, dynamic = [], []
     for angle in angles_deg:
         q = configuration_at(robot, posture, angle)

@@ -31,7 +31,6 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SpecError
-from ..platforms import DifferentialDrive
 from ..robot.model import Arm, Robot
 
 
@@ -52,11 +51,13 @@ class ArmPosture:
     bearing: float
 
 
-def _check_paper_like(robot: Robot) -> None:
-    if not isinstance(robot.platform, DifferentialDrive) or len(robot.arms) != 2:  # the paper's own platform
-        raise SpecError(f"the case study needs a differential drive with two arms; {robot.name!r} does not fit")
-    if any(len(arm.joint_names) != 3 for arm in robot.arms):
-        raise SpecError(f"the case study needs two 3-joint arms; {robot.name!r} has other arms")
+def _check_two_arms(robot: Robot) -> None:
+    """The posture is the arms' own: any platform carries it (the paper's differential drive, the
+    omnidirectional base it is compared with, a locked one)."""
+    if len(robot.arms) != 2:
+        raise SpecError(f"the case study's posture needs two arms; {robot.name!r} has {len(robot.arms)}")
+    for index in range(2):
+        planar_arm(robot, index)  # 3 joints, vertical axes
 
 
 def arm_measure(robot: Robot, arm: Arm, q2: float, q3: float) -> tuple[float, np.ndarray, np.ndarray]:
@@ -81,9 +82,9 @@ def optimal_posture(robot: Robot, arm_index: int = 0, grid: int = 73, refinement
     (q2, q3) and (-q2, -q3), the one that bends to the right (positive bearing) is returned.
 
     Raises:
-        SpecError: not a differential drive with two 3-joint arms (the paper's robot).
+        SpecError: not two 3-joint arms with vertical axes (as the paper's robot has).
     """
-    _check_paper_like(robot)
+    _check_two_arms(robot)
     arm = robot.arms[arm_index]
     center, half = np.zeros(2), math.pi
     best = (-1.0, 0.0, 0.0)
@@ -116,9 +117,9 @@ def configuration_at(robot: Robot, posture: ArmPosture, angle_deg: float, headin
     whole robot (rad).
 
     Raises:
-        SpecError: not a differential drive with two 3-joint arms (the paper's robot).
+        SpecError: not two 3-joint arms with vertical axes (as the paper's robot has).
     """
-    _check_paper_like(robot)
+    _check_two_arms(robot)
     alpha = math.radians(angle_deg)
     _, q2, q3 = posture.q
     right, left = robot.arms
@@ -133,7 +134,7 @@ def optimal_configuration(robot: Robot, angle_deg: float = 0.0, heading: float =
     heading (default straight ahead); ``heading`` rotates the whole robot (rad).
 
     Raises:
-        SpecError: not a differential drive with two 3-joint arms (the paper's robot).
+        SpecError: not two 3-joint arms with vertical axes (as the paper's robot has).
     """
     return configuration_at(robot, optimal_posture(robot), angle_deg, heading)
 
@@ -180,7 +181,7 @@ def planar_arm(robot: Robot, arm_index: int) -> PlanarArm:
     """
     arm = robot.arms[arm_index]
     if len(arm.joint_names) != 3:
-        raise SpecError(f"sweep postures need 3-joint planar arms; arm {arm.name!r} has {len(arm.joint_names)}")
+        raise SpecError(f"the paper's postures need 3-joint planar arms; arm {arm.name!r} has {len(arm.joint_names)}")
     model, data = robot.model, robot.data
     q0 = robot.configuration(joints=dict.fromkeys(arm.joint_names, 0.0))
     pin.computeJointJacobians(model, data, q0)
@@ -191,7 +192,7 @@ def planar_arm(robot: Robot, arm_index: int) -> PlanarArm:
         axis = pin.getJointJacobian(model, data, jid, pin.WORLD)[3:, model.joints[jid].idx_v]
         if abs(abs(axis[2]) - 1.0) > 1e-9:
             raise SpecError(
-                f"sweep postures need vertical arm joints; {name!r} turns about {np.round(axis, 3).tolist()}"
+                f"the paper's postures need vertical arm joints; {name!r} turns about {np.round(axis, 3).tolist()}"
             )
         signs.append(1.0 if axis[2] > 0 else -1.0)
         points.append(data.oMi[jid].translation[:2].copy())
