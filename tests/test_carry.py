@@ -232,3 +232,24 @@ def test_bad_paths_are_refused(tmp_path):
     with pytest.raises(ArgumentError, match="increasing"):
         ObjectPath(np.array([0.0, 0.0]), np.zeros((2, 2)))
     assert main(["carry", "planar_dual_arm", "--path", str(path)]) == 2
+
+
+def test_a_singular_start_is_refused_by_name(tmp_path, capsys):
+    """The UR5's home posture lies stretched out: its Jacobian (Pinocchio's, read here directly)
+    has a zero singular value (to round-off), so the minor axis is not defined there. ``carry`` says so in one
+    line naming the start posture and how to give another, before any motion is computed."""
+    ur5 = mobmanip.load_robot("ur5")
+    q = ur5.neutral()
+    frame = ur5.model.getFrameId(ur5.arms[0].end_effector)
+    J = pin.computeFrameJacobian(ur5.model, ur5.data, q, frame, pin.LOCAL_WORLD_ALIGNED)
+    sigma = np.linalg.svd(J, compute_uv=False)
+    assert sigma[-1] < 1e-10 * sigma[0]  # rank 5, to round-off
+    path = tmp_path / "ahead.csv"
+    path.write_text("t,x,y\n0,0,0\n1,0.05,0\n")
+    assert main(["carry", "ur5", "--path", str(path), "--prepare", "0"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.splitlines() == [
+        "mobmanip: error: kinematic:minor_axis is not defined at the start posture (the home configuration): "
+        "the posture is singular there; start from another (--start Q.json, or a [hold] posture in the spec)"
+    ]

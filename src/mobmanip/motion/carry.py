@@ -423,6 +423,15 @@ def _default_start_label(robot: Robot, q0: np.ndarray) -> str:
     return "the case-study posture (both arms at their optimum, object straight ahead)"
 
 
+def _why_undefined(evaluator) -> str:
+    dynamic = getattr(evaluator.objective, "ellipsoid", None) == "dynamic"
+    return "the posture is singular there" + (" or the torques cannot hold the load" if dynamic else "")
+
+
+#: The runs as a message names them.
+_RUN_NAMES = {"qp": "QP motion", "pinv": "baseline", "self-motion": "self-motion"}
+
+
 def _run(
     robot,
     q0,
@@ -471,7 +480,8 @@ def _run(
             value, grad, ok = evaluator(q)
             if not ok:
                 raise MeasureError(
-                    f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the {method} motion"
+                    f"{evaluator.objective.name} is not defined at step {k} (t = {times[k]:g} s) of the "
+                    f"{_RUN_NAMES[method]}: {_why_undefined(evaluator)}"
                 )
             capacity[k] = value
             S = robot.null_space(q)
@@ -622,6 +632,11 @@ def carry(
         step_rows(constraints, terms_at(robot, q0, task.name, object_mass=object_mass), rest, float(step),
                   (np.zeros((robot.nx, robot.nx)), rest))  # fmt: skip
     label = "the given start configuration" if start is not None else _default_start_label(robot, q0)
+    if not evaluator(q0)[2]:
+        raise MeasureError(
+            f"{evaluator.objective.name} is not defined at the start posture ({label}): {_why_undefined(evaluator)}; "
+            "start from another (--start Q.json, or a [hold] posture in the spec)"
+        )
     step, gain = float(step), float(gain)
     preparation, weight, q_path = None, None, q0
     if prepare > 0.0 and gain > 0.0:
