@@ -122,6 +122,8 @@ def hardest_stop(
         raise ArgumentError(f"the sense of the run must be +1 (forward) or -1 (backward), got {sense!r}")
     if isinstance(speed, bool) or not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed >= 0.0):
         raise ArgumentError(f"the speed braked from must be a finite number of m/s >= 0, got {speed!r}")
+    if robot.platform.n_reduced == 0:
+        raise ArgumentError(f"{robot.name} has a {robot.platform.kind} platform: it does not drive, so it has no stop")
     S = robot.null_space(q)[:3, : robot.platform.n_reduced]
     run = np.linalg.lstsq(S, [1.0, 0.0, 0.0], rcond=None)[0]
     if np.linalg.norm(S @ run - [1.0, 0.0, 0.0]) > 1e-9:
