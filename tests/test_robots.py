@@ -353,3 +353,20 @@ def test_omnidirectional_spec_with_wheels_is_refused(tmp_path):
     extra = '[wheels]\nright = "wheel_right_joint"\nleft = "wheel_left_joint"'
     with pytest.raises(SpecError, match="only for a differential_drive"):
         load_spec(_omni_spec(tmp_path, extra=extra))
+
+
+def test_platform_pose_reads_the_platforms_world_placement(tiago, rng):
+    """``platform_pose(q)`` is where Pinocchio puts the root body: (x, y) of its origin and the
+    heading of its x axis, at random configurations (yaw over the whole circle)."""
+    from mobmanip.robot.model import platform_pose
+
+    for _ in range(20):
+        yaw = rng.uniform(-math.pi, math.pi)
+        q = tiago.configuration((rng.uniform(-5, 5), rng.uniform(-5, 5), yaw))
+        pin.forwardKinematics(tiago.model, tiago.data, q)
+        placement = tiago.data.oMi[1]
+        x, y, heading = platform_pose(q)
+        np.testing.assert_allclose([x, y], placement.translation[:2], rtol=0, atol=1e-12)
+        axis = placement.rotation[:2, 0]
+        assert abs(heading - math.atan2(axis[1], axis[0])) < 1e-12
+        assert abs(heading - yaw) < 1e-12

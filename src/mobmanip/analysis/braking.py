@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ArgumentError
-from ..robot.model import Robot
+from ..robot.model import Robot, platform_pose
 from ..sets.lifted import LiftedPolytope
 from ..terms.constraints.floor import CONTACT_FORCES, Floor, ground_reaction
 from .reaches import tip_over_reading
@@ -132,7 +132,7 @@ def hardest_stop(
             "(a steered base turns as it drives unless its steering is at 0): the stop is for a straight run"
         )
     braking = braking_set(robot, q, object_mass, floor)
-    heading = math.atan2(float(q[3]), float(q[2]))
+    heading = platform_pose(q)[2]
     against = -sense * np.array([math.cos(heading), math.sin(heading)])  # the deceleration's direction
     deceleration = 0.0 if braking.empty else float(braking.straight_line_reach(against))
     if deceleration <= 0.0:

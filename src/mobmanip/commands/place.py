@@ -497,6 +497,7 @@ def _compute_map(args, robot, target, extent, yaw, collision, reference, executo
 def _write_map(args, grid, result) -> None:
     import numpy as np
 
+    from ..robot.model import platform_pose
     from ..support.files import output_directory
     from .outputs import placement_map_outputs
 
@@ -505,7 +506,7 @@ def _write_map(args, grid, result) -> None:
     reachable = int(np.sum(~np.isnan(grid.values)))
     print(
         f"map: {reachable} of {grid.values.size} platform positions hold the object; best {value:.6g} at "
-        f"x {q[0]:.4f} m, y {q[1]:.4f} m, heading {math.degrees(math.atan2(q[3], q[2])):.2f} deg "
+        f"x {q[0]:.4f} m, y {q[1]:.4f} m, heading {math.degrees(platform_pose(q)[2]):.2f} deg "
         f"(place, started also from the map's {MAP_SEEDS} best cells: {result.value:.6g}); "
         f"{grid.evaluations} evaluations, {grid.seconds:.2f} s"
     )

@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ArgumentError, SpecError, TaskError
 from ..platforms import a_platform
-from ..robot.model import Robot
+from ..robot.model import Robot, platform_pose
 from ..robot.tasks import TaskSpace, get_task
 from ..sets.lifted import Witness
 from ..sets.linear_programs import LinearProgram
@@ -202,7 +202,7 @@ def _replay(robot, q, tau, task, object_mass, floor, duration, step, stop, keep)
             raise TaskError(f"at t = {t:.6g} s the efforts lift the whole robot off the floor")
         z = support.floor_z
         zmp = np.array([(z * force[0] - moment[1]) / force[2], (moment[0] + z * force[1]) / force[2]])
-        pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
+        pose = platform_pose(q)
         normal, _, use = contact_forces(support.world_points(pose), driven, force, moment, zmp, mu, stiffness)
         times.append(t)
         configurations.append(q)
@@ -329,7 +329,7 @@ def _affine_state(robot: Robot, q: np.ndarray, x: np.ndarray, task: TaskSpace, o
 def _contact_maps(state: _AffineState, q: np.ndarray, support, stiffness: np.ndarray | None) -> ContactMaps:
     """The contact forces of :func:`contact_maps` from one state's affine wrench."""
     G, g = state.wrench
-    pose = (float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2])))
+    pose = platform_pose(q)
     components = both_ways([contact.driven for contact in support.contacts])
     # the floor of motion's one sharing, in the world's frame (the wrench's)
     sharing = WrenchSharing.of(support.world_points(pose), components, support.floor_z, stiffness)
@@ -458,7 +458,7 @@ def held_reach(
     if calm_hold.holds and fraction == 1.0:
         return HeldReach(d, top, instant, float(duration), calm_hold, calm_hold, fraction, witness, None, witness)
     q = np.asarray(q, dtype=float)
-    heading = math.atan2(float(q[3]), float(q[2]))
+    heading = platform_pose(q)[2]
     program = _HoldingProgram(robot, polytope, d, object_mass, floor, heading)
     calm_witness = witness
     # a held reach: (reach, its replay, its efforts, the replay's contact maps)

@@ -43,7 +43,7 @@ from ..analysis.single import analyze
 from ..errors import ArgumentError, MobmanipError, TaskError
 from ..gradients.readings import ReadingObjective, is_reading_objective
 from ..measures import get_measure
-from ..robot.model import Robot
+from ..robot.model import Robot, platform_pose
 from ..robot.tasks import get_task
 from .maps import PlacementMap
 from .optimize import DEFAULT_STARTS, Placement, PlacementProblem, Region, _project, check_turn, place
@@ -118,7 +118,7 @@ class PolytopePlacement:
     @property
     def platform(self) -> tuple[float, float, float]:
         """(x m, y m, heading rad) of the platform."""
-        return float(self.q[0]), float(self.q[1]), math.atan2(self.q[3], self.q[2])
+        return platform_pose(self.q)
 
 
 def place_polytope(

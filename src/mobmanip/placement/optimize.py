@@ -47,7 +47,7 @@ from ..analysis.single import Analysis
 from ..errors import ArgumentError, UnreachableObjectError
 from ..gradients.evaluator import GradientEvaluator, Objective, platform_gradient
 from ..postures.inverse_kinematics import hold_from
-from ..robot.model import Robot
+from ..robot.model import Robot, platform_pose
 from ..robot.tasks import get_task
 from ..support.lockstep import Lockstep
 
@@ -143,7 +143,7 @@ class Placement:
     @property
     def platform(self) -> tuple[float, float, float]:
         """(x m, y m, heading rad) of the platform."""
-        return float(self.q[0]), float(self.q[1]), math.atan2(self.q[3], self.q[2])
+        return platform_pose(self.q)
 
     def agreement(self, rtol: float = AGREEMENT_RTOL) -> dict[str, int]:
         """How the starts ended: ``{"best": reached the best value within ``rtol`` of its size,
@@ -288,7 +288,7 @@ class PlacementProblem:
 
     def variables(self, q: np.ndarray, psi: float) -> np.ndarray:
         z = np.empty(self.n)
-        z[:3] = (q[0], q[1], math.atan2(q[3], q[2]))
+        z[:3] = platform_pose(q)
         for k, j in enumerate(self.joint_ids):
             joint = self.model.joints[j]
             if joint.nq == 2:

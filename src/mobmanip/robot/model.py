@@ -356,7 +356,7 @@ class Robot:
             else:
                 value = float(q[joint.idx_q])
             joints[self.model.names[j]] = value
-        return {"platform": [float(q[0]), float(q[1]), math.atan2(q[3], q[2])], "joints": joints}
+        return {"platform": list(platform_pose(q)), "joints": joints}
 
     @property
     def coordinate_names(self) -> tuple[str, ...]:
@@ -467,6 +467,12 @@ class Robot:
         if not self.model.existFrame(name):
             raise FrameNotFoundError(name, [f.name for f in self.model.frames], where=f"robot {self.name}")
         return frame_index(self.model, name)
+
+
+def platform_pose(q: np.ndarray) -> tuple[float, float, float]:
+    """The platform's pose (x m, y m, yaw rad) in configuration q: the planar root joint's block
+    (x, y, cos yaw, sin yaw), first in every loaded robot's q."""
+    return float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))
 
 
 def frame_index(model: pin.Model, name: str) -> int:

@@ -84,7 +84,7 @@ from numpy.typing import ArrayLike
 
 from ..analysis.single import Analysis, analyze
 from ..measures import default_measures, get_measure, measure_names, resolve_measures
-from ..robot.model import Robot
+from ..robot.model import Robot, platform_pose
 from ..sets.taskset import TaskSet
 from . import page as _page
 from .animation import CAMERA_FRAMES as CAMERA_FRAMES
@@ -359,7 +359,7 @@ class EllipsoidViewer(MeshcatScene):
                 points, boxes = self._frame_extent(frames[i])
                 extents.append(np.vstack([points, *(_page.box_corners(*box) for box in boxes)]))
             first = frames[0]
-            heading = math.atan2(first.q[3], first.q[2]) if self.model.nq >= 4 else 0.0
+            heading = platform_pose(first.q)[2] if self.model.nq >= 4 else 0.0
             return self._send_animation_camera(extents, [times[i] for i in picked], heading)
         frames = [frames[i] for i in camera_samples(len(frames))]
         all_points, all_boxes = [], []
@@ -368,7 +368,7 @@ class EllipsoidViewer(MeshcatScene):
             all_points.append(points)
             all_boxes.extend(boxes)
         first = frames[0]
-        heading = math.atan2(first.q[3], first.q[2]) if self.model.nq >= 4 else 0.0
+        heading = platform_pose(first.q)[2] if self.model.nq >= 4 else 0.0
         return self._send_fit(np.vstack(all_points), all_boxes, heading)
 
     def _frame_extent(self, frame: Frame) -> tuple[np.ndarray, list]:

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..casestudy import ANGLES_DEG, PLATFORM_SPEEDS, WHEEL_TORQUES, configuration_at, optimal_posture
 from ..errors import ArgumentError, SpecError
-from ..robot.model import Robot
+from ..robot.model import Robot, platform_pose
 from .scene import Frame, analyze_pair
 
 SWEEPS = ("object-angle", "fig3", "fig4")
@@ -90,7 +90,7 @@ def object_angle_frames(
             label = f"object at {angle:g} deg from the platform heading"
         else:
             q_at = np.array(robot.neutral() if q is None else q, dtype=float)
-            yaw = math.atan2(q_at[3], q_at[2]) + math.radians(angle)
+            yaw = platform_pose(q_at)[2] + math.radians(angle)
             q_at[2:4] = (math.cos(yaw), math.sin(yaw))
             label = f"platform heading turned by {angle:g} deg"
         analysis, fixed = analyze_pair(robot, q_at, task, locked=locked, **options)

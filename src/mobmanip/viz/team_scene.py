@@ -38,6 +38,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..measures import get_measure
+from ..robot.model import platform_pose
 from ..team.analysis import TeamAnalysis
 from ..team.members import ObjectShape
 from . import page as _page
@@ -269,7 +270,7 @@ class TeamViewer(MeshcatScene):
             The camera request sent (see :mod:`mobmanip.viz.page`).
         """
         first = frames[0].analysis.team.members[0]
-        heading = math.atan2(first.q[3], first.q[2]) if first.robot.model.nq >= 4 else 0.0
+        heading = platform_pose(first.q)[2] if first.robot.model.nq >= 4 else 0.0
         if times is not None and len(frames) > 1:
             picked = camera_samples(len(frames), FOLLOW_FRAMES)
             extents = [self._frame_extent(frames[i]) for i in picked]

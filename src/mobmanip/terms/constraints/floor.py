@@ -92,6 +92,7 @@ import pinocchio as pin
 
 from ...errors import ArgumentError, SpecError
 from ...platforms import a_platform
+from ...robot.model import platform_pose
 from ...robot.support import Support, check_faces, check_mu, check_reserve, polygon_margin, robot_support
 from ...robot.tasks import get_task
 from ..grasp import GRAVITY, HeldObject
@@ -278,7 +279,7 @@ class Floor(Constraint):
         A_G = pin.computeCentroidalMap(model, data, q).copy()  # momentum about c, world axes
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        pose = _pose(q)
+        pose = platform_pose(q)
         points = support.world_points(pose)
         columns = _contact_columns(support, points, c)
         n_forces, nx = columns.size, S.shape[1]
@@ -801,7 +802,7 @@ def _wheel_equations(
         if keep.any():
             out.append(({CONTACT_FORCES: vt[keep]}, np.zeros(int(keep.sum()))))
     if rolled:
-        yaw = math.atan2(float(q[3]), float(q[2]))
+        yaw = platform_pose(q)[2]
         block = np.zeros((len(rolled), n_forces))
         for i, c in enumerate(rolled):
             fx, fy = support.contacts[c].free or (0.0, 0.0)
@@ -851,10 +852,6 @@ def _robot_support(robot) -> Support:
         cached = robot_support(robot)
         robot.__dict__["_floor_support"] = cached
     return cached
-
-
-def _pose(q: np.ndarray) -> tuple[float, float, float]:
-    return float(q[0]), float(q[1]), math.atan2(float(q[3]), float(q[2]))
 
 
 def _weight(mass: float, gravity: np.ndarray) -> np.ndarray:
