@@ -189,4 +189,3 @@ def test_a_steered_base_brakes_from_a_straight_run_only(tmp_path, capfd):
         stop = hardest_stop(robot, q, sense, 1.0, 1.0, Floor(mu=0.5))
         assert 0.0 < stop.deceleration <= grounded.straight_line_reach([-sense, 0.0]) * (1 + 1e-9)
         assert any("drive_wheel slips" in b for b in stop.binding), stop.binding
-

@@ -327,7 +327,8 @@ class CarryResult:
         posture gives) and ``motion`` (the QP over the baseline from the prepared start: what the
         capacity term gives along the path); their product is the whole ratio. A ratio whose
         denominator's set has collapsed (a singular posture) is ``None`` and ``collapsed`` says
-        which run and its semi-axes there.
+        which run and its semi-axes there. ``mean_capacity_ratio`` is the QP's mean over the
+        baseline's (from the start posture), the motion's gain where both are least at the start.
         """
         out: dict[str, Any] = {"objective": self.objective.name, "task": self.task}
         runs = {"qp": self.motion, "pinv": self.baseline}
@@ -345,13 +346,14 @@ class CarryResult:
         if self.prepared_baseline is not None:
             out["pinv_prepared"]["start"] = dict(out["qp"]["start"])
 
-        def ratio(top: str, bottom: str) -> float | None:
-            low = runs[bottom].capacity.min()
+        def ratio(top: str, bottom: str, of=np.min) -> float | None:
+            low = of(runs[bottom].capacity)
             if low <= 0 or bottom in self.collapsed:
                 return None
-            return float(runs[top].capacity.min() / low)
+            return float(of(runs[top].capacity) / low)
 
         out["min_capacity_ratio"] = ratio("qp", "pinv")
+        out["mean_capacity_ratio"] = ratio("qp", "pinv", np.mean)
         if self.prepared_baseline is not None:
             out["ratio_parts"] = {"preparation": ratio("pinv_prepared", "pinv"), "motion": ratio("qp", "pinv_prepared")}
         out["collapsed"] = {
