@@ -263,6 +263,8 @@ def test_capacity_is_at_least_1_2_times_the_baseline_from_the_same_start(beam):
     ratio = motion.capacity.min() / base.capacity.min()
     assert ratio >= 1.2
     assert result.summary()["min_capacity_ratio"] == pytest.approx(ratio)
+    means = motion.capacity.mean() / base.capacity.mean()
+    assert result.summary()["mean_capacity_ratio"] == pytest.approx(means, rel=1e-12)
 
 
 def test_team_carry_figures_meet_the_paper_figures_standard(beam):

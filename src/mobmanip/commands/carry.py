@@ -18,6 +18,7 @@ from .common import (
     motion_floor,
     print_path_warnings,
     print_self_motion,
+    print_shared_start,
     registered_constraints,
     report_partial_carry,
     show_progress,
@@ -155,15 +156,6 @@ def _check_work(args, path) -> None:
     check_work(WorkEstimate("carry", "QP steps", steps, per_step, detail), _bound(args.max_work, MAX_STEPS))
 
 
-def _minima_at_the_start(result) -> bool:
-    """Whether the QP and the baseline, from one start, are both least at their first step, and
-    clearly (by more than 1e-6 of its value: a capacity that stays put is no such case)."""
-    return result.preparation is None and all(
-        run.capacity.size > 1 and run.capacity[1:].min() - run.capacity[0] > 1e-6 * abs(run.capacity[0])
-        for run in (result.motion, result.baseline)
-    )
-
-
 def print_ratio(label: str, ratio: float | None) -> None:
     print(f"{label}: " + ("not given (its baseline's set has collapsed)" if ratio is None else f"{ratio:.3f}"))
 
@@ -252,11 +244,7 @@ def run(args) -> int:
             f"{value['smallest_semi_axis']:.2g} of {value['largest_semi_axis']:.3g}); no ratio to it is given"
         )
     print_ratio("min capacity ratio, QP / baseline from the start posture", summary["min_capacity_ratio"])
-    if _minima_at_the_start(result) and summary["mean_capacity_ratio"] is not None:
-        print(
-            f"  both runs are least at the start posture they share, so the ratio says nothing of the motion: "
-            f"the means' ratio is {summary['mean_capacity_ratio']:.3f} (--prepare S lets a self-motion raise the start)"
-        )
+    print_shared_start(result, summary["mean_capacity_ratio"])
     parts = summary.get("ratio_parts")
     if parts is not None:
         print_ratio("  of which the preparation gives (baseline from the prepared start / from the start posture)",

@@ -872,3 +872,19 @@ def report_partial_carry(failure, out: str | None, write_partial) -> int:
         print(f"wrote {path} (partial: up to t = {failure.partial.t[-1]:g} s)")
     print(f"mobmanip: error: {failure}", file=sys.stderr)
     return 2
+
+
+def print_shared_start(result, mean_ratio: float | None) -> None:
+    """Say when the QP motion and the baseline of a carry or a team's carry, set out from one
+    posture without a self-motion, are both least at their first step (and clearly: by more than
+    1e-6 of its value, so a capacity that stays put is no such case): the ratio of their minima
+    is then 1 whatever the motion does, and the ratio of their means is the motion's gain."""
+    runs = (result.motion, result.baseline)
+    shared = result.preparation is None and all(
+        run.capacity.size > 1 and run.capacity[1:].min() - run.capacity[0] > 1e-6 * abs(run.capacity[0]) for run in runs
+    )
+    if shared and mean_ratio is not None:
+        print(
+            f"  both runs are least at the start posture they share, so the ratio says nothing of the motion: "
+            f"the means' ratio is {mean_ratio:.3f} (--prepare S lets a self-motion raise the start)"
+        )

@@ -15,6 +15,7 @@ from .common import (
     motion_floor,
     print_path_warnings,
     print_self_motion,
+    print_shared_start,
     registered_constraints,
     report_partial_carry,
 )
@@ -208,6 +209,7 @@ def run(args) -> int:
     ratio = summary["min_capacity_ratio"]
     if ratio is not None:
         print(f"min capacity ratio (QP / baseline): {ratio:.3f}")
+        print_shared_start(result, summary["mean_capacity_ratio"])
     closest = summary["qp"]["min_platform_distance"]
     if closest is not None:
         print(f"platforms at least {closest:.3f} m apart (centre to centre; the QP has no collision rows)")

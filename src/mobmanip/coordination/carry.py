@@ -296,6 +296,8 @@ class TeamCarryResult:
         out["qp"]["start"] = {"posture": posture, "capacity": float(self.motion.capacity[0])}
         base = self.baseline.capacity.min()
         out["min_capacity_ratio"] = float(self.motion.capacity.min() / base) if base > 0 else None
+        mean = self.baseline.capacity.mean()
+        out["mean_capacity_ratio"] = float(self.motion.capacity.mean() / mean) if mean > 0 else None
         out["internal_forces"] = (
             "the load is shared by the least-norm hand wrenches (no internal force in the model); "
             "max_grasp_strain is the hands' disagreement with the rigid grasp that would load the object"
