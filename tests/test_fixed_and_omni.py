@@ -159,3 +159,22 @@ def test_omnidirectional_carry_along_the_heading_is_the_differential_drives(pair
     sideways = omni.reduced_velocity_names.index("base_y")
     assert np.max(np.abs(holonomic.motion.x[:, sideways])) < 1e-12
     assert np.min(holonomic.motion.capacity) > 1.0  # the posture is far from singular all along
+
+
+def test_the_viewers_object_angle_sweep_turns_the_object_on_the_holonomic_base(pair):
+    """The viewer's object-angle sweep of the holonomic base is the paper's (it turned the platform
+    instead while the posture was the differential drive's only): the object lies at each angle
+    from the heading, and at 90 deg, on the axle line, the holonomic ellipse reaches further
+    sideways than the wheels' at the same posture."""
+    from mobmanip.viz.sweeps import object_angle_frames
+
+    diff, omni = pair
+    angles = (0.0, 45.0, 90.0)
+    frames = object_angle_frames(omni, angles_deg=angles)
+    assert len(frames) == len(angles)
+    for frame, angle in zip(frames, angles):
+        c = frame.analysis.held_object.center
+        assert math.degrees(math.atan2(c[1], c[0])) == pytest.approx(angle, abs=1e-6)
+    wheels = analyze(diff, _same_pose(omni, frames[-1].q, diff), "planar").kinematic
+    axle = np.array([0.0, 1.0])
+    assert frames[-1].analysis.kinematic.radius_along(axle) > 1.05 * wheels.radius_along(axle)

@@ -47,8 +47,9 @@ def _check_moving(robot: Robot, sweep: str) -> None:
 
 
 def _paper_like(robot: Robot):
-    """(robot on its differential drive, optimal posture), or (None, None) when the robot is
-    not like the paper's. A paper-like robot with its platform locked still qualifies."""
+    """(robot on its own moving platform, the arms' optimal posture), or (None, None) when its
+    arms are not the paper's (two 3-joint arms with vertical axes, on any base). A paper-like
+    robot with its platform locked still qualifies."""
     own = robot
     if robot.platform_locked and robot.wheel_platform is not None:
         own = robot.with_platform(robot.wheel_platform.kind)
