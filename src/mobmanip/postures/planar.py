@@ -54,8 +54,10 @@ class ArmPosture:
 def _check_two_arms(robot: Robot) -> None:
     """The posture is the arms' own: any platform carries it (the paper's differential drive, the
     omnidirectional base it is compared with, a locked one)."""
-    if len(robot.arms) != 2:
-        raise SpecError(f"the case study's posture needs two arms; {robot.name!r} has {len(robot.arms)}")
+    joints = [len(arm.joint_names) for arm in robot.arms]
+    if joints != [3, 3]:
+        shape = " and ".join(str(n) for n in joints) or "no"
+        raise SpecError(f"the case study's posture needs two 3-joint arms; {robot.name!r} has arms of {shape} joints")
     for index in range(2):
         planar_arm(robot, index)  # 3 joints, vertical axes
 
