@@ -51,15 +51,16 @@ class ArmPosture:
     bearing: float
 
 
-def _check_two_arms(robot: Robot) -> None:
+def _check_two_arms(robot: Robot, axes: bool = False) -> None:
     """The posture is the arms' own: any platform carries it (the paper's differential drive, the
-    omnidirectional base it is compared with, a locked one)."""
+    omnidirectional base it is compared with, a locked one). ``axes``: also that their joints
+    turn about vertical axes (it runs the model's kinematics, on ``robot.data``)."""
     joints = [len(arm.joint_names) for arm in robot.arms]
     if joints != [3, 3]:
         shape = " and ".join(str(n) for n in joints) or "no"
         raise SpecError(f"the case study's posture needs two 3-joint arms; {robot.name!r} has arms of {shape} joints")
-    for index in range(2):
-        planar_arm(robot, index)  # 3 joints, vertical axes
+    for index in range(2) if axes else ():
+        planar_arm(robot, index)
 
 
 def arm_measure(robot: Robot, arm: Arm, q2: float, q3: float) -> tuple[float, np.ndarray, np.ndarray]:
@@ -86,7 +87,7 @@ def optimal_posture(robot: Robot, arm_index: int = 0, grid: int = 73, refinement
     Raises:
         SpecError: not two 3-joint arms with vertical axes (as the paper's robot has).
     """
-    _check_two_arms(robot)
+    _check_two_arms(robot, axes=True)
     arm = robot.arms[arm_index]
     center, half = np.zeros(2), math.pi
     best = (-1.0, 0.0, 0.0)
