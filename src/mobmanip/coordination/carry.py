@@ -16,7 +16,7 @@ start, each hand's target is its start pose moved with the object (translated al
 and turned about the vertical by the path's turn), so the object follows the path and the hands
 keep their places on it (the grasp constraints tie every hand to the one object). The limits
 and T are ``carry``'s (:func:`mobmanip.motion.carry_step.velocity_bounds`); tau is the efforts
-of the paper's policy for the whole team (:func:`mobmanip.coordination.effort.team_effort_map`),
+of the paper's policy for the whole team (:func:`mobmanip.coordination.effort.team_step_maps`),
 the load shared by W^+ over all hands. g is the gradient of the team's capacity
 (:class:`mobmanip.coordination.capacity.TeamCapacity`: the measure ``mobmanip team`` computes,
 for the object held by all hands) over x; w is fixed at the first step so that the capacity

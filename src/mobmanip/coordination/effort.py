@@ -28,27 +28,7 @@ from ..robot.tasks import TaskSpace
 from ..team import Team
 from ..terms.grasp import HeldObject
 
-__all__ = ["TeamStepMaps", "diagnose_team_step", "team_effort_map", "team_step_maps"]
-
-
-def team_effort_map(
-    team: Team,
-    qs: Sequence[np.ndarray],
-    x_prev: np.ndarray,
-    dt: float,
-    task: TaskSpace,
-    held: HeldObject,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(A, offset) with the team's efforts over the step tau = A x + offset, (nx, nx) and (nx,)
-    (robots in order, each robot's wheels then joints; see the module's docstring).
-
-    Args:
-        team: the team; qs: each robot's configuration.
-        x_prev: the team's reduced velocity over the previous step, (nx,).
-        dt: the step (s); task: the team's task; held: the object as it is held now.
-    """
-    maps = team_step_maps(team, qs, x_prev, dt, task, held)
-    return maps.efforts
+__all__ = ["TeamStepMaps", "diagnose_team_step", "team_step_maps"]
 
 
 class TeamStepMaps(NamedTuple):
@@ -73,7 +53,14 @@ def team_step_maps(
     held: HeldObject,
 ) -> TeamStepMaps:
     """The team's efforts and its hands' wrenches on the object over the step, affine in x (see
-    the module's docstring; arguments as :func:`team_effort_map`)."""
+    the module's docstring): ``efforts`` (A, offset), tau = A x + offset, (nx, nx) and (nx,)
+    (robots in order, each robot's wheels then joints).
+
+    Args:
+        team: the team; qs: each robot's configuration.
+        x_prev: the team's reduced velocity over the previous step, (nx,).
+        dt: the step (s); task: the team's task; held: the object as it is held now.
+    """
     m = task.dim
     J, drift, P, Q, xi = [], [], [], [], []
     for member, q, s in zip(team.members, qs, team.member_slices()):
@@ -139,7 +126,7 @@ def diagnose_team_step(
             (velocity, effort) units.
         H, J_u, b: the step's QP weight and tracking equality.
         lo, hi: its velocity bounds (position limits included); velocity_limits: (nx,).
-        A, offset, effort_limits: its effort map (:func:`team_effort_map`) and limits.
+        A, offset, effort_limits: its effort map (:func:`team_step_maps`) and limits.
         positions, position_limits: each reduced velocity's joint position and its (lower,
             upper) limits (rad or m; NaN for a wheel), (nx,) each.
         step, t: the step's index and time (s).
