@@ -380,13 +380,6 @@ def _cross_frames_both(u: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _gamma(y: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """gamma with x . ad(z) y = z . gamma(y, x) for every z: (w_y x x_l, v_y x x_l + w_y x x_a),
-    spatial vectors on axis 1."""
-    vy, wy, xl, xa = y[:, :3], y[:, 3:], x[:, :3], x[:, 3:]
-    return np.concatenate([_cross(wy, xl), _cross(vy, xl) + _cross(wy, xa)], axis=1)
-
-
 #: The most a compile of each compiled loop may take (s), printed when a first call compiles it.
 _COMPILE_SECONDS = {
     name: up_to(name) for name in ("world_inertias", "mass_and_gravity", "bilinear_rows", "kinematic chain")

@@ -306,23 +306,19 @@ def solve_step_qp(H, c, A, b, lo, hi, G=None, h=None) -> np.ndarray | None:
     return solve_qp(H, c, G=G, h=h, A=A, b=b, lb=lo, ub=hi, solver="daqp")
 
 
-def _effort_rows(robot, q, x_prev, dt, task, object_mass, limits) -> tuple[np.ndarray, np.ndarray]:
+def effort_rows_of(effort_map: tuple[np.ndarray, np.ndarray], limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Linear inequalities G x <= h that keep the wheel and joint efforts of the step within
-    their limits: with xdot = (x - x_prev) / dt the efforts are affine in x, tau = c + A xdot
+    their limits, from the step's effort map (A, offset) (:func:`_effort_map`): with
+    xdot = (x - x_prev) / dt the efforts are affine in x, tau = A x + offset
     (:meth:`mobmanip.motion.MotionTerms.torques`, the velocity terms at x_prev), and
     -s tau_max <= tau <= s tau_max with s = :data:`EFFORT_SHARE`."""
-    return effort_rows_of(_effort_map(robot, q, x_prev, dt, task, object_mass), limits)
-
-
-def effort_rows_of(effort_map: tuple[np.ndarray, np.ndarray], limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_effort_rows` from the step's effort map (A, offset): tau = A x + offset."""
     A, offset = effort_map
     bound = EFFORT_SHARE * limits
     return np.vstack([A, -A]), np.concatenate([bound - offset, bound + offset])
 
 
 def _effort_map(robot, q, x_prev, dt, task, object_mass, gravity=None) -> tuple[np.ndarray, np.ndarray]:
-    """(A, offset) with the step's efforts tau = A x + offset (see :func:`_effort_rows`); on a ramp
+    """(A, offset) with the step's efforts tau = A x + offset (see :func:`effort_rows_of`); on a ramp
     ``gravity`` is the floor's (:meth:`mobmanip.motion.carry_floor.CarryFloor.gravity`), default straight down."""
     from .in_motion import motion_terms
 

@@ -9,7 +9,7 @@ their variables at the step's configuration; over one step they are rows over x:
   rigid grasp, ``v = (W^T)^+ J_u x``;
 - acceleration problem: ``xdot = (x - x_prev) / dt`` and ``tau = A x + offset``, the efforts of
   the paper's policy with the velocity terms at the previous step's rates (carry's own effort
-  rows, :func:`mobmanip.motion.carry_step._effort_rows`).
+  rows, :func:`mobmanip.motion.carry_step.effort_rows_of`).
 
 What cannot be written over x alone is refused, naming the constraint and what it asks: rows over
 the hands' wrenches ``h`` or the object's acceleration ``a``, variables of its own (the floor's

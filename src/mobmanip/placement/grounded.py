@@ -41,7 +41,7 @@ from scipy.optimize import minimize
 
 from ..analysis.single import analyze
 from ..errors import ArgumentError, MobmanipError, TaskError
-from ..gradients.readings import ReadingObjective, is_reading_objective
+from ..gradients.readings import ReadingObjective
 from ..measures import get_measure
 from ..robot.model import Robot, platform_pose
 from ..robot.tasks import get_task
@@ -70,12 +70,6 @@ def surrogate(objective: ReadingObjective) -> str:
     if ellipsoid is None:
         return FALLBACK_SURROGATE
     return f"{ellipsoid}:capacity:" + (objective.direction_text or ",".join(repr(v) for v in objective.direction))
-
-
-def is_polytope_objective(text: str) -> bool:
-    """Whether ``text`` is an objective of this module: a reading of a registered measure other
-    than the two ellipsoids with closed-form gradients (``MEASURE:...``)."""
-    return is_reading_objective(text)
 
 
 def polytope_value(

@@ -40,12 +40,6 @@ class Hull:
     faces: list[np.ndarray]
     pairs: np.ndarray
 
-    def vertex_rows(self) -> list[np.ndarray]:
-        """Per vertex, the facet rows that meet there."""
-        order = np.argsort(self.pairs[:, 1], kind="stable")
-        counts = np.bincount(self.pairs[:, 1], minlength=len(self.vertices))
-        return np.split(self.facet_rows[self.pairs[order, 0]], np.cumsum(counts)[:-1])
-
     def normal_sums(self, rows: np.ndarray) -> np.ndarray:
         """Per vertex, the sum of ``rows[facet]`` over the facets that meet there, (v, cols)."""
         out = np.zeros((len(self.vertices), rows.shape[1]))
