@@ -1,0 +1,48 @@
+"""Commands run on built-in robots nobody had tried them on, as a user would: a refusal is one line
+given before any work (nothing printed first, no kernel compiled, no folder made)."""
+
+from __future__ import annotations
+
+import pytest
+
+from hostile_util import assert_one_line_error, run_cli
+
+FLOOR_REFUSAL = "the floor model covers platforms that move on the floor"
+
+
+@pytest.fixture(scope="module")
+def rest_to_rest(tmp_path_factory):
+    """0.2 m straight ahead in 2 s from rest to rest (a quintic), as an object path and as a
+    platform trajectory."""
+    folder = tmp_path_factory.mktemp("paths")
+    times = [0.1 * i for i in range(21)]
+    xs = [0.2 * (10 * (t / 2) ** 3 - 15 * (t / 2) ** 4 + 6 * (t / 2) ** 5) for t in times]
+    path, trajectory = folder / "path.csv", folder / "trajectory.csv"
+    path.write_text("t,x,y\n" + "".join(f"{t:.2f},{x:.9f},0\n" for t, x in zip(times, xs)))
+    trajectory.write_text(
+        "t,platform_x,platform_y,platform_yaw\n" + "".join(f"{t:.2f},{x:.9f},0,0\n" for t, x in zip(times, xs))
+    )
+    return path, trajectory
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("sweep", "panda", "--ground", "--angle", "0:90:2", "--distance", "0.5"),
+        ("sweep", "planar_dual_arm", "--platform", "fixed", "--ground", "--angle", "0:90:2", "--distance", "0.8"),
+        ("carry", "panda", "--ground", "--no-progress"),
+        ("trajectory", "ur5", "--ground"),
+    ],
+    ids=["sweep-fixed", "sweep-locked", "carry-fixed", "trajectory-fixed"],
+)
+def test_the_floor_on_a_fixed_platform_is_refused_before_any_work(capfd, tmp_path, rest_to_rest, argv):
+    """sweep printed its estimate and compiled its kernels (about 20 s), carry compiled its
+    gradient kernels, trajectory printed its whole analysis, all before refusing."""
+    path, trajectory = rest_to_rest
+    command, robot, *options = argv
+    given = {"sweep": ("-o", tmp_path / "out"), "carry": ("--path", path), "trajectory": ()}[command]
+    csv = (trajectory,) if command == "trajectory" else ()
+    code, out, err = run_cli(capfd, command, robot, *csv, *options, *given)
+    assert_one_line_error(code, err, FLOOR_REFUSAL, f"'{robot}' has a fixed platform")
+    assert out == ""
+    assert not (tmp_path / "out").exists()
