@@ -46,3 +46,20 @@ def test_the_floor_on_a_fixed_platform_is_refused_before_any_work(capfd, tmp_pat
     assert_one_line_error(code, err, FLOOR_REFUSAL, f"'{robot}' has a fixed platform")
     assert out == ""
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    "robot, needle",
+    [
+        ("stretch", "the case study's posture needs two arms; 'stretch' has 1"),
+        ("tiago_dual", "the paper's postures need 3-joint planar arms; arm 'right' has 7"),
+        ("ur5", "the case study needs a differential drive with two arms; 'ur5' does not fit"),
+    ],
+)
+def test_the_case_study_refuses_another_robot_before_printing(capfd, tmp_path, robot, needle):
+    """`paper --robot R` printed '[1/4] loaded R' before refusing R (the line ran into the error
+    line when standard output was not a terminal)."""
+    code, out, err = run_cli(capfd, "paper", "--robot", robot, "--out", tmp_path / "paper")
+    assert_one_line_error(code, err, needle)
+    assert out == ""
+    assert not (tmp_path / "paper").exists()
