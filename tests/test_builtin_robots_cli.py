@@ -63,3 +63,48 @@ def test_the_case_study_refuses_another_robot_before_printing(capfd, tmp_path, r
     assert_one_line_error(code, err, needle)
     assert out == ""
     assert not (tmp_path / "paper").exists()
+
+
+@pytest.mark.parametrize("command", ["trajectory", "retime"])
+def test_a_trajectory_that_moves_a_fixed_platform_is_refused(capfd, rest_to_rest, command):
+    """A fixed arm's trajectory whose platform columns move 0.2 m: `trajectory` reported the motion
+    as 0.186 m/s of 'platform slip' and `retime` asked for velocity or effort limits the UR5 has
+    (no joint moved, so nothing limited the speed)."""
+    _, trajectory = rest_to_rest
+    code, out, err = run_cli(capfd, command, "ur5", trajectory)
+    assert_one_line_error(
+        code, err, "robot 'ur5' has a fixed platform, but platform_x changes by 0.2 m", "keep platform_x"
+    )
+    assert out == ""
+
+
+def test_a_fixed_platform_mounted_away_from_the_origin_is_read(tmp_path):
+    """Constant platform columns say where a fixed arm is mounted: the hand's path is the one
+    mounted at the origin, carried over by that pose (forward kinematics by hand)."""
+    import numpy as np
+    import pinocchio as pin
+
+    from mobmanip.motion.trajectory import read_trajectory
+    from mobmanip.robot.model import load_robot
+
+    robot = load_robot("ur5")
+    rows = "".join(f"{0.1 * i:.1f},1.5,-0.5,0.7,{0.1 * i:.2f},-1.0,1.5\n" for i in range(5))
+    path = tmp_path / "mounted.csv"
+    path.write_text("t,platform_x,platform_y,platform_yaw,shoulder_pan_joint,shoulder_lift_joint,elbow_joint\n" + rows)
+    mounted = read_trajectory(robot, path)
+    (tmp_path / "origin.csv").write_text(path.read_text().replace(",1.5,-0.5,0.7,", ",0,0,0,"))
+    origin = read_trajectory(robot, tmp_path / "origin.csv")
+    c, s = np.cos(0.7), np.sin(0.7)
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    tool = robot.model.getFrameId("tool0")
+
+    def hand(q):
+        pin.framesForwardKinematics(robot.model, robot.data, q)
+        return robot.data.oMf[tool].translation.copy()
+
+    for q_mounted, q_origin in zip(mounted.q, origin.q):
+        assert np.allclose(hand(q_mounted), turn @ hand(q_origin) + [1.5, -0.5, 0.0], atol=1e-12)
+    pan = robot.reduced_velocity_names.index("shoulder_pan_joint")
+    assert np.allclose(mounted.x[:, pan], 1.0, atol=1e-9)  # 0.1 rad every 0.1 s
+    assert np.allclose(np.delete(mounted.x, pan, axis=1), 0.0, atol=1e-12)
+    assert np.all(mounted.slip == 0.0)
