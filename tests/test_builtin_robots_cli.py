@@ -108,3 +108,15 @@ def test_a_fixed_platform_mounted_away_from_the_origin_is_read(tmp_path):
     assert np.allclose(mounted.x[:, pan], 1.0, atol=1e-9)  # 0.1 rad every 0.1 s
     assert np.allclose(np.delete(mounted.x, pan, axis=1), 0.0, atol=1e-12)
     assert np.all(mounted.slip == 0.0)
+
+
+def test_the_trajectory_may_follow_the_options(capfd, rest_to_rest):
+    """`retime ROBOT --object-mass 2 TRAJ.csv` was refused ('unrecognized arguments: TRAJ.csv'):
+    argparse had matched the optional TRAJ.csv to nothing on reading ROBOT. Either order now
+    reads the same command; a word too many is still refused."""
+    _, trajectory = rest_to_rest
+    after = run_cli(capfd, "retime", "planar_dual_arm", "--object-mass", "2", trajectory)
+    before = run_cli(capfd, "retime", "planar_dual_arm", trajectory, "--object-mass", "2")
+    assert after[0] == 0 and after == before
+    code, _, err = run_cli(capfd, "retime", "planar_dual_arm", "--object-mass", "2", trajectory, "extra")
+    assert_one_line_error(code, err, "unrecognized arguments: extra")
