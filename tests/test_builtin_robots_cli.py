@@ -120,3 +120,33 @@ def test_the_trajectory_may_follow_the_options(capfd, rest_to_rest):
     assert after[0] == 0 and after == before
     code, _, err = run_cli(capfd, "retime", "planar_dual_arm", "--object-mass", "2", trajectory, "extra")
     assert_one_line_error(code, err, "unrecognized arguments: extra")
+
+
+def test_a_failed_self_motion_is_not_blamed_on_the_path(capfd, rest_to_rest):
+    """TIAGo on the floor: the self-motion before the path (the object held still) fails; the
+    message said 'slowing the path down likely helps', which cannot help a motion the path does
+    not drive. The step's time is the self-motion's: the path's start less --prepare, plus the
+    steps taken."""
+    import re
+
+    path, _ = rest_to_rest
+    code, _, err = run_cli(capfd, "carry", "tiago", "--path", path, "--ground", "--no-progress")
+    line = assert_one_line_error(
+        code, err, "of the self-motion before the path", "the floor binds", "slowing the path down does not help",
+        "--prepare S; 0: none",
+    )  # fmt: skip
+    assert "likely helps" not in line
+    step, t = re.search(r"at step (\d+) of the self-motion before the path \(t = (-?[\d.]+) s", line).groups()
+    assert float(t) == pytest.approx(-30.0 + 0.02 * int(step), abs=1e-9)
+
+
+def test_a_self_motion_diagnosis_names_the_limit_without_the_paths_advice():
+    from mobmanip.motion.carry_step import CarryDiagnosis
+
+    during = CarryDiagnosis(7, -12.5, "arm_2_joint", "position", asked=0.3, allowed=0.1, position=1.2,
+                            position_limit=1.25, slowing_helps=False, unit="rad/s", self_motion=True)  # fmt: skip
+    message = during.message()
+    assert message.startswith("at step 7 of the self-motion before the path (t = -12.5 s, the object held still) ")
+    assert "the position limit of arm_2_joint binds: the step asks 0.3, the limit allows 0.1 (rad/s)" in message
+    assert "the path needs it" not in message
+    assert during.to_dict()["self_motion"] is True
