@@ -181,9 +181,24 @@ def _redeliver_interrupts(previous):
 def _main(argv: list[str] | None) -> int:
     parser = build_parser(command_named(sys.argv[1:] if argv is None else argv))
     with _escaped_output():
-        args = parser.parse_args(argv)
+        args = _parse(parser, argv)
         _configure_logging(args.verbose)
         return _run(args)
+
+
+def _parse(parser: argparse.ArgumentParser, argv: list[str] | None) -> argparse.Namespace:
+    """``parser.parse_args(argv)``, except that a command's optional positional given after its
+    options is taken: argparse matches ``retime ROBOT --ground TRAJ.csv``'s TRAJ.csv to nothing
+    when it reads ROBOT, then refused TRAJ.csv as an unrecognized argument."""
+    args, extra = parser.parse_known_args(argv)
+    if extra and not extra[0].startswith("-"):
+        commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        for action in commands.choices[args.command]._get_positional_actions():
+            if extra and action.nargs == "?" and getattr(args, action.dest) is None and not extra[0].startswith("-"):
+                setattr(args, action.dest, extra.pop(0))
+    if extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
 
 
 @contextlib.contextmanager

@@ -201,6 +201,10 @@ def run(args) -> int:
     start = read_configuration(robot, args.start) if args.start else None
     constraints, floor_args = registered_constraints(args)
     floor = motion_floor(floor_args, "carry")
+    if floor is not None:  # before the kernels are compiled
+        from ..terms.constraints.floor import check_floor_platform
+
+        check_floor_platform(robot.name, robot.platform.kind)
     if args.out:  # refuse an unwritable output before the motion is computed
         out = output_directory(args.out)
         for name in CARRY_FILES + (CARRY_FASTEST_FILES if args.fastest else ()):

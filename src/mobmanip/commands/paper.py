@@ -46,8 +46,14 @@ def run(args) -> int:
 
     out = output_directory(args.out)
     robot = load_robot(args.robot)
-    print(f"[1/4] loaded {robot.name}: {robot.nx} reduced velocities")
-    study = run_case_study(robot, progress=lambda message: print(f"[2/4] {message}"), measures=POLYTOPES)
+    loaded = [f"[1/4] loaded {robot.name}: {robot.nx} reduced velocities"]
+
+    def note(message: str) -> None:  # the first note comes once the robot is found to fit the study
+        while loaded:
+            print(loaded.pop())
+        print(f"[2/4] {message}")
+
+    study = run_case_study(robot, progress=note, measures=POLYTOPES)
     print(_table(study))
     print(_polytope_table(study))
     write_json(out / "case_study.json", study.to_dict())

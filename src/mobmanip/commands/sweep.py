@@ -202,6 +202,7 @@ def run_command(args) -> int:
         measures=measures,
         constraints=constraints_from_args(args),
     )
+    _check_floor(args, spec)  # before the estimate is printed and the kernels compiled
     out = output_directory(args.output, "-o")  # removed again if the sweep fails
     if args.max_points < 1:
         raise UsageError(f"--max-points must be at least 1, got {args.max_points}")
@@ -255,6 +256,17 @@ def run_command(args) -> int:
     for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def _check_floor(args, spec) -> None:
+    """Refuse the floor's options for a robot whose platform does not move on the floor (or one
+    --platform fixed locks)."""
+    from ..robot.spec import find_spec
+    from ..terms.constraints.floor import Floor, check_floor_platform
+
+    if any(isinstance(constraint, Floor) for constraint in spec.constraints):
+        robot = find_spec(args.robot)
+        check_floor_platform(robot.name, "fixed" if args.platform == "fixed" else robot.platform)
 
 
 #: The files a sweep writes into its -o folder; -o was once a prefix of names ending so.

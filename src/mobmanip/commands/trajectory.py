@@ -194,6 +194,10 @@ def run(args) -> int:
         for suffix in (".csv", ".json", ".png"):
             check_output(out / f"analysis{suffix}")
     robot = load_robot(find_spec(args.robot), strict=True if args.strict else None)
+    if args.ground:  # before the analysis is printed
+        from ..terms.constraints.floor import check_floor_platform
+
+        check_floor_platform(robot.name, robot.platform.kind)
     if args.bag is not None:
         trajectory = read_recorded(robot, args, _sample_bound(args))
     else:

@@ -41,6 +41,7 @@ tracked every 0.02 s asked for an impulse of acceleration at each sample and non
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -531,6 +532,8 @@ def _run(
                         diagnosis = CarryDiagnosis(k, float(times[k]), constraint, "constraint")
                     else:
                         diagnosis = diagnose_step(robot, q, h, effort_map, J_u, b, k, float(times[k]))
+                    if method == "self-motion":
+                        diagnosis = dataclasses.replace(diagnosis, self_motion=True, slowing_helps=False)
                     partial = CarryRun(method, times[: k + 1], qs[: k + 1], xs[:k], capacity[: k + 1], track[: k + 1],
                                        hand[: k + 1])  # fmt: skip
                     raise CarryFailed(f"the carry QP has no solution: {diagnosis.message()}", diagnosis, partial)

@@ -43,6 +43,8 @@ class CarryDiagnosis:
             velocity limit, likely for an effort limit (the accelerations' efforts fall with the
             square of the speed, gravity's do not).
         unit: the unit of ``asked`` and ``allowed`` (``"m/s"``, ``"rad/s"``, ``"N"``, ``"N m"``).
+        self_motion: the step is one of the self-motion before the path (the object held
+            still): the motion is the capacity term's own, and the path's speed plays no part.
     """
 
     step: int
@@ -55,9 +57,16 @@ class CarryDiagnosis:
     position_limit: float | None = None
     slowing_helps: bool | None = None
     unit: str = ""
+    self_motion: bool = False
 
     def message(self) -> str:
         """One sentence for the user."""
+        if self.self_motion:
+            return (
+                f"at step {self.step} of the self-motion before the path (t = {self.t:g} s, the object held still) "
+                f"{self._binds()}; this motion is the capacity term's own, not the path's, so slowing the path "
+                "down does not help: shorten or skip the self-motion (--prepare S; 0: none)"
+            )
         where = f"at step {self.step} (t = {self.t:g} s)"
         if self.kind == "singular":
             return (
@@ -97,6 +106,20 @@ class CarryDiagnosis:
             factor = abs(self.asked or 0.0) / max(abs(self.allowed or 0.0), 1e-300)
             return text + f"; slowing the path down helps (by at least {factor:.3g}x: this step alone asks that)"
         return text + "; slowing the path down likely helps (accelerations' efforts fall with the speed squared)"
+
+    def _binds(self) -> str:
+        """What binds, without advice."""
+        if self.kind == "singular":
+            return "the hands cannot hold still at this posture even without limits (a singular posture)"
+        if self.kind in ("floor", "constraint"):
+            return f"{'the floor' if self.kind == 'floor' else 'a constraint'} binds: {self.joint}"
+        if self.kind == "limits together":
+            return "the velocity, position and effort limits together leave no motion"
+        unit = self.unit or ("N m or N" if self.kind == "effort" else "rad/s or m/s")
+        return (
+            f"the {self.kind} limit of {self.joint} binds: the step asks {self.asked:.4g}, the limit allows "
+            f"{self.allowed:.4g} ({unit})"
+        )
 
     def to_dict(self) -> dict:
         return {**dataclasses.asdict(self), "message": self.message()}

@@ -17,7 +17,7 @@ columns of :data:`ANNOTATION_COLUMNS` are allowed and ignored.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +28,8 @@ from ..errors import ArgumentError, JointNotFoundError
 from ..robot.model import Robot
 
 PLATFORM_COLUMNS = ("platform_x", "platform_y", "platform_yaw")
+#: How much a fixed platform's pose columns may vary over a trajectory's rows (m or rad): rounding.
+PLATFORM_STILL = 1e-9
 #: Columns a trajectory file may carry beside the configuration (``mobmanip carry`` writes them);
 #: they are not read.
 ANNOTATION_COLUMNS = ("capacity", "baseline_capacity", "tracking_error")
@@ -265,6 +267,8 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
     values = parse_csv_body(path, "trajectory", header, body, bound_of)
     check_time_stamps(values[:, header.index("t")], f"trajectory {path}", [i for i, _ in body])
     column = {name: values[:, k] for k, name in enumerate(header)}
+    if robot.platform_locked:
+        _check_platform_still(robot, path, column)
     qs = np.array(
         [
             robot.configuration(
@@ -279,6 +283,22 @@ def read_trajectory(robot: Robot, path: str | Path) -> Trajectory:
         ]
     )
     return trajectory_from_samples(robot, column["t"], qs, known_joints=joints)
+
+
+def _check_platform_still(robot: Robot, path: Path, column: Mapping[str, np.ndarray]) -> None:
+    """Refuse a trajectory that moves a fixed platform: its pose columns say where the robot is
+    mounted, and a motion of them is no joint's (it read as slip, and a retiming found nothing
+    limiting the speed of a path whose joints all stand still)."""
+    for name in PLATFORM_COLUMNS:
+        values = column[name]
+        spread = float(np.max(values) - np.min(values))
+        if spread > PLATFORM_STILL:
+            unit = "rad" if name == "platform_yaw" else "m"
+            raise ArgumentError(
+                f"trajectory {path}: robot {robot.name!r} has a fixed platform, but {name} changes by "
+                f"{spread:.6g} {unit} over the rows; a fixed platform stays where it is mounted (keep "
+                f"{', '.join(PLATFORM_COLUMNS)} constant)"
+            )
 
 
 def _known_rows(robot: Robot, known_joints: Sequence[str] | None) -> np.ndarray:

@@ -538,12 +538,27 @@ def _standing_robot(terms: Terms) -> tuple[Robot, np.ndarray, HeldObject]:
     if robot is None or q is None or terms.held_object is None:
         raise ArgumentError("the floor needs the robot, its configuration and the object (terms from terms_at)")
     if robot.wheel_platform is None or robot.platform.kind not in FLOOR_KINDS:
-        raise SpecError(
-            f"the floor model covers platforms that move on the floor "
-            f"({', '.join(kind.replace('_', ' ') for kind in FLOOR_KINDS)}); "
-            f"{robot.name!r} has {a_platform(robot.platform.kind)}"
-        )
+        raise _not_on_floor(robot.name, robot.platform.kind)
     return robot, q, terms.held_object
+
+
+def check_floor_platform(name: str, kind: str) -> None:
+    """Refuse the floor for robot ``name`` when its platform ``kind`` does not move on the floor
+    (not one of :data:`FLOOR_KINDS`); the commands call it before any work is done.
+
+    Raises:
+        SpecError: naming the robot, its platform and the kinds the floor covers.
+    """
+    if kind not in FLOOR_KINDS:
+        raise _not_on_floor(name, kind)
+
+
+def _not_on_floor(name: str, kind: str) -> SpecError:
+    return SpecError(
+        f"the floor model covers platforms that move on the floor "
+        f"({', '.join(kind.replace('_', ' ') for kind in FLOOR_KINDS)}); "
+        f"{name!r} has {a_platform(kind)}"
+    )
 
 
 class _ContactColumns(NamedTuple):
