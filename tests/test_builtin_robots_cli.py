@@ -51,8 +51,8 @@ def test_the_floor_on_a_fixed_platform_is_refused_before_any_work(capfd, tmp_pat
 @pytest.mark.parametrize(
     "robot, needle",
     [
-        ("stretch", "the case study's posture needs two arms; 'stretch' has 1"),
-        ("tiago_dual", "the paper's postures need 3-joint planar arms; arm 'right' has 7"),
+        ("stretch", "the case study's posture needs two 3-joint arms; 'stretch' has arms of 3 joints"),
+        ("tiago_dual", "the case study's posture needs two 3-joint arms; 'tiago_dual' has arms of 7 and 7 joints"),
         ("ur5", "the case study needs a differential drive with two arms; 'ur5' does not fit"),
     ],
 )
