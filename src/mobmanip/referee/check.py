@@ -44,6 +44,10 @@ AT_LIMIT = 0.999
 #: MuJoCo's acceleration at t = 0 agrees when its largest error on the task's rows is within this
 #: share of the predicted acceleration's norm.
 ACCELERATION_TOLERANCE = 0.03
+#: A straight-line maximum below this share of the set's longest one (over the axes replayed) is
+#: taken as 0: the linear programs behind it hold their equations to about 1e-7 of the set's scale
+#: (HiGHS's feasibility tolerance), so a smaller one is their round-off, not a motion to replay.
+REACH_RESOLUTION = 1e-6
 #: MuJoCo's normal forces at t = 0 agree when each is within this share of the weight of the
 #: predicted one (judged where the floor shares the weight by compliance).
 NORMAL_TOLERANCE = 1e-3
@@ -232,13 +236,15 @@ def replay_maxima(referee, grounded, task: str, *, fraction: float = 1.0, durati
     """Every task axis, both senses: ``fraction`` of the grounded straight-line maximum, reached
     with the calm efforts (the least reduced acceleration among those with half the most slack;
     at the maximum itself, where that program may find the point a hair outside the set, the
-    maximum's own witness), replayed by :func:`replay_axis`; an axis whose maximum is 0 is
-    listed, not replayed."""
+    maximum's own witness), replayed by :func:`replay_axis`; an axis whose maximum is 0 (to
+    :data:`REACH_RESOLUTION` of the longest) is listed with a reach of 0, not replayed."""
     out = []
-    for axis, e in axis_directions(task):
-        reach = float(grounded.straight_line_reach(e))
-        if reach <= 0.0:
-            out.append(AxisReplay(axis, e, reach, None))
+    axes = axis_directions(task)
+    reaches = [float(grounded.straight_line_reach(e)) for _, e in axes]
+    resolution = REACH_RESOLUTION * max(reaches, default=0.0)
+    for (axis, e), reach in zip(axes, reaches):
+        if reach <= resolution:
+            out.append(AxisReplay(axis, e, 0.0, None))
             continue
         target = fraction * reach * e
         try:
