@@ -150,6 +150,9 @@ def test_without_a_reserve_tiago_minus_x_is_named_as_not_holding(tmp_path, capsy
     assert failed[0]["acceleration_error"] <= ACCELERATION_BOUND
     row = next(line for line in stdout.splitlines() if line.split()[0] == "-x")
     assert row.endswith("a wheel SLID")
+    with pytest.raises(SystemExit):  # the exit status 1 is what --help says it is
+        main(["referee", "--help"])
+    assert "1 when one does not" in " ".join(capsys.readouterr().out.split())
 
 
 def test_a_fraction_replays_that_share_of_each_maximum(tmp_path, capsys, reserved):

@@ -29,7 +29,12 @@ HOLD_SHARE = 0.9
 
 
 def register(sub) -> None:
-    parser = sub.add_parser("referee", help="replay the grounded maxima in MuJoCo (needs mobmanip[referee])")
+    parser = sub.add_parser(
+        "referee",
+        help="replay the grounded maxima in MuJoCo (needs mobmanip[referee])",
+        description="Replay each grounded straight-line maximum in MuJoCo and judge it. Exit status: 0 when every "
+        "replayed axis agrees and holds, 1 when one does not, 2 for bad input.",
+    )
     add_robot_options(parser)
     add_object_mass_option(parser)
     add_floor_options(parser)
