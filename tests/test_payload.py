@@ -376,6 +376,40 @@ def test_the_static_command_writes_the_functions_result(robots, tmp_path, capsys
     assert "with the robot static" in out and f"{expected.mass:.6g} kg" in out
 
 
+def test_an_instants_payload_names_what_can_be_held_for_a_while(tmp_path, capsys):
+    """The UR5 at home (arm stretched out, a singular posture): the instant's program holds the
+    object still with 39.25 kg while the joints accelerate at about 1,000 rad/s^2. The command
+    says so and gives the payload with the robot static too, here against a closed form: nothing
+    moves, so tau = g(q) + m g0 J^T e_z (Pinocchio's gravity and the hand's Jacobian, the hand
+    pushing the object up), and the payload is the least over the joints of the mass that brings
+    one to its effort limit (1e-9). Stretch, whose static payload is the instant's to 2e-6, gets no
+    such note."""
+    ur5 = load_robot("ur5")
+    q = ur5.neutral()
+    model, data = ur5.model, ur5.data
+    gravity = ur5.null_space(q).T @ pin.computeGeneralizedGravity(model, data, q)
+    frame = model.getFrameId(ur5.arms[0].end_effector)
+    J = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)
+    per_kg = 9.81 * (ur5.null_space(q).T @ J[2])  # effort per kg held: the hand pushes up on the object
+    limits = np.asarray(ur5.effort_limits, dtype=float)
+    closed_form = min(
+        ((limits[i] - gravity[i]) if b > 0 else (limits[i] + gravity[i])) / abs(b)
+        for i, b in enumerate(per_kg)
+        if abs(b) > 1e-12
+    )
+    target = tmp_path / "payload.json"
+    code, out, err = run_cli(["payload", "ur5", "--json", str(target)], capsys)
+    assert code == 0, err
+    written = json.loads(target.read_text())
+    assert written["static_mass"] == pytest.approx(closed_form, rel=1e-9)
+    assert written["mass"] > 3.0 * closed_form  # the instant's, with the joints accelerating
+    assert np.abs(written["variables"]["xdot"]).max() > 100.0
+    assert f"what can be held for a while: {closed_form:.6g} kg" in out
+    code, out, err = run_cli(["payload", "stretch"], capsys)
+    assert code == 0, err
+    assert "for an instant only" not in out
+
+
 def test_the_command_says_unbounded_in_words(capsys):
     code, out, err = run_cli(["payload", "planar_dual_arm"], capsys)
     assert code == 0, err

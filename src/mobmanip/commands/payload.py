@@ -117,6 +117,9 @@ def run(args) -> int:
     constraints = constraints_from_args(args, ACCELERATION)
     found = payload(robot, q, args.task, acceleration=acceleration, constraints=constraints, static=args.static)
     document = found.to_dict()
+    static = _static_payload(robot, q, args, found, constraints)
+    if static is not None:
+        document["static_mass"] = static
     require_finite(document)  # never a NaN or an infinity printed as a result
     print(f"robot {robot.name} ({robot.platform.kind}), task {found.task} ({', '.join(document['task_axes'])})")
     print(found.summary())
@@ -128,6 +131,13 @@ def run(args) -> int:
         print("  the program's binding rows:")
         for label in found.binding:
             print(f"    {label}")
+        if static is not None:
+            xdot = np.abs(found.variables["xdot"])
+            print(
+                f"  for an instant only: the object stays still while the joints accelerate (up to {xdot.max():.4g} "
+                f"rad/s^2 or m/s^2, {found.reduced_names[int(xdot.argmax())]}); with the robot static too "
+                f"(--static), what can be held for a while: {static:.6g} kg"
+            )
         if found.floor is not None:
             contacts = ", ".join(f"{name} {_force(c['normal'])}" for name, c in found.floor["contacts"].items())
             print(f"  normal forces (N): {contacts}")
@@ -138,6 +148,24 @@ def run(args) -> int:
         write_json(args.json, document)
         print(f"wrote {args.json}")
     return 0
+
+
+#: The share of the instant's payload the static one must fall short by to be said (below it the two
+#: print alike).
+STATIC_SHORTFALL = 1e-3
+
+
+def _static_payload(robot, q, args, found, constraints) -> float | None:
+    """The payload with the robot static too, where holding the object still takes less than the
+    instant's payload (whose joints may accelerate while the object does not); else ``None``."""
+    from ..analysis.payload import payload
+
+    if args.static or found.status != "bounded" or not found.held_still:
+        return None
+    static = payload(robot, q, args.task, constraints=constraints, static=True)
+    if static.mass is None or found.mass is None or static.mass >= found.mass * (1.0 - STATIC_SHORTFALL):
+        return None
+    return float(static.mass)
 
 
 def _force(value: float) -> str:
