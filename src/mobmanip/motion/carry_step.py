@@ -99,8 +99,10 @@ class CarryDiagnosis:
         if self.kind == "position":
             return (
                 text + f"; the joint is at {self.position:.4g}, its limit {self.position_limit:.4g} "
-                f"({self.unit.replace('/s', '') or 'rad or m'}): the path needs it "
-                "past the end of its range, slowing down does not help (change the start posture or the path)"
+                f"({self.unit.replace('/s', '') or 'rad or m'}): from this posture the path needs it past the end "
+                "of its range, and slowing down does not help; the motion's earlier steps, led one at a time by the "
+                "capacity term, brought it here: start from another posture (--start), maximise another objective "
+                "or change the path"
             )
         if self.kind == "velocity":
             factor = abs(self.asked or 0.0) / max(abs(self.allowed or 0.0), 1e-300)
