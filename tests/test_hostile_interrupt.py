@@ -191,6 +191,29 @@ def test_an_interrupt_a_library_turns_into_its_own_error_is_still_an_interrupt(s
     assert proc.returncode == _EXIT[signum], (proc.returncode, proc.stderr)
 
 
+_AFTER_PUBLISHING_SCRIPT = """
+import signal, sys
+import mobmanip.cli as cli
+
+cli._log_thread_pools = lambda: signal.raise_signal(signal.{signal})  # right after the files are published
+sys.argv = ["mobmanip", "analyze", "planar_dual_arm", "--json", "out.json"]
+sys.exit(cli.main())
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_once_the_outputs_are_published_is_ignored(tmp_path, signum):
+    """Ctrl-C or SIGTERM after the command has returned and its files are published (the
+    interrupt test's 0.5 s landed there once): the run ends as finished, exit 0, the file there
+    and "wrote out.json" true. It ended as interrupted, "no output was written", beside the file."""
+    script = _AFTER_PUBLISHING_SCRIPT.replace("{signal}", signal.Signals(signum).name)
+    proc = subprocess.run([sys.executable, "-c", script], env={**os.environ, "PYTHONPATH": str(SRC)}, cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert proc.returncode == 0, (proc.returncode, proc.stderr)
+    assert proc.stderr == "" and proc.stdout.rstrip().endswith("wrote out.json")
+    assert json.loads((tmp_path / "out.json").read_text())["robot"] == "planar_dual_arm"
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_signal_inside_a_finaliser_still_ends_the_run_in_one_line(signum):
     """Python cannot raise an interrupt that arrives inside a finaliser or a garbage-collector

@@ -96,7 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     ends the process by SIGINT itself once Python has shut down, as Python does for an
     interrupted program: the shell reports 130, and a shell script running mobmanip in a loop
     stops too (a plain exit code of 130 would let it go on). Ctrl-C or SIGTERM after the
-    command has finished, while Python shuts down, is ignored: its outputs are complete.
+    command has returned (while its outputs are published, and while Python shuts down) is
+    ignored: its outputs are complete.
 
     The command runs with one thread in each BLAS and OpenMP pool, and so do the worker
     processes it starts (:func:`mobmanip.support.threads.limit_threads`: its matrices are small,
@@ -109,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.excepthook = _quiet_interrupts(sys.excepthook)
         sys.unraisablehook = _redeliver_interrupts(sys.unraisablehook)
     _RECEIVED.clear()
+    _FINISHED.clear()
     from .support.threads import limit_threads
 
     try:
@@ -234,6 +236,7 @@ def _run(args) -> int:
             warnings.simplefilter("ignore", RuntimeWarning)
             _check_outputs_first(args)
             code = args.func(args)
+            _FINISHED.append(True)  # its "wrote ..." lines are out: publish them, whatever arrives now
         _log_thread_pools()
         return code
     except MobmanipError as exc:
@@ -262,6 +265,11 @@ class Terminated(KeyboardInterrupt):
 
 #: The signals received during the current :func:`main` call (SIGINT, SIGTERM), in order.
 _RECEIVED: list[int] = []
+#: Not empty once the current command has returned: the outputs it has said it wrote are then
+#: published and the run ends as finished, a signal from then on ignored (as during Python's
+#: shutdown). Before, an interrupt that arrived while the files were being published ended the
+#: run as interrupted with none written, after the command had printed "wrote ...".
+_FINISHED: list[bool] = []
 
 
 def _interrupt_received() -> KeyboardInterrupt:
@@ -280,12 +288,14 @@ def _terminate_as_interrupt():
         return
 
     def terminate(signum, frame):
-        _RECEIVED.append(signal.SIGTERM)
-        raise Terminated()
+        if not _FINISHED:
+            _RECEIVED.append(signal.SIGTERM)
+            raise Terminated()
 
     def interrupt(signum, frame):
-        _RECEIVED.append(signal.SIGINT)
-        raise KeyboardInterrupt()
+        if not _FINISHED:
+            _RECEIVED.append(signal.SIGINT)
+            raise KeyboardInterrupt()
 
     previous = signal.signal(signal.SIGTERM, terminate)
     previous_int = signal.getsignal(signal.SIGINT)
