@@ -16,7 +16,8 @@ import pytest
 import scipy.optimize
 
 from mobmanip.analysis import analyze
-from mobmanip.casestudy import configuration_at, run_case_study
+from mobmanip.casestudy import configuration_at, optimal_posture, run_case_study
+from mobmanip.robot.model import load_robot
 
 LINKS = (0.5, 0.5, 0.5)  # m, Table 1
 WHEEL_RADIUS = 0.075  # m, Table 2
@@ -265,3 +266,37 @@ def test_sweep_ellipses_are_nested(study):
             }
             for inner, outer in ((dyn[10.0], dyn[50.0]), (dyn[50.0], dyn[200.0])):
                 assert _psd(inner - outer, 1e-12 * np.abs(inner).max())
+
+
+def _paper_with_a_leaning_joint(folder, axis):
+    """The paper's robot whose arm_right_2_joint turns about ``axis`` (its files copied)."""
+    from pathlib import Path
+
+    robots = Path(__file__).resolve().parents[1] / "robots"
+    urdf = (robots / "planar_dual_arm.urdf").read_text()
+    at = urdf.index('<axis xyz="0 0 1"/>', urdf.index('name="arm_right_2_joint"'))
+    (folder / "planar_dual_arm.urdf").write_text(urdf[:at] + f'<axis xyz="{axis}"/>' + urdf[at + 19 :])
+    spec = (robots / "planar_dual_arm.toml").read_text().replace('name = "planar_dual_arm"', 'name = "leaning"', 1)
+    (folder / "leaning.toml").write_text(spec)
+    return load_robot(folder / "leaning.toml")
+
+
+def test_a_file_that_rounds_pi_over_2_keeps_the_case_study_posture(tmp_path, posture):
+    """A joint axis written as x turned by a pitch of -1.57 (pi/2 rounded, as vendor files do)
+    leans 8e-4 rad: the posture, searched on the model's own Jacobian, is still found, and is
+    the tidy robot's to 1e-5 (the lean moves the optimum to second order, (8e-4)^2 = 6e-7;
+    measured 1.3e-6). The sweeps' closed form asks for vertical axes to 1e-9 and refused it.
+    An axis leaning 0.1 rad is no planar arm: refused, naming the joint."""
+    from mobmanip.errors import SpecError
+    from mobmanip.motion.carry import _default_start_label, default_start
+
+    lean = math.cos(1.57 - math.pi / 2), math.sin(math.pi / 2 - 1.57)
+    leaning = _paper_with_a_leaning_joint(tmp_path, f"{lean[1]:.9f} 0 {lean[0]:.9f}")
+    found = optimal_posture(leaning)
+    np.testing.assert_allclose(found.q, posture.q, rtol=0, atol=1e-5)
+    q0 = default_start(leaning)
+    assert "case-study posture" in _default_start_label(leaning, q0)
+    (tmp_path / "far").mkdir()
+    far = _paper_with_a_leaning_joint(tmp_path / "far", f"{math.sin(0.1):.9f} 0 {math.cos(0.1):.9f}")
+    with pytest.raises(SpecError, match="posture needs vertical arm joints; 'arm_right_2_joint' turns about"):
+        optimal_posture(far)
