@@ -288,14 +288,13 @@ def test_a_file_that_rounds_pi_over_2_keeps_the_case_study_posture(tmp_path, pos
     measured 1.3e-6). The sweeps' closed form asks for vertical axes to 1e-9 and refused it.
     An axis leaning 0.1 rad is no planar arm: refused, naming the joint."""
     from mobmanip.errors import SpecError
-    from mobmanip.motion.carry import _default_start_label, default_start
+    from mobmanip.motion.carry import default_start
 
     lean = math.cos(1.57 - math.pi / 2), math.sin(math.pi / 2 - 1.57)
     leaning = _paper_with_a_leaning_joint(tmp_path, f"{lean[1]:.9f} 0 {lean[0]:.9f}")
     found = optimal_posture(leaning)
     np.testing.assert_allclose(found.q, posture.q, rtol=0, atol=1e-5)
-    q0 = default_start(leaning)
-    assert "case-study posture" in _default_start_label(leaning, q0)
+    np.testing.assert_array_equal(default_start(leaning), configuration_at(leaning, found, 0.0))  # carry's start
     (tmp_path / "far").mkdir()
     far = _paper_with_a_leaning_joint(tmp_path / "far", f"{math.sin(0.1):.9f} 0 {math.cos(0.1):.9f}")
     with pytest.raises(SpecError, match="posture needs vertical arm joints; 'arm_right_2_joint' turns about"):
