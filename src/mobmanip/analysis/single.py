@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import copy
 import functools
 import types
 from collections.abc import Iterable, Mapping
@@ -232,7 +233,12 @@ class Analysis:
 
     def block_indices(self) -> dict | None:
         """Unit-consistent indices per block (linear, angular) of each set, for a task that mixes
-        m and rad (``None`` otherwise): see :func:`mobmanip.analysis.plausibility.block_indices`."""
+        m and rad (``None`` otherwise): see :func:`mobmanip.analysis.plausibility.block_indices`.
+        Computed once (a grounded set's shadows take seconds); each call returns its own copy."""
+        return copy.deepcopy(self._block_indices)
+
+    @functools.cached_property
+    def _block_indices(self) -> dict | None:
         from .plausibility import block_indices
 
         return block_indices(get_task(self.task), self.measures)

@@ -749,11 +749,16 @@ def ranked_limits(
 
 
 def _unique_rows(V: np.ndarray, tol: float) -> np.ndarray:
-    keep: list[np.ndarray] = []
+    """The rows of V farther than ``tol`` from every row kept before them, in order. The kept rows
+    fill one array as they come: rebuilt from a list at each row, they made the 3-D projections
+    of a 16-joint robot's grounded set quadratic in copies (5.7 s of 20 in ``analyze``)."""
+    keep = np.empty_like(V)
+    count = 0
     for v in V:
-        if not keep or np.min(np.linalg.norm(np.array(keep) - v, axis=1)) > tol:
-            keep.append(v)
-    return np.array(keep)
+        if count == 0 or np.min(np.linalg.norm(keep[:count] - v, axis=1)) > tol:
+            keep[count] = v
+            count += 1
+    return keep[:count].copy()
 
 
 def _facets(V: np.ndarray, tol: float) -> tuple[np.ndarray | None, np.ndarray | None]:
