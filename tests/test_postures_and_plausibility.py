@@ -140,7 +140,9 @@ def test_an_explicit_object_warns_by_its_own_offsets(robot):
     pos = spread.end_effector_positions
     apart = np.linalg.norm(pos[0] - pos[1])
     assert apart > 0.4 * 1.1 + 0.05
-    assert len(spread.warnings) == 1 and f"{apart:.3f} m apart" in spread.warnings[0]
+    # both arms stretched out (only their first joints turned): the posture is singular too
+    assert len(spread.warnings) == 2 and f"{apart:.3f} m apart" in spread.warnings[0]
+    assert spread.warnings[1].startswith("the posture is singular")
 
 
 # ----- placeholder limits and weight -----
@@ -199,6 +201,37 @@ def test_block_indices_are_the_shadows_of_each_block(tiago):
             assert abs(entry["volume"] - 4.0 / 3.0 * np.pi * np.prod(a)) < 1e-9 * entry["volume"]
             assert abs(entry["isotropy"] - a[-1] / a[0]) < 1e-12
     assert block_indices(mobmanip.robot.tasks.get_task("translational"), an.measures) is None
+
+
+def test_a_singular_posture_is_said_with_its_semi_axes():
+    """The UR5 at home holds its arm stretched out: the hand's velocity set loses a direction
+    (its Jacobian has rank 5). The analysis says the posture is singular with the kinematic ellipsoid's
+    semi-axes, here against the singular values of Pinocchio's frame Jacobian scaled by the
+    velocity limits (the ellipsoid of a single hand, W = I), also when only the dynamic measure
+    was asked for; the elbow and the wrist bent get no such line."""
+    import re
+
+    ur5 = mobmanip.load_robot("ur5")
+    frame = ur5.model.getFrameId(ur5.arms[0].end_effector)
+
+    def semi_axes(q):
+        J = pin.computeFrameJacobian(ur5.model, ur5.data, q, frame, pin.LOCAL_WORLD_ALIGNED)
+        return np.linalg.svd(J @ ur5.null_space(q) * np.asarray(ur5.velocity_limits), compute_uv=False)
+
+    home = ur5.neutral()
+    sigma = semi_axes(home)
+    assert sigma[-1] < 1e-3 * sigma[0]
+    for measures in (None, ("dynamic",)):
+        found = [w for w in mobmanip.analyze(ur5, home, "spatial", measures=measures).warnings if "singular" in w]
+        assert len(found) == 1, found
+        largest, least = map(float, re.search(r"run from (\S+) down to (\S+) \(m/s, rad/s\)", found[0]).groups())
+        assert largest == pytest.approx(sigma[0], rel=1e-3) and least < 1e-3 * largest
+    bent = home.copy()
+    for joint, angle in (("shoulder_lift_joint", -0.8), ("elbow_joint", 1.2), ("wrist_2_joint", 1.0)):
+        bent[ur5.model.joints[ur5.model.getJointId(joint)].idx_q] = angle
+    sigma = semi_axes(bent)
+    assert sigma[-1] > 0.01 * sigma[0]
+    assert not [w for w in mobmanip.analyze(ur5, bent, "spatial").warnings if "singular" in w]
 
 
 def test_the_analysis_block_indices_are_its_own_copies(tiago):

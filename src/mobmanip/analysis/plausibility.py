@@ -121,9 +121,34 @@ def rest_warnings(analysis) -> list[str]:
                 "ellipsoid adds all efforts up in one Euclidean norm (||Z tau|| <= 1), so it reads 'cannot hold the "
                 "load' where each joint can; the dynamic polytopes (--polytope) bound each effort on its own"
             )
+    out.extend(singular_warnings(analysis))
     out.extend(floor_warnings(analysis))
     out.extend(ignored_warnings(analysis))
     return out
+
+
+def singular_warnings(analysis) -> list[str]:
+    """The posture is singular: the kinematic ellipsoid (computed from the terms when the analysis
+    did not ask for it) has collapsed (:data:`COLLAPSED_RATIO`). Every set is then flat along
+    the lost directions, and the exact ones change by a finite amount under a tilt of the joints
+    as small as 1e-8 rad (TIAGo Pro with its arms hanging), so neither their readings nor a
+    replay of them says much about the robot."""
+    from ..measures import KINEMATIC
+    from ..sets.ellipsoid import Ellipsoid, kinematic_ellipsoid
+
+    found = analysis.measures.get(KINEMATIC.name)
+    if not isinstance(found, Ellipsoid):
+        terms = analysis.terms
+        found = kinematic_ellipsoid(terms.J_u, terms.W, terms.velocity_limits)
+    if found.empty or not collapsed(found):
+        return []
+    semi = np.asarray(found.semi_axes, dtype=float)
+    unit = KINEMATIC.quantity.units_for(analysis.task)
+    return [
+        f"the posture is singular: the kinematic ellipsoid's semi-axes run from {semi[0]:.3g} down to {semi[-1]:.2g} "
+        f"({unit}), so every set is flat along some direction and jumps under the smallest change of the joints; "
+        "move the joints off the singularity (e.g. --posture or --q) for readings that hold"
+    ]
 
 
 def ignored_warnings(analysis) -> list[str]:
