@@ -1,7 +1,8 @@
-"""Progress bars for long runs: every command that can run long (carry, trajectory, place with
---map, team --sweep-heading (also with --dask), sweep, site) draws one on standard error when that is a terminal
-(a pseudo-terminal here), and none when standard error is piped; standard output (results, JSON
-printed) never holds one, and ``--no-progress`` turns it off on a terminal too."""
+"""Progress bars for long runs: every command that can run long (carry, team-carry, trajectory,
+place with --map, team --sweep-heading (also with --dask), sweep, site) draws one on standard
+error when that is a terminal (a pseudo-terminal here), and none when standard error is piped;
+standard output (results, JSON printed) never holds one, and ``--no-progress`` turns it off on a
+terminal too."""
 
 from __future__ import annotations
 
@@ -36,6 +37,8 @@ COMMANDS = {
     "place": (["place", "planar_dual_arm", "--object", "1,0.5,0.35", "--objective", "kinematic:capacity:+x",
                "--starts", "1", "--map", "maps", "--map-cells", "5"], "map"),
     "team": (["team", EXAMPLES / "beam_team.toml", "--sweep-heading=-10:10:3"], "team headings"),
+    "team-carry": (["team-carry", EXAMPLES / "beam_team.toml", "--path", "../short.csv", "--prepare", "0"],
+                   "team-carry qp"),
     "team-dask": (["team", EXAMPLES / "beam_team.toml", "--sweep-heading=-10:10:3", "--dask", "local:1"],
                   "team headings"),
     "sweep": (["sweep", "planar_dual_arm", "--angle", "0,90", "--distance", "1.0", "--workers", "1", "-o", "s"],
@@ -83,10 +86,15 @@ def _run(argv, cwd: Path, terminal: bool) -> tuple[int, str, str]:
     return proc.returncode, out.decode(), b"".join(chunks).decode(errors="replace")
 
 
+#: The first 2 s of examples/carry_line.csv: a team-carry of 100 steps per motion.
+SHORT_PATH = "".join((EXAMPLES / "carry_line.csv").read_text().splitlines(keepends=True)[:22])
+
+
 @pytest.fixture
 def work(tmp_path):
     (tmp_path / "site.toml").write_text(SITE)
     (tmp_path / "motion.csv").write_text(MOTION)
+    (tmp_path / "short.csv").write_text(SHORT_PATH)
     return tmp_path
 
 
@@ -108,7 +116,7 @@ def test_a_bar_on_a_terminal_none_in_piped_output(work, command):
     assert "\r" not in out and not bar.search(out)
 
 
-@pytest.mark.parametrize("command", ["carry", "site"])
+@pytest.mark.parametrize("command", ["carry", "site", "team-carry"])
 def test_no_progress_turns_the_bar_off_on_a_terminal(work, command):
     argv, description = COMMANDS[command]
     (work / "quiet").mkdir()

@@ -10,6 +10,7 @@ from .common import (
     add_motion_floor_options,
     add_out_dir_option,
     add_page_options,
+    add_progress_option,
     add_step_options,
     add_work_option,
     motion_floor,
@@ -18,6 +19,7 @@ from .common import (
     print_shared_start,
     registered_constraints,
     report_partial_carry,
+    show_progress,
 )
 
 TEAM_CARRY_HELP = """\
@@ -97,6 +99,7 @@ def register(sub) -> None:
     add_page_options(parser, "the team's motion (see below)")
     add_motion_floor_options(parser)
     add_work_option(parser, f"QP steps times robots (default {MAX_ROBOT_STEPS:,})")
+    add_progress_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -180,6 +183,7 @@ def run(args) -> int:
             prepare=args.prepare,
             floor=floor,
             constraints=constraints,
+            progress=show_progress(args),
         )
     except CarryFailed as failure:
         return report_partial_carry(failure, args.out, functools.partial(team_carry_partial_outputs, team))

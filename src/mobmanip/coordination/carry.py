@@ -75,6 +75,7 @@ from ..motion.carry_step import CarryDiagnosis, solve_step_qp, velocity_bounds
 from ..motion.step_constraints import StepRows, check_constraints, step_rows
 from ..motion.trajectory import tangent_integrate
 from ..robot.tasks import get_task
+from ..support.progress import progress_bar
 from ..team import Member, Team
 from ..terms.builder import terms_at
 from ..terms.constraints.base import Constraint
@@ -428,6 +429,7 @@ def _run(
     x_start: np.ndarray | None = None,
     floor: TeamFloor | None = None,
     constraints: tuple[Constraint, ...] = (),
+    progress: bool = False,
 ) -> tuple[TeamCarryRun, float]:
     """One motion of the team along ``path`` from ``qs0``; returns it and the capacity term's weight
     (``floor``: every robot keeps it, but for the pseudo-inverse baseline, which only reads it)."""
@@ -460,97 +462,100 @@ def _run(
             None if margins is None else margins[:k], None if uses is None else uses[:k],
         )  # fmt: skip
 
-    for k in range(n):
-        for i, q in enumerate(qs):
-            Q[i][k] = q
-        held = targets.held(k)
-        try:
-            if method == "pinv":
-                capacity[k], grad = problem.capacity.value(qs, held), None
-            else:
-                capacity[k], grad = problem.capacity.gradient(qs, held)
-        except MeasureError as exc:
-            raise MeasureError(f"{exc} at step {k} (t = {times[k]:g} s) of the team's {method} motion") from None
-        track[k], hand[k], turn[k], strain[k] = _errors(_hand_poses(team, qs), targets, k, start_distances)
-        if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
-            n = k + 1
-            break
-        if k == n - 1:
-            break
-        h = float(times[k + 1] - times[k])
-        J = _jacobian(team, qs, problem.rows)  # also updates the frame placements
-        hands = _hand_poses(team, qs)
-        b = (
-            np.concatenate(
-                [
-                    np.concatenate([g.translation - now.translation, pin.log3(g.rotation @ now.rotation.T)])[
-                        problem.rows
+    with progress_bar(n, desc=f"team-carry {method}", unit="step", show=progress) as bar:
+        for k in range(n):
+            bar.update(1)
+            for i, q in enumerate(qs):
+                Q[i][k] = q
+            held = targets.held(k)
+            try:
+                if method == "pinv":
+                    capacity[k], grad = problem.capacity.value(qs, held), None
+                else:
+                    capacity[k], grad = problem.capacity.gradient(qs, held)
+            except MeasureError as exc:
+                raise MeasureError(f"{exc} at step {k} (t = {times[k]:g} s) of the team's {method} motion") from None
+            track[k], hand[k], turn[k], strain[k] = _errors(_hand_poses(team, qs), targets, k, start_distances)
+            if converge and k >= window and capacity[k] - capacity[k - window] < PREPARE_TOLERANCE * abs(capacity[k]):
+                n = k + 1
+                break
+            if k == n - 1:
+                break
+            h = float(times[k + 1] - times[k])
+            J = _jacobian(team, qs, problem.rows)  # also updates the frame placements
+            hands = _hand_poses(team, qs)
+            b = (
+                np.concatenate(
+                    [
+                        np.concatenate([g.translation - now.translation, pin.log3(g.rotation @ now.rotation.T)])[
+                            problem.rows
+                        ]
+                        for now, g in ((now, targets.hand(k + 1, i)) for i, now in enumerate(hands))
                     ]
-                    for now, g in ((now, targets.hand(k + 1, i)) for i, now in enumerate(hands))
-                ]
+                )
+                / h
             )
-            / h
-        )
-        maps = team_step_maps(team, qs, x_prev, h, problem.task, held)
-        A, offset = maps.efforts
-        wrenches = None
-        if method == "pinv":
-            D2 = problem.D2
-            x = D2 * (J.T @ np.linalg.solve((J * D2) @ J.T, b))
-        else:
-            assert grad is not None
-            if weight is None:
-                norm = float(np.linalg.norm(np.sqrt(problem.D2) * grad))
-                weight = gain / norm if norm > 0 else 0.0
-            lo, hi = problem.bounds(qs, h)
-            G, g_hi = effort_rows(A, offset, problem.effort_limits)
-            extra = None
-            if constraints:  # every robot keeps them, on its own rows
-                extra = _constraint_rows(team, qs, x_prev, h, problem.task, (A, offset), constraints)
-                G, g_hi = np.vstack([G, extra.G]), np.r_[g_hi, extra.h]
-            H_k, c_k = H, -weight * grad
-            if platforms is not None:
-                H_p, c_p = platforms.cost(qs, k, h)
-                H_k, c_k = H + H_p, c_k + c_p
-            if floor is not None:  # the baseline only reads it
-                wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
-                floor_G, floor_g, labels, kinds = floor.step_rows(team, qs, wrenches)
-                x = solve_step_qp(H_k, c_k, J, b, lo, hi, np.vstack([G, floor_G]), np.r_[g_hi, floor_g])
-                if x is None and solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi) is not None:
-                    binding = _floor_binding(H_k, c_k, J, b, lo, hi, G, g_hi, floor_G, floor_g, labels)
-                    # a turn the base cannot make is no matter of speed
-                    turning = binding in labels and kinds[labels.index(binding)] == "no turn"
-                    diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=not turning)
-                    raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
-                                      partial(k))  # fmt: skip
+            maps = team_step_maps(team, qs, x_prev, h, problem.task, held)
+            A, offset = maps.efforts
+            wrenches = None
+            if method == "pinv":
+                D2 = problem.D2
+                x = D2 * (J.T @ np.linalg.solve((J * D2) @ J.T, b))
             else:
-                x = solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi)
-            if x is None and extra is not None:
-                own = len(g_hi) - len(extra.h)
-                free = solve_step_qp(H_k, c_k, J, b, lo, hi, G[:own], g_hi[:own])
-                if free is not None:  # the constraints bind: name the row the step breaks most without them
-                    label = extra.labels[int(np.argmax(extra.G @ free - extra.h))]
-                    diagnosis = CarryDiagnosis(k, float(times[k]), label, "constraint")
-                    raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
-                                      partial(k))  # fmt: skip
-            if x is None:
-                pos, low, up, units = problem.joint_positions(qs)
-                diagnosis = diagnose_team_step(
-                    problem.names, units, H, J, b, lo, hi, np.sqrt(problem.D2), A, offset, problem.effort_limits,
-                    pos, (low, up), k, float(times[k]),
-                )  # fmt: skip
-                raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis, partial(k))
-        X[k] = x
-        effort[k] = float(np.max(np.abs(A @ x + offset) / problem.effort_limits))
-        if floor is not None and margins is not None and uses is not None:
-            if wrenches is None:
-                wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
-            margins[k], uses[k] = floor.readings(team, qs, wrenches, x)
-        x_prev = x
-        qs = [
-            tangent_integrate(m.robot.model, q, m.robot.null_space(q) @ x[s] * h)
-            for m, q, s in zip(team.members, qs, problem.slices)
-        ]
+                assert grad is not None
+                if weight is None:
+                    norm = float(np.linalg.norm(np.sqrt(problem.D2) * grad))
+                    weight = gain / norm if norm > 0 else 0.0
+                lo, hi = problem.bounds(qs, h)
+                G, g_hi = effort_rows(A, offset, problem.effort_limits)
+                extra = None
+                if constraints:  # every robot keeps them, on its own rows
+                    extra = _constraint_rows(team, qs, x_prev, h, problem.task, (A, offset), constraints)
+                    G, g_hi = np.vstack([G, extra.G]), np.r_[g_hi, extra.h]
+                H_k, c_k = H, -weight * grad
+                if platforms is not None:
+                    H_p, c_p = platforms.cost(qs, k, h)
+                    H_k, c_k = H + H_p, c_k + c_p
+                if floor is not None:  # the baseline only reads it
+                    wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
+                    floor_G, floor_g, labels, kinds = floor.step_rows(team, qs, wrenches)
+                    x = solve_step_qp(H_k, c_k, J, b, lo, hi, np.vstack([G, floor_G]), np.r_[g_hi, floor_g])
+                    if x is None and solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi) is not None:
+                        binding = _floor_binding(H_k, c_k, J, b, lo, hi, G, g_hi, floor_G, floor_g, labels)
+                        # a turn the base cannot make is no matter of speed
+                        turning = binding in labels and kinds[labels.index(binding)] == "no turn"
+                        diagnosis = CarryDiagnosis(k, float(times[k]), binding, "floor", slowing_helps=not turning)
+                        raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
+                                          partial(k))  # fmt: skip
+                else:
+                    x = solve_step_qp(H_k, c_k, J, b, lo, hi, G, g_hi)
+                if x is None and extra is not None:
+                    own = len(g_hi) - len(extra.h)
+                    free = solve_step_qp(H_k, c_k, J, b, lo, hi, G[:own], g_hi[:own])
+                    if free is not None:  # the constraints bind: name the row the step breaks most without them
+                        label = extra.labels[int(np.argmax(extra.G @ free - extra.h))]
+                        diagnosis = CarryDiagnosis(k, float(times[k]), label, "constraint")
+                        raise CarryFailed(f"the team's carry QP has no solution: {diagnosis.message()}", diagnosis,
+                                          partial(k))  # fmt: skip
+                if x is None:
+                    pos, low, up, units = problem.joint_positions(qs)
+                    diagnosis = diagnose_team_step(
+                        problem.names, units, H, J, b, lo, hi, np.sqrt(problem.D2), A, offset, problem.effort_limits,
+                        pos, (low, up), k, float(times[k]),
+                    )  # fmt: skip
+                    message = f"the team's carry QP has no solution: {diagnosis.message()}"
+                    raise CarryFailed(message, diagnosis, partial(k))
+            X[k] = x
+            effort[k] = float(np.max(np.abs(A @ x + offset) / problem.effort_limits))
+            if floor is not None and margins is not None and uses is not None:
+                if wrenches is None:
+                    wrenches = floor.wrenches(team, qs, x_prev, h, problem.task, held, maps.hand_wrenches)
+                margins[k], uses[k] = floor.readings(team, qs, wrenches, x)
+            x_prev = x
+            qs = [
+                tangent_integrate(m.robot.model, q, m.robot.null_space(q) @ x[s] * h)
+                for m, q, s in zip(team.members, qs, problem.slices)
+            ]
     return partial(n - 1), (0.0 if weight is None else weight)
 
 
@@ -599,6 +604,7 @@ def team_carry(
     prepare: float = DEFAULT_PREPARE,
     floor: CarryFloor | None = None,
     constraints: Sequence[Constraint] = (),
+    progress: bool = False,
 ) -> TeamCarryResult:
     """Synthesise the team's capacity-maximising motion along ``path`` and the pseudo-inverse baseline.
 
@@ -620,6 +626,7 @@ def team_carry(
             self-motion and the QP motion, over its own velocities and efforts
             (:func:`mobmanip.motion.step_constraints.step_rows`; a constraint that cannot join a
             step is refused by name).
+        progress: show a progress bar on standard error for each of the three motions.
 
     Raises:
         ArgumentError: a bad step, gain, prepare, frame, path or floor (a ramp).
@@ -645,17 +652,17 @@ def team_carry(
     if prepare > 0.0 and gain > 0.0:
         still = ObjectPath(np.array([path.t[0] - float(prepare), path.t[0]]), np.zeros((2, 2)))
         run, weight = _run(problem, q0, still, frame, step, "self-motion", gain, converge=True, floor=grounded,
-                           constraints=constraints)  # fmt: skip
+                           constraints=constraints, progress=progress)  # fmt: skip
         preparation = run.shifted(path.t[0] - run.t[-1])
         q_path = [q[-1] for q in preparation.q]
         x_start = np.concatenate([x[-1] for x in preparation.x]) if len(preparation.t) > 1 else None
     try:
         motion, _ = _run(problem, q_path, path, frame, step, "qp", gain, weight=weight, x_start=x_start,
-                         floor=grounded, constraints=constraints)  # fmt: skip
+                         floor=grounded, constraints=constraints, progress=progress)  # fmt: skip
     except CarryFailed as exc:
         exc.preparation = preparation
         raise
-    baseline, _ = _run(problem, q0, path, frame, step, "pinv", 0.0, floor=grounded)
+    baseline, _ = _run(problem, q0, path, frame, step, "pinv", 0.0, floor=grounded, progress=progress)
     described = None if floor is None else floor.describe()
     return TeamCarryResult(team, objective, motion, baseline, preparation, frame, floor=described,
                            constraints=tuple(c.describe() for c in constraints))  # fmt: skip
