@@ -3,8 +3,11 @@ given before any work (nothing printed first, no kernel compiled, no folder made
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
+import mobmanip
 from hostile_util import assert_one_line_error, run_cli
 
 FLOOR_REFUSAL = "the floor model covers platforms that move on the floor"
@@ -123,14 +126,18 @@ def test_the_trajectory_may_follow_the_options(capfd, rest_to_rest):
 
 
 def test_a_failed_self_motion_is_not_blamed_on_the_path(capfd, rest_to_rest):
-    """TIAGo on the floor: the self-motion before the path (the object held still) fails; the
+    """TIAGo on the floor from home: the self-motion before the path (the object held still) fails; the
     message said 'slowing the path down likely helps', which cannot help a motion the path does
     not drive. The step's time is the self-motion's: the path's start less --prepare, plus the
     steps taken."""
+    import json
     import re
 
     path, _ = rest_to_rest
-    code, _, err = run_cli(capfd, "carry", "tiago", "--path", path, "--ground", "--no-progress")
+    tiago = mobmanip.load_robot("tiago")  # from home, its arm stretched out to the side
+    start = Path(path).with_name("home.json")
+    start.write_text(json.dumps(tiago.configuration_dict(tiago.neutral())))
+    code, _, err = run_cli(capfd, "carry", "tiago", "--path", path, "--start", start, "--ground", "--no-progress")
     line = assert_one_line_error(
         code, err, "of the self-motion before the path", "the floor binds", "slowing the path down does not help",
         "--prepare S; 0: none",
@@ -150,3 +157,30 @@ def test_a_self_motion_diagnosis_names_the_limit_without_the_paths_advice():
     assert "the position limit of arm_2_joint binds: the step asks 0.3, the limit allows 0.1 (rad/s)" in message
     assert "the path needs it" not in message
     assert during.to_dict()["self_motion"] is True
+
+
+def test_tiago_sweeps_its_default_grid_from_its_hold_posture(capfd, tmp_path):
+    """`sweep tiago` with the default grid used to reach none of it: the inverse kinematics
+    started from home, the arm stretched out to the side with arm_1_joint at its limit. From the
+    spec's hold posture (the arm bent in front) it reaches the grid's near points; each posture
+    holds the hand where the grid asks, by Pinocchio's forward kinematics: at the grid's angle
+    and distance from the reference point, at the hold's height (1e-9 m)."""
+    import numpy as np
+    import pinocchio as pin
+
+    code, out, err = run_cli(capfd, "sweep", "tiago", "--no-progress", "-o", tmp_path / "s")
+    assert code == 0, err
+    table = np.load(tmp_path / "s" / "sweep.npz")
+    reached = table["reachable"][..., 0]
+    assert 10 <= reached.sum() < reached.size
+    assert f"{int(reached.sum())} of {reached.size} (angle, distance) points in reach" in out
+    tiago = mobmanip.load_robot("tiago")
+    hand = tiago.model.getFrameId(tiago.arms[0].end_effector)
+    origin, height = table["hold_origin"], float(table["hold_height"])
+    names = [str(n) for n in table["posture_joint_names"]]
+    for i, j in np.argwhere(reached):
+        q = tiago.configuration((0.0, 0.0, 0.0), dict(zip(names, table["posture_joints"][i, j].tolist())))
+        pin.framesForwardKinematics(tiago.model, tiago.data, q)
+        a, d = np.radians(table["angle_deg"][i]), table["distance"][j]
+        expected = np.r_[origin + d * np.array([np.cos(a), np.sin(a)]), height]
+        assert np.linalg.norm(tiago.data.oMf[hand].translation - expected) < 1e-9

@@ -56,6 +56,25 @@ def test_carry_on_the_floor_keeps_every_sample_where_the_plain_carry_slips(name,
     assert grounded.summary()["floor"]["mu"] == mu
 
 
+def test_tiago_carries_on_the_floor_from_its_hold_posture_self_motion_and_all():
+    """TIAGo from its spec's hold posture (the arm bent in front), with the default self-motion
+    and its own mu (0.5): the self-motion and the QP motion both keep every sample on the floor
+    by the trajectory analysis. With a reserve of 0.1 every support keeps a tenth of its equal
+    share, so the analysis' least normal force is clear of zero (about 10.7 N); without one the
+    capacity term takes a caster to zero load, a bound the analysis, from the samples' rates,
+    reads as -0.13 N. From home (the arm stretched out to the side, arm_1_joint at its limit)
+    the self-motion spun the base to -2.1 rad/s and failed at its 38th step
+    (tests/test_builtin_robots_cli.py keeps that message)."""
+    robot = mobmanip.load_robot("tiago")
+    path = read_path(EXAMPLES / "carry_line.csv")
+    result = carry(robot, path, floor=CarryFloor(reserve=0.1))
+    assert result.preparation is not None and len(result.preparation.t) > 100  # it moved before the path
+    for run in (result.preparation, result.motion):
+        margin, use, normal = _floor_along(robot, run.t, run.q, 0.5)
+        assert use <= 1.0 and normal > 0.0 and margin > 0.0
+    assert result.motion.tracking_error.max() < 1e-3
+
+
 def test_a_path_the_floor_cannot_allow_fails_naming_the_floor_row():
     robot = mobmanip.load_robot("planar_dual_arm")
     path = read_path(EXAMPLES / "carry_line.csv")
