@@ -46,8 +46,8 @@ def test_a_baseline_through_a_singular_posture_gets_no_ratio(capsys):
     from mobmanip.commands.carry import print_ratio
     from mobmanip.motion.carry import carry, read_path
 
-    robot = mobmanip.load_robot("tiago_pro")
-    result = carry(robot, read_path(EXAMPLES / "carry_line.csv"))
+    robot = mobmanip.load_robot("tiago_pro")  # from home: a singular posture
+    result = carry(robot, read_path(EXAMPLES / "carry_line.csv"), start=robot.neutral())
     summary = result.summary()
     assert summary["min_capacity_ratio"] is None
     assert summary["ratio_parts"]["preparation"] is None

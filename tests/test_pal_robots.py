@@ -70,3 +70,33 @@ def test_jacobian_and_kinetic_energy(pal, rng):
         P = mobmanip.reduced_dynamics(pal, q).P
         energy = pin.computeKineticEnergy(pal.model, pal.data, q, v)
         assert 0.5 * x @ P @ x == pytest.approx(energy, rel=1e-10)
+
+
+def _unit_jacobian_ratio(robot, q) -> float:
+    """Smallest over largest singular value of the hands' stacked world-aligned Jacobians (the
+    arms' columns) scaled by the velocity limits: a singular posture gives about zero."""
+    pin.computeJointJacobians(robot.model, robot.data, q)
+    pin.updateFramePlacements(robot.model, robot.data)
+    columns = [robot.model.joints[robot.model.getJointId(j)].idx_v for arm in robot.arms for j in arm.joint_names]
+    J = np.vstack([pin.getFrameJacobian(robot.model, robot.data, robot.model.getFrameId(arm.end_effector),
+                                        pin.LOCAL_WORLD_ALIGNED)[:, columns] for arm in robot.arms])  # fmt: skip
+    sigma = np.linalg.svd(J * np.asarray(robot.velocity_limits)[robot.platform.n_reduced :], compute_uv=False)
+    return float(sigma[-1] / sigma[0])
+
+
+def test_tiago_pro_holds_its_object_in_front_with_the_arms_off_the_singularity():
+    """TIAGo Pro's [hold]: tool frames 0.55 m ahead, 0.85 m high, 0.30 m apart (to the spec's
+    4 decimals of a radian, 1e-4 m), each tool's z axis pointing at the other hand, every joint
+    inside its range. By Pinocchio alone: home is singular (the hands' Jacobian loses rank), the
+    hold is not."""
+    robot = mobmanip.load_robot("tiago_pro")
+    q = robot.hold_configuration()
+    pin.framesForwardKinematics(robot.model, robot.data, q)
+    hands = [robot.data.oMf[robot.model.getFrameId(arm.end_effector)] for arm in robot.arms]  # right, left
+    for hand, side in zip(hands, (-1.0, 1.0)):
+        np.testing.assert_allclose(hand.translation, [0.55, 0.15 * side, 0.85], atol=1e-4)
+        np.testing.assert_allclose(hand.rotation[:, 2], [0.0, -side, 0.0], atol=1e-3)
+    low, high = robot.model.lowerPositionLimit, robot.model.upperPositionLimit
+    arms = [robot.model.joints[robot.model.getJointId(j)].idx_q for arm in robot.arms for j in arm.joint_names]
+    assert np.all(q[arms] > low[arms] + 0.05) and np.all(q[arms] < high[arms] - 0.05)
+    assert _unit_jacobian_ratio(robot, robot.neutral()) < 1e-3 < 0.05 < _unit_jacobian_ratio(robot, q)
