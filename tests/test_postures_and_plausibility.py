@@ -234,6 +234,27 @@ def test_a_singular_posture_is_said_with_its_semi_axes():
     assert not [w for w in mobmanip.analyze(ur5, bent, "spatial").warnings if "singular" in w]
 
 
+def test_a_task_the_robot_cannot_span_anywhere_is_not_called_a_singular_posture(robot):
+    """The paper's planar arms in the spatial task: no joint moves the hands along z (Pinocchio's
+    frame Jacobians have zero z rows, here and at a random posture), so the kinematic ellipsoid
+    is flat in every posture. That is the robot's, not the posture's: no warning says to move
+    the joints."""
+    rng = np.random.default_rng(3)
+    q = robot.neutral()
+    moved = q.copy()
+    for joint in robot.model.joints[2:]:
+        if joint.nq == 1:
+            moved[joint.idx_q] += rng.uniform(-1.0, 1.0)
+    for posture in (q, moved):
+        for arm in robot.arms:
+            J = pin.computeFrameJacobian(robot.model, robot.model.createData(), posture, arm.frame_id,
+                                         pin.LOCAL_WORLD_ALIGNED)  # fmt: skip
+            assert np.abs(J[2]).max() == 0.0
+    an = mobmanip.analyze(robot, q, "spatial")
+    assert an.kinematic.semi_axes[-1] < 1e-12 * an.kinematic.semi_axes[0]
+    assert not [w for w in an.warnings if "singular" in w]
+
+
 def test_the_analysis_block_indices_are_its_own_copies(tiago):
     """An analysis computes its block indices once (a grounded set's shadows took 10 s each time
     on TIAGo Pro) and hands out copies: changing one leaves the next call's, the JSON's and the

@@ -98,6 +98,8 @@ def test_every_floor_program_settles(monkeypatch, seed):
             robot, q, task, object_mass=mass, measures=("dynamic_polytope",), constraints=(floor,)
         ).measures["dynamic_polytope"]
         m = polytope.dim
+        if m <= 3:  # the projection's programs too (its vertices are enumerated on first use)
+            assert polytope.vertices.shape[1] == m
         for e in rng.normal(size=(12, m)):
             e /= np.linalg.norm(e)
             polytope.support(e)

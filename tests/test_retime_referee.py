@@ -262,19 +262,27 @@ def slippery(tiago, carried):
 
 @pytest.mark.slow
 def test_on_a_slippery_floor_the_traction_binds_in_places(tiago, carried, slippery):
-    """With mu 0.27 the wheels' traction (within 0.7 of their friction pyramid) binds on 16 of
-    the 601 samples: at the start, three times along the path (s = 1.1, 2.6 and 8.4 s), and
-    near the end; the back-left caster's reserve binds everywhere else, as at mu 0.5. The timing
-    is 12.36 s (11.32 s at mu 0.5). At mu 0.26 the wheels cannot give the back-left caster the
-    acceleration that keeps it over its reserve after s = 1.54 s: no timing exists."""
+    """With mu 0.27 the wheels' traction (within 0.7 of their friction pyramid) binds in five
+    places: at the start, three times along the path (s = 1.1, 2.6 and 8.4 s), and at the end;
+    the back-left caster's reserve binds everywhere else, as at mu 0.5. The timing is about
+    12.4 s (11.32 s at mu 0.5). At mu 0.26 the wheels cannot give the back-left caster the
+    acceleration that keeps it over its reserve after s = 1.54 s: no timing exists.
+
+    The path retimed here is the carry's QP motion over 600 steps, which carries the round-off
+    of its solver: with one build of NumPy and DAQP the traction bound 16 samples and the timing
+    was 12.36 s, with another 15 samples and 12.45 s. So the places are checked, each to 0.1 s
+    of the path, with the timing to 1 %, not the count of samples and the timing's last digit."""
     kinds = np.array(slippery.binding_kind)
     assert set(kinds) == {"traction", "contact"}
     traction = np.flatnonzero(kinds == "traction")
-    assert len(traction) == 16 and traction[0] == 0 and traction[-1] == len(kinds) - 1
+    runs = np.split(traction, np.flatnonzero(np.diff(traction) > 1) + 1)
+    assert len(runs) == 5 and runs[0][0] == 0 and runs[-1][-1] == len(kinds) - 1
+    for run, where in zip(runs[1:-1], (1.1, 2.6, 8.4)):
+        assert np.abs(slippery.s[run] - where).max() < 0.1
     assert {"support caster_back_left_2_link loaded"} == {
         label for label, kind in zip(slippery.binding, kinds) if kind == "contact"
     }
-    assert slippery.duration == pytest.approx(12.36, abs=0.01)
+    assert slippery.duration == pytest.approx(12.4, rel=0.01)
     with pytest.raises(NumericalError, match="no timing of the path reaches its end at rest"):
         retime(tiago, carried, object_mass=MASS, floor=CarryFloor(mu=SLIPPERY - 0.01, reserve=0.3))
 

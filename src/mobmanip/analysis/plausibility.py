@@ -140,7 +140,7 @@ def singular_warnings(analysis) -> list[str]:
     if not isinstance(found, Ellipsoid):
         terms = analysis.terms
         found = kinematic_ellipsoid(terms.J_u, terms.W, terms.velocity_limits)
-    if found.empty or not collapsed(found):
+    if found.empty or not collapsed(found) or _collapsed_everywhere(analysis):
         return []
     semi = np.asarray(found.semi_axes, dtype=float)
     unit = KINEMATIC.quantity.units_for(analysis.task)
@@ -149,6 +149,31 @@ def singular_warnings(analysis) -> list[str]:
         f"({unit}), so every set is flat along some direction and jumps under the smallest change of the joints; "
         "move the joints off the singularity (e.g. --posture or --q) for readings that hold"
     ]
+
+
+#: How far (rad or m, at random within each joint's range) :func:`singular_warnings` moves the
+#: joints to tell a singular posture from a task the robot cannot span anywhere.
+SINGULAR_PROBE = 0.3
+
+
+def _collapsed_everywhere(analysis) -> bool:
+    """Whether the kinematic ellipsoid stays collapsed with every one-degree joint moved by up to
+    :data:`SINGULAR_PROBE`: then the task has a direction no posture moves the object along (a
+    planar robot's z in the spatial task), which is the robot's, not the posture's."""
+    from ..sets.ellipsoid import kinematic_ellipsoid
+    from ..terms.builder import terms_at
+
+    robot, q = analysis.robot, np.array(analysis.q, dtype=float)
+    model = robot.model
+    rng = np.random.default_rng(0)
+    for joint in model.joints[2:]:  # the platform's root joint is the first
+        if joint.nq == 1:
+            k = joint.idx_q
+            q[k] = np.clip(q[k] + rng.uniform(-SINGULAR_PROBE, SINGULAR_PROBE), model.lowerPositionLimit[k],
+                           model.upperPositionLimit[k])  # fmt: skip
+    terms = terms_at(robot, q, analysis.task, held_object=analysis.held_object if analysis.object_given else None,
+                     check=False)  # fmt: skip
+    return collapsed(kinematic_ellipsoid(terms.J_u, terms.W, terms.velocity_limits))
 
 
 def ignored_warnings(analysis) -> list[str]:

@@ -117,18 +117,31 @@ class LiftedPolytope(TaskSet):
         self.empty = self._feasible_point() is None
         if self.empty:
             self.center = np.zeros(self.dim)
-            self.degenerate = True
+            self._cache["degenerate"] = True
             self._size = 1.0  # the scale of the programs' tolerances
             return
-        if self.dim <= 3:  # the vertices give the bounding box (and are wanted anyway)
-            self._size = 1.0  # the refinement's tolerance scale until the box is known
-            V = self._cache["vertices"] = self._refine(first=True)
-            lo, hi = V.min(axis=0), V.max(axis=0)
+        if self.dim <= 3:  # the bounding box from the extreme points along the axes, which also
+            # start the vertices' projection (enumerated on first use: a reading along one
+            # direction, one program, does not need them, and they took some 150 programs)
+            self._size = 1.0  # the programs' tolerance scale until the box is known
+            axis_points = self._axis_points()
+            lo, hi = axis_points.min(axis=0), axis_points.max(axis=0)
         else:
             lo, hi = -self._axis_supports(-1.0), self._axis_supports(1.0)
         self.center = 0.5 * (lo + hi)
         self._size = float(max(np.max(hi - lo), 1e-300))
-        self.degenerate = self._flat()
+
+    @property
+    def degenerate(self) -> bool:
+        """The set has no interior in the task space (some direction's width is relatively zero);
+        for m <= 3 judged from the vertices, enumerated then if they were not yet."""
+        if "degenerate" not in self._cache:
+            self._cache["degenerate"] = self._flat()
+        return self._cache["degenerate"]
+
+    @degenerate.setter
+    def degenerate(self, value: bool) -> None:
+        self._cache["degenerate"] = bool(value)
 
     # ------------------------------------------------------------------------------------------
     # linear programs
@@ -184,6 +197,14 @@ class LiftedPolytope(TaskSet):
     def _tol(self) -> float:
         """Two points closer than this are one: relative to the set's size, at least _ABS_TOL."""
         return max(_TOL * getattr(self, "_size", 1.0), _ABS_TOL)
+
+    def _axis_points(self) -> np.ndarray:
+        """The maximisers along +e_i and -e_i of each task axis, in that order, (2 m, m): the
+        bounding box of the set, and the first points of its projection (:meth:`_refine`)."""
+        if "axis_points" not in self._cache:
+            points = [self._vertex(s * e)[1][self._task] for e in np.eye(self.dim) for s in (1.0, -1.0)]
+            self._cache["axis_points"] = np.array(points)
+        return self._cache["axis_points"]
 
     def _axis_supports(self, sign: float) -> np.ndarray:
         return np.array([self._maximise(sign * row)[0] for row in np.eye(self.dim)])
@@ -480,16 +501,11 @@ class LiftedPolytope(TaskSet):
             self._cache["vertices"] = self._refine()
         return self._cache["vertices"]
 
-    def _refine(self, first: bool = False) -> np.ndarray:
-        """Bretl and Lall's projection: grow an inner polytope by supports along its facets' normals.
-
-        With ``first`` (called before the set's size is known), the extreme points along the task
-        axes size the tolerance before the refinement starts."""
+    def _refine(self) -> np.ndarray:
+        """Bretl and Lall's projection: grow an inner polytope by supports along its facets'
+        normals, from the extreme points along the task axes (whose box sized the tolerance)."""
         m = self.dim
-        found = [self._vertex(s * e)[1][self._task] for e in np.eye(m) for s in (1.0, -1.0)]
-        if first:
-            box = np.ptp(np.array(found), axis=0)
-            self._size = float(max(np.max(box), 1e-300))
+        found = list(self._axis_points())
         if m == 1:
             return np.unique(np.round(np.array(found), 15), axis=0)
         tol = self._tol()
