@@ -275,6 +275,13 @@ class LinkDescription:
         return self.inertial is not None and self.inertial.has_inertia
 
 
+def geometry_type(kind: str) -> pin.GeometryType:
+    """Pinocchio's geometry type of a kind of shapes (``"collision"`` or ``"visual"``)."""
+    import pinocchio as pin
+
+    return pin.GeometryType.COLLISION if kind == "collision" else pin.GeometryType.VISUAL
+
+
 class ModelBuilder(ABC):
     """How Pinocchio builds a model and geometry from a description's source: the one part of
     a description that depends on the file's language (URDF's builder is
@@ -296,7 +303,6 @@ class ModelBuilder(ABC):
             DescriptionError: Pinocchio cannot build it (naming ``source`` and its reason).
         """
 
-    @abstractmethod
     def build_geometry(
         self,
         source: str,
@@ -308,9 +314,29 @@ class ModelBuilder(ABC):
         """The ``kind`` (``"collision"`` or ``"visual"``) shapes on ``model``; meshes resolved
         in ``package_dirs`` and, with ``meshes``, replaced or left out as it says.
 
+        A builder gives the two steps that depend on its language: :meth:`with_meshes` (the
+        text with the meshes replaced or left out) and :meth:`load_geometry` (Pinocchio's shapes
+        of a text).
+
         Raises:
             DescriptionError: Pinocchio cannot load them (naming ``source`` and its reason).
         """
+        text = self.text if meshes is None else self.with_meshes(kind, meshes)
+        return self.load_geometry(source, model, kind, text, [str(p) for p in package_dirs])
+
+    def with_meshes(self, kind: str, meshes: MeshFilter) -> str:
+        """The text with each ``kind`` mesh replaced by the file ``meshes`` gives, or its shape
+        left out (see :meth:`build_geometry`)."""
+        raise NotImplementedError(f"{type(self).__name__} does not filter {self.language} meshes")
+
+    def load_geometry(self, source: str, model: pin.Model, kind: str, text: str, dirs: list[str]) -> pin.GeometryModel:
+        """Pinocchio's ``kind`` shapes of ``text`` on ``model``, meshes resolved in ``dirs``
+        (see :meth:`build_geometry`).
+
+        Raises:
+            DescriptionError: Pinocchio cannot load them (naming ``source`` and its reason).
+        """
+        raise NotImplementedError(f"{type(self).__name__} does not load {self.language} geometry")
 
     def error(self, source: str, reason: str) -> DescriptionError:
         """The error for a problem in the source, in its language's own error class."""

@@ -15,6 +15,7 @@ from ..support.native_stderr import call_with_large_stack, captured_native_stder
 from .description import (
     MeshFilter,
     ModelBuilder,
+    geometry_type,
 )
 
 if TYPE_CHECKING:
@@ -87,25 +88,17 @@ class MjcfBuilder(ModelBuilder):
             model.inertias[1] = model.inertias[1] + pin.Inertia(along, np.zeros(3), np.zeros((3, 3)))
         return model
 
-    def build_geometry(
-        self,
-        source: str,
-        model: pin.Model,
-        kind: str,
-        package_dirs: tuple[Path, ...],
-        meshes: MeshFilter | None = None,
-    ) -> pin.GeometryModel:
-        """The geoms on ``model`` (see :meth:`ModelBuilder.build_geometry`); with ``meshes``, each
-        mesh file is replaced by the file it gives or its geoms left out."""
+    def load_geometry(self, source: str, model: pin.Model, kind: str, text: str, dirs: list[str]) -> pin.GeometryModel:
+        """The geoms of ``text`` on ``model`` (see :meth:`ModelBuilder.load_geometry`); its mesh
+        files are absolute (``dirs`` plays no part)."""
         import pinocchio as pin
 
-        text = self.text if meshes is None else self._with_meshes(meshes)
-        geometry_type = pin.GeometryType.COLLISION if kind == "collision" else pin.GeometryType.VISUAL
-        return self._call(
-            source, f"load the {kind} geometry", pin.buildGeomFromMJCF, model, _FILE, geometry_type, text=text
-        )
+        what = f"load the {kind} geometry"
+        return self._call(source, what, pin.buildGeomFromMJCF, model, _FILE, geometry_type(kind), text=text)
 
-    def _with_meshes(self, meshes: MeshFilter) -> str:
+    def with_meshes(self, kind: str, meshes: MeshFilter) -> str:
+        """The text with each mesh file replaced by the file ``meshes`` gives, or its geoms left
+        out (of either kind: an MJCF geom is both)."""
         root = ElementTree.fromstring(self.text)
         meshdir = Path((root.find("compiler") or ElementTree.Element("compiler")).get("meshdir", ""))
         dropped = set()

@@ -39,6 +39,7 @@ from .description import (
     Origin,
     RobotDescription,
     Shape,
+    geometry_type,
 )
 from .formats import DescriptionFormat, register_format
 
@@ -352,38 +353,17 @@ class UrdfBuilder(ModelBuilder):
         arguments = (self.text,) if root_joint is None else (self.text, root_joint)
         return _guarded(source, "build a model", True, pin.buildModelFromXML, *arguments)
 
-    def build_geometry(
-        self,
-        source: str,
-        model: pin.Model,
-        kind: str,
-        package_dirs: tuple[Path, ...],
-        meshes: MeshFilter | None = None,
-    ) -> pin.GeometryModel:
-        """The ``kind`` shapes of the text on ``model`` (see :meth:`ModelBuilder.build_geometry`).
-
-        With ``meshes``, the shapes of the other kind and texture files are left out too.
-        """
+    def load_geometry(self, source: str, model: pin.Model, kind: str, text: str, dirs: list[str]) -> pin.GeometryModel:
+        """The ``kind`` shapes of ``text`` on ``model`` (see :meth:`ModelBuilder.load_geometry`)."""
         import pinocchio as pin
 
-        text = self.text if meshes is None else self._with_meshes(kind, meshes)
-        geometry_type = pin.GeometryType.COLLISION if kind == "collision" else pin.GeometryType.VISUAL
-        dirs = [str(p) for p in package_dirs]
-        return _guarded(
-            source,
-            f"load the {kind} geometry",
-            False,
-            pin.buildGeomFromUrdfString,
-            model,
-            text,
-            geometry_type,
-            None,
-            dirs,
-        )
+        what = f"load the {kind} geometry"
+        return _guarded(source, what, False, pin.buildGeomFromUrdfString, model, text, geometry_type(kind), None, dirs)
 
-    def _with_meshes(self, kind: str, meshes: MeshFilter) -> str:
+    def with_meshes(self, kind: str, meshes: MeshFilter) -> str:
         """The text with each ``kind`` mesh replaced by the file ``meshes`` gives, or its shape
-        removed; the other kind's shapes and texture files removed."""
+        removed; the other kind's shapes and texture files removed (Pinocchio loads only what
+        is left)."""
         if self._tree is None:
             self._tree = ElementTree.fromstring(self.text)
         root = copy.deepcopy(self._tree)

@@ -129,21 +129,30 @@ def planar_exp(qa: np.ndarray, xi: np.ndarray) -> np.ndarray:
     return np.array([qa[0] + ca * tx - sa * ty, qa[1] + sa * tx + ca * ty, cb / norm, sb / norm])
 
 
+def _planar_root(model: pin.Model) -> tuple[slice, slice] | None:
+    """The configuration block (4) and tangent block (3) of a planar root joint, or ``None``
+    when the root is not planar."""
+    root = model.joints[1]
+    if root.shortname() != "JointModelPlanar":
+        return None
+    return slice(root.idx_q, root.idx_q + 4), slice(root.idx_v, root.idx_v + 3)
+
+
 def tangent_integrate(model: pin.Model, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
     """``pin.integrate(model, q, dv)`` (nq,), with a planar root's block from :func:`planar_exp`."""
     out = pin.integrate(model, q, dv)
-    root = model.joints[1]
-    if root.shortname() == "JointModelPlanar":
-        out[root.idx_q : root.idx_q + 4] = planar_exp(q[root.idx_q : root.idx_q + 4], dv[root.idx_v : root.idx_v + 3])
+    if (planar := _planar_root(model)) is not None:
+        iq, iv = planar
+        out[iq] = planar_exp(q[iq], dv[iv])
     return out
 
 
 def tangent_difference(model: pin.Model, qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
     """``pin.difference(model, qa, qb)`` (nv,), with a planar root's block from :func:`planar_log`."""
     d = pin.difference(model, qa, qb)
-    root = model.joints[1]
-    if root.shortname() == "JointModelPlanar":
-        d[root.idx_v : root.idx_v + 3] = planar_log(qa[root.idx_q : root.idx_q + 4], qb[root.idx_q : root.idx_q + 4])
+    if (planar := _planar_root(model)) is not None:
+        iq, iv = planar
+        d[iv] = planar_log(qa[iq], qb[iq])
     return d
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 from ..robot.tasks import get_task
-from .constraints.base import Constraint, ConstraintRows
+from .constraints.base import Constraint, ConstraintRows, Terms
 from .constraints.joint_limits import JOINT_BOXES
 from .dynamics import decouple, frame_jacobians, placed_end_effectors, reduced_dynamics_unchecked
 from .grasp import HeldObject, held_mass
@@ -28,49 +28,15 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
-class MeasureTerms:
-    """What a measure is computed from at one configuration (robot and object at rest).
-
-    The names are the paper's; :mod:`mobmanip.sets.ellipsoid` takes the same arrays.
+class MeasureTerms(Terms):
+    """What a measure is computed from at one configuration (robot and object at rest): the
+    paper's terms, which :class:`~mobmanip.terms.constraints.base.Terms` names one by one, and the
+    coupled P.
 
     Attributes:
-        task: task-space name.
-        J_u: unified Jacobian J S, (m k, nx).
-        W: grasp matrix, (m, m k).
-        P: reduced inertia, coupled or decoupled as ``decoupled`` says, (nx, nx).
-        Q: reduced input matrix, (nx, nx).
-        xi: reduced bias at rest (-S^T g), (nx,).
-        M_o: object inertia in the task space, (m, m).
-        g_o: object gravity wrench (Eq. 22), (m,).
-        velocity_limits: qdot_max per reduced velocity (rad/s or m/s), (nx,).
-        effort_limits: tau_max per reduced velocity (N m or N), (nx,).
-        decoupled: whether P is the decoupled one.
-        constraints: the constraints beyond the joint boxes that the sets must honour.
-        reduced_names: the name of each reduced velocity (wheels, then joints), (nx,).
-        robot, q, held_object, positions: the configuration the terms belong to (the robot, its
-            configuration (nq,), the object and the end effectors' positions (k, 3)); a
-            constraint that needs more than the arrays (the floor's contacts) reads them. ``None``
-            for terms assembled by hand (a team's, a test's).
         P_coupled: the coupled P, (nx, nx) (``None``: the same as P).
     """
 
-    task: str
-    J_u: np.ndarray
-    W: np.ndarray
-    P: np.ndarray
-    Q: np.ndarray
-    xi: np.ndarray
-    M_o: np.ndarray
-    g_o: np.ndarray
-    velocity_limits: np.ndarray
-    effort_limits: np.ndarray
-    decoupled: bool
-    constraints: tuple[Constraint, ...] = ()
-    reduced_names: tuple[str, ...] = ()
-    robot: Any = None
-    q: np.ndarray | None = None
-    held_object: HeldObject | None = None
-    positions: np.ndarray | None = None
     P_coupled: np.ndarray | None = None
 
     def __post_init__(self):

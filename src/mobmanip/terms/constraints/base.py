@@ -23,11 +23,14 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ...errors import ArgumentError
+
+if TYPE_CHECKING:
+    from ..grasp import HeldObject
 
 #: The problems and their own variables, in column order.
 PROBLEMS: dict[str, tuple[str, ...]] = {
@@ -49,57 +52,50 @@ EQUATIONS: dict[str, tuple[str, ...]] = {
 ROW_KINDS = ("effort", "velocity", "contact", "tip-over", "traction", "level", "user")
 
 
-class Terms(Protocol):
-    """What a constraint reads of the terms at a configuration
-    (:class:`mobmanip.terms.builder.MeasureTerms` is one; see its attributes)."""
+@dataclass(frozen=True)
+class Terms:
+    """The paper's terms at one configuration (robot and object at rest), as a constraint reads
+    them: :class:`mobmanip.terms.builder.MeasureTerms`, what every measure is computed from, is
+    these with what a measure reads besides. The names are the paper's;
+    :mod:`mobmanip.sets.ellipsoid` takes the same arrays.
 
-    @property
-    def task(self) -> str: ...
+    Attributes:
+        task: task-space name.
+        J_u: unified Jacobian J S, (m k, nx).
+        W: grasp matrix, (m, m k).
+        P: reduced inertia, coupled or decoupled as ``decoupled`` says, (nx, nx).
+        Q: reduced input matrix, (nx, nx).
+        xi: reduced bias at rest (-S^T g), (nx,).
+        M_o: object inertia in the task space, (m, m).
+        g_o: object gravity wrench (Eq. 22), (m,).
+        velocity_limits: qdot_max per reduced velocity (rad/s or m/s), (nx,).
+        effort_limits: tau_max per reduced velocity (N m or N), (nx,).
+        decoupled: whether P is the decoupled one.
+        constraints: the constraints beyond the joint boxes that the sets must honour.
+        reduced_names: the name of each reduced velocity (wheels, then joints), (nx,).
+        robot, q, held_object, positions: the configuration the terms belong to (the robot, its
+            configuration (nq,), the object and the end effectors' positions (k, 3)); a
+            constraint that needs more than the arrays (the floor's contacts) reads them. ``None``
+            for terms assembled by hand (a team's, a test's).
+    """
 
-    @property
-    def J_u(self) -> np.ndarray: ...
-
-    @property
-    def W(self) -> np.ndarray: ...
-
-    @property
-    def P(self) -> np.ndarray: ...
-
-    @property
-    def Q(self) -> np.ndarray: ...
-
-    @property
-    def xi(self) -> np.ndarray: ...
-
-    @property
-    def M_o(self) -> np.ndarray: ...
-
-    @property
-    def g_o(self) -> np.ndarray: ...
-
-    @property
-    def velocity_limits(self) -> np.ndarray: ...
-
-    @property
-    def effort_limits(self) -> np.ndarray: ...
-
-    @property
-    def decoupled(self) -> bool: ...
-
-    @property
-    def reduced_names(self) -> tuple[str, ...]: ...
-
-    @property
-    def robot(self) -> Any: ...
-
-    @property
-    def q(self) -> np.ndarray | None: ...
-
-    @property
-    def held_object(self) -> Any: ...
-
-    @property
-    def positions(self) -> np.ndarray | None: ...
+    task: str
+    J_u: np.ndarray
+    W: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    xi: np.ndarray
+    M_o: np.ndarray
+    g_o: np.ndarray
+    velocity_limits: np.ndarray
+    effort_limits: np.ndarray
+    decoupled: bool
+    constraints: tuple[Constraint, ...] = ()
+    reduced_names: tuple[str, ...] = ()
+    robot: Any = None
+    q: np.ndarray | None = None
+    held_object: HeldObject | None = None
+    positions: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
