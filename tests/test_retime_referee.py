@@ -271,7 +271,9 @@ def test_on_a_slippery_floor_the_traction_binds_in_places(tiago, carried, slippe
     The path retimed here is the carry's QP motion over 600 steps, which carries the round-off
     of its solver: with one build of NumPy and DAQP the traction bound 16 samples and the timing
     was 12.36 s, with another 15 samples and 12.45 s. So the places are checked, each to 0.1 s
-    of the path, with the timing to 1 %, not the count of samples and the timing's last digit."""
+    of the path, not the count of samples; and the timing is checked as the fastest, not by its
+    digits: the floor's rows, evaluated independently of the plan along the retimed motion
+    (:func:`_floor_excess`), hold, and the same motion 0.1 % faster breaks one."""
     kinds = np.array(slippery.binding_kind)
     assert set(kinds) == {"traction", "contact"}
     traction = np.flatnonzero(kinds == "traction")
@@ -282,7 +284,12 @@ def test_on_a_slippery_floor_the_traction_binds_in_places(tiago, carried, slippe
     assert {"support caster_back_left_2_link loaded"} == {
         label for label, kind in zip(slippery.binding, kinds) if kind == "contact"
     }
-    assert slippery.duration == pytest.approx(12.4, rel=0.01)
+    floor = CarryFloor(mu=SLIPPERY, reserve=0.3)
+    kept, _ = _floor_excess(tiago, slippery.trajectory, floor)
+    assert max(kept.values()) <= 1e-6 * _share(tiago)
+    faster, _ = _floor_excess(tiago, slippery.trajectory.scaled(1.001), floor)
+    assert max(faster.values()) > 1e-6 * _share(tiago)
+    assert 12.0 < slippery.duration < 12.8  # about 12.4 s
     with pytest.raises(NumericalError, match="no timing of the path reaches its end at rest"):
         retime(tiago, carried, object_mass=MASS, floor=CarryFloor(mu=SLIPPERY - 0.01, reserve=0.3))
 
