@@ -36,6 +36,11 @@ def _start(cwd: Path, *argv) -> subprocess.Popen:
 
 
 def _kill_all_after(procs: list[subprocess.Popen], delay: float, signum: int) -> list[tuple[int, str]]:
+    """Send ``signum`` to every process still running ``delay`` s after the last one's ``main``
+    began (counted from there, not from the launch: on a loaded machine Python's own start-up,
+    before any line of the command's, can take longer than the shortest delay)."""
+    for proc in procs:
+        _wait_until_main_runs(proc)
     time.sleep(delay)
     for proc in procs:
         if proc.poll() is None:
@@ -265,8 +270,7 @@ def test_a_killed_run_leaves_nothing_behind(tmp_path, command, files):
         procs = [_start(work, *argv("new/sub")), _start(work, *argv("kept"))]
         (code_new, err_new), (code_old, err_old) = _kill_all_after(procs, delay, signum)
         for code, err in ((code_new, err_new), (code_old, err_old)):
-            # One line, also while NumPy and Pinocchio are being imported (0.3 s is long after
-            # Python's own start-up, which takes some 40 ms).
+            # One line, also while NumPy and Pinocchio are being imported (0.3 s after main began).
             assert "Traceback" not in err, err
             assert code in (0, _EXIT[signum]), (code, err)
         listing = _listing(work)
