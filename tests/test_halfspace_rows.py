@@ -67,6 +67,41 @@ def test_the_rule_merges_scaled_copies_and_keeps_opposite_and_parallel_rows():
     assert inverse.tolist() == [0, 0, 1, 2, 3, 3, 0]
 
 
+def test_many_rows_group_as_the_pairwise_rule_says():
+    """300 rows in 3 dimensions with copies planted among them: scaled by a positive factor, moved
+    by 1e-12, and a chain of three unit normals turned by 0.8e-9 rad each (the ends 1.3e-9 apart
+    in a coordinate, past the tolerance; each within 0.7e-9 of the middle: one halfspace by
+    transitivity). The groups equal those a union of the brute-force pairs gives, the first row of
+    each group kept."""
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(300, 3))
+    b = rng.uniform(0.5, 2.0, 300)
+    A[10], b[10] = 3.0 * A[200], 3.0 * b[200]  # a scaled copy listed before its original
+    A[50], b[50] = A[7] + 1e-12, b[7]
+    A[120] = np.array([0.6, 0.8, 0.0])  # a chain of unit normals along a circle, the offsets equal
+    A[121] = np.array([np.cos(0.9272952180016122 - 0.8e-9), np.sin(0.9272952180016122 - 0.8e-9), 0.0])
+    A[122] = np.array([np.cos(0.9272952180016122 - 1.6e-9), np.sin(0.9272952180016122 - 1.6e-9), 0.0])
+    b[120] = b[121] = b[122] = 1.0
+    pairs = _repeated_pairs(A, b, 1.0)
+    assert (120, 121) in pairs and (121, 122) in pairs and (120, 122) not in pairs
+    keep, inverse = distinct_rows(A, b, 1.0)
+    leader = list(range(len(A)))
+
+    def root(i):
+        while leader[i] != i:
+            i = leader[i]
+        return i
+
+    for i, j in pairs:
+        a, c = root(i), root(j)
+        leader[max(a, c)] = min(a, c)
+    roots = [root(i) for i in range(len(A))]
+    assert keep.tolist() == sorted(set(roots))
+    assert [keep[k] for k in inverse] == roots
+    assert roots[200] == 10 and roots[50] == 7 and roots[121] == roots[122] == 120
+    assert len(keep) == 300 - 4
+
+
 def test_a_prism_of_coplanar_generators_has_one_row_per_facet():
     """G = [e1, e2, e1 + e2, e3]: a hexagon (the three coplanar generators) times a segment, 8
     facets; the top and bottom normal comes from three generator pairs each. Asked first for its

@@ -56,13 +56,11 @@ def distinct_rows(
     length = np.where(length > 0.0, length, 1.0)
     b = np.asarray(offsets, dtype=float).reshape(r, -1)
     key = np.hstack([A / length[:, None], b / (length[:, None] * max(size, 1e-300))])
-    if r <= 256:
-        close = np.flatnonzero(np.triu(np.max(np.abs(key[:, None, :] - key[None, :, :]), axis=2) <= rtol, 1))
-        pairs = np.stack(np.divmod(close, r), axis=1)
-    else:
-        from scipy.spatial import cKDTree
+    # the pairs within rtol in the max-norm, from a k-d tree: comparing every pair of rows cost
+    # 4-6 ms for a zonotope's 240 facets against 0.2 ms
+    from scipy.spatial import cKDTree
 
-        pairs = cKDTree(key).query_pairs(rtol, p=np.inf, output_type="ndarray")
+    pairs = cKDTree(key).query_pairs(rtol, p=np.inf, output_type="ndarray")
     leader = np.arange(r)
     for i, j in sorted(map(tuple, pairs.tolist())):  # union by the smaller index: a group's first row leads
         a, c = leader[i], leader[j]
