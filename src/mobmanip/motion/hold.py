@@ -23,8 +23,10 @@ constant efforts tau: at each state (q, x), with the terms of
 
 (internal wrenches included: two hands on one object form a closed chain), then q and x advance
 by a semi-implicit Euler step (x first, q along ``pin.integrate`` with S(q) x). At every step the
-floor's resultant wrench (:func:`mobmanip.motion.ground.floor_wrench`, velocity terms included) is
-shared by the contacts as the floor constraint shares it
+floor's resultant wrench (the robot's own, :func:`mobmanip.motion.ground.floor_wrench` with
+velocity terms, and each hand's wrench h_i on the object applied at the hand, as the floor
+constraint takes them: what the hands do not hold of the object, e.g. a planar task's weight
+unless held level, is borne elsewhere) is shared by the contacts as the floor constraint shares it
 (:func:`mobmanip.motion.traction.contact_forces`): the hold ends when a support's normal force
 drops to its reserve (0 by default: it lifts) or a driven wheel's traction leaves its friction
 cone (its use ``|f_t| / (mu f_n)`` above 1 - reserve: it slips).
@@ -47,7 +49,7 @@ from ..sets.lifted import Witness
 from ..sets.linear_programs import LinearProgram
 from ..terms.constraints.floor import LEVEL_ROWS, Floor, pyramid_faces
 from ..terms.constraints.floor_wrench import WrenchSharing, both_ways
-from ..terms.grasp import GRAVITY, object_mass_of
+from ..terms.grasp import GRAVITY, object_mass_of, skew
 from .ground import floor_wrench
 from .in_motion import motion_terms
 from .traction import contact_forces
@@ -317,12 +319,24 @@ def _affine_state(robot: Robot, q: np.ndarray, x: np.ndarray, task: TaskSpace, o
     rate, offset = np.zeros((6, nx)), np.zeros(6)
     rate[rows] = to_object @ terms.J_u
     offset[rows] = to_object @ (terms.drift - terms.grasp_drift)
-    constant, linear = floor_wrench(robot, q, x, object_mass, offset, rate)
+    # The floor carries the robot and what its hands apply to the object, each hand's wrench h_i
+    # at its own point (as the floor constraint has it): the object's rows the hands do not hold
+    # (a planar task's weight and tipping moments, unless held level) are borne elsewhere, and a
+    # squeeze between hands at different heights tips the robot.
+    constant, linear = floor_wrench(robot, q, x, 0.0, np.zeros(6), np.zeros((6, nx)))
+    pin.framesForwardKinematics(robot.model, robot.data, q)
+    held = list(task.rows)
+    to_origin = np.zeros((6, mk))  # [force; moment about the origin] of the hands' wrenches
+    for i, arm in enumerate(robot.arms):
+        p = robot.data.oMf[arm.frame_id].translation
+        about_origin = np.block([[np.eye(3), np.zeros((3, 3))], [skew(p), np.eye(3)]])
+        to_origin[:, i * len(held) : (i + 1) * len(held)] = about_origin[:, held]
+    H, h0 = solution[nx : nx + mk, :nx], solution[nx : nx + mk, nx]
     return _AffineState(
         S=terms.S,
         xdot=(X, x0),
         a_o=(solution[nx + mk :, :nx], solution[nx + mk :, nx]),
-        wrench=(linear @ X, constant + linear @ x0),
+        wrench=(linear @ X + to_origin @ H, constant + linear @ x0 + to_origin @ h0),
     )
 
 
