@@ -277,7 +277,7 @@ def test_at_rest_the_replay_loads_the_contacts_as_the_lp_does(case, task, level)
     carries what the hands apply to the object at their own points: a squeeze between hands at
     different heights (the paper's arms hold at 0.3 and 0.4 m) tips the robot. The replay used to
     put the whole object, weight included, at the hands' midpoint: 1.6-3 % of the weight apart,
-    and the paper robot's +x at 97 % then 'gave way after 0 ms' with a caster at -27.5 N."""
+    and the paper robot's +x at 97 % (object at 90 deg) then 'gave way after 0 ms', a caster at -27.5 N."""
     robot, q, _ = case()
     floor = Floor(mu=MU, level=level)
     polytope = mobmanip.analyze(

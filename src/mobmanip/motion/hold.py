@@ -313,12 +313,6 @@ def _affine_state(robot: Robot, q: np.ndarray, x: np.ndarray, task: TaskSpace, o
     rhs[nx + mk :, nx] = terms.c_o + terms.g_o
     solution = np.linalg.lstsq(_chain(terms), rhs, rcond=None)[0]
     X, x0 = solution[:nx, :nx], solution[:nx, nx]  # xdot = X tau + x0
-    # the object's acceleration from the hands' motion: a_o = (W^T)^+ (J_u xdot + d/dt(J_u) x - Wdot^T v_o)
-    to_object = np.linalg.pinv(terms.W.T)
-    rows = list(task.rows)
-    rate, offset = np.zeros((6, nx)), np.zeros(6)
-    rate[rows] = to_object @ terms.J_u
-    offset[rows] = to_object @ (terms.drift - terms.grasp_drift)
     # The floor carries the robot and what its hands apply to the object, each hand's wrench h_i
     # at its own point (as the floor constraint has it): the object's rows the hands do not hold
     # (a planar task's weight and tipping moments, unless held level) are borne elsewhere, and a
