@@ -264,11 +264,17 @@ def _lp_normals(polytope, witness) -> np.ndarray:
     return np.array([forces[c["columns"][1] - 1] for c in polytope.model["floor"]["contacts"]])
 
 
+def _stretch():
+    robot = mobmanip.load_robot("stretch")  # the vendor's file: a prismatic lift, frames turned
+    return robot, named_configuration(robot, "home"), "translational"
+
+
 @pytest.mark.parametrize(
     ("case", "task", "level"),
     [(_paper, "planar", False), (_paper, "planar", True), (_tiago, "spatial", False),
-     (_tiago, "translational", False), (_tiago, "planar", False)],
-    ids=["paper-planar", "paper-planar-level", "tiago-spatial", "tiago-translational", "tiago-planar"],
+     (_tiago, "translational", False), (_tiago, "planar", False), (_stretch, "translational", False)],
+    ids=["paper-planar", "paper-planar-level", "tiago-spatial", "tiago-translational", "tiago-planar",
+         "stretch-translational"],
 )  # fmt: skip
 def test_at_rest_the_replay_loads_the_contacts_as_the_lp_does(case, task, level):
     """At t = 0 the replay's normal forces are the LP's for the same efforts, along every axis at
@@ -277,8 +283,14 @@ def test_at_rest_the_replay_loads_the_contacts_as_the_lp_does(case, task, level)
     carries what the hands apply to the object at their own points: a squeeze between hands at
     different heights (the paper's arms hold at 0.3 and 0.4 m) tips the robot. The replay used to
     put the whole object, weight included, at the hands' midpoint: 1.6-3 % of the weight apart,
-    and the paper robot's +x at 97 % (object at 90 deg) then 'gave way after 0 ms', a caster at -27.5 N."""
+    and the paper robot's +x at 97 % (object at 90 deg) then 'gave way after 0 ms', a caster at -27.5 N.
+
+    Independently, the normal forces add up to the weight the floor carries plus the rate of the
+    vertical momentum, from Pinocchio's centroidal map at rest (A_G S xdot) and the object's own
+    m a_z: the robot's weight, and the object's only where the hands hold it vertically."""
     robot, q, _ = case()
+    carried = level or 2 in get_task(task).rows
+    A_G = pin.computeCentroidalMap(robot.model, robot.model.createData(), q)[2] @ robot.null_space(q)
     floor = Floor(mu=MU, level=level)
     polytope = mobmanip.analyze(
         robot, q, task, object_mass=MASS, measures=("dynamic_polytope",), constraints=(floor,)
@@ -291,6 +303,10 @@ def test_at_rest_the_replay_loads_the_contacts_as_the_lp_does(case, task, level)
                           stop=False)  # fmt: skip
             expected = _lp_normals(polytope, witness)
             assert np.abs(hold.normal[0] - expected).max() <= 1e-12 * expected.sum()
+            a_z = float(witness.point[list(get_task(task).rows).index(2)]) if 2 in get_task(task).rows else 0.0
+            weight = (float(pin.computeTotalMass(robot.model)) + (MASS if carried else 0.0)) * 9.81
+            total = weight + A_G @ witness.variables["xdot"] + (MASS * a_z if carried else 0.0)
+            assert hold.normal[0].sum() == pytest.approx(total, rel=1e-9)
 
 
 def test_a_reserve_ends_the_hold_where_a_support_reaches_it():

@@ -29,7 +29,7 @@ from ..robot.support import Support, polygon_margin
 from ..robot.tasks import TaskSpace
 from ..team import Team
 from ..terms.constraints.floor_wrench import FloorRows, to_platform
-from ..terms.grasp import GRAVITY, HeldObject, skew
+from ..terms.grasp import GRAVITY, HeldObject, wrench_shift
 
 __all__ = ["TeamFloor"]
 
@@ -105,8 +105,7 @@ class TeamFloor:
             w1[:, s] = linear / h
             w0 = offset - linear @ x_prev[s] / h
             for _ in member.arms:  # the hand's wrench on the object, its moment about the world origin
-                about = np.eye(6)
-                about[3:, :3] = skew(hands[hand])
+                about = wrench_shift(hands[hand])
                 block = slice(hand * m, (hand + 1) * m)
                 w1 += about @ place @ F[block]
                 w0 += about @ (place @ f0[block] + weight)

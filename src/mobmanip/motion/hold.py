@@ -49,7 +49,7 @@ from ..sets.lifted import Witness
 from ..sets.linear_programs import LinearProgram
 from ..terms.constraints.floor import LEVEL_ROWS, Floor, pyramid_faces
 from ..terms.constraints.floor_wrench import WrenchSharing, both_ways
-from ..terms.grasp import GRAVITY, object_mass_of, skew
+from ..terms.grasp import GRAVITY, object_mass_of, wrench_shift
 from .ground import floor_wrench
 from .in_motion import motion_terms
 from .traction import contact_forces
@@ -323,8 +323,7 @@ def _affine_state(robot: Robot, q: np.ndarray, x: np.ndarray, task: TaskSpace, o
     to_origin = np.zeros((6, mk))  # [force; moment about the origin] of the hands' wrenches
     for i, arm in enumerate(robot.arms):
         p = robot.data.oMf[arm.frame_id].translation
-        about_origin = np.block([[np.eye(3), np.zeros((3, 3))], [skew(p), np.eye(3)]])
-        to_origin[:, i * len(held) : (i + 1) * len(held)] = about_origin[:, held]
+        to_origin[:, i * len(held) : (i + 1) * len(held)] = wrench_shift(p)[:, held]
     H, h0 = solution[nx : nx + mk, :nx], solution[nx : nx + mk, nx]
     return _AffineState(
         S=terms.S,

@@ -27,6 +27,14 @@ def skew(r: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
+def wrench_shift(r: np.ndarray) -> np.ndarray:
+    """[[I, 0], [skew(r), I]], (6, 6): a wrench [force; moment] applied at ``r`` (m, from a point)
+    as the wrench about that point, [f; m + r x f]."""
+    out = np.eye(6)
+    out[3:, :3] = skew(np.asarray(r, dtype=float))
+    return out
+
+
 def grasp_block(task: str | TaskSpace, offset: np.ndarray) -> np.ndarray:
     """W_i for one rigid grasp at ``offset`` r_i (m) from the object centre, (m, m).
 
@@ -35,9 +43,7 @@ def grasp_block(task: str | TaskSpace, offset: np.ndarray) -> np.ndarray:
     rotation in the task) this is the identity.
     """
     task = get_task(task)
-    full = np.eye(6)
-    full[3:, :3] = skew(np.asarray(offset, dtype=float))
-    return task.restrict(full)
+    return task.restrict(wrench_shift(offset))
 
 
 def grasp_matrix(task: str | TaskSpace, offsets: np.ndarray) -> np.ndarray:

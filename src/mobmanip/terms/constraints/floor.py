@@ -95,7 +95,7 @@ from ...platforms import a_platform
 from ...robot.model import platform_pose
 from ...robot.support import Support, check_faces, check_mu, check_reserve, polygon_margin, robot_support
 from ...robot.tasks import get_task
-from ..grasp import GRAVITY, HeldObject
+from ..grasp import GRAVITY, HeldObject, skew, wrench_shift
 
 if TYPE_CHECKING:
     from ...robot.model import Robot
@@ -165,10 +165,6 @@ def weight_lean(robot: Robot, q: np.ndarray, gravity: np.ndarray) -> np.ndarray:
         return np.zeros(robot.model.nv)
     J_c = pin.jacobianCenterOfMass(robot.model, robot.data, q)
     return -float(pin.computeTotalMass(robot.model)) * (J_c.T @ lean)
-
-
-def _skew(r: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
 @dataclass(frozen=True)
@@ -589,7 +585,7 @@ def _contact_columns(support: Support, points: np.ndarray, c: np.ndarray) -> _Co
     slices: list[tuple[int, int]] = []
     for contact, p in zip(support.contacts, points):
         start = sum(block.shape[1] for block in blocks)
-        wrench = np.vstack([np.eye(3), _skew(p - c)])
+        wrench = np.vstack([np.eye(3), skew(p - c)])
         block = wrench if contact.driven else wrench[:, 2:3]
         blocks.append(block)
         slices.append((start, start + block.shape[1]))
@@ -628,12 +624,12 @@ def _hand_rows(
     out = _HandRows([], [], [], [], [])
     for arm in robot.arms:
         p = data.oMf[arm.frame_id].translation
-        about_c = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - c), np.eye(3)]])  # wrench at c
+        about_c = wrench_shift(p - c)  # wrench at c
         out.task.append(about_c[:, rows])
         out.level.append(about_c[:, level])
         J = pin.getFrameJacobian(model, data, arm.frame_id, pin.LOCAL_WORLD_ALIGNED)
         out.kinematics.append(J[level] @ S)
-        G6 = np.block([[np.eye(3), np.zeros((3, 3))], [_skew(p - center), np.eye(3)]])
+        G6 = wrench_shift(p - center)
         out.grasp_task.append(G6[np.ix_(level, rows)])
         out.grasp_level.append(G6[np.ix_(level, level)])
     return out
@@ -784,7 +780,7 @@ def _wheel_equations(
     for contact, p, (a, b) in zip(support.contacts, points, slices):
         jid = wheel_ids.get(contact.name, 1) if contact.source == "wheel" else 1
         J = pin.getJointJacobian(model, data, jid, pin.LOCAL_WORLD_ALIGNED)
-        J_point = J[:3] - _skew(p - data.oMi[jid].translation) @ J[3:]
+        J_point = J[:3] - skew(p - data.oMi[jid].translation) @ J[3:]
         jacobians[a:b] = J_point[3 - (b - a) :]
     if dependent:
         M = pin.crba(model, data, q)
