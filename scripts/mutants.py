@@ -123,9 +123,9 @@ MUTANTS: tuple[Mutant, ...] = (
     # ----- the floor: the constraint, the support, carry's floor rows, the floor along a motion
     _m(
         "F01", "floor", FLOOR,
-        "return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])",
-        "return np.array([[0.0, r[2], -r[1]], [-r[2], 0.0, r[0]], [r[1], -r[0], 0.0]])",
-        "the lever arm's cross-product matrix is transposed: every contact force's moment about the centre of "
+        "wrench = np.vstack([np.eye(3), skew(p - c)])",
+        "wrench = np.vstack([np.eye(3), skew(c - p)])",
+        "the lever arm's cross-product is reversed: every contact force's moment about the centre of "
         "mass changes sign",
         "tests/test_floor.py",
     ),
